@@ -1,0 +1,113 @@
+# pdftrace - examples, tests and checks.
+#
+#   make                  build the examples into build/
+#   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm
+#   make run-all          also render the other examples into out/
+#   make test             build and run the test runner, then again without threads and
+#                         under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make check-warnings   compile the examples (and so the implementation) with gcc and clang
+#                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
+#   make clean            remove build/ and out/
+#
+# Every variable below can be overridden: make CC=clang CFLAGS='-O3 -g' RUN_SPP=256
+
+CFLAGS   ?= -std=c99 -O2 -Wall -Wextra -pedantic
+CXXFLAGS ?= -O2 -Wall -Wextra -pedantic
+CPPFLAGS ?=
+LDFLAGS  ?=
+LDLIBS   ?=
+
+BUILD ?= build
+OUT   ?= out
+
+# Added to every build: the header lives at the top level; the library wants -lm and pthreads.
+PT_CPPFLAGS := -I.
+PT_THREADS  ?= -pthread
+PT_LDLIBS   := -lm
+
+# The sanitizer build of the tests (added after CFLAGS, so its -O1 wins).
+SANFLAGS ?= -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all
+
+# check-warnings: the compilers and flags it uses.
+WARN_CC      ?= gcc clang
+WARN_CXX     ?= g++ clang++
+WARN_CFLAGS  ?= -std=c99 -O2 -Wall -Wextra -pedantic -Werror
+WARN_CXXFLAGS ?= -x c++ -O2 -Wall -Wextra -pedantic -Werror
+
+# make run: samples per pixel and any other options for build/cornell.
+RUN_SPP  ?= 64
+RUN_ARGS ?=
+
+EXAMPLES     := minimal cornell custom_pdf
+EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
+TEST_SRCS    := $(wildcard tests/*.c)
+TEST_HDRS    := $(wildcard tests/*.h)
+
+.PHONY: all run run-all test nothreads-test check-warnings clean help
+
+all: $(EXAMPLE_BINS)
+
+$(BUILD) $(OUT):
+	mkdir -p $@
+
+$(BUILD)/%: examples/%.c pdftrace.h | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PT_LDLIBS)
+
+run: $(BUILD)/cornell | $(OUT)
+	$(BUILD)/cornell --spp $(RUN_SPP) $(RUN_ARGS) -o $(OUT)/cornell.ppm -o $(OUT)/cornell.pfm
+
+run-all: run $(EXAMPLE_BINS) | $(OUT)
+	$(BUILD)/minimal $(OUT)/minimal.ppm
+	$(BUILD)/custom_pdf $(OUT)/custom_pdf.ppm $(OUT)/custom_pdf_unguided.ppm
+
+# ---- tests: one runner from all tests/*.c (tests/test_main.c defines PDFTRACE_IMPLEMENTATION)
+
+define need_tests
+	@test -n "$(TEST_SRCS)" || { echo "error: no tests/*.c found" >&2; exit 1; }
+endef
+
+$(BUILD)/test_runner: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+	$(need_tests)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+
+$(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+	$(need_tests)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+
+# Without threads: no -pthread at all, to show the library does not need it.
+$(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+	$(need_tests)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+
+# The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed".
+test: $(BUILD)/test_runner $(BUILD)/test_runner_nothreads $(BUILD)/test_runner_asan
+	./$(BUILD)/test_runner
+	./$(BUILD)/test_runner_nothreads
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan
+
+nothreads-test: $(BUILD)/test_runner_nothreads
+	./$(BUILD)/test_runner_nothreads
+
+# ---- warnings: each example is a complete program with the implementation included.
+
+check-warnings: | $(BUILD)
+	@set -e; for cc in $(WARN_CC); do \
+	    for ex in $(EXAMPLES); do \
+	        echo "$$cc $(WARN_CFLAGS) examples/$$ex.c"; \
+	        $$cc $(WARN_CFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) -c examples/$$ex.c -o $(BUILD)/warn-$$cc-$$ex.o; \
+	    done; \
+	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS examples/minimal.c"; \
+	    $$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS $(PT_CPPFLAGS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-nothreads.o; \
+	done; \
+	for cxx in $(WARN_CXX); do \
+	    echo "$$cxx $(WARN_CXXFLAGS) examples/cpp_check.cpp (then run it)"; \
+	    $$cxx $(WARN_CXXFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) examples/cpp_check.cpp -o $(BUILD)/cpp_check-$$cxx $(PT_LDLIBS); \
+	    ./$(BUILD)/cpp_check-$$cxx; \
+	done; \
+	echo "check-warnings: all clean"
+
+clean:
+	rm -rf $(BUILD) $(OUT)
+
+help:
+	@sed -n '2,12p' Makefile | sed 's/^# \{0,1\}//'

@@ -1,0 +1,32 @@
+// cpp_check.cpp - compiles pdftrace.h, implementation included, as C++ (used by
+// `make check-warnings`) and runs a tiny scene through the public API.
+#define PDFTRACE_IMPLEMENTATION
+#include "pdftrace.h"
+
+#include <cstdio>
+
+int main()
+{
+    pt_scene *s = pt_scene_create();
+    if (!s) return 1;
+    int white = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    int light = pt_scene_add_emitter(s, pt_v3(4, 4, 4), 1);
+    int rc = white < 0 ? white : light;
+    if (rc >= 0) rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, white);
+    if (rc >= 0) rc = pt_scene_add_quad(s, pt_v3(-1, 3, -1), pt_v3(2, 0, 0), pt_v3(0, 0, 2), light);
+    if (rc >= 0) rc = pt_scene_commit(s);
+    pt_render_desc d = {};
+    pt_image img = {};
+    if (rc >= 0) {
+        d.width = 8;
+        d.height = 8;
+        d.samples_per_pixel = 2;
+        d.threads = 1;
+        d.camera.look_from = pt_v3(0, 0, -5);
+        rc = pt_render_image(s, &d, &img, NULL);
+    }
+    if (rc != PT_OK) std::fprintf(stderr, "cpp_check: %s\n", pt_result_string(rc));
+    pt_image_free(&img);
+    pt_scene_destroy(s);
+    return rc == PT_OK ? 0 : 1;
+}
