@@ -616,3 +616,2676 @@ PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, cl
 #endif
 
 #endif /* PDFTRACE_H */
+
+/* ==========================================================================================
+   IMPLEMENTATION
+   ========================================================================================== */
+#ifdef PDFTRACE_IMPLEMENTATION
+#ifndef PDFTRACE_IMPLEMENTATION_DONE
+#define PDFTRACE_IMPLEMENTATION_DONE
+
+#if !defined(_POSIX_C_SOURCE) && !defined(_GNU_SOURCE) && !defined(_WIN32) && !defined(__cplusplus)
+#define _POSIX_C_SOURCE 200809L /* effective only when this header is the first one included */
+#endif
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <stdarg.h>
+#include <float.h>
+#include <time.h>
+#ifndef PDFTRACE_NO_THREADS
+#include <pthread.h>
+#include <unistd.h>
+#endif
+
+#if defined(PT_MALLOC) && defined(PT_FREE) && defined(PT_REALLOC)
+/* all three given */
+#elif !defined(PT_MALLOC) && !defined(PT_FREE) && !defined(PT_REALLOC)
+#define PT_MALLOC(sz) malloc(sz)
+#define PT_REALLOC(p, sz) realloc(p, sz)
+#define PT_FREE(p) free(p)
+#else
+#error "pdftrace: define all of PT_MALLOC, PT_REALLOC and PT_FREE, or none"
+#endif
+
+#ifndef PT_ASSERT
+#include <assert.h>
+#define PT_ASSERT(x) assert(x)
+#endif
+
+#define PT__PI 3.14159265358979323846f
+#define PT__INV_PI 0.31830988618379067154f
+#define PT__INV_4PI 0.07957747154594766788f
+#define PT__INF FLT_MAX
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+PTDEF const char *pt_result_string(int code)
+{
+    switch (code) {
+    case PT_OK: return "ok";
+    case PT_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case PT_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case PT_ERROR_IO: return "input/output error";
+    case PT_ERROR_INVALID_STATE: return "invalid state";
+    case PT_ERROR_CANCELLED: return "cancelled";
+    case PT_ERROR_THREAD: return "thread error";
+    case PT_ERROR_UNSUPPORTED: return "unsupported";
+    default: return "unknown error";
+    }
+}
+
+/* ------------------------------------------------------------------------------------------
+   1. Math
+   ------------------------------------------------------------------------------------------ */
+
+/* isfinite on the bit pattern, so that -ffast-math builds still catch NaN and Inf. */
+static int pt__isfinite(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return (u & 0x7f800000u) != 0x7f800000u;
+}
+static int pt__vfinite(pt_vec3 v) { return pt__isfinite(v.x) && pt__isfinite(v.y) && pt__isfinite(v.z); }
+static float pt__minf(float a, float b) { return a < b ? a : b; }
+static float pt__maxf(float a, float b) { return a > b ? a : b; }
+static float pt__safe_sqrt(float x) { return sqrtf(x > 0.0f ? x : 0.0f); }
+static pt_vec3 pt__vmin(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__minf(a.x, b.x), pt__minf(a.y, b.y), pt__minf(a.z, b.z)); }
+static pt_vec3 pt__vmax(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__maxf(a.x, b.x), pt__maxf(a.y, b.y), pt__maxf(a.z, b.z)); }
+static float pt__vget(pt_vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+static float pt__mean3(pt_vec3 c) { return (c.x + c.y + c.z) * (1.0f / 3.0f); }
+static int pt__is_black(pt_vec3 c) { return c.x <= 0.0f && c.y <= 0.0f && c.z <= 0.0f; }
+
+/* Waechter & Binder, Ray Tracing Gems ch. 6: move each coordinate by int(256 n_i) ulps in
+   the direction of the normal (integer arithmetic on the float bits), or by n_i/65536 near
+   the origin where ulps are too small to matter. */
+static float pt__int_as_float(int32_t i) { float f; memcpy(&f, &i, sizeof f); return f; }
+static int32_t pt__float_as_int(float f) { int32_t i; memcpy(&i, &f, sizeof i); return i; }
+static float pt__offset_coord(float p, float n)
+{
+    const float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
+    int32_t of_i = (int32_t)(int_scale * n);
+    float p_i = pt__int_as_float(pt__float_as_int(p) + ((p < 0.0f) ? -of_i : of_i));
+    return fabsf(p) < origin ? p + float_scale * n : p_i;
+}
+PTDEF pt_vec3 pt_offset_ray_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w)
+{
+    if (pt_dot(n, w) < 0.0f) n = pt_neg(n);
+    return pt_v3(pt__offset_coord(p.x, n.x), pt__offset_coord(p.y, n.y), pt__offset_coord(p.z, n.z));
+}
+
+PTDEF pt_transform pt_transform_identity(void)
+{
+    pt_transform t;
+    memset(&t, 0, sizeof t);
+    t.m[0][0] = t.m[1][1] = t.m[2][2] = 1.0f;
+    return t;
+}
+PTDEF pt_transform pt_transform_translate(pt_vec3 v)
+{
+    pt_transform t = pt_transform_identity();
+    t.m[0][3] = v.x; t.m[1][3] = v.y; t.m[2][3] = v.z;
+    return t;
+}
+PTDEF pt_transform pt_transform_scale(pt_vec3 s)
+{
+    pt_transform t = pt_transform_identity();
+    t.m[0][0] = s.x; t.m[1][1] = s.y; t.m[2][2] = s.z;
+    return t;
+}
+/* Rodrigues' rotation formula, in matrix form. */
+PTDEF pt_transform pt_transform_rotate(pt_vec3 axis, float degrees)
+{
+    pt_transform t = pt_transform_identity();
+    pt_vec3 a = pt_normalize(axis);
+    double th = (double)degrees * 3.14159265358979323846 / 180.0;
+    float c = (float)cos(th), s = (float)sin(th), k = 1.0f - c;
+    if (pt_length2(a) == 0.0f) return t;
+    t.m[0][0] = a.x * a.x * k + c;       t.m[0][1] = a.x * a.y * k - a.z * s; t.m[0][2] = a.x * a.z * k + a.y * s;
+    t.m[1][0] = a.y * a.x * k + a.z * s; t.m[1][1] = a.y * a.y * k + c;       t.m[1][2] = a.y * a.z * k - a.x * s;
+    t.m[2][0] = a.z * a.x * k - a.y * s; t.m[2][1] = a.z * a.y * k + a.x * s; t.m[2][2] = a.z * a.z * k + c;
+    return t;
+}
+PTDEF pt_transform pt_transform_rotate_y(float degrees) { return pt_transform_rotate(pt_v3(0, 1, 0), degrees); }
+PTDEF pt_transform pt_transform_mul(pt_transform a, pt_transform b)
+{
+    pt_transform r;
+    int i, j;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 4; ++j) {
+            r.m[i][j] = a.m[i][0] * b.m[0][j] + a.m[i][1] * b.m[1][j] + a.m[i][2] * b.m[2][j];
+        }
+        r.m[i][3] += a.m[i][3];
+    }
+    return r;
+}
+PTDEF pt_vec3 pt_transform_point(const pt_transform *t, pt_vec3 p)
+{
+    return pt_v3(t->m[0][0] * p.x + t->m[0][1] * p.y + t->m[0][2] * p.z + t->m[0][3],
+                 t->m[1][0] * p.x + t->m[1][1] * p.y + t->m[1][2] * p.z + t->m[1][3],
+                 t->m[2][0] * p.x + t->m[2][1] * p.y + t->m[2][2] * p.z + t->m[2][3]);
+}
+PTDEF pt_vec3 pt_transform_vector(const pt_transform *t, pt_vec3 v)
+{
+    return pt_v3(t->m[0][0] * v.x + t->m[0][1] * v.y + t->m[0][2] * v.z,
+                 t->m[1][0] * v.x + t->m[1][1] * v.y + t->m[1][2] * v.z,
+                 t->m[2][0] * v.x + t->m[2][1] * v.y + t->m[2][2] * v.z);
+}
+/* n' = (M^-1)^T n, computed as the cofactor matrix of M times n (the determinant only scales). */
+PTDEF int pt_transform_normal(const pt_transform *t, pt_vec3 n, pt_vec3 *out)
+{
+    pt_vec3 c0 = pt_v3(t->m[0][0], t->m[1][0], t->m[2][0]);
+    pt_vec3 c1 = pt_v3(t->m[0][1], t->m[1][1], t->m[2][1]);
+    pt_vec3 c2 = pt_v3(t->m[0][2], t->m[1][2], t->m[2][2]);
+    pt_vec3 r0 = pt_cross(c1, c2), r1 = pt_cross(c2, c0), r2 = pt_cross(c0, c1);
+    float det = pt_dot(c0, r0);
+    pt_vec3 m;
+    if (!out) return PT_ERROR_INVALID_ARGUMENT;
+    if (det == 0.0f || !pt__isfinite(det)) { *out = pt_v3(0, 0, 0); return PT_ERROR_INVALID_ARGUMENT; }
+    m = pt_v3(r0.x * n.x + r1.x * n.y + r2.x * n.z,
+              r0.y * n.x + r1.y * n.y + r2.y * n.z,
+              r0.z * n.x + r1.z * n.y + r2.z * n.z);
+    if (det < 0.0f) m = pt_neg(m);
+    *out = pt_normalize(m);
+    return PT_OK;
+}
+static float pt__transform_det(const pt_transform *t)
+{
+    pt_vec3 c0 = pt_v3(t->m[0][0], t->m[1][0], t->m[2][0]);
+    pt_vec3 c1 = pt_v3(t->m[0][1], t->m[1][1], t->m[2][1]);
+    pt_vec3 c2 = pt_v3(t->m[0][2], t->m[1][2], t->m[2][2]);
+    return pt_dot(c0, pt_cross(c1, c2));
+}
+
+/* Duff, Burgess, Christensen, Hery, Kensler, Liani & Villemin, "Building an Orthonormal
+   Basis, Revisited", JCGT 6(1), 2017: branch-free, exact at n.z = -1 thanks to copysign. */
+PTDEF pt_onb pt_onb_from_normal(pt_vec3 n)
+{
+    pt_onb b;
+    float sign = copysignf(1.0f, n.z);
+    float a = -1.0f / (sign + n.z);
+    float c = n.x * n.y * a;
+    b.s = pt_v3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b.t = pt_v3(c, sign + n.y * n.y * a, -n.y);
+    b.n = n;
+    return b;
+}
+
+/* PCG32 seeding as in O'Neill's reference: state = 0, inc = 2*stream+1, step, add seed, step. */
+PTDEF void pt_rng_seed(pt_rng *r, uint64_t seed, uint64_t stream)
+{
+    if (!r) return;
+    r->state = 0u;
+    r->inc = (stream << 1u) | 1u;
+    (void)pt_rng_u32(r);
+    r->state += seed;
+    (void)pt_rng_u32(r);
+}
+/* SplitMix64 finaliser (Steele, Lea & Flood, "Fast Splittable Pseudorandom Number
+   Generators", OOPSLA 2014) hashes (seed, pixel, sample) into a PCG state and stream. */
+static uint64_t pt__mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+PTDEF pt_rng pt_rng_for_sample(uint64_t seed, uint32_t pixel, uint32_t sample)
+{
+    pt_rng r;
+    uint64_t key = ((uint64_t)pixel << 32) | (uint64_t)sample;
+    uint64_t h1 = pt__mix64(seed + 0x9e3779b97f4a7c15ULL);
+    uint64_t h2 = pt__mix64(key ^ h1);
+    uint64_t h3 = pt__mix64(h2 + 0x9e3779b97f4a7c15ULL);
+    pt_rng_seed(&r, h2, h3);
+    return r;
+}
+
+/* Internal representation of a scene (shared by the sections below). */
+enum { PT__PRIM_SPHERE = 0, PT__PRIM_QUAD = 1, PT__PRIM_TRIANGLE = 2 };
+
+typedef struct pt__prim {
+    pt_vec3 p0;       /* sphere: centre | quad: Q | triangle: a */
+    pt_vec3 p1;       /* sphere: (radius, 0, 0) | quad: u | triangle: b */
+    pt_vec3 p2;       /* quad: v | triangle: c */
+    pt_vec3 n;        /* quad, triangle: unit geometric normal */
+    pt_vec3 w;        /* quad: n'/(n'.n'), n' = u x v (plane coordinates, Shirley RTNW) */
+    uint32_t id;      /* public primitive index */
+    int32_t material;
+    int32_t light;    /* index into scene->lights, or -1 */
+    int32_t normals;  /* first of 3 shading normals in scene->normals, or -1 */
+    int32_t type;     /* PT__PRIM_* */
+} pt__prim;
+
+typedef struct pt__material {
+    pt_material_type type;
+    pt_color albedo;
+    int texture;      /* 0 or texture id */
+    float fuzz, ior;
+    pt_color emission;
+    int two_sided, emits, delta, scatters;
+} pt__material;
+
+typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
+
+typedef struct pt__light {
+    uint32_t prim;    /* index into scene->prims (after BVH ordering) */
+    float power, select_pdf, cdf;
+    float area;
+} pt__light;
+
+typedef struct pt__node {
+    float lo[3];
+    uint32_t index;   /* leaf: first primitive; inner: second child (first child is next) */
+    float hi[3];
+    uint16_t count;   /* leaf: number of primitives (> 0); inner: 0 */
+    uint16_t axis;    /* inner: split axis */
+} pt__node;
+
+struct pt_scene {
+    pt__prim *prims;
+    uint32_t prim_count, prim_cap;
+    pt__material *mats;
+    uint32_t mat_count, mat_cap;
+    pt__texture *texs;
+    uint32_t tex_count, tex_cap;
+    pt_vec3 *normals;
+    uint32_t normal_count, normal_cap;
+    pt__node *nodes;
+    uint32_t node_count, bvh_depth;
+    pt__light *lights;
+    uint32_t light_count;
+    double total_power;
+    pt_transform xf;
+    int xf_identity;
+    int committed;
+    unsigned features;
+    uint32_t sphere_count, quad_count, triangle_count, mesh_count, degenerate_skipped;
+    pt_vec3 lo, hi;
+    char error[256];
+};
+
+static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
+{
+    pt_scene *scene = (pt_scene *)cscene;
+    if (scene) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(scene->error, sizeof scene->error, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+/* ------------------------------------------------------------------------------------------
+   2. Sampling and PDFs
+   ------------------------------------------------------------------------------------------ */
+
+/* Concentric map of the square to the disk (Shirley & Chiu, "A Low Distortion Map Between
+   Disk and Square", JGT 2(3), 1997). */
+PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y)
+{
+    float sx = 2.0f * u1 - 1.0f, sy = 2.0f * u2 - 1.0f, r, th;
+    if (sx == 0.0f && sy == 0.0f) { *x = 0.0f; *y = 0.0f; return; }
+    if (fabsf(sx) > fabsf(sy)) { r = sx; th = (PT__PI / 4.0f) * (sy / sx); }
+    else { r = sy; th = (PT__PI / 2.0f) - (PT__PI / 4.0f) * (sx / sy); }
+    *x = r * cosf(th);
+    *y = r * sinf(th);
+}
+/* Malley's method: project the uniform disk up to the hemisphere; density cos(theta)/pi. */
+PTDEF pt_vec3 pt_sample_cosine_hemisphere(float u1, float u2)
+{
+    float x, y;
+    pt_sample_concentric_disk(u1, u2, &x, &y);
+    return pt_v3(x, y, pt__safe_sqrt(1.0f - x * x - y * y));
+}
+/* Archimedes: z is uniform on [-1, 1] for uniform directions; density 1/(4 pi). */
+PTDEF pt_vec3 pt_sample_uniform_sphere(float u1, float u2)
+{
+    float z = 1.0f - 2.0f * u1, r = pt__safe_sqrt(1.0f - z * z), phi = 2.0f * PT__PI * u2;
+    return pt_v3(r * cosf(phi), r * sinf(phi), z);
+}
+
+/* A point sampled on a light, seen from a shading point. */
+typedef struct pt__light_sample {
+    pt_vec3 dir;      /* unit, from the shading point to the light point */
+    float dist;       /* distance to the light point */
+    float pdf;        /* solid-angle density of dir for this light alone */
+    pt_vec3 point, normal;
+} pt__light_sample;
+
+/* --- sphere light. Outside: uniform in the cone of directions that meet the sphere, with
+   1 - cos(theta_max) = s^2 / (1 + cos(theta_max)), s = sin(theta_max), which stays exact for
+   tiny and distant spheres where 1 - sqrt(1 - s^2) rounds to zero (shared/docs
+   accuracy-references; Shirley RTRL sec. 12 for the cone; pbrt-v4 sec. 6.2.4). Inside or on the
+   sphere (two-sided only; a one-sided sphere emits outwards and cannot light its inside):
+   uniform area sampling converted to solid angle, density dist^2 / (|cos| * area). */
+static int pt__sphere_inside(pt_vec3 o, pt_vec3 c, float r)
+{
+    pt_vec3 wc = pt_sub(c, o);
+    return pt_length2(wc) <= r * r;
+}
+static float pt__cone_one_minus_cos(float s2)
+{
+    float cosmax = pt__safe_sqrt(1.0f - s2);
+    return s2 / (1.0f + cosmax);
+}
+static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided, float u1, float u2,
+                                   pt__light_sample *ls)
+{
+    pt_vec3 wc = pt_sub(c, o);
+    float d2 = pt_length2(wc);
+    if (d2 > r * r) {
+        float d = sqrtf(d2), s2 = (r * r) / d2;
+        float omc = pt__cone_one_minus_cos(s2);           /* 1 - cos(theta_max) */
+        float uc = u1 * omc;
+        float cos_t = 1.0f - uc, sin2_t = uc * (2.0f - uc), sin_t = pt__safe_sqrt(sin2_t);
+        float phi = 2.0f * PT__PI * u2, t;
+        pt_onb b = pt_onb_from_normal(pt_scale(wc, 1.0f / d));
+        if (!(omc > 0.0f)) return 0;
+        ls->dir = pt_normalize(pt_onb_to_world(&b, pt_v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t)));
+        ls->pdf = 1.0f / (2.0f * PT__PI * omc);
+        /* distance to the near intersection: d (cos - sqrt(s^2 - sin^2)) */
+        t = d * (cos_t - pt__safe_sqrt(s2 - sin2_t));
+        ls->dist = t > 0.0f ? t : 0.0f;
+        ls->point = pt_madd(o, ls->dir, ls->dist);
+        ls->normal = pt_normalize(pt_sub(ls->point, c));
+        return pt__isfinite(ls->pdf) && ls->dist > 0.0f;
+    }
+    if (!two_sided) return 0;
+    {
+        pt_vec3 n = pt_sample_uniform_sphere(u1, u2), p = pt_madd(c, n, r), v = pt_sub(p, o);
+        float dist2 = pt_length2(v), dist, cosl;
+        if (!(dist2 > 0.0f)) return 0;
+        dist = sqrtf(dist2);
+        ls->dir = pt_scale(v, 1.0f / dist);
+        cosl = fabsf(pt_dot(n, ls->dir));
+        if (!(cosl > 0.0f)) return 0;
+        ls->pdf = dist2 / (cosl * 4.0f * PT__PI * r * r);
+        ls->dist = dist;
+        ls->point = p;
+        ls->normal = n;
+        return pt__isfinite(ls->pdf);
+    }
+}
+/* Density of unit direction w; when the caller already knows the hit distance along w (from
+   the inside), pass it as t_known (else a negative value). */
+static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w, float t_known)
+{
+    pt_vec3 wc = pt_sub(c, o);
+    float d2 = pt_length2(wc);
+    if (d2 > r * r) {
+        float s2 = (r * r) / d2, sin2, tol;
+        if (pt_dot(w, wc) <= 0.0f) return 0.0f;
+        /* sin^2 of the angle to the centre from the cross product: accurate for tiny angles.
+           The tolerance covers a few ulps of error in unit directions at the cone's rim. */
+        sin2 = pt_length2(pt_cross(w, wc)) / d2;
+        tol = 8.0f * FLT_EPSILON * (sqrtf(s2) + s2);
+        if (sin2 > s2 + tol) return 0.0f;
+        return 1.0f / (2.0f * PT__PI * pt__cone_one_minus_cos(s2));
+    }
+    if (!two_sided) return 0.0f;
+    {
+        float t = t_known, cosl;
+        pt_vec3 p, n;
+        if (t < 0.0f) {
+            /* far root of |o + t w - c|^2 = r^2 from inside: t = b + sqrt(b^2 + r^2 - d^2) */
+            float bq = pt_dot(w, wc);
+            pt_vec3 l = pt_sub(wc, pt_scale(w, bq));   /* Haines et al.: perpendicular part */
+            float disc = (r - pt_length(l)) * (r + pt_length(l));
+            if (disc < 0.0f) disc = 0.0f;
+            t = bq + sqrtf(disc);
+        }
+        if (!(t > 0.0f)) return 0.0f;
+        p = pt_madd(o, w, t);
+        n = pt_normalize(pt_sub(p, c));
+        cosl = fabsf(pt_dot(n, w));
+        if (!(cosl > 0.0f)) return 0.0f;
+        return (t * t) / (cosl * 4.0f * PT__PI * r * r);
+    }
+}
+
+/* --- planar lights (parallelogram, triangle): area sampling converted to solid angle,
+   p(w) = dist^2 / (|cos theta_l| A) (pbrt-v4 sec. 4.2.3, change of variables). A one-sided
+   light seen from behind its plane has no density at all. */
+static int pt__planar_faces(pt_vec3 o, pt_vec3 q, pt_vec3 n, int two_sided)
+{
+    float side = pt_dot(n, pt_sub(o, q));
+    return two_sided ? side != 0.0f : side > 0.0f;
+}
+static int pt__planar_finish(pt_vec3 o, pt_vec3 p, pt_vec3 n, float area, pt__light_sample *ls)
+{
+    pt_vec3 v = pt_sub(p, o);
+    float dist2 = pt_length2(v), dist, cosl;
+    if (!(dist2 > 0.0f)) return 0;
+    dist = sqrtf(dist2);
+    ls->dir = pt_scale(v, 1.0f / dist);
+    cosl = fabsf(pt_dot(n, ls->dir));
+    if (!(cosl > 0.0f)) return 0;
+    ls->pdf = dist2 / (cosl * area);
+    ls->dist = dist;
+    ls->point = p;
+    ls->normal = n;
+    return pt__isfinite(ls->pdf);
+}
+static int pt__quad_light_sample(pt_vec3 o, pt_vec3 q, pt_vec3 u, pt_vec3 v, int two_sided, float u1, float u2,
+                                 pt__light_sample *ls)
+{
+    pt_vec3 nn = pt_cross(u, v), n = pt_normalize(nn);
+    float area = pt_length(nn);
+    if (!(area > 0.0f) || !pt__planar_faces(o, q, n, two_sided)) return 0;
+    return pt__planar_finish(o, pt_madd(pt_madd(q, u, u1), v, u2), n, area, ls);
+}
+static float pt__quad_light_value(pt_vec3 o, pt_vec3 q, pt_vec3 u, pt_vec3 v, int two_sided, pt_vec3 w)
+{
+    pt_vec3 nn = pt_cross(u, v), n = pt_normalize(nn);
+    float area = pt_length(nn), t, cosl;
+    pt_ray ray;
+    if (!(area > 0.0f) || !pt__planar_faces(o, q, n, two_sided)) return 0.0f;
+    ray.origin = o; ray.dir = w;
+    if (!pt_intersect_quad(ray, q, u, v, PT__INF, &t)) return 0.0f;
+    cosl = fabsf(pt_dot(n, w));
+    if (!(cosl > 0.0f)) return 0.0f;
+    return (t * t) / (cosl * area);
+}
+/* Uniform point in a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Osada, Funkhouser,
+   Chazelle & Dobkin, "Shape Distributions", ACM TOG 21(4), 2002, eq. 1). */
+static int pt__triangle_light_sample(pt_vec3 o, pt_vec3 a, pt_vec3 b, pt_vec3 c, int two_sided, float u1, float u2,
+                                     pt__light_sample *ls)
+{
+    pt_vec3 nn = pt_cross(pt_sub(b, a), pt_sub(c, a)), n = pt_normalize(nn), p;
+    float area = 0.5f * pt_length(nn), su = sqrtf(u1), b0 = 1.0f - su, b1 = u2 * su;
+    if (!(area > 0.0f) || !pt__planar_faces(o, a, n, two_sided)) return 0;
+    p = pt_add(pt_add(pt_scale(a, b0), pt_scale(b, b1)), pt_scale(c, 1.0f - b0 - b1));
+    return pt__planar_finish(o, p, n, area, ls);
+}
+static float pt__triangle_light_value(pt_vec3 o, pt_vec3 a, pt_vec3 b, pt_vec3 c, int two_sided, pt_vec3 w)
+{
+    pt_vec3 nn = pt_cross(pt_sub(b, a), pt_sub(c, a)), n = pt_normalize(nn);
+    float area = 0.5f * pt_length(nn), t, cosl;
+    pt_ray ray;
+    if (!(area > 0.0f) || !pt__planar_faces(o, a, n, two_sided)) return 0.0f;
+    ray.origin = o; ray.dir = w;
+    if (!pt_intersect_triangle(ray, a, b, c, PT__INF, &t)) return 0.0f;
+    cosl = fabsf(pt_dot(n, w));
+    if (!(cosl > 0.0f)) return 0.0f;
+    return (t * t) / (cosl * area);
+}
+
+/* --- fuzzy metal lobe: the direction of r + f s, with r the unit mirror direction and s
+   uniform in the unit ball (Shirley, "Ray Tracing in One Weekend" v3, sec. 10.6). Its
+   density follows in closed form: along direction w at angle theta from r the ball covers
+   t in [t1, t2], roots of t^2 - 2 t cos(theta) + 1 - f^2 = 0, and
+   p(w) = (t2^3 - t1^3) / (3 V), V = 4/3 pi f^3. With h = sqrt(f^2 - sin^2 theta),
+   t2 - t1 = 2h and t2^3 - t1^3 = 2h (4 cos^2 theta - 1 + f^2) (no cancellation);
+   for f <= 1 the ball never contains the origin, so t1 >= 0 wherever cos(theta) >= 0. */
+static float pt__fuzz_value(pt_vec3 r, float f, pt_vec3 w)
+{
+    float cos_t = pt_dot(w, r), sin2 = pt_length2(pt_cross(w, r)), f2 = f * f, h;
+    if (cos_t <= 0.0f || sin2 >= f2) return 0.0f;
+    h = sqrtf(f2 - sin2);
+    return h * (4.0f * cos_t * cos_t - 1.0f + f2) / (2.0f * PT__PI * f2 * f);
+}
+static pt_vec3 pt__fuzz_sample(pt_vec3 r, float f, float u1, float u2, float u3)
+{
+    pt_vec3 s = pt_scale(pt_sample_uniform_sphere(u1, u2), f * cbrtf(u3));
+    return pt_normalize(pt_add(r, s));
+}
+static pt_vec3 pt__reflect(pt_vec3 wo, pt_vec3 n) { return pt_sub(pt_scale(n, 2.0f * pt_dot(wo, n)), wo); }
+
+/* Forward declarations of scene-side helpers used by the public PDFs. */
+static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
+                             uint32_t *light_index);
+static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w);
+static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
+                                   float u3, pt_vec3 *dir, float *pdf);
+static float pt__material_pdf_value(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, pt_vec3 w);
+
+static pt_pdf pt__pdf_blank(pt_pdf_type type)
+{
+    pt_pdf p;
+    memset(&p, 0, sizeof p);
+    p.type = type;
+    return p;
+}
+PTDEF pt_pdf pt_pdf_uniform_sphere(void) { return pt__pdf_blank(PT_PDF_UNIFORM_SPHERE); }
+PTDEF pt_pdf pt_pdf_cosine_hemisphere(pt_vec3 unit_normal)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_COSINE_HEMISPHERE);
+    p.as.cosine.basis = pt_onb_from_normal(pt_normalize(unit_normal));
+    return p;
+}
+PTDEF pt_pdf pt_pdf_sphere_light(pt_vec3 origin, pt_vec3 center, float radius, int two_sided)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_SPHERE_LIGHT);
+    p.origin = origin;
+    p.as.sphere.center = center;
+    p.as.sphere.radius = radius;
+    p.as.sphere.two_sided = two_sided;
+    return p;
+}
+PTDEF pt_pdf pt_pdf_quad_light(pt_vec3 origin, pt_vec3 q, pt_vec3 u, pt_vec3 v, int two_sided)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_QUAD_LIGHT);
+    p.origin = origin;
+    p.as.quad.q = q; p.as.quad.u = u; p.as.quad.v = v;
+    p.as.quad.two_sided = two_sided;
+    return p;
+}
+PTDEF pt_pdf pt_pdf_triangle_light(pt_vec3 origin, pt_vec3 a, pt_vec3 b, pt_vec3 c, int two_sided)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_TRIANGLE_LIGHT);
+    p.origin = origin;
+    p.as.triangle.a = a; p.as.triangle.b = b; p.as.triangle.c = c;
+    p.as.triangle.two_sided = two_sided;
+    return p;
+}
+PTDEF pt_pdf pt_pdf_scene_lights(const pt_scene *scene, pt_vec3 origin)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_SCENE_LIGHTS);
+    p.origin = origin;
+    p.as.lights.scene = scene;
+    return p;
+}
+PTDEF pt_pdf pt_pdf_material(const pt_scene *scene, int material, pt_vec3 normal, pt_vec3 wo)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_MATERIAL);
+    p.as.material.scene = scene;
+    p.as.material.material = material;
+    p.as.material.normal = pt_normalize(normal);
+    p.as.material.wo = pt_normalize(wo);
+    return p;
+}
+PTDEF pt_pdf pt_pdf_mixture(int count, const pt_pdf *components, const float *weights)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_MIXTURE);
+    p.as.mixture.count = count;
+    p.as.mixture.components = components;
+    p.as.mixture.weights = weights;
+    return p;
+}
+PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_fn value)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_CALLBACK);
+    p.as.callback.user = user;
+    p.as.callback.sample = sample;
+    p.as.callback.value = value;
+    return p;
+}
+
+static int pt__pdf_validate_depth(const pt_pdf *pdf, int depth)
+{
+    if (!pdf || depth > 32) return PT_ERROR_INVALID_ARGUMENT;
+    switch (pdf->type) {
+    case PT_PDF_UNIFORM_SPHERE: return PT_OK;
+    case PT_PDF_COSINE_HEMISPHERE:
+        return pt__vfinite(pdf->as.cosine.basis.n) && pt_length2(pdf->as.cosine.basis.n) > 0.5f ? PT_OK
+                                                                                                 : PT_ERROR_INVALID_ARGUMENT;
+    case PT_PDF_SPHERE_LIGHT:
+        return pt__vfinite(pdf->origin) && pt__vfinite(pdf->as.sphere.center) && pt__isfinite(pdf->as.sphere.radius) &&
+                       pdf->as.sphere.radius > 0.0f
+                   ? PT_OK
+                   : PT_ERROR_INVALID_ARGUMENT;
+    case PT_PDF_QUAD_LIGHT:
+        return pt__vfinite(pdf->origin) && pt__vfinite(pdf->as.quad.q) && pt__vfinite(pdf->as.quad.u) &&
+                       pt__vfinite(pdf->as.quad.v) && pt_length2(pt_cross(pdf->as.quad.u, pdf->as.quad.v)) > 0.0f
+                   ? PT_OK
+                   : PT_ERROR_INVALID_ARGUMENT;
+    case PT_PDF_TRIANGLE_LIGHT:
+        return pt__vfinite(pdf->origin) && pt__vfinite(pdf->as.triangle.a) && pt__vfinite(pdf->as.triangle.b) &&
+                       pt__vfinite(pdf->as.triangle.c) &&
+                       pt_length2(pt_cross(pt_sub(pdf->as.triangle.b, pdf->as.triangle.a),
+                                           pt_sub(pdf->as.triangle.c, pdf->as.triangle.a))) > 0.0f
+                   ? PT_OK
+                   : PT_ERROR_INVALID_ARGUMENT;
+    case PT_PDF_SCENE_LIGHTS:
+        return pdf->as.lights.scene && pdf->as.lights.scene->committed && pt__vfinite(pdf->origin)
+                   ? PT_OK
+                   : PT_ERROR_INVALID_ARGUMENT;
+    case PT_PDF_MATERIAL: {
+        const pt_scene *s = pdf->as.material.scene;
+        if (!s || pdf->as.material.material < 0 || (uint32_t)pdf->as.material.material >= s->mat_count)
+            return PT_ERROR_INVALID_ARGUMENT;
+        return pt__vfinite(pdf->as.material.normal) && pt__vfinite(pdf->as.material.wo) ? PT_OK
+                                                                                        : PT_ERROR_INVALID_ARGUMENT;
+    }
+    case PT_PDF_MIXTURE: {
+        int k;
+        double sum = 0.0;
+        if (pdf->as.mixture.count <= 0 || !pdf->as.mixture.components || !pdf->as.mixture.weights)
+            return PT_ERROR_INVALID_ARGUMENT;
+        for (k = 0; k < pdf->as.mixture.count; ++k) {
+            float w = pdf->as.mixture.weights[k];
+            if (!pt__isfinite(w) || w < 0.0f) return PT_ERROR_INVALID_ARGUMENT;
+            sum += w;
+            if (pt__pdf_validate_depth(&pdf->as.mixture.components[k], depth + 1) != PT_OK)
+                return PT_ERROR_INVALID_ARGUMENT;
+        }
+        return fabs(sum - 1.0) <= 1e-4 ? PT_OK : PT_ERROR_INVALID_ARGUMENT;
+    }
+    case PT_PDF_CALLBACK:
+        return pdf->as.callback.sample && pdf->as.callback.value ? PT_OK : PT_ERROR_INVALID_ARGUMENT;
+    default: return PT_ERROR_INVALID_ARGUMENT;
+    }
+}
+PTDEF int pt_pdf_validate(const pt_pdf *pdf) { return pt__pdf_validate_depth(pdf, 0); }
+
+PTDEF float pt_pdf_value(const pt_pdf *pdf, pt_vec3 w)
+{
+    float v = 0.0f;
+    if (!pdf) return 0.0f;
+    switch (pdf->type) {
+    case PT_PDF_UNIFORM_SPHERE: v = PT__INV_4PI; break;
+    case PT_PDF_COSINE_HEMISPHERE: v = pt__maxf(0.0f, pt_dot(w, pdf->as.cosine.basis.n)) * PT__INV_PI; break;
+    case PT_PDF_SPHERE_LIGHT:
+        v = pt__sphere_light_value(pdf->origin, pdf->as.sphere.center, pdf->as.sphere.radius, pdf->as.sphere.two_sided,
+                                   w, -1.0f);
+        break;
+    case PT_PDF_QUAD_LIGHT:
+        v = pt__quad_light_value(pdf->origin, pdf->as.quad.q, pdf->as.quad.u, pdf->as.quad.v, pdf->as.quad.two_sided, w);
+        break;
+    case PT_PDF_TRIANGLE_LIGHT:
+        v = pt__triangle_light_value(pdf->origin, pdf->as.triangle.a, pdf->as.triangle.b, pdf->as.triangle.c,
+                                     pdf->as.triangle.two_sided, w);
+        break;
+    case PT_PDF_SCENE_LIGHTS:
+        if (pdf->as.lights.scene && pdf->as.lights.scene->committed)
+            v = pt__lights_value(pdf->as.lights.scene, pdf->origin, w);
+        break;
+    case PT_PDF_MATERIAL:
+        if (pdf->as.material.scene && pdf->as.material.material >= 0 &&
+            (uint32_t)pdf->as.material.material < pdf->as.material.scene->mat_count)
+            v = pt__material_pdf_value(pdf->as.material.scene, pdf->as.material.material, pdf->as.material.normal,
+                                       pdf->as.material.wo, w);
+        break;
+    case PT_PDF_MIXTURE: {
+        int k;
+        if (!pdf->as.mixture.components || !pdf->as.mixture.weights) break;
+        for (k = 0; k < pdf->as.mixture.count; ++k)
+            if (pdf->as.mixture.weights[k] > 0.0f)
+                v += pdf->as.mixture.weights[k] * pt_pdf_value(&pdf->as.mixture.components[k], w);
+        break;
+    }
+    case PT_PDF_CALLBACK:
+        if (pdf->as.callback.value) v = pdf->as.callback.value(pdf->as.callback.user, w);
+        break;
+    default: break;
+    }
+    return pt__isfinite(v) && v > 0.0f ? v : 0.0f;
+}
+
+PTDEF int pt_pdf_sample(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value)
+{
+    pt_vec3 w = pt_v3(0, 0, 0);
+    float p = 0.0f;
+    int ok = 0;
+    pt__light_sample ls;
+    if (dir) *dir = w;
+    if (pdf_value) *pdf_value = 0.0f;
+    if (!pdf || !rng || !dir || !pdf_value) return 0;
+    switch (pdf->type) {
+    case PT_PDF_UNIFORM_SPHERE: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+        w = pt_sample_uniform_sphere(u1, u2);
+        p = PT__INV_4PI;
+        ok = 1;
+        break;
+    }
+    case PT_PDF_COSINE_HEMISPHERE: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+        pt_vec3 l = pt_sample_cosine_hemisphere(u1, u2);
+        w = pt_normalize(pt_onb_to_world(&pdf->as.cosine.basis, l));
+        p = pt__maxf(0.0f, pt_dot(w, pdf->as.cosine.basis.n)) * PT__INV_PI;
+        ok = p > 0.0f;
+        break;
+    }
+    case PT_PDF_SPHERE_LIGHT: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+        ok = pt__sphere_light_sample(pdf->origin, pdf->as.sphere.center, pdf->as.sphere.radius,
+                                     pdf->as.sphere.two_sided, u1, u2, &ls);
+        w = ls.dir; p = ls.pdf;
+        break;
+    }
+    case PT_PDF_QUAD_LIGHT: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+        ok = pt__quad_light_sample(pdf->origin, pdf->as.quad.q, pdf->as.quad.u, pdf->as.quad.v, pdf->as.quad.two_sided,
+                                   u1, u2, &ls);
+        w = ls.dir; p = ls.pdf;
+        break;
+    }
+    case PT_PDF_TRIANGLE_LIGHT: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+        ok = pt__triangle_light_sample(pdf->origin, pdf->as.triangle.a, pdf->as.triangle.b, pdf->as.triangle.c,
+                                       pdf->as.triangle.two_sided, u1, u2, &ls);
+        w = ls.dir; p = ls.pdf;
+        break;
+    }
+    case PT_PDF_SCENE_LIGHTS: {
+        float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+        uint32_t li;
+        if (!pdf->as.lights.scene || !pdf->as.lights.scene->committed) break;
+        ok = pt__lights_sample(pdf->as.lights.scene, pdf->origin, u0, u1, u2, &ls, &li);
+        if (ok) {
+            w = ls.dir;
+            /* the density of the direction over all lights, not the picked one's alone */
+            p = pt__lights_value(pdf->as.lights.scene, pdf->origin, w);
+            ok = p > 0.0f;
+        }
+        break;
+    }
+    case PT_PDF_MATERIAL: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng), u3 = pt_rng_float(rng);
+        const pt_scene *s = pdf->as.material.scene;
+        if (!s || pdf->as.material.material < 0 || (uint32_t)pdf->as.material.material >= s->mat_count) break;
+        ok = pt__material_pdf_sample(s, pdf->as.material.material, pdf->as.material.normal, pdf->as.material.wo, u1,
+                                     u2, u3, &w, &p);
+        break;
+    }
+    case PT_PDF_MIXTURE: {
+        int k, n = pdf->as.mixture.count, chosen = -1;
+        float u = pt_rng_float(rng), acc = 0.0f, pk = 0.0f;
+        if (n <= 0 || !pdf->as.mixture.components || !pdf->as.mixture.weights) break;
+        for (k = 0; k < n; ++k) {
+            float wk = pdf->as.mixture.weights[k];
+            if (!(wk > 0.0f)) continue;
+            chosen = k;          /* the last positive-weight component absorbs rounding */
+            acc += wk;
+            if (u < acc) break;
+        }
+        if (chosen < 0) break;
+        if (!pt_pdf_sample(&pdf->as.mixture.components[chosen], rng, &w, &pk)) break;
+        /* density of the mixture: sum over every component, the chosen one included */
+        p = 0.0f;
+        for (k = 0; k < n; ++k) {
+            float wk = pdf->as.mixture.weights[k];
+            if (!(wk > 0.0f)) continue;
+            p += wk * (k == chosen ? pk : pt_pdf_value(&pdf->as.mixture.components[k], w));
+        }
+        ok = p > 0.0f;
+        break;
+    }
+    case PT_PDF_CALLBACK:
+        if (pdf->as.callback.sample) ok = pdf->as.callback.sample(pdf->as.callback.user, rng, &w, &p) ? 1 : 0;
+        break;
+    default: break;
+    }
+    if (!ok || !pt__vfinite(w) || !pt__isfinite(p) || !(p > 0.0f)) return 0;
+    *dir = w;
+    *pdf_value = p;
+    return 1;
+}
+
+/* ------------------------------------------------------------------------------------------
+   3. Geometry and scenes
+   ------------------------------------------------------------------------------------------ */
+
+/* Per-ray data computed once per traversal. */
+typedef struct pt__rayctx {
+    pt_vec3 o, d, inv_d;
+    int kx, ky, kz;       /* watertight triangle test: axis permutation */
+    float sx, sy, sz;     /* and shear */
+} pt__rayctx;
+
+static void pt__rayctx_init(pt__rayctx *rc, pt_ray r)
+{
+    float ax = fabsf(r.dir.x), ay = fabsf(r.dir.y), az = fabsf(r.dir.z), dk;
+    rc->o = r.origin;
+    rc->d = r.dir;
+    rc->inv_d = pt_v3(r.dir.x != 0.0f ? 1.0f / r.dir.x : FLT_MAX, r.dir.y != 0.0f ? 1.0f / r.dir.y : FLT_MAX,
+                      r.dir.z != 0.0f ? 1.0f / r.dir.z : FLT_MAX);
+    /* Woop, Benthin & Wald 2013: kz = dominant axis, kx/ky follow cyclically (swapped to keep
+       the winding when dir[kz] < 0). */
+    rc->kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    rc->kx = (rc->kz + 1) % 3;
+    rc->ky = (rc->kx + 1) % 3;
+    dk = pt__vget(r.dir, rc->kz);
+    if (dk < 0.0f) { int tmp = rc->kx; rc->kx = rc->ky; rc->ky = tmp; }
+    if (dk == 0.0f) dk = FLT_MIN; /* zero direction: nothing is hit, but stay finite */
+    rc->sx = pt__vget(r.dir, rc->kx) / dk;
+    rc->sy = pt__vget(r.dir, rc->ky) / dk;
+    rc->sz = 1.0f / dk;
+}
+
+/* Haines, Guenther & Akenine-Moeller, "Precision Improvements for Ray/Sphere Intersection",
+   Ray Tracing Gems ch. 7: the discriminant from (r - |l|)(r + |l|) with l the part of
+   f = o - c perpendicular to the ray, and the stable root pair q/a, c/q. */
+static int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, float tmax, float *t_out)
+{
+    pt_vec3 f = pt_sub(rc->o, c);
+    float a = pt_dot(rc->d, rc->d), bp = -pt_dot(f, rc->d), cc, disc, q, t0, t1, ll;
+    pt_vec3 l;
+    if (!(a > 0.0f)) return 0;
+    l = pt_add(f, pt_scale(rc->d, bp / a));
+    ll = pt_length(l);
+    disc = a * (r - ll) * (r + ll);
+    if (disc < 0.0f) return 0;
+    cc = pt_dot(f, f) - r * r;
+    q = bp + copysignf(sqrtf(disc), bp);
+    if (q == 0.0f) return 0;
+    t0 = cc / q;
+    t1 = q / a;
+    if (t0 > t1) { float tmp = t0; t0 = t1; t1 = tmp; }
+    if (t0 > 0.0f && t0 < tmax) { *t_out = t0; return 1; }
+    if (t1 > 0.0f && t1 < tmax) { *t_out = t1; return 1; }
+    return 0;
+}
+
+/* Parallelogram Q + a u + b v: plane hit, then plane coordinates a = w.(p x v), b = w.(u x p)
+   with w = n'/(n'.n') (Shirley, "Ray Tracing: The Next Week", sec. 6). */
+static int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t_out)
+{
+    float denom = pt_dot(p->n, rc->d), t, a, b;
+    pt_vec3 h;
+    if (denom == 0.0f) return 0;
+    t = pt_dot(p->n, pt_sub(p->p0, rc->o)) / denom;
+    if (!(t > 0.0f && t < tmax)) return 0;
+    h = pt_sub(pt_madd(rc->o, rc->d, t), p->p0);
+    a = pt_dot(p->w, pt_cross(h, p->p2));
+    b = pt_dot(p->w, pt_cross(p->p1, h));
+    if (a < 0.0f || a > 1.0f || b < 0.0f || b > 1.0f) return 0;
+    *t_out = t;
+    return 1;
+}
+
+/* Watertight ray/triangle intersection (Woop, Benthin & Wald, "Watertight Ray/Triangle
+   Intersection", JCGT 2(1), 2013): vertices translated to the ray origin, sheared so the ray
+   is +z, 2D edge functions; an edge function that is exactly zero is recomputed in double. */
+static int pt__hit_triangle(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, pt_vec3 c, float tmax, float *t_out,
+                            float *bary)
+{
+    pt_vec3 A = pt_sub(a, rc->o), B = pt_sub(b, rc->o), C = pt_sub(c, rc->o);
+    float Akz = pt__vget(A, rc->kz), Bkz = pt__vget(B, rc->kz), Ckz = pt__vget(C, rc->kz);
+    float Ax = pt__vget(A, rc->kx) - rc->sx * Akz, Ay = pt__vget(A, rc->ky) - rc->sy * Akz;
+    float Bx = pt__vget(B, rc->kx) - rc->sx * Bkz, By = pt__vget(B, rc->ky) - rc->sy * Bkz;
+    float Cx = pt__vget(C, rc->kx) - rc->sx * Ckz, Cy = pt__vget(C, rc->ky) - rc->sy * Ckz;
+    float U = Cx * By - Cy * Bx, V = Ax * Cy - Ay * Cx, W = Bx * Ay - By * Ax, det, T, inv;
+    if (U == 0.0f || V == 0.0f || W == 0.0f) {
+        U = (float)((double)Cx * (double)By - (double)Cy * (double)Bx);
+        V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
+        W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
+    }
+    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return 0;
+    det = U + V + W;
+    if (det == 0.0f) return 0;
+    T = U * (rc->sz * Akz) + V * (rc->sz * Bkz) + W * (rc->sz * Ckz);
+    if (det < 0.0f ? (T >= 0.0f || T <= tmax * det) : (T <= 0.0f || T >= tmax * det)) return 0;
+    inv = 1.0f / det;
+    *t_out = T * inv;
+    if (!(*t_out > 0.0f && *t_out < tmax)) return 0;
+    if (bary) { bary[0] = U * inv; bary[1] = V * inv; bary[2] = W * inv; }
+    return 1;
+}
+
+PTDEF int pt_intersect_sphere(pt_ray ray, pt_vec3 center, float radius, float tmax, float *t)
+{
+    pt__rayctx rc;
+    float tt;
+    if (!t || !(radius > 0.0f)) return 0;
+    pt__rayctx_init(&rc, ray);
+    if (!pt__hit_sphere(&rc, center, radius, tmax, &tt)) return 0;
+    *t = tt;
+    return 1;
+}
+static void pt__quad_setup(pt__prim *p)
+{
+    pt_vec3 nn = pt_cross(p->p1, p->p2);
+    p->n = pt_normalize(nn);
+    p->w = pt_scale(nn, 1.0f / pt_dot(nn, nn));
+}
+PTDEF int pt_intersect_quad(pt_ray ray, pt_vec3 q, pt_vec3 u, pt_vec3 v, float tmax, float *t)
+{
+    pt__rayctx rc;
+    pt__prim p;
+    float tt;
+    if (!t || !(pt_length2(pt_cross(u, v)) > 0.0f)) return 0;
+    memset(&p, 0, sizeof p);
+    p.p0 = q; p.p1 = u; p.p2 = v;
+    pt__quad_setup(&p);
+    pt__rayctx_init(&rc, ray);
+    if (!pt__hit_quad(&rc, &p, tmax, &tt)) return 0;
+    *t = tt;
+    return 1;
+}
+PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, float tmax, float *t)
+{
+    pt__rayctx rc;
+    float tt;
+    if (!t) return 0;
+    pt__rayctx_init(&rc, ray);
+    if (!pt__hit_triangle(&rc, a, b, c, tmax, &tt, NULL)) return 0;
+    *t = tt;
+    return 1;
+}
+
+/* Intersects one primitive; bary receives triangle barycentrics. */
+static int pt__hit_prim(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t, float *bary)
+{
+    switch (p->type) {
+    case PT__PRIM_SPHERE: return pt__hit_sphere(rc, p->p0, p->p1.x, tmax, t);
+    case PT__PRIM_QUAD: return pt__hit_quad(rc, p, tmax, t);
+    default: return pt__hit_triangle(rc, p->p0, p->p1, p->p2, tmax, t, bary);
+    }
+}
+
+/* Fills a public hit record for primitive p hit at t. */
+static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float t, const float *bary, pt_hit *h)
+{
+    h->t = t;
+    h->primitive = p->id;
+    h->material = p->material;
+    if (p->type == PT__PRIM_SPHERE) {
+        /* re-project onto the sphere to remove the error of o + t d (pbrt-v4 sec. 6.8.5) */
+        pt_vec3 n = pt_normalize(pt_sub(pt_ray_at(ray, t), p->p0));
+        h->point = pt_madd(p->p0, n, p->p1.x);
+        h->geometric_normal = n;
+        h->shading_normal = n;
+    } else if (p->type == PT__PRIM_QUAD) {
+        h->point = pt_ray_at(ray, t);
+        h->geometric_normal = p->n;
+        h->shading_normal = p->n;
+    } else {
+        /* barycentric point on the triangle is more accurate than o + t d */
+        h->point = pt_add(pt_add(pt_scale(p->p0, bary[0]), pt_scale(p->p1, bary[1])), pt_scale(p->p2, bary[2]));
+        h->geometric_normal = p->n;
+        h->shading_normal = p->n;
+        if (p->normals >= 0) {
+            const pt_vec3 *nv = s->normals + p->normals;
+            pt_vec3 ns = pt_normalize(pt_add(pt_add(pt_scale(nv[0], bary[0]), pt_scale(nv[1], bary[1])),
+                                             pt_scale(nv[2], bary[2])));
+            if (pt_length2(ns) > 0.0f) h->shading_normal = ns;
+        }
+    }
+    h->front_face = pt_dot(ray.dir, h->geometric_normal) < 0.0f;
+}
+
+PTDEF pt_scene *pt_scene_create(void)
+{
+    pt_scene *s = (pt_scene *)PT_MALLOC(sizeof(pt_scene));
+    if (!s) return NULL;
+    memset(s, 0, sizeof *s);
+    s->xf = pt_transform_identity();
+    s->xf_identity = 1;
+    return s;
+}
+PTDEF void pt_scene_destroy(pt_scene *s)
+{
+    if (!s) return;
+    PT_FREE(s->prims);
+    PT_FREE(s->mats);
+    PT_FREE(s->texs);
+    PT_FREE(s->normals);
+    PT_FREE(s->nodes);
+    PT_FREE(s->lights);
+    PT_FREE(s);
+}
+PTDEF const char *pt_scene_error_message(const pt_scene *s) { return s ? s->error : "scene is NULL"; }
+
+/* Grows an array to hold `need` elements; returns 0 when out of memory or on overflow. */
+static int pt__grow(void **arr, uint32_t *cap, uint32_t need, size_t elem)
+{
+    uint32_t nc;
+    void *p;
+    if (need <= *cap) return 1;
+    if (need > 0x7fffffffu / 2u) return 0;
+    nc = *cap ? *cap : 16u;
+    while (nc < need) nc *= 2u;
+    if ((size_t)nc > ((size_t)-1) / elem) return 0;
+    p = PT_REALLOC(*arr, (size_t)nc * elem);
+    if (!p) return 0;
+    *arr = p;
+    *cap = nc;
+    return 1;
+}
+
+PTDEF int pt_scene_set_transform(pt_scene *s, const pt_transform *t)
+{
+    int i, j;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!t) {
+        s->xf = pt_transform_identity();
+        s->xf_identity = 1;
+        return PT_OK;
+    }
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 4; ++j)
+            if (!pt__isfinite(t->m[i][j]))
+                return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "transform: element [%d][%d] is not finite", i, j);
+    {
+        float det = pt__transform_det(t);
+        if (!(fabsf(det) > 0.0f) || !pt__isfinite(det))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "transform: matrix is singular");
+    }
+    {
+        pt_transform id = pt_transform_identity();
+        s->xf = *t;
+        s->xf_identity = memcmp(t, &id, sizeof *t) == 0;
+    }
+    return PT_OK;
+}
+
+static int pt__check_material(pt_scene *s, int material, const char *what)
+{
+    if (material < 0 || (uint32_t)material >= s->mat_count)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "%s: material %d does not exist (the scene has %u)", what,
+                        material, (unsigned)s->mat_count);
+    return PT_OK;
+}
+static pt__prim *pt__new_prim(pt_scene *s, int type, int material)
+{
+    pt__prim *p;
+    if (!pt__grow((void **)&s->prims, &s->prim_cap, s->prim_count + 1u, sizeof(pt__prim))) return NULL;
+    p = &s->prims[s->prim_count];
+    memset(p, 0, sizeof *p);
+    p->type = type;
+    p->material = material;
+    p->light = -1;
+    p->normals = -1;
+    p->id = s->prim_count++;
+    s->committed = 0;
+    if (!s->xf_identity) s->features |= PT_FEATURE_TRANSFORMS;
+    return p;
+}
+
+PTDEF int pt_scene_add_sphere(pt_scene *s, pt_vec3 center, float radius, int material)
+{
+    pt__prim *p;
+    float r = radius;
+    int rc;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if ((rc = pt__check_material(s, material, "sphere")) != PT_OK) return rc;
+    if (!pt__vfinite(center) || !pt__isfinite(radius) || !(radius > 0.0f))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "sphere: centre must be finite and radius > 0 (radius %g)",
+                        (double)radius);
+    if (!s->xf_identity) {
+        /* a similarity transform has M^T M = k^2 I */
+        pt_vec3 c0 = pt_v3(s->xf.m[0][0], s->xf.m[1][0], s->xf.m[2][0]);
+        pt_vec3 c1 = pt_v3(s->xf.m[0][1], s->xf.m[1][1], s->xf.m[2][1]);
+        pt_vec3 c2 = pt_v3(s->xf.m[0][2], s->xf.m[1][2], s->xf.m[2][2]);
+        float k2 = pt_length2(c0), tol = 1e-4f * k2;
+        if (fabsf(pt_length2(c1) - k2) > tol || fabsf(pt_length2(c2) - k2) > tol || fabsf(pt_dot(c0, c1)) > tol ||
+            fabsf(pt_dot(c0, c2)) > tol || fabsf(pt_dot(c1, c2)) > tol)
+            return pt__fail(s, PT_ERROR_UNSUPPORTED,
+                            "sphere: the current transform is not a similarity (rotation, translation, uniform "
+                            "scale); a sphere would become an ellipsoid");
+        center = pt_transform_point(&s->xf, center);
+        r = radius * sqrtf(k2);
+        if (!pt__vfinite(center) || !pt__isfinite(r) || !(r > 0.0f))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "sphere: transformed sphere is not finite");
+    }
+    p = pt__new_prim(s, PT__PRIM_SPHERE, material);
+    if (!p) return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "sphere: out of memory");
+    p->p0 = center;
+    p->p1 = pt_v3(r, 0.0f, 0.0f);
+    s->sphere_count++;
+    s->features |= PT_FEATURE_SPHERES;
+    return (int)p->id;
+}
+
+/* Transforms a parallelogram; a mirroring transform swaps u and v so that the emitting side
+   stays on the geometrically transformed side. */
+static int pt__xf_quad(const pt_scene *s, pt_vec3 *q, pt_vec3 *u, pt_vec3 *v)
+{
+    if (!s->xf_identity) {
+        *q = pt_transform_point(&s->xf, *q);
+        *u = pt_transform_vector(&s->xf, *u);
+        *v = pt_transform_vector(&s->xf, *v);
+        if (pt__transform_det(&s->xf) < 0.0f) { pt_vec3 t = *u; *u = *v; *v = t; }
+    }
+    return pt__vfinite(*q) && pt__vfinite(*u) && pt__vfinite(*v) && pt_length2(pt_cross(*u, *v)) > 0.0f &&
+           pt__isfinite(pt_length2(pt_cross(*u, *v)));
+}
+static void pt__set_quad(pt__prim *p, pt_vec3 q, pt_vec3 u, pt_vec3 v)
+{
+    p->p0 = q; p->p1 = u; p->p2 = v;
+    pt__quad_setup(p);
+}
+PTDEF int pt_scene_add_quad(pt_scene *s, pt_vec3 q, pt_vec3 u, pt_vec3 v, int material)
+{
+    pt__prim *p;
+    int rc;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if ((rc = pt__check_material(s, material, "quad")) != PT_OK) return rc;
+    if (!pt__vfinite(q) || !pt__vfinite(u) || !pt__vfinite(v))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "quad: Q, u and v must be finite");
+    if (!pt__xf_quad(s, &q, &u, &v))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "quad: u and v are parallel or zero (no area)");
+    p = pt__new_prim(s, PT__PRIM_QUAD, material);
+    if (!p) return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "quad: out of memory");
+    pt__set_quad(p, q, u, v);
+    s->quad_count++;
+    s->features |= PT_FEATURE_QUADS;
+    return (int)p->id;
+}
+
+static void pt__set_triangle(pt__prim *p, pt_vec3 a, pt_vec3 b, pt_vec3 c)
+{
+    p->p0 = a; p->p1 = b; p->p2 = c;
+    p->n = pt_normalize(pt_cross(pt_sub(b, a), pt_sub(c, a)));
+}
+static int pt__tri_ok(pt_vec3 a, pt_vec3 b, pt_vec3 c)
+{
+    float a2 = pt_length2(pt_cross(pt_sub(b, a), pt_sub(c, a)));
+    return pt__vfinite(a) && pt__vfinite(b) && pt__vfinite(c) && a2 > 0.0f && pt__isfinite(a2);
+}
+PTDEF int pt_scene_add_triangle(pt_scene *s, pt_vec3 a, pt_vec3 b, pt_vec3 c, int material)
+{
+    pt__prim *p;
+    int rc;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if ((rc = pt__check_material(s, material, "triangle")) != PT_OK) return rc;
+    if (!pt__vfinite(a) || !pt__vfinite(b) || !pt__vfinite(c))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "triangle: vertices must be finite");
+    if (!s->xf_identity) {
+        a = pt_transform_point(&s->xf, a);
+        b = pt_transform_point(&s->xf, b);
+        c = pt_transform_point(&s->xf, c);
+        if (pt__transform_det(&s->xf) < 0.0f) { pt_vec3 t = b; b = c; c = t; }
+    }
+    if (!pt__tri_ok(a, b, c)) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "triangle: zero area or not finite");
+    p = pt__new_prim(s, PT__PRIM_TRIANGLE, material);
+    if (!p) return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "triangle: out of memory");
+    pt__set_triangle(p, a, b, c);
+    s->triangle_count++;
+    s->features |= PT_FEATURE_TRIANGLES;
+    return (int)p->id;
+}
+
+PTDEF int pt_scene_add_box(pt_scene *s, pt_vec3 lo, pt_vec3 hi, int material)
+{
+    pt_vec3 q[6], u[6], v[6];
+    pt_vec3 dx, dy, dz;
+    int i, rc, first = -1;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if ((rc = pt__check_material(s, material, "box")) != PT_OK) return rc;
+    if (!pt__vfinite(lo) || !pt__vfinite(hi) || !(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "box: corners must be finite with max > min on every axis");
+    dx = pt_v3(hi.x - lo.x, 0, 0); dy = pt_v3(0, hi.y - lo.y, 0); dz = pt_v3(0, 0, hi.z - lo.z);
+    /* six faces, each with u x v pointing out of the box */
+    q[0] = pt_v3(lo.x, lo.y, hi.z); u[0] = dx; v[0] = dy;            /* +z */
+    q[1] = pt_v3(hi.x, lo.y, lo.z); u[1] = pt_neg(dx); v[1] = dy;    /* -z */
+    q[2] = pt_v3(hi.x, lo.y, hi.z); u[2] = pt_neg(dz); v[2] = dy;    /* +x */
+    q[3] = pt_v3(lo.x, lo.y, lo.z); u[3] = dz; v[3] = dy;            /* -x */
+    q[4] = pt_v3(lo.x, hi.y, hi.z); u[4] = dx; v[4] = pt_neg(dz);    /* +y */
+    q[5] = pt_v3(lo.x, lo.y, lo.z); u[5] = dx; v[5] = dz;            /* -y */
+    for (i = 0; i < 6; ++i)
+        if (!pt__xf_quad(s, &q[i], &u[i], &v[i]))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "box: face %d is degenerate after the transform", i);
+    if (!pt__grow((void **)&s->prims, &s->prim_cap, s->prim_count + 6u, sizeof(pt__prim)))
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "box: out of memory");
+    for (i = 0; i < 6; ++i) {
+        pt__prim *p = pt__new_prim(s, PT__PRIM_QUAD, material);
+        pt__set_quad(p, q[i], u[i], v[i]);
+        if (first < 0) first = (int)p->id;
+    }
+    s->quad_count += 6;
+    s->features |= PT_FEATURE_QUADS;
+    return first;
+}
+
+PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
+{
+    uint32_t i, good = 0, first = 0;
+    int rc, have_first = 0;
+    float det;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!m) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: desc is NULL");
+    if ((rc = pt__check_material(s, m->material, "mesh")) != PT_OK) return rc;
+    if (!m->positions || !m->indices || m->vertex_count == 0 || m->triangle_count == 0)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: positions, indices and counts are required");
+    if (m->triangle_count > 0x3fffffffu / 3u)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: too many triangles (%u)", (unsigned)m->triangle_count);
+    for (i = 0; i < m->vertex_count; ++i) {
+        if (!pt__vfinite(pt_v3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2])))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: vertex %u is not finite", (unsigned)i);
+        if (m->normals &&
+            !pt__vfinite(pt_v3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2])))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: normal %u is not finite", (unsigned)i);
+    }
+    for (i = 0; i < 3u * m->triangle_count; ++i)
+        if (m->indices[i] >= m->vertex_count)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: triangle %u uses vertex %u, but there are %u",
+                            (unsigned)(i / 3u), (unsigned)m->indices[i], (unsigned)m->vertex_count);
+    if (!pt__grow((void **)&s->prims, &s->prim_cap, s->prim_count + m->triangle_count, sizeof(pt__prim)) ||
+        (m->normals &&
+         !pt__grow((void **)&s->normals, &s->normal_cap, s->normal_count + 3u * m->triangle_count, sizeof(pt_vec3))))
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "mesh: out of memory (%u triangles)", (unsigned)m->triangle_count);
+    det = s->xf_identity ? 1.0f : pt__transform_det(&s->xf);
+    for (i = 0; i < m->triangle_count; ++i) {
+        pt_vec3 v[3], n[3];
+        int k;
+        pt__prim *p;
+        n[0] = n[1] = n[2] = pt_v3(0, 0, 0);
+        for (k = 0; k < 3; ++k) {
+            uint32_t vi = m->indices[3 * i + (uint32_t)k];
+            v[k] = pt_v3(m->positions[3 * vi], m->positions[3 * vi + 1], m->positions[3 * vi + 2]);
+            if (!s->xf_identity) v[k] = pt_transform_point(&s->xf, v[k]);
+            if (m->normals) {
+                n[k] = pt_v3(m->normals[3 * vi], m->normals[3 * vi + 1], m->normals[3 * vi + 2]);
+                if (!s->xf_identity) (void)pt_transform_normal(&s->xf, n[k], &n[k]);
+                n[k] = pt_normalize(n[k]);
+            }
+        }
+        if (det < 0.0f) {
+            pt_vec3 t = v[1]; v[1] = v[2]; v[2] = t;
+            t = n[1]; n[1] = n[2]; n[2] = t;
+        }
+        if (!pt__tri_ok(v[0], v[1], v[2])) { s->degenerate_skipped++; continue; }
+        p = pt__new_prim(s, PT__PRIM_TRIANGLE, m->material);
+        pt__set_triangle(p, v[0], v[1], v[2]);
+        if (m->normals) {
+            p->normals = (int32_t)s->normal_count;
+            s->normals[s->normal_count++] = n[0];
+            s->normals[s->normal_count++] = n[1];
+            s->normals[s->normal_count++] = n[2];
+        }
+        if (!have_first) { first = p->id; have_first = 1; }
+        good++;
+    }
+    if (!good) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: every triangle has zero area");
+    s->triangle_count += good;
+    s->mesh_count++;
+    s->features |= PT_FEATURE_TRIANGLES | PT_FEATURE_MESHES | (m->normals ? (unsigned)PT_FEATURE_SHADING_NORMALS : 0u);
+    return (int)first;
+}
+
+/* ------------------------------------------------------------------------------------------
+   4. Materials and textures
+   ------------------------------------------------------------------------------------------ */
+
+static int pt__color_ok(pt_color c) { return pt__vfinite(c) && c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f; }
+
+PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
+{
+    pt__material m;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!d) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: desc is NULL");
+    memset(&m, 0, sizeof m);
+    if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_EMITTER)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: unknown type %d", (int)d->type);
+    if (!pt__color_ok(d->albedo))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: albedo must be finite and >= 0");
+    if (!pt__color_ok(d->emission))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: emission must be finite and >= 0");
+    if (d->albedo_texture < 0 || (uint32_t)d->albedo_texture > s->tex_count)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: texture %d does not exist", d->albedo_texture);
+    if (!pt__isfinite(d->fuzz) || d->fuzz < 0.0f)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: fuzz must be finite and >= 0");
+    if (!pt__isfinite(d->ior) || d->ior < 0.0f || (d->ior > 0.0f && d->ior < 1e-3f))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: ior must be finite and > 0");
+    m.type = d->type;
+    m.albedo = d->albedo;
+    m.texture = d->albedo_texture;
+    m.fuzz = pt__minf(d->fuzz, 1.0f);
+    m.ior = d->ior > 0.0f ? d->ior : 1.5f;
+    m.emission = d->emission;
+    m.two_sided = d->two_sided_emission != 0;
+    m.emits = !pt__is_black(d->emission);
+    m.scatters = d->type != PT_MATERIAL_EMITTER;
+    m.delta = d->type == PT_MATERIAL_DIELECTRIC || (d->type == PT_MATERIAL_METAL && m.fuzz == 0.0f);
+    if (!pt__grow((void **)&s->mats, &s->mat_cap, s->mat_count + 1u, sizeof(pt__material)))
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "material: out of memory");
+    s->mats[s->mat_count] = m;
+    s->committed = 0;
+    return (int)s->mat_count++;
+}
+PTDEF int pt_scene_add_lambertian(pt_scene *s, pt_color albedo)
+{
+    pt_material_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_LAMBERTIAN;
+    d.albedo = albedo;
+    return pt_scene_add_material(s, &d);
+}
+PTDEF int pt_scene_add_metal(pt_scene *s, pt_color albedo, float fuzz)
+{
+    pt_material_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_METAL;
+    d.albedo = albedo;
+    d.fuzz = fuzz;
+    return pt_scene_add_material(s, &d);
+}
+PTDEF int pt_scene_add_dielectric(pt_scene *s, float ior)
+{
+    pt_material_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_DIELECTRIC;
+    d.ior = ior;
+    if (!(ior > 0.0f)) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "dielectric: ior must be > 0");
+    return pt_scene_add_material(s, &d);
+}
+PTDEF int pt_scene_add_emitter(pt_scene *s, pt_color radiance, int two_sided)
+{
+    pt_material_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_EMITTER;
+    d.emission = radiance;
+    d.two_sided_emission = two_sided;
+    return pt_scene_add_material(s, &d);
+}
+PTDEF int pt_scene_add_checker(pt_scene *s, pt_color even, pt_color odd, float scale)
+{
+    pt__texture t;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__color_ok(even) || !pt__color_ok(odd) || !pt__isfinite(scale) || !(scale > 0.0f))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "checker: colours must be finite and >= 0, scale > 0");
+    t.even = even;
+    t.odd = odd;
+    t.inv_scale = 1.0f / scale;
+    if (!pt__grow((void **)&s->texs, &s->tex_cap, s->tex_count + 1u, sizeof(pt__texture)))
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "checker: out of memory");
+    s->texs[s->tex_count++] = t;
+    s->committed = 0;
+    return (int)s->tex_count; /* ids start at 1; 0 means "no texture" */
+}
+/* Parity of floor(x/s) + floor(y/s) + floor(z/s), one term at a time so that large
+   coordinates do not overflow an integer. */
+static pt_color pt__checker(const pt__texture *t, pt_vec3 p)
+{
+    double fx = floor((double)p.x * t->inv_scale), fy = floor((double)p.y * t->inv_scale);
+    double fz = floor((double)p.z * t->inv_scale);
+    int parity = ((int)fmod(fabs(fx), 2.0) + (int)fmod(fabs(fy), 2.0) + (int)fmod(fabs(fz), 2.0)) & 1;
+    return parity ? t->odd : t->even;
+}
+PTDEF pt_color pt_scene_eval_texture(const pt_scene *s, int texture, pt_vec3 p)
+{
+    if (!s || texture < 1 || (uint32_t)texture > s->tex_count) return pt_v3(0, 0, 0);
+    return pt__checker(&s->texs[texture - 1], p);
+}
+PTDEF int pt_material_is_delta(const pt_scene *s, int material)
+{
+    if (!s || material < 0 || (uint32_t)material >= s->mat_count) return 0;
+    return s->mats[material].delta || !s->mats[material].scatters;
+}
+static pt_color pt__albedo(const pt_scene *s, const pt__material *m, pt_vec3 p)
+{
+    return m->texture ? pt__checker(&s->texs[m->texture - 1], p) : m->albedo;
+}
+
+/* A * pScatter(wi) = BRDF * cos for a non-delta material, with ns and ng the shading and
+   geometric normals already flipped to the side of wo. Directions below the geometric
+   surface carry nothing. */
+static pt_color pt__material_eval(const pt__material *m, pt_color albedo, pt_vec3 ns, pt_vec3 ng, pt_vec3 wo,
+                                  pt_vec3 wi)
+{
+    if (pt_dot(ng, wi) <= 0.0f) return pt_v3(0, 0, 0);
+    if (m->type == PT_MATERIAL_LAMBERTIAN) {
+        float c = pt_dot(ns, wi);
+        return c > 0.0f ? pt_scale(albedo, c * PT__INV_PI) : pt_v3(0, 0, 0);
+    }
+    if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f)
+        return pt_scale(albedo, pt__fuzz_value(pt__reflect(wo, ns), m->fuzz, wi));
+    return pt_v3(0, 0, 0);
+}
+/* The density with which the material samples wi (ns flipped to the side of wo). */
+static float pt__material_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo, pt_vec3 wi)
+{
+    if (m->type == PT_MATERIAL_LAMBERTIAN) return pt__maxf(0.0f, pt_dot(ns, wi)) * PT__INV_PI;
+    if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f) return pt__fuzz_value(pt__reflect(wo, ns), m->fuzz, wi);
+    return 0.0f;
+}
+static int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float u1, float u2, float u3,
+                                   pt_vec3 *wi, float *pdf)
+{
+    if (m->type == PT_MATERIAL_LAMBERTIAN) {
+        pt_onb b = pt_onb_from_normal(ns);
+        *wi = pt_normalize(pt_onb_to_world(&b, pt_sample_cosine_hemisphere(u1, u2)));
+        *pdf = pt__maxf(0.0f, pt_dot(ns, *wi)) * PT__INV_PI;
+        return *pdf > 0.0f;
+    }
+    if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f) {
+        pt_vec3 r = pt__reflect(wo, ns);
+        *wi = pt__fuzz_sample(r, m->fuzz, u1, u2, u3);
+        *pdf = pt__fuzz_value(r, m->fuzz, *wi);
+        return *pdf > 0.0f;
+    }
+    return 0;
+}
+static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
+                                   float u3, pt_vec3 *dir, float *pdf)
+{
+    const pt__material *m = &s->mats[material];
+    if (pt_dot(n, wo) < 0.0f) n = pt_neg(n);
+    if (m->delta || !m->scatters) return 0;
+    return pt__material_sample_dir(m, n, wo, u1, u2, u3, dir, pdf);
+}
+static float pt__material_pdf_value(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, pt_vec3 w)
+{
+    const pt__material *m = &s->mats[material];
+    if (pt_dot(n, wo) < 0.0f) n = pt_neg(n);
+    if (m->delta || !m->scatters) return 0.0f;
+    return pt__material_density(m, n, wo, w);
+}
+
+/* Exact Fresnel reflectance of a dielectric interface for unpolarised light; eta = n_i/n_t.
+   Returns 1 under total internal reflection and then leaves *cos_t untouched. */
+static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
+{
+    float sin2_t = eta * eta * (1.0f - cos_i * cos_i), ct, rs, rp;
+    if (sin2_t >= 1.0f) return 1.0f;
+    ct = pt__safe_sqrt(1.0f - sin2_t);
+    rs = (eta * cos_i - ct) / (eta * cos_i + ct);
+    rp = (cos_i - eta * ct) / (cos_i + eta * ct);
+    *cos_t = ct;
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+/* ------------------------------------------------------------------------------------------
+   5. BVH: binned surface area heuristic (Wald, "On fast Construction of SAH-based Bounding
+   Volume Hierarchies", IEEE RT 2007): centroids binned into 16 bins per axis, the split of
+   least SAH cost (traversal 1, intersection 1) taken, leaves of at most 8 primitives. Nodes
+   are stored depth first (first child follows its parent). Traversal visits the nearer child
+   first and keeps the farther one on a stack with its entry distance; box tests widen the
+   exit distance by 1 + 2 gamma(3) (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013).
+   ------------------------------------------------------------------------------------------ */
+
+#define PT__BVH_BINS 16
+#define PT__BVH_MAX_LEAF 8
+#define PT__BVH_SAH_DEPTH 40      /* below this depth splits are by median: depth stays bounded */
+#define PT__BVH_STACK 128
+
+typedef struct pt__bvh_build {
+    pt_vec3 *lo, *hi, *c;
+    uint32_t *idx;
+    pt__node *nodes;
+    uint32_t node_count, max_depth;
+} pt__bvh_build;
+
+static void pt__prim_bounds(const pt__prim *p, pt_vec3 *lo, pt_vec3 *hi)
+{
+    if (p->type == PT__PRIM_SPHERE) {
+        pt_vec3 r = pt_v3(p->p1.x, p->p1.x, p->p1.x);
+        *lo = pt_sub(p->p0, r);
+        *hi = pt_add(p->p0, r);
+    } else if (p->type == PT__PRIM_QUAD) {
+        pt_vec3 a = p->p0, b = pt_add(p->p0, p->p1), c = pt_add(p->p0, p->p2), d = pt_add(b, p->p2);
+        *lo = pt__vmin(pt__vmin(a, b), pt__vmin(c, d));
+        *hi = pt__vmax(pt__vmax(a, b), pt__vmax(c, d));
+    } else {
+        *lo = pt__vmin(pt__vmin(p->p0, p->p1), p->p2);
+        *hi = pt__vmax(pt__vmax(p->p0, p->p1), p->p2);
+    }
+}
+static float pt__half_area(pt_vec3 lo, pt_vec3 hi)
+{
+    pt_vec3 d = pt__vmax(pt_sub(hi, lo), pt_v3(0, 0, 0));
+    return d.x * d.y + d.y * d.z + d.z * d.x;
+}
+
+static uint32_t pt__bvh_build_range(pt__bvh_build *b, uint32_t begin, uint32_t end, uint32_t depth)
+{
+    uint32_t ni = b->node_count++, n = end - begin, i, mid = begin;
+    pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_neg(lo), clo = lo, chi = hi;
+    pt__node *node = &b->nodes[ni];
+    int best_axis = -1, best_bin = -1, axis, k;
+    float best_cost = FLT_MAX;
+    if (depth > b->max_depth) b->max_depth = depth;
+    for (i = begin; i < end; ++i) {
+        uint32_t p = b->idx[i];
+        lo = pt__vmin(lo, b->lo[p]);
+        hi = pt__vmax(hi, b->hi[p]);
+        clo = pt__vmin(clo, b->c[p]);
+        chi = pt__vmax(chi, b->c[p]);
+    }
+    node->lo[0] = lo.x; node->lo[1] = lo.y; node->lo[2] = lo.z;
+    node->hi[0] = hi.x; node->hi[1] = hi.y; node->hi[2] = hi.z;
+    node->count = 0;
+    node->axis = 0;
+    node->index = begin;
+    if (n <= 1) { node->count = (uint16_t)n; return ni; }
+    if (depth < PT__BVH_SAH_DEPTH) {
+        for (axis = 0; axis < 3; ++axis) {
+            float cmin = pt__vget(clo, axis), ext = pt__vget(chi, axis) - cmin, scale;
+            uint32_t cnt[PT__BVH_BINS];
+            pt_vec3 blo[PT__BVH_BINS], bhi[PT__BVH_BINS];
+            float right_area[PT__BVH_BINS];
+            uint32_t right_cnt[PT__BVH_BINS];
+            pt_vec3 alo, ahi;
+            uint32_t acc;
+            if (!(ext > 0.0f)) continue;
+            scale = (float)PT__BVH_BINS / ext;
+            for (k = 0; k < PT__BVH_BINS; ++k) { cnt[k] = 0; blo[k] = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX); bhi[k] = pt_neg(blo[k]); }
+            for (i = begin; i < end; ++i) {
+                uint32_t p = b->idx[i];
+                int bin = (int)((pt__vget(b->c[p], axis) - cmin) * scale);
+                if (bin < 0) bin = 0;
+                if (bin >= PT__BVH_BINS) bin = PT__BVH_BINS - 1;
+                cnt[bin]++;
+                blo[bin] = pt__vmin(blo[bin], b->lo[p]);
+                bhi[bin] = pt__vmax(bhi[bin], b->hi[p]);
+            }
+            alo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX); ahi = pt_neg(alo); acc = 0;
+            for (k = PT__BVH_BINS - 1; k > 0; --k) {
+                alo = pt__vmin(alo, blo[k]); ahi = pt__vmax(ahi, bhi[k]); acc += cnt[k];
+                right_area[k] = acc ? pt__half_area(alo, ahi) : 0.0f;
+                right_cnt[k] = acc;
+            }
+            alo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX); ahi = pt_neg(alo); acc = 0;
+            for (k = 0; k < PT__BVH_BINS - 1; ++k) {
+                float cost;
+                alo = pt__vmin(alo, blo[k]); ahi = pt__vmax(ahi, bhi[k]); acc += cnt[k];
+                if (acc == 0 || right_cnt[k + 1] == 0) continue;
+                cost = pt__half_area(alo, ahi) * (float)acc + right_area[k + 1] * (float)right_cnt[k + 1];
+                if (cost < best_cost) { best_cost = cost; best_axis = axis; best_bin = k; }
+            }
+        }
+    }
+    if (best_axis >= 0) {
+        float parent = pt__half_area(lo, hi);
+        float split_cost = 1.0f + (parent > 0.0f ? best_cost / parent : (float)n);
+        if (split_cost >= (float)n && n <= PT__BVH_MAX_LEAF) { node->count = (uint16_t)n; return ni; }
+        {
+            float cmin = pt__vget(clo, best_axis), scale = (float)PT__BVH_BINS / (pt__vget(chi, best_axis) - cmin);
+            uint32_t lo_i = begin, hi_i = end;
+            while (lo_i < hi_i) {
+                uint32_t p = b->idx[lo_i];
+                int bin = (int)((pt__vget(b->c[p], best_axis) - cmin) * scale);
+                if (bin >= PT__BVH_BINS) bin = PT__BVH_BINS - 1;
+                if (bin <= best_bin) lo_i++;
+                else { b->idx[lo_i] = b->idx[--hi_i]; b->idx[hi_i] = p; }
+            }
+            mid = lo_i;
+        }
+        node->axis = (uint16_t)best_axis;
+    }
+    if (mid <= begin || mid >= end) {
+        /* no useful SAH split (coincident centroids or too deep): a leaf if small enough,
+           otherwise halve the range so that the depth stays logarithmic */
+        if (n <= PT__BVH_MAX_LEAF) { node->count = (uint16_t)n; return ni; }
+        mid = begin + n / 2u;
+    }
+    pt__bvh_build_range(b, begin, mid, depth + 1u);
+    {
+        uint32_t right = pt__bvh_build_range(b, mid, end, depth + 1u);
+        b->nodes[ni].index = right;
+    }
+    return ni;
+}
+
+static int pt__bvh_build_scene(pt_scene *s)
+{
+    pt__bvh_build b;
+    uint32_t n = s->prim_count, i;
+    pt__prim *sorted;
+    PT_FREE(s->nodes);
+    s->nodes = NULL;
+    s->node_count = 0;
+    s->bvh_depth = 0;
+    if (n == 0) return PT_OK;
+    memset(&b, 0, sizeof b);
+    b.lo = (pt_vec3 *)PT_MALLOC(sizeof(pt_vec3) * n);
+    b.hi = (pt_vec3 *)PT_MALLOC(sizeof(pt_vec3) * n);
+    b.c = (pt_vec3 *)PT_MALLOC(sizeof(pt_vec3) * n);
+    b.idx = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * n);
+    b.nodes = (pt__node *)PT_MALLOC(sizeof(pt__node) * (2u * (size_t)n));
+    sorted = (pt__prim *)PT_MALLOC(sizeof(pt__prim) * n);
+    if (!b.lo || !b.hi || !b.c || !b.idx || !b.nodes || !sorted) {
+        PT_FREE(b.lo); PT_FREE(b.hi); PT_FREE(b.c); PT_FREE(b.idx); PT_FREE(b.nodes); PT_FREE(sorted);
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory building the BVH (%u primitives)",
+                        (unsigned)n);
+    }
+    for (i = 0; i < n; ++i) {
+        pt__prim_bounds(&s->prims[i], &b.lo[i], &b.hi[i]);
+        b.c[i] = pt_scale(pt_add(b.lo[i], b.hi[i]), 0.5f);
+        b.idx[i] = i;
+    }
+    pt__bvh_build_range(&b, 0, n, 0);
+    for (i = 0; i < n; ++i) sorted[i] = s->prims[b.idx[i]];
+    memcpy(s->prims, sorted, sizeof(pt__prim) * n);
+    s->nodes = b.nodes;
+    s->node_count = b.node_count;
+    s->bvh_depth = b.max_depth;
+    PT_FREE(b.lo); PT_FREE(b.hi); PT_FREE(b.c); PT_FREE(b.idx); PT_FREE(sorted);
+    return PT_OK;
+}
+
+static int pt__slab(const pt__node *n, const pt__rayctx *rc, float tmax, float *tnear)
+{
+    float tx0 = (n->lo[0] - rc->o.x) * rc->inv_d.x, tx1 = (n->hi[0] - rc->o.x) * rc->inv_d.x;
+    float ty0 = (n->lo[1] - rc->o.y) * rc->inv_d.y, ty1 = (n->hi[1] - rc->o.y) * rc->inv_d.y;
+    float tz0 = (n->lo[2] - rc->o.z) * rc->inv_d.z, tz1 = (n->hi[2] - rc->o.z) * rc->inv_d.z;
+    float t0 = pt__maxf(pt__maxf(pt__minf(tx0, tx1), pt__minf(ty0, ty1)), pt__maxf(pt__minf(tz0, tz1), 0.0f));
+    float t1 = pt__minf(pt__minf(pt__maxf(tx0, tx1), pt__maxf(ty0, ty1)), pt__maxf(tz0, tz1)) * 1.00000036f;
+    *tnear = t0;
+    return t0 <= t1 && t0 < tmax;
+}
+
+/* Closest hit: returns 1 and the primitive index (into s->prims), t and barycentrics. */
+static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
+                           float *bary)
+{
+    uint32_t stack_node[PT__BVH_STACK];
+    float stack_t[PT__BVH_STACK];
+    int sp = 0, found = 0;
+    uint32_t ni = 0;
+    float tn;
+    if (!s->node_count || !pt__slab(&s->nodes[0], rc, tmax, &tn)) return 0;
+    for (;;) {
+        const pt__node *n = &s->nodes[ni];
+        int descend = 0;
+        if (n->count) {
+            uint32_t k, end = n->index + n->count;
+            for (k = n->index; k < end; ++k) {
+                float t, bb[3];
+                if (pt__hit_prim(rc, &s->prims[k], tmax, &t, bb)) {
+                    tmax = t;
+                    *prim = k;
+                    bary[0] = bb[0]; bary[1] = bb[1]; bary[2] = bb[2];
+                    found = 1;
+                }
+            }
+        } else {
+            uint32_t l = ni + 1u, r = n->index;
+            float tl, tr;
+            int hl = pt__slab(&s->nodes[l], rc, tmax, &tl), hr = pt__slab(&s->nodes[r], rc, tmax, &tr);
+            if (hl && hr) {
+                uint32_t near_n = l, far_n = r;
+                float far_t = tr;
+                if (tr < tl) { near_n = r; far_n = l; far_t = tl; }
+                PT_ASSERT(sp < PT__BVH_STACK); /* depth is bounded by the build (see above) */
+                stack_node[sp] = far_n;
+                stack_t[sp] = far_t;
+                sp++;
+                ni = near_n;
+                descend = 1;
+            } else if (hl) { ni = l; descend = 1; }
+            else if (hr) { ni = r; descend = 1; }
+        }
+        if (descend) continue;
+        while (sp > 0) {
+            --sp;
+            if (stack_t[sp] < tmax) { ni = stack_node[sp]; descend = 1; break; }
+        }
+        if (!descend) break;
+    }
+    if (found) *t_out = tmax;
+    return found;
+}
+
+/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. */
+static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
+{
+    uint32_t stack_node[PT__BVH_STACK];
+    int sp = 0;
+    uint32_t ni = 0;
+    float tn;
+    if (!s->node_count || !pt__slab(&s->nodes[0], rc, tmax, &tn)) return 0;
+    for (;;) {
+        const pt__node *n = &s->nodes[ni];
+        if (n->count) {
+            uint32_t k, end = n->index + n->count;
+            for (k = n->index; k < end; ++k) {
+                float t, bb[3];
+                if (pt__hit_prim(rc, &s->prims[k], tmax, &t, bb)) return 1;
+            }
+        } else {
+            uint32_t l = ni + 1u, r = n->index;
+            float tl, tr;
+            int hl = pt__slab(&s->nodes[l], rc, tmax, &tl), hr = pt__slab(&s->nodes[r], rc, tmax, &tr);
+            if (hl && hr) {
+                PT_ASSERT(sp < PT__BVH_STACK);
+                stack_node[sp++] = r;
+                ni = l;
+                continue;
+            }
+            if (hl) { ni = l; continue; }
+            if (hr) { ni = r; continue; }
+        }
+        if (sp == 0) break;
+        ni = stack_node[--sp];
+    }
+    return 0;
+}
+
+static float pt__prim_area(const pt__prim *p)
+{
+    if (p->type == PT__PRIM_SPHERE) return 4.0f * PT__PI * p->p1.x * p->p1.x;
+    if (p->type == PT__PRIM_QUAD) return pt_length(pt_cross(p->p1, p->p2));
+    return 0.5f * pt_length(pt_cross(pt_sub(p->p1, p->p0), pt_sub(p->p2, p->p0)));
+}
+
+PTDEF int pt_scene_commit(pt_scene *s)
+{
+    uint32_t i, nl = 0;
+    int rc;
+    double total = 0.0, acc = 0.0;
+    unsigned f;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    s->error[0] = '\0';
+    if ((rc = pt__bvh_build_scene(s)) != PT_OK) return rc;
+    /* light table: every emitting primitive is a light, picked in proportion to its power */
+    PT_FREE(s->lights);
+    s->lights = NULL;
+    s->light_count = 0;
+    for (i = 0; i < s->prim_count; ++i) {
+        s->prims[i].light = -1;
+        if (s->mats[s->prims[i].material].emits) nl++;
+    }
+    if (nl) {
+        s->lights = (pt__light *)PT_MALLOC(sizeof(pt__light) * nl);
+        if (!s->lights) return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory (%u lights)", (unsigned)nl);
+        for (i = 0; i < s->prim_count; ++i) {
+            const pt__material *m = &s->mats[s->prims[i].material];
+            pt__light *l;
+            if (!m->emits) continue;
+            l = &s->lights[s->light_count];
+            l->prim = i;
+            l->area = pt__prim_area(&s->prims[i]);
+            l->power = pt__mean3(m->emission) * l->area * PT__PI * (m->two_sided ? 2.0f : 1.0f);
+            if (!pt__isfinite(l->power) || !(l->power > 0.0f))
+                return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "commit: emitter (primitive %u) has power %g",
+                                (unsigned)s->prims[i].id, (double)l->power);
+            total += l->power;
+            s->prims[i].light = (int32_t)s->light_count++;
+        }
+        for (i = 0; i < s->light_count; ++i) {
+            s->lights[i].select_pdf = (float)(s->lights[i].power / total);
+            acc += s->lights[i].power;
+            s->lights[i].cdf = (float)(acc / total);
+        }
+        s->lights[s->light_count - 1].cdf = 1.0f;
+    }
+    s->total_power = total;
+    /* features */
+    f = s->features & (PT_FEATURE_SPHERES | PT_FEATURE_QUADS | PT_FEATURE_TRIANGLES | PT_FEATURE_MESHES |
+                       PT_FEATURE_SHADING_NORMALS | PT_FEATURE_TRANSFORMS);
+    if (s->light_count) f |= PT_FEATURE_EMITTERS;
+    if (s->light_count == 1) f |= PT_FEATURE_SINGLE_EMITTER;
+    s->lo = pt_v3(0, 0, 0);
+    s->hi = pt_v3(0, 0, 0);
+    if (s->node_count) {
+        s->lo = pt_v3(s->nodes[0].lo[0], s->nodes[0].lo[1], s->nodes[0].lo[2]);
+        s->hi = pt_v3(s->nodes[0].hi[0], s->nodes[0].hi[1], s->nodes[0].hi[2]);
+    }
+    for (i = 0; i < s->prim_count; ++i) {
+        const pt__material *m = &s->mats[s->prims[i].material];
+        if (m->emits && m->two_sided) f |= PT_FEATURE_TWO_SIDED_EMITTERS;
+        if (m->scatters && !m->delta) f |= PT_FEATURE_NON_DELTA;
+        if (m->delta) f |= PT_FEATURE_DELTA;
+        if (m->type == PT_MATERIAL_DIELECTRIC) f |= PT_FEATURE_DIELECTRICS;
+        if (m->texture) f |= PT_FEATURE_TEXTURES;
+    }
+    s->features = f;
+    s->committed = 1;
+    return PT_OK;
+}
+
+PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
+{
+    if (!s || !info) return PT_ERROR_INVALID_ARGUMENT;
+    memset(info, 0, sizeof *info);
+    info->features = s->features;
+    info->committed = s->committed;
+    info->primitive_count = s->prim_count;
+    info->sphere_count = s->sphere_count;
+    info->quad_count = s->quad_count;
+    info->triangle_count = s->triangle_count;
+    info->mesh_count = s->mesh_count;
+    info->emitter_count = s->committed ? s->light_count : 0u;
+    info->material_count = s->mat_count;
+    info->texture_count = s->tex_count;
+    info->degenerate_triangles_skipped = s->degenerate_skipped;
+    info->bvh_node_count = s->node_count;
+    info->bvh_max_depth = s->bvh_depth;
+    info->total_emitted_power = s->total_power;
+    info->bounds_min = s->lo;
+    info->bounds_max = s->hi;
+    return PT_OK;
+}
+
+/* --- lights of a scene (used by the integrator and by pt_pdf_scene_lights) --- */
+static int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
+                                 pt__light_sample *ls)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_sample(o, p->p0, p->p1.x, two, u1, u2, ls);
+    if (p->type == PT__PRIM_QUAD) return pt__quad_light_sample(o, p->p0, p->p1, p->p2, two, u1, u2, ls);
+    return pt__triangle_light_sample(o, p->p0, p->p1, p->p2, two, u1, u2, ls);
+}
+static float pt__light_prim_value(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w, -1.0f);
+    if (p->type == PT__PRIM_QUAD) return pt__quad_light_value(o, p->p0, p->p1, p->p2, two, w);
+    return pt__triangle_light_value(o, p->p0, p->p1, p->p2, two, w);
+}
+/* Density of w for one light whose surface a ray from o along w reaches at distance t with
+   unit geometric normal n (no ray cast needed). */
+static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w, float t, pt_vec3 n)
+{
+    const pt__material *m = &s->mats[p->material];
+    float cosl, area;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, m->two_sided, w, t);
+    if (!m->two_sided && pt_dot(n, pt_sub(o, p->p0)) <= 0.0f) return 0.0f;
+    cosl = fabsf(pt_dot(n, w));
+    area = s->lights[p->light].area;
+    if (!(cosl > 0.0f)) return 0.0f;
+    return (t * t) / (cosl * area);
+}
+static uint32_t pt__pick_light(const pt_scene *s, float u)
+{
+    uint32_t lo = 0, hi = s->light_count - 1u;
+    while (lo < hi) { /* first light whose cdf exceeds u */
+        uint32_t mid = (lo + hi) / 2u;
+        if (s->lights[mid].cdf > u) hi = mid;
+        else lo = mid + 1u;
+    }
+    return lo;
+}
+/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
+static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
+                             uint32_t *light_index)
+{
+    uint32_t li;
+    if (!s->light_count) return 0;
+    li = s->light_count == 1 ? 0u : pt__pick_light(s, u0);
+    if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls)) return 0;
+    ls->pdf *= s->lights[li].select_pdf;
+    *light_index = li;
+    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
+}
+static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w)
+{
+    uint32_t i;
+    float v = 0.0f;
+    for (i = 0; i < s->light_count; ++i)
+        v += s->lights[i].select_pdf * pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w);
+    return v;
+}
+
+/* --- public queries --- */
+static int pt__query_ok(const pt_scene *s, pt_ray ray, float tmax)
+{
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!s->committed) return pt__fail(s, PT_ERROR_INVALID_STATE, "query: the scene is not committed");
+    if (!pt__vfinite(ray.origin) || !pt__vfinite(ray.dir) || tmax != tmax) return PT_ERROR_INVALID_ARGUMENT;
+    return PT_OK;
+}
+PTDEF int pt_scene_intersect(const pt_scene *s, pt_ray ray, float tmax, pt_hit *hit)
+{
+    pt__rayctx rc;
+    uint32_t prim;
+    float t, bary[3];
+    int e = pt__query_ok(s, ray, tmax);
+    if (e != PT_OK) return e;
+    if (!hit) return PT_ERROR_INVALID_ARGUMENT;
+    pt__rayctx_init(&rc, ray);
+    if (!pt__bvh_closest(s, &rc, tmax, &prim, &t, bary)) return 0;
+    pt__fill_hit(s, &s->prims[prim], ray, t, bary, hit);
+    return 1;
+}
+PTDEF int pt_scene_occluded(const pt_scene *s, pt_ray ray, float tmax)
+{
+    pt__rayctx rc;
+    int e = pt__query_ok(s, ray, tmax);
+    if (e != PT_OK) return e;
+    pt__rayctx_init(&rc, ray);
+    return pt__bvh_any(s, &rc, tmax);
+}
+PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tmax, pt_hit *hit)
+{
+    pt__rayctx rc;
+    uint32_t i, best = 0;
+    float bary[3] = {0, 0, 0}, best_bary[3] = {0, 0, 0}, t;
+    int found = 0, e = pt__query_ok(s, ray, tmax);
+    if (e != PT_OK) return e;
+    if (!hit) return PT_ERROR_INVALID_ARGUMENT;
+    pt__rayctx_init(&rc, ray);
+    for (i = 0; i < s->prim_count; ++i) {
+        if (pt__hit_prim(&rc, &s->prims[i], tmax, &t, bary)) {
+            tmax = t;
+            best = i;
+            memcpy(best_bary, bary, sizeof bary);
+            found = 1;
+        }
+    }
+    if (!found) return 0;
+    pt__fill_hit(s, &s->prims[best], ray, tmax, best_bary, hit);
+    return 1;
+}
+
+/* ------------------------------------------------------------------------------------------
+   6. Camera: pinhole or thin lens; screen right = forward x up (right-handed).
+   ------------------------------------------------------------------------------------------ */
+
+PTDEF int pt_camera_init(pt_camera *cam, const pt_camera_desc *d, int width, int height)
+{
+    pt_vec3 fwd, up, right, tup;
+    float vfov, focus, h, vh, vw;
+    if (!cam || !d || width <= 0 || height <= 0) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__vfinite(d->look_from) || !pt__vfinite(d->look_at) || !pt__vfinite(d->up)) return PT_ERROR_INVALID_ARGUMENT;
+    vfov = d->vfov_degrees == 0.0f ? 40.0f : d->vfov_degrees;
+    if (!pt__isfinite(vfov) || !(vfov > 0.0f && vfov < 180.0f)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__isfinite(d->lens_radius) || d->lens_radius < 0.0f) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__isfinite(d->focus_distance) || d->focus_distance < 0.0f) return PT_ERROR_INVALID_ARGUMENT;
+    fwd = pt_sub(d->look_at, d->look_from);
+    if (!(pt_length2(fwd) > 0.0f)) return PT_ERROR_INVALID_ARGUMENT;
+    fwd = pt_normalize(fwd);
+    up = pt_length2(d->up) > 0.0f ? pt_normalize(d->up) : pt_v3(0, 1, 0);
+    right = pt_cross(fwd, up);
+    if (!(pt_length2(right) > 1e-12f)) return PT_ERROR_INVALID_ARGUMENT; /* up parallel to the view */
+    right = pt_normalize(right);
+    tup = pt_cross(right, fwd);
+    focus = d->focus_distance > 0.0f ? d->focus_distance : pt_length(pt_sub(d->look_at, d->look_from));
+    h = (float)tan((double)vfov * 3.14159265358979323846 / 360.0);
+    vh = 2.0f * h * focus;
+    vw = vh * (float)width / (float)height;
+    cam->origin = d->look_from;
+    cam->forward = fwd;
+    cam->right = right;
+    cam->up = tup;
+    cam->pixel_du = pt_scale(right, vw / (float)width);
+    cam->pixel_dv = pt_scale(tup, -vh / (float)height);
+    cam->pixel00 = pt_add(pt_add(pt_madd(d->look_from, fwd, focus), pt_scale(right, -0.5f * vw)), pt_scale(tup, 0.5f * vh));
+    cam->lens_radius = d->lens_radius;
+    cam->width = width;
+    cam->height = height;
+    return PT_OK;
+}
+PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, float u2)
+{
+    pt_ray r;
+    pt_vec3 target = pt_add(pt_add(cam->pixel00, pt_scale(cam->pixel_du, x)), pt_scale(cam->pixel_dv, y));
+    r.origin = cam->origin;
+    if (cam->lens_radius > 0.0f) {
+        float lx, ly;
+        pt_sample_concentric_disk(u1, u2, &lx, &ly);
+        r.origin = pt_add(r.origin, pt_add(pt_scale(cam->right, lx * cam->lens_radius),
+                                           pt_scale(cam->up, ly * cam->lens_radius)));
+    }
+    r.dir = pt_normalize(pt_sub(target, r.origin));
+    return r;
+}
+
+/* ------------------------------------------------------------------------------------------
+   7. Integrator
+   At every non-delta vertex the "scatter" density is the material's PDF, mixed with the
+   user's guide PDF when there is one: p_s = (1 - g) p_material + g p_guide. The strategies:
+   - MATERIAL: w_i ~ p_s; weight A pScatter / p_s; emission counted where rays land.
+   - LIGHT: direct light by a shadow ray to a point sampled from the light PDF (picked by
+     power), weight A pScatter Le / p_light; emission that scattered rays land on is not
+     counted (it is the light strategy's), except after a delta vertex or from the camera.
+     The path continues by p_s for indirect light.
+   - MIXTURE: w_i ~ w p_lights + (1 - w) p_s and weight A pScatter / (w p_lights(w_i) +
+     (1 - w) p_s(w_i)), where p_lights(w_i) sums over all lights; emission counted where rays
+     land. A light sample that fails (a one-sided light seen from behind) ends the path: the
+     estimator stays unbiased because that mass is simply absent from the density.
+   - MIS: both of LIGHT's and MATERIAL's estimates of direct light, weighted by the power
+     heuristic w_a = p_a^2 / (p_a^2 + p_b^2) (Veach & Guibas, "Optimally Combining Sampling
+     Techniques for Monte Carlo Rendering", SIGGRAPH 1995).
+   Russian roulette from rr_start_depth continues with probability q = min(0.95, max(beta))
+   and divides beta by q (Arvo & Kirk 1990). Depth counts scattering events: max_depth 1 is
+   direct light only.
+   ------------------------------------------------------------------------------------------ */
+
+typedef struct pt__settings {
+    pt_strategy strategy;
+    float light_weight;
+    int max_depth, rr_start;
+    pt_color background;
+    pt_guide_fn guide;
+    void *guide_user;
+    float guide_weight;
+} pt__settings;
+
+static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c)
+{
+    memset(c, 0, sizeof *c);
+    if ((int)d->strategy < (int)PT_STRATEGY_MIS || (int)d->strategy > (int)PT_STRATEGY_MIXTURE)
+        return PT_ERROR_INVALID_ARGUMENT;
+    c->strategy = d->strategy;
+    c->light_weight = d->light_weight == 0.0f ? 0.5f : d->light_weight;
+    if (!pt__isfinite(c->light_weight) || !(c->light_weight > 0.0f && c->light_weight <= 1.0f))
+        return PT_ERROR_INVALID_ARGUMENT;
+    if (d->max_depth < 0) return PT_ERROR_INVALID_ARGUMENT;
+    c->max_depth = d->max_depth == 0 ? 50 : d->max_depth;
+    c->rr_start = d->rr_start_depth == 0 ? 3 : (d->rr_start_depth < 0 ? 0x7fffffff : d->rr_start_depth);
+    if (!pt__color_ok(d->background)) return PT_ERROR_INVALID_ARGUMENT;
+    c->background = d->background;
+    c->guide = d->guide;
+    c->guide_user = d->guide_user;
+    c->guide_weight = d->guide ? (d->guide_weight == 0.0f ? 0.5f : d->guide_weight) : 0.0f;
+    if (!pt__isfinite(c->guide_weight) || c->guide_weight < 0.0f || c->guide_weight >= 1.0f)
+        return PT_ERROR_INVALID_ARGUMENT;
+    return PT_OK;
+}
+
+static float pt__power_heuristic(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    if (!pt__isfinite(a2)) return 1.0f; /* a dominates (only in extreme cases) */
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+/* Per-vertex state of the scatter density (material PDF mixed with an optional guide). */
+typedef struct pt__vertex {
+    const pt__material *m;
+    pt_vec3 p, ng, ns, wo;
+    pt_color albedo;
+    int has_guide;
+    float g;
+    pt_pdf guide;
+} pt__vertex;
+
+static float pt__scatter_density(const pt__vertex *v, pt_vec3 wi)
+{
+    float pm = pt__material_density(v->m, v->ns, v->wo, wi);
+    if (!v->has_guide) return pm;
+    return (1.0f - v->g) * pm + v->g * pt_pdf_value(&v->guide, wi);
+}
+static int pt__scatter_sample(const pt__vertex *v, pt_rng *rng, pt_vec3 *wi)
+{
+    float u0 = v->has_guide ? pt_rng_float(rng) : 1.0f;
+    if (v->has_guide && u0 < v->g) {
+        float pg;
+        return pt_pdf_sample(&v->guide, rng, wi, &pg);
+    } else {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng), u3 = pt_rng_float(rng), pm;
+        return pt__material_sample_dir(v->m, v->ns, v->wo, u1, u2, u3, wi, &pm);
+    }
+}
+
+/* Whether any light can be sampled from p at all; exact (and cheap) for one light. */
+static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
+{
+    const pt__prim *lp;
+    int two;
+    if (!s->light_count) return 0;
+    if (s->light_count > 1) return 1;
+    lp = &s->prims[s->lights[0].prim];
+    two = s->mats[lp->material].two_sided;
+    if (lp->type == PT__PRIM_SPHERE) return two || !pt__sphere_inside(p, lp->p0, lp->p1.x);
+    return pt__planar_faces(p, lp->p0, lp->n, two);
+}
+
+static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_rng *rng, pt_path_stats *st)
+{
+    pt_color L = pt_v3(0, 0, 0), beta = pt_v3(1, 1, 1);
+    int depth, prev_delta = 1;
+    float prev_pdf = 0.0f;
+    pt_vec3 prev_p = ray.origin;
+    const int any_lights = s->light_count > 0;
+    pt__vertex v;
+    memset(&v, 0, sizeof v);
+    st->camera_rays++;
+    for (depth = 0;; ++depth) {
+        pt__rayctx rc;
+        uint32_t pi;
+        float t, bary[3];
+        const pt__prim *prim;
+        const pt__material *m;
+        pt_hit h;
+        pt_vec3 wi;
+        pt__rayctx_init(&rc, ray);
+        if (!pt__bvh_closest(s, &rc, PT__INF, &pi, &t, bary)) {
+            L = pt_add(L, pt_mul(beta, cfg->background));
+            break;
+        }
+        prim = &s->prims[pi];
+        m = &s->mats[prim->material];
+        pt__fill_hit(s, prim, ray, t, bary, &h);
+        /* emission reached by the ray */
+        if (m->emits && (m->two_sided || h.front_face)) {
+            float w = 1.0f;
+            if (!prev_delta) {
+                if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
+                else if (cfg->strategy == PT_STRATEGY_MIS) {
+                    float pl = s->lights[prim->light].select_pdf *
+                               pt__light_prim_value_at(s, prim, prev_p, ray.dir, t, h.geometric_normal);
+                    w = pt__power_heuristic(prev_pdf, pl);
+                }
+            }
+            if (w > 0.0f) L = pt_add(L, pt_scale(pt_mul(beta, m->emission), w));
+        }
+        if (depth >= cfg->max_depth || !m->scatters) break;
+
+        v.m = m;
+        v.p = h.point;
+        v.wo = pt_neg(ray.dir);
+        v.ng = h.front_face ? h.geometric_normal : pt_neg(h.geometric_normal);
+        v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
+        v.albedo = pt__albedo(s, m, h.point);
+
+        if (m->delta) {
+            /* perfectly specular: follow the delta direction; no light PDF here */
+            if (m->type == PT_MATERIAL_DIELECTRIC) {
+                float eta = h.front_face ? 1.0f / m->ior : m->ior, cos_t = 0.0f;
+                float cos_i = pt__minf(1.0f, pt_dot(v.wo, v.ns));
+                float F = pt__fresnel_dielectric(cos_i, eta, &cos_t);
+                if (pt_rng_float(rng) < F) wi = pt__reflect(v.wo, v.ns);
+                else wi = pt_normalize(pt_add(pt_scale(v.wo, -eta), pt_scale(v.ns, eta * cos_i - cos_t)));
+                /* weight F/F or (1-F)/(1-F) = 1: clear glass */
+            } else {
+                wi = pt__reflect(v.wo, v.ns);
+                if (pt_dot(wi, v.ng) <= 0.0f) break;
+                beta = pt_mul(beta, v.albedo);
+            }
+            prev_delta = 1;
+        } else {
+            float p_total, u;
+            pt_color f;
+            int use_light = 0;
+            v.has_guide = 0;
+            if (cfg->guide) {
+                pt_shading_point sp;
+                sp.position = v.p;
+                sp.normal = v.ns;
+                sp.wo = v.wo;
+                sp.material = prim->material;
+                sp.depth = depth;
+                v.g = cfg->guide_weight;
+                v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
+            }
+            /* next-event estimation (LIGHT and MIS) */
+            if (any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT)) {
+                pt__light_sample ls;
+                uint32_t li;
+                float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+                if (pt__lights_sample(s, v.p, u0, u1, u2, &ls, &li)) {
+                    f = pt__material_eval(m, v.albedo, v.ns, v.ng, v.wo, ls.dir);
+                    if (!pt__is_black(f)) {
+                        float w = 1.0f;
+                        pt_ray sr;
+                        pt__rayctx src;
+                        pt_vec3 target;
+                        if (cfg->strategy == PT_STRATEGY_MIS) w = pt__power_heuristic(ls.pdf, pt__scatter_density(&v, ls.dir));
+                        sr.origin = pt_offset_ray_origin(v.p, v.ng, ls.dir);
+                        target = pt_offset_ray_origin(ls.point, ls.normal, pt_neg(ls.dir));
+                        sr.dir = pt_sub(target, sr.origin);
+                        pt__rayctx_init(&src, sr);
+                        st->shadow_rays++;
+                        if (!pt__bvh_any(s, &src, 1.0f - 1e-4f)) {
+                            const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
+                            L = pt_add(L, pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls.pdf)));
+                        }
+                    }
+                }
+            }
+            /* the direction that continues the path */
+            if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights && pt__lights_reachable(s, v.p)) {
+                u = pt_rng_float(rng);
+                use_light = u < cfg->light_weight;
+                if (use_light) {
+                    pt__light_sample ls;
+                    uint32_t li;
+                    float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+                    if (!pt__lights_sample(s, v.p, u0, u1, u2, &ls, &li)) break;
+                    wi = ls.dir;
+                } else if (!pt__scatter_sample(&v, rng, &wi)) break;
+                p_total = cfg->light_weight * pt__lights_value(s, v.p, wi) +
+                          (1.0f - cfg->light_weight) * pt__scatter_density(&v, wi);
+            } else {
+                if (!pt__scatter_sample(&v, rng, &wi)) break;
+                p_total = pt__scatter_density(&v, wi);
+            }
+            f = pt__material_eval(m, v.albedo, v.ns, v.ng, v.wo, wi);
+            if (pt__is_black(f) || !(p_total > 0.0f)) break;
+            beta = pt_mul(beta, pt_scale(f, 1.0f / p_total));
+            prev_pdf = p_total;
+            prev_delta = 0;
+        }
+        prev_p = v.p;
+        ray.origin = pt_offset_ray_origin(v.p, v.ng, wi);
+        ray.dir = wi;
+        if (depth + 1 >= cfg->rr_start) {
+            float q = pt__minf(0.95f, pt_max_component(beta));
+            if (!(q > 0.0f) || pt_rng_float(rng) >= q) break;
+            beta = pt_scale(beta, 1.0f / q);
+        }
+        st->bounce_rays++;
+    }
+    return L;
+}
+
+/* One camera sample with the per-sample NaN/Inf guard. */
+static pt_color pt__sample(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_rng *rng, pt_path_stats *st)
+{
+    pt_color L = pt__trace(s, cfg, ray, rng, st);
+    if (!pt__vfinite(L)) {
+        st->nonfinite_samples++;
+        return pt_v3(0, 0, 0);
+    }
+    return L;
+}
+
+PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray ray, pt_rng *rng, pt_path_stats *stats)
+{
+    pt__settings cfg;
+    pt_path_stats local;
+    pt_color L;
+    if (!s || !d || !rng || !s->committed || pt__settings_from_desc(d, &cfg) != PT_OK || !pt__vfinite(ray.origin) ||
+        !pt__vfinite(ray.dir) || !(pt_length2(ray.dir) > 0.0f))
+        return pt_v3(0, 0, 0);
+    ray.dir = pt_normalize(ray.dir);
+    memset(&local, 0, sizeof local);
+    L = pt__sample(s, &cfg, ray, rng, &local);
+    if (stats) {
+        stats->camera_rays += local.camera_rays;
+        stats->bounce_rays += local.bounce_rays;
+        stats->shadow_rays += local.shadow_rays;
+        stats->nonfinite_samples += local.nonfinite_samples;
+    }
+    return L;
+}
+
+/* ------------------------------------------------------------------------------------------
+   8. Rendering: the image is cut into tiles; each pass adds samples_per_pass samples to every
+   pixel of every tile. Tiles are handed out by a pthreads pool (or the host's parallel-for).
+   A pixel's k-th sample draws from the stream pt_rng_for_sample(seed, pixel, k) and is added
+   to the pixel in sample order by the one job that owns the tile, so the image does not
+   depend on the thread count or the order in which tiles run.
+   ------------------------------------------------------------------------------------------ */
+
+static double pt__now(void)
+{
+#if defined(CLOCK_MONOTONIC) && !defined(PDFTRACE_NO_THREADS)
+    struct timespec ts;
+    if (clock_gettime(CLOCK_MONOTONIC, &ts) == 0) return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+#endif
+    return (double)clock() / (double)CLOCKS_PER_SEC;
+}
+
+static int pt__cpu_count(void)
+{
+#if !defined(PDFTRACE_NO_THREADS) && defined(_SC_NPROCESSORS_ONLN)
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    if (n > 0 && n < 4096) return (int)n;
+#endif
+    return 1;
+}
+
+typedef struct pt__pass {
+    const pt_scene *scene;
+    const pt__settings *cfg;
+    const pt_camera *cam;
+    pt_film *film;
+    uint64_t seed;
+    int tile_size, tiles_x, spp;
+    const volatile int *cancel;
+    pt_path_stats *tile_stats;  /* one per tile */
+    unsigned char *tile_done;   /* one per tile */
+#ifndef PDFTRACE_NO_THREADS
+    pthread_mutex_t lock;
+    int next, count;
+#endif
+} pt__pass;
+
+static void pt__render_tile(void *data, int index)
+{
+    pt__pass *ps = (pt__pass *)data;
+    pt_film *film = ps->film;
+    int tx = index % ps->tiles_x, ty = index / ps->tiles_x;
+    int x0 = tx * ps->tile_size, y0 = ty * ps->tile_size;
+    int x1 = x0 + ps->tile_size, y1 = y0 + ps->tile_size, x, y, k;
+    pt_path_stats st;
+    if (ps->cancel && *ps->cancel) return;
+    memset(&st, 0, sizeof st);
+    if (x1 > film->width) x1 = film->width;
+    if (y1 > film->height) y1 = film->height;
+    for (y = y0; y < y1; ++y) {
+        for (x = x0; x < x1; ++x) {
+            uint32_t pix = (uint32_t)y * (uint32_t)film->width + (uint32_t)x;
+            uint32_t base = film->count[pix];
+            double *sum = film->sum + 3u * pix, *sq = film->sum_sq + 3u * pix;
+            for (k = 0; k < ps->spp; ++k) {
+                pt_rng rng = pt_rng_for_sample(ps->seed, pix, base + (uint32_t)k);
+                float jx = pt_rng_float(&rng), jy = pt_rng_float(&rng);
+                float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
+                pt_ray r = pt_camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
+                pt_color L = pt__sample(ps->scene, ps->cfg, r, &rng, &st);
+                sum[0] += L.x; sum[1] += L.y; sum[2] += L.z;
+                sq[0] += (double)L.x * L.x; sq[1] += (double)L.y * L.y; sq[2] += (double)L.z * L.z;
+            }
+            film->count[pix] = base + (uint32_t)ps->spp;
+        }
+    }
+    ps->tile_stats[index] = st;
+    ps->tile_done[index] = 1;
+}
+
+#ifndef PDFTRACE_NO_THREADS
+static void *pt__worker(void *data)
+{
+    pt__pass *ps = (pt__pass *)data;
+    for (;;) {
+        int i;
+        pthread_mutex_lock(&ps->lock);
+        i = ps->next++;
+        pthread_mutex_unlock(&ps->lock);
+        if (i >= ps->count) break;
+        pt__render_tile(ps, i);
+    }
+    return NULL;
+}
+#endif
+
+/* Runs every tile of a pass; returns the number of threads used. */
+static int pt__run_pass(pt__pass *ps, int tiles, int threads, const pt_render_desc *d)
+{
+    int i;
+    if (d->parallel_for) {
+        d->parallel_for(d->parallel_for_user, tiles, pt__render_tile, ps);
+        return threads;
+    }
+#ifndef PDFTRACE_NO_THREADS
+    if (threads > 1 && tiles > 1) {
+        pthread_t tid[256];
+        int started = 0, n = threads > tiles ? tiles : threads;
+        if (n > 256) n = 256;
+        ps->next = 0;
+        ps->count = tiles;
+        for (i = 0; i < n - 1; ++i) {
+            if (pthread_create(&tid[i], NULL, pt__worker, ps) != 0) break; /* fewer threads: still correct */
+            started++;
+        }
+        (void)pt__worker(ps); /* the calling thread works too */
+        for (i = 0; i < started; ++i) pthread_join(tid[i], NULL);
+        return started + 1;
+    }
+#endif
+    for (i = 0; i < tiles; ++i) pt__render_tile(ps, i);
+    return 1;
+}
+
+PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
+{
+    pt__settings cfg;
+    pt_camera cam;
+    pt__pass ps;
+    int rc, spp, per_pass, passes, pass, tiles, tiles_x, tiles_y, tile, threads, used = 1, result = PT_OK;
+    uint64_t done = 0;
+    double t0 = pt__now();
+    pt_render_stats total;
+    memset(&total, 0, sizeof total);
+    if (stats) memset(stats, 0, sizeof *stats);
+    if (!s || !d || !film) return PT_ERROR_INVALID_ARGUMENT;
+    if (!s->committed)
+        return pt__fail(s, PT_ERROR_INVALID_STATE, "render: the scene is not committed (or changed since)");
+    if (d->width <= 0 || d->height <= 0 || d->samples_per_pixel < 0 || d->samples_per_pass < 0 || d->threads < 0 ||
+        d->tile_size < 0)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "render: width %d, height %d, samples %d: sizes must be > 0",
+                        d->width, d->height, d->samples_per_pixel);
+    if (!film->sum || !film->sum_sq || !film->count || film->width != d->width || film->height != d->height)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "render: the film is not initialised to %dx%d", d->width,
+                        d->height);
+    if ((rc = pt__settings_from_desc(d, &cfg)) != PT_OK)
+        return pt__fail(s, rc, "render: invalid settings (strategy, light_weight, max_depth, background or guide)");
+    if ((rc = pt_camera_init(&cam, &d->camera, d->width, d->height)) != PT_OK)
+        return pt__fail(s, rc, "render: invalid camera (look_from == look_at, up parallel to the view, fov ...)");
+    spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
+    per_pass = d->samples_per_pass ? d->samples_per_pass : (spp / 16 > 0 ? spp / 16 : 1);
+    if (per_pass > spp) per_pass = spp;
+    passes = (spp + per_pass - 1) / per_pass;
+    memset(&ps, 0, sizeof ps);
+    ps.tile_size = d->tile_size ? d->tile_size : 16;
+    tiles_x = (d->width + ps.tile_size - 1) / ps.tile_size;
+    tiles_y = (d->height + ps.tile_size - 1) / ps.tile_size;
+    tiles = tiles_x * tiles_y;
+    threads = d->threads ? d->threads : pt__cpu_count();
+#ifdef PDFTRACE_NO_THREADS
+    if (!d->parallel_for) threads = 1;
+#endif
+    ps.scene = s;
+    ps.cfg = &cfg;
+    ps.cam = &cam;
+    ps.film = film;
+    ps.seed = d->seed;
+    ps.tiles_x = tiles_x;
+    ps.cancel = d->cancel;
+    ps.tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)tiles);
+    ps.tile_done = (unsigned char *)PT_MALLOC((size_t)tiles);
+    if (!ps.tile_stats || !ps.tile_done) {
+        PT_FREE(ps.tile_stats);
+        PT_FREE(ps.tile_done);
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "render: out of memory");
+    }
+#ifndef PDFTRACE_NO_THREADS
+    if (pthread_mutex_init(&ps.lock, NULL) != 0) {
+        PT_FREE(ps.tile_stats);
+        PT_FREE(ps.tile_done);
+        return pt__fail(s, PT_ERROR_THREAD, "render: pthread_mutex_init failed");
+    }
+#endif
+    for (pass = 0; pass < passes; ++pass) {
+        int all_done = 1;
+        ps.spp = (pass == passes - 1) ? spp - per_pass * (passes - 1) : per_pass;
+        memset(ps.tile_stats, 0, sizeof(pt_path_stats) * (size_t)tiles);
+        memset(ps.tile_done, 0, (size_t)tiles);
+        used = pt__run_pass(&ps, tiles, threads, d);
+        for (tile = 0; tile < tiles; ++tile) {
+            const pt_path_stats *ts = &ps.tile_stats[tile];
+            if (!ps.tile_done[tile]) { all_done = 0; continue; }
+            total.camera_rays += ts->camera_rays;
+            total.bounce_rays += ts->bounce_rays;
+            total.shadow_rays += ts->shadow_rays;
+            total.nonfinite_samples += ts->nonfinite_samples;
+            {
+                int tx = tile % tiles_x, ty = tile / tiles_x;
+                int w = d->width - tx * ps.tile_size, h = d->height - ty * ps.tile_size;
+                if (w > ps.tile_size) w = ps.tile_size;
+                if (h > ps.tile_size) h = ps.tile_size;
+                done += (uint64_t)w * (uint64_t)h * (uint64_t)ps.spp;
+            }
+        }
+        total.passes = pass + 1;
+        if (!all_done || (d->cancel && *d->cancel)) { result = PT_ERROR_CANCELLED; break; }
+        if (d->progress) {
+            pt_progress pr;
+            pr.pass = pass + 1;
+            pr.pass_count = passes;
+            pr.samples_done = done;
+            pr.samples_total = (uint64_t)d->width * (uint64_t)d->height * (uint64_t)spp;
+            pr.seconds = pt__now() - t0;
+            if (d->progress(d->progress_user, &pr)) { result = PT_ERROR_CANCELLED; break; }
+        }
+    }
+#ifndef PDFTRACE_NO_THREADS
+    pthread_mutex_destroy(&ps.lock);
+#endif
+    PT_FREE(ps.tile_stats);
+    PT_FREE(ps.tile_done);
+    total.samples = done;
+    total.seconds = pt__now() - t0;
+    total.threads = used;
+    if (stats) *stats = total;
+    if (result == PT_ERROR_CANCELLED) pt__fail(s, result, "render: cancelled after %d passes", total.passes);
+    return result;
+}
+
+PTDEF int pt_render_image(const pt_scene *s, const pt_render_desc *d, pt_image *image, pt_render_stats *stats)
+{
+    pt_film film;
+    int rc, rr;
+    if (!s || !d || !image) return PT_ERROR_INVALID_ARGUMENT;
+    memset(&film, 0, sizeof film);
+    if ((rc = pt_film_init(&film, d->width, d->height)) != PT_OK) return rc;
+    rc = pt_render(s, d, &film, stats);
+    if (rc == PT_OK || rc == PT_ERROR_CANCELLED) {
+        rr = pt_film_resolve(&film, image);
+        if (rr != PT_OK) rc = rr;
+    }
+    pt_film_free(&film);
+    return rc;
+}
+
+/* ------------------------------------------------------------------------------------------
+   9. Output: film, images, PFM and PPM writers
+   ------------------------------------------------------------------------------------------ */
+
+static int pt__pixels(int w, int h, size_t *n)
+{
+    if (w <= 0 || h <= 0 || (size_t)w > ((size_t)-1) / 64u / (size_t)h || (uint64_t)w * (uint64_t)h > 0xffffffffu)
+        return 0;
+    *n = (size_t)w * (size_t)h;
+    return 1;
+}
+PTDEF int pt_film_init(pt_film *f, int w, int h)
+{
+    size_t n;
+    if (!f) return PT_ERROR_INVALID_ARGUMENT;
+    memset(f, 0, sizeof *f);
+    if (!pt__pixels(w, h, &n)) return PT_ERROR_INVALID_ARGUMENT;
+    f->sum = (double *)PT_MALLOC(sizeof(double) * 3u * n);
+    f->sum_sq = (double *)PT_MALLOC(sizeof(double) * 3u * n);
+    f->count = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * n);
+    if (!f->sum || !f->sum_sq || !f->count) {
+        pt_film_free(f);
+        return PT_ERROR_OUT_OF_MEMORY;
+    }
+    f->width = w;
+    f->height = h;
+    pt_film_clear(f);
+    return PT_OK;
+}
+PTDEF void pt_film_free(pt_film *f)
+{
+    if (!f) return;
+    PT_FREE(f->sum);
+    PT_FREE(f->sum_sq);
+    PT_FREE(f->count);
+    memset(f, 0, sizeof *f);
+}
+PTDEF void pt_film_clear(pt_film *f)
+{
+    size_t n;
+    if (!f || !f->sum || !pt__pixels(f->width, f->height, &n)) return;
+    memset(f->sum, 0, sizeof(double) * 3u * n);
+    memset(f->sum_sq, 0, sizeof(double) * 3u * n);
+    memset(f->count, 0, sizeof(uint32_t) * n);
+}
+PTDEF int pt_image_init(pt_image *img, int w, int h)
+{
+    size_t n;
+    if (!img) return PT_ERROR_INVALID_ARGUMENT;
+    memset(img, 0, sizeof *img);
+    if (!pt__pixels(w, h, &n)) return PT_ERROR_INVALID_ARGUMENT;
+    img->rgb = (float *)PT_MALLOC(sizeof(float) * 3u * n);
+    if (!img->rgb) return PT_ERROR_OUT_OF_MEMORY;
+    memset(img->rgb, 0, sizeof(float) * 3u * n);
+    img->width = w;
+    img->height = h;
+    return PT_OK;
+}
+PTDEF void pt_image_free(pt_image *img)
+{
+    if (!img) return;
+    PT_FREE(img->rgb);
+    memset(img, 0, sizeof *img);
+}
+PTDEF int pt_film_resolve(const pt_film *f, pt_image *img)
+{
+    size_t n, i;
+    int c;
+    if (!f || !img || !f->sum || !f->count || !pt__pixels(f->width, f->height, &n)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!img->rgb || img->width != f->width || img->height != f->height) {
+        int rc;
+        pt_image_free(img);
+        if ((rc = pt_image_init(img, f->width, f->height)) != PT_OK) return rc;
+    }
+    for (i = 0; i < n; ++i)
+        for (c = 0; c < 3; ++c)
+            img->rgb[3u * i + (size_t)c] = f->count[i] ? (float)(f->sum[3u * i + (size_t)c] / (double)f->count[i]) : 0.0f;
+    return PT_OK;
+}
+PTDEF int pt_film_pixel(const pt_film *f, int x, int y, pt_color *mean, pt_color *var_of_mean)
+{
+    size_t i;
+    double m[3], v[3], n;
+    int c;
+    if (!f || !f->sum || x < 0 || y < 0 || x >= f->width || y >= f->height) return PT_ERROR_INVALID_ARGUMENT;
+    i = (size_t)y * (size_t)f->width + (size_t)x;
+    n = (double)f->count[i];
+    for (c = 0; c < 3; ++c) {
+        m[c] = n > 0.0 ? f->sum[3u * i + (size_t)c] / n : 0.0;
+        /* unbiased sample variance, divided by n for the variance of the mean */
+        v[c] = n > 1.0 ? (f->sum_sq[3u * i + (size_t)c] - n * m[c] * m[c]) / (n - 1.0) / n : 0.0;
+        if (v[c] < 0.0) v[c] = 0.0;
+    }
+    if (mean) *mean = pt_v3((float)m[0], (float)m[1], (float)m[2]);
+    if (var_of_mean) *var_of_mean = pt_v3((float)v[0], (float)v[1], (float)v[2]);
+    return PT_OK;
+}
+
+PTDEF float pt_srgb_encode(float x)
+{
+    if (!(x > 0.0f)) return 0.0f; /* also maps NaN to 0 */
+    if (x >= 1.0f) return 1.0f;
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
+}
+
+/* Writes through "<path>.ptmp" and renames it into place; no partial file is left behind. */
+typedef int (*pt__writer_fn)(FILE *f, const pt_image *img);
+static int pt__write_atomic(const char *path, const pt_image *img, pt__writer_fn fn)
+{
+    size_t len, n;
+    char *tmp;
+    FILE *f;
+    int ok;
+    if (!path || !*path || !img || !img->rgb || !pt__pixels(img->width, img->height, &n)) return PT_ERROR_INVALID_ARGUMENT;
+    len = strlen(path);
+    tmp = (char *)PT_MALLOC(len + 6u);
+    if (!tmp) return PT_ERROR_OUT_OF_MEMORY;
+    memcpy(tmp, path, len);
+    memcpy(tmp + len, ".ptmp", 6u);
+    f = fopen(tmp, "wb");
+    if (!f) { PT_FREE(tmp); return PT_ERROR_IO; }
+    ok = fn(f, img);
+    ok = (fflush(f) == 0) && ok && !ferror(f);
+    ok = (fclose(f) == 0) && ok;
+#ifdef _WIN32
+    if (ok) remove(path);
+#endif
+    if (ok) ok = rename(tmp, path) == 0;
+    if (!ok) remove(tmp);
+    PT_FREE(tmp);
+    return ok ? PT_OK : PT_ERROR_IO;
+}
+static int pt__pfm_body(FILE *f, const pt_image *img)
+{
+    int x, y, c;
+    unsigned char buf[12];
+    if (fprintf(f, "PF\n%d %d\n-1.0\n", img->width, img->height) < 0) return 0;
+    for (y = img->height - 1; y >= 0; --y) { /* PFM stores the bottom row first */
+        for (x = 0; x < img->width; ++x) {
+            for (c = 0; c < 3; ++c) {
+                uint32_t u;
+                float v = img->rgb[3u * ((size_t)y * (size_t)img->width + (size_t)x) + (size_t)c];
+                memcpy(&u, &v, 4);
+                buf[4 * c + 0] = (unsigned char)(u & 0xffu);
+                buf[4 * c + 1] = (unsigned char)((u >> 8) & 0xffu);
+                buf[4 * c + 2] = (unsigned char)((u >> 16) & 0xffu);
+                buf[4 * c + 3] = (unsigned char)((u >> 24) & 0xffu);
+            }
+            if (fwrite(buf, 1, 12, f) != 12) return 0;
+        }
+    }
+    return 1;
+}
+static int pt__ppm_body(FILE *f, const pt_image *img)
+{
+    int x, y, c;
+    unsigned char px[3];
+    if (fprintf(f, "P6\n%d %d\n255\n", img->width, img->height) < 0) return 0;
+    for (y = 0; y < img->height; ++y) {
+        for (x = 0; x < img->width; ++x) {
+            for (c = 0; c < 3; ++c) {
+                float v = img->rgb[3u * ((size_t)y * (size_t)img->width + (size_t)x) + (size_t)c];
+                px[c] = (unsigned char)(pt_srgb_encode(v) * 255.0f + 0.5f);
+            }
+            if (fwrite(px, 1, 3, f) != 3) return 0;
+        }
+    }
+    return 1;
+}
+PTDEF int pt_write_pfm(const char *path, const pt_image *img) { return pt__write_atomic(path, img, pt__pfm_body); }
+PTDEF int pt_write_ppm(const char *path, const pt_image *img) { return pt__write_atomic(path, img, pt__ppm_body); }
+
+#ifdef __cplusplus
+}
+#endif
+
+/* PDFTRACE_IMPLEMENTATION_COMPLETE */
+#endif /* PDFTRACE_IMPLEMENTATION_DONE */
+#endif /* PDFTRACE_IMPLEMENTATION */
