@@ -658,6 +658,11 @@ PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, cl
 #define PT__INV_PI 0.31830988618379067154f
 #define PT__INV_4PI 0.07957747154594766788f
 #define PT__INF FLT_MAX
+#if defined(__GNUC__) || defined(__clang__)
+#define PT__HOT inline __attribute__((always_inline))
+#else
+#define PT__HOT inline
+#endif
 
 #ifdef __cplusplus
 extern "C" {
@@ -1428,13 +1433,16 @@ typedef struct pt__rayctx {
     float sx, sy, sz;     /* and shear */
 } pt__rayctx;
 
-static void pt__rayctx_init(pt__rayctx *rc, pt_ray r)
+/* need_triangles = 0 skips the shear set-up in scenes without triangles. */
+static PT__HOT void pt__rayctx_init2(pt__rayctx *rc, pt_ray r, int need_triangles)
 {
-    float ax = fabsf(r.dir.x), ay = fabsf(r.dir.y), az = fabsf(r.dir.z), dk;
+    float ax, ay, az, dk;
     rc->o = r.origin;
     rc->d = r.dir;
     rc->inv_d = pt_v3(r.dir.x != 0.0f ? 1.0f / r.dir.x : FLT_MAX, r.dir.y != 0.0f ? 1.0f / r.dir.y : FLT_MAX,
                       r.dir.z != 0.0f ? 1.0f / r.dir.z : FLT_MAX);
+    if (!need_triangles) { rc->kx = 0; rc->ky = 1; rc->kz = 2; rc->sx = rc->sy = rc->sz = 0.0f; return; }
+    ax = fabsf(r.dir.x); ay = fabsf(r.dir.y); az = fabsf(r.dir.z);
     /* Woop, Benthin & Wald 2013: kz = dominant axis, kx/ky follow cyclically (swapped to keep
        the winding when dir[kz] < 0). */
     rc->kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
@@ -1447,11 +1455,12 @@ static void pt__rayctx_init(pt__rayctx *rc, pt_ray r)
     rc->sy = pt__vget(r.dir, rc->ky) / dk;
     rc->sz = 1.0f / dk;
 }
+static void pt__rayctx_init(pt__rayctx *rc, pt_ray r) { pt__rayctx_init2(rc, r, 1); }
 
 /* Haines, Guenther & Akenine-Moeller, "Precision Improvements for Ray/Sphere Intersection",
    Ray Tracing Gems ch. 7: the discriminant from (r - |l|)(r + |l|) with l the part of
    f = o - c perpendicular to the ray, and the stable root pair q/a, c/q. */
-static int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, float tmax, float *t_out)
+static PT__HOT int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, float tmax, float *t_out)
 {
     pt_vec3 f = pt_sub(rc->o, c);
     float a = pt_dot(rc->d, rc->d), bp = -pt_dot(f, rc->d), cc, disc, q, t0, t1, ll;
@@ -1474,7 +1483,7 @@ static int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, float tmax, 
 
 /* Parallelogram Q + a u + b v: plane hit, then plane coordinates a = w.(p x v), b = w.(u x p)
    with w = n'/(n'.n') (Shirley, "Ray Tracing: The Next Week", sec. 6). */
-static int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t_out)
+static PT__HOT int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t_out)
 {
     float denom = pt_dot(p->n, rc->d), t, a, b;
     pt_vec3 h;
@@ -1492,7 +1501,7 @@ static int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float tmax, flo
 /* Watertight ray/triangle intersection (Woop, Benthin & Wald, "Watertight Ray/Triangle
    Intersection", JCGT 2(1), 2013): vertices translated to the ray origin, sheared so the ray
    is +z, 2D edge functions; an edge function that is exactly zero is recomputed in double. */
-static int pt__hit_triangle(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, pt_vec3 c, float tmax, float *t_out,
+static PT__HOT int pt__hit_triangle(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, pt_vec3 c, float tmax, float *t_out,
                             float *bary)
 {
     pt_vec3 A = pt_sub(a, rc->o), B = pt_sub(b, rc->o), C = pt_sub(c, rc->o);
@@ -1560,7 +1569,7 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
 }
 
 /* Intersects one primitive; bary receives triangle barycentrics. */
-static int pt__hit_prim(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t, float *bary)
+static PT__HOT int pt__hit_prim(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t, float *bary)
 {
     switch (p->type) {
     case PT__PRIM_SPHERE: return pt__hit_sphere(rc, p->p0, p->p1.x, tmax, t);
@@ -2241,7 +2250,7 @@ static int pt__bvh_build_scene(pt_scene *s)
     return PT_OK;
 }
 
-static int pt__slab(const pt__node *n, const pt__rayctx *rc, float tmax, float *tnear)
+static PT__HOT int pt__slab(const pt__node *n, const pt__rayctx *rc, float tmax, float *tnear)
 {
     float tx0 = (n->lo[0] - rc->o.x) * rc->inv_d.x, tx1 = (n->hi[0] - rc->o.x) * rc->inv_d.x;
     float ty0 = (n->lo[1] - rc->o.y) * rc->inv_d.y, ty1 = (n->hi[1] - rc->o.y) * rc->inv_d.y;
@@ -2267,8 +2276,9 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
         int descend = 0;
         if (n->count) {
             uint32_t k, end = n->index + n->count;
+            float bb[3] = {0.0f, 0.0f, 0.0f};
             for (k = n->index; k < end; ++k) {
-                float t, bb[3];
+                float t;
                 if (pt__hit_prim(rc, &s->prims[k], tmax, &t, bb)) {
                     tmax = t;
                     *prim = k;
@@ -2439,17 +2449,34 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
 static int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
                                  pt__light_sample *ls)
 {
+    /* same arithmetic as pt__quad_light_sample / pt__triangle_light_sample, with the normal
+       and area computed once at commit */
     int two = s->mats[p->material].two_sided;
+    float area = s->lights[p->light].area;
     if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_sample(o, p->p0, p->p1.x, two, u1, u2, ls);
-    if (p->type == PT__PRIM_QUAD) return pt__quad_light_sample(o, p->p0, p->p1, p->p2, two, u1, u2, ls);
-    return pt__triangle_light_sample(o, p->p0, p->p1, p->p2, two, u1, u2, ls);
+    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0;
+    if (p->type == PT__PRIM_QUAD) return pt__planar_finish(o, pt_madd(pt_madd(p->p0, p->p1, u1), p->p2, u2), p->n, area, ls);
+    {
+        float su = sqrtf(u1), b0 = 1.0f - su, b1 = u2 * su;
+        pt_vec3 q = pt_add(pt_add(pt_scale(p->p0, b0), pt_scale(p->p1, b1)), pt_scale(p->p2, 1.0f - b0 - b1));
+        return pt__planar_finish(o, q, p->n, area, ls);
+    }
 }
 static float pt__light_prim_value(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w)
 {
     int two = s->mats[p->material].two_sided;
+    pt__rayctx rc;
+    pt_ray r;
+    float t, bary[3], cosl;
     if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w, -1.0f);
-    if (p->type == PT__PRIM_QUAD) return pt__quad_light_value(o, p->p0, p->p1, p->p2, two, w);
-    return pt__triangle_light_value(o, p->p0, p->p1, p->p2, two, w);
+    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
+    r.origin = o;
+    r.dir = w;
+    pt__rayctx_init2(&rc, r, p->type == PT__PRIM_TRIANGLE);
+    if (!pt__hit_prim(&rc, p, PT__INF, &t, bary)) return 0.0f;
+    cosl = fabsf(pt_dot(p->n, w));
+    if (!(cosl > 0.0f)) return 0.0f;
+    return (t * t) / (cosl * s->lights[p->light].area);
 }
 /* Density of w for one light whose surface a ray from o along w reaches at distance t with
    unit geometric normal n (no ray cast needed). */
@@ -2707,6 +2734,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     float prev_pdf = 0.0f;
     pt_vec3 prev_p = ray.origin;
     const int any_lights = s->light_count > 0;
+    const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
     pt__vertex v;
     memset(&v, 0, sizeof v);
     st->camera_rays++;
@@ -2718,7 +2746,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         const pt__material *m;
         pt_hit h;
         pt_vec3 wi;
-        pt__rayctx_init(&rc, ray);
+        pt__rayctx_init2(&rc, ray, tri);
         if (!pt__bvh_closest(s, &rc, PT__INF, &pi, &t, bary)) {
             L = pt_add(L, pt_mul(beta, cfg->background));
             break;
@@ -2794,7 +2822,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                         sr.origin = pt_offset_ray_origin(v.p, v.ng, ls.dir);
                         target = pt_offset_ray_origin(ls.point, ls.normal, pt_neg(ls.dir));
                         sr.dir = pt_sub(target, sr.origin);
-                        pt__rayctx_init(&src, sr);
+                        pt__rayctx_init2(&src, sr, tri);
                         st->shadow_rays++;
                         if (!pt__bvh_any(s, &src, 1.0f - 1e-4f)) {
                             const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];

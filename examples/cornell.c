@@ -145,7 +145,7 @@ static int parse_long(const char *opt, const char *text, long lo, long hi, long 
 
 static int parse_int(const char *opt, const char *text, int lo, int hi, int *out)
 {
-    long v;
+    long v = 0;
     if (!parse_long(opt, text, lo, hi, &v)) return 0;
     *out = (int)v;
     return 1;
