@@ -2908,7 +2908,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
 
 static double pt__now(void)
 {
-#if defined(CLOCK_MONOTONIC) && !defined(PDFTRACE_NO_THREADS)
+#if defined(CLOCK_MONOTONIC)
     struct timespec ts;
     if (clock_gettime(CLOCK_MONOTONIC, &ts) == 0) return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 #endif
