@@ -11,7 +11,7 @@
 #
 # Every variable below can be overridden: make CC=clang CFLAGS='-O3 -g' RUN_SPP=256
 
-CFLAGS   ?= -std=c99 -O2 -Wall -Wextra -pedantic
+CFLAGS   ?= -std=c99 -O3 -Wall -Wextra -pedantic
 CXXFLAGS ?= -O2 -Wall -Wextra -pedantic
 CPPFLAGS ?=
 LDFLAGS  ?=
