@@ -1,0 +1,57 @@
+/* test.h - a tiny test framework for the pdftrace unit tests.
+
+   A test is a function void name(test_ctx *t). It records failures with CHECK(t, cond, fmt, ...),
+   which returns the truth of cond (so a test can stop early with `if (!CHECK(...)) goto done;`)
+   and keeps the first failure's reason and location. test_note appends free text to the line
+   printed for a passing test. Each section file exports a table of test_case terminated by
+   {NULL, NULL}; test_main.c lists the sections. */
+#ifndef PDFTRACE_TEST_H
+#define PDFTRACE_TEST_H
+
+#include <stddef.h>
+
+#if defined(__GNUC__) || defined(__clang__)
+#define TEST_PRINTF(fmt_index, first_arg) __attribute__((format(printf, fmt_index, first_arg)))
+#else
+#define TEST_PRINTF(fmt_index, first_arg)
+#endif
+
+typedef struct test_ctx {
+    int failures;          /* CHECKs that failed */
+    int checks;            /* CHECKs evaluated */
+    char reason[768];      /* first failure */
+    const char *file;      /* location of the first failure */
+    int line;
+    char notes[1024];      /* details printed with PASS (and with FAIL, after the reason) */
+} test_ctx;
+
+typedef void (*test_fn)(test_ctx *t);
+
+typedef struct test_case {
+    const char *name;
+    test_fn fn;
+} test_case;
+
+#define TEST_CASE(fn) { #fn, fn }
+#define TEST_END { NULL, NULL }
+
+/* Records one check. Returns ok. fmt describes the failure. */
+int test_check_(test_ctx *t, int ok, const char *file, int line, const char *fmt, ...) TEST_PRINTF(5, 6);
+/* Appends "; text" (or "text" first) to the notes. */
+void test_note(test_ctx *t, const char *fmt, ...) TEST_PRINTF(2, 3);
+
+#define CHECK(t, cond, ...) test_check_((t), (cond) ? 1 : 0, __FILE__, __LINE__, __VA_ARGS__)
+/* The same, for helpers that report at their caller's location. */
+#define CHECK_AT(t, file, line, cond, ...) test_check_((t), (cond) ? 1 : 0, (file), (line), __VA_ARGS__)
+
+/* The sections (one file each). */
+extern const test_case test_math_cases[];
+extern const test_case test_rng_cases[];
+extern const test_case test_pdf_cases[];
+extern const test_case test_geometry_cases[];
+extern const test_case test_materials_cases[];
+extern const test_case test_bvh_cases[];
+extern const test_case test_render_cases[];
+extern const test_case test_output_cases[];
+
+#endif

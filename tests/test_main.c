@@ -1,0 +1,115 @@
+#define _POSIX_C_SOURCE 200809L
+/* test_main.c - the pdftrace unit-test runner.
+
+   Usage: test_runner [filter]
+   Runs every test whose "section.name" contains filter (all tests without one). Prints one line
+   per test, "PASS name (details)" or "FAIL name: reason (file:line)", a summary per section,
+   and as its last line "N passed, M failed". Exit code 0 iff no test failed.
+
+   This file compiles the library implementation (PDFTRACE_IMPLEMENTATION). */
+#define PDFTRACE_IMPLEMENTATION
+#include "pdftrace.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "test.h"
+
+int test_check_(test_ctx *t, int ok, const char *file, int line, const char *fmt, ...)
+{
+    t->checks++;
+    if (!ok) {
+        if (t->failures == 0) {
+            va_list ap;
+            va_start(ap, fmt);
+            vsnprintf(t->reason, sizeof t->reason, fmt, ap);
+            va_end(ap);
+            t->file = file;
+            t->line = line;
+        }
+        t->failures++;
+    }
+    return ok;
+}
+
+void test_note(test_ctx *t, const char *fmt, ...)
+{
+    size_t len = strlen(t->notes);
+    va_list ap;
+    if (len + 3 >= sizeof t->notes) return;
+    if (len > 0) {
+        t->notes[len++] = ';';
+        t->notes[len++] = ' ';
+        t->notes[len] = '\0';
+    }
+    va_start(ap, fmt);
+    vsnprintf(t->notes + len, sizeof t->notes - len, fmt, ap);
+    va_end(ap);
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    if (clock_gettime(CLOCK_MONOTONIC, &ts) != 0) return (double)clock() / CLOCKS_PER_SEC;
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+typedef struct section {
+    const char *name;
+    const test_case *cases;
+} section;
+
+int main(int argc, char **argv)
+{
+    static const section sections[] = {
+        { "math", test_math_cases },
+        { "rng", test_rng_cases },
+        { "pdf", test_pdf_cases },
+        { "geometry", test_geometry_cases },
+        { "materials", test_materials_cases },
+        { "bvh", test_bvh_cases },
+        { "render", test_render_cases },
+        { "output", test_output_cases },
+    };
+    const char *filter = argc > 1 ? argv[1] : NULL;
+    int passed = 0, failed = 0;
+    size_t s;
+    double start = now_seconds();
+
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    for (s = 0; s < sizeof sections / sizeof sections[0]; s++) {
+        const test_case *c;
+        int sp = 0, sf = 0;
+        double s0 = now_seconds();
+        for (c = sections[s].cases; c->name != NULL; c++) {
+            char full[256];
+            test_ctx t;
+            double t0, dt;
+            snprintf(full, sizeof full, "%s.%s", sections[s].name, c->name);
+            if (filter && !strstr(full, filter)) continue;
+            memset(&t, 0, sizeof t);
+            t0 = now_seconds();
+            c->fn(&t);
+            dt = now_seconds() - t0;
+            if (t.failures == 0) {
+                printf("PASS %s (%s%s%.2f s)\n", full, t.notes, t.notes[0] ? "; " : "", dt);
+                sp++;
+            } else {
+                printf("FAIL %s: %s (%s:%d)\n", full, t.reason, t.file, t.line);
+                printf("     [%d of %d checks failed; %s%s%.2f s]\n", t.failures, t.checks, t.notes,
+                       t.notes[0] ? "; " : "", dt);
+                sf++;
+            }
+        }
+        if (sp + sf > 0)
+            printf("-- section %s: %d passed, %d failed (%.2f s)\n", sections[s].name, sp, sf,
+                   now_seconds() - s0);
+        passed += sp;
+        failed += sf;
+    }
+    printf("-- total time %.2f s\n", now_seconds() - start);
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed == 0 ? 0 : 1;
+}

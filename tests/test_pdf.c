@@ -1,0 +1,1011 @@
+/* test_pdf.c - section 2 of pdftrace.h: warping functions and every pt_pdf type.
+
+   For each PDF (see tu_check_pdf in test_util.h): (a) the density returned with a sample equals
+   pt_pdf_value of that direction (relative 1e-4) and the closed form (relative 1e-3); (b) it
+   integrates to the right mass: the fraction of successful draws, a Monte Carlo integral of
+   pt_pdf_value over a cone that contains the support, and the expected mass agree, and the mean of
+   1/pdf equals the solid angle of the support; (c) a chi-square test of the samples against
+   pt_pdf_value; never NaN/Inf; unit directions.
+
+   False-failure rate: all statistical comparisons in this file share alpha = 0.01, Sidak-corrected
+   over PDF_STAT_TESTS (an upper bound on their number), so each is made at 1 - 0.99^(1/PDF_STAT_TESTS).
+   Seeds are fixed, so a run is reproducible. */
+#include "test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PDF_STAT_TESTS 400
+#define FILE_ALPHA 0.01
+
+static double alpha_each(void) { return tu_sidak(FILE_ALPHA, PDF_STAT_TESTS); }
+
+/* Worst statistics over the cases of one test, for its PASS line. */
+typedef struct agg { double min_p, max_z; int cases; } agg;
+static void agg_init(agg *a) { a->min_p = 2.0; a->max_z = 0.0; a->cases = 0; }
+static void agg_add(agg *a, const tu_pdf_result *r)
+{
+    if (r->chi2_p < a->min_p) a->min_p = r->chi2_p;
+    if (r->max_abs_z > a->max_z) a->max_z = r->max_abs_z;
+    a->cases++;
+}
+static void agg_note(test_ctx *t, const agg *a)
+{
+    if (a->min_p <= 1.0)
+        test_note(t, "%d cases, min chi2 p = %.3g, max |z| = %.2f; alpha %.2g per comparison (0.01 Sidak over %d)",
+                  a->cases, a->min_p, a->max_z, alpha_each(), PDF_STAT_TESTS);
+    else
+        test_note(t, "%d cases, max |z| = %.2f; alpha %.2g per comparison (0.01 Sidak over %d)", a->cases, a->max_z,
+                  alpha_each(), PDF_STAT_TESTS);
+}
+
+static tu_pdf_check base_check(const char *label, const pt_pdf *pdf, uint64_t seed)
+{
+    tu_pdf_check c;
+    memset(&c, 0, sizeof c);
+    c.label = label;
+    c.pdf = pdf;
+    c.axis = dv(0, 0, 1);
+    c.omc = 2.0;
+    c.expected_mass = 1.0;
+    c.support = -1.0;
+    c.n_samples = 100000;
+    c.n_mass = 50000;
+    c.ns = 16;
+    c.nphi = 32;
+    c.seed = seed;
+    c.alpha = alpha_each();
+    return c;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* warping functions                                                                           */
+
+/* Chi-square of a 2D histogram against equal cell probabilities. */
+static double uniform_chi2_p(const long *h, int cells, long n)
+{
+    double e = (double)n / cells, chi2 = 0;
+    int i;
+    for (i = 0; i < cells; i++) chi2 += (h[i] - e) * (h[i] - e) / e;
+    return tu_chi2_sf(chi2, cells - 1);
+}
+
+static void warp_functions(test_ctx *t)
+{
+    /* Each warp maps uniform [0,1)^2 to a known density; in coordinates where that density is
+       uniform (sphere: z and phi; cosine: z^2 and phi; disk: r^2 and phi) a 16x32 histogram of
+       200000 warped points must be flat. */
+    enum { NS = 16, NP = 32, N = 200000 };
+    long hs[NS * NP] = { 0 }, hc[NS * NP] = { 0 }, hd[NS * NP] = { 0 };
+    long bad_s = 0, bad_c = 0, bad_d = 0, i;
+    double ps, pc, pd, a = alpha_each();
+    pt_rng rng;
+    const float edge[] = { 0.0f, 0.5f, 0.99999994f };
+    int k, l;
+    pt_rng_seed(&rng, 555, 1);
+    for (i = 0; i < N; i++) {
+        float u1 = pt_rng_float(&rng), u2 = pt_rng_float(&rng), x, y;
+        pt_vec3 s = pt_sample_uniform_sphere(u1, u2), c = pt_sample_cosine_hemisphere(u1, u2);
+        double phi, r2;
+        int bi, bj;
+        pt_sample_concentric_disk(u1, u2, &x, &y);
+        if (!isfinite(s.x) || !isfinite(s.y) || !isfinite(s.z) || fabs(dlen(dv_from(s)) - 1) > 1e-5) bad_s++;
+        if (!isfinite(c.x) || !isfinite(c.y) || !isfinite(c.z) || fabs(dlen(dv_from(c)) - 1) > 1e-5 || c.z < 0) bad_c++;
+        r2 = (double)x * x + (double)y * y;
+        if (!isfinite(x) || !isfinite(y) || r2 > 1.0 + 1e-6) bad_d++;
+        phi = atan2(s.y, s.x) + TU_PI;
+        bi = (int)((1.0 - s.z) * 0.5 * NS); bj = (int)(phi / (2 * TU_PI) * NP);
+        hs[(bi < NS ? (bi < 0 ? 0 : bi) : NS - 1) * NP + (bj < NP ? bj : NP - 1)]++;
+        phi = atan2(c.y, c.x) + TU_PI;
+        bi = (int)((double)c.z * c.z * NS); bj = (int)(phi / (2 * TU_PI) * NP);
+        hc[(bi < NS ? (bi < 0 ? 0 : bi) : NS - 1) * NP + (bj < NP ? bj : NP - 1)]++;
+        phi = atan2(y, x) + TU_PI;
+        bi = (int)(r2 * NS); bj = (int)(phi / (2 * TU_PI) * NP);
+        hd[(bi < NS ? (bi < 0 ? 0 : bi) : NS - 1) * NP + (bj < NP ? bj : NP - 1)]++;
+    }
+    for (k = 0; k < 3; k++) {
+        for (l = 0; l < 3; l++) {
+            float x, y;
+            pt_vec3 s = pt_sample_uniform_sphere(edge[k], edge[l]), c = pt_sample_cosine_hemisphere(edge[k], edge[l]);
+            pt_sample_concentric_disk(edge[k], edge[l], &x, &y);
+            if (!isfinite(s.x + s.y + s.z) || fabs(dlen(dv_from(s)) - 1) > 1e-5) bad_s++;
+            if (!isfinite(c.x + c.y + c.z) || fabs(dlen(dv_from(c)) - 1) > 1e-5 || c.z < 0) bad_c++;
+            if (!isfinite(x + y) || (double)x * x + (double)y * y > 1.0 + 1e-6) bad_d++;
+        }
+    }
+    CHECK(t, bad_s == 0, "%ld uniform-sphere samples not finite unit vectors", bad_s);
+    CHECK(t, bad_c == 0, "%ld cosine samples not finite unit vectors with z >= 0", bad_c);
+    CHECK(t, bad_d == 0, "%ld disk samples outside the unit disk or not finite", bad_d);
+    ps = uniform_chi2_p(hs, NS * NP, N);
+    pc = uniform_chi2_p(hc, NS * NP, N);
+    pd = uniform_chi2_p(hd, NS * NP, N);
+    CHECK(t, ps >= a, "pt_sample_uniform_sphere: chi-square p = %.3g", ps);
+    CHECK(t, pc >= a, "pt_sample_cosine_hemisphere: chi-square p = %.3g (density is not z/pi)", pc);
+    CHECK(t, pd >= a, "pt_sample_concentric_disk: chi-square p = %.3g (not uniform on the disk)", pd);
+    test_note(t, "chi2 p: sphere %.3f, cosine %.3f, disk %.3f; alpha %.2g", ps, pc, pd, a);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* uniform sphere and cosine hemisphere                                                        */
+
+static double ref_uniform(const void *ctx, dv3 w, int *near)
+{
+    (void)ctx; (void)w;
+    *near = 0;
+    return 1.0 / (4.0 * TU_PI);
+}
+
+static void pdf_uniform_sphere(test_ctx *t)
+{
+    pt_pdf p = pt_pdf_uniform_sphere();
+    tu_pdf_check c = base_check("uniform sphere", &p, 100);
+    tu_pdf_result r;
+    agg a;
+    agg_init(&a);
+    CHECK(t, p.type == PT_PDF_UNIFORM_SPHERE, "type %d", (int)p.type);
+    CHECK(t, pt_pdf_validate(&p) == PT_OK, "pt_pdf_validate rejected the uniform sphere");
+    c.ref = ref_uniform;
+    c.support = 4.0 * TU_PI;
+    TU_CHECK_PDF(t, &c, &r);
+    agg_add(&a, &r);
+    agg_note(t, &a);
+}
+
+typedef struct cos_ctx { dv3 n; } cos_ctx;
+static double ref_cosine(const void *ctx, dv3 w, int *near)
+{
+    const cos_ctx *c = (const cos_ctx *)ctx;
+    double d = ddot(w, c->n);
+    *near = fabs(d) < 1e-6;
+    return d > 0 ? d / TU_PI : 0.0;
+}
+
+static void pdf_cosine_hemisphere(test_ctx *t)
+{
+    const pt_vec3 normals[] = { { 0, 0, 1 }, { 0, 0, -1 }, { 0.48f, -0.6f, 0.64f }, { 4.8828125e-4f, 0.0f, -0.99999988f },
+                                { 1, 0, 0 } };
+    int i;
+    agg a;
+    agg_init(&a);
+    for (i = 0; i < 5; i++) {
+        char label[96];
+        pt_vec3 n = pt_normalize(normals[i]);
+        pt_pdf p = pt_pdf_cosine_hemisphere(n);
+        cos_ctx ctx;
+        tu_pdf_check c;
+        tu_pdf_result r;
+        snprintf(label, sizeof label, "cosine about (%.3g, %.3g, %.9g)", n.x, n.y, n.z);
+        ctx.n = dv_from(n);
+        c = base_check(label, &p, 200 + i);
+        c.axis = ctx.n;
+        c.omc = 1.0; /* the hemisphere: nothing may be sampled below the surface */
+        c.ref = ref_cosine;
+        c.ref_ctx = &ctx;
+        /* mean of 1/pdf = pi/cos has infinite variance: not checked */
+        TU_CHECK_PDF(t, &c, &r);
+        agg_add(&a, &r);
+    }
+    agg_note(t, &a);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* light PDFs                                                                                  */
+
+typedef struct light_ctx { tu_light L; dv3 o; } light_ctx;
+static double ref_light(const void *ctx, dv3 w, int *near)
+{
+    const light_ctx *c = (const light_ctx *)ctx;
+    return tu_light_density(&c->L, c->o, w, near);
+}
+
+/* Runs the checker on a light PDF with the closed form of tu_light. chi2: run the chi-square. */
+static void light_case(test_ctx *t, agg *a, const char *label, const pt_pdf *p, const tu_light *L, dv3 o, int chi2,
+                       uint64_t seed)
+{
+    light_ctx ctx;
+    tu_pdf_check c = base_check(label, p, seed);
+    tu_pdf_result r;
+    tu_domain dom;
+    tu_planar_ctx pc;
+    double sa = tu_light_solid_angle(L, o);
+    ctx.L = *L;
+    ctx.o = o;
+    tu_light_cone(L, o, &c.axis, &c.omc);
+    if (L->kind != TU_SPHERE) {
+        /* histogram and mass estimate in the light's own (a, b) coordinates */
+        tu_planar_domain(&dom, &pc, L, o);
+        c.domain = &dom;
+        c.ns = 16;
+        c.nphi = 16;
+    }
+    c.ref = ref_light;
+    c.ref_ctx = &ctx;
+    c.expected_mass = sa > 0 ? 1.0 : 0.0;
+    c.support = sa;
+    if (!chi2) c.ns = 0;
+    if (sa == 0.0) { c.ns = 0; c.n_samples = 2000; }
+    CHECK(t, pt_pdf_validate(p) == PT_OK, "%s: pt_pdf_validate rejected a valid light PDF", label);
+    TU_CHECK_PDF(t, &c, &r);
+    agg_add(a, &r);
+}
+
+static void pdf_sphere_light(test_ctx *t)
+{
+    /* From outside: a cone of sin^2(theta_max) = R^2/d^2 in {0.9 ... 1e-10}; just outside the
+       surface; from inside (two-sided: area sampling; one-sided: no density, sampling fails); on the
+       surface (two-sided: any consistent density of mass 1, no NaN). */
+    const double s2[] = { 0.9, 0.25, 1e-2, 1e-4, 1e-6, 1e-8, 1e-10 };
+    agg a;
+    int i;
+    char label[128];
+    tu_light L;
+    dv3 o = dv(0.25, -0.5, 0.125);
+    pt_vec3 of = dv_to(o);
+    agg_init(&a);
+    memset(&L, 0, sizeof L);
+    L.kind = TU_SPHERE;
+    for (i = 0; i < 7; i++) {
+        dv3 dir = dnorm(dv(0.3, -0.2, 1.0));
+        double d = 3.0, R = sqrt(s2[i]) * d;
+        pt_vec3 cf = dv_to(dadd(o, dscale(dir, d)));
+        float rf = (float)R;
+        pt_pdf p = pt_pdf_sphere_light(of, cf, rf, 0);
+        L.p0 = dv_from(cf);
+        L.radius = rf;
+        L.two_sided = 0;
+        snprintf(label, sizeof label, "sphere light sin^2 = %.0e from outside", s2[i]);
+        /* below 1e-6 a float direction cannot resolve the cone finely enough for a histogram */
+        light_case(t, &a, label, &p, &L, o, s2[i] >= 1e-6, 300 + i);
+    }
+    {   /* just outside the surface: sin^2 = 1/(1+1e-3)^2 */
+        pt_vec3 cf = pt_v3(1.0f, 2.0f, 3.0f);
+        float rf = 0.5f;
+        pt_vec3 near_o = pt_v3(1.0f + 0.5f * 1.001f, 2.0f, 3.0f);
+        pt_pdf p = pt_pdf_sphere_light(near_o, cf, rf, 1);
+        L.p0 = dv_from(cf); L.radius = rf; L.two_sided = 1;
+        light_case(t, &a, "sphere light from 1e-3 R outside the surface", &p, &L, dv_from(near_o), 1, 320);
+    }
+    {   /* inside, two-sided: uniform area sampling converted to solid angle */
+        const double frac[] = { 0.0, 0.5, 0.99 };
+        for (i = 0; i < 3; i++) {
+            pt_vec3 cf = pt_v3(-1.0f, 0.5f, 2.0f);
+            float rf = 2.0f;
+            pt_vec3 in_o = dv_to(dadd(dv_from(cf), dscale(dnorm(dv(1, 1, -0.5)), frac[i] * rf)));
+            pt_pdf p = pt_pdf_sphere_light(in_o, cf, rf, 1);
+            L.p0 = dv_from(cf); L.radius = rf; L.two_sided = 1;
+            snprintf(label, sizeof label, "two-sided sphere light from inside at %.2f R", frac[i]);
+            light_case(t, &a, label, &p, &L, dv_from(in_o), 1, 330 + i);
+        }
+    }
+    {   /* inside, one-sided: density zero everywhere, sampling fails */
+        pt_vec3 cf = pt_v3(0, 0, 0), in_o = pt_v3(0.3f, 0.2f, 0.1f);
+        pt_pdf p = pt_pdf_sphere_light(in_o, cf, 1.0f, 0);
+        L.p0 = dv_from(cf); L.radius = 1.0; L.two_sided = 0;
+        light_case(t, &a, "one-sided sphere light from inside", &p, &L, dv_from(in_o), 0, 340);
+    }
+    {   /* on the surface, two-sided: exactly (float) on it, and rounded onto it */
+        const pt_vec3 centers[] = { { 0, 0, 0 }, { 1.0f, 2.0f, 3.0f }, { -100.0f, 50.0f, 7.0f } };
+        const float radii[] = { 1.0f, 0.5f, 3.0f };
+        for (i = 0; i < 3; i++) {
+            dv3 dir = dnorm(dv(i == 0 ? 1 : 0.6, i == 0 ? 0 : -0.48, i == 0 ? 0 : 0.64));
+            pt_vec3 on_o = dv_to(dadd(dv_from(centers[i]), dscale(dir, radii[i])));
+            pt_pdf p = pt_pdf_sphere_light(on_o, centers[i], radii[i], 1);
+            tu_pdf_check c;
+            tu_pdf_result r;
+            snprintf(label, sizeof label, "two-sided sphere light from its surface (case %d)", i);
+            c = base_check(label, &p, 350 + i);
+            c.ns = 24;
+            c.nphi = 48;
+            /* either model (cone from just outside, area from just inside) has mass 1 */
+            TU_CHECK_PDF(t, &c, &r);
+            agg_add(&a, &r);
+        }
+    }
+    agg_note(t, &a);
+}
+
+static void pdf_quad_light(test_ctx *t)
+{
+    /* A parallelogram facing -y at y = 1 (u x v = -1.2 y), and a tilted, skewed one. Origins: below
+       its centre, off to the side, grazing (1e-3 below its plane, 3 away), far (distance 100), from
+       behind (one-sided: no density, sampling fails; two-sided: full density). */
+    struct { pt_vec3 q, u, v; } quads[2] = { { { -0.5f, 1.0f, -0.7f }, { 1.2f, 0, 0 }, { 0, 0, 1.0f } },
+                                             { { 0.2f, 0.9f, -0.3f }, { 0.8f, 0.3f, 0.1f }, { 0.4f, -0.1f, 0.9f } } };
+    const dv3 origins[] = { { 0, 0, 0 }, { 2.0, 0.5, 1.0 }, { 3.0, 0.999, 0.0 }, { 30.0, -90.0, 40.0 }, { 0.1, 2.5, 0.2 } };
+    const char *names[] = { "below", "side", "grazing", "far", "behind" };
+    agg a;
+    int qi, oi, two;
+    agg_init(&a);
+    for (qi = 0; qi < 2; qi++) {
+        for (oi = 0; oi < 5; oi++) {
+            for (two = 0; two <= 1; two++) {
+                char label[128];
+                tu_light L;
+                pt_vec3 of = dv_to(origins[oi]);
+                pt_pdf p = pt_pdf_quad_light(of, quads[qi].q, quads[qi].u, quads[qi].v, two);
+                if (two && oi != 4 && oi != 0) continue; /* two-sided: only below and behind */
+                memset(&L, 0, sizeof L);
+                L.kind = TU_QUAD;
+                L.p0 = dv_from(quads[qi].q);
+                L.p1 = dv_from(quads[qi].u);
+                L.p2 = dv_from(quads[qi].v);
+                L.two_sided = two;
+                snprintf(label, sizeof label, "%s quad %d, %s", two ? "two-sided" : "one-sided", qi, names[oi]);
+                light_case(t, &a, label, &p, &L, dv_from(of), 1, 400 + qi * 20 + oi * 2 + two);
+            }
+        }
+    }
+    agg_note(t, &a);
+}
+
+static void pdf_triangle_light(test_ctx *t)
+{
+    /* (b - a) x (c - a) points to -y (first) and mostly -y (second, tilted). */
+    struct { pt_vec3 a, b, c; } tris[2] = { { { -0.5f, 1.0f, -0.5f }, { 0.9f, 1.0f, -0.2f }, { -0.5f, 1.0f, 0.7f } },
+                                            { { 0.1f, 0.8f, 0.0f }, { 1.2f, 0.6f, -0.4f }, { 0.3f, 1.4f, 1.1f } } };
+    const dv3 origins[] = { { 0, 0, 0 }, { 2.0, 0.2, -1.0 }, { -3.0, 0.999, 0.1 }, { 50.0, -60.0, 20.0 }, { 0.0, 3.0, 0.0 } };
+    const char *names[] = { "below", "side", "grazing", "far", "other side" };
+    agg a;
+    int ti, oi, two;
+    agg_init(&a);
+    for (ti = 0; ti < 2; ti++) {
+        for (oi = 0; oi < 5; oi++) {
+            for (two = 0; two <= 1; two++) {
+                char label[128];
+                tu_light L;
+                pt_vec3 of = dv_to(origins[oi]);
+                pt_pdf p = pt_pdf_triangle_light(of, tris[ti].a, tris[ti].b, tris[ti].c, two);
+                if (two && oi != 4 && oi != 0) continue;
+                memset(&L, 0, sizeof L);
+                L.kind = TU_TRIANGLE;
+                L.p0 = dv_from(tris[ti].a);
+                L.p1 = dv_from(tris[ti].b);
+                L.p2 = dv_from(tris[ti].c);
+                L.two_sided = two;
+                snprintf(label, sizeof label, "%s triangle %d, %s", two ? "two-sided" : "one-sided", ti, names[oi]);
+                light_case(t, &a, label, &p, &L, dv_from(of), 1, 500 + ti * 20 + oi * 2 + two);
+            }
+        }
+    }
+    agg_note(t, &a);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* scene lights                                                                                */
+
+#define MAX_LIGHTS 8
+typedef struct scene_ref { int count; tu_light L[MAX_LIGHTS]; double P[MAX_LIGHTS]; dv3 o; } scene_ref;
+static double ref_scene(const void *ctx, dv3 w, int *near)
+{
+    const scene_ref *s = (const scene_ref *)ctx;
+    double sum = 0;
+    int i;
+    *near = 0;
+    for (i = 0; i < s->count; i++) {
+        int n = 0;
+        double d = tu_light_density(&s->L[i], s->o, w, &n);
+        if (d < 0) return -1.0;
+        sum += s->P[i] * d;
+        *near |= n;
+    }
+    return sum;
+}
+
+/* Which light the direction w from o hits first (-1: none). */
+static int which_light(const scene_ref *s, dv3 o, dv3 w)
+{
+    int i, best = -1;
+    double bt = INFINITY;
+    for (i = 0; i < s->count; i++) {
+        double th = tu_light_hit(&s->L[i], o, w);
+        if (th > 0 && th < bt) { bt = th; best = i; }
+    }
+    return best;
+}
+
+static void pdf_scene_lights(test_ctx *t)
+{
+    /* Five lights around the origin, with powers pi * mean radiance * area (x2 two-sided):
+       A quad L=1 A=1 -> pi; B quad L=3 A=1 -> 3 pi; C two-sided quad L=1 A=1 -> 2 pi;
+       D sphere L=1 A=1 -> pi; E triangle (a Lambertian material that also emits) L=2 A=0.5 -> pi.
+       Selection probabilities 1/8, 3/8, 2/8, 1/8, 1/8, checked by counting which light each sample
+       hits (chi-square, 4 dof) -- B must be picked ~3x as often as A. Also a diffuse sphere, which
+       must not be a light. From a second origin behind A, the mass is 1 - 1/8. */
+    pt_scene *s = pt_scene_create();
+    int mA, mB, mC, mD, mE, white, rc, i;
+    pt_material_desc md;
+    pt_scene_info info;
+    scene_ref ref;
+    double R = sqrt(1.0 / (4.0 * TU_PI)), total = 8.0;
+    const double P[5] = { 1 / total, 3 / total, 2 / total, 1 / total, 1 / total };
+    agg a;
+    agg_init(&a);
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    mA = pt_scene_add_emitter(s, pt_v3(1, 1, 1), 0);
+    mB = pt_scene_add_emitter(s, pt_v3(3, 3, 3), 0);
+    mC = pt_scene_add_emitter(s, pt_v3(1, 1, 1), 1);
+    mD = pt_scene_add_emitter(s, pt_v3(1, 1, 1), 0);
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_LAMBERTIAN;
+    md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
+    md.emission = pt_v3(2, 2, 2);
+    mE = pt_scene_add_material(s, &md);
+    white = pt_scene_add_lambertian(s, pt_v3(0.7f, 0.7f, 0.7f));
+    CHECK(t, mA >= 0 && mB >= 0 && mC >= 0 && mD >= 0 && mE >= 0 && white >= 0, "adding materials failed");
+    memset(&ref, 0, sizeof ref);
+    ref.count = 5;
+    ref.L[0].kind = TU_QUAD; ref.L[0].p0 = dv(-0.5, 3, -0.5); ref.L[0].p1 = dv(1, 0, 0); ref.L[0].p2 = dv(0, 0, 1);
+    ref.L[1].kind = TU_QUAD; ref.L[1].p0 = dv(3, -0.5, -0.5); ref.L[1].p1 = dv(0, 0, 1); ref.L[1].p2 = dv(0, 1, 0);
+    ref.L[2].kind = TU_QUAD; ref.L[2].p0 = dv(-0.5, -0.5, 3); ref.L[2].p1 = dv(1, 0, 0); ref.L[2].p2 = dv(0, 1, 0);
+    ref.L[2].two_sided = 1;
+    ref.L[3].kind = TU_SPHERE; ref.L[3].p0 = dv(-3, 0, 0); ref.L[3].radius = (float)R;
+    ref.L[4].kind = TU_TRIANGLE; ref.L[4].p0 = dv(0, -3, 0); ref.L[4].p1 = dv(0, -3, 1); ref.L[4].p2 = dv(1, -3, 0);
+    for (i = 0; i < 5; i++) ref.P[i] = P[i];
+    rc = pt_scene_add_quad(s, dv_to(ref.L[0].p0), dv_to(ref.L[0].p1), dv_to(ref.L[0].p2), mA);
+    rc |= pt_scene_add_quad(s, dv_to(ref.L[1].p0), dv_to(ref.L[1].p1), dv_to(ref.L[1].p2), mB);
+    rc |= pt_scene_add_quad(s, dv_to(ref.L[2].p0), dv_to(ref.L[2].p1), dv_to(ref.L[2].p2), mC);
+    rc |= pt_scene_add_sphere(s, dv_to(ref.L[3].p0), (float)R, mD);
+    rc |= pt_scene_add_triangle(s, dv_to(ref.L[4].p0), dv_to(ref.L[4].p1), dv_to(ref.L[4].p2), mE);
+    rc |= pt_scene_add_sphere(s, pt_v3(0, 0, -3), 0.5f, white);
+    CHECK(t, rc >= 0, "adding shapes failed");
+    {
+        pt_pdf un = pt_pdf_scene_lights(s, pt_v3(0, 0, 0));
+        CHECK(t, pt_pdf_validate(&un) == PT_ERROR_INVALID_ARGUMENT,
+              "pt_pdf_validate accepted the light PDF of an uncommitted scene");
+    }
+    rc = pt_scene_commit(s);
+    if (!CHECK(t, rc == PT_OK, "commit failed: %d %s", rc, pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    pt_scene_get_info(s, &info);
+    CHECK(t, info.emitter_count == 5, "emitter_count = %u, want 5 (the diffuse sphere is not a light)",
+          (unsigned)info.emitter_count);
+    CHECK(t, fabs(info.total_emitted_power - total * TU_PI) <= 1e-3 * total * TU_PI,
+          "total_emitted_power %.6f, want 8 pi = %.6f", info.total_emitted_power, total * TU_PI);
+    {
+        pt_pdf p = pt_pdf_scene_lights(s, pt_v3(0, 0, 0));
+        tu_pdf_check c = base_check("scene lights from the centre", &p, 600);
+        tu_pdf_result r;
+        long counts[6] = { 0 }, n = 100000, k;
+        double chi2 = 0, pv;
+        pt_rng rng;
+        CHECK(t, pt_pdf_validate(&p) == PT_OK, "pt_pdf_validate rejected the scene-lights PDF");
+        ref.o = dv(0, 0, 0);
+        c.ref = ref_scene;
+        c.ref_ctx = &ref;
+        c.ns = 48;
+        c.nphi = 96;
+        c.n_samples = 200000;
+        {
+            double sa = 0;
+            for (i = 0; i < 5; i++) sa += tu_light_solid_angle(&ref.L[i], ref.o);
+            c.support = sa; /* the lights do not overlap as seen from the origin */
+        }
+        TU_CHECK_PDF(t, &c, &r);
+        agg_add(&a, &r);
+        /* selection by power */
+        pt_rng_seed(&rng, 601, 1);
+        for (k = 0; k < n; k++) {
+            pt_vec3 d;
+            float pdfv;
+            int which;
+            if (!pt_pdf_sample(&p, &rng, &d, &pdfv)) { counts[5]++; continue; }
+            which = which_light(&ref, ref.o, dnorm(dv_from(d)));
+            counts[which < 0 ? 5 : which]++;
+        }
+        for (i = 0; i < 5; i++) chi2 += (counts[i] - n * P[i]) * (counts[i] - n * P[i]) / (n * P[i]);
+        pv = tu_chi2_sf(chi2, 4);
+        CHECK(t, counts[5] <= 2, "%ld of %ld samples hit no light", counts[5], n);
+        CHECK(t, pv >= alpha_each(),
+              "light selection counts %ld %ld %ld %ld %ld for powers 1:3:2:1:1 (chi2 %.1f, p = %.3g)", counts[0],
+              counts[1], counts[2], counts[3], counts[4], chi2, pv);
+        test_note(t, "light B (3x power) picked %.3fx as often as A", (double)counts[1] / (double)counts[0]);
+    }
+    {   /* behind light A: its share of the mass is missing, and sampling it fails */
+        pt_pdf p = pt_pdf_scene_lights(s, pt_v3(0, 3.5f, 0));
+        tu_pdf_check c = base_check("scene lights from behind light A", &p, 610);
+        tu_pdf_result r;
+        ref.o = dv(0, 3.5, 0);
+        c.ref = ref_scene;
+        c.ref_ctx = &ref;
+        c.expected_mass = 1.0 - P[0];
+        c.ns = 48;
+        c.nphi = 96;
+        c.n_samples = 200000;
+        TU_CHECK_PDF(t, &c, &r);
+        agg_add(&a, &r);
+    }
+    pt_scene_destroy(s);
+    agg_note(t, &a);
+}
+
+static void pdf_scene_lights_power(test_ctx *t)
+{
+    /* Power uses the mean radiance: (1, 2, 3) and (2, 2, 2) have equal power (P = 1/2 each); a
+       single light needs no selection and has mass 1 on its own. */
+    pt_scene *s = pt_scene_create();
+    int m1, m2, rc;
+    long counts[2] = { 0, 0 }, n = 40000, k;
+    pt_rng rng;
+    double z, zmax = tu_z_two_sided(alpha_each());
+    scene_ref ref;
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    m1 = pt_scene_add_emitter(s, pt_v3(1, 2, 3), 0);
+    m2 = pt_scene_add_emitter(s, pt_v3(2, 2, 2), 0);
+    rc = pt_scene_add_quad(s, pt_v3(-0.5f, 2, -0.5f), pt_v3(1, 0, 0), pt_v3(0, 0, 1), m1); /* faces -y */
+    rc |= pt_scene_add_quad(s, pt_v3(-0.5f, -2, -0.5f), pt_v3(0, 0, 1), pt_v3(1, 0, 0), m2); /* faces +y */
+    rc |= pt_scene_commit(s);
+    if (!CHECK(t, rc >= 0, "scene setup failed: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    {
+        pt_pdf p = pt_pdf_scene_lights(s, pt_v3(0, 0, 0));
+        pt_rng_seed(&rng, 620, 1);
+        for (k = 0; k < n; k++) {
+            pt_vec3 d;
+            float pv;
+            if (pt_pdf_sample(&p, &rng, &d, &pv)) counts[d.y > 0 ? 0 : 1]++;
+        }
+    }
+    z = (counts[0] - 0.5 * n) / sqrt(0.25 * n);
+    CHECK(t, fabs(z) <= zmax, "radiance (1,2,3) vs (2,2,2): picked %ld vs %ld times (z = %.2f); power must use the mean radiance",
+          counts[0], counts[1], z);
+    pt_scene_destroy(s);
+
+    /* a single light */
+    s = pt_scene_create();
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    m1 = pt_scene_add_emitter(s, pt_v3(5, 5, 5), 0);
+    rc = pt_scene_add_triangle(s, pt_v3(-1, 1, -1), pt_v3(1, 1, 0), pt_v3(-1, 1, 1), m1); /* faces -y */
+    rc |= pt_scene_commit(s);
+    if (CHECK(t, rc >= 0, "scene setup failed")) {
+        pt_pdf p = pt_pdf_scene_lights(s, pt_v3(0.2f, -0.5f, 0.1f));
+        tu_pdf_check c = base_check("single-light scene", &p, 630);
+        tu_pdf_result r;
+        memset(&ref, 0, sizeof ref);
+        ref.count = 1;
+        ref.P[0] = 1.0;
+        ref.L[0].kind = TU_TRIANGLE;
+        ref.L[0].p0 = dv(-1, 1, -1); ref.L[0].p1 = dv(1, 1, 0); ref.L[0].p2 = dv(-1, 1, 1);
+        ref.o = dv_from(pt_v3(0.2f, -0.5f, 0.1f));
+        tu_light_cone(&ref.L[0], ref.o, &c.axis, &c.omc);
+        c.ref = ref_scene;
+        c.ref_ctx = &ref;
+        c.support = tu_light_solid_angle(&ref.L[0], ref.o);
+        TU_CHECK_PDF(t, &c, &r);
+        test_note(t, "equal-power pick z = %.2f; single light max |z| %.2f", z, r.max_abs_z);
+    }
+    pt_scene_destroy(s);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* material PDFs                                                                               */
+
+/* Fuzzy metal: direction of r + fuzz * B, B uniform in the unit ball, r the mirror direction
+   (|r| = 1). Along direction w (c = w.r) the ray meets the ball for t in c -+ h, h^2 = c^2 - 1 + f^2,
+   so p(w) = (1/V) \int t^2 dt = (t2^3 - t1^3) / (3V) = 2h(3c^2 + h^2) / (4 pi f^3). */
+typedef struct metal_ctx { dv3 r; double f; } metal_ctx;
+static double ref_metal(const void *ctx, dv3 w, int *near)
+{
+    const metal_ctx *m = (const metal_ctx *)ctx;
+    double c = ddot(w, m->r), k = c * c - (1.0 - m->f * m->f), h;
+    /* near the rim p ~ sqrt(k): float rounding of c (~1e-7) is amplified by c/k */
+    *near = fabs(k) < 1e-3 || fabs(c) < 1e-5;
+    if (c <= 0.0 || k <= 0.0) return 0.0;
+    h = sqrt(k);
+    return 2.0 * h * (3.0 * c * c + h * h) / (4.0 * TU_PI * m->f * m->f * m->f);
+}
+
+static void pdf_material_lambertian(test_ctx *t)
+{
+    /* cos/pi about the normal on the side of wo (the normal need not face wo) */
+    pt_scene *s = pt_scene_create();
+    int m, i, rc;
+    agg a;
+    agg_init(&a);
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.6f, 0.7f));
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
+    rc |= pt_scene_commit(s);
+    if (!CHECK(t, rc >= 0, "scene setup failed")) { pt_scene_destroy(s); return; }
+    CHECK(t, pt_material_is_delta(s, m) == 0, "Lambertian reported as delta");
+    for (i = 0; i < 3; i++) {
+        pt_vec3 n = pt_normalize(i == 0 ? pt_v3(0, 1, 0) : pt_v3(0.3f, -0.4f, 0.5f));
+        pt_vec3 wo = pt_normalize(i == 0 ? pt_v3(0.3f, 1, 0.2f) : pt_v3(0.6f, -0.1f, 0.7f));
+        pt_vec3 nside = n;
+        pt_pdf p;
+        cos_ctx ctx;
+        tu_pdf_check c;
+        tu_pdf_result r;
+        const char *label = i == 0 ? "Lambertian, normal +y" : i == 1 ? "Lambertian, tilted" : "Lambertian, normal facing away from wo";
+        if (i == 2) n = pt_neg(n); /* wo is on the other side: the lobe follows wo */
+        p = pt_pdf_material(s, m, n, wo);
+        CHECK(t, pt_pdf_validate(&p) == PT_OK, "%s: pt_pdf_validate failed", label);
+        ctx.n = dv_from(pt_dot(nside, wo) >= 0 ? nside : pt_neg(nside));
+        c = base_check(label, &p, 700 + i);
+        c.axis = ctx.n;
+        c.omc = 1.0;
+        c.ref = ref_cosine;
+        c.ref_ctx = &ctx;
+        TU_CHECK_PDF(t, &c, &r);
+        agg_add(&a, &r);
+    }
+    pt_scene_destroy(s);
+    agg_note(t, &a);
+}
+
+static void pdf_material_metal(test_ctx *t)
+{
+    /* Fuzz 0.3 and 1.0 at normal incidence and 0.3 at 40 degrees: the whole lobe is above the surface,
+       so the closed form above is the density. Fuzz 1.0 at 60 degrees reaches below the surface,
+       where the model is the implementation's choice: only consistency (sample vs value, mass vs
+       success rate, chi-square) is checked. Fuzz > 1 is clamped to 1. */
+    pt_scene *s = pt_scene_create();
+    int m03, m10, m20, rc, i;
+    agg a;
+    agg_init(&a);
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    m03 = pt_scene_add_metal(s, pt_v3(0.9f, 0.9f, 0.9f), 0.3f);
+    m10 = pt_scene_add_metal(s, pt_v3(0.9f, 0.9f, 0.9f), 1.0f);
+    m20 = pt_scene_add_metal(s, pt_v3(0.9f, 0.9f, 0.9f), 2.0f);
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m03);
+    rc |= pt_scene_commit(s);
+    if (!CHECK(t, rc >= 0 && m03 >= 0 && m10 >= 0 && m20 >= 0, "scene setup failed")) { pt_scene_destroy(s); return; }
+    CHECK(t, pt_material_is_delta(s, m03) == 0 && pt_material_is_delta(s, m10) == 0, "fuzzy metal reported as delta");
+    for (i = 0; i < 4; i++) {
+        const int mats[4] = { m03, m10, m03, m10 };
+        const double fuzz[4] = { 0.3, 1.0, 0.3, 1.0 };
+        const double angle[4] = { 0, 0, 40, 60 };
+        const char *labels[4] = { "metal fuzz 0.3, normal incidence", "metal fuzz 1.0, normal incidence",
+                                  "metal fuzz 0.3, 40 degrees", "metal fuzz 1.0, 60 degrees (consistency only)" };
+        dv3 n = dnorm(dv(0.1, 1.0, -0.2)), e1, e2, wo, r;
+        double th = angle[i] * TU_PI / 180.0;
+        pt_pdf p;
+        metal_ctx ctx;
+        tu_pdf_check c;
+        tu_pdf_result res;
+        tu_frame(n, &e1, &e2);
+        wo = dnorm(dadd(dscale(n, cos(th)), dscale(e1, sin(th))));
+        wo = dnorm(dv_from(dv_to(wo)));
+        r = dsub(dscale(dv_from(dv_to(n)), 2.0 * ddot(dv_from(dv_to(n)), wo)), wo);
+        p = pt_pdf_material(s, mats[i], dv_to(n), dv_to(wo));
+        CHECK(t, pt_pdf_validate(&p) == PT_OK, "%s: pt_pdf_validate failed", labels[i]);
+        ctx.r = dnorm(r);
+        ctx.f = fuzz[i];
+        c = base_check(labels[i], &p, 710 + i);
+        c.axis = ctx.r;
+        if (fuzz[i] < 1.0) {
+            c.omc = (1.0 - sqrt(1.0 - fuzz[i] * fuzz[i])) * 1.02;
+            c.support = 2.0 * TU_PI * (1.0 - sqrt(1.0 - fuzz[i] * fuzz[i])); /* 1/p has finite variance */
+        } else {
+            c.omc = 1.0;
+        }
+        if (i < 3) { c.ref = ref_metal; c.ref_ctx = &ctx; }
+        else { c.omc = 2.0; c.expected_mass = -1.0; c.ns = 24; c.nphi = 48; }
+        TU_CHECK_PDF(t, &c, &res);
+        agg_add(&a, &res);
+    }
+    {   /* fuzz 2 behaves as fuzz 1 */
+        pt_vec3 n = pt_v3(0, 0, 1), wo = pt_normalize(pt_v3(0.2f, 0, 1));
+        pt_pdf p10 = pt_pdf_material(s, m10, n, wo), p20 = pt_pdf_material(s, m20, n, wo);
+        pt_rng rng;
+        int bad = 0;
+        pt_rng_seed(&rng, 720, 1);
+        for (i = 0; i < 2000; i++) {
+            pt_vec3 w = pt_normalize(dv_to(tu_rand_dir(&rng)));
+            float v1 = pt_pdf_value(&p10, w), v2 = pt_pdf_value(&p20, w);
+            if (fabs(v1 - v2) > 1e-5 * fmax(v1, v2)) bad++;
+        }
+        CHECK(t, bad == 0, "metal with fuzz 2 differs from fuzz 1 at %d of 2000 directions (fuzz is clamped to [0, 1])", bad);
+    }
+    pt_scene_destroy(s);
+    agg_note(t, &a);
+}
+
+static void pdf_material_delta(test_ctx *t)
+{
+    /* Delta materials have no PDF: sampling returns 0 (zero outputs) and value is 0. */
+    pt_scene *s = pt_scene_create();
+    int mirror, glass, emit, rc, k, i;
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    mirror = pt_scene_add_metal(s, pt_v3(1, 1, 1), 0.0f);
+    glass = pt_scene_add_dielectric(s, 1.5f);
+    emit = pt_scene_add_emitter(s, pt_v3(1, 1, 1), 0);
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, glass);
+    rc |= pt_scene_commit(s);
+    if (!CHECK(t, rc >= 0, "scene setup failed")) { pt_scene_destroy(s); return; }
+    for (k = 0; k < 3; k++) {
+        int m = k == 0 ? mirror : k == 1 ? glass : emit;
+        pt_pdf p = pt_pdf_material(s, m, pt_v3(0, 0, 1), pt_normalize(pt_v3(0.3f, 0, 1)));
+        pt_rng rng;
+        int bad = 0;
+        pt_rng_seed(&rng, 730 + k, 1);
+        CHECK(t, pt_material_is_delta(s, m) == 1, "material %d (k = %d) not reported delta", m, k);
+        for (i = 0; i < 1000; i++) {
+            pt_vec3 d = pt_v3(9, 9, 9), w = pt_normalize(dv_to(tu_rand_dir(&rng)));
+            float pv = 9;
+            int got = pt_pdf_sample(&p, &rng, &d, &pv);
+            float v = pt_pdf_value(&p, w);
+            if (got != 0 || d.x != 0 || d.y != 0 || d.z != 0 || pv != 0 || v != 0) bad++;
+        }
+        CHECK(t, bad == 0, "delta material %d: %d of 1000 draws/values were not 0", k, bad);
+    }
+    /* the mirror direction itself also has value 0 (a delta has no density) */
+    {
+        pt_pdf p = pt_pdf_material(s, mirror, pt_v3(0, 0, 1), pt_v3(0, 0, 1));
+        CHECK(t, pt_pdf_value(&p, pt_v3(0, 0, 1)) == 0.0f, "mirror PDF value in the mirror direction is not 0");
+    }
+    pt_scene_destroy(s);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* mixtures and callbacks                                                                      */
+
+typedef struct mix_ref { int count; tu_density_fn fn[4]; const void *ctx[4]; double w[4]; } mix_ref;
+static double ref_mix(const void *ctx, dv3 w, int *near)
+{
+    const mix_ref *m = (const mix_ref *)ctx;
+    double sum = 0;
+    int i;
+    *near = 0;
+    for (i = 0; i < m->count; i++) {
+        int n = 0;
+        double d = m->fn[i](m->ctx[i], w, &n);
+        if (d < 0) return -1;
+        sum += m->w[i] * d;
+        *near |= n;
+    }
+    return sum;
+}
+
+/* A user PDF: uniform in a cone (drawn with the test's own sampler). */
+typedef struct cone_user { dv3 axis; double omc; long sample_calls, value_calls; int fail; } cone_user;
+static int cone_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
+{
+    cone_user *u = (cone_user *)user;
+    u->sample_calls++;
+    if (u->fail) return 0;
+    *dir = dv_to(tu_sample_cone(rng, u->axis, u->omc));
+    *pdf = (float)(1.0 / (2.0 * TU_PI * u->omc));
+    return 1;
+}
+static float cone_value(void *user, pt_vec3 dir)
+{
+    cone_user *u = (cone_user *)user;
+    dv3 d = dsub(dnorm(dv_from(dir)), u->axis);
+    u->value_calls++;
+    return 0.5 * ddot(d, d) <= u->omc ? (float)(1.0 / (2.0 * TU_PI * u->omc)) : 0.0f;
+}
+static double ref_cone_user(const void *ctx, dv3 w, int *near)
+{
+    const cone_user *u = (const cone_user *)ctx;
+    dv3 d = dsub(w, u->axis);
+    double ch = 0.5 * ddot(d, d);
+    *near = fabs(ch - u->omc) < 1e-5 * u->omc;
+    return ch <= u->omc ? 1.0 / (2.0 * TU_PI * u->omc) : 0.0;
+}
+
+static void pdf_mixture(test_ctx *t)
+{
+    /* Known failure 1 (accuracy-references.md): the density of a mixture is sum_k w_k p_k, never the
+       chosen component's. Checked exactly against the components' own values, and by the full
+       checker; a mixture whose light component has no density (light seen from behind) has mass
+       equal to the other weight; nested mixtures and callbacks compose. */
+    pt_vec3 n = pt_v3(0, 1, 0), o = pt_v3(0, 0, 0);
+    pt_vec3 q = pt_v3(-0.5f, 1.0f, -0.7f), u = pt_v3(1.2f, 0, 0), v = pt_v3(0, 0, 1.0f);
+    pt_pdf comps[3], mix, nested_c[2], nested;
+    float w2[2] = { 0.3f, 0.7f }, w3[3] = { 0.2f, 0.5f, 0.3f }, wn[2] = { 0.4f, 0.6f };
+    light_ctx lc;
+    cos_ctx cc;
+    mix_ref mr;
+    cone_user cu;
+    agg a;
+    pt_rng rng;
+    int i, bad = 0, chosen_only = 0;
+    agg_init(&a);
+    comps[0] = pt_pdf_cosine_hemisphere(n);
+    comps[1] = pt_pdf_quad_light(o, q, u, v, 0);
+    mix = pt_pdf_mixture(2, comps, w2);
+    CHECK(t, mix.type == PT_PDF_MIXTURE && pt_pdf_validate(&mix) == PT_OK, "mixture rejected by pt_pdf_validate");
+    /* exact: value == w0 p0 + w1 p1, and the density returned with a sample is that sum */
+    pt_rng_seed(&rng, 800, 1);
+    for (i = 0; i < 20000; i++) {
+        pt_vec3 d, w = pt_normalize(dv_to(tu_rand_dir(&rng)));
+        float pv, v0, v1, want;
+        float got = pt_pdf_value(&mix, w);
+        v0 = pt_pdf_value(&comps[0], w);
+        v1 = pt_pdf_value(&comps[1], w);
+        want = w2[0] * v0 + w2[1] * v1;
+        if (fabs(got - want) > 1e-6 * want) bad++;
+        if (pt_pdf_sample(&mix, &rng, &d, &pv)) {
+            v0 = pt_pdf_value(&comps[0], d);
+            v1 = pt_pdf_value(&comps[1], d);
+            want = w2[0] * v0 + w2[1] * v1;
+            if (fabs(pv - want) > 1e-6 * want) {
+                bad++;
+                if (fabs(pv - v0) <= 1e-6 * v0 || fabs(pv - v1) <= 1e-6 * v1) chosen_only++;
+            }
+        }
+    }
+    CHECK(t, bad == 0, "mixture density differs from sum w_k p_k %d times (%d of them equal a single component's density)",
+          bad, chosen_only);
+    /* full checker with the closed forms */
+    lc.L.kind = TU_QUAD; lc.L.p0 = dv_from(q); lc.L.p1 = dv_from(u); lc.L.p2 = dv_from(v); lc.L.two_sided = 0;
+    lc.L.radius = 0;
+    lc.o = dv_from(o);
+    cc.n = dv_from(n);
+    mr.count = 2;
+    mr.fn[0] = ref_cosine; mr.ctx[0] = &cc; mr.w[0] = w2[0];
+    mr.fn[1] = ref_light; mr.ctx[1] = &lc; mr.w[1] = w2[1];
+    {
+        tu_pdf_check c = base_check("mixture 0.3 cosine + 0.7 quad light", &mix, 801);
+        tu_pdf_result r;
+        c.ref = ref_mix;
+        c.ref_ctx = &mr;
+        c.ns = 32; c.nphi = 64;
+        TU_CHECK_PDF(t, &c, &r);
+        agg_add(&a, &r);
+    }
+    {   /* light from behind: its component has no density; mass = 0.3 */
+        pt_pdf back[2], m2;
+        light_ctx lb = lc;
+        mix_ref mb = mr;
+        tu_pdf_check c;
+        tu_pdf_result r;
+        pt_vec3 ob = pt_v3(0, 2, 0);
+        back[0] = pt_pdf_cosine_hemisphere(n);
+        back[1] = pt_pdf_quad_light(ob, q, u, v, 0);
+        m2 = pt_pdf_mixture(2, back, w2);
+        lb.o = dv_from(ob);
+        mb.ctx[1] = &lb;
+        c = base_check("mixture with a light seen from behind", &m2, 802);
+        c.ref = ref_mix;
+        c.ref_ctx = &mb;
+        c.expected_mass = w2[0];
+        c.ns = 16; c.nphi = 32;
+        TU_CHECK_PDF(t, &c, &r);
+        agg_add(&a, &r);
+    }
+    {   /* three components incl. a nested mixture and a callback */
+        mix_ref inner, outer;
+        tu_pdf_check c;
+        tu_pdf_result r;
+        memset(&cu, 0, sizeof cu);
+        cu.axis = dnorm(dv(-1, 0.5, 0.2));
+        cu.omc = 0.1;
+        nested_c[0] = pt_pdf_uniform_sphere();
+        nested_c[1] = pt_pdf_callback(&cu, cone_sample, cone_value);
+        nested = pt_pdf_mixture(2, nested_c, wn);
+        comps[2] = nested;
+        mix = pt_pdf_mixture(3, comps, w3);
+        CHECK(t, pt_pdf_validate(&mix) == PT_OK, "nested mixture rejected by pt_pdf_validate");
+        inner.count = 2;
+        inner.fn[0] = ref_uniform; inner.ctx[0] = NULL; inner.w[0] = wn[0];
+        inner.fn[1] = ref_cone_user; inner.ctx[1] = &cu; inner.w[1] = wn[1];
+        outer.count = 3;
+        outer.fn[0] = ref_cosine; outer.ctx[0] = &cc; outer.w[0] = w3[0];
+        outer.fn[1] = ref_light; outer.ctx[1] = &lc; outer.w[1] = w3[1];
+        outer.fn[2] = ref_mix; outer.ctx[2] = &inner; outer.w[2] = w3[2];
+        c = base_check("mixture of cosine, quad light and (uniform + callback cone)", &mix, 803);
+        c.ref = ref_mix;
+        c.ref_ctx = &outer;
+        c.ns = 32; c.nphi = 64;
+        TU_CHECK_PDF(t, &c, &r);
+        agg_add(&a, &r);
+    }
+    {   /* pt_pdf_validate on malformed mixtures */
+        float bad_sum[2] = { 0.3f, 0.6f }, negative[2] = { -0.2f, 1.2f }, nan_w[2] = { NAN, 1.0f };
+        pt_pdf m;
+        m = pt_pdf_mixture(2, comps, bad_sum);
+        CHECK(t, pt_pdf_validate(&m) == PT_ERROR_INVALID_ARGUMENT, "weights summing to 0.9 accepted");
+        m = pt_pdf_mixture(2, comps, negative);
+        CHECK(t, pt_pdf_validate(&m) == PT_ERROR_INVALID_ARGUMENT, "a negative weight accepted");
+        m = pt_pdf_mixture(2, comps, nan_w);
+        CHECK(t, pt_pdf_validate(&m) == PT_ERROR_INVALID_ARGUMENT, "a NaN weight accepted");
+        m = pt_pdf_mixture(2, NULL, w2);
+        CHECK(t, pt_pdf_validate(&m) == PT_ERROR_INVALID_ARGUMENT, "NULL components accepted");
+        m = pt_pdf_mixture(0, comps, w2);
+        CHECK(t, pt_pdf_validate(&m) == PT_ERROR_INVALID_ARGUMENT, "an empty mixture accepted");
+    }
+    agg_note(t, &a);
+}
+
+static void pdf_callback(test_ctx *t)
+{
+    cone_user cu;
+    pt_pdf p;
+    tu_pdf_check c;
+    tu_pdf_result r;
+    agg a;
+    agg_init(&a);
+    memset(&cu, 0, sizeof cu);
+    cu.axis = dnorm(dv(0.2, -1, 0.4));
+    cu.omc = 0.3;
+    p = pt_pdf_callback(&cu, cone_sample, cone_value);
+    CHECK(t, p.type == PT_PDF_CALLBACK && pt_pdf_validate(&p) == PT_OK, "callback PDF rejected");
+    c = base_check("callback cone", &p, 900);
+    c.axis = cu.axis;
+    c.omc = cu.omc * 1.05;
+    c.support = 2 * TU_PI * cu.omc;
+    c.ref = ref_cone_user;
+    c.ref_ctx = &cu;
+    TU_CHECK_PDF(t, &c, &r);
+    agg_add(&a, &r);
+    CHECK(t, cu.sample_calls >= c.n_samples, "the sample callback was called %ld times for %ld draws", cu.sample_calls,
+          c.n_samples);
+    CHECK(t, cu.value_calls > 0, "the value callback was never called");
+    {   /* a callback that cannot sample: pt_pdf_sample returns 0 with zero outputs */
+        pt_rng rng;
+        pt_vec3 d = pt_v3(1, 1, 1);
+        float pv = 1;
+        int got;
+        cu.fail = 1;
+        pt_rng_seed(&rng, 901, 1);
+        got = pt_pdf_sample(&p, &rng, &d, &pv);
+        CHECK(t, got == 0 && d.x == 0 && d.y == 0 && d.z == 0 && pv == 0,
+              "failing callback: returned %d, dir (%g, %g, %g), pdf %g", got, d.x, d.y, d.z, pv);
+    }
+    p = pt_pdf_callback(&cu, NULL, cone_value);
+    CHECK(t, pt_pdf_validate(&p) == PT_ERROR_INVALID_ARGUMENT, "NULL sample callback accepted");
+    p = pt_pdf_callback(&cu, cone_sample, NULL);
+    CHECK(t, pt_pdf_validate(&p) == PT_ERROR_INVALID_ARGUMENT, "NULL value callback accepted");
+    agg_note(t, &a);
+}
+
+static void pdf_validate_and_degenerate(test_ctx *t)
+{
+    /* Non-finite parameters are rejected; degenerate but finite configurations never give NaN. */
+    pt_pdf p;
+    pt_rng rng;
+    int i, k, bad = 0;
+    p = pt_pdf_sphere_light(pt_v3(0, 0, 0), pt_v3(NAN, 0, 5), 1, 0);
+    CHECK(t, pt_pdf_validate(&p) == PT_ERROR_INVALID_ARGUMENT, "sphere light with a NaN centre accepted");
+    p = pt_pdf_sphere_light(pt_v3(0, 0, 0), pt_v3(0, 0, 5), INFINITY, 0);
+    CHECK(t, pt_pdf_validate(&p) == PT_ERROR_INVALID_ARGUMENT, "sphere light with an infinite radius accepted");
+    p = pt_pdf_quad_light(pt_v3(0, NAN, 0), pt_v3(0, 1, 0), pt_v3(1, 0, 0), pt_v3(0, 0, 1), 0);
+    CHECK(t, pt_pdf_validate(&p) == PT_ERROR_INVALID_ARGUMENT, "quad light with a NaN origin accepted");
+    p = pt_pdf_cosine_hemisphere(pt_v3(NAN, 0, 1));
+    CHECK(t, pt_pdf_validate(&p) == PT_ERROR_INVALID_ARGUMENT, "cosine PDF with a NaN normal accepted");
+    p = pt_pdf_scene_lights(NULL, pt_v3(0, 0, 0));
+    CHECK(t, pt_pdf_validate(&p) == PT_ERROR_INVALID_ARGUMENT, "scene-lights PDF without a scene accepted");
+    CHECK(t, pt_pdf_validate(NULL) == PT_ERROR_INVALID_ARGUMENT, "pt_pdf_validate(NULL) did not fail");
+    /* finite degenerate cases: origin in the plane of a quad, at the centre of a sphere, on an edge
+       of a triangle; tiny far lights */
+    {
+        pt_pdf cases[6];
+        cases[0] = pt_pdf_quad_light(pt_v3(2, 1, 0), pt_v3(-0.5f, 1, -0.5f), pt_v3(1, 0, 0), pt_v3(0, 0, 1), 0);
+        cases[1] = pt_pdf_quad_light(pt_v3(0, 1, 0), pt_v3(-0.5f, 1, -0.5f), pt_v3(1, 0, 0), pt_v3(0, 0, 1), 1);
+        cases[2] = pt_pdf_sphere_light(pt_v3(1, 2, 3), pt_v3(1, 2, 3), 0.5f, 1);
+        cases[3] = pt_pdf_triangle_light(pt_v3(0.5f, 0, 0), pt_v3(0, 0, 0), pt_v3(1, 0, 0), pt_v3(0, 0, 1), 1);
+        cases[4] = pt_pdf_quad_light(pt_v3(0, 0, 0), pt_v3(1e3f, 1e3f, 1e3f), pt_v3(1e-4f, 0, 0), pt_v3(0, 1e-4f, 0), 1);
+        cases[5] = pt_pdf_sphere_light(pt_v3(0, 0, 0), pt_v3(1e4f, 0, 0), 1e-3f, 0);
+        pt_rng_seed(&rng, 950, 1);
+        for (k = 0; k < 6; k++) {
+            for (i = 0; i < 5000; i++) {
+                pt_vec3 d, w = pt_normalize(dv_to(tu_rand_dir(&rng)));
+                float pv, v;
+                int got = pt_pdf_sample(&cases[k], &rng, &d, &pv);
+                if (got == 1 && (!isfinite(d.x + d.y + d.z + pv) || !(pv > 0))) bad++;
+                if (got == 1 && !isfinite(pt_pdf_value(&cases[k], d))) bad++;
+                v = pt_pdf_value(&cases[k], w);
+                if (!isfinite(v) || v < 0) bad++;
+            }
+        }
+        CHECK(t, bad == 0, "%d non-finite or non-positive results in degenerate configurations", bad);
+    }
+}
+
+const test_case test_pdf_cases[] = {
+    TEST_CASE(warp_functions),
+    TEST_CASE(pdf_uniform_sphere),
+    TEST_CASE(pdf_cosine_hemisphere),
+    TEST_CASE(pdf_sphere_light),
+    TEST_CASE(pdf_quad_light),
+    TEST_CASE(pdf_triangle_light),
+    TEST_CASE(pdf_scene_lights),
+    TEST_CASE(pdf_scene_lights_power),
+    TEST_CASE(pdf_material_lambertian),
+    TEST_CASE(pdf_material_metal),
+    TEST_CASE(pdf_material_delta),
+    TEST_CASE(pdf_mixture),
+    TEST_CASE(pdf_callback),
+    TEST_CASE(pdf_validate_and_degenerate),
+    TEST_END
+};

@@ -1,0 +1,785 @@
+/* test_util.c - statistics, closed forms and the PDF checker shared by the tests (see test_util.h). */
+#include "test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int tu_verbose(void)
+{
+    const char *v = getenv("PT_TEST_VERBOSE");
+    return v != NULL && v[0] != '\0' && v[0] != '0';
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* random numbers                                                                              */
+
+double tu_rand(pt_rng *r)
+{
+    uint64_t hi = pt_rng_u32(r) >> 5, lo = pt_rng_u32(r) >> 6; /* 27 + 26 = 53 bits */
+    return ((double)hi * 67108864.0 + (double)lo) * (1.0 / 9007199254740992.0);
+}
+
+dv3 tu_rand_dir(pt_rng *r)
+{
+    /* Archimedes' hat-box theorem: z uniform in [-1, 1], phi uniform. */
+    double z = 1.0 - 2.0 * tu_rand(r);
+    double phi = 2.0 * TU_PI * tu_rand(r);
+    double s = sqrt(fmax(0.0, 1.0 - z * z));
+    return dv(s * cos(phi), s * sin(phi), z);
+}
+
+void tu_frame(dv3 axis, dv3 *e1, dv3 *e2)
+{
+    dv3 a = dnorm(axis);
+    dv3 helper = fabs(a.x) < 0.6 ? dv(1, 0, 0) : dv(0, 1, 0);
+    *e1 = dnorm(dcross(helper, a));
+    *e2 = dcross(a, *e1); /* e1 x e2 = a */
+}
+
+dv3 tu_sample_cone(pt_rng *r, dv3 axis, double omc)
+{
+    dv3 e1, e2;
+    double ch = tu_rand(r) * omc;            /* 1 - cos(theta), uniform: equal-area */
+    double cos_t = 1.0 - ch;
+    double sin_t = sqrt(fmax(0.0, ch * (2.0 - ch)));
+    double phi = 2.0 * TU_PI * tu_rand(r);
+    tu_frame(axis, &e1, &e2);
+    return dnorm(dadd(dadd(dscale(e1, sin_t * cos(phi)), dscale(e2, sin_t * sin(phi))), dscale(dnorm(axis), cos_t)));
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* statistics                                                                                  */
+
+double tu_sidak(double alpha, int k)
+{
+    if (k <= 1) return alpha;
+    return 1.0 - pow(1.0 - alpha, 1.0 / (double)k);
+}
+
+double tu_z_two_sided(double alpha)
+{
+    /* P(|Z| > z) = erfc(z / sqrt 2); solve by bisection. */
+    double lo = 0.0, hi = 40.0;
+    int i;
+    for (i = 0; i < 200; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (erfc(mid / sqrt(2.0)) > alpha) lo = mid; else hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+/* Regularised lower incomplete gamma P(a, x) by its power series (for x < a + 1). */
+static double gamma_p_series(double a, double x)
+{
+    double term = 1.0 / a, sum = term, ap = a;
+    int n;
+    for (n = 0; n < 100000; n++) {
+        ap += 1.0;
+        term *= x / ap;
+        sum += term;
+        if (fabs(term) < fabs(sum) * 1e-16) break;
+    }
+    return sum * exp(-x + a * log(x) - lgamma(a));
+}
+
+/* Regularised upper incomplete gamma Q(a, x) by its continued fraction (modified Lentz). */
+static double gamma_q_fraction(double a, double x)
+{
+    const double tiny = 1e-300;
+    double b = x + 1.0 - a, c = 1.0 / tiny, d = 1.0 / b, h = d;
+    int i;
+    for (i = 1; i < 100000; i++) {
+        double an = -(double)i * ((double)i - a), del;
+        b += 2.0;
+        d = an * d + b;
+        if (fabs(d) < tiny) d = tiny;
+        c = b + an / c;
+        if (fabs(c) < tiny) c = tiny;
+        d = 1.0 / d;
+        del = d * c;
+        h *= del;
+        if (fabs(del - 1.0) < 1e-16) break;
+    }
+    return exp(-x + a * log(x) - lgamma(a)) * h;
+}
+
+double tu_chi2_sf(double x, double dof)
+{
+    double a = 0.5 * dof, hx = 0.5 * x;
+    if (x <= 0.0) return 1.0;
+    if (hx < a + 1.0) return 1.0 - gamma_p_series(a, hx);
+    return gamma_q_fraction(a, hx);
+}
+
+void tu_acc_add(tu_acc *a, double x)
+{
+    double d;
+    a->n += 1.0;
+    d = x - a->mean;
+    a->mean += d / a->n;
+    a->m2 += d * (x - a->mean);
+}
+
+double tu_acc_var(const tu_acc *a) { return a->n > 1.0 ? a->m2 / (a->n - 1.0) : 0.0; }
+double tu_acc_se(const tu_acc *a) { return a->n > 1.0 ? sqrt(tu_acc_var(a) / a->n) : 0.0; }
+
+/* ------------------------------------------------------------------------------------------ */
+/* closed forms                                                                                */
+
+double tu_solid_angle_triangle(dv3 o, dv3 a, dv3 b, dv3 c)
+{
+    /* tan(Omega / 2) = |r1 . (r2 x r3)| / (l1 l2 l3 + (r1.r2) l3 + (r1.r3) l2 + (r2.r3) l1) */
+    dv3 r1 = dsub(a, o), r2 = dsub(b, o), r3 = dsub(c, o);
+    double l1 = dlen(r1), l2 = dlen(r2), l3 = dlen(r3);
+    double num = fabs(ddot(r1, dcross(r2, r3)));
+    double den = l1 * l2 * l3 + ddot(r1, r2) * l3 + ddot(r1, r3) * l2 + ddot(r2, r3) * l1;
+    return 2.0 * atan2(num, den);
+}
+
+double tu_lambert_polygon(dv3 x, dv3 n, const dv3 *verts, int count)
+{
+    double sum = 0.0;
+    int i;
+    for (i = 0; i < count; i++) {
+        dv3 ui = dnorm(dsub(verts[i], x));
+        dv3 uj = dnorm(dsub(verts[(i + 1) % count], x));
+        dv3 cr = dcross(ui, uj);
+        double s = dlen(cr);
+        double theta = atan2(s, ddot(ui, uj));
+        if (s > 0.0) sum += theta * ddot(n, dscale(cr, 1.0 / s));
+    }
+    return 0.5 * fabs(sum);
+}
+
+double tu_fresnel_dielectric(double cos_i, double eta_i, double eta_t)
+{
+    double sin_i = sqrt(fmax(0.0, 1.0 - cos_i * cos_i));
+    double sin_t = eta_i / eta_t * sin_i, cos_t, rs, rp;
+    if (sin_t >= 1.0) return 1.0;
+    cos_t = sqrt(1.0 - sin_t * sin_t);
+    rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+/* One minus the cosine of the half-angle of the cone a sphere subtends; the form
+   s^2 / (1 + sqrt(1 - s^2)) stays exact for tiny s (accuracy-references.md). */
+static double sphere_omc(double s2) { return s2 / (1.0 + sqrt(fmax(0.0, 1.0 - s2))); }
+
+double tu_light_area(const tu_light *L)
+{
+    switch (L->kind) {
+    case TU_SPHERE: return 4.0 * TU_PI * L->radius * L->radius;
+    case TU_QUAD: return dlen(dcross(L->p1, L->p2));
+    default: return 0.5 * dlen(dcross(dsub(L->p1, L->p0), dsub(L->p2, L->p0)));
+    }
+}
+
+/* Planar light: the ray's parameter t, and the (a, b) coordinates of the hit. */
+static int planar_hit(const tu_light *L, dv3 o, dv3 w, double *t, double *margin, dv3 *N)
+{
+    dv3 q, e1, e2, p, rel;
+    double nn, denom, a, b;
+    if (L->kind == TU_QUAD) { q = L->p0; e1 = L->p1; e2 = L->p2; }
+    else { q = L->p0; e1 = dsub(L->p1, L->p0); e2 = dsub(L->p2, L->p0); }
+    *N = dcross(e1, e2);
+    nn = ddot(*N, *N);
+    denom = ddot(w, *N);
+    if (denom == 0.0) return 0;
+    *t = ddot(dsub(q, o), *N) / denom;
+    p = dadd(o, dscale(w, *t));
+    rel = dsub(p, q);
+    a = ddot(dcross(rel, e2), *N) / nn;
+    b = ddot(dcross(e1, rel), *N) / nn;
+    if (L->kind == TU_QUAD) {
+        *margin = fmin(fmin(a, 1.0 - a), fmin(b, 1.0 - b));
+    } else {
+        *margin = fmin(fmin(a, b), 1.0 - a - b);
+    }
+    return 1;
+}
+
+double tu_light_hit(const tu_light *L, dv3 o, dv3 w)
+{
+    if (L->kind == TU_SPHERE) {
+        dv3 l = dsub(L->p0, o);
+        double b = ddot(l, w), ww = ddot(w, w);
+        /* Haines et al.: discriminant from the perpendicular distance */
+        dv3 perp = dsub(l, dscale(w, b / ww));
+        double disc = L->radius * L->radius - ddot(perp, perp), s, t0, t1;
+        if (disc < 0.0) return -1.0;
+        s = sqrt(disc * ww);
+        t0 = (b - s) / ww;
+        t1 = (b + s) / ww;
+        if (t0 > 0.0) return t0;
+        if (t1 > 0.0) return t1;
+        return -1.0;
+    } else {
+        double t, margin;
+        dv3 N;
+        if (!planar_hit(L, o, w, &t, &margin, &N)) return -1.0;
+        if (t <= 0.0 || margin < 0.0) return -1.0;
+        return t;
+    }
+}
+
+double tu_light_density(const tu_light *L, dv3 o, dv3 w, int *near)
+{
+    *near = 0;
+    w = dnorm(w);
+    if (L->kind == TU_SPHERE) {
+        dv3 l = dsub(L->p0, o);
+        double d2 = ddot(l, l), r2 = L->radius * L->radius;
+        if (fabs(d2 - r2) <= 1e-5 * r2) return -1.0; /* on the surface: model-dependent */
+        if (d2 > r2) {
+            double omc = sphere_omc(r2 / d2);
+            dv3 axis = dscale(l, 1.0 / sqrt(d2));
+            dv3 diff = dsub(w, axis);
+            double ch = 0.5 * ddot(diff, diff);
+            /* float directions resolve angles to ~1e-7 rad; theta ~ sqrt(2 ch) */
+            double theta = sqrt(2.0 * ch), theta_max = sqrt(2.0 * omc);
+            if (fabs(theta - theta_max) <= 1e-6 + 1e-5 * theta_max) *near = 1;
+            return ch <= omc ? 1.0 / (2.0 * TU_PI * omc) : 0.0;
+        } else {
+            /* inside: uniform area sampling, converted to solid angle */
+            double b = ddot(l, w), c = d2 - r2, disc = b * b - c, t, cos_l;
+            dv3 x, n;
+            if (!L->two_sided) return 0.0;
+            t = b + sqrt(fmax(0.0, disc));
+            x = dadd(o, dscale(w, t));
+            n = dscale(dsub(x, L->p0), 1.0 / L->radius);
+            cos_l = fabs(ddot(w, n));
+            if (cos_l < 1e-6) *near = 1;
+            return t * t / (cos_l * 4.0 * TU_PI * r2);
+        }
+    } else {
+        double t, margin, cos_l, area = tu_light_area(L);
+        dv3 N, q = L->p0;
+        if (!L->two_sided) {
+            dv3 Nl = L->kind == TU_QUAD ? dcross(L->p1, L->p2) : dcross(dsub(L->p1, L->p0), dsub(L->p2, L->p0));
+            if (ddot(dsub(o, q), Nl) <= 0.0) return 0.0; /* behind a one-sided light */
+        }
+        if (!planar_hit(L, o, w, &t, &margin, &N)) return 0.0;
+        cos_l = fabs(ddot(w, N)) / dlen(N);
+        {
+            /* distance of the hit point to the nearest edge (conservatively), against how far a
+               direction error of 1e-6 rad moves the hit point: t * 1e-6 / cos */
+            double e1 = L->kind == TU_QUAD ? dlen(L->p1) : dlen(dsub(L->p1, L->p0));
+            double e2 = L->kind == TU_QUAD ? dlen(L->p2) : dlen(dsub(L->p2, L->p0));
+            double e3 = L->kind == TU_QUAD ? 0.0 : dlen(dsub(L->p2, L->p1));
+            double dist = fabs(margin) * dlen(N) / fmax(fmax(e1, e2), e3);
+            if (dist < fabs(t) * 1e-6 / fmax(cos_l, 1e-12) + 1e-7 * fmax(e1, e2) || cos_l < 1e-6) *near = 1;
+        }
+        if (t <= 0.0 || margin < 0.0) return 0.0;
+        return t * t / (cos_l * area);
+    }
+}
+
+double tu_light_solid_angle(const tu_light *L, dv3 o)
+{
+    if (L->kind == TU_SPHERE) {
+        dv3 l = dsub(L->p0, o);
+        double d2 = ddot(l, l), r2 = L->radius * L->radius;
+        if (fabs(d2 - r2) <= 1e-5 * r2) return L->two_sided ? 2.0 * TU_PI : -1.0;
+        if (d2 > r2) return 2.0 * TU_PI * sphere_omc(r2 / d2);
+        return L->two_sided ? 4.0 * TU_PI : 0.0;
+    } else {
+        dv3 a, b, c, d, N;
+        if (L->kind == TU_QUAD) {
+            a = L->p0; b = dadd(a, L->p1); c = dadd(b, L->p2); d = dadd(a, L->p2);
+            N = dcross(L->p1, L->p2);
+        } else {
+            a = L->p0; b = L->p1; c = L->p2; d = a;
+            N = dcross(dsub(b, a), dsub(c, a));
+        }
+        if (!L->two_sided && ddot(dsub(o, a), N) <= 0.0) return 0.0;
+        if (L->kind == TU_QUAD) return tu_solid_angle_triangle(o, a, b, c) + tu_solid_angle_triangle(o, a, c, d);
+        return tu_solid_angle_triangle(o, a, b, c);
+    }
+}
+
+void tu_light_cone(const tu_light *L, dv3 o, dv3 *axis, double *omc)
+{
+    if (L->kind == TU_SPHERE) {
+        dv3 l = dsub(L->p0, o);
+        double d2 = ddot(l, l), r2 = L->radius * L->radius;
+        if (d2 <= r2 * (1.0 + 1e-5)) { *axis = dv(0, 0, 1); *omc = 2.0; return; }
+        *axis = dnorm(l);
+        *omc = fmin(2.0, sphere_omc(r2 / d2) * 1.05);
+    } else {
+        dv3 v[4], centroid;
+        int n, i;
+        double m = 0.0;
+        if (L->kind == TU_QUAD) {
+            v[0] = L->p0; v[1] = dadd(L->p0, L->p1); v[2] = dadd(v[1], L->p2); v[3] = dadd(L->p0, L->p2);
+            n = 4;
+        } else {
+            v[0] = L->p0; v[1] = L->p1; v[2] = L->p2;
+            n = 3;
+        }
+        centroid = dv(0, 0, 0);
+        for (i = 0; i < n; i++) centroid = dadd(centroid, dscale(v[i], 1.0 / n));
+        *axis = dnorm(dsub(centroid, o));
+        for (i = 0; i < n; i++) {
+            dv3 diff = dsub(dnorm(dsub(v[i], o)), *axis);
+            m = fmax(m, 0.5 * ddot(diff, diff));
+        }
+        *omc = fmin(2.0, m * 1.1 + 1e-12);
+    }
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* domains: equal-area maps of a set of directions to the unit square                          */
+
+typedef struct cone_ctx { dv3 axis, e1, e2; double omc; } cone_ctx;
+
+static int cone_to_unit(const void *ctx, dv3 w, double *x, double *y)
+{
+    const cone_ctx *c = (const cone_ctx *)ctx;
+    dv3 diff = dsub(w, c->axis);
+    double ch = 0.5 * ddot(diff, diff), phi;
+    if (ch > c->omc * (1.0 + 1e-4) + 1e-7) return 0;
+    *x = fmin(ch / c->omc, 1.0 - 1e-12);
+    phi = atan2(ddot(w, c->e2), ddot(w, c->e1));
+    if (phi < 0.0) phi += 2.0 * TU_PI;
+    *y = fmin(phi / (2.0 * TU_PI), 1.0 - 1e-12);
+    return 1;
+}
+
+static dv3 cone_from_unit(const void *ctx, double x, double y, double *jac)
+{
+    const cone_ctx *c = (const cone_ctx *)ctx;
+    double ch = x * c->omc, cos_t = 1.0 - ch, sin_t = sqrt(fmax(0.0, ch * (2.0 - ch))), phi = 2.0 * TU_PI * y;
+    *jac = 2.0 * TU_PI * c->omc;
+    return dnorm(dadd(dadd(dscale(c->e1, sin_t * cos(phi)), dscale(c->e2, sin_t * sin(phi))), dscale(c->axis, cos_t)));
+}
+
+static double cone_propose(const void *ctx, pt_rng *r, dv3 *w)
+{
+    const cone_ctx *c = (const cone_ctx *)ctx;
+    *w = tu_sample_cone(r, c->axis, c->omc);
+    return 1.0 / (2.0 * TU_PI * c->omc);
+}
+
+/* Planar lights: (a, b) of the parallelogram q + a u + b v, or Duffy's square-to-triangle map
+   p = A + x (B - A) + x y (C - B) (barycentrics beta = x (1 - y), gamma = x y). */
+static dv3 planar_point(const tu_light *L, double x, double y, double *dA)
+{
+    if (L->kind == TU_QUAD) {
+        *dA = tu_light_area(L);
+        return dadd(L->p0, dadd(dscale(L->p1, x), dscale(L->p2, y)));
+    }
+    *dA = 2.0 * tu_light_area(L) * x;
+    return dadd(L->p0, dadd(dscale(dsub(L->p1, L->p0), x), dscale(dsub(L->p2, L->p1), x * y)));
+}
+
+static int planar_to_unit(const void *ctx, dv3 w, double *x, double *y)
+{
+    const tu_planar_ctx *c = (const tu_planar_ctx *)ctx;
+    const double eps = 1e-2; /* float directions at grazing angles move the hit point by ~1e-3 */
+    dv3 q = c->L.p0, e1, e2, N, p, rel;
+    double t, a, b, nn;
+    if (c->L.kind == TU_QUAD) { e1 = c->L.p1; e2 = c->L.p2; }
+    else { e1 = dsub(c->L.p1, q); e2 = dsub(c->L.p2, q); }
+    N = dcross(e1, e2);
+    nn = ddot(N, N);
+    if (ddot(w, N) == 0.0) return 0;
+    t = ddot(dsub(q, c->o), N) / ddot(w, N);
+    if (t <= 0.0) return 0;
+    p = dadd(c->o, dscale(w, t));
+    rel = dsub(p, q);
+    a = ddot(dcross(rel, e2), N) / nn;
+    b = ddot(dcross(e1, rel), N) / nn;
+    if (c->L.kind == TU_QUAD) {
+        if (a < -eps || a > 1 + eps || b < -eps || b > 1 + eps) return 0;
+        *x = a; *y = b;
+    } else {
+        double u = a + b;
+        if (a < -eps || b < -eps || u > 1 + eps) return 0;
+        *x = u;
+        *y = u > 0.0 ? b / u : 0.0;
+    }
+    *x = fmin(fmax(*x, 0.0), 1.0 - 1e-12);
+    *y = fmin(fmax(*y, 0.0), 1.0 - 1e-12);
+    return 1;
+}
+
+static dv3 planar_from_unit(const void *ctx, double x, double y, double *jac)
+{
+    const tu_planar_ctx *c = (const tu_planar_ctx *)ctx;
+    double dA, d2, cosl;
+    dv3 p = planar_point(&c->L, x, y, &dA), v = dsub(p, c->o), N, w;
+    N = c->L.kind == TU_QUAD ? dcross(c->L.p1, c->L.p2) : dcross(dsub(c->L.p1, c->L.p0), dsub(c->L.p2, c->L.p0));
+    d2 = ddot(v, v);
+    w = dscale(v, 1.0 / sqrt(d2));
+    cosl = fabs(ddot(w, N)) / dlen(N);
+    *jac = dA * cosl / d2; /* d omega = cos dA / d^2 */
+    return w;
+}
+
+static double planar_propose(const void *ctx, pt_rng *r, dv3 *w)
+{
+    /* uniform area sampling of the light enlarged by 1.25 about its centroid */
+    const tu_planar_ctx *c = (const tu_planar_ctx *)ctx;
+    tu_light big = c->L;
+    double x = tu_rand(r), y = tu_rand(r), dA, d2, cosl, area;
+    dv3 p, v, N;
+    if (big.kind == TU_QUAD) {
+        dv3 centre = dadd(big.p0, dscale(dadd(big.p1, big.p2), 0.5));
+        big.p1 = dscale(big.p1, 1.25);
+        big.p2 = dscale(big.p2, 1.25);
+        big.p0 = dsub(centre, dscale(dadd(big.p1, big.p2), 0.5));
+    } else {
+        dv3 centre = dscale(dadd(dadd(big.p0, big.p1), big.p2), 1.0 / 3.0);
+        big.p0 = dadd(centre, dscale(dsub(big.p0, centre), 1.25));
+        big.p1 = dadd(centre, dscale(dsub(big.p1, centre), 1.25));
+        big.p2 = dadd(centre, dscale(dsub(big.p2, centre), 1.25));
+    }
+    if (big.kind == TU_TRIANGLE && x + y > 1.0) { x = 1.0 - x; y = 1.0 - y; }
+    area = tu_light_area(&big);
+    if (big.kind == TU_QUAD) p = dadd(big.p0, dadd(dscale(big.p1, x), dscale(big.p2, y)));
+    else p = dadd(big.p0, dadd(dscale(dsub(big.p1, big.p0), x), dscale(dsub(big.p2, big.p0), y)));
+    (void)dA;
+    v = dsub(p, c->o);
+    d2 = ddot(v, v);
+    *w = dscale(v, 1.0 / sqrt(d2));
+    N = big.kind == TU_QUAD ? dcross(big.p1, big.p2) : dcross(dsub(big.p1, big.p0), dsub(big.p2, big.p0));
+    cosl = fabs(ddot(*w, N)) / dlen(N);
+    return d2 / (cosl * area);
+}
+
+void tu_planar_domain(tu_domain *d, tu_planar_ctx *ctx, const tu_light *L, dv3 o)
+{
+    ctx->L = *L;
+    ctx->o = o;
+    d->to_unit = planar_to_unit;
+    d->from_unit = planar_from_unit;
+    d->propose = planar_propose;
+    d->ctx = ctx;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* the PDF checker                                                                             */
+
+/* Adaptive integration of pt_pdf_value * jacobian over a rectangle of the unit square. Two nested
+   midpoint rules (2x2 and 4x4) estimate the error; a rectangle is split in four while they
+   disagree by more than 2e-3 relative (plus a small absolute floor), while some of its points are
+   outside the support and some inside, or while `force` asks for it (cells beside the support
+   boundary, where a thin sliver of support can fall between all the points). */
+typedef struct grid_ctx { const pt_pdf *pdf; const tu_domain *dom; double floor; long evals; } grid_ctx;
+
+static double grid_value(grid_ctx *g, double x, double y)
+{
+    double jac;
+    dv3 w = g->dom->from_unit(g->dom->ctx, x, y, &jac);
+    float v = pt_pdf_value(g->pdf, dv_to(w));
+    g->evals++;
+    return isfinite(v) && v > 0.0f ? (double)v * jac : 0.0;
+}
+
+static double rect_integral(grid_ctx *g, double x0, double x1, double y0, double y1, int depth, int force)
+{
+    double i4 = 0.0, i16 = 0.0, area = (x1 - x0) * (y1 - y0);
+    int a, b, zeros = 0, n = 0;
+    for (a = 0; a < 2; a++)
+        for (b = 0; b < 2; b++) {
+            double v = grid_value(g, x0 + (a + 0.5) / 2 * (x1 - x0), y0 + (b + 0.5) / 2 * (y1 - y0));
+            i4 += v;
+            zeros += v == 0.0;
+            n++;
+        }
+    for (a = 0; a < 4; a++)
+        for (b = 0; b < 4; b++) {
+            double v = grid_value(g, x0 + (a + 0.5) / 4 * (x1 - x0), y0 + (b + 0.5) / 4 * (y1 - y0));
+            i16 += v;
+            zeros += v == 0.0;
+            n++;
+        }
+    i4 *= area / 4.0;
+    i16 *= area / 16.0;
+    if (depth < 5 && (force > 0 || (zeros > 0 && zeros < n) || fabs(i16 - i4) > 2e-3 * i16 + g->floor * area)) {
+        double xm = 0.5 * (x0 + x1), ym = 0.5 * (y0 + y1);
+        return rect_integral(g, x0, xm, y0, ym, depth + 1, force - 1) + rect_integral(g, xm, x1, y0, ym, depth + 1, force - 1) +
+               rect_integral(g, x0, xm, ym, y1, depth + 1, force - 1) + rect_integral(g, xm, x1, ym, y1, depth + 1, force - 1);
+    }
+    return i16;
+}
+
+int tu_check_pdf_(test_ctx *t, const tu_pdf_check *c, tu_pdf_result *res, const char *file, int line)
+{
+    const double cone_sa = 2.0 * TU_PI * c->omc;
+    const double z = tu_z_two_sided(c->alpha);
+    /* float densities carry absolute rounding error: allow 1e-6 of the density of a uniform cone */
+    const double abs_tol = 1e-6 / cone_sa;
+    const int ns = c->ns, nphi = c->nphi;
+    long *hist = NULL;
+    long i, succ = 0, fails = 0, bad_rc = 0, bad_fail_out = 0, nonfinite = 0, nonpositive = 0, nonunit = 0;
+    long mismatch = 0, ref_mismatch = 0, outside = 0, binned = 0, value_bad = 0, value_ref_mismatch = 0;
+    char example[200] = "", ref_example[200] = "", value_example[200] = "", out_example[200] = "";
+    tu_acc inv, mass;
+    cone_ctx cone;
+    tu_domain cone_dom;
+    const tu_domain *dom = c->domain;
+    pt_rng rng, rng2;
+    int ok = 1;
+    double F;
+
+    memset(&inv, 0, sizeof inv);
+    memset(&mass, 0, sizeof mass);
+    cone.axis = dnorm(c->axis);
+    cone.omc = c->omc;
+    tu_frame(cone.axis, &cone.e1, &cone.e2);
+    cone_dom.to_unit = cone_to_unit;
+    cone_dom.from_unit = cone_from_unit;
+    cone_dom.propose = cone_propose;
+    cone_dom.ctx = &cone;
+    if (!dom) dom = &cone_dom;
+    if (res) { res->chi2_p = 2.0; res->max_abs_z = 0.0; }
+    if (ns > 0) {
+        hist = (long *)calloc((size_t)ns * (size_t)nphi, sizeof *hist);
+        if (!CHECK_AT(t, file, line, hist != NULL, "%s: out of memory", c->label)) return 0;
+    }
+    pt_rng_seed(&rng, c->seed, 11);
+    pt_rng_seed(&rng2, c->seed, 12);
+
+    /* (a) the samples */
+    for (i = 0; i < c->n_samples; i++) {
+        pt_vec3 d = pt_v3(-7.0f, -7.0f, -7.0f);
+        float pv = -7.0f, v;
+        int rc = pt_pdf_sample(c->pdf, &rng, &d, &pv), near = 0;
+        double r = -1.0, len, x, y;
+        dv3 w;
+        if (rc != 0 && rc != 1) { bad_rc++; continue; }
+        if (rc == 0) {
+            fails++;
+            if (d.x != 0.0f || d.y != 0.0f || d.z != 0.0f || pv != 0.0f) bad_fail_out++;
+            continue;
+        }
+        succ++;
+        if (!isfinite(d.x) || !isfinite(d.y) || !isfinite(d.z) || !isfinite(pv)) { nonfinite++; continue; }
+        if (!(pv > 0.0f)) { nonpositive++; continue; }
+        len = dlen(dv_from(d));
+        if (fabs(len - 1.0) > 1e-5) nonunit++;
+        w = dnorm(dv_from(d));
+        v = pt_pdf_value(c->pdf, d);
+        if (c->ref) r = c->ref(c->ref_ctx, w, &near);
+        if (!isfinite(v)) nonfinite++;
+        else if (fabs((double)v - (double)pv) > 1e-4 * fmax(v, pv) && !near) {
+            if (mismatch++ == 0)
+                snprintf(example, sizeof example, "sample (%.9g, %.9g, %.9g) pdf %.9g, pt_pdf_value %.9g", d.x, d.y,
+                         d.z, pv, v);
+        }
+        if (r >= 0.0 && !near && fabs(pv - r) > 1e-3 * r + abs_tol) {
+            if (ref_mismatch++ == 0)
+                snprintf(ref_example, sizeof ref_example, "sample (%.9g, %.9g, %.9g) pdf %.9g, closed form %.9g",
+                         d.x, d.y, d.z, pv, r);
+        }
+        if (!cone_to_unit(&cone, w, &x, &y) || !dom->to_unit(dom->ctx, w, &x, &y)) {
+            if (outside++ == 0)
+                snprintf(out_example, sizeof out_example, "(%.9g, %.9g, %.9g) pdf %.9g", d.x, d.y, d.z, pv);
+            continue;
+        }
+        tu_acc_add(&inv, 1.0 / pv);
+        if (hist) {
+            int si = (int)(x * ns), pj = (int)(y * nphi);
+            if (si >= ns) si = ns - 1;
+            if (pj >= nphi) pj = nphi - 1;
+            hist[(long)si * nphi + pj]++;
+            binned++;
+        }
+    }
+
+    /* pt_pdf_value at directions from the proposal: finite, >= 0, equal to the closed form; and
+       the mass \int p = E[p(W) / q(W)] for W drawn from the proposal q, which covers the support */
+    for (i = 0; i < c->n_mass; i++) {
+        dv3 w0;
+        double q = dom->propose(dom->ctx, &rng2, &w0), r;
+        dv3 w = dnorm(dv_from(dv_to(w0)));
+        float v = pt_pdf_value(c->pdf, dv_to(w));
+        int near = 0;
+        if (!isfinite(v) || v < 0.0f) {
+            if (value_bad++ == 0)
+                snprintf(value_example, sizeof value_example, "pt_pdf_value(%.9g, %.9g, %.9g) = %g", w.x, w.y, w.z, v);
+            continue;
+        }
+        tu_acc_add(&mass, (double)v / q);
+        if (c->ref) {
+            r = c->ref(c->ref_ctx, w, &near);
+            if (r >= 0.0 && !near && (r == 0.0 ? v != 0.0f : fabs(v - r) > 1e-3 * r + abs_tol)) {
+                if (value_ref_mismatch++ == 0)
+                    snprintf(value_example, sizeof value_example,
+                             "pt_pdf_value(%.9g, %.9g, %.9g) = %.9g, closed form %.9g", w.x, w.y, w.z, v, r);
+            }
+        }
+    }
+
+    ok &= CHECK_AT(t, file, line, bad_rc == 0, "%s: pt_pdf_sample returned neither 0 nor 1 (%ld times)", c->label, bad_rc);
+    ok &= CHECK_AT(t, file, line, bad_fail_out == 0, "%s: a failed draw left non-zero dir/pdf (%ld times)", c->label,
+                   bad_fail_out);
+    ok &= CHECK_AT(t, file, line, nonfinite == 0, "%s: %ld non-finite samples or densities", c->label, nonfinite);
+    ok &= CHECK_AT(t, file, line, nonpositive == 0, "%s: %ld successful samples with density <= 0", c->label, nonpositive);
+    ok &= CHECK_AT(t, file, line, nonunit == 0, "%s: %ld sampled directions not unit length (1e-5)", c->label, nonunit);
+    ok &= CHECK_AT(t, file, line, mismatch == 0, "%s: %ld of %ld sample densities differ from pt_pdf_value (rel 1e-4), e.g. %s",
+                   c->label, mismatch, succ, example);
+    ok &= CHECK_AT(t, file, line, ref_mismatch == 0,
+                   "%s: %ld of %ld sample densities differ from the closed form (rel 1e-3), e.g. %s", c->label,
+                   ref_mismatch, succ, ref_example);
+    ok &= CHECK_AT(t, file, line, outside == 0, "%s: %ld samples outside the support, e.g. %s", c->label, outside,
+                   out_example);
+    ok &= CHECK_AT(t, file, line, value_bad == 0, "%s: %ld pt_pdf_value results negative or non-finite, e.g. %s",
+                   c->label, value_bad, value_example);
+    ok &= CHECK_AT(t, file, line, value_ref_mismatch == 0,
+                   "%s: pt_pdf_value differs from the closed form at %ld of %ld directions (rel 1e-3), e.g. %s",
+                   c->label, value_ref_mismatch, c->n_mass, value_example);
+
+    /* (b) mass */
+    F = c->n_samples > 0 ? (double)succ / (double)c->n_samples : 0.0;
+    if (res) { res->success_fraction = F; res->mass = mass.mean; res->inv_pdf_mean = inv.mean; }
+    if (c->expected_mass >= 0.0) {
+        double M = c->expected_mass, se = sqrt(M * (1.0 - M) / (double)c->n_samples);
+        /* 1e-4: allowance for draws rejected for numerical reasons (a bias below 1e-4) */
+        ok &= CHECK_AT(t, file, line, fabs(F - M) <= z * se + 1e-4,
+                       "%s: %ld of %ld draws succeeded (%.6f), expected mass %.6f (z limit %.2f)", c->label, succ,
+                       c->n_samples, F, M, z);
+        if (se > 0 && res) res->max_abs_z = fmax(res->max_abs_z, fabs(F - M) / se);
+        if (c->n_mass > 0) {
+            double sem = tu_acc_se(&mass);
+            ok &= CHECK_AT(t, file, line, fabs(mass.mean - M) <= z * sem + 1e-5 * M,
+                           "%s: integral of pt_pdf_value over the sphere %.6f +- %.6f, expected %.6f (z limit %.2f)",
+                           c->label, mass.mean, sem, M, z);
+            if (sem > 0 && res) res->max_abs_z = fmax(res->max_abs_z, fabs(mass.mean - M) / sem);
+        }
+    }
+    if (c->n_mass > 0 && c->n_samples > 0) {
+        double se = sqrt(tu_acc_var(&mass) / mass.n + F * (1.0 - F) / (double)c->n_samples);
+        ok &= CHECK_AT(t, file, line, fabs(mass.mean - F) <= z * se + 1e-4,
+                       "%s: integral of pt_pdf_value %.6f but fraction of successful draws %.6f (se %.2g)", c->label,
+                       mass.mean, F, se);
+        if (se > 0 && res) res->max_abs_z = fmax(res->max_abs_z, fabs(mass.mean - F) / se);
+    }
+    if (c->support > 0.0 && inv.n > 1) {
+        double se = tu_acc_se(&inv);
+        ok &= CHECK_AT(t, file, line, fabs(inv.mean - c->support) <= z * se + 1e-5 * c->support,
+                       "%s: mean of 1/pdf %.9g +- %.3g, expected the support's solid angle %.9g (z limit %.2f)",
+                       c->label, inv.mean, se, c->support, z);
+        if (se > 0 && res) res->max_abs_z = fmax(res->max_abs_z, fabs(inv.mean - c->support) / se);
+    }
+
+    /* (c) chi-square */
+    if (hist && binned > 0) {
+        double *I = (double *)malloc((size_t)ns * (size_t)nphi * sizeof *I);
+        char *flag = (char *)calloc((size_t)ns * (size_t)nphi, 1);
+        double total = 0.0, chi2 = 0.0, pool_e = 0.0, pool_o = 0.0, p;
+        int cells = 0, si, pj, refined = 0;
+        grid_ctx grid;
+        if (!CHECK_AT(t, file, line, I != NULL && flag != NULL, "%s: out of memory", c->label)) {
+            free(I); free(flag); free(hist); return 0;
+        }
+        grid.pdf = c->pdf;
+        grid.dom = dom;
+        grid.floor = 1e-4 * (c->expected_mass > 0 ? c->expected_mass : 1.0);
+        grid.evals = 0;
+        for (si = 0; si < ns; si++)
+            for (pj = 0; pj < nphi; pj++)
+                I[si * nphi + pj] = rect_integral(&grid, (double)si / ns, (double)(si + 1) / ns, (double)pj / nphi,
+                                                  (double)(pj + 1) / nphi, 0, 0);
+        /* cells on either side of the support boundary: integrate again with forced refinement */
+        for (si = 0; si < ns; si++) {
+            for (pj = 0; pj < nphi; pj++) {
+                int di, dj, boundary = 0;
+                for (di = -1; di <= 1; di++)
+                    for (dj = -1; dj <= 1; dj++) {
+                        int ni = si + di, nj = pj + dj;
+                        if (dom == &cone_dom) nj = (nj + nphi) % nphi; /* phi wraps around */
+                        if (ni < 0 || ni >= ns || nj < 0 || nj >= nphi) continue;
+                        if ((I[ni * nphi + nj] > 0.0) != (I[si * nphi + pj] > 0.0)) boundary = 1;
+                    }
+                if (boundary) { flag[si * nphi + pj] = 1; refined++; }
+            }
+        }
+        for (si = 0; si < ns; si++)
+            for (pj = 0; pj < nphi; pj++)
+                if (flag[si * nphi + pj])
+                    I[si * nphi + pj] = rect_integral(&grid, (double)si / ns, (double)(si + 1) / ns, (double)pj / nphi,
+                                                      (double)(pj + 1) / nphi, 0, 3);
+        for (si = 0; si < ns * nphi; si++) total += I[si];
+        ok &= CHECK_AT(t, file, line, total > 0.0, "%s: pt_pdf_value integrates to zero over the domain", c->label);
+        if (total > 0.0) {
+            for (si = 0; si < ns * nphi; si++) {
+                double e = (double)binned * I[si] / total, o = (double)hist[si];
+                if (e >= 5.0) {
+                    chi2 += (o - e) * (o - e) / e;
+                    cells++;
+                    if (getenv("PT_TEST_DEBUG") && (o - e) * (o - e) / e > 9)
+                        printf("      cell %d,%d expected %.1f observed %.0f\n", si / nphi, si % nphi, e, o);
+                } else {
+                    pool_e += e;
+                    pool_o += o;
+                }
+            }
+            if (pool_e >= 5.0) { chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e; cells++; }
+            else {
+                ok &= CHECK_AT(t, file, line, pool_o <= pool_e + 5.0 * sqrt(pool_e) + 5.0,
+                               "%s: %.0f samples in cells where the density integrates to %.3g expected samples",
+                               c->label, pool_o, pool_e);
+            }
+            p = cells > 1 ? tu_chi2_sf(chi2, cells - 1) : 1.0;
+            if (res) res->chi2_p = p;
+            ok &= CHECK_AT(t, file, line, p >= c->alpha,
+                           "%s: chi-square %.1f with %d dof, p = %.3g < alpha %.3g (samples do not follow pt_pdf_value)",
+                           c->label, chi2, cells - 1, p, c->alpha);
+            if (tu_verbose())
+                printf("    %s: chi2 %.1f dof %d p %.4f (%d boundary cells, %ld evaluations, integral %.6f)\n",
+                       c->label, chi2, cells - 1, p, refined, grid.evals, total);
+        }
+        free(I);
+        free(flag);
+    }
+    if (tu_verbose())
+        printf("    %s: success %.6f, mass %.6f +- %.6f (exp %.6f), E[1/p] %.6g +- %.3g (exp %.6g)\n", c->label, F,
+               mass.mean, tu_acc_se(&mass), c->expected_mass, inv.mean, tu_acc_se(&inv), c->support);
+    free(hist);
+    return ok;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* films                                                                                       */
+
+int tu_film_regions(const pt_film *f, int rx, int ry, tu_region *out)
+{
+    int i, j, x, y, k;
+    for (j = 0; j < ry; j++) {
+        for (i = 0; i < rx; i++) {
+            tu_region *r = &out[j * rx + i];
+            double var[3] = { 0, 0, 0 };
+            int x0 = i * f->width / rx, x1 = (i + 1) * f->width / rx;
+            int y0 = j * f->height / ry, y1 = (j + 1) * f->height / ry;
+            memset(r, 0, sizeof *r);
+            for (y = y0; y < y1; y++) {
+                for (x = x0; x < x1; x++) {
+                    pt_color m, v;
+                    if (pt_film_pixel(f, x, y, &m, &v) != PT_OK) return 0;
+                    r->mean[0] += m.x; r->mean[1] += m.y; r->mean[2] += m.z;
+                    var[0] += v.x; var[1] += v.y; var[2] += v.z;
+                    r->pixels++;
+                }
+            }
+            for (k = 0; k < 3; k++) {
+                r->mean[k] /= r->pixels;
+                r->se[k] = sqrt(var[k]) / r->pixels;
+            }
+        }
+    }
+    return 1;
+}
+
+int tu_film_equal(const pt_film *a, const pt_film *b)
+{
+    size_t n;
+    if (a->width != b->width || a->height != b->height) return 0;
+    n = (size_t)a->width * (size_t)a->height;
+    return memcmp(a->sum, b->sum, n * 3 * sizeof(double)) == 0 &&
+           memcmp(a->sum_sq, b->sum_sq, n * 3 * sizeof(double)) == 0 &&
+           memcmp(a->count, b->count, n * sizeof(uint32_t)) == 0;
+}

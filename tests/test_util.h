@@ -1,0 +1,141 @@
+/* test_util.h - statistics, double-precision geometry and the PDF checker shared by the tests.
+   Everything here is independent of the library's own math (the library is only called to
+   draw samples and evaluate densities), so the tests compare against separate code. */
+#ifndef PDFTRACE_TEST_UTIL_H
+#define PDFTRACE_TEST_UTIL_H
+
+#include <stdint.h>
+#include <math.h>
+#include "pdftrace.h"
+#include "test.h"
+
+#define TU_PI 3.14159265358979323846
+
+/* ---- double-precision vectors ---- */
+typedef struct dv3 { double x, y, z; } dv3;
+static inline dv3 dv(double x, double y, double z) { dv3 r; r.x = x; r.y = y; r.z = z; return r; }
+static inline dv3 dv_from(pt_vec3 v) { return dv(v.x, v.y, v.z); }
+static inline pt_vec3 dv_to(dv3 v) { return pt_v3((float)v.x, (float)v.y, (float)v.z); }
+static inline dv3 dadd(dv3 a, dv3 b) { return dv(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline dv3 dsub(dv3 a, dv3 b) { return dv(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline dv3 dscale(dv3 a, double s) { return dv(a.x * s, a.y * s, a.z * s); }
+static inline double ddot(dv3 a, dv3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline dv3 dcross(dv3 a, dv3 b)
+{
+    return dv(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double dlen(dv3 a) { return sqrt(ddot(a, a)); }
+static inline dv3 dnorm(dv3 a) { double l = dlen(a); return l > 0 ? dscale(a, 1.0 / l) : a; }
+
+/* ---- random numbers for the tests (PCG32 from the header; its quality is tested in test_rng.c) ---- */
+double tu_rand(pt_rng *r);                 /* uniform double in [0, 1), 53 bits */
+dv3 tu_rand_dir(pt_rng *r);                /* uniform on the unit sphere (Archimedes: z uniform) */
+void tu_frame(dv3 axis, dv3 *e1, dv3 *e2); /* right-handed (e1, e2, axis), own construction */
+/* Uniform direction in the cone 1 - cos(theta) <= omc about axis (omc = 2: whole sphere). */
+dv3 tu_sample_cone(pt_rng *r, dv3 axis, double omc);
+
+/* ---- statistics ---- */
+double tu_sidak(double alpha, int k);      /* per-test level for family-wise alpha over k tests */
+double tu_z_two_sided(double alpha);       /* z with P(|Z| > z) = alpha, Z standard normal */
+double tu_chi2_sf(double x, double dof);   /* P(X > x) for X ~ chi-square(dof) */
+
+typedef struct tu_acc { double n, mean, m2; } tu_acc; /* Welford running mean and variance */
+void tu_acc_add(tu_acc *a, double x);
+double tu_acc_var(const tu_acc *a);        /* unbiased sample variance */
+double tu_acc_se(const tu_acc *a);         /* standard error of the mean */
+
+/* ---- closed forms ---- */
+/* Solid angle of triangle abc seen from o (Van Oosterom & Strackee, IEEE TBME 30(2), 1983). */
+double tu_solid_angle_triangle(dv3 o, dv3 a, dv3 b, dv3 c);
+/* Irradiance at x (normal n) from a uniform Lambertian polygon of unit radiance, Lambert's polygon
+   formula E = 1/2 sum_i Theta_i (n . g_i), Theta_i = atan2(|u_i x u_i+1|, u_i . u_i+1). The polygon
+   must lie above the tangent plane. */
+double tu_lambert_polygon(dv3 x, dv3 n, const dv3 *verts, int count);
+/* Unpolarised Fresnel reflectance for a dielectric interface (exact, from Snell's law). */
+double tu_fresnel_dielectric(double cos_i, double eta_i, double eta_t);
+
+/* Lights as seen by a light-sampling PDF (area or cone sampling converted to solid angle). */
+enum { TU_SPHERE, TU_QUAD, TU_TRIANGLE };
+typedef struct tu_light {
+    int kind;
+    dv3 p0, p1, p2;  /* sphere: center; quad: q, u, v; triangle: a, b, c */
+    double radius;
+    int two_sided;
+} tu_light;
+/* Density in sr^-1 of the light's sampling PDF at unit direction w from o. *near is set when w is
+   within float precision of the support boundary. Returns -1 when the reference is undefined
+   (a shading point on the surface of a sphere light, where either model is valid). */
+double tu_light_density(const tu_light *L, dv3 o, dv3 w, int *near);
+double tu_light_solid_angle(const tu_light *L, dv3 o); /* measure of {density > 0} */
+void tu_light_cone(const tu_light *L, dv3 o, dv3 *axis, double *omc); /* a cone containing it */
+double tu_light_area(const tu_light *L);
+/* Where the ray o + t w first hits the light (t > 0), or -1. */
+double tu_light_hit(const tu_light *L, dv3 o, dv3 w);
+
+/* ---- the PDF checker ----
+   For one pt_pdf it checks
+   (a) every sample: return value 0/1, unit direction, finite density > 0 equal to pt_pdf_value of
+       the direction (relative 1e-4) and to the closed form (relative 1e-3); failed draws give zero
+       outputs; no sample outside the cone that contains the support;
+   (b) mass: the fraction of successful draws, an importance-sampled Monte Carlo estimate of \int p
+       (mean of p/q over directions from a proposal q that covers the support: uniform in the cone,
+       or area sampling of an enlarged planar light) and the expected mass agree; the mean of 1/pdf
+       over the samples equals the measure of the support;
+   (c) shape: a Pearson chi-square test of the sample histogram on a grid over the domain's unit
+       square against N * \int_cell p (adaptive midpoint rule, refined at the support boundary);
+   and pt_pdf_value against the closed form at the proposal's directions.
+   Each case makes TU_PDF_COMPARISONS statistical comparisons at level alpha each. */
+typedef double (*tu_density_fn)(const void *ctx, dv3 w, int *near);
+
+/* The set of directions a check works on, as an equal-measure map to the unit square (for the
+   histogram), with a proposal density covering it (for the mass estimate). The default is the cone
+   (axis, omc) with coordinates ((1 - cos theta)/omc, phi/2pi) and uniform cone sampling. */
+typedef struct tu_domain {
+    int (*to_unit)(const void *ctx, dv3 w, double *x, double *y);      /* 0: w is outside */
+    dv3 (*from_unit)(const void *ctx, double x, double y, double *jac); /* jac = d omega / dx dy */
+    double (*propose)(const void *ctx, pt_rng *r, dv3 *w);             /* returns q(w) in sr^-1 */
+    const void *ctx;
+} tu_domain;
+/* A planar light's own parametrisation: (a, b) of a parallelogram, Duffy's map for a triangle; the
+   proposal is uniform area sampling of the light enlarged 1.25x about its centroid. Robust for the
+   thin slivers that grazing views produce, where a cone histogram has no resolution. */
+typedef struct tu_planar_ctx { tu_light L; dv3 o; } tu_planar_ctx;
+void tu_planar_domain(tu_domain *d, tu_planar_ctx *ctx, const tu_light *L, dv3 o);
+
+typedef struct tu_pdf_check {
+    const char *label;
+    const pt_pdf *pdf;
+    dv3 axis;
+    double omc;              /* cone 1 - cos(theta) <= omc containing the support; 2 = whole sphere */
+    const tu_domain *domain; /* NULL: the cone */
+    double expected_mass;    /* \int p over the sphere; < 0: unknown */
+    double support;          /* solid angle of {p > 0}; <= 0: skip E[1/p] (e.g. infinite variance) */
+    tu_density_fn ref;       /* closed form, or NULL */
+    const void *ref_ctx;
+    long n_samples, n_mass;
+    int ns, nphi;            /* chi-square grid; ns = 0 skips the chi-square test */
+    uint64_t seed;
+    double alpha;            /* per comparison */
+} tu_pdf_check;
+
+#define TU_PDF_COMPARISONS 5
+
+typedef struct tu_pdf_result {
+    double chi2_p;           /* 2 when not run */
+    double max_abs_z;        /* over the z comparisons */
+    double success_fraction, mass, inv_pdf_mean;
+} tu_pdf_result;
+
+int tu_check_pdf_(test_ctx *t, const tu_pdf_check *c, tu_pdf_result *res, const char *file, int line);
+#define TU_CHECK_PDF(t, c, res) tu_check_pdf_((t), (c), (res), __FILE__, __LINE__)
+
+/* ---- films ---- */
+typedef struct tu_region { double mean[3], se[3]; int pixels; } tu_region;
+/* Splits the film into rx * ry regions (row-major, region 0 top-left) and computes each region's
+   mean and its standard error from pt_film_pixel's per-pixel variance of the mean. */
+int tu_film_regions(const pt_film *f, int rx, int ry, tu_region *out);
+int tu_film_equal(const pt_film *a, const pt_film *b); /* bit-identical sums, squares and counts */
+
+int tu_verbose(void); /* PT_TEST_VERBOSE set: print per-case details */
+
+#endif
