@@ -35,7 +35,7 @@ WARN_CFLAGS  ?= -std=c99 -O2 -Wall -Wextra -pedantic -Werror
 WARN_CXXFLAGS ?= -x c++ -O2 -Wall -Wextra -pedantic -Werror
 
 # make run: samples per pixel and any other options for build/cornell.
-RUN_SPP  ?= 64
+RUN_SPP  ?= 128
 RUN_ARGS ?=
 
 EXAMPLES     := minimal cornell custom_pdf
@@ -89,6 +89,8 @@ nothreads-test: $(BUILD)/test_runner_nothreads
 	./$(BUILD)/test_runner_nothreads
 
 # ---- warnings: each example is a complete program with the implementation included.
+# The PDFTRACE_STATIC build is checked with -Wno-unused-function: every public function a
+# file does not call is then an unused static function.
 
 check-warnings: | $(BUILD)
 	@set -e; for cc in $(WARN_CC); do \
@@ -98,6 +100,8 @@ check-warnings: | $(BUILD)
 	    done; \
 	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS examples/minimal.c"; \
 	    $$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS $(PT_CPPFLAGS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-nothreads.o; \
+	    echo "$$cc $(WARN_CFLAGS) -Wno-unused-function -DPDFTRACE_STATIC examples/minimal.c"; \
+	    $$cc $(WARN_CFLAGS) -Wno-unused-function -DPDFTRACE_STATIC $(PT_CPPFLAGS) $(PT_THREADS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-static.o; \
 	done; \
 	for cxx in $(WARN_CXX); do \
 	    echo "$$cxx $(WARN_CXXFLAGS) examples/cpp_check.cpp (then run it)"; \

@@ -102,7 +102,7 @@ static void usage(FILE *f)
         "\n"
         "  -w, --width N         image width in pixels (default 600)\n"
         "  -h, --height N        image height in pixels (default 600)\n"
-        "      --spp N           samples per pixel (default 64)\n"
+        "      --spp N           samples per pixel (default 128)\n"
         "      --strategy S      mis | material | light | mixture (default mis)\n"
         "      --light-weight W  light PDF weight of the mixture strategy, in (0, 1] (default 0.5)\n"
         "      --max-depth N     maximum scattering events per path (default 50)\n"
@@ -236,7 +236,7 @@ static int parse_options(int argc, char **argv, options *o)
     int i;
     o->width = 600;
     o->height = 600;
-    o->spp = 64;
+    o->spp = 128;
     o->strategy = PT_STRATEGY_MIS;
     o->light_weight = 0.5f;
     o->max_depth = 50;
@@ -319,13 +319,14 @@ static int parse_options(int argc, char **argv, options *o)
    Progress and statistics
    --------------------------------------------------------------------------------------- */
 
+/* One line, rewritten in place with \r on a terminal; one line per pass in a log file. */
 static int show_progress(void *user, const pt_progress *p)
 {
+    int tty = *(const int *)user;
     double percent = p->samples_total ? 100.0 * (double)p->samples_done / (double)p->samples_total : 100.0;
     double rate = p->seconds > 0 ? (double)p->samples_done / p->seconds : 0.0;
-    (void)user;
-    fprintf(stderr, "\rpass %d/%d  %5.1f%%  %7.2f s  %.2f M samples/s   ", p->pass, p->pass_count, percent,
-            p->seconds, rate * 1e-6);
+    fprintf(stderr, "%spass %d/%d  %5.1f%%  %7.2f s  %.2f M samples/s%s", tty ? "\r" : "", p->pass, p->pass_count,
+            percent, p->seconds, rate * 1e-6, tty ? "   " : "\n");
     fflush(stderr);
     return 0; /* never cancel */
 }
@@ -337,8 +338,8 @@ static void print_stats(const options *o, const pt_render_stats *st)
     printf("image      %d x %d, %d spp, strategy %s", o->width, o->height, o->spp, strategy_name(o->strategy));
     if (o->strategy == PT_STRATEGY_MIXTURE) printf(" (light weight %g)", (double)o->light_weight);
     printf(", max depth %d, seed %llu\n", o->max_depth, (unsigned long long)o->seed);
-    printf("time       %.3f s on %d thread%s, %d passes\n", st->seconds, st->threads, st->threads == 1 ? "" : "s",
-           st->passes);
+    printf("time       %.3f s on %d thread%s, %d pass%s\n", st->seconds, st->threads, st->threads == 1 ? "" : "s",
+           st->passes, st->passes == 1 ? "" : "es");
     printf("samples    %llu (%.3f M samples/s)\n", (unsigned long long)st->samples, (double)st->samples / secs * 1e-6);
     printf("rays       %llu camera + %llu bounce + %llu shadow = %llu\n", (unsigned long long)st->camera_rays,
            (unsigned long long)st->bounce_rays, (unsigned long long)st->shadow_rays, (unsigned long long)rays);
@@ -358,6 +359,7 @@ int main(int argc, char **argv)
     pt_render_stats stats;
     pt_image image = {0};
     int rc, i, status = 0;
+    int stderr_is_tty = isatty(STDERR_FILENO);
 
     rc = parse_options(argc, argv, &opt);
     if (rc == 2) return 0;
@@ -385,10 +387,13 @@ int main(int argc, char **argv)
     desc.threads = opt.threads;
     desc.seed = opt.seed;
     set_cornell_camera(&desc);
-    if (!opt.quiet) desc.progress = show_progress;
+    if (!opt.quiet) {
+        desc.progress = show_progress;
+        desc.progress_user = &stderr_is_tty;
+    }
 
     rc = pt_render_image(scene, &desc, &image, &stats);
-    if (!opt.quiet) fputc('\n', stderr);
+    if (!opt.quiet && stderr_is_tty) fputc('\n', stderr);
     if (rc != PT_OK) {
         fprintf(stderr, "%s: rendering failed: %s\n", prog, pt_result_string(rc));
         status = 1;

@@ -26,7 +26,7 @@ int main(int argc, char **argv)
     }
     d.width = 320; d.height = 240; d.samples_per_pixel = 64;
     d.camera.look_from = pt_v3(0, 2, -8); d.camera.look_at = pt_v3(0, 1, 0);
-    d.background = pt_v3(0.05f, 0.05f, 0.08f); /* a faint sky */
+    d.background = pt_v3(0.01f, 0.01f, 0.02f); /* a faint night sky */
     if ((rc = pt_render_image(s, &d, &img, &st)) == PT_OK && (rc = pt_write_ppm(path, &img)) == PT_OK)
         printf("wrote %s: %dx%d, %d spp in %.2f s\n", path, d.width, d.height, d.samples_per_pixel, st.seconds);
     else
