@@ -972,11 +972,25 @@ static int pt__sphere_inside(pt_vec3 o, pt_vec3 c, float r)
     pt_vec3 wc = pt_sub(c, o);
     return pt_length2(wc) <= r * r;
 }
+/* Whether the float direction w lies in the cone of directions from the origin that meet the
+   sphere (wc = centre - origin): sin^2 of the angle from the cross product, in double, so the
+   test is exact for the given float w and stays accurate for tiny angles (no tolerance band:
+   a band would add mass to the density of tiny, distant spheres). */
+static int pt__in_cone(pt_vec3 w, pt_vec3 wc, float r)
+{
+    double wx = w.x, wy = w.y, wz = w.z, cx = wc.x, cy = wc.y, cz = wc.z;
+    double xx = wy * cz - wz * cy, yy = wz * cx - wx * cz, zz = wx * cy - wy * cx;
+    double ww = wx * wx + wy * wy + wz * wz;
+    if (wx * cx + wy * cy + wz * cz <= 0.0) return 0;
+    /* |w x wc|^2 / (|w|^2 |wc|^2) <= r^2 / |wc|^2 */
+    return xx * xx + yy * yy + zz * zz <= (double)r * (double)r * ww;
+}
 static float pt__cone_one_minus_cos(float s2)
 {
     float cosmax = pt__safe_sqrt(1.0f - s2);
     return s2 / (1.0f + cosmax);
 }
+static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w, float t_known);
 static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided, float u1, float u2,
                                    pt__light_sample *ls)
 {
@@ -991,6 +1005,16 @@ static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided,
         pt_onb b = pt_onb_from_normal(pt_scale(wc, 1.0f / d));
         if (!(omc > 0.0f)) return 0;
         ls->dir = pt_normalize(pt_onb_to_world(&b, pt_v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t)));
+        {
+            /* a sample at the rim can round to just outside the cone; nudge it towards the axis
+               (by a fraction of the cone's angle far below float resolution elsewhere) so that
+               sample and value agree for every direction */
+            int k;
+            float step = 1e-4f;
+            for (k = 0; k < 24 && !pt__in_cone(ls->dir, wc, r); ++k, step *= 2.0f)
+                ls->dir = pt_normalize(pt_add(ls->dir, pt_scale(pt_sub(b.n, ls->dir), step)));
+            if (!pt__in_cone(ls->dir, wc, r)) return 0;
+        }
         ls->pdf = 1.0f / (2.0f * PT__PI * omc);
         /* distance to the near intersection: d (cos - sqrt(s^2 - sin^2)) */
         t = d * (cos_t - pt__safe_sqrt(s2 - sin2_t));
@@ -1002,13 +1026,14 @@ static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided,
     if (!two_sided) return 0;
     {
         pt_vec3 n = pt_sample_uniform_sphere(u1, u2), p = pt_madd(c, n, r), v = pt_sub(p, o);
-        float dist2 = pt_length2(v), dist, cosl;
+        float dist2 = pt_length2(v), dist;
         if (!(dist2 > 0.0f)) return 0;
         dist = sqrtf(dist2);
         ls->dir = pt_scale(v, 1.0f / dist);
-        cosl = fabsf(pt_dot(n, ls->dir));
-        if (!(cosl > 0.0f)) return 0;
-        ls->pdf = dist2 / (cosl * 4.0f * PT__PI * r * r);
+        /* the density of a uniform area sample, dist^2 / (|cos| A), in the closed form that
+           pt__sphere_light_value uses, so that sample and value agree */
+        ls->pdf = pt__sphere_light_value(o, c, r, 1, ls->dir, -1.0f);
+        if (!(ls->pdf > 0.0f)) return 0;
         ls->dist = dist;
         ls->point = p;
         ls->normal = n;
@@ -1022,33 +1047,26 @@ static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided
     pt_vec3 wc = pt_sub(c, o);
     float d2 = pt_length2(wc);
     if (d2 > r * r) {
-        float s2 = (r * r) / d2, sin2, tol;
-        if (pt_dot(w, wc) <= 0.0f) return 0.0f;
-        /* sin^2 of the angle to the centre from the cross product: accurate for tiny angles.
-           The tolerance covers a few ulps of error in unit directions at the cone's rim. */
-        sin2 = pt_length2(pt_cross(w, wc)) / d2;
-        tol = 8.0f * FLT_EPSILON * (sqrtf(s2) + s2);
-        if (sin2 > s2 + tol) return 0.0f;
+        float s2 = (r * r) / d2;
+        if (!pt__in_cone(w, wc, r)) return 0.0f;
         return 1.0f / (2.0f * PT__PI * pt__cone_one_minus_cos(s2));
     }
     if (!two_sided) return 0.0f;
     {
-        float t = t_known, cosl;
-        pt_vec3 p, n;
-        if (t < 0.0f) {
-            /* far root of |o + t w - c|^2 = r^2 from inside: t = b + sqrt(b^2 + r^2 - d^2) */
-            float bq = pt_dot(w, wc);
-            pt_vec3 l = pt_sub(wc, pt_scale(w, bq));   /* Haines et al.: perpendicular part */
-            float disc = (r - pt_length(l)) * (r + pt_length(l));
-            if (disc < 0.0f) disc = 0.0f;
-            t = bq + sqrtf(disc);
-        }
-        if (!(t > 0.0f)) return 0.0f;
-        p = pt_madd(o, w, t);
-        n = pt_normalize(pt_sub(p, c));
-        cosl = fabsf(pt_dot(n, w));
-        if (!(cosl > 0.0f)) return 0.0f;
-        return (t * t) / (cosl * 4.0f * PT__PI * r * r);
+        /* From inside or on the sphere (unit w, b = w.(c - o)): the far root of
+           |o + t w - c|^2 = r^2 is t = b + sqrt(D), D = r^2 - |c - o|^2 + b^2, and the cosine
+           at the light point is (p - c).w / r = sqrt(D) / r. Both in double and in closed form:
+           from a point on the surface D = b^2 exactly, where the float discriminant of a
+           ray-sphere test cancels to zero at grazing angles and the density would explode. */
+        double b = (double)w.x * wc.x + (double)w.y * wc.y + (double)w.z * wc.z;
+        double dd = (double)wc.x * wc.x + (double)wc.y * wc.y + (double)wc.z * wc.z;
+        double D = (double)r * r - dd + b * b, sD, t;
+        (void)t_known;
+        if (!(D > 0.0)) return 0.0f;
+        sD = sqrt(D);
+        t = b + sD;
+        if (!(t > 0.0)) return 0.0f;
+        return (float)((t * t) / (4.0 * 3.14159265358979323846 * (double)r * sD));
     }
 }
 
