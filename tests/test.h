@@ -23,6 +23,7 @@ typedef struct test_ctx {
     const char *file;      /* location of the first failure */
     int line;
     char notes[1024];      /* details printed with PASS (and with FAIL, after the reason) */
+    char more[5][320];     /* the next few failures, printed below the FAIL line */
 } test_ctx;
 
 typedef void (*test_fn)(test_ctx *t);

@@ -21,14 +21,19 @@ int test_check_(test_ctx *t, int ok, const char *file, int line, const char *fmt
 {
     t->checks++;
     if (!ok) {
+        va_list ap;
+        va_start(ap, fmt);
         if (t->failures == 0) {
-            va_list ap;
-            va_start(ap, fmt);
             vsnprintf(t->reason, sizeof t->reason, fmt, ap);
-            va_end(ap);
             t->file = file;
             t->line = line;
+        } else if (t->failures <= 5) {
+            char *dst = t->more[t->failures - 1];
+            int n = vsnprintf(dst, sizeof t->more[0], fmt, ap);
+            if (n >= 0 && (size_t)n < sizeof t->more[0])
+                snprintf(dst + n, sizeof t->more[0] - (size_t)n, " (%s:%d)", file, line);
         }
+        va_end(ap);
         t->failures++;
     }
     return ok;
@@ -97,7 +102,9 @@ int main(int argc, char **argv)
                 printf("PASS %s (%s%s%.2f s)\n", full, t.notes, t.notes[0] ? "; " : "", dt);
                 sp++;
             } else {
+                int k;
                 printf("FAIL %s: %s (%s:%d)\n", full, t.reason, t.file, t.line);
+                for (k = 0; k < 5 && k + 1 < t.failures; k++) printf("     also: %s\n", t.more[k]);
                 printf("     [%d of %d checks failed; %s%s%.2f s]\n", t.failures, t.checks, t.notes,
                        t.notes[0] ? "; " : "", dt);
                 sf++;

@@ -1,2 +1,392 @@
-#include "test.h"
-const test_case test_output_cases[] = { TEST_END };
+#define _POSIX_C_SOURCE 200809L
+/* test_output.c - section 9 of pdftrace.h: film (accumulation, resolve, per-pixel variance), images,
+   and the PFM/PPM writers (layout, sRGB encoding, error handling, atomic replacement).
+   References: the PFM format (Debevec's Portable Float Map: "PF", width height, negative scale for
+   little-endian, rows bottom to top), PPM P6, IEC 61966-2-1 (sRGB transfer function). */
+#include "test_util.h"
+
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ---- temporary directories ---- */
+static int make_tmpdir(char *buf, size_t n)
+{
+    snprintf(buf, n, "/tmp/pdftrace-test-XXXXXX");
+    return mkdtemp(buf) != NULL;
+}
+
+/* Number of entries in dir (excluding . and ..); names into list if given. */
+static int dir_entries(const char *dir, char *list, size_t n)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    int count = 0;
+    if (list && n) list[0] = '\0';
+    if (!d) return -1;
+    while ((e = readdir(d)) != NULL) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        count++;
+        if (list && strlen(list) + strlen(e->d_name) + 2 < n) {
+            strcat(list, e->d_name);
+            strcat(list, " ");
+        }
+    }
+    closedir(d);
+    return count;
+}
+
+static void remove_tree(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    char path[512];
+    if (!d) return;
+    while ((e = readdir(d)) != NULL) {
+        struct stat st;
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) remove_tree(path);
+        else unlink(path);
+    }
+    closedir(d);
+    rmdir(dir);
+}
+
+static unsigned char *read_file(const char *path, long *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *buf;
+    long n;
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    buf = (unsigned char *)malloc((size_t)n + 1);
+    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
+    fclose(f);
+    *size = n;
+    return buf;
+}
+
+/* Parses a Netpbm-style header: magic, then `fields` whitespace-separated tokens, then exactly one
+   whitespace byte. Returns the offset of the data or -1. */
+static long parse_header(const unsigned char *b, long n, const char *magic, char tokens[][32], int fields)
+{
+    long i = 0;
+    int f;
+    size_t ml = strlen(magic);
+    if (n < (long)ml || memcmp(b, magic, ml) != 0) return -1;
+    i = (long)ml;
+    for (f = 0; f < fields; f++) {
+        int k = 0;
+        if (i >= n || !(b[i] == ' ' || b[i] == '\n' || b[i] == '\r' || b[i] == '\t')) return -1;
+        while (i < n && (b[i] == ' ' || b[i] == '\n' || b[i] == '\r' || b[i] == '\t')) i++;
+        while (i < n && !(b[i] == ' ' || b[i] == '\n' || b[i] == '\r' || b[i] == '\t') && k < 31) tokens[f][k++] = (char)b[i++];
+        tokens[f][k] = '\0';
+    }
+    if (i >= n || !(b[i] == ' ' || b[i] == '\n' || b[i] == '\r' || b[i] == '\t')) return -1;
+    return i + 1;
+}
+
+static float le_float(const unsigned char *p)
+{
+    uint32_t u = (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static double srgb_ref(double x)
+{
+    if (!(x > 0)) return 0;
+    if (x >= 1) return 1;
+    return x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1 / 2.4) - 0.055;
+}
+
+static void pfm_layout(test_ctx *t)
+{
+    /* 5 x 3 image with distinct values: header "PF" w h -scale (little-endian), then rows from the
+       bottom image row to the top, RGB floats, nothing else. */
+    char dir[64], path[128], tok[3][32];
+    pt_image img;
+    unsigned char *b;
+    long n, off;
+    int x, y, c, rc, bad = 0;
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(path, sizeof path, "%s/a.pfm", dir);
+    memset(&img, 0, sizeof img);
+    if (!CHECK(t, pt_image_init(&img, 5, 3) == PT_OK && img.rgb && img.width == 5 && img.height == 3, "pt_image_init")) {
+        remove_tree(dir);
+        return;
+    }
+    for (y = 0; y < 3; y++)
+        for (x = 0; x < 5; x++)
+            for (c = 0; c < 3; c++) img.rgb[3 * (y * 5 + x) + c] = (float)(x + 10 * y + 100 * c) + 0.25f - (c == 2 ? 1000.0f : 0.0f);
+    rc = pt_write_pfm(path, &img);
+    CHECK(t, rc == PT_OK, "pt_write_pfm: %d", rc);
+    b = read_file(path, &n);
+    if (CHECK(t, b != NULL, "cannot read %s", path)) {
+        off = parse_header(b, n, "PF", tok, 3);
+        if (CHECK(t, off > 0, "PFM header malformed")) {
+            CHECK(t, atoi(tok[0]) == 5 && atoi(tok[1]) == 3, "PFM size %s x %s", tok[0], tok[1]);
+            CHECK(t, atof(tok[2]) < 0, "PFM scale %s is not negative (little-endian)", tok[2]);
+            CHECK(t, n - off == 5 * 3 * 3 * 4, "PFM data is %ld bytes, want %d", n - off, 5 * 3 * 3 * 4);
+            if (n - off == 5 * 3 * 3 * 4) {
+                for (y = 0; y < 3; y++)        /* file row y is image row 2 - y */
+                    for (x = 0; x < 5; x++)
+                        for (c = 0; c < 3; c++)
+                            if (le_float(b + off + 4 * (3 * (y * 5 + x) + c)) != img.rgb[3 * ((2 - y) * 5 + x) + c]) bad++;
+                CHECK(t, bad == 0, "%d PFM values not at their bottom-row-first positions", bad);
+            }
+        }
+        free(b);
+    }
+    CHECK(t, dir_entries(dir, NULL, 0) == 1, "the writer left extra files in the directory");
+    pt_image_free(&img);
+    CHECK(t, img.rgb == NULL, "pt_image_free left a dangling pointer");
+    remove_tree(dir);
+}
+
+static void ppm_srgb(test_ctx *t)
+{
+    /* P6 with maxval 255, top row first; each byte = 255 * sRGB(clamp(x, 0, 1)) to within one unit
+       (rounding or truncation), exactly 0 for x <= 0 and 255 for x >= 1. */
+    static const float vals[] = { -1.0f, 0.0f, 0.001f, 0.0031308f, 0.01f, 0.05f, 0.18f, 0.2140411f, 0.5f, 0.9f, 0.999f, 1.0f, 1.5f, 100.0f, 0.73f };
+    const int w = 5, h = 3;
+    char dir[64], path[128], tok[3][32];
+    pt_image img;
+    unsigned char *b;
+    long n, off;
+    int i, c, bad = 0, rc;
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(path, sizeof path, "%s/a.ppm", dir);
+    memset(&img, 0, sizeof img);
+    if (!CHECK(t, pt_image_init(&img, w, h) == PT_OK, "pt_image_init")) { remove_tree(dir); return; }
+    for (i = 0; i < w * h; i++)
+        for (c = 0; c < 3; c++) img.rgb[3 * i + c] = vals[(i + 5 * c) % 15];
+    rc = pt_write_ppm(path, &img);
+    CHECK(t, rc == PT_OK, "pt_write_ppm: %d", rc);
+    b = read_file(path, &n);
+    if (CHECK(t, b != NULL, "cannot read the PPM")) {
+        off = parse_header(b, n, "P6", tok, 3);
+        if (CHECK(t, off > 0, "PPM header malformed")) {
+            CHECK(t, atoi(tok[0]) == w && atoi(tok[1]) == h && atoi(tok[2]) == 255, "PPM header %s %s %s", tok[0], tok[1], tok[2]);
+            CHECK(t, n - off == w * h * 3, "PPM data is %ld bytes, want %d", n - off, w * h * 3);
+            if (n - off == w * h * 3) {
+                for (i = 0; i < w * h * 3; i++) {
+                    double x = img.rgb[i], want = 255.0 * srgb_ref(x);
+                    int got = b[off + i];
+                    if ((x <= 0 && got != 0) || (x >= 1 && got != 255) || fabs(got - want) >= 1.0) {
+                        if (bad++ == 0) test_note(t, "value %g -> byte %d, want %.2f", x, got, want);
+                    }
+                }
+                CHECK(t, bad == 0, "%d PPM bytes differ from 255 * sRGB(clamp(x))", bad);
+            }
+        }
+        free(b);
+    }
+    pt_image_free(&img);
+    remove_tree(dir);
+}
+
+static void srgb_encode_function(test_ctx *t)
+{
+    int i, bad = 0, nonmono = 0;
+    float prev = -1;
+    for (i = 0; i <= 10000; i++) {
+        float x = i / 10000.0f, y = pt_srgb_encode(x);
+        double want = srgb_ref(x);
+        if (fabs(y - want) > 1e-5 * fmax(want, 1e-3)) bad++;
+        if (y < prev) nonmono++;
+        prev = y;
+    }
+    CHECK(t, bad == 0, "%d of 10001 values differ from IEC 61966-2-1 (rel 1e-5)", bad);
+    CHECK(t, nonmono == 0, "pt_srgb_encode is not monotone");
+    CHECK(t, pt_srgb_encode(-0.5f) == 0.0f && pt_srgb_encode(2.0f) == 1.0f && pt_srgb_encode(1e30f) == 1.0f,
+          "not clamped: f(-0.5) = %g, f(2) = %g", pt_srgb_encode(-0.5f), pt_srgb_encode(2.0f));
+    CHECK(t, fabs(pt_srgb_encode(0.0031308f) - 0.0031308 * 12.92) < 1e-6, "linear segment end");
+}
+
+static void write_errors(test_ctx *t)
+{
+    /* An unwritable target returns PT_ERROR_IO and leaves no file (temporary or final) behind;
+       invalid arguments return PT_ERROR_INVALID_ARGUMENT; an existing file is replaced whole. */
+    char dir[64], path[160], list[256];
+    pt_image img, small;
+    int rc, k;
+    FILE *f;
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    memset(&img, 0, sizeof img);
+    memset(&small, 0, sizeof small);
+    if (!CHECK(t, pt_image_init(&img, 4, 4) == PT_OK && pt_image_init(&small, 1, 1) == PT_OK, "pt_image_init")) {
+        remove_tree(dir);
+        return;
+    }
+    for (k = 0; k < 2; k++) {
+        int (*writer)(const char *, const pt_image *) = k == 0 ? pt_write_pfm : pt_write_ppm;
+        const char *name = k == 0 ? "pt_write_pfm" : "pt_write_ppm";
+        /* a directory that does not exist */
+        snprintf(path, sizeof path, "%s/missing/out.img", dir);
+        rc = writer(path, &img);
+        CHECK(t, rc == PT_ERROR_IO, "%s into a missing directory: %d, want PT_ERROR_IO", name, rc);
+        CHECK(t, dir_entries(dir, list, sizeof list) == 0, "%s left files behind: %s", name, list);
+        /* the target is an existing directory: the temporary file must be removed */
+        snprintf(path, sizeof path, "%s/target", dir);
+        mkdir(path, 0700);
+        rc = writer(path, &img);
+        CHECK(t, rc == PT_ERROR_IO, "%s onto a directory: %d, want PT_ERROR_IO", name, rc);
+        CHECK(t, dir_entries(dir, list, sizeof list) == 1 && dir_entries(path, NULL, 0) == 0,
+              "%s onto a directory left files behind: %s", name, list);
+        rmdir(path);
+        /* a path through a regular file */
+        snprintf(path, sizeof path, "%s/file", dir);
+        f = fopen(path, "wb");
+        if (f) fclose(f);
+        snprintf(path, sizeof path, "%s/file/out.img", dir);
+        rc = writer(path, &img);
+        CHECK(t, rc == PT_ERROR_IO, "%s below a regular file: %d, want PT_ERROR_IO", name, rc);
+        snprintf(path, sizeof path, "%s/file", dir);
+        unlink(path);
+        /* invalid arguments */
+        CHECK(t, writer(NULL, &img) == PT_ERROR_INVALID_ARGUMENT, "%s(NULL path) did not fail", name);
+        snprintf(path, sizeof path, "%s/x.img", dir);
+        CHECK(t, writer(path, NULL) == PT_ERROR_INVALID_ARGUMENT, "%s(NULL image) did not fail", name);
+        {
+            pt_image empty;
+            memset(&empty, 0, sizeof empty);
+            empty.width = 4;
+            empty.height = 4;
+            CHECK(t, writer(path, &empty) == PT_ERROR_INVALID_ARGUMENT, "%s with rgb == NULL did not fail", name);
+        }
+        CHECK(t, dir_entries(dir, list, sizeof list) == 0, "%s: invalid calls left files: %s", name, list);
+        /* replacing an existing file: the new content, nothing else in the directory */
+        rc = writer(path, &img);
+        rc |= writer(path, &small);
+        {
+            long n1 = 0, n2 = 0;
+            unsigned char *b1, *b2;
+            char other[160];
+            snprintf(other, sizeof other, "%s/y.img", dir);
+            writer(other, &small);
+            b1 = read_file(path, &n1);
+            b2 = read_file(other, &n2);
+            CHECK(t, rc == PT_OK && b1 && b2 && n1 == n2 && memcmp(b1, b2, (size_t)n1) == 0,
+                  "%s: overwriting a file does not leave exactly the new image", name);
+            free(b1);
+            free(b2);
+            unlink(other);
+        }
+        CHECK(t, dir_entries(dir, list, sizeof list) == 1, "%s: after overwriting, the directory holds: %s", name, list);
+        unlink(path);
+    }
+    pt_image_free(&img);
+    pt_image_free(&small);
+    remove_tree(dir);
+}
+
+static void film_math(test_ctx *t)
+{
+    /* Synthetic sums: pixel (1, 0) holds samples {1, 2, 3, 6} in red, {0.5} x 4 in green, {-1, 1, -1, 1}
+       in blue. Mean = sum/n; variance of the mean = s^2 / n with the unbiased sample variance
+       s^2 = (sum_sq - n mean^2) / (n - 1). A pixel without samples has mean 0 (no NaN). */
+    pt_film f;
+    pt_image img;
+    pt_color m, v;
+    int rc, i;
+    memset(&img, 0, sizeof img);
+    rc = pt_film_init(&f, 3, 2);
+    if (!CHECK(t, rc == PT_OK && f.sum && f.sum_sq && f.count && f.width == 3 && f.height == 2, "pt_film_init")) return;
+    for (i = 0; i < 6; i++)
+        CHECK(t, f.count[i] == 0 && f.sum[3 * i] == 0 && f.sum_sq[3 * i + 2] == 0, "fresh film not zeroed at %d", i);
+    /* pixel (x = 1, y = 0): index 1 */
+    f.count[1] = 4;
+    f.sum[3] = 12; f.sum_sq[3] = 1 + 4 + 9 + 36;
+    f.sum[4] = 2; f.sum_sq[4] = 1;
+    f.sum[5] = 0; f.sum_sq[5] = 4;
+    /* pixel (x = 2, y = 1): index 5, one sample (0.25, 0.5, 0.75) */
+    f.count[5] = 1;
+    f.sum[15] = 0.25; f.sum[16] = 0.5; f.sum[17] = 0.75;
+    f.sum_sq[15] = 0.0625; f.sum_sq[16] = 0.25; f.sum_sq[17] = 0.5625;
+    rc = pt_film_pixel(&f, 1, 0, &m, &v);
+    CHECK(t, rc == PT_OK, "pt_film_pixel: %d", rc);
+    CHECK(t, fabs(m.x - 3) < 1e-6 && fabs(m.y - 0.5) < 1e-6 && fabs(m.z) < 1e-6, "mean (%g %g %g), want (3 0.5 0)", m.x, m.y, m.z);
+    /* red: s^2 = (50 - 36) / 3 = 14/3, /4 = 7/6; green: 0; blue: s^2 = 4/3, /4 = 1/3 */
+    CHECK(t, fabs(v.x - 7.0 / 6.0) < 1e-5 && fabs(v.y) < 1e-6 && fabs(v.z - 1.0 / 3.0) < 1e-5,
+          "variance of the mean (%.6f %.6f %.6f), want (%.6f 0 %.6f) = unbiased sample variance / n", v.x, v.y, v.z,
+          7.0 / 6.0, 1.0 / 3.0);
+    rc = pt_film_pixel(&f, 0, 1, &m, &v);
+    CHECK(t, rc == PT_OK && m.x == 0 && m.y == 0 && m.z == 0 && !isnan(v.x) && !isnan(v.y) && !isnan(v.z),
+          "empty pixel: mean (%g %g %g), variance (%g %g %g)", m.x, m.y, m.z, v.x, v.y, v.z);
+    rc = pt_film_pixel(&f, 2, 1, &m, &v);
+    CHECK(t, rc == PT_OK && fabs(m.z - 0.75) < 1e-7 && !isnan(v.x), "one-sample pixel: mean %g, variance %g", m.z, v.x);
+    CHECK(t, pt_film_pixel(&f, 3, 0, &m, &v) == PT_ERROR_INVALID_ARGUMENT && pt_film_pixel(&f, 0, -1, &m, &v) == PT_ERROR_INVALID_ARGUMENT,
+          "out-of-range pixel accepted");
+    rc = pt_film_resolve(&f, &img);
+    if (CHECK(t, rc == PT_OK && img.width == 3 && img.height == 2 && img.rgb, "pt_film_resolve: %d", rc)) {
+        CHECK(t, fabs(img.rgb[3] - 3) < 1e-6 && fabs(img.rgb[4] - 0.5) < 1e-6 && img.rgb[0] == 0 && fabs(img.rgb[17] - 0.75) < 1e-7,
+              "resolved values (%g %g) (%g) (%g)", img.rgb[3], img.rgb[4], img.rgb[0], img.rgb[17]);
+        for (i = 0; i < 18; i++) CHECK(t, !isnan(img.rgb[i]), "resolved value %d is NaN", i);
+    }
+    pt_film_clear(&f);
+    for (i = 0; i < 6; i++) CHECK(t, f.count[i] == 0 && f.sum[3 * i] == 0 && f.sum_sq[3 * i] == 0, "pt_film_clear left data at %d", i);
+    pt_film_free(&f);
+    CHECK(t, f.sum == NULL && f.count == NULL, "pt_film_free left dangling pointers");
+    pt_image_free(&img);
+    CHECK(t, pt_film_init(&f, 0, 4) == PT_ERROR_INVALID_ARGUMENT, "a 0 x 4 film accepted");
+    CHECK(t, pt_image_init(&img, -1, 4) == PT_ERROR_INVALID_ARGUMENT, "a -1 x 4 image accepted");
+}
+
+static void film_accumulates_render(test_ctx *t)
+{
+    /* A render adds exactly samples_per_pixel samples to every pixel, sum/count is what resolve gives,
+       and sum_sq >= sum^2 / count (Cauchy-Schwarz) everywhere. */
+    pt_scene *s = pt_scene_create();
+    pt_render_desc d;
+    pt_film f;
+    pt_image img;
+    pt_render_stats st;
+    int m, e, rc, i, c, bad = 0;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    m = pt_scene_add_lambertian(s, pt_v3(0.6f, 0.5f, 0.4f));
+    e = pt_scene_add_emitter(s, pt_v3(3, 3, 3), 0);
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
+    rc = rc >= 0 ? pt_scene_add_quad(s, pt_v3(-1, 3, -1), pt_v3(2, 0, 0), pt_v3(0, 0, 2), e) : rc;
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "scene")) { pt_scene_destroy(s); return; }
+    memset(&d, 0, sizeof d);
+    d.width = 12; d.height = 9; d.samples_per_pixel = 7;
+    d.camera.look_from = pt_v3(0, 1, -4); d.camera.look_at = pt_v3(0, 0, 0);
+    d.background = pt_v3(0.1f, 0.2f, 0.3f);
+    memset(&img, 0, sizeof img);
+    pt_film_init(&f, 12, 9);
+    rc = pt_render(s, &d, &f, &st);
+    CHECK(t, rc == PT_OK && st.nonfinite_samples == 0 && st.samples == 12 * 9 * 7, "render: %d, %llu samples", rc,
+          (unsigned long long)st.samples);
+    rc = pt_film_resolve(&f, &img);
+    for (i = 0; i < 12 * 9 && rc == PT_OK; i++) {
+        if (f.count[i] != 7) bad++;
+        for (c = 0; c < 3; c++) {
+            double mean = f.sum[3 * i + c] / f.count[i];
+            if (fabs(img.rgb[3 * i + c] - mean) > 1e-6 * fmax(1, fabs(mean))) bad++;
+            if (f.sum_sq[3 * i + c] < f.sum[3 * i + c] * f.sum[3 * i + c] / f.count[i] * (1 - 1e-9)) bad++;
+        }
+    }
+    CHECK(t, rc == PT_OK && bad == 0, "%d film entries inconsistent (count, mean, sum of squares)", bad);
+    pt_image_free(&img);
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+}
+
+const test_case test_output_cases[] = {
+    TEST_CASE(pfm_layout),
+    TEST_CASE(ppm_srgb),
+    TEST_CASE(srgb_encode_function),
+    TEST_CASE(write_errors),
+    TEST_CASE(film_math),
+    TEST_CASE(film_accumulates_render),
+    TEST_END
+};

@@ -300,6 +300,29 @@ static void pdf_sphere_light(test_ctx *t)
             /* either model (cone from just outside, area from just inside) has mass 1 */
             TU_CHECK_PDF(t, &c, &r);
             agg_add(&a, &r);
+            {
+                /* and neither exceeds 1/pi anywhere (area sampling from the surface is cos/pi, a
+                   cone from just outside is ~1/(2 pi)): random directions, and directions within
+                   1e-3..1e-9 of the tangent plane where cancellation is worst */
+                pt_rng rng;
+                int k, over = 0;
+                float worst_v = 0;
+                dv3 nout = dir, e1, e2;
+                tu_frame(nout, &e1, &e2);
+                pt_rng_seed(&rng, 360 + i, 1);
+                for (k = 0; k < 60000; k++) {
+                    dv3 w;
+                    float v;
+                    if (k % 2 == 0) w = tu_rand_dir(&rng);
+                    else {
+                        double eps = pow(10.0, -3.0 - 6.0 * tu_rand(&rng)), ph = 2 * TU_PI * tu_rand(&rng);
+                        w = dnorm(dadd(dadd(dscale(e1, cos(ph)), dscale(e2, sin(ph))), dscale(nout, -eps)));
+                    }
+                    v = pt_pdf_value(&p, dv_to(w));
+                    if (!(v <= (float)(1.0 / TU_PI) * 1.001f)) { over++; if (v > worst_v || !isfinite(v)) worst_v = v; }
+                }
+                CHECK(t, over == 0, "%s: pt_pdf_value exceeds 1/pi at %d of 60000 directions (worst %g)", label, over, worst_v);
+            }
         }
     }
     agg_note(t, &a);

@@ -1,2 +1,725 @@
-#include "test.h"
-const test_case test_render_cases[] = { TEST_END };
+#define _POSIX_C_SOURCE 200809L
+/* test_render.c - sections 6-8 of pdftrace.h: camera, integrator strategies, rendering.
+
+   Determinism (bit-identical films across thread counts, tile sizes and host parallel-fors that run
+   tiles in reverse or on their own threads), progressive rendering, cancellation, progress reports;
+   convergence against analytic references: a closed furnace (radiance Le/(1 - albedo) = 1), direct
+   light from a quad on a plane (Lambert's polygon formula) and from a sphere (E = pi L sin^2(a) cos),
+   and the four strategies against each other on the Cornell box of Shirley's "Ray Tracing: The Rest
+   of Your Life". Every render must report zero non-finite samples.
+
+   Statistical checks use fixed seeds; each test states its comparisons and uses alpha = 0.01
+   Sidak-corrected over them (the false-failure rate of each test is at most 0.01; the file has
+   RENDER_STAT_FAMILIES such tests, so at most ~5% for the file if all were independent). */
+#include "test_util.h"
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RENDER_STAT_FAMILIES 6
+#define FAMILY_ALPHA 0.01
+
+static pt_render_desc base_desc(int w, int h, int spp)
+{
+    pt_render_desc d;
+    memset(&d, 0, sizeof d);
+    d.width = w;
+    d.height = h;
+    d.samples_per_pixel = spp;
+    d.seed = 4242;
+    return d;
+}
+
+/* The Cornell box of "Ray Tracing: The Rest of Your Life" (two rotated boxes; optionally the glass
+   sphere), with its camera. */
+static pt_scene *cornell(int glass, pt_render_desc *d)
+{
+    pt_scene *s = pt_scene_create();
+    int red, white, green, light, rc;
+    pt_transform a, b;
+    if (!s) return NULL;
+    red = pt_scene_add_lambertian(s, pt_v3(0.65f, 0.05f, 0.05f));
+    white = pt_scene_add_lambertian(s, pt_v3(0.73f, 0.73f, 0.73f));
+    green = pt_scene_add_lambertian(s, pt_v3(0.12f, 0.45f, 0.15f));
+    light = pt_scene_add_emitter(s, pt_v3(15, 15, 15), 0);
+    rc = pt_scene_add_quad(s, pt_v3(555, 0, 0), pt_v3(0, 555, 0), pt_v3(0, 0, 555), green);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 0), pt_v3(0, 555, 0), pt_v3(0, 0, 555), red);
+    rc |= pt_scene_add_quad(s, pt_v3(343, 554, 332), pt_v3(-130, 0, 0), pt_v3(0, 0, -105), light); /* faces -y */
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 0), pt_v3(555, 0, 0), pt_v3(0, 0, 555), white);
+    rc |= pt_scene_add_quad(s, pt_v3(555, 555, 555), pt_v3(-555, 0, 0), pt_v3(0, 0, -555), white);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 555), pt_v3(555, 0, 0), pt_v3(0, 555, 0), white);
+    a = pt_transform_mul(pt_transform_translate(pt_v3(265, 0, 295)), pt_transform_rotate_y(15));
+    pt_scene_set_transform(s, &a);
+    rc |= pt_scene_add_box(s, pt_v3(0, 0, 0), pt_v3(165, 330, 165), white);
+    if (glass) {
+        pt_scene_set_transform(s, NULL);
+        rc |= pt_scene_add_sphere(s, pt_v3(190, 90, 190), 90, pt_scene_add_dielectric(s, 1.5f));
+    } else {
+        b = pt_transform_mul(pt_transform_translate(pt_v3(130, 0, 65)), pt_transform_rotate_y(-18));
+        pt_scene_set_transform(s, &b);
+        rc |= pt_scene_add_box(s, pt_v3(0, 0, 0), pt_v3(165, 165, 165), white);
+    }
+    pt_scene_set_transform(s, NULL);
+    if (rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    d->camera.look_from = pt_v3(278, 278, -800);
+    d->camera.look_at = pt_v3(278, 278, 0);
+    d->camera.vfov_degrees = 40;
+    return s;
+}
+
+static int render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *st,
+                       const char *what)
+{
+    int rc;
+    pt_render_stats local;
+    if (!st) st = &local;
+    if (!CHECK(t, pt_film_init(film, d->width, d->height) == PT_OK, "%s: film", what)) return 0;
+    rc = pt_render(s, d, film, st);
+    CHECK(t, rc == PT_OK, "%s: pt_render returned %d (%s)", what, rc, pt_result_string(rc));
+    CHECK(t, st->nonfinite_samples == 0, "%s: %llu non-finite samples", what, (unsigned long long)st->nonfinite_samples);
+    return rc == PT_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* camera                                                                                      */
+
+static void camera_conventions(test_ctx *t)
+{
+    /* Right-handed pinhole: screen right = forward x up, row 0 at the top, vertical fov, aspect from
+       width/height; the thin lens focuses every lens sample of a pixel on one point of the focus
+       plane. */
+    pt_camera_desc cd;
+    pt_camera cam;
+    pt_ray r;
+    double half = 30.0 * TU_PI / 180.0;
+    int rc, i;
+    memset(&cd, 0, sizeof cd);
+    cd.look_from = pt_v3(1, 2, 3);
+    cd.look_at = pt_v3(1, 2, -7);
+    cd.vfov_degrees = 60;
+    rc = pt_camera_init(&cam, &cd, 40, 20);
+    if (!CHECK(t, rc == PT_OK, "pt_camera_init: %d", rc)) return;
+    r = pt_camera_ray(&cam, 20, 10, 0.5f, 0.5f);
+    CHECK(t, dlen(dsub(dv_from(r.dir), dv(0, 0, -1))) < 1e-6 && dlen(dsub(dv_from(r.origin), dv(1, 2, 3))) < 1e-6,
+          "centre ray (%g %g %g) from (%g %g %g)", r.dir.x, r.dir.y, r.dir.z, r.origin.x, r.origin.y, r.origin.z);
+    r = pt_camera_ray(&cam, 20, 0, 0.5f, 0.5f); /* top edge: +vfov/2 upwards */
+    CHECK(t, dlen(dsub(dv_from(r.dir), dv(0, sin(half), -cos(half)))) < 1e-6, "top-centre ray (%g %g %g)", r.dir.x, r.dir.y, r.dir.z);
+    r = pt_camera_ray(&cam, 40, 10, 0.5f, 0.5f); /* right edge: tan(h) = aspect tan(vfov/2), towards +x */
+    {
+        double h = atan(2.0 * tan(half));
+        CHECK(t, dlen(dsub(dv_from(r.dir), dv(sin(h), 0, -cos(h)))) < 1e-6, "right-centre ray (%g %g %g), want (%g 0 %g)",
+              r.dir.x, r.dir.y, r.dir.z, sin(h), -cos(h));
+    }
+    r = pt_camera_ray(&cam, 0, 20, 0.5f, 0.5f); /* bottom-left corner */
+    CHECK(t, r.dir.x < 0 && r.dir.y < 0, "bottom-left ray (%g %g %g)", r.dir.x, r.dir.y, r.dir.z);
+    CHECK(t, fabs(dlen(dv_from(r.dir)) - 1) < 1e-6, "camera ray not unit length");
+    /* thin lens: focus distance 5 */
+    cd.lens_radius = 0.5f;
+    cd.focus_distance = 5.0f;
+    rc = pt_camera_init(&cam, &cd, 40, 20);
+    if (CHECK(t, rc == PT_OK, "thin lens init")) {
+        dv3 first = dv(0, 0, 0);
+        int bad = 0;
+        for (i = 0; i < 16; i++) {
+            float u1 = (i % 4 + 0.5f) / 4, u2 = (i / 4 + 0.5f) / 4;
+            dv3 o, p;
+            double tt;
+            r = pt_camera_ray(&cam, 13.3f, 7.1f, u1, u2);
+            o = dv_from(r.origin);
+            tt = (o.z - (3.0 - 5.0)) / -r.dir.z;    /* focus plane z = 3 - 5 */
+            p = dadd(o, dscale(dv_from(r.dir), tt));
+            if (i == 0) first = p;
+            else if (dlen(dsub(p, first)) > 1e-4) bad++;
+            if (fabs(o.z - 3) > 1e-5 || dlen(dsub(o, dv(1, 2, 3))) > 0.5 + 1e-5) bad++;
+        }
+        CHECK(t, bad == 0, "thin lens: %d of 16 lens samples do not meet on the focus plane or leave the lens disk", bad);
+    }
+    cd.look_at = cd.look_from;
+    CHECK(t, pt_camera_init(&cam, &cd, 40, 20) == PT_ERROR_INVALID_ARGUMENT, "look_at == look_from accepted");
+    cd.look_at = pt_v3(0, 0, 0);
+    CHECK(t, pt_camera_init(&cam, &cd, 0, 20) == PT_ERROR_INVALID_ARGUMENT, "width 0 accepted");
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* determinism                                                                                 */
+
+static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
+{
+    int i;
+    (void)user;
+    for (i = count - 1; i >= 0; i--) job(job_data, i);
+}
+
+typedef struct host_pool { pthread_mutex_t mu; int next, count; pt_job_fn job; void *data; } host_pool;
+/* Each of two threads takes the next index and runs tile count-1-index: all tiles, once, in reverse. */
+static void *host_worker_rev(void *arg)
+{
+    host_pool *p = (host_pool *)arg;
+    for (;;) {
+        int i;
+        pthread_mutex_lock(&p->mu);
+        i = p->next++;
+        pthread_mutex_unlock(&p->mu);
+        if (i >= p->count) break;
+        p->job(p->data, p->count - 1 - i);
+    }
+    return NULL;
+}
+static void host_threads(void *user, int count, pt_job_fn job, void *job_data)
+{
+    host_pool p;
+    pthread_t th[2];
+    int k, started = 0;
+    (void)user;
+    pthread_mutex_init(&p.mu, NULL);
+    p.next = 0;
+    p.count = count;
+    p.job = job;
+    p.data = job_data;
+    for (k = 0; k < 2; k++)
+        if (pthread_create(&th[k], NULL, host_worker_rev, &p) == 0) started++;
+    if (started == 0) host_worker_rev(&p);
+    for (k = 0; k < started; k++) pthread_join(th[k], NULL);
+    pthread_mutex_destroy(&p.mu);
+}
+
+static void threads_bit_identical(test_ctx *t)
+{
+    pt_render_desc d = base_desc(40, 28, 4);
+    pt_scene *s = cornell(1, &d);
+    pt_film ref, f;
+    pt_render_stats st;
+    int k;
+    const char *names[6] = { "threads=2", "threads=3", "tile_size=7", "host parallel_for (reverse)",
+                             "host parallel_for (2 threads)", "threads=0 (all cores)" };
+    if (!CHECK(t, s != NULL, "Cornell scene")) return;
+    d.max_depth = 8;
+    d.threads = 1;
+    if (!render_into(t, s, &d, &ref, &st, "threads=1")) { pt_scene_destroy(s); return; }
+    CHECK(t, st.samples == (uint64_t)40 * 28 * 4, "stats.samples %llu, want %d", (unsigned long long)st.samples, 40 * 28 * 4);
+    for (k = 0; k < 6; k++) {
+        pt_render_desc e = d;
+        e.threads = k == 0 ? 2 : k == 1 ? 3 : k == 5 ? 0 : 1;
+        if (k == 2) { e.tile_size = 7; e.threads = 2; }
+        if (k == 3) e.parallel_for = host_reverse;
+        if (k == 4) e.parallel_for = host_threads;
+        if (render_into(t, s, &e, &f, &st, names[k]))
+            CHECK(t, tu_film_equal(&ref, &f), "%s: film differs from threads=1", names[k]);
+        pt_film_free(&f);
+    }
+    pt_film_free(&ref);
+    pt_scene_destroy(s);
+    test_note(t, "7 renders of a 40x28 Cornell box with glass, bit-identical");
+}
+
+static void progressive_equals_single(test_ctx *t)
+{
+    /* Two renders of 8 spp into one film = one render of 16 spp in passes of 8, bit for bit; a
+       16-spp render in passes of 5 (5+5+5+1) takes exactly 16 samples per pixel. */
+    pt_render_desc d = base_desc(24, 24, 8);
+    pt_scene *s = cornell(0, &d);
+    pt_film a, b;
+    pt_render_stats st;
+    int rc, i;
+    if (!CHECK(t, s != NULL, "Cornell scene")) return;
+    d.max_depth = 6;
+    d.threads = 2;
+    if (render_into(t, s, &d, &a, &st, "first 8 spp")) {
+        rc = pt_render(s, &d, &a, &st);
+        CHECK(t, rc == PT_OK && st.nonfinite_samples == 0, "second 8 spp: %d", rc);
+    }
+    d.samples_per_pixel = 16;
+    d.samples_per_pass = 8;
+    if (render_into(t, s, &d, &b, &st, "16 spp in passes of 8")) {
+        CHECK(t, st.passes == 2, "16 spp in passes of 8 took %d passes", st.passes);
+        CHECK(t, tu_film_equal(&a, &b), "8 + 8 spp differs from 16 spp (passes of 8)");
+    }
+    pt_film_free(&b);
+    d.samples_per_pass = 5;
+    if (render_into(t, s, &d, &b, &st, "16 spp in passes of 5")) {
+        int bad = 0;
+        for (i = 0; i < d.width * d.height; i++) bad += b.count[i] != 16;
+        CHECK(t, bad == 0, "%d pixels without exactly 16 samples (passes of 5)", bad);
+        CHECK(t, st.passes == 4, "16 spp in passes of 5 took %d passes, want 4", st.passes);
+        test_note(t, "passes of 5 %s passes of 8", tu_film_equal(&a, &b) ? "also bit-identical to" : "differ in rounding from");
+    }
+    pt_film_free(&a);
+    pt_film_free(&b);
+    pt_scene_destroy(s);
+}
+
+typedef struct progress_log { int calls, bad_order, cancel_at; uint64_t last_done, total; int pass_count; double last_s; volatile int *flag; int flag_at; } progress_log;
+static int on_progress(void *user, const pt_progress *p)
+{
+    progress_log *l = (progress_log *)user;
+    l->calls++;
+    if (p->pass != l->calls || p->samples_done <= l->last_done || p->seconds < l->last_s || p->samples_done > p->samples_total)
+        l->bad_order++;
+    l->last_done = p->samples_done;
+    l->last_s = p->seconds;
+    l->total = p->samples_total;
+    l->pass_count = p->pass_count;
+    if (l->flag && p->pass == l->flag_at) *l->flag = 1;
+    return l->cancel_at > 0 && p->pass >= l->cancel_at;
+}
+
+static void cancellation_and_progress(test_ctx *t)
+{
+    pt_render_desc d = base_desc(32, 32, 12);
+    pt_scene *s = cornell(0, &d);
+    pt_film f;
+    pt_render_stats st;
+    progress_log log;
+    volatile int flag = 0;
+    int rc, i, bad;
+    if (!CHECK(t, s != NULL, "Cornell scene")) return;
+    d.max_depth = 4;
+    d.samples_per_pass = 3;
+    d.threads = 2;
+    /* a full render: 4 passes reported in order */
+    memset(&log, 0, sizeof log);
+    d.progress = on_progress;
+    d.progress_user = &log;
+    if (render_into(t, s, &d, &f, &st, "with progress")) {
+        CHECK(t, log.calls == 4 && log.pass_count == 4 && log.bad_order == 0, "progress: %d calls, pass_count %d, %d out of order",
+              log.calls, log.pass_count, log.bad_order);
+        CHECK(t, log.last_done == (uint64_t)32 * 32 * 12 && log.total == (uint64_t)32 * 32 * 12, "samples_done %llu total %llu",
+              (unsigned long long)log.last_done, (unsigned long long)log.total);
+        CHECK(t, st.passes == 4, "stats.passes %d", st.passes);
+    }
+    pt_film_free(&f);
+    /* the callback cancels after pass 1: exactly one pass in the film */
+    memset(&log, 0, sizeof log);
+    log.cancel_at = 1;
+    pt_film_init(&f, 32, 32);
+    rc = pt_render(s, &d, &f, &st);
+    CHECK(t, rc == PT_ERROR_CANCELLED, "progress callback cancel: returned %d, want PT_ERROR_CANCELLED", rc);
+    for (i = 0, bad = 0; i < 32 * 32; i++) bad += f.count[i] != 3;
+    CHECK(t, bad == 0 && log.calls == 1, "after cancelling at pass 1: %d pixels without 3 samples, %d callbacks", bad, log.calls);
+    pt_film_free(&f);
+    /* *cancel set before the render */
+    flag = 1;
+    d.cancel = &flag;
+    d.progress = NULL;
+    pt_film_init(&f, 32, 32);
+    rc = pt_render(s, &d, &f, &st);
+    CHECK(t, rc == PT_ERROR_CANCELLED, "cancel flag set: returned %d, want PT_ERROR_CANCELLED", rc);
+    for (i = 0, bad = 0; i < 32 * 32; i++) bad += f.count[i] > 12;
+    CHECK(t, bad == 0, "cancelled film has pixels with more samples than asked");
+    pt_film_free(&f);
+    /* *cancel set during the render (from the progress callback after pass 2) */
+    flag = 0;
+    memset(&log, 0, sizeof log);
+    log.flag = &flag;
+    log.flag_at = 2;
+    d.progress = on_progress;
+    pt_film_init(&f, 32, 32);
+    rc = pt_render(s, &d, &f, &st);
+    CHECK(t, rc == PT_ERROR_CANCELLED, "cancel flag set during the render: returned %d", rc);
+    for (i = 0, bad = 0; i < 32 * 32; i++) bad += f.count[i] < 6 || f.count[i] >= 12;
+    CHECK(t, bad == 0, "cancel after pass 2: %d pixels outside [6, 12) samples", bad);
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+}
+
+static void render_image_matches_film(test_ctx *t)
+{
+    /* pt_render_image = pt_render into a fresh film + pt_film_resolve, bit for bit */
+    pt_render_desc d = base_desc(20, 16, 3);
+    pt_scene *s = cornell(1, &d);
+    pt_film f;
+    pt_image a, b;
+    pt_render_stats st;
+    int rc;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.threads = 1;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    rc = pt_render_image(s, &d, &a, &st);
+    CHECK(t, rc == PT_OK && st.nonfinite_samples == 0, "pt_render_image: %d", rc);
+    if (render_into(t, s, &d, &f, NULL, "pt_render")) {
+        rc = pt_film_resolve(&f, &b);
+        CHECK(t, rc == PT_OK && a.width == 20 && a.height == 16 && b.width == 20 && b.height == 16 &&
+                     memcmp(a.rgb, b.rgb, sizeof(float) * 3 * 20 * 16) == 0,
+              "pt_render_image differs from pt_render + pt_film_resolve");
+    }
+    pt_film_free(&f);
+    pt_image_free(&a);
+    pt_image_free(&b);
+    pt_scene_destroy(s);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* convergence                                                                                 */
+
+static void furnace_closed_sphere(test_ctx *t)
+{
+    /* Inside a closed sphere of Lambertian albedo 0.5 emitting 0.5 on both sides, the radiance is
+       Le / (1 - rho) = 1 everywhere (pbrt-v4's furnace; the truncation at max_depth 50 is 2^-51). Every
+       shading point lies on the (two-sided) light itself. 16 regions x 4 strategies = 64 z-tests at
+       alpha 0.01 Sidak. */
+    pt_scene *s = pt_scene_create();
+    pt_material_desc md;
+    int m, rc, strat, i, over3 = 0, n = 0;
+    double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 64)), worst = 0;
+    const char *names[4] = { "MIS", "material", "light", "mixture" };
+    if (!CHECK(t, s != NULL, "scene")) return;
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_LAMBERTIAN;
+    md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
+    md.emission = pt_v3(0.5f, 0.5f, 0.5f);
+    md.two_sided_emission = 1;
+    m = pt_scene_add_material(s, &md);
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (strat = 0; strat < 4; strat++) {
+        pt_render_desc d = base_desc(16, 16, 32);
+        pt_film f;
+        tu_region reg[16];
+        d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
+        d.camera.look_at = pt_v3(1, 0.5f, 0);
+        d.camera.vfov_degrees = 90;
+        d.strategy = (pt_strategy)strat;
+        d.seed = 500 + strat;
+        if (!render_into(t, s, &d, &f, NULL, names[strat])) { pt_film_free(&f); continue; }
+        tu_film_regions(&f, 4, 4, reg);
+        {
+            int fails = 0;
+            double img = 0;
+            for (i = 0; i < 16; i++) {
+                double se = reg[i].se[1], z = se > 0 ? fabs(reg[i].mean[1] - 1.0) / se : (fabs(reg[i].mean[1] - 1) < 1e-5 ? 0 : INFINITY);
+                n++;
+                worst = fmax(worst, z);
+                over3 += z > 3;
+                fails += z > zlim;
+                img += reg[i].mean[1] / 16;
+            }
+            CHECK(t, fails == 0, "%s: %d of 16 regions differ from 1 (z > %.2f); image mean %.4f", names[strat], fails, zlim, img);
+        }
+        pt_film_free(&f);
+    }
+    test_note(t, "%d regions, max |z| %.2f (limit %.2f), %d above 3", n, worst, zlim, over3);
+    pt_scene_destroy(s);
+}
+
+static void furnace_one_bounce(test_ctx *t)
+{
+    /* The same furnace with max_depth 1, one path per sample from a fixed interior point in uniformly
+       random directions: the camera ray sees Le = 0.5 and one scattering adds rho Le = 0.25, so every
+       strategy must give 0.75. This isolates direct light at shading points on a two-sided sphere
+       light (inside it, or numerically just outside its surface). 4 z-tests, alpha 0.01 Sidak. */
+    pt_scene *s = pt_scene_create();
+    pt_material_desc md;
+    int m, rc, strat;
+    double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 4)), worst = 0;
+    const char *names[4] = { "MIS", "material", "light", "mixture" };
+    if (!CHECK(t, s != NULL, "scene")) return;
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_LAMBERTIAN;
+    md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
+    md.emission = pt_v3(0.5f, 0.5f, 0.5f);
+    md.two_sided_emission = 1;
+    m = pt_scene_add_material(s, &md);
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (strat = 0; strat < 4; strat++) {
+        pt_render_desc d = base_desc(1, 1, 1);
+        pt_rng rng, dirs;
+        pt_path_stats ps;
+        tu_acc acc;
+        long i;
+        double se, z;
+        memset(&acc, 0, sizeof acc);
+        memset(&ps, 0, sizeof ps);
+        d.max_depth = 1;
+        d.strategy = (pt_strategy)strat;
+        pt_rng_seed(&rng, 5100 + strat, 1);
+        pt_rng_seed(&dirs, 5200 + strat, 1);
+        for (i = 0; i < 40000; i++) {
+            pt_ray r;
+            pt_color L;
+            r.origin = pt_v3(0.2f, -0.1f, 0.3f);
+            r.dir = pt_normalize(dv_to(tu_rand_dir(&dirs)));
+            L = pt_trace_path(s, &d, r, &rng, &ps);
+            tu_acc_add(&acc, L.y);
+        }
+        se = tu_acc_se(&acc);
+        z = se > 0 ? fabs(acc.mean - 0.75) / se : (fabs(acc.mean - 0.75) < 1e-5 ? 0 : INFINITY);
+        worst = fmax(worst, z);
+        CHECK(t, z <= zlim && ps.nonfinite_samples == 0, "%s: %.5f +- %.5f, want 0.75 (z = %.2f > %.2f)", names[strat], acc.mean,
+              se, z, zlim);
+    }
+    test_note(t, "max |z| %.2f (limit %.2f)", worst, zlim);
+    pt_scene_destroy(s);
+}
+
+static void strategies_agree_cornell(test_ctx *t)
+{
+    /* The four strategies estimate the same image. Cornell box (two boxes), 48x48, max_depth 8. Per
+       region (4x4) and channel, z = (m_s - m_mis) / sqrt(se_s^2 + se_mis^2) with standard errors from
+       the films' per-pixel variances; 3 strategies x 16 regions x 3 channels = 144 comparisons at
+       alpha 0.01 Sidak. Also reports how many |z| exceed 3. */
+    pt_render_desc d = base_desc(48, 48, 96);
+    pt_scene *s = cornell(0, &d);
+    pt_film f[4];
+    tu_region reg[4][16];
+    int strat, i, c, over3 = 0, ok = 1;
+    double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 144)), worst = 0;
+    const char *names[4] = { "MIS", "material", "light", "mixture" };
+    if (!CHECK(t, s != NULL, "Cornell scene")) return;
+    d.max_depth = 8;
+    for (strat = 0; strat < 4; strat++) {
+        d.strategy = (pt_strategy)strat;
+        d.seed = 900 + strat;
+        ok &= render_into(t, s, &d, &f[strat], NULL, names[strat]);
+        if (ok) tu_film_regions(&f[strat], 4, 4, reg[strat]);
+    }
+    if (ok) {
+        for (strat = 1; strat < 4; strat++) {
+            for (i = 0; i < 16; i++) {
+                for (c = 0; c < 3; c++) {
+                    double se = sqrt(reg[strat][i].se[c] * reg[strat][i].se[c] + reg[0][i].se[c] * reg[0][i].se[c]);
+                    double z = fabs(reg[strat][i].mean[c] - reg[0][i].mean[c]) / se;
+                    worst = fmax(worst, z);
+                    over3 += z > 3;
+                    CHECK(t, z <= zlim, "%s vs MIS, region %d channel %d: %.5f +- %.5f vs %.5f +- %.5f (z = %.2f > %.2f)",
+                          names[strat], i, c, reg[strat][i].mean[c], reg[strat][i].se[c], reg[0][i].mean[c], reg[0][i].se[c],
+                          z, zlim);
+                }
+            }
+        }
+    }
+    for (strat = 0; strat < 4; strat++) pt_film_free(&f[strat]);
+    test_note(t, "144 comparisons, max |z| %.2f (limit %.2f), %d above 3", worst, zlim, over3);
+    pt_scene_destroy(s);
+}
+
+/* Guide for the direct-light test: aims at the quad light from the shading point. */
+typedef struct guide_ctx { pt_vec3 q, u, v; long calls; } guide_ctx;
+static int quad_guide(void *user, const pt_shading_point *sp, pt_pdf *out)
+{
+    guide_ctx *g = (guide_ctx *)user;
+    g->calls++;
+    *out = pt_pdf_quad_light(sp->position, g->q, g->u, g->v, 0);
+    return 1;
+}
+
+static void direct_light_lambert(test_ctx *t)
+{
+    /* A Lambertian floor (albedo 0.5) under a 1x1 quad light of radiance 4 at height 2, max_depth 1,
+       camera between them looking down. Each pixel's reference is rho E / pi with E from Lambert's
+       polygon formula, averaged over a 6x6 grid of pt_camera_ray positions in the pixel (hit with the
+       plane in double precision). Four strategies, plus MIS with a user guide PDF aimed at the light:
+       5 x 16 regions = 80 z-tests at alpha 0.01 Sidak. */
+    pt_scene *s = pt_scene_create();
+    pt_vec3 q = pt_v3(-0.2f, 2.0f, -0.3f), u = pt_v3(1, 0, 0), v = pt_v3(0, 0, 1); /* u x v = -y */
+    dv3 verts[4];
+    pt_render_desc d = base_desc(32, 32, 64);
+    pt_camera cam;
+    double *ref = NULL, zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 80)), worst = 0;
+    int floor_m, light_m, rc, x, y, k, strat, over3 = 0;
+    const double rho = 0.5, L = 4.0;
+    const char *names[5] = { "MIS", "material", "light", "mixture", "MIS + guide" };
+    guide_ctx g;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    floor_m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    light_m = pt_scene_add_emitter(s, pt_v3(4, 4, 4), 0);
+    rc = pt_scene_add_quad(s, pt_v3(-20, 0, -20), pt_v3(0, 0, 40), pt_v3(40, 0, 0), floor_m);
+    rc = rc >= 0 ? pt_scene_add_quad(s, q, u, v, light_m) : rc;
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    verts[0] = dv_from(q);
+    verts[1] = dadd(verts[0], dv_from(u));
+    verts[2] = dadd(verts[1], dv_from(v));
+    verts[3] = dadd(verts[0], dv_from(v));
+    d.camera.look_from = pt_v3(0, 1, 0);
+    d.camera.look_at = pt_v3(0, 0, 0);
+    d.camera.up = pt_v3(0, 0, -1);
+    d.camera.vfov_degrees = 70;
+    d.max_depth = 1;
+    pt_camera_init(&cam, &d.camera, d.width, d.height);
+    ref = (double *)malloc(sizeof(double) * 32 * 32);
+    if (!CHECK(t, ref != NULL, "out of memory")) { pt_scene_destroy(s); return; }
+    for (y = 0; y < 32; y++) {
+        for (x = 0; x < 32; x++) {
+            double sum = 0;
+            for (k = 0; k < 36; k++) {
+                pt_ray r = pt_camera_ray(&cam, x + (k % 6 + 0.5f) / 6, y + (k / 6 + 0.5f) / 6, 0.5f, 0.5f);
+                double tt = -(double)r.origin.y / r.dir.y;
+                dv3 p = dadd(dv_from(r.origin), dscale(dv_from(r.dir), tt));
+                sum += rho / TU_PI * L * tu_lambert_polygon(p, dv(0, 1, 0), verts, 4);
+            }
+            ref[y * 32 + x] = sum / 36;
+        }
+    }
+    memset(&g, 0, sizeof g);
+    g.q = q; g.u = u; g.v = v;
+    for (strat = 0; strat < 5; strat++) {
+        pt_film f;
+        tu_region reg[16];
+        int i;
+        d.strategy = (pt_strategy)(strat == 4 ? 0 : strat);
+        d.seed = 600 + strat;
+        if (strat == 4) { d.guide = quad_guide; d.guide_user = &g; d.guide_weight = 0.5f; }
+        if (!render_into(t, s, &d, &f, NULL, names[strat])) { pt_film_free(&f); continue; }
+        tu_film_regions(&f, 4, 4, reg);
+        for (i = 0; i < 16; i++) {
+            double want = 0, z;
+            int n = 0;
+            for (y = (i / 4) * 8; y < (i / 4) * 8 + 8; y++)
+                for (x = (i % 4) * 8; x < (i % 4) * 8 + 8; x++) { want += ref[y * 32 + x]; n++; }
+            want /= n;
+            z = fabs(reg[i].mean[1] - want) / reg[i].se[1];
+            worst = fmax(worst, z);
+            over3 += z > 3;
+            CHECK(t, z <= zlim, "%s, region %d: %.6f +- %.6f, Lambert's formula %.6f (z = %.2f > %.2f)", names[strat], i,
+                  reg[i].mean[1], reg[i].se[1], want, z, zlim);
+        }
+        pt_film_free(&f);
+    }
+    CHECK(t, g.calls > 0, "the guide was never called");
+    test_note(t, "80 comparisons, max |z| %.2f (limit %.2f), %d above 3", worst, zlim, over3);
+    free(ref);
+    pt_scene_destroy(s);
+}
+
+static void direct_sphere_light_formula(test_ctx *t)
+{
+    /* A spherical light of radiance L and angular radius a seen at angle theta from the normal of a
+       Lambertian floor (rho = 0.5), theta + a < pi/2: outgoing radiance rho L sin^2(a) cos(theta)
+       (accuracy-references.md). One path per sample with pt_trace_path, max_depth 1. sin^2(a) = 0.05
+       with every strategy; sin^2(a) = 1e-6 and 1e-8 (radiance scaled to keep the result ~0.05) with
+       the strategies that sample lights. Comparisons: 3 points x (4 + 3 + 3) = 30, alpha 0.01 Sidak. */
+    const double s2[3] = { 0.05, 1e-6, 1e-8 };
+    const dv3 pts[3] = { { 0, 0, 0 }, { 0.7, 0, -0.4 }, { -1.0, 0, 0.9 } };
+    const dv3 c = { 0.3, 2.0, 0.1 };
+    double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 30)), worst = 0;
+    int si, pi, strat;
+    for (si = 0; si < 3; si++) {
+        pt_scene *s = pt_scene_create();
+        int fm, lm, rc;
+        double L = 1.0 / s2[si];
+        if (!CHECK(t, s != NULL, "scene")) return;
+        fm = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+        lm = pt_scene_add_emitter(s, pt_v3((float)L, (float)L, (float)L), 0);
+        rc = pt_scene_add_quad(s, pt_v3(-20, 0, -20), pt_v3(0, 0, 40), pt_v3(40, 0, 0), fm);
+        /* the radius gives sin^2 = s2 at the first point; the other points' sin^2 follow from their
+           distances (one light per scene) */
+        rc = rc >= 0 ? pt_scene_add_sphere(s, dv_to(c), (float)sqrt(s2[si] * ddot(dsub(c, pts[0]), dsub(c, pts[0]))), lm) : rc;
+        rc = rc >= 0 ? pt_scene_commit(s) : rc;
+        if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+        for (pi = 0; pi < 3; pi++) {
+            double R = (float)sqrt(s2[si] * ddot(dsub(c, pts[0]), dsub(c, pts[0])));
+            dv3 l = dsub(c, pts[pi]);
+            double d2 = ddot(l, l), sin2 = R * R / d2, cos_t = l.y / sqrt(d2);
+            double want = 0.5 * (double)(float)L * sin2 * cos_t;
+            for (strat = 0; strat < 4; strat++) {
+                pt_render_desc d = base_desc(1, 1, 1);
+                pt_rng rng;
+                pt_path_stats ps;
+                tu_acc acc;
+                long i;
+                double z;
+                if (si > 0 && strat == PT_STRATEGY_MATERIAL) continue; /* the material PDF cannot find a tiny light */
+                memset(&acc, 0, sizeof acc);
+                memset(&ps, 0, sizeof ps);
+                d.max_depth = 1;
+                d.strategy = (pt_strategy)strat;
+                pt_rng_seed(&rng, 7000 + si * 100 + pi * 10 + strat, 1);
+                for (i = 0; i < 20000; i++) {
+                    pt_ray r;
+                    pt_color col;
+                    r.origin = dv_to(dadd(pts[pi], dv(0.05, 0.2, -0.03)));
+                    r.dir = dv_to(dnorm(dsub(pts[pi], dadd(pts[pi], dv(0.05, 0.2, -0.03)))));
+                    col = pt_trace_path(s, &d, r, &rng, &ps);
+                    tu_acc_add(&acc, col.y);
+                }
+                z = fabs(acc.mean - want) / tu_acc_se(&acc);
+                worst = fmax(worst, z);
+                CHECK(t, z <= zlim && ps.nonfinite_samples == 0,
+                      "sin^2 %.0e, point %d, strategy %d: %.6f +- %.6f, want rho L sin^2 cos = %.6f (z = %.2f), %llu non-finite",
+                      s2[si], pi, strat, acc.mean, tu_acc_se(&acc), want, z, (unsigned long long)ps.nonfinite_samples);
+            }
+        }
+        pt_scene_destroy(s);
+    }
+    test_note(t, "max |z| %.2f (limit %.2f)", worst, zlim);
+}
+
+static void no_nonfinite_anywhere(test_ctx *t)
+{
+    /* Everything at once -- glass, mirror, fuzzy metals (0.3 and 1), a checker texture, a two-sided
+       sphere light, a tiny sphere light of huge radiance, a triangle light, a light behind a wall --
+       with all strategies and a guide: no non-finite sample, no negative or NaN pixel. */
+    pt_render_desc d = base_desc(32, 32, 4);
+    pt_scene *s = pt_scene_create();
+    int m_l, m_glass, m_mirror, m_fuzz, m_fuzz1, m_tex, m_emit2, m_emit, m_tiny, tex, rc = 0, strat;
+    pt_material_desc md;
+    guide_ctx g;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    m_l = pt_scene_add_lambertian(s, pt_v3(0.7f, 0.7f, 0.7f));
+    m_glass = pt_scene_add_dielectric(s, 1.5f);
+    m_mirror = pt_scene_add_metal(s, pt_v3(0.9f, 0.9f, 0.9f), 0.0f);
+    m_fuzz = pt_scene_add_metal(s, pt_v3(0.9f, 0.6f, 0.3f), 0.3f);
+    m_fuzz1 = pt_scene_add_metal(s, pt_v3(0.9f, 0.9f, 0.9f), 1.0f);
+    tex = pt_scene_add_checker(s, pt_v3(0.1f, 0.1f, 0.1f), pt_v3(0.8f, 0.8f, 0.8f), 0.5f);
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_LAMBERTIAN;
+    md.albedo_texture = tex;
+    m_tex = pt_scene_add_material(s, &md);
+    m_emit2 = pt_scene_add_emitter(s, pt_v3(3, 3, 3), 1);
+    m_emit = pt_scene_add_emitter(s, pt_v3(5, 4, 3), 0);
+    m_tiny = pt_scene_add_emitter(s, pt_v3(1e6f, 1e6f, 1e6f), 0);
+    rc |= pt_scene_add_quad(s, pt_v3(-10, 0, -10), pt_v3(0, 0, 20), pt_v3(20, 0, 0), m_tex);
+    rc |= pt_scene_add_sphere(s, pt_v3(-1.5f, 1, 0), 1, m_glass);
+    rc |= pt_scene_add_sphere(s, pt_v3(0.8f, 0.6f, -0.5f), 0.6f, m_mirror);
+    rc |= pt_scene_add_sphere(s, pt_v3(1.8f, 0.5f, 1), 0.5f, m_fuzz);
+    rc |= pt_scene_add_sphere(s, pt_v3(-0.2f, 0.3f, 1.5f), 0.3f, m_fuzz1);
+    rc |= pt_scene_add_sphere(s, pt_v3(0, 3, 0), 0.5f, m_emit2);
+    rc |= pt_scene_add_sphere(s, pt_v3(2, 2, -2), 1e-3f, m_tiny);
+    rc |= pt_scene_add_triangle(s, pt_v3(-3, 2.5f, -3), pt_v3(-1, 2.5f, -3), pt_v3(-2, 2.5f, -1), m_emit);
+    rc |= pt_scene_add_quad(s, pt_v3(-5, 0, 4), pt_v3(10, 0, 0), pt_v3(0, 5, 0), m_l);
+    rc |= pt_scene_add_quad(s, pt_v3(-1, 1, 5), pt_v3(2, 0, 0), pt_v3(0, 2, 0), m_emit); /* behind the wall */
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    d.camera.look_from = pt_v3(0, 1.5f, -5);
+    d.camera.look_at = pt_v3(0, 1, 0);
+    d.camera.vfov_degrees = 60;
+    d.max_depth = 12;
+    memset(&g, 0, sizeof g);
+    g.q = pt_v3(-3, 2.5f, -3); g.u = pt_v3(2, 0, 0); g.v = pt_v3(0, 0, 2);
+    for (strat = 0; strat < 5; strat++) {
+        pt_film f;
+        pt_image img;
+        int bad = 0, k;
+        d.strategy = (pt_strategy)(strat % 4);
+        if (strat == 4) { d.guide = quad_guide; d.guide_user = &g; }
+        memset(&img, 0, sizeof img);
+        if (render_into(t, s, &d, &f, NULL, "all-features scene") && pt_film_resolve(&f, &img) == PT_OK) {
+            for (k = 0; k < 3 * 32 * 32; k++) bad += !(img.rgb[k] >= 0.0f) || !isfinite(img.rgb[k]);
+            CHECK(t, bad == 0, "strategy %d: %d negative or non-finite pixel values", strat, bad);
+        }
+        pt_image_free(&img);
+        pt_film_free(&f);
+    }
+    pt_scene_destroy(s);
+}
+
+const test_case test_render_cases[] = {
+    TEST_CASE(camera_conventions),
+    TEST_CASE(threads_bit_identical),
+    TEST_CASE(progressive_equals_single),
+    TEST_CASE(cancellation_and_progress),
+    TEST_CASE(render_image_matches_film),
+    TEST_CASE(furnace_closed_sphere),
+    TEST_CASE(furnace_one_bounce),
+    TEST_CASE(strategies_agree_cornell),
+    TEST_CASE(direct_light_lambert),
+    TEST_CASE(direct_sphere_light_formula),
+    TEST_CASE(no_nonfinite_anywhere),
+    TEST_END
+};
