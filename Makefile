@@ -5,11 +5,14 @@
 #   make run-all          also render the other examples into out/
 #   make test             build and run the test runner, then again without threads and
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
 #                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
 #   make clean            remove build/ and out/
+#   make help             this text
 #
-# Every variable below can be overridden: make CC=clang CFLAGS='-O3 -g' RUN_SPP=256
+# Every variable set with ?= in the Makefile can be overridden, e.g.
+#   make CC=clang CFLAGS='-O3 -g' RUN_SPP=256
 
 CFLAGS   ?= -std=c99 -O3 -Wall -Wextra -pedantic
 CXXFLAGS ?= -O2 -Wall -Wextra -pedantic
@@ -114,4 +117,4 @@ clean:
 	rm -rf $(BUILD) $(OUT)
 
 help:
-	@sed -n '2,12p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,/^$$/p' Makefile | sed -n 's/^# \{0,1\}//p'
