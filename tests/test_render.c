@@ -13,7 +13,9 @@
    RENDER_STAT_FAMILIES such tests, so at most ~5% for the file if all were independent). */
 #include "test_util.h"
 
+#ifndef PDFTRACE_NO_THREADS
 #include <pthread.h>
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -152,6 +154,7 @@ static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
     for (i = count - 1; i >= 0; i--) job(job_data, i);
 }
 
+#ifndef PDFTRACE_NO_THREADS
 typedef struct host_pool { pthread_mutex_t mu; int next, count; pt_job_fn job; void *data; } host_pool;
 /* Each of two threads takes the next index and runs tile count-1-index: all tiles, once, in reverse. */
 static void *host_worker_rev(void *arg)
@@ -184,6 +187,7 @@ static void host_threads(void *user, int count, pt_job_fn job, void *job_data)
     for (k = 0; k < started; k++) pthread_join(th[k], NULL);
     pthread_mutex_destroy(&p.mu);
 }
+#endif
 
 static void threads_bit_identical(test_ctx *t)
 {
@@ -204,9 +208,19 @@ static void threads_bit_identical(test_ctx *t)
         e.threads = k == 0 ? 2 : k == 1 ? 3 : k == 5 ? 0 : 1;
         if (k == 2) { e.tile_size = 7; e.threads = 2; }
         if (k == 3) e.parallel_for = host_reverse;
+#ifndef PDFTRACE_NO_THREADS
         if (k == 4) e.parallel_for = host_threads;
+#else
+        if (k == 4) e.parallel_for = host_reverse; /* no threads in this build */
+#endif
         if (render_into(t, s, &e, &f, &st, names[k]))
             CHECK(t, tu_film_equal(&ref, &f), "%s: film differs from threads=1", names[k]);
+        pt_film_free(&f);
+    }
+    {   /* and the seed matters */
+        pt_render_desc e = d;
+        e.seed = d.seed + 1;
+        if (render_into(t, s, &e, &f, &st, "seed + 1")) CHECK(t, !tu_film_equal(&ref, &f), "a different seed gave the same film");
         pt_film_free(&f);
     }
     pt_film_free(&ref);
@@ -376,7 +390,7 @@ static void furnace_closed_sphere(test_ctx *t)
     rc = rc >= 0 ? pt_scene_commit(s) : rc;
     if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     for (strat = 0; strat < 4; strat++) {
-        pt_render_desc d = base_desc(16, 16, 32);
+        pt_render_desc d = base_desc(16, 16, 45); /* a non-square count on purpose */
         pt_film f;
         tu_region reg[16];
         d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
@@ -401,7 +415,7 @@ static void furnace_closed_sphere(test_ctx *t)
         }
         pt_film_free(&f);
     }
-    test_note(t, "%d regions, max |z| %.2f (limit %.2f), %d above 3", n, worst, zlim, over3);
+    test_note(t, "%d regions, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over 64), %d above 3", n, worst, zlim, over3);
     pt_scene_destroy(s);
 }
 
@@ -453,7 +467,7 @@ static void furnace_one_bounce(test_ctx *t)
         CHECK(t, z <= zlim && ps.nonfinite_samples == 0, "%s: %.5f +- %.5f, want 0.75 (z = %.2f > %.2f)", names[strat], acc.mean,
               se, z, zlim);
     }
-    test_note(t, "max |z| %.2f (limit %.2f)", worst, zlim);
+    test_note(t, "max |z| %.2f (limit %.2f: alpha 0.01 Sidak over 4)", worst, zlim);
     pt_scene_destroy(s);
 }
 
@@ -462,8 +476,8 @@ static void strategies_agree_cornell(test_ctx *t)
     /* The four strategies estimate the same image. Cornell box (two boxes), 48x48, max_depth 8. Per
        region (4x4) and channel, z = (m_s - m_mis) / sqrt(se_s^2 + se_mis^2) with standard errors from
        the films' per-pixel variances; 3 strategies x 16 regions x 3 channels = 144 comparisons at
-       alpha 0.01 Sidak. Also reports how many |z| exceed 3. */
-    pt_render_desc d = base_desc(48, 48, 96);
+       alpha 0.01 Sidak. Also reports how many |z| exceed 3. 200 spp. */
+    pt_render_desc d = base_desc(48, 48, 200);
     pt_scene *s = cornell(0, &d);
     pt_film f[4];
     tu_region reg[4][16];
@@ -494,7 +508,7 @@ static void strategies_agree_cornell(test_ctx *t)
         }
     }
     for (strat = 0; strat < 4; strat++) pt_film_free(&f[strat]);
-    test_note(t, "144 comparisons, max |z| %.2f (limit %.2f), %d above 3", worst, zlim, over3);
+    test_note(t, "144 comparisons, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over 144), %d above 3", worst, zlim, over3);
     pt_scene_destroy(s);
 }
 
@@ -513,17 +527,17 @@ static void direct_light_lambert(test_ctx *t)
     /* A Lambertian floor (albedo 0.5) under a 1x1 quad light of radiance 4 at height 2, max_depth 1,
        camera between them looking down. Each pixel's reference is rho E / pi with E from Lambert's
        polygon formula, averaged over a 6x6 grid of pt_camera_ray positions in the pixel (hit with the
-       plane in double precision). Four strategies, plus MIS with a user guide PDF aimed at the light:
-       5 x 16 regions = 80 z-tests at alpha 0.01 Sidak. */
+       plane in double precision). Four strategies, the mixture with light_weight 0.2, and MIS with a
+       user guide PDF aimed at the light: 6 x 16 regions = 96 z-tests at alpha 0.01 Sidak. */
     pt_scene *s = pt_scene_create();
     pt_vec3 q = pt_v3(-0.2f, 2.0f, -0.3f), u = pt_v3(1, 0, 0), v = pt_v3(0, 0, 1); /* u x v = -y */
     dv3 verts[4];
-    pt_render_desc d = base_desc(32, 32, 64);
+    pt_render_desc d = base_desc(32, 32, 128);
     pt_camera cam;
-    double *ref = NULL, zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 80)), worst = 0;
+    double *ref = NULL, zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 96)), worst = 0;
     int floor_m, light_m, rc, x, y, k, strat, over3 = 0;
     const double rho = 0.5, L = 4.0;
-    const char *names[5] = { "MIS", "material", "light", "mixture", "MIS + guide" };
+    const char *names[6] = { "MIS", "material", "light", "mixture", "MIS + guide", "mixture, light_weight 0.2" };
     guide_ctx g;
     if (!CHECK(t, s != NULL, "scene")) return;
     floor_m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
@@ -558,12 +572,14 @@ static void direct_light_lambert(test_ctx *t)
     }
     memset(&g, 0, sizeof g);
     g.q = q; g.u = u; g.v = v;
-    for (strat = 0; strat < 5; strat++) {
+    for (strat = 0; strat < 6; strat++) {
         pt_film f;
         tu_region reg[16];
         int i;
-        d.strategy = (pt_strategy)(strat == 4 ? 0 : strat);
+        d.strategy = (pt_strategy)(strat == 4 ? 0 : strat == 5 ? 3 : strat);
         d.seed = 600 + strat;
+        d.guide = NULL;
+        d.light_weight = strat == 5 ? 0.2f : 0.0f;
         if (strat == 4) { d.guide = quad_guide; d.guide_user = &g; d.guide_weight = 0.5f; }
         if (!render_into(t, s, &d, &f, NULL, names[strat])) { pt_film_free(&f); continue; }
         tu_film_regions(&f, 4, 4, reg);
@@ -582,7 +598,7 @@ static void direct_light_lambert(test_ctx *t)
         pt_film_free(&f);
     }
     CHECK(t, g.calls > 0, "the guide was never called");
-    test_note(t, "80 comparisons, max |z| %.2f (limit %.2f), %d above 3", worst, zlim, over3);
+    test_note(t, "96 comparisons, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over 96), %d above 3", worst, zlim, over3);
     free(ref);
     pt_scene_destroy(s);
 }
@@ -647,7 +663,7 @@ static void direct_sphere_light_formula(test_ctx *t)
         }
         pt_scene_destroy(s);
     }
-    test_note(t, "max |z| %.2f (limit %.2f)", worst, zlim);
+    test_note(t, "max |z| %.2f (limit %.2f: alpha 0.01 Sidak over 30)", worst, zlim);
 }
 
 static void no_nonfinite_anywhere(test_ctx *t)
@@ -709,12 +725,75 @@ static void no_nonfinite_anywhere(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+static void render_desc_validation(test_ctx *t)
+{
+    /* Settings outside their documented ranges are rejected; pt_trace_path is a pure function of
+       its rng state. */
+    pt_render_desc d = base_desc(8, 8, 1);
+    pt_scene *s = cornell(0, &d);
+    pt_film f;
+    int rc;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); return; }
+    d.light_weight = 1.5f;
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "light_weight 1.5: %d", rc);
+    d.light_weight = 0;
+    d.strategy = (pt_strategy)7;
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "strategy 7: %d", rc);
+    d.strategy = PT_STRATEGY_MIS;
+    d.background = pt_v3(NAN, 0, 0);
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "NaN background: %d", rc);
+    d.background = pt_v3(0, 0, 0);
+    d.guide = quad_guide;
+    d.guide_weight = 1.0f;
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "guide_weight 1 (must be < 1): %d", rc);
+    d.guide = NULL;
+    d.guide_weight = 0;
+    rc = pt_render(s, &d, NULL, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "NULL film: %d", rc);
+    rc = pt_render(NULL, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "NULL scene: %d", rc);
+    {
+        pt_film g;
+        if (pt_film_init(&g, 9, 8) == PT_OK) {
+            rc = pt_render(s, &d, &g, NULL);
+            CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "film of another size than the desc: %d", rc);
+            pt_film_free(&g);
+        }
+    }
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_OK, "valid settings after the invalid ones: %d", rc);
+    {
+        pt_rng a, b;
+        pt_ray r;
+        pt_color x, y;
+        int i, same = 1;
+        pt_rng_seed(&a, 77, 3);
+        r.origin = pt_v3(278, 278, -800);
+        r.dir = pt_normalize(pt_v3(0.05f, -0.1f, 1));
+        for (i = 0; i < 50; i++) {
+            b = a;
+            x = pt_trace_path(s, &d, r, &a, NULL);
+            y = pt_trace_path(s, &d, r, &b, NULL);
+            same &= x.x == y.x && x.y == y.y && x.z == y.z && a.state == b.state;
+        }
+        CHECK(t, same, "pt_trace_path is not a pure function of its rng state");
+    }
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+}
+
 const test_case test_render_cases[] = {
     TEST_CASE(camera_conventions),
     TEST_CASE(threads_bit_identical),
     TEST_CASE(progressive_equals_single),
     TEST_CASE(cancellation_and_progress),
     TEST_CASE(render_image_matches_film),
+    TEST_CASE(render_desc_validation),
     TEST_CASE(furnace_closed_sphere),
     TEST_CASE(furnace_one_bounce),
     TEST_CASE(strategies_agree_cornell),
