@@ -967,10 +967,13 @@ typedef struct pt__light_sample {
    accuracy-references; Shirley RTRL sec. 12 for the cone; pbrt-v4 sec. 6.2.4). Inside or on the
    sphere (two-sided only; a one-sided sphere emits outwards and cannot light its inside):
    uniform area sampling converted to solid angle, density dist^2 / (|cos| * area). */
+/* Inside or on the surface. A point on a sphere rounds to either side of it; within 1e-5
+   (relative, in squared distance) it counts as on it, where area sampling is exact and a
+   cone from "just outside" would put the sampled point behind the origin. */
 static int pt__sphere_inside(pt_vec3 o, pt_vec3 c, float r)
 {
     pt_vec3 wc = pt_sub(c, o);
-    return pt_length2(wc) <= r * r;
+    return pt_length2(wc) <= r * r * (1.0f + 1e-5f);
 }
 /* Whether the float direction w lies in the cone of directions from the origin that meet the
    sphere (wc = centre - origin): sin^2 of the angle from the cross product, in double, so the
@@ -996,7 +999,7 @@ static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided,
 {
     pt_vec3 wc = pt_sub(c, o);
     float d2 = pt_length2(wc);
-    if (d2 > r * r) {
+    if (!pt__sphere_inside(o, c, r)) {
         float d = sqrtf(d2), s2 = (r * r) / d2;
         float omc = pt__cone_one_minus_cos(s2);           /* 1 - cos(theta_max) */
         float uc = u1 * omc;
@@ -1046,7 +1049,7 @@ static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided
 {
     pt_vec3 wc = pt_sub(c, o);
     float d2 = pt_length2(wc);
-    if (d2 > r * r) {
+    if (!pt__sphere_inside(o, c, r)) {
         float s2 = (r * r) / d2;
         if (!pt__in_cone(w, wc, r)) return 0.0f;
         return 1.0f / (2.0f * PT__PI * pt__cone_one_minus_cos(s2));
@@ -2141,6 +2144,11 @@ static float pt__half_area(pt_vec3 lo, pt_vec3 hi)
     return d.x * d.y + d.y * d.z + d.z * d.x;
 }
 
+/* Relative 2^-22 plus 1e-30 absolute (a normal float whose product with 1/0 -> FLT_MAX is
+   still larger than any distance in a scene). */
+static float pt__pad_down(float x) { return x - (fabsf(x) * 2.384185791e-7f + 1e-30f); }
+static float pt__pad_up(float x) { return x + (fabsf(x) * 2.384185791e-7f + 1e-30f); }
+
 static uint32_t pt__bvh_build_range(pt__bvh_build *b, uint32_t begin, uint32_t end, uint32_t depth)
 {
     uint32_t ni = b->node_count++, n = end - begin, i, mid = begin;
@@ -2156,8 +2164,10 @@ static uint32_t pt__bvh_build_range(pt__bvh_build *b, uint32_t begin, uint32_t e
         clo = pt__vmin(clo, b->c[p]);
         chi = pt__vmax(chi, b->c[p]);
     }
-    node->lo[0] = lo.x; node->lo[1] = lo.y; node->lo[2] = lo.z;
-    node->hi[0] = hi.x; node->hi[1] = hi.y; node->hi[2] = hi.z;
+    /* padded outwards: a ray running exactly in a bounding plane (an axis-aligned ray along a
+       box face) would otherwise get 0 * 1/0 for that slab and be culled */
+    node->lo[0] = pt__pad_down(lo.x); node->lo[1] = pt__pad_down(lo.y); node->lo[2] = pt__pad_down(lo.z);
+    node->hi[0] = pt__pad_up(hi.x); node->hi[1] = pt__pad_up(hi.y); node->hi[2] = pt__pad_up(hi.z);
     node->count = 0;
     node->axis = 0;
     node->index = begin;
@@ -2707,7 +2717,8 @@ static float pt__power_heuristic(float a, float b)
 /* Per-vertex state of the scatter density (material PDF mixed with an optional guide). */
 typedef struct pt__vertex {
     const pt__material *m;
-    pt_vec3 p, ng, ns, wo;
+    pt_vec3 p, o, ng, ns, wo; /* o: the spawn point on the side of ng, the origin of every ray and
+                                 of every light computation at this vertex */
     pt_color albedo;
     int has_guide;
     float g;
@@ -2794,6 +2805,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
         v.albedo = pt__albedo(s, m, h.point);
 
+        v.o = pt_offset_ray_origin(v.p, v.ng, v.ng);
         if (m->delta) {
             /* perfectly specular: follow the delta direction; no light PDF here */
             if (m->type == PT_MATERIAL_DIELECTRIC) {
@@ -2829,7 +2841,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                 pt__light_sample ls;
                 uint32_t li;
                 float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-                if (pt__lights_sample(s, v.p, u0, u1, u2, &ls, &li)) {
+                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) {
                     f = pt__material_eval(m, v.albedo, v.ns, v.ng, v.wo, ls.dir);
                     if (!pt__is_black(f)) {
                         float w = 1.0f;
@@ -2837,7 +2849,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                         pt__rayctx src;
                         pt_vec3 target;
                         if (cfg->strategy == PT_STRATEGY_MIS) w = pt__power_heuristic(ls.pdf, pt__scatter_density(&v, ls.dir));
-                        sr.origin = pt_offset_ray_origin(v.p, v.ng, ls.dir);
+                        sr.origin = v.o;
                         target = pt_offset_ray_origin(ls.point, ls.normal, pt_neg(ls.dir));
                         sr.dir = pt_sub(target, sr.origin);
                         pt__rayctx_init2(&src, sr, tri);
@@ -2850,17 +2862,17 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                 }
             }
             /* the direction that continues the path */
-            if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights && pt__lights_reachable(s, v.p)) {
+            if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights && pt__lights_reachable(s, v.o)) {
                 u = pt_rng_float(rng);
                 use_light = u < cfg->light_weight;
                 if (use_light) {
                     pt__light_sample ls;
                     uint32_t li;
                     float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-                    if (!pt__lights_sample(s, v.p, u0, u1, u2, &ls, &li)) break;
+                    if (!pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) break;
                     wi = ls.dir;
                 } else if (!pt__scatter_sample(&v, rng, &wi)) break;
-                p_total = cfg->light_weight * pt__lights_value(s, v.p, wi) +
+                p_total = cfg->light_weight * pt__lights_value(s, v.o, wi) +
                           (1.0f - cfg->light_weight) * pt__scatter_density(&v, wi);
             } else {
                 if (!pt__scatter_sample(&v, rng, &wi)) break;
@@ -2872,8 +2884,10 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
             prev_pdf = p_total;
             prev_delta = 0;
         }
-        prev_p = v.p;
-        ray.origin = pt_offset_ray_origin(v.p, v.ng, wi);
+        /* non-delta directions always leave on the side of ng (pt__material_eval), so the
+           spawn point is v.o, the point that light sampling used */
+        prev_p = v.o;
+        ray.origin = prev_delta ? pt_offset_ray_origin(v.p, v.ng, wi) : v.o;
         ray.dir = wi;
         if (depth + 1 >= cfg->rr_start) {
             float q = pt__minf(0.95f, pt_max_component(beta));
