@@ -856,7 +856,8 @@ typedef struct pt__prim {
     pt_vec3 p1;       /* sphere: (radius, 0, 0) | quad: u | triangle: b */
     pt_vec3 p2;       /* quad: v | triangle: c */
     pt_vec3 n;        /* quad, triangle: unit geometric normal */
-    pt_vec3 w;        /* quad: n'/(n'.n'), n' = u x v (plane coordinates, Shirley RTNW) */
+    pt_vec3 w;        /* quad: v x w0 and ... */
+    pt_vec3 w2;       /* ... w0 x u, with w0 = n'/(n'.n'), n' = u x v: a = h.w, b = h.w2 */
     uint32_t id;      /* public primitive index */
     int32_t material;
     int32_t light;    /* index into scene->lights, or -1 */
@@ -1502,8 +1503,9 @@ static PT__HOT int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, floa
     return 0;
 }
 
-/* Parallelogram Q + a u + b v: plane hit, then plane coordinates a = w.(p x v), b = w.(u x p)
-   with w = n'/(n'.n') (Shirley, "Ray Tracing: The Next Week", sec. 6). */
+/* Parallelogram Q + a u + b v: plane hit, then plane coordinates a = w.(h x v), b = w.(u x h)
+   with w = n'/(n'.n'), h = hit - Q (Shirley, "Ray Tracing: The Next Week", sec. 6), as
+   a = h.(v x w), b = h.(w x u) with both vectors precomputed. */
 static PT__HOT int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t_out)
 {
     float denom = pt_dot(p->n, rc->d), t, a, b;
@@ -1512,8 +1514,8 @@ static PT__HOT int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float t
     t = pt_dot(p->n, pt_sub(p->p0, rc->o)) / denom;
     if (!(t > 0.0f && t < tmax)) return 0;
     h = pt_sub(pt_madd(rc->o, rc->d, t), p->p0);
-    a = pt_dot(p->w, pt_cross(h, p->p2));
-    b = pt_dot(p->w, pt_cross(p->p1, h));
+    a = pt_dot(h, p->w);
+    b = pt_dot(h, p->w2);
     if (a < 0.0f || a > 1.0f || b < 0.0f || b > 1.0f) return 0;
     *t_out = t;
     return 1;
@@ -1560,9 +1562,11 @@ PTDEF int pt_intersect_sphere(pt_ray ray, pt_vec3 center, float radius, float tm
 }
 static void pt__quad_setup(pt__prim *p)
 {
-    pt_vec3 nn = pt_cross(p->p1, p->p2);
+    pt_vec3 nn = pt_cross(p->p1, p->p2), w0 = pt_scale(nn, 1.0f / pt_dot(nn, nn));
     p->n = pt_normalize(nn);
-    p->w = pt_scale(nn, 1.0f / pt_dot(nn, nn));
+    /* w0.(h x v) = h.(v x w0) and w0.(u x h) = h.(w0 x u): precomputed once */
+    p->w = pt_cross(p->p2, w0);
+    p->w2 = pt_cross(w0, p->p1);
 }
 PTDEF int pt_intersect_quad(pt_ray ray, pt_vec3 q, pt_vec3 u, pt_vec3 v, float tmax, float *t)
 {
