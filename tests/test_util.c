@@ -112,6 +112,13 @@ double tu_chi2_sf(double x, double dof)
     return gamma_q_fraction(a, hx);
 }
 
+double tu_z_floor(double mean, double want, double se, double floor)
+{
+    double d = fabs(mean - want) - floor;
+    if (d <= 0.0) return 0.0;
+    return se > 0.0 ? d / se : INFINITY;
+}
+
 void tu_acc_add(tu_acc *a, double x)
 {
     double d;

@@ -39,6 +39,15 @@ double tu_sidak(double alpha, int k);      /* per-test level for family-wise alp
 double tu_z_two_sided(double alpha);       /* z with P(|Z| > z) = alpha, Z standard normal */
 double tu_chi2_sf(double x, double dof);   /* P(X > x) for X ~ chi-square(dof) */
 
+/* z-score of a mean against an exact reference, after allowing a systematic error of `floor`:
+   (|mean - want| - floor) / se, or 0 inside the floor; infinite if se == 0 and outside it. The
+   render tests use floor = TU_FLOAT_FLOOR * |want|: a float32 renderer starts secondary rays from
+   origins offset by ~256 ulps (Waechter & Binder) and so estimates quantities ~1e-5 (relative)
+   away from the surface point; near-zero-variance estimators would turn that into huge z. The
+   floor is far below every bias these tests exist to catch (>= 1e-3). */
+#define TU_FLOAT_FLOOR 1e-4
+double tu_z_floor(double mean, double want, double se, double floor);
+
 typedef struct tu_acc { double n, mean, m2; } tu_acc; /* Welford running mean and variance */
 void tu_acc_add(tu_acc *a, double x);
 double tu_acc_var(const tu_acc *a);        /* unbiased sample variance */
