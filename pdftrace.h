@@ -41,7 +41,7 @@
        int white = pt_scene_add_lambertian(s, pt_v3(0.73f, 0.73f, 0.73f));
        int light = pt_scene_add_emitter(s, pt_v3(15, 15, 15), 0);
        pt_scene_add_quad(s, pt_v3(-5,0,-5), pt_v3(10,0,0), pt_v3(0,0,10), white);   (floor)
-       pt_scene_add_quad(s, pt_v3(-1,4,1), pt_v3(2,0,0), pt_v3(0,0,-2), light);    (emits along u x v = -y)
+       pt_scene_add_quad(s, pt_v3(-1,4,-1), pt_v3(2,0,0), pt_v3(0,0,2), light);    (emits along u x v = -y)
        pt_scene_add_sphere(s, pt_v3(0,1,0), 1, white);
        if (pt_scene_commit(s) != PT_OK) puts(pt_scene_error_message(s));
        pt_render_desc d = {0};                 (zero means "default" for every field)
@@ -99,7 +99,11 @@
 
 #ifndef PTDEF
 #ifdef PDFTRACE_STATIC
+#if defined(__GNUC__) || defined(__clang__)
+#define PTDEF static __attribute__((unused)) /* a file need not call every function */
+#else
 #define PTDEF static
+#endif
 #else
 #define PTDEF extern
 #endif
@@ -505,7 +509,12 @@ typedef enum pt_strategy {
 
 /* A user guide PDF: fills *out for a shading point and returns 1, or returns 0 to skip the
    guide there. The PDF is mixed into the material side of every strategy with
-   pt_render_desc.guide_weight: p_scatter = (1 - g) p_material + g p_guide. */
+   pt_render_desc.guide_weight: p_scatter = (1 - g) p_material + g p_guide.
+   Called from every render thread at once: `user` must be safe to read concurrently. The
+   pt_shading_point is valid only during the call; the pt_pdf written to *out is used while
+   that vertex is shaded (right after the call), so anything it points to (mixture components
+   and weights, callback data, a scene) must outlive the call: point into `user` or other data
+   that lives until pt_render returns, never into the callback's own stack frame. */
 typedef int (*pt_guide_fn)(void *user, const pt_shading_point *sp, pt_pdf *out);
 
 /* Counters for one or more paths. */
