@@ -380,7 +380,8 @@ typedef struct pt_mesh_desc {
     const float *normals;        /* optional: 3 floats per vertex, interpolated for shading */
     int material;
 } pt_mesh_desc;
-/* Copies the data. Zero-area triangles are skipped (counted in pt_scene_info). */
+/* Copies the data. Zero-area triangles are skipped (counted in pt_scene_info); the others get
+   consecutive primitive indices, starting at the returned one, in the order given. */
 PTDEF int pt_scene_add_mesh(pt_scene *scene, const pt_mesh_desc *mesh);
 
 PTDEF int pt_scene_commit(pt_scene *scene);
@@ -405,7 +406,8 @@ PTDEF int pt_scene_occluded(const pt_scene *scene, pt_ray ray, float tmax);
 /* Reference closest hit that tests every primitive; for tests and debugging. */
 PTDEF int pt_scene_intersect_brute_force(const pt_scene *scene, pt_ray ray, float tmax, pt_hit *hit);
 
-/* Single-primitive intersections: the smallest t in (0, tmax), or return 0.
+/* Single-primitive intersections: the smallest t in (0, tmax), or return 0. Edges count as
+   part of a quad or triangle (a ray through an edge hits).
    Ray/sphere after Haines et al., "Precision Improvements for Ray/Sphere Intersection",
    Ray Tracing Gems ch. 7; ray/triangle is watertight (Woop, Benthin & Wald, JCGT 2(1), 2013). */
 PTDEF int pt_intersect_sphere(pt_ray ray, pt_vec3 center, float radius, float tmax, float *t);
@@ -601,8 +603,8 @@ PTDEF int pt_film_pixel(const pt_film *film, int x, int y, pt_color *mean, pt_co
 PTDEF int pt_image_init(pt_image *image, int width, int height);
 PTDEF void pt_image_free(pt_image *image);
 
-/* Renders desc->samples_per_pixel more samples into every pixel of the film (initialised to
-   the desc's size). Returns PT_OK, PT_ERROR_CANCELLED (the film holds what was done) or an
+/* Renders desc->samples_per_pixel more samples into every pixel of the film, which the caller
+   initialised with pt_film_init(film, desc->width, desc->height). Returns PT_OK, PT_ERROR_CANCELLED (the film holds what was done) or an
    error. stats may be NULL. */
 PTDEF int pt_render(const pt_scene *scene, const pt_render_desc *desc, pt_film *film, pt_render_stats *stats);
 /* Convenience: a fresh film, rendered and resolved into *image. */
