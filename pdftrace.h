@@ -1310,10 +1310,20 @@ static int pt__pdf_validate_depth(const pt_pdf *pdf, int depth)
 }
 PTDEF int pt_pdf_validate(const pt_pdf *pdf) { return pt__pdf_validate_depth(pdf, 0); }
 
-PTDEF float pt_pdf_value(const pt_pdf *pdf, pt_vec3 w)
+/* Mixtures nest; a cyclic or absurdly deep one (misuse) yields no density instead of
+   unbounded recursion. */
+#define PT__PDF_MAX_DEPTH 32
+static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth);
+static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value, int depth);
+PTDEF float pt_pdf_value(const pt_pdf *pdf, pt_vec3 w) { return pt__pdf_value_depth(pdf, w, 0); }
+PTDEF int pt_pdf_sample(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value)
+{
+    return pt__pdf_sample_depth(pdf, rng, dir, pdf_value, 0);
+}
+static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
 {
     float v = 0.0f;
-    if (!pdf) return 0.0f;
+    if (!pdf || depth > PT__PDF_MAX_DEPTH) return 0.0f;
     switch (pdf->type) {
     case PT_PDF_UNIFORM_SPHERE: v = PT__INV_4PI; break;
     case PT_PDF_COSINE_HEMISPHERE: v = pt__maxf(0.0f, pt_dot(w, pdf->as.cosine.basis.n)) * PT__INV_PI; break;
@@ -1343,7 +1353,7 @@ PTDEF float pt_pdf_value(const pt_pdf *pdf, pt_vec3 w)
         if (!pdf->as.mixture.components || !pdf->as.mixture.weights) break;
         for (k = 0; k < pdf->as.mixture.count; ++k)
             if (pdf->as.mixture.weights[k] > 0.0f)
-                v += pdf->as.mixture.weights[k] * pt_pdf_value(&pdf->as.mixture.components[k], w);
+                v += pdf->as.mixture.weights[k] * pt__pdf_value_depth(&pdf->as.mixture.components[k], w, depth + 1);
         break;
     }
     case PT_PDF_CALLBACK:
@@ -1354,7 +1364,7 @@ PTDEF float pt_pdf_value(const pt_pdf *pdf, pt_vec3 w)
     return pt__isfinite(v) && v > 0.0f ? v : 0.0f;
 }
 
-PTDEF int pt_pdf_sample(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value)
+static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value, int depth)
 {
     pt_vec3 w = pt_v3(0, 0, 0);
     float p = 0.0f;
@@ -1362,7 +1372,7 @@ PTDEF int pt_pdf_sample(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf
     pt__light_sample ls;
     if (dir) *dir = w;
     if (pdf_value) *pdf_value = 0.0f;
-    if (!pdf || !rng || !dir || !pdf_value) return 0;
+    if (!pdf || !rng || !dir || !pdf_value || depth > PT__PDF_MAX_DEPTH) return 0;
     switch (pdf->type) {
     case PT_PDF_UNIFORM_SPHERE: {
         float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
@@ -1433,13 +1443,13 @@ PTDEF int pt_pdf_sample(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf
             if (u < acc) break;
         }
         if (chosen < 0) break;
-        if (!pt_pdf_sample(&pdf->as.mixture.components[chosen], rng, &w, &pk)) break;
+        if (!pt__pdf_sample_depth(&pdf->as.mixture.components[chosen], rng, &w, &pk, depth + 1)) break;
         /* density of the mixture: sum over every component, the chosen one included */
         p = 0.0f;
         for (k = 0; k < n; ++k) {
             float wk = pdf->as.mixture.weights[k];
             if (!(wk > 0.0f)) continue;
-            p += wk * (k == chosen ? pk : pt_pdf_value(&pdf->as.mixture.components[k], w));
+            p += wk * (k == chosen ? pk : pt__pdf_value_depth(&pdf->as.mixture.components[k], w, depth + 1));
         }
         ok = p > 0.0f;
         break;
