@@ -3,7 +3,8 @@
 
    References are double-precision intersections written here (Haines et al.'s perpendicular-distance
    discriminant for spheres, parametric coordinates for planar shapes). Statistical checks (the
-   transformed emitters) share alpha = 0.01, Sidak-corrected over GEOM_STAT_TESTS comparisons. */
+   transformed emitters' PDF checks) belong to the chi-square suite's family (test_util.h:
+   alpha = 0.01 over the whole suite, Sidak-corrected over TU_SUITE_COMPARISONS). */
 #include "test_util.h"
 
 #include <float.h>
@@ -11,10 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define GEOM_STAT_TESTS 20
-#define FILE_ALPHA 0.01
-
-static double alpha_each(void) { return tu_sidak(FILE_ALPHA, GEOM_STAT_TESTS); }
+static double alpha_each(void) { return tu_suite_alpha(); }
 
 static pt_ray mkray(dv3 o, dv3 d)
 {
@@ -520,8 +518,8 @@ static void transformed_emitters(test_ctx *t)
             if (pt_scene_intersect(s, r, INFINITY, &h) != 1 || h.primitive != (uint32_t)id) misses++;
         }
         CHECK(t, misses == 0, "%s: %d of 2000 light samples do not hit the emitter", c.label, misses);
-        test_note(t, "%s max |z| %.2f, chi2 p %.3f (alpha %.2g each: 0.01 Sidak over %d)", k == 0 ? "quad" : "sphere",
-                  res.max_abs_z, res.chi2_p, alpha_each(), GEOM_STAT_TESTS);
+        test_note(t, "%s max |z| %.2f, chi2 p %.3f (alpha %.2g each: 0.01 Sidak over %d, the chi-square suite)", k == 0 ? "quad" : "sphere",
+                  res.max_abs_z, res.chi2_p, alpha_each(), TU_SUITE_COMPARISONS);
         pt_scene_destroy(s);
     }
 }

@@ -125,15 +125,56 @@ typedef struct tu_pdf_check {
     int ns, nphi;            /* chi-square grid; ns = 0 skips the chi-square test */
     uint64_t seed;
     double alpha;            /* per comparison */
+    double inv_z;            /* > 0: E[1/p] must lie within inv_z standard errors (3 for the cases of
+                                issue 3); 0: at the level alpha like the other comparisons */
+    int expect_reject;       /* a deliberately wrong PDF (harness demonstration): recorded as such and
+                                not counted in the suite's family of comparisons */
 } tu_pdf_check;
 
+/* The most statistical comparisons one checker call makes at level alpha: chi-square, success
+   fraction vs mass, Monte Carlo mass vs expected mass, Monte Carlo mass vs success fraction, E[1/p]. */
 #define TU_PDF_COMPARISONS 5
+/* Relative agreement required between the density returned with a sample and pt_pdf_value of the
+   sampled direction (accuracy-references.md: 1e-5 or better). */
+#define TU_SAMPLE_VALUE_REL 1e-5
+/* Hard failure when pt_pdf_value integrates over the histogram's domain to more than 1 + this (the
+   adaptive quadrature is accurate to ~1e-4 on every case of the suite). */
+#define TU_MASS_TOL 2e-3
 
 typedef struct tu_pdf_result {
     double chi2_p;           /* 2 when not run */
+    double chi2;
+    int dof;                 /* -1 when not run */
+    double integral;         /* pt_pdf_value integrated over the histogram's domain (NAN: not run) */
     double max_abs_z;        /* over the z comparisons */
+    double inv_z;            /* (E[1/p] - support) / se, NAN when not checked */
+    double worst_sample_value_rel; /* max relative difference of sample density and pt_pdf_value */
     double success_fraction, mass, inv_pdf_mean;
 } tu_pdf_result;
+
+/* ---- the chi-square suite ----
+   Every statistical comparison made by a PDF check (tu_check_pdf and the other chi-square tests of
+   sampling) belongs to one family: alpha = 0.01 for the whole suite, Sidak-corrected over at most
+   TU_SUITE_COMPARISONS comparisons, i.e. each is made at 1 - 0.99^(1/TU_SUITE_COMPARISONS). The
+   checker counts the comparisons it makes (tests count their others with tu_suite_count); the
+   suite.chi2_table test fails if an unfiltered run made more than the bound, and prints one row
+   per chi-square case. */
+#define TU_SUITE_ALPHA 0.01
+#define TU_SUITE_COMPARISONS 600
+double tu_suite_alpha(void);
+void tu_suite_count(int comparisons);
+long tu_suite_comparisons(void);
+
+typedef struct tu_chi2_row {
+    char label[96];
+    long n;                  /* draws */
+    int dof;
+    double chi2, p, integral, inv_z;
+    int has_inv_z, expect_reject, passed;
+} tu_chi2_row;
+int tu_chi2_row_count(void);
+const tu_chi2_row *tu_chi2_row_at(int i);
+void tu_chi2_print_table(void);
 
 int tu_check_pdf_(test_ctx *t, const tu_pdf_check *c, tu_pdf_result *res, const char *file, int line);
 #define TU_CHECK_PDF(t, c, res) tu_check_pdf_((t), (c), (res), __FILE__, __LINE__)
