@@ -77,6 +77,7 @@ int main(int argc, char **argv)
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
         { "output", test_output_cases },
+        { "analytic", test_analytic_cases },
         { "suite", test_suite_cases },
     };
     const char *filter = argc > 1 ? argv[1] : NULL;

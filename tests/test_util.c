@@ -917,3 +917,152 @@ int tu_film_equal(const pt_film *a, const pt_film *b)
            memcmp(a->sum_sq, b->sum_sq, n * 3 * sizeof(double)) == 0 &&
            memcmp(a->count, b->count, n * sizeof(uint32_t)) == 0;
 }
+
+/* ------------------------------------------------------------------------------------------ */
+/* analytic images                                                                             */
+
+/* Irradiance at a point x of the plane y = 0 (normal +y) from the light, radiance L. */
+static double plane_irradiance(const tu_light *L, double Le, dv3 x)
+{
+    if (L->kind == TU_SPHERE) {
+        /* E = pi L sin^2(alpha) cos(theta), sin alpha = R / d, cos theta = (c - x).n / d */
+        dv3 l = dsub(L->p0, x);
+        double d2 = ddot(l, l);
+        return TU_PI * Le * (L->radius * L->radius / d2) * (l.y / sqrt(d2));
+    } else {
+        dv3 v[4];
+        int n;
+        if (L->kind == TU_QUAD) {
+            v[0] = L->p0; v[1] = dadd(L->p0, L->p1); v[2] = dadd(v[1], L->p2); v[3] = dadd(L->p0, L->p2);
+            n = 4;
+        } else {
+            v[0] = L->p0; v[1] = L->p1; v[2] = L->p2;
+            n = 3;
+        }
+        return Le * tu_lambert_polygon(x, dv(0, 1, 0), v, n);
+    }
+}
+
+/* Midpoint rule over the pixel footprint with k x k camera rays. */
+static double footprint_mean(const tu_plane_scene *ps, const pt_camera *cam, int x, int y, int k)
+{
+    double sum = 0.0;
+    int a, b;
+    for (a = 0; a < k; a++) {
+        for (b = 0; b < k; b++) {
+            pt_ray r = pt_camera_ray(cam, (float)(x + (a + 0.5) / k), (float)(y + (b + 0.5) / k), 0.5f, 0.5f);
+            double tt = -(double)r.origin.y / (double)r.dir.y;
+            dv3 p = dadd(dv_from(r.origin), dscale(dv_from(r.dir), tt));
+            sum += ps->rho / TU_PI * plane_irradiance(&ps->light, ps->radiance, p);
+        }
+    }
+    return sum / (k * k);
+}
+
+int tu_plane_scene_create(tu_plane_scene *ps, int kind, int width, int height)
+{
+    int floor_m, light_m, rc, x, y;
+    pt_camera cam;
+    memset(ps, 0, sizeof *ps);
+    ps->rho = 0.5;
+    ps->radiance = 1.0;
+    ps->width = width;
+    ps->height = height;
+    ps->light.kind = kind;
+    if (kind == TU_SPHERE) {
+        /* sin^2(alpha) = 1/4.84 below the centre; the sphere (y in [1.2, 3.2]) is above the camera */
+        ps->light.p0 = dv(0.3, 2.2, 0.1);
+        ps->light.radius = 1.0;
+    } else if (kind == TU_QUAD) {
+        ps->light.p0 = dv(-1.0, 1.5, -1.0); /* u x v = (0, -4, 0): faces the plane */
+        ps->light.p1 = dv(2.0, 0.0, 0.0);
+        ps->light.p2 = dv(0.0, 0.0, 2.0);
+    } else {
+        ps->light.p0 = dv(-1.2, 1.5, -1.0); /* (b - a) x (c - a) points down */
+        ps->light.p1 = dv(1.5, 1.5, -0.9);
+        ps->light.p2 = dv(-0.9, 1.5, 1.4);
+    }
+    ps->scene = pt_scene_create();
+    if (!ps->scene) return 0;
+    floor_m = pt_scene_add_lambertian(ps->scene, pt_v3((float)ps->rho, (float)ps->rho, (float)ps->rho));
+    light_m = pt_scene_add_emitter(ps->scene, pt_v3((float)ps->radiance, (float)ps->radiance, (float)ps->radiance), 0);
+    rc = pt_scene_add_quad(ps->scene, pt_v3(-20, 0, -20), pt_v3(0, 0, 40), pt_v3(40, 0, 0), floor_m);
+    if (rc >= 0) {
+        if (kind == TU_SPHERE) rc = pt_scene_add_sphere(ps->scene, dv_to(ps->light.p0), (float)ps->light.radius, light_m);
+        else if (kind == TU_QUAD) rc = pt_scene_add_quad(ps->scene, dv_to(ps->light.p0), dv_to(ps->light.p1), dv_to(ps->light.p2), light_m);
+        else rc = pt_scene_add_triangle(ps->scene, dv_to(ps->light.p0), dv_to(ps->light.p1), dv_to(ps->light.p2), light_m);
+    }
+    if (rc < 0 || pt_scene_commit(ps->scene) != PT_OK) return 0;
+    ps->camera.look_from = pt_v3(0, 1, 0);
+    ps->camera.look_at = pt_v3(0, 0, 0);
+    ps->camera.up = pt_v3(0, 0, -1);
+    ps->camera.vfov_degrees = 70;
+    if (pt_camera_init(&cam, &ps->camera, width, height) != PT_OK) return 0;
+    ps->ref = (double *)malloc(sizeof(double) * (size_t)width * (size_t)height);
+    ps->qerr = (double *)malloc(sizeof(double) * (size_t)width * (size_t)height);
+    if (!ps->ref || !ps->qerr) return 0;
+    for (y = 0; y < height; y++) {
+        for (x = 0; x < width; x++) {
+            double i8 = footprint_mean(ps, &cam, x, y, 8), i4 = footprint_mean(ps, &cam, x, y, 4);
+            ps->ref[y * width + x] = i8;
+            ps->qerr[y * width + x] = fabs(i8 - i4) / 3.0;
+        }
+    }
+    return 1;
+}
+
+void tu_plane_scene_destroy(tu_plane_scene *ps)
+{
+    if (ps->scene) pt_scene_destroy(ps->scene);
+    free(ps->ref);
+    free(ps->qerr);
+    memset(ps, 0, sizeof *ps);
+}
+
+void tu_plane_render_compare(const tu_plane_scene *ps, pt_render_desc *d, double z_pixel, tu_image_stats *out)
+{
+    pt_film f;
+    pt_render_stats st;
+    int x, y;
+    double var_sum = 0.0;
+    memset(out, 0, sizeof *out);
+    d->width = ps->width;
+    d->height = ps->height;
+    d->camera = ps->camera;
+    d->max_depth = 1;
+    out->rc = pt_film_init(&f, d->width, d->height);
+    if (out->rc != PT_OK) return;
+    out->rc = pt_render(ps->scene, d, &f, &st);
+    out->nonfinite = st.nonfinite_samples;
+    out->seconds = st.seconds;
+    if (out->rc == PT_OK) {
+        for (y = 0; y < d->height; y++) {
+            for (x = 0; x < d->width; x++) {
+                pt_color m, v;
+                double want = ps->ref[y * d->width + x], se, z, zs;
+                pt_film_pixel(&f, x, y, &m, &v);
+                se = sqrt((double)v.y);
+                z = tu_z_floor(m.y, want, se, TU_FLOAT_FLOOR * want);
+                zs = m.y >= want ? z : -z;
+                out->pixels++;
+                out->accepted += z <= z_pixel;
+                out->mean_rel += (m.y - want) / want;
+                out->mean_z += zs;
+                out->max_abs_z = fmax(out->max_abs_z, z);
+                out->image_mean += m.y;
+                out->image_ref += want;
+                var_sum += v.y;
+                if (se > 0.0) out->worst_qerr_over_se = fmax(out->worst_qerr_over_se, ps->qerr[y * d->width + x] / se);
+                else if (ps->qerr[y * d->width + x] > 0.0) out->worst_qerr_over_se = INFINITY;
+            }
+        }
+        out->mean_rel /= out->pixels;
+        out->mean_z /= out->pixels;
+        out->image_mean /= out->pixels;
+        out->image_ref /= out->pixels;
+        out->image_se = sqrt(var_sum) / out->pixels;
+        out->image_z = tu_z_floor(out->image_mean, out->image_ref, out->image_se, TU_FLOAT_FLOOR * out->image_ref);
+        if (out->image_mean < out->image_ref) out->image_z = -out->image_z;
+    }
+    pt_film_free(&f);
+}

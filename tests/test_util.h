@@ -186,6 +186,44 @@ typedef struct tu_region { double mean[3], se[3]; int pixels; } tu_region;
 int tu_film_regions(const pt_film *f, int rx, int ry, tu_region *out);
 int tu_film_equal(const pt_film *a, const pt_film *b); /* bit-identical sums, squares and counts */
 
+/* ---- analytic images: a Lambertian plane lit by one light, direct light only ----
+   The plane y = 0 (albedo rho) under one emitter of radiance L (a sphere, a quad or a triangle, all
+   wholly above the plane and facing it), seen by a pinhole camera looking straight down from below
+   the emitter (so no camera ray meets it). With max_depth 1 the exact outgoing radiance at a plane
+   point is rho E / pi (Lambertian receiver), E from Lambert's polygon formula (planar lights) or
+   E = pi L sin^2(alpha) cos(theta) (a sphere wholly above the tangent plane, so theta + alpha <= pi/2
+   holds everywhere: accuracy-references.md). A pixel's expectation is the mean of rho E / pi over its
+   footprint (the renderer jitters the camera ray uniformly over the pixel): computed by the midpoint
+   rule on 8 x 8 camera rays per pixel, hit with the plane in double precision; its error is
+   estimated by Richardson's rule from the 4 x 4 rule, |I_8 - I_4| / 3 (midpoint error ~ h^2). */
+typedef struct tu_plane_scene {
+    pt_scene *scene;
+    tu_light light;          /* the emitter, in double */
+    double radiance, rho;
+    pt_camera_desc camera;
+    int width, height;
+    double *ref, *qerr;      /* per pixel: the footprint mean of rho E / pi and its quadrature error */
+} tu_plane_scene;
+/* kind: TU_SPHERE, TU_QUAD or TU_TRIANGLE. Returns 1 on success. */
+int tu_plane_scene_create(tu_plane_scene *ps, int kind, int width, int height);
+void tu_plane_scene_destroy(tu_plane_scene *ps);
+
+typedef struct tu_image_stats {
+    int pixels, accepted;    /* pixels whose z (beyond the float floor) is within z_pixel */
+    double mean_rel;         /* mean over pixels of (mean - ref) / ref */
+    double mean_z;           /* mean signed z over pixels */
+    double max_abs_z;
+    double image_mean, image_ref, image_se, image_z; /* the image's mean pixel value */
+    double worst_qerr_over_se; /* reference quadrature error / pixel standard error, worst pixel */
+    uint64_t nonfinite;
+    double seconds;
+    int rc;                  /* pt_render's result */
+} tu_image_stats;
+/* Renders the scene with d (its width, height, camera and max_depth are set here) into a fresh film
+   and compares every pixel (green channel) with its reference: z = (|mean - ref| - floor) / se with
+   se from pt_film_pixel's variance of the mean and floor = TU_FLOAT_FLOOR * ref. */
+void tu_plane_render_compare(const tu_plane_scene *ps, pt_render_desc *d, double z_pixel, tu_image_stats *out);
+
 int tu_verbose(void); /* PT_TEST_VERBOSE set: print per-case details */
 
 #endif

@@ -1,0 +1,293 @@
+/* test_analytic.c - issue 3's analytic images and furnaces: every strategy against closed forms,
+   pixel by pixel.
+
+   Analytic images (tu_plane_scene in test_util.h): a Lambertian plane (rho = 0.5) lit by a sphere, a
+   quad or a triangle light of radiance 1, direct light only (max_depth 1), 64 x 64 pixels, rendered
+   with each strategy (MIS, MATERIAL, LIGHT, MIXTURE at light weight 0.5) and compared per pixel with
+   the footprint mean of rho E / pi (Lambert's polygon formula in double precision; E = pi L sin^2(a)
+   cos(t) for the sphere). Acceptance (issue 3): at least 99.5 % of the pixels pass a two-sided z-test
+   at alpha = 0.001 (|z| <= 3.29, z from the pixel's sample variance of the mean, beyond the 1e-4
+   relative float floor of test_util.h), and the image mean lies within 3 standard errors.
+
+   False-failure rates. A pixel's z uses its sample variance (a t statistic): with the sample counts
+   below every pixel holds >= ~100 light hits even for MATERIAL, whose samples are Bernoulli (rho L
+   or 0), and the two tails of the t statistic of such a mean at n p >= 100 add up to at most
+   ~0.0016 instead of 0.001 (Poisson tail sums). The number of rejected pixels is then ~Binomial(4096,
+   <= 0.0016), mean <= 6.6, and the threshold 0.5 % allows 20: P(fail) < 1e-5 per image. The image
+   mean test at 3 standard errors fails with probability 0.0027 per image; 12 images: ~3.2 %. The
+   reference's quadrature error is checked to stay below 5 % of every pixel's standard error.
+
+   Furnaces: inside a closed sphere of albedo 0.5 emitting 0.5 (two-sided) the radiance is
+   Le / (1 - rho) = 1 everywhere; a mirror and a glass sphere inside a uniform two-sided emitter of
+   radiance 1 (a real emitter, sampled as a light by MIS/LIGHT/MIXTURE) return 1. */
+#include "test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define IMAGE_W 64
+#define IMAGE_H 64
+#define PIXEL_ALPHA 0.001
+#define ACCEPT_FRACTION 0.995
+#define IMAGE_Z 3.0
+
+static const char *strategy_name(int s)
+{
+    return s == PT_STRATEGY_MIS ? "MIS" : s == PT_STRATEGY_MATERIAL ? "MATERIAL" : s == PT_STRATEGY_LIGHT ? "LIGHT" : "MIXTURE";
+}
+
+/* Samples per pixel by strategy: MATERIAL finds the light only by hitting it (probability ~0.1-0.3
+   per sample here), so it needs the most for >= 100 hits per pixel. */
+static int strategy_spp(int s) { return s == PT_STRATEGY_MATERIAL ? 1024 : s == PT_STRATEGY_LIGHT ? 128 : 256; }
+
+static void analytic_image(test_ctx *t, int kind, const char *light_name, uint64_t seed)
+{
+    tu_plane_scene ps;
+    int strat;
+    double zpix = tu_z_two_sided(PIXEL_ALPHA);
+    if (!CHECK(t, tu_plane_scene_create(&ps, kind, IMAGE_W, IMAGE_H), "%s scene setup failed", light_name)) {
+        tu_plane_scene_destroy(&ps);
+        return;
+    }
+    for (strat = 0; strat < 4; strat++) {
+        pt_render_desc d;
+        tu_image_stats st;
+        memset(&d, 0, sizeof d);
+        d.samples_per_pixel = strategy_spp(strat);
+        d.strategy = (pt_strategy)strat;
+        d.seed = seed + (uint64_t)strat;
+        tu_plane_render_compare(&ps, &d, zpix, &st);
+        if (!CHECK(t, st.rc == PT_OK, "%s, %s: pt_render returned %d", light_name, strategy_name(strat), st.rc)) continue;
+        CHECK(t, st.nonfinite == 0, "%s, %s: %llu non-finite samples", light_name, strategy_name(strat),
+              (unsigned long long)st.nonfinite);
+        CHECK(t, st.accepted >= ACCEPT_FRACTION * st.pixels,
+              "%s, %s: only %d of %d pixels (%.2f %%) pass the z-test at alpha %.3g (need %.1f %%); mean rel error %+.2e, mean z %+.2f",
+              light_name, strategy_name(strat), st.accepted, st.pixels, 100.0 * st.accepted / st.pixels, PIXEL_ALPHA,
+              100 * ACCEPT_FRACTION, st.mean_rel, st.mean_z);
+        CHECK(t, fabs(st.image_z) <= IMAGE_Z, "%s, %s: image mean %.7f +- %.2g, reference %.7f (z = %+.2f, limit %.0f)",
+              light_name, strategy_name(strat), st.image_mean, st.image_se, st.image_ref, st.image_z, IMAGE_Z);
+        CHECK(t, st.worst_qerr_over_se < 0.05,
+              "%s, %s: the reference's quadrature error reaches %.3f of a pixel's standard error", light_name,
+              strategy_name(strat), st.worst_qerr_over_se);
+        test_note(t, "%s %d spp: %.2f %% accepted, mean rel err %+.1e, mean z %+.3f, image z %+.2f", strategy_name(strat),
+                  d.samples_per_pixel, 100.0 * st.accepted / st.pixels, st.mean_rel, st.mean_z, st.image_z);
+        if (tu_verbose())
+            printf("    %s %s: %d spp, %d/%d accepted, max |z| %.2f, image %.7f +- %.2g ref %.7f, qerr/se %.3g, %.2f s\n",
+                   light_name, strategy_name(strat), d.samples_per_pixel, st.accepted, st.pixels, st.max_abs_z,
+                   st.image_mean, st.image_se, st.image_ref, st.worst_qerr_over_se, st.seconds);
+    }
+    tu_plane_scene_destroy(&ps);
+}
+
+static void image_sphere_light(test_ctx *t) { analytic_image(t, TU_SPHERE, "sphere light", 31000); }
+static void image_quad_light(test_ctx *t) { analytic_image(t, TU_QUAD, "quad light", 32000); }
+static void image_triangle_light(test_ctx *t) { analytic_image(t, TU_TRIANGLE, "triangle light", 33000); }
+
+/* ------------------------------------------------------------------------------------------ */
+/* furnaces                                                                                    */
+
+typedef struct furnace_stats {
+    int pixels, accepted, within;   /* z-test passes; |mean - want| <= tol */
+    double max_dev, image_mean, image_se, image_z, mean_sample_sd;
+    uint64_t nonfinite;
+    int rc;
+} furnace_stats;
+
+/* Renders and compares every pixel with `want` (green channel; the scenes are grey). pooled: the
+   z-test uses the image's mean variance of a pixel mean instead of each pixel's own (see
+   furnace_every_pixel). */
+static void furnace_render(const pt_scene *s, pt_render_desc *d, double want, double tol, int pooled, furnace_stats *fs)
+{
+    pt_film f;
+    pt_render_stats st;
+    int x, y;
+    double zpix = tu_z_two_sided(PIXEL_ALPHA), var = 0.0, pooled_var = 0.0;
+    memset(fs, 0, sizeof *fs);
+    fs->rc = pt_film_init(&f, d->width, d->height);
+    if (fs->rc != PT_OK) return;
+    fs->rc = pt_render(s, d, &f, &st);
+    fs->nonfinite = st.nonfinite_samples;
+    if (fs->rc == PT_OK) {
+        for (y = 0; y < d->height; y++) {
+            for (x = 0; x < d->width; x++) {
+                pt_color m, v;
+                pt_film_pixel(&f, x, y, &m, &v);
+                pooled_var += v.y / (d->width * d->height);
+            }
+        }
+        for (y = 0; y < d->height; y++) {
+            for (x = 0; x < d->width; x++) {
+                pt_color m, v;
+                double dev, z;
+                pt_film_pixel(&f, x, y, &m, &v);
+                dev = fabs(m.y - want);
+                z = tu_z_floor(m.y, want, sqrt(pooled ? pooled_var : v.y), TU_FLOAT_FLOOR * want);
+                fs->pixels++;
+                fs->accepted += z <= zpix;
+                fs->within += dev <= tol;
+                fs->max_dev = fmax(fs->max_dev, dev);
+                fs->image_mean += m.y;
+                fs->mean_sample_sd += sqrt(v.y * d->samples_per_pixel);
+                var += v.y;
+            }
+        }
+        fs->image_mean /= fs->pixels;
+        fs->mean_sample_sd /= fs->pixels;
+        fs->image_se = sqrt(var) / fs->pixels;
+        fs->image_z = tu_z_floor(fs->image_mean, want, fs->image_se, TU_FLOAT_FLOOR * want);
+    }
+    pt_film_free(&f);
+}
+
+/* Samples per pixel for the closed furnace with Russian roulette (the default from depth 3), 64 x 64
+   pixels: enough for the image mean's standard error to be <= 1e-3 / 3.5 with each strategy's
+   per-sample standard deviation (measured: MIS 0.31, MATERIAL 0.41, LIGHT 0.21, MIXTURE 0.41), and
+   at least ~300 per pixel so that the skew of a pixel mean stays small (LIGHT at 140 spp rejected
+   0.42 %% of the pixels, at 560 spp 0.11 %%). */
+static int furnace_rr_spp(int s) { return s == PT_STRATEGY_MIS ? 300 : s == PT_STRATEGY_LIGHT ? 560 : 525; }
+
+static void furnace_every_pixel(test_ctx *t)
+{
+    /* Issue 3: inside a closed sphere of albedo 0.5 emitting 0.5 on both sides every pixel converges
+       to Le / (1 - rho) = 1 (pbrt-v4's furnace). Camera inside, off-centre, 32 x 32, each strategy.
+       Stated as: every pixel passes a z-test against 1 (>= 99.5 %% of them at alpha 0.001) and the
+       image mean lies within 1e-3 of 1, with enough samples that 1e-3 is at least 3.5 standard
+       errors (false failure < 5e-4 per render; 8 renders: < 0.4 %%).
+       (a) Russian roulette off, max_depth 20 (the truncation loses 2^-21), 256 spp. At a shading point exactly
+       on the sphere every strategy would be exact (cosine sampling: f/p = rho; area sampling a
+       sphere from its own surface: cos cos' / d^2 = 1/(4 R^2), so f L / p = rho Le; MIS's two
+       densities coincide), but rays leave from spawn points ~256 ulps inside the surface (Waechter
+       & Binder): light samples within ~0.02 of the shading point then carry less than rho Le (a
+       relative bias ~1e-5 overall, per sample up to the whole contribution, ~1e-4 of the samples).
+       So: MATERIAL, which never samples the light, must be within 1e-5 of 1 in every pixel; with
+       the others >= 99.5 %% of the pixels must be within 1e-3 (a rare short light sample moves a
+       pixel by <= 0.25 / 256).
+       (b) Russian roulette on (the default, from depth 3), 64 x 64, furnace_rr_spp samples per
+       pixel. Roulette makes the samples strongly right-skewed (most paths are cut at depth 3, a few
+       survive with weight 1/q), and the t statistic of a pixel built on its own sample variance is
+       then left-skewed: at 2100 spp 0.27-0.4 %% of the pixels fell below |z| = 3.29 (measured over
+       seeds, all with mean below 1 and a variance that missed the rare survivors) instead of 0.1 %%.
+       Every pixel of this furnace estimates the same quantity with the same sample distribution
+       (after the first hit the process is the same everywhere on the sphere), so the z-test uses
+       the image's pooled variance of a pixel mean: measured rejection rates 0.05-0.15 %%, so ~6 of
+       4096 pixels expected against the 20 that 99.5 %% allows (false failure ~1e-5 per render).
+       (Without roulette the variance comes from rare short light samples, which are exactly what
+       a pixel's own variance must see: (a) uses the per-pixel variance.) */
+    pt_scene *s = pt_scene_create();
+    pt_material_desc md;
+    int m, rc, strat, rr;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_LAMBERTIAN;
+    md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
+    md.emission = pt_v3(0.5f, 0.5f, 0.5f);
+    md.two_sided_emission = 1;
+    m = pt_scene_add_material(s, &md);
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (rr = 0; rr < 2; rr++) {
+        for (strat = 0; strat < 4; strat++) {
+            pt_render_desc d;
+            furnace_stats fs;
+            memset(&d, 0, sizeof d);
+            d.width = rr == 0 ? 32 : 64;
+            d.height = rr == 0 ? 32 : 64;
+            d.samples_per_pixel = rr == 0 ? 256 : furnace_rr_spp(strat);
+            d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
+            d.camera.look_at = pt_v3(1, 0.5f, 0);
+            d.camera.vfov_degrees = 90;
+            d.strategy = (pt_strategy)strat;
+            d.max_depth = rr == 0 ? 20 : 50;
+            d.rr_start_depth = rr == 0 ? -1 : 0;
+            d.seed = 34000 + (uint64_t)(10 * rr + strat);
+            /* without Russian roulette the truncation at depth 20 loses 2^-21 = 4.8e-7 */
+            furnace_render(s, &d, rr == 0 ? 1.0 - ldexp(1.0, -21) : 1.0, 1e-3, rr, &fs);
+            if (!CHECK(t, fs.rc == PT_OK, "%s: pt_render %d", strategy_name(strat), fs.rc)) continue;
+            CHECK(t, fs.nonfinite == 0, "%s: %llu non-finite samples", strategy_name(strat), (unsigned long long)fs.nonfinite);
+            CHECK(t, fs.accepted >= ACCEPT_FRACTION * fs.pixels, "%s, RR %s: only %d of %d pixels pass the z-test against 1",
+                  strategy_name(strat), rr ? "on" : "off", fs.accepted, fs.pixels);
+            CHECK(t, fabs(fs.image_mean - 1.0) <= 1e-3, "%s, RR %s: image mean %.6f +- %.2g, not within 1e-3 of 1",
+                  strategy_name(strat), rr ? "on" : "off", fs.image_mean, fs.image_se);
+            CHECK(t, 3.5 * fs.image_se <= 1e-3, "%s, RR %s: image standard error %.2g too large to resolve 1e-3",
+                  strategy_name(strat), rr ? "on" : "off", fs.image_se);
+            if (rr == 0 && strat == PT_STRATEGY_MATERIAL)
+                CHECK(t, fs.max_dev <= 1e-5, "MATERIAL, no Russian roulette: a pixel is %.2e from 1 (the estimator is exact)",
+                      fs.max_dev);
+            if (rr == 0)
+                CHECK(t, fs.within >= ACCEPT_FRACTION * fs.pixels,
+                      "%s, no Russian roulette: %d of %d pixels farther than 1e-3 from 1 (max deviation %.2e)",
+                      strategy_name(strat), fs.pixels - fs.within, fs.pixels, fs.max_dev);
+            test_note(t, "RR %s %s %d spp: mean %.5f +- %.1e, %.2f %% z-accepted, %.2f %% within 1e-3, max |pixel - 1| %.1e",
+                      rr ? "on" : "off", strategy_name(strat), d.samples_per_pixel, fs.image_mean, fs.image_se,
+                      100.0 * fs.accepted / fs.pixels, 100.0 * fs.within / fs.pixels, fs.max_dev);
+        }
+    }
+    pt_scene_destroy(s);
+}
+
+static void furnace_mirror_glass_in_emitter(test_ctx *t)
+{
+    /* Issue 3: a mirror (albedo 1) and a glass sphere (ior 1.5) inside a uniform two-sided emitter
+       sphere of radiance 1 (a real emitter, sampled as a light by MIS, LIGHT and MIXTURE) return 1:
+       both are lossless, and after a delta vertex the emitter counts at full weight with every
+       strategy. Camera inside, 48 x 32. (a) Russian roulette off, max_depth 50: every pixel within
+       1e-3 of 1 (exactly 1 but for paths trapped > 50 bounces). (b) Russian roulette on (the default,
+       from depth 3): the image mean within 3 standard errors of 1 (false failure 0.27 %% per
+       strategy). A per-pixel z-test is not used here: in a glass pixel only ~8 %% of the paths reach
+       depth 3 and ~5 %% of those are killed (value 0) while the others carry 1/0.95, so a pixel
+       holds ~2 kills on average and its sample variance misses them in ~13 %% of the pixels -- the
+       z statistic of such a rare-event mean is far from normal (checked: 4 %% of the glass pixels
+       then "fail" at alpha 0.001 although the image is unbiased). */
+    pt_scene *s = pt_scene_create();
+    int em, mirror, glass, rc, strat, rr;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    em = pt_scene_add_emitter(s, pt_v3(1, 1, 1), 1);
+    mirror = pt_scene_add_metal(s, pt_v3(1, 1, 1), 0.0f);
+    glass = pt_scene_add_dielectric(s, 1.5f);
+    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 6.0f, em);
+    rc = rc >= 0 ? pt_scene_add_sphere(s, pt_v3(-1.1f, 0, 0), 1.0f, mirror) : rc;
+    rc = rc >= 0 ? pt_scene_add_sphere(s, pt_v3(1.1f, 0, 0.2f), 1.0f, glass) : rc;
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (rr = 0; rr < 2; rr++) {
+        for (strat = 0; strat < 4; strat++) {
+            pt_render_desc d;
+            furnace_stats fs;
+            memset(&d, 0, sizeof d);
+            d.width = 48;
+            d.height = 32;
+            d.samples_per_pixel = rr == 0 ? 16 : 256;
+            d.camera.look_from = pt_v3(0.1f, 0.3f, -4.0f);
+            d.camera.look_at = pt_v3(0, 0, 0);
+            d.camera.vfov_degrees = 60;
+            d.strategy = (pt_strategy)strat;
+            d.max_depth = 50;
+            d.rr_start_depth = rr == 0 ? -1 : 0;
+            d.seed = 35000 + (uint64_t)(10 * rr + strat);
+            furnace_render(s, &d, 1.0, 1e-3, 0, &fs);
+            if (!CHECK(t, fs.rc == PT_OK, "%s: pt_render %d", strategy_name(strat), fs.rc)) continue;
+            CHECK(t, fs.nonfinite == 0, "%s: %llu non-finite samples", strategy_name(strat), (unsigned long long)fs.nonfinite);
+            if (rr == 0) {
+                CHECK(t, fs.within == fs.pixels, "%s, no Russian roulette: %d of %d pixels farther than 1e-3 from 1 (max deviation %.2e)",
+                      strategy_name(strat), fs.pixels - fs.within, fs.pixels, fs.max_dev);
+                test_note(t, "RR off %s: max |pixel - 1| %.1e", strategy_name(strat), fs.max_dev);
+            } else {
+                CHECK(t, fs.image_z <= IMAGE_Z, "%s, RR: image mean %.6f +- %.2g, not within 3 standard errors of 1",
+                      strategy_name(strat), fs.image_mean, fs.image_se);
+                test_note(t, "RR on %s: mean %.5f +- %.1e", strategy_name(strat), fs.image_mean, fs.image_se);
+            }
+        }
+    }
+    pt_scene_destroy(s);
+}
+
+const test_case test_analytic_cases[] = {
+    TEST_CASE(image_sphere_light),
+    TEST_CASE(image_quad_light),
+    TEST_CASE(image_triangle_light),
+    TEST_CASE(furnace_every_pixel),
+    TEST_CASE(furnace_mirror_glass_in_emitter),
+    TEST_END
+};
