@@ -55,6 +55,7 @@ extern const test_case test_bvh_cases[];
 extern const test_case test_render_cases[];
 extern const test_case test_output_cases[];
 extern const test_case test_analytic_cases[];
+extern const test_case test_regress_cases[];
 extern const test_case test_suite_cases[];  /* last: summaries over the whole run */
 
 #endif

@@ -78,6 +78,7 @@ int main(int argc, char **argv)
         { "render", test_render_cases },
         { "output", test_output_cases },
         { "analytic", test_analytic_cases },
+        { "regress", test_regress_cases },
         { "suite", test_suite_cases },
     };
     const char *filter = argc > 1 ? argv[1] : NULL;

@@ -921,8 +921,8 @@ int tu_film_equal(const pt_film *a, const pt_film *b)
 /* ------------------------------------------------------------------------------------------ */
 /* analytic images                                                                             */
 
-/* Irradiance at a point x of the plane y = 0 (normal +y) from the light, radiance L. */
-static double plane_irradiance(const tu_light *L, double Le, dv3 x)
+/* Irradiance at a point x of the plane y = 0 (normal +y) from the light, radiance Le. */
+double tu_plane_irradiance(const tu_light *L, double Le, dv3 x)
 {
     if (L->kind == TU_SPHERE) {
         /* E = pi L sin^2(alpha) cos(theta), sin alpha = R / d, cos theta = (c - x).n / d */
@@ -947,52 +947,24 @@ static double plane_irradiance(const tu_light *L, double Le, dv3 x)
 static double footprint_mean(const tu_plane_scene *ps, const pt_camera *cam, int x, int y, int k)
 {
     double sum = 0.0;
-    int a, b;
+    int a, b, i;
     for (a = 0; a < k; a++) {
         for (b = 0; b < k; b++) {
             pt_ray r = pt_camera_ray(cam, (float)(x + (a + 0.5) / k), (float)(y + (b + 0.5) / k), 0.5f, 0.5f);
             double tt = -(double)r.origin.y / (double)r.dir.y;
             dv3 p = dadd(dv_from(r.origin), dscale(dv_from(r.dir), tt));
-            sum += ps->rho / TU_PI * plane_irradiance(&ps->light, ps->radiance, p);
+            for (i = 0; i < ps->light_count; i++) sum += ps->rho / TU_PI * tu_plane_irradiance(&ps->light[i], ps->radiance[i], p);
         }
     }
     return sum / (k * k);
 }
 
-int tu_plane_scene_create(tu_plane_scene *ps, int kind, int width, int height)
+int tu_plane_scene_finish(tu_plane_scene *ps, int width, int height)
 {
-    int floor_m, light_m, rc, x, y;
     pt_camera cam;
-    memset(ps, 0, sizeof *ps);
-    ps->rho = 0.5;
-    ps->radiance = 1.0;
+    int x, y;
     ps->width = width;
     ps->height = height;
-    ps->light.kind = kind;
-    if (kind == TU_SPHERE) {
-        /* sin^2(alpha) = 1/4.84 below the centre; the sphere (y in [1.2, 3.2]) is above the camera */
-        ps->light.p0 = dv(0.3, 2.2, 0.1);
-        ps->light.radius = 1.0;
-    } else if (kind == TU_QUAD) {
-        ps->light.p0 = dv(-1.0, 1.5, -1.0); /* u x v = (0, -4, 0): faces the plane */
-        ps->light.p1 = dv(2.0, 0.0, 0.0);
-        ps->light.p2 = dv(0.0, 0.0, 2.0);
-    } else {
-        ps->light.p0 = dv(-1.2, 1.5, -1.0); /* (b - a) x (c - a) points down */
-        ps->light.p1 = dv(1.5, 1.5, -0.9);
-        ps->light.p2 = dv(-0.9, 1.5, 1.4);
-    }
-    ps->scene = pt_scene_create();
-    if (!ps->scene) return 0;
-    floor_m = pt_scene_add_lambertian(ps->scene, pt_v3((float)ps->rho, (float)ps->rho, (float)ps->rho));
-    light_m = pt_scene_add_emitter(ps->scene, pt_v3((float)ps->radiance, (float)ps->radiance, (float)ps->radiance), 0);
-    rc = pt_scene_add_quad(ps->scene, pt_v3(-20, 0, -20), pt_v3(0, 0, 40), pt_v3(40, 0, 0), floor_m);
-    if (rc >= 0) {
-        if (kind == TU_SPHERE) rc = pt_scene_add_sphere(ps->scene, dv_to(ps->light.p0), (float)ps->light.radius, light_m);
-        else if (kind == TU_QUAD) rc = pt_scene_add_quad(ps->scene, dv_to(ps->light.p0), dv_to(ps->light.p1), dv_to(ps->light.p2), light_m);
-        else rc = pt_scene_add_triangle(ps->scene, dv_to(ps->light.p0), dv_to(ps->light.p1), dv_to(ps->light.p2), light_m);
-    }
-    if (rc < 0 || pt_scene_commit(ps->scene) != PT_OK) return 0;
     ps->camera.look_from = pt_v3(0, 1, 0);
     ps->camera.look_at = pt_v3(0, 0, 0);
     ps->camera.up = pt_v3(0, 0, -1);
@@ -1009,6 +981,51 @@ int tu_plane_scene_create(tu_plane_scene *ps, int kind, int width, int height)
         }
     }
     return 1;
+}
+
+int tu_plane_scene_create(tu_plane_scene *ps, int kind, int width, int height)
+{
+    return tu_plane_scene_create_ex(ps, kind, 0, 0, width, height);
+}
+
+int tu_plane_scene_create_ex(tu_plane_scene *ps, int kind, int two_sided, int flip, int width, int height)
+{
+    int floor_m, light_m, rc;
+    tu_light *L = &ps->light[0];
+    memset(ps, 0, sizeof *ps);
+    ps->rho = 0.5;
+    ps->light_count = 1;
+    ps->radiance[0] = 1.0;
+    L->kind = kind;
+    L->two_sided = two_sided;
+    if (kind == TU_SPHERE) {
+        /* sin^2(alpha) = 1/4.84 below the centre; the sphere (y in [1.2, 3.2]) is above the camera */
+        L->p0 = dv(0.3, 2.2, 0.1);
+        L->radius = 1.0;
+    } else if (kind == TU_QUAD) {
+        L->p0 = dv(-1.0, 1.5, -1.0); /* u x v = (0, -4, 0): faces the plane */
+        L->p1 = dv(2.0, 0.0, 0.0);
+        L->p2 = dv(0.0, 0.0, 2.0);
+        if (flip) { L->p1 = dv(0.0, 0.0, 2.0); L->p2 = dv(2.0, 0.0, 0.0); } /* the same quad facing up */
+    } else {
+        L->p0 = dv(-1.2, 1.5, -1.0); /* (b - a) x (c - a) points down */
+        L->p1 = dv(1.5, 1.5, -0.9);
+        L->p2 = dv(-0.9, 1.5, 1.4);
+        if (flip) { dv3 tmp = L->p1; L->p1 = L->p2; L->p2 = tmp; }
+    }
+    ps->scene = pt_scene_create();
+    if (!ps->scene) return 0;
+    floor_m = pt_scene_add_lambertian(ps->scene, pt_v3((float)ps->rho, (float)ps->rho, (float)ps->rho));
+    light_m = pt_scene_add_emitter(ps->scene, pt_v3(1, 1, 1), two_sided);
+    rc = pt_scene_add_quad(ps->scene, pt_v3(-20, 0, -20), pt_v3(0, 0, 40), pt_v3(40, 0, 0), floor_m);
+    if (rc >= 0) {
+        if (kind == TU_SPHERE) rc = pt_scene_add_sphere(ps->scene, dv_to(L->p0), (float)L->radius, light_m);
+        else if (kind == TU_QUAD) rc = pt_scene_add_quad(ps->scene, dv_to(L->p0), dv_to(L->p1), dv_to(L->p2), light_m);
+        else rc = pt_scene_add_triangle(ps->scene, dv_to(L->p0), dv_to(L->p1), dv_to(L->p2), light_m);
+    }
+    if (rc < 0 || pt_scene_commit(ps->scene) != PT_OK) return 0;
+    if (flip && !two_sided) ps->radiance[0] = 0.0; /* a one-sided light facing away lights nothing */
+    return tu_plane_scene_finish(ps, width, height);
 }
 
 void tu_plane_scene_destroy(tu_plane_scene *ps)
@@ -1046,7 +1063,7 @@ void tu_plane_render_compare(const tu_plane_scene *ps, pt_render_desc *d, double
                 zs = m.y >= want ? z : -z;
                 out->pixels++;
                 out->accepted += z <= z_pixel;
-                out->mean_rel += (m.y - want) / want;
+                if (want > 0.0) out->mean_rel += (m.y - want) / want;
                 out->mean_z += zs;
                 out->max_abs_z = fmax(out->max_abs_z, z);
                 out->image_mean += m.y;

@@ -196,17 +196,29 @@ int tu_film_equal(const pt_film *a, const pt_film *b); /* bit-identical sums, sq
    footprint (the renderer jitters the camera ray uniformly over the pixel): computed by the midpoint
    rule on 8 x 8 camera rays per pixel, hit with the plane in double precision; its error is
    estimated by Richardson's rule from the 4 x 4 rule, |I_8 - I_4| / 3 (midpoint error ~ h^2). */
+#define TU_PLANE_MAX_LIGHTS 4
 typedef struct tu_plane_scene {
     pt_scene *scene;
-    tu_light light;          /* the emitter, in double */
-    double radiance, rho;
+    int light_count;
+    tu_light light[TU_PLANE_MAX_LIGHTS]; /* the emitters, in double; E adds up (none may shadow another) */
+    double radiance[TU_PLANE_MAX_LIGHTS];
+    double rho;
     pt_camera_desc camera;
     int width, height;
     double *ref, *qerr;      /* per pixel: the footprint mean of rho E / pi and its quadrature error */
 } tu_plane_scene;
-/* kind: TU_SPHERE, TU_QUAD or TU_TRIANGLE. Returns 1 on success. */
+/* The standard scenes: one light of radiance 1 over the plane (rho 0.5); kind: TU_SPHERE, TU_QUAD or
+   TU_TRIANGLE; two_sided and flip (emit upwards, away from the plane) for planar lights.
+   Returns 1 on success. */
 int tu_plane_scene_create(tu_plane_scene *ps, int kind, int width, int height);
+int tu_plane_scene_create_ex(tu_plane_scene *ps, int kind, int two_sided, int flip, int width, int height);
+/* For a scene built by the caller (ps->scene committed, holding the plane y = 0 of albedo ps->rho and
+   the ps->light_count lights listed, all above the plane and facing it): sets the camera and
+   computes the references. */
+int tu_plane_scene_finish(tu_plane_scene *ps, int width, int height);
 void tu_plane_scene_destroy(tu_plane_scene *ps);
+/* Irradiance at x on the plane y = 0 (normal +y) from a light of radiance Le facing it. */
+double tu_plane_irradiance(const tu_light *L, double Le, dv3 x);
 
 typedef struct tu_image_stats {
     int pixels, accepted;    /* pixels whose z (beyond the float floor) is within z_pixel */
