@@ -8,6 +8,9 @@
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
 #                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
+#   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
+#                         write validation/out/index.html (needs povray, libopenexr-dev, libpng-dev)
+#   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
 #   make clean            remove build/ and out/
 #   make help             this text
 #
@@ -46,7 +49,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c)
 TEST_HDRS    := $(wildcard tests/*.h)
 
-.PHONY: all run run-all test nothreads-test check-warnings clean help
+.PHONY: all run run-all test nothreads-test check-warnings clean help validate validate-refs
 
 all: $(EXAMPLE_BINS)
 
@@ -82,8 +85,44 @@ $(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
+# ---- scene files and POV-Ray validation (validation/ptv.c). OpenEXR (POV-Ray's +FE output) and
+# libpng (the report's images) are optional: found with pkg-config, else left out (the scene
+# tests still run; the POV-Ray comparisons print SKIP). Only OpenEXR's C library is linked.
+PTV_EXR_LIBS ?= -lOpenEXRCore-3_1
+PTV_HAVE_EXR := $(shell pkg-config --exists OpenEXR 2>/dev/null && echo yes)
+PTV_HAVE_PNG := $(shell pkg-config --exists libpng 2>/dev/null && echo yes)
+PTV_CPPFLAGS :=
+PTV_LDLIBS   :=
+ifeq ($(PTV_HAVE_EXR),yes)
+PTV_CPPFLAGS += -DPTV_HAVE_EXR $(patsubst -I%,-isystem %,$(shell pkg-config --cflags-only-I OpenEXR))
+PTV_LDLIBS   += $(PTV_EXR_LIBS)
+endif
+ifeq ($(PTV_HAVE_PNG),yes)
+PTV_CPPFLAGS += -DPTV_HAVE_PNG $(shell pkg-config --cflags libpng)
+PTV_LDLIBS   += $(shell pkg-config --libs libpng)
+endif
+
+$(BUILD)/ptv: validation/ptv.c pdftrace.h | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) $(PTV_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PTV_LDLIBS) $(PT_LDLIBS)
+
+# scenes/mesh.obj is committed; this remakes it.
+scenes/mesh.obj: validation/gen_mesh.c | $(BUILD)
+	$(CC) $(CFLAGS) -o $(BUILD)/gen_mesh $< -lm
+	$(BUILD)/gen_mesh $@
+
+validate: $(BUILD)/ptv
+	@test "$(PTV_HAVE_EXR)" = yes || { echo "make validate: needs OpenEXR (apt-get install libopenexr-dev)" >&2; exit 1; }
+	validation/validate.sh $(BUILD)/ptv validation/out
+
+validate-refs: $(BUILD)/ptv
+	validation/validate-refs.sh $(BUILD)/ptv
+
 # The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed".
-test: $(BUILD)/test_runner $(BUILD)/test_runner_nothreads $(BUILD)/test_runner_asan
+# First the scene-file runner (malformed inputs, scenes/ loading, --scene = built-in box, and
+# the fast POV-Ray comparisons when povray is installed).
+test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads $(BUILD)/test_runner_asan
+	mkdir -p $(BUILD)/ptv-work
+	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/cornell
 	./$(BUILD)/test_runner
 	./$(BUILD)/test_runner_nothreads
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan
@@ -110,6 +149,8 @@ check-warnings: | $(BUILD)
 	    echo "$$cxx $(WARN_CXXFLAGS) examples/cpp_check.cpp (then run it)"; \
 	    $$cxx $(WARN_CXXFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) examples/cpp_check.cpp -o $(BUILD)/cpp_check-$$cxx $(PT_LDLIBS); \
 	    ./$(BUILD)/cpp_check-$$cxx; \
+	    echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_SCENE_FILES examples/cpp_check.cpp (the optional scene-file section)"; \
+	    $$cxx $(WARN_CXXFLAGS) -DPDFTRACE_SCENE_FILES $(PT_CPPFLAGS) $(PT_THREADS) -c examples/cpp_check.cpp -o $(BUILD)/cpp_check-scene-$$cxx.o; \
 	done; \
 	echo "check-warnings: all clean"
 

@@ -3,6 +3,7 @@
    rendered with pdftrace and written as PPM (sRGB, 8 bit) and/or PFM (linear float).
 
        build/cornell --spp 64 -o out/cornell.ppm -o out/cornell.pfm
+       build/cornell --scene scenes/cornell.scene -o out/cornell.pfm   (any scene file)
 
    Run with --help for the options. Options are checked before anything is rendered, and
    nothing is written unless the whole render succeeded. */
@@ -13,6 +14,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#define PDFTRACE_SCENE_FILES /* --scene: the optional scene-file loader (pdftrace.h section 10) */
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
 
@@ -29,7 +31,11 @@ typedef struct options {
     int quiet;
     const char *outputs[MAX_OUTPUTS];
     int output_count;
+    const char *scene;   /* --scene PATH, or NULL for the built-in Cornell box */
+    unsigned given;      /* GIVEN_* bits: options set on the command line win over the scene file */
 } options;
+
+enum { GIVEN_W = 1, GIVEN_H = 2, GIVEN_SPP = 4, GIVEN_STRATEGY = 8, GIVEN_DEPTH = 16, GIVEN_SEED = 32 };
 
 /* ---------------------------------------------------------------------------------------
    The scene: exactly the book's final Cornell box. A quad is Q + a*u + b*v, a, b in [0,1].
@@ -113,6 +119,9 @@ static void usage(FILE *f)
         "      --ppm PATH        same as -o PATH, PATH must end in .ppm\n"
         "      --pfm PATH        same as -o PATH, PATH must end in .pfm\n"
         "  -q, --quiet           no progress line\n"
+        "      --scene PATH      render a scene file (format: pdftrace.h, section 10) instead of\n"
+        "                        the built-in box; its size, spp, depth, strategy and seed are the\n"
+        "                        defaults, options given here override them\n"
         "      --help            show this help and exit\n"
         "\n"
         "Long options also accept --name=value.\n",
@@ -244,6 +253,8 @@ static int parse_options(int argc, char **argv, options *o)
     o->seed = 0;
     o->quiet = 0;
     o->output_count = 0;
+    o->scene = NULL;
+    o->given = 0;
 
     for (i = 1; i < argc; i++) {
         const char *arg = argv[i];
@@ -277,7 +288,8 @@ static int parse_options(int argc, char **argv, options *o)
         if (strcmp(name, "-w") && strcmp(name, "--width") && strcmp(name, "-h") && strcmp(name, "--height") &&
             strcmp(name, "--spp") && strcmp(name, "--strategy") && strcmp(name, "--light-weight") &&
             strcmp(name, "--max-depth") && strcmp(name, "--threads") && strcmp(name, "--seed") &&
-            strcmp(name, "-o") && strcmp(name, "--output") && strcmp(name, "--ppm") && strcmp(name, "--pfm")) {
+            strcmp(name, "-o") && strcmp(name, "--output") && strcmp(name, "--ppm") && strcmp(name, "--pfm") &&
+            strcmp(name, "--scene")) {
             return fail("unknown option '%s'", arg);
         }
         if (!value) {
@@ -287,20 +299,30 @@ static int parse_options(int argc, char **argv, options *o)
 
         if (!strcmp(name, "-w") || !strcmp(name, "--width")) {
             if (!parse_int(name, value, 1, 16384, &o->width)) return 0;
+            o->given |= GIVEN_W;
         } else if (!strcmp(name, "-h") || !strcmp(name, "--height")) {
             if (!parse_int(name, value, 1, 16384, &o->height)) return 0;
+            o->given |= GIVEN_H;
         } else if (!strcmp(name, "--spp")) {
             if (!parse_int(name, value, 1, 1 << 20, &o->spp)) return 0;
+            o->given |= GIVEN_SPP;
         } else if (!strcmp(name, "--strategy")) {
             if (!parse_strategy(name, value, &o->strategy)) return 0;
+            o->given |= GIVEN_STRATEGY;
         } else if (!strcmp(name, "--light-weight")) {
             if (!parse_light_weight(name, value, &o->light_weight)) return 0;
         } else if (!strcmp(name, "--max-depth")) {
             if (!parse_int(name, value, 1, 100000, &o->max_depth)) return 0;
+            o->given |= GIVEN_DEPTH;
         } else if (!strcmp(name, "--threads")) {
             if (!parse_int(name, value, 0, 1024, &o->threads)) return 0;
         } else if (!strcmp(name, "--seed")) {
             if (!parse_u64(name, value, &o->seed)) return 0;
+            o->given |= GIVEN_SEED;
+        } else if (!strcmp(name, "--scene")) {
+            if (o->scene) return fail("option %s given twice", name);
+            if (!*value) return fail("option %s: empty path", name);
+            o->scene = value;
         } else { /* -o, --output, --ppm, --pfm */
             const char *ext = !strcmp(name, "--ppm") ? ".ppm" : !strcmp(name, "--pfm") ? ".pfm" : NULL;
             if (o->output_count == MAX_OUTPUTS) return fail("too many outputs (at most %d)", MAX_OUTPUTS);
@@ -365,17 +387,42 @@ int main(int argc, char **argv)
     if (rc == 2) return 0;
     if (rc == 0) return 2;
 
-    scene = pt_scene_create();
-    if (!scene) {
-        fprintf(stderr, "%s: out of memory\n", prog);
-        return 1;
-    }
-    rc = build_cornell_box(scene);
-    if (rc != PT_OK) {
-        fprintf(stderr, "%s: building the scene failed: %s (%s)\n", prog, pt_result_string(rc),
-                pt_scene_error_message(scene));
-        pt_scene_destroy(scene);
-        return 1;
+    if (opt.scene) {
+        /* A scene file: its settings are the defaults; options given on the command line win. */
+        pt_scene_desc sd;
+        pt_render_desc from_file;
+        char err[1024];
+        rc = pt_scene_desc_load(opt.scene, &sd, err, sizeof err);
+        if (rc == PT_OK) {
+            rc = pt_scene_desc_build(&sd, &scene, &from_file, err, sizeof err);
+            pt_scene_desc_free(&sd);
+        }
+        if (rc != PT_OK) {
+            fprintf(stderr, "%s: %s\n", prog, err);
+            return 1;
+        }
+        if (!(opt.given & GIVEN_W)) opt.width = from_file.width;
+        if (!(opt.given & GIVEN_H)) opt.height = from_file.height;
+        if (!(opt.given & GIVEN_SPP)) opt.spp = from_file.samples_per_pixel;
+        if (!(opt.given & GIVEN_STRATEGY)) opt.strategy = from_file.strategy;
+        if (!(opt.given & GIVEN_DEPTH)) opt.max_depth = from_file.max_depth;
+        if (!(opt.given & GIVEN_SEED)) opt.seed = from_file.seed;
+        desc.camera = from_file.camera;
+        desc.background = from_file.background;
+    } else {
+        scene = pt_scene_create();
+        if (!scene) {
+            fprintf(stderr, "%s: out of memory\n", prog);
+            return 1;
+        }
+        rc = build_cornell_box(scene);
+        if (rc != PT_OK) {
+            fprintf(stderr, "%s: building the scene failed: %s (%s)\n", prog, pt_result_string(rc),
+                    pt_scene_error_message(scene));
+            pt_scene_destroy(scene);
+            return 1;
+        }
+        set_cornell_camera(&desc);
     }
 
     desc.width = opt.width;
@@ -386,7 +433,6 @@ int main(int argc, char **argv)
     desc.max_depth = opt.max_depth;
     desc.threads = opt.threads;
     desc.seed = opt.seed;
-    set_cornell_camera(&desc);
     if (!opt.quiet) {
         desc.progress = show_progress;
         desc.progress_user = &stderr_is_tty;
