@@ -183,9 +183,9 @@ static int render_desc(const pt_scene_desc *sd, int w, int h, int spp, pt_image 
     }
     for (y = 0; y < rd.height; ++y)
         for (x = 0; x < rd.width; ++x) {
-            pt_color m, v;
+            pt_color m = pt_v3(0, 0, 0), v = pt_v3(0, 0, 0);
             size_t i = 3 * ((size_t)y * (size_t)rd.width + (size_t)x);
-            pt_film_pixel(&film, x, y, &m, &v);
+            if (pt_film_pixel(&film, x, y, &m, &v) != PT_OK) m = v = pt_v3(-1, -1, -1); /* cannot happen */
             mean->rgb[i] = m.x; mean->rgb[i + 1] = m.y; mean->rgb[i + 2] = m.z;
             var->rgb[i] = v.x; var->rgb[i + 1] = v.y; var->rgb[i + 2] = v.z;
         }
@@ -681,6 +681,111 @@ static void test_compare(const char *dir, const char *work, const char *name, in
 }
 #endif
 
+/* Fuzz: every scene file, mutated at random (deterministic) - lines cut short, tokens replaced by
+   huge, NaN, negative or junk values, characters deleted or duplicated, lines swapped. Each
+   result must be a clean success (then it must build or fail cleanly, and export or fail
+   cleanly) or an error whose message starts with the file name. Run under ASan for memory. */
+static uint64_t fuzz_state = 0x9E3779B97F4A7C15ull;
+static uint32_t fuzz_rand(uint32_t n)
+{
+    fuzz_state ^= fuzz_state << 13;
+    fuzz_state ^= fuzz_state >> 7;
+    fuzz_state ^= fuzz_state << 17;
+    return (uint32_t)(fuzz_state >> 11) % n;
+}
+static void test_fuzz(const char *dir, const char *work, int rounds)
+{
+    static const char *const names[] = {"cornell", "direct-quad", "direct-sphere", "mirror", "checker", "mesh"};
+    static const char *const junk[] = {"1e300", "-1e300", "nan", "inf", "-0", "0", "-1", "1e7", "1e-40", "x", "#", "",
+                                       "99999999999999999999", "0x10", "mesh.obj", "white", "lamp", "sphere", "-5e6"};
+    char *text = NULL, *buf = NULL, err[1024], pov[2048], detail[1200];
+    int r, bad = 0, ok_count = 0, err_count = 0;
+    size_t cap = 0;
+    snprintf(pov, sizeof pov, "%s/fuzz.pov", work);
+    for (r = 0; r < rounds && !bad; ++r) {
+        char path[2048];
+        FILE *f;
+        size_t len = 0, n, i;
+        int m, muts = 1 + (int)fuzz_rand(4), rc;
+        pt_scene_desc sd;
+        snprintf(path, sizeof path, "%s/%s.scene", dir, names[r % (int)(sizeof names / sizeof names[0])]);
+        f = fopen(path, "rb");
+        if (!f) { bad = 1; break; }
+        if (cap < 1u << 20) { free(text); free(buf); cap = 1u << 20; text = (char *)malloc(cap); buf = (char *)malloc(cap); }
+        if (!text || !buf) { fclose(f); bad = 1; break; }
+        len = fread(text, 1, cap / 4, f);
+        fclose(f);
+        for (m = 0; m < muts; ++m) {
+            size_t pos = len ? fuzz_rand((uint32_t)len) : 0, k = 0;
+            int kind = (int)fuzz_rand(5);
+            if (kind == 0) { /* cut the line short at pos */
+                size_t e = pos;
+                while (e < len && text[e] != '\n') ++e;
+                memmove(text + pos, text + e, len - e);
+                len -= e - pos;
+            } else if (kind == 1) { /* replace the token at pos */
+                const char *j = junk[fuzz_rand((uint32_t)(sizeof junk / sizeof junk[0]))];
+                size_t s0 = pos, e = pos, jl = strlen(j);
+                while (s0 > 0 && text[s0 - 1] != ' ' && text[s0 - 1] != '\n') --s0;
+                while (e < len && text[e] != ' ' && text[e] != '\n') ++e;
+                if (len - (e - s0) + jl >= cap / 2) continue;
+                memmove(text + s0 + jl, text + e, len - e);
+                memcpy(text + s0, j, jl);
+                len = len - (e - s0) + jl;
+            } else if (kind == 2 && len) { /* delete a character */
+                memmove(text + pos, text + pos + 1, len - pos - 1);
+                --len;
+            } else if (kind == 3 && len + 1 < cap / 2) { /* duplicate a character */
+                memmove(text + pos + 1, text + pos, len - pos);
+                ++len;
+            } else { /* append a copy of a random line */
+                size_t s0 = pos, e = pos;
+                while (s0 > 0 && text[s0 - 1] != '\n') --s0;
+                while (e < len && text[e] != '\n') ++e;
+                if (len + (e - s0) + 1 >= cap / 2) continue;
+                memcpy(buf, text + s0, e - s0);
+                k = e - s0;
+                text[len++] = '\n';
+                memcpy(text + len, buf, k);
+                len += k;
+            }
+        }
+        n = len;
+        rc = pt_scene_desc_parse(text, n, "fuzz.scene", dir, &sd, err, sizeof err);
+        if (rc != PT_OK) {
+            ++err_count;
+            if (strncmp(err, "fuzz.scene", 10) != 0 && strstr(err, ".obj") == NULL) bad = 1;
+            for (i = 0; i < sizeof sd && !bad; ++i)
+                if (((const unsigned char *)&sd)[i] != 0) bad = 1; /* *out left empty */
+        } else {
+            pt_scene *s = NULL;
+            pt_render_desc rd;
+            ++ok_count;
+            rc = pt_scene_desc_build(&sd, &s, &rd, err, sizeof err);
+            if (rc == PT_OK) {
+                pt_hit hit;
+                pt_ray ray;
+                ray.origin = rd.camera.look_from;
+                ray.dir = pt_sub(rd.camera.look_at, rd.camera.look_from);
+                if (pt_scene_intersect(s, ray, 1e30f, &hit) < 0) bad = 1;
+                pt_scene_destroy(s);
+            } else if (s != NULL || strncmp(err, "fuzz.scene", 10) != 0)
+                bad = 1;
+            rc = pt_scene_desc_write_pov(&sd, pov, NULL, err, sizeof err);
+            if (rc != PT_OK && strncmp(err, "fuzz.scene", 10) != 0 && strstr(err, "fuzz.pov") == NULL) bad = 1;
+            pt_scene_desc_free(&sd);
+        }
+        if (bad) snprintf(detail, sizeof detail, "round %d: unexpected result, message '%s'", r, err);
+    }
+    if (!bad)
+        snprintf(detail, sizeof detail, "%d mutated scene files: %d loaded (then built/exported or refused cleanly), %d refused with file:line",
+                 rounds, ok_count, err_count);
+    remove(pov);
+    free(text);
+    free(buf);
+    result(!bad, "fuzz", detail);
+}
+
 /* scenes/cornell.scene must be exactly the built-in box of examples/cornell.c: same image bytes. */
 static void test_cornell_identical(const char *cornell, const char *dir, const char *work)
 {
@@ -709,6 +814,7 @@ static int cmd_test(int argc, char **argv)
     if (argc != 4 && argc != 5) { fprintf(stderr, "usage: ptv test SCENEDIR WORKDIR [build/cornell]\n"); return 2; }
     test_malformed(argv[3]);
     test_scenes_load(argv[2]);
+    test_fuzz(argv[2], argv[3], 3000);
     if (argc == 5) test_cornell_identical(argv[4], argv[2], argv[3]);
 #ifdef PTV_HAVE_EXR
     if (system("command -v povray >/dev/null 2>&1") == 0) {
