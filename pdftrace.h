@@ -841,7 +841,6 @@ static float pt__safe_sqrt(float x) { return sqrtf(x > 0.0f ? x : 0.0f); }
 static pt_vec3 pt__vmin(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__minf(a.x, b.x), pt__minf(a.y, b.y), pt__minf(a.z, b.z)); }
 static pt_vec3 pt__vmax(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__maxf(a.x, b.x), pt__maxf(a.y, b.y), pt__maxf(a.z, b.z)); }
 static float pt__vget(pt_vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
-static float pt__mean3(pt_vec3 c) { return (c.x + c.y + c.z) * (1.0f / 3.0f); }
 static int pt__is_black(pt_vec3 c) { return c.x <= 0.0f && c.y <= 0.0f && c.z <= 0.0f; }
 
 /* Waechter & Binder, Ray Tracing Gems ch. 6: move each coordinate by int(256 n_i) ulps in
@@ -1018,7 +1017,8 @@ typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
 
 typedef struct pt__light {
     uint32_t prim;    /* index into scene->prims (after BVH ordering) */
-    float power, select_pdf, cdf;
+    double power;     /* in double: radiance near FLT_MAX or near denormal still has a power */
+    float select_pdf, cdf;
     float area;
 } pt__light;
 
@@ -2565,8 +2565,9 @@ PTDEF int pt_scene_commit(pt_scene *s)
             l = &s->lights[s->light_count];
             l->prim = i;
             l->area = pt__prim_area(&s->prims[i]);
-            l->power = pt__mean3(m->emission) * l->area * PT__PI * (m->two_sided ? 2.0f : 1.0f);
-            if (!pt__isfinite(l->power) || !(l->power > 0.0f))
+            l->power = ((double)m->emission.x + (double)m->emission.y + (double)m->emission.z) / 3.0 *
+                       (double)l->area * 3.14159265358979323846 * (m->two_sided ? 2.0 : 1.0);
+            if (!(l->power > 0.0) || !(l->power < 1e300))
                 return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "commit: emitter (primitive %u) has power %g",
                                 (unsigned)s->prims[i].id, (double)l->power);
             total += l->power;
