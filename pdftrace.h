@@ -71,6 +71,7 @@
    7. Integrator (strategies)
    8. Rendering (tiles, threads, passes, statistics)
    9. Output (framebuffer, PFM and PPM writers)
+   10. Scene files and POV-Ray export (optional: define PDFTRACE_SCENE_FILES)
 
    SKIPPING WORK A SCENE DOES NOT NEED
    ===================================
