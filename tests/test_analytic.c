@@ -175,17 +175,9 @@ static void furnace_every_pixel(test_ctx *t)
        (Without roulette the variance comes from rare short light samples, which are exactly what
        a pixel's own variance must see: (a) uses the per-pixel variance.) */
     pt_scene *s = pt_scene_create();
-    pt_material_desc md;
-    int m, rc, strat, rr;
+    int rc, strat, rr;
     if (!CHECK(t, s != NULL, "scene")) return;
-    memset(&md, 0, sizeof md);
-    md.type = PT_MATERIAL_LAMBERTIAN;
-    md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
-    md.emission = pt_v3(0.5f, 0.5f, 0.5f);
-    md.two_sided_emission = 1;
-    m = pt_scene_add_material(s, &md);
-    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
-    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    rc = tu_add_closed_furnace(s);
     if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     for (rr = 0; rr < 2; rr++) {
         for (strat = 0; strat < 4; strat++) {

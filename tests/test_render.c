@@ -376,19 +376,11 @@ static void furnace_closed_sphere(test_ctx *t)
        shading point lies on the (two-sided) light itself. 16 regions x 4 strategies = 64 z-tests at
        alpha 0.01 Sidak. */
     pt_scene *s = pt_scene_create();
-    pt_material_desc md;
-    int m, rc, strat, i, over3 = 0, n = 0;
+    int rc, strat, i, over3 = 0, n = 0;
     double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 64)), worst = 0;
     const char *names[4] = { "MIS", "material", "light", "mixture" };
     if (!CHECK(t, s != NULL, "scene")) return;
-    memset(&md, 0, sizeof md);
-    md.type = PT_MATERIAL_LAMBERTIAN;
-    md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
-    md.emission = pt_v3(0.5f, 0.5f, 0.5f);
-    md.two_sided_emission = 1;
-    m = pt_scene_add_material(s, &md);
-    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
-    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    rc = tu_add_closed_furnace(s);
     if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     for (strat = 0; strat < 4; strat++) {
         pt_render_desc d = base_desc(16, 16, 45); /* a non-square count on purpose */
@@ -427,19 +419,11 @@ static void furnace_one_bounce(test_ctx *t)
        strategy must give 0.75. This isolates direct light at shading points on a two-sided sphere
        light (inside it, or numerically just outside its surface). 4 z-tests, alpha 0.01 Sidak. */
     pt_scene *s = pt_scene_create();
-    pt_material_desc md;
-    int m, rc, strat;
+    int rc, strat;
     double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 4)), worst = 0;
     const char *names[4] = { "MIS", "material", "light", "mixture" };
     if (!CHECK(t, s != NULL, "scene")) return;
-    memset(&md, 0, sizeof md);
-    md.type = PT_MATERIAL_LAMBERTIAN;
-    md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
-    md.emission = pt_v3(0.5f, 0.5f, 0.5f);
-    md.two_sided_emission = 1;
-    m = pt_scene_add_material(s, &md);
-    rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
-    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    rc = tu_add_closed_furnace(s);
     if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     for (strat = 0; strat < 4; strat++) {
         pt_render_desc d = base_desc(1, 1, 1);

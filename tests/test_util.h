@@ -35,6 +35,9 @@ void tu_frame(dv3 axis, dv3 *e1, dv3 *e2); /* right-handed (e1, e2, axis), own c
 dv3 tu_sample_cone(pt_rng *r, dv3 axis, double omc);
 
 /* ---- statistics ---- */
+/* The closed furnace (pbrt-v4's test): adds to s a sphere of radius 1 at the origin, Lambertian albedo
+   0.5 with two-sided emission 0.5, so every point inside sees Le/(1 - rho) = 1, and commits. */
+int tu_add_closed_furnace(pt_scene *s);
 double tu_sidak(double alpha, int k);      /* per-test level for family-wise alpha over k tests */
 double tu_z_two_sided(double alpha);       /* z with P(|Z| > z) = alpha, Z standard normal */
 double tu_chi2_sf(double x, double dof);   /* P(X > x) for X ~ chi-square(dof) */
