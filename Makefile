@@ -6,6 +6,10 @@
 #   make test             build and run the test runner, then again without threads and
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS
+#   make exr-test         build the test runner with OpenEXR (build/test_runner_exr) and run
+#                         its exr section (needs libopenexr-dev)
+#   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
+#                         and input through OpenEXRCore; needs libopenexr-dev). Default 0.
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
 #                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
@@ -44,19 +48,35 @@ WARN_CXXFLAGS ?= -x c++ -O2 -Wall -Wextra -pedantic -Werror
 RUN_SPP  ?= 128
 RUN_ARGS ?=
 
+# OpenEXR (pdftrace.h section 11): only the include dirs of the OpenEXR .pc file are taken
+# (its libs list the C++ libraries); only the C library OpenEXRCore is linked.
+OPENEXR       ?= 0
+EXR_INCLUDES  ?= $(or $(shell pkg-config --cflags-only-I OpenEXR 2>/dev/null),-I/usr/include/OpenEXR -I/usr/include/Imath)
+EXR_LIBS      ?= -lOpenEXRCore-3_1
+EXR_FLAGS     := -DPDFTRACE_OPENEXR $(patsubst -I%,-isystem %,$(EXR_INCLUDES))
+ifeq ($(OPENEXR),1)
+PT_CPPFLAGS += $(EXR_FLAGS)
+PT_LDLIBS   := $(EXR_LIBS) $(PT_LDLIBS)
+endif
+# Rebuild the examples and runners when OPENEXR changes (the file is rewritten only then).
+OPT_STAMP := $(BUILD)/options-openexr
+
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c)
 TEST_HDRS    := $(wildcard tests/*.h)
 
-.PHONY: all run run-all test nothreads-test check-warnings clean help validate validate-refs
+.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs FORCE
 
 all: $(EXAMPLE_BINS)
 
 $(BUILD) $(OUT):
 	mkdir -p $@
 
-$(BUILD)/%: examples/%.c pdftrace.h | $(BUILD)
+$(OPT_STAMP): FORCE | $(BUILD)
+	@echo '$(OPENEXR)' | cmp -s - $@ || echo '$(OPENEXR)' > $@
+
+$(BUILD)/%: examples/%.c pdftrace.h $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PT_LDLIBS)
 
 run: $(BUILD)/cornell | $(OUT)
@@ -72,18 +92,26 @@ define need_tests
 	@test -n "$(TEST_SRCS)" || { echo "error: no tests/*.c found" >&2; exit 1; }
 endef
 
-$(BUILD)/test_runner: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+$(BUILD)/test_runner: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
-$(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+$(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
 # Without threads: no -pthread at all, to show the library does not need it.
-$(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+$(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+
+# Always with OpenEXR, whatever OPENEXR says; `make exr-test` runs only its exr section.
+$(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+	$(need_tests)
+	$(CC) -I. $(EXR_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(EXR_LIBS) -lm
+
+exr-test: $(BUILD)/test_runner_exr
+	./$(BUILD)/test_runner_exr exr
 
 # ---- scene files and POV-Ray validation (validation/ptv.c). OpenEXR (POV-Ray's +FE output) and
 # libpng (the report's images) are optional: found with pkg-config, else left out (the scene
@@ -152,6 +180,19 @@ check-warnings: | $(BUILD)
 	    echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_SCENE_FILES examples/cpp_check.cpp (the optional scene-file section)"; \
 	    $$cxx $(WARN_CXXFLAGS) -DPDFTRACE_SCENE_FILES $(PT_CPPFLAGS) $(PT_THREADS) -c examples/cpp_check.cpp -o $(BUILD)/cpp_check-scene-$$cxx.o; \
 	done; \
+	if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
+	    for cc in $(WARN_CC); do \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_OPENEXR examples/cornell.c tests/test_exr.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c examples/cornell.c -o $(BUILD)/warn-$$cc-exr.o; \
+	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) -c tests/test_exr.c -o $(BUILD)/warn-$$cc-test-exr.o; \
+	    done; \
+	    for cxx in $(WARN_CXX); do \
+	        echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_OPENEXR examples/cpp_check.cpp (the optional EXR section)"; \
+	        $$cxx $(WARN_CXXFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c examples/cpp_check.cpp -o $(BUILD)/cpp_check-exr-$$cxx.o; \
+	    done; \
+	else \
+	    echo "SKIP the PDFTRACE_OPENEXR variants: no openexr.h (apt-get install libopenexr-dev)"; \
+	fi; \
 	echo "check-warnings: all clean"
 
 clean:

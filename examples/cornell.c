@@ -1,6 +1,7 @@
 #define _POSIX_C_SOURCE 200809L
 /* cornell.c - the final Cornell box of Shirley's "Ray Tracing: The Rest of Your Life",
-   rendered with pdftrace and written as PPM (sRGB, 8 bit) and/or PFM (linear float).
+   rendered with pdftrace and written as PPM (sRGB, 8 bit) and/or PFM (linear float), or
+   EXR (half, ZIP) when built with PDFTRACE_OPENEXR (make OPENEXR=1).
 
        build/cornell --spp 64 -o out/cornell.ppm -o out/cornell.pfm
        build/cornell --scene scenes/cornell.scene -o out/cornell.pfm   (any scene file)
@@ -114,7 +115,8 @@ static void usage(FILE *f)
         "      --max-depth N     maximum scattering events per path (default 50)\n"
         "      --threads N       worker threads, 0 = all cores (default 0)\n"
         "      --seed N          random seed, a non-negative integer (default 0)\n"
-        "  -o, --output PATH     write the image to PATH: PPM if it ends in .ppm, PFM if .pfm;\n"
+        "  -o, --output PATH     write the image to PATH: PPM if it ends in .ppm, PFM if .pfm,\n"
+        "                        EXR (half, ZIP) if .exr (needs a build with make OPENEXR=1);\n"
         "                        may be given up to %d times (default cornell.ppm)\n"
         "      --ppm PATH        same as -o PATH, PATH must end in .ppm\n"
         "      --pfm PATH        same as -o PATH, PATH must end in .pfm\n"
@@ -223,8 +225,12 @@ static int check_output(const char *opt, const char *path, const char *required_
 
     if (required_ext && !ends_with(path, required_ext))
         return fail("option %s: '%s' does not end in %s", opt, path, required_ext);
-    if (!ends_with(path, ".ppm") && !ends_with(path, ".pfm"))
-        return fail("option %s: '%s' must end in .ppm or .pfm", opt, path);
+#ifndef PDFTRACE_OPENEXR
+    if (ends_with(path, ".exr"))
+        return fail("option %s: '%s': built without OpenEXR support: rebuild with make OPENEXR=1", opt, path);
+#endif
+    if (!ends_with(path, ".ppm") && !ends_with(path, ".pfm") && !ends_with(path, ".exr"))
+        return fail("option %s: '%s' must end in .ppm, .pfm or .exr", opt, path);
     if (!slash) {
         strcpy(dir, ".");
     } else {
@@ -447,9 +453,14 @@ int main(int argc, char **argv)
         print_stats(&opt, &stats);
         for (i = 0; i < opt.output_count; i++) {
             const char *path = opt.outputs[i];
+            char err[512] = "";
+#ifdef PDFTRACE_OPENEXR
+            if (ends_with(path, ".exr")) rc = pt_write_exr(path, &image, NULL, err, sizeof err);
+            else
+#endif
             rc = ends_with(path, ".pfm") ? pt_write_pfm(path, &image) : pt_write_ppm(path, &image);
             if (rc != PT_OK) {
-                fprintf(stderr, "%s: writing %s failed: %s\n", prog, path, pt_result_string(rc));
+                fprintf(stderr, "%s: writing %s failed: %s%s%s\n", prog, path, pt_result_string(rc), err[0] ? ": " : "", err);
                 status = 1;
             } else {
                 printf("wrote      %s\n", path);

@@ -77,6 +77,7 @@ int main(int argc, char **argv)
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
         { "output", test_output_cases },
+        { "exr", test_exr_cases },
         { "analytic", test_analytic_cases },
         { "regress", test_regress_cases },
         { "suite", test_suite_cases },

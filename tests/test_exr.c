@@ -1,0 +1,445 @@
+#define _POSIX_C_SOURCE 200809L
+/* test_exr.c - section 11 of pdftrace.h: OpenEXR output and input (only with PDFTRACE_OPENEXR;
+   built by `make OPENEXR=1`, run alone by `make exr-test`). Without it the section has one test
+   that passes and says the EXR code is not compiled in.
+   References: IEEE 754-2008 binary16 (round to nearest, ties to even; subnormals in steps of
+   2^-24, largest finite 65504); the OpenEXR file layout and OpenEXRCore API
+   (https://openexr.com/en/latest/OpenEXRFileLayout.html, https://openexr.com/en/latest/API.html). */
+#include "test_util.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#ifndef PDFTRACE_OPENEXR
+
+static void not_compiled(test_ctx *t)
+{
+    test_note(t, "SKIP: OpenEXR support is not compiled in (make OPENEXR=1 or make exr-test)");
+}
+
+const test_case test_exr_cases[] = {
+    TEST_CASE(not_compiled),
+    TEST_END
+};
+
+#else /* PDFTRACE_OPENEXR */
+
+#include <openexr.h>
+#include <dirent.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ---- files ---- */
+static int make_tmpdir(char *buf, size_t n)
+{
+    snprintf(buf, n, "/tmp/pdftrace-exr-XXXXXX");
+    return mkdtemp(buf) != NULL;
+}
+static int count_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    int count = 0;
+    if (!d) return -1;
+    while ((e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) count++;
+    closedir(d);
+    return count;
+}
+static void remove_dir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    char path[600];
+    if (!d) return;
+    while ((e = readdir(d)) != NULL) {
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        unlink(path);
+    }
+    closedir(d);
+    rmdir(dir);
+}
+static int exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+static unsigned char *slurp(const char *path, long *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *buf;
+    long n;
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    buf = (unsigned char *)malloc(n > 0 ? (size_t)n : 1u);
+    if (buf && n > 0 && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
+    fclose(f);
+    *size = n;
+    return buf;
+}
+static int spit(const char *path, const unsigned char *buf, long n)
+{
+    FILE *f = fopen(path, "wb");
+    int ok;
+    if (!f) return 0;
+    ok = fwrite(buf, 1, (size_t)n, f) == (size_t)n;
+    return (fclose(f) == 0) && ok;
+}
+
+/* ---- the reference rounding: binary16 round-to-nearest-even computed in double (own code,
+   independent of the library's bit manipulation). Valid for |x| < 65520. */
+static double ref_half(double x)
+{
+    double a = fabs(x), ulp, r;
+    int k;
+    if (a == 0.0) return x;
+    (void)frexp(a, &k); /* a = f 2^k, f in [0.5, 1): exponent e = k - 1 */
+    ulp = k - 1 < -14 ? ldexp(1.0, -24) : ldexp(1.0, k - 1 - 10);
+    r = a / ulp;
+    {   /* ties to even without depending on the FP rounding mode */
+        double fl = floor(r), frac = r - fl;
+        if (frac > 0.5 || (frac == 0.5 && fmod(fl, 2.0) != 0.0)) fl += 1.0;
+        r = fl * ulp;
+    }
+    return x < 0 ? -r : r;
+}
+
+/* 37 x 23: a gradient, HDR values up to 6e4, tiny (half-subnormal) values, zeros, negatives. */
+static int make_test_image(pt_image *img, int w, int h)
+{
+    int x, y, c;
+    if (pt_image_init(img, w, h) != PT_OK) return 0;
+    for (y = 0; y < h; ++y)
+        for (x = 0; x < w; ++x)
+            for (c = 0; c < 3; ++c) {
+                float *p = &img->rgb[3 * ((size_t)y * (size_t)w + (size_t)x) + (size_t)c];
+                double g = (double)(x + 1) / w * (double)(y + 1) / h;
+                switch ((x + 3 * y + c) % 7) {
+                case 0: *p = (float)g; break;                            /* gradient [0, 1] */
+                case 1: *p = (float)(1.0 + 6e4 * g * g); break;          /* HDR, up to 6e4 */
+                case 2: *p = (float)(3e-8 * (1 + x) * (1 + c)); break;   /* half subnormals */
+                case 3: *p = 0.0f; break;
+                case 4: *p = (float)(1e-4 * (y + 1) + 1e-6 * x); break; /* small normals */
+                case 5: *p = (float)(-g * 7.25); break;                  /* negative */
+                default: *p = (float)(g * 1000.0 + 0.3); break;
+                }
+            }
+    return 1;
+}
+
+static int image_empty(const pt_image *img) { return img->width == 0 && img->height == 0 && img->rgb == NULL; }
+
+static void round_trip_one(test_ctx *t, const char *dir, pt_exr_pixel_type pt, pt_exr_compression cp, const char *label)
+{
+    pt_image a = { 0, 0, NULL }, b = { 0, 0, NULL };
+    pt_exr_options o;
+    char path[600], err[512];
+    size_t i, n;
+    int rc, bad = 0;
+    double worst = 0.0;
+    o.pixel_type = pt;
+    o.compression = cp;
+    snprintf(path, sizeof path, "%s/rt-%s.exr", dir, label);
+    if (!CHECK(t, make_test_image(&a, 37, 23), "%s: image", label)) return;
+    rc = pt_write_exr(path, &a, &o, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK && err[0] == '\0', "%s: write rc %d '%s'", label, rc, err)) goto done;
+    rc = pt_read_exr(path, &b, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "%s: read rc %d '%s'", label, rc, err)) goto done;
+    if (!CHECK(t, b.width == 37 && b.height == 23 && b.rgb, "%s: size %dx%d", label, b.width, b.height)) goto done;
+    n = 3u * 37u * 23u;
+    if (pt == PT_EXR_FLOAT) {
+        CHECK(t, memcmp(a.rgb, b.rgb, n * sizeof(float)) == 0, "%s: float data not bit-exact", label);
+    } else {
+        for (i = 0; i < n; ++i) {
+            double x = a.rgb[i], r = b.rgb[i], want = ref_half(x), tol = fmax(fabs(x) * ldexp(1.0, -11), ldexp(1.0, -25));
+            if (r != want || fabs(r - x) > tol) {
+                if (bad++ == 0) CHECK(t, 0, "%s: value %zu: %.9g read as %.9g, want %.9g", label, i, x, r, want);
+            }
+            if (x != 0.0 && fabs(x) >= ldexp(1.0, -14)) worst = fmax(worst, fabs(r - x) / fabs(x));
+        }
+        CHECK(t, bad == 0, "%s: %d half values off", label, bad);
+        CHECK(t, worst <= ldexp(1.0, -11), "%s: worst relative error %.3g > 2^-11", label, worst);
+    }
+    test_note(t, "%s ok", label);
+done:
+    pt_image_free(&a);
+    pt_image_free(&b);
+}
+
+static void round_trip(test_ctx *t)
+{
+    char dir[64];
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    round_trip_one(t, dir, PT_EXR_HALF, PT_EXR_ZIP, "half-zip");
+    round_trip_one(t, dir, PT_EXR_HALF, PT_EXR_PIZ, "half-piz");
+    round_trip_one(t, dir, PT_EXR_FLOAT, PT_EXR_ZIP, "float-zip");
+    round_trip_one(t, dir, PT_EXR_FLOAT, PT_EXR_PIZ, "float-piz");
+    round_trip_one(t, dir, PT_EXR_HALF, PT_EXR_NONE, "half-none");
+    round_trip_one(t, dir, PT_EXR_FLOAT, PT_EXR_NONE, "float-none");
+    CHECK(t, count_entries(dir) == 6, "expected 6 files (no temporaries), found %d", count_entries(dir));
+    remove_dir(dir);
+}
+
+/* Exact binary16 cases: rounding at the top of the range, ties, subnormals, inf, NaN. */
+static void half_rounding(test_ctx *t)
+{
+    static const struct { float in, want; } cases[] = {
+        { 65504.0f, 65504.0f },               /* largest half */
+        { 65519.0f, 65504.0f },               /* below the midpoint */
+        { 1.0f + 1.0f / 2048.0f, 1.0f },      /* tie: to even (down) */
+        { 1.0f + 3.0f / 2048.0f, 1.0f + 4.0f / 2048.0f }, /* tie: to even (up) */
+        { 5.9604645e-8f, 5.9604645e-8f },     /* 2^-24, smallest subnormal */
+        { 2.9802322e-8f, 0.0f },              /* 2^-25: tie to zero */
+        { 4.4703484e-8f, 5.9604645e-8f },     /* 1.5 * 2^-25: up to 2^-24 */
+        { 6.1035156e-5f, 6.1035156e-5f },     /* 2^-14, smallest normal */
+        { 6.1020255e-5f, 6.1035156e-5f },     /* just below 2^-14: rounds up to the normal */
+        { -2.5f, -2.5f },
+        { 1e-30f, 0.0f },
+    };
+    const int n = (int)(sizeof cases / sizeof cases[0]);
+    pt_image a = { 0, 0, NULL }, b = { 0, 0, NULL };
+    char dir[64], path[128], err[512];
+    int i, rc;
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(path, sizeof path, "%s/h.exr", dir);
+    if (!CHECK(t, pt_image_init(&a, n + 3, 1) == PT_OK, "init")) goto done;
+    for (i = 0; i < n; ++i) a.rgb[3 * i] = a.rgb[3 * i + 1] = a.rgb[3 * i + 2] = cases[i].in;
+    a.rgb[3 * n] = 65520.0f;      /* midpoint to 2^16: to infinity */
+    a.rgb[3 * n + 1] = -1e10f;    /* -infinity */
+    a.rgb[3 * n + 2] = 0.0f;
+    a.rgb[3 * n + 3] = (float)NAN;
+    a.rgb[3 * n + 6] = (float)INFINITY;
+    rc = pt_write_exr(path, &a, NULL, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "write rc %d %s", rc, err)) goto done;
+    rc = pt_read_exr(path, &b, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK && b.width == n + 3, "read rc %d %s", rc, err)) goto done;
+    for (i = 0; i < n; ++i)
+        CHECK(t, b.rgb[3 * i] == cases[i].want && b.rgb[3 * i + 2] == cases[i].want, "%.9g -> %.9g, want %.9g",
+              (double)cases[i].in, (double)b.rgb[3 * i], (double)cases[i].want);
+    CHECK(t, isinf(b.rgb[3 * n]) && b.rgb[3 * n] > 0, "65520 -> %g, want +inf", (double)b.rgb[3 * n]);
+    CHECK(t, isinf(b.rgb[3 * n + 1]) && b.rgb[3 * n + 1] < 0, "-1e10 -> %g, want -inf", (double)b.rgb[3 * n + 1]);
+    CHECK(t, isnan(b.rgb[3 * n + 3]), "NaN -> %g", (double)b.rgb[3 * n + 3]);
+    CHECK(t, isinf(b.rgb[3 * n + 6]), "inf -> %g", (double)b.rgb[3 * n + 6]);
+    test_note(t, "%d exact cases, inf, NaN", n);
+done:
+    pt_image_free(&a);
+    pt_image_free(&b);
+    remove_dir(dir);
+}
+
+/* A file written with OpenEXRCore directly: channels A (half), B (uint), G (float), R (half),
+   data window starting at (5, 7), 16 lines per chunk with ZIP. pdftrace must map by name. */
+static int write_rgba_direct(const char *path, int w, int h, uint16_t *hr, float *fg, uint32_t *ub, uint16_t *ha)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    exr_context_t ctx = NULL;
+    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    exr_attr_box2i_t dw;
+    int part = 0, y, c, ready = 0;
+    int32_t spc = 0;
+    exr_result_t rv;
+    init.error_handler_fn = NULL;
+    rv = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_ZIP);
+    dw.min.x = 5; dw.min.y = 7; dw.max.x = 5 + w - 1; dw.max.y = 7 + h - 1;
+    if (rv == EXR_ERR_SUCCESS) rv = exr_set_data_window(ctx, part, &dw);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_add_channel(ctx, part, "R", EXR_PIXEL_HALF, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_add_channel(ctx, part, "G", EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_add_channel(ctx, part, "B", EXR_PIXEL_UINT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_add_channel(ctx, part, "A", EXR_PIXEL_HALF, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_write_header(ctx);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_get_scanlines_per_chunk(ctx, part, &spc);
+    for (y = dw.min.y; rv == EXR_ERR_SUCCESS && y <= dw.max.y; y += spc) {
+        exr_chunk_info_t ci;
+        size_t row;
+        rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
+        if (rv != EXR_ERR_SUCCESS) break;
+        row = (size_t)(ci.start_y - dw.min.y) * (size_t)w;
+        rv = ready ? exr_encoding_update(ctx, part, &ci, &enc) : exr_encoding_initialize(ctx, part, &ci, &enc);
+        if (rv != EXR_ERR_SUCCESS) break;
+        for (c = 0; c < enc.channel_count; ++c) {
+            exr_coding_channel_info_t *ch = &enc.channels[c];
+            char nm = ch->channel_name[0];
+            ch->user_pixel_stride = nm == 'R' || nm == 'A' ? 2 : 4;
+            ch->user_bytes_per_element = (int16_t)ch->user_pixel_stride;
+            ch->user_line_stride = ch->user_pixel_stride * w;
+            ch->user_data_type = ch->data_type;
+            ch->encode_from_ptr = nm == 'R' ? (const uint8_t *)(hr + row) : nm == 'G' ? (const uint8_t *)(fg + row)
+                                  : nm == 'B' ? (const uint8_t *)(ub + row) : (const uint8_t *)(ha + row);
+        }
+        if (!ready) rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+        ready = 1;
+        if (rv == EXR_ERR_SUCCESS) rv = exr_encoding_run(ctx, part, &enc);
+    }
+    if (ready) exr_encoding_destroy(ctx, &enc);
+    if (ctx) { exr_result_t fr = exr_finish(&ctx); if (rv == EXR_ERR_SUCCESS) rv = fr; }
+    return rv == EXR_ERR_SUCCESS;
+}
+
+static void rgba_written_by_library(test_ctx *t)
+{
+    enum { W = 29, H = 41 };
+    static uint16_t hr[W * H], ha[W * H];
+    static float fg[W * H];
+    static uint32_t ub[W * H];
+    pt_image b = { 0, 0, NULL };
+    char dir[64], path[128], err[512];
+    int i, rc, bad = 0;
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(path, sizeof path, "%s/rgba.exr", dir);
+    for (i = 0; i < W * H; ++i) {
+        hr[i] = (uint16_t)(0x3c00u + (unsigned)i % 1024u); /* 1 + (i mod 1024)/1024 as half */
+        fg[i] = (float)i * 0.001f + 1e-7f;
+        ub[i] = (uint32_t)(i * 37);
+        ha[i] = 0x3800u; /* 0.5 */
+    }
+    if (!CHECK(t, write_rgba_direct(path, W, H, hr, fg, ub, ha), "writing the RGBA file with OpenEXRCore failed")) goto done;
+    rc = pt_read_exr(path, &b, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "read rc %d '%s'", rc, err)) goto done;
+    if (!CHECK(t, b.width == W && b.height == H, "size %dx%d, want %dx%d", b.width, b.height, W, H)) goto done;
+    for (i = 0; i < W * H; ++i) {
+        float r = 1.0f + (float)(i % 1024) / 1024.0f;
+        if (b.rgb[3 * i] != r || b.rgb[3 * i + 1] != fg[i] || b.rgb[3 * i + 2] != (float)ub[i]) {
+            if (bad++ == 0)
+                CHECK(t, 0, "pixel %d: (%g %g %g), want (%g %g %g)", i, (double)b.rgb[3 * i], (double)b.rgb[3 * i + 1],
+                      (double)b.rgb[3 * i + 2], (double)r, (double)fg[i], (double)ub[i]);
+        }
+    }
+    CHECK(t, bad == 0, "%d pixels wrong", bad);
+    test_note(t, "A/B/G/R = half/uint/float/half, data window at (5, 7)");
+done:
+    pt_image_free(&b);
+    remove_dir(dir);
+}
+
+static void expect_read_error(test_ctx *t, const char *path, const char *what)
+{
+    pt_image b;
+    char err[512];
+    int rc;
+    b.width = 3; b.height = 4; b.rgb = NULL; /* must come back empty */
+    err[0] = '\0';
+    rc = pt_read_exr(path, &b, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO, "%s: rc %d (%s), want PT_ERROR_IO", what, rc, pt_result_string(rc));
+    CHECK(t, image_empty(&b), "%s: image not left empty (%dx%d)", what, b.width, b.height);
+    CHECK(t, err[0] != '\0' && strstr(err, path) != NULL, "%s: message '%s' does not name the file", what, err);
+    if (rc == PT_OK) pt_image_free(&b);
+}
+
+static void bad_files(test_ctx *t)
+{
+    pt_image a = { 0, 0, NULL };
+    pt_exr_options o;
+    unsigned char *buf = NULL;
+    char dir[64], good[128], path[128], err[512];
+    long size = 0, i;
+    int rc;
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(good, sizeof good, "%s/good.exr", dir);
+    if (!CHECK(t, make_test_image(&a, 64, 48), "image")) goto done;
+    o.pixel_type = PT_EXR_HALF;
+    o.compression = PT_EXR_ZIP;
+    rc = pt_write_exr(good, &a, &o, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "write rc %d %s", rc, err)) goto done;
+    buf = slurp(good, &size);
+    if (!CHECK(t, buf && size > 400, "reading back %s", good)) goto done;
+
+    /* corrupt: 64 bytes inverted in the middle of the pixel data */
+    snprintf(path, sizeof path, "%s/corrupt.exr", dir);
+    for (i = size / 2; i < size / 2 + 64 && i < size; ++i) buf[i] ^= 0xffu;
+    CHECK(t, spit(path, buf, size), "writing %s", path);
+    expect_read_error(t, path, "corrupt");
+    for (i = size / 2; i < size / 2 + 64 && i < size; ++i) buf[i] ^= 0xffu;
+
+    /* truncated at half */
+    snprintf(path, sizeof path, "%s/truncated.exr", dir);
+    CHECK(t, spit(path, buf, size / 2), "writing %s", path);
+    expect_read_error(t, path, "truncated");
+    /* only the header's first bytes */
+    snprintf(path, sizeof path, "%s/stub.exr", dir);
+    CHECK(t, spit(path, buf, 10), "writing %s", path);
+    expect_read_error(t, path, "10-byte stub");
+    /* not an EXR */
+    snprintf(path, sizeof path, "%s/not.exr", dir);
+    CHECK(t, spit(path, (const unsigned char *)"PF\n2 2\n-1.0\n................", 28), "writing %s", path);
+    expect_read_error(t, path, "not an EXR");
+    /* empty and missing */
+    snprintf(path, sizeof path, "%s/empty.exr", dir);
+    CHECK(t, spit(path, buf, 0), "writing %s", path);
+    expect_read_error(t, path, "empty");
+    snprintf(path, sizeof path, "%s/missing.exr", dir);
+    expect_read_error(t, path, "missing");
+    {
+        pt_image b = { 0, 0, NULL };
+        rc = pt_read_exr(NULL, &b, err, sizeof err);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && image_empty(&b), "NULL path: rc %d", rc);
+        rc = pt_read_exr(good, NULL, NULL, 0);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "NULL image: rc %d", rc);
+        rc = pt_read_exr(good, &b, NULL, 0); /* no message buffer: fine */
+        CHECK(t, rc == PT_OK && b.width == 64, "good file without err buffer: rc %d", rc);
+        pt_image_free(&b);
+    }
+    test_note(t, "corrupt, truncated, stub, non-EXR, empty, missing: PT_ERROR_IO with a message");
+done:
+    free(buf);
+    pt_image_free(&a);
+    remove_dir(dir);
+}
+
+static void write_errors(test_ctx *t)
+{
+    pt_image a = { 0, 0, NULL }, none = { 0, 0, NULL };
+    pt_exr_options o;
+    char dir[64], path[160], tmp[200], err[512];
+    int rc;
+    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, make_test_image(&a, 8, 5), "image")) goto done;
+    snprintf(path, sizeof path, "%s/no/such/dir/x.exr", dir);
+    rc = pt_write_exr(path, &a, NULL, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && err[0], "unwritable path: rc %d '%s'", rc, err);
+    CHECK(t, !exists(path), "unwritable path: file exists");
+    /* the target is a directory: the temporary file is written, the rename fails, and it is removed */
+    snprintf(path, sizeof path, "%s/sub", dir);
+    CHECK(t, mkdir(path, 0700) == 0, "mkdir");
+    snprintf(tmp, sizeof tmp, "%s.ptmp", path);
+    rc = pt_write_exr(path, &a, NULL, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && err[0], "directory as target: rc %d '%s'", rc, err);
+    CHECK(t, !exists(tmp), "directory as target: %s left behind", tmp);
+    rmdir(path);
+    CHECK(t, count_entries(dir) == 0, "%d files left in %s", count_entries(dir), dir);
+    /* bad arguments */
+    snprintf(path, sizeof path, "%s/ok.exr", dir);
+    CHECK(t, pt_write_exr(path, &none, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT, "empty image accepted");
+    CHECK(t, pt_write_exr(NULL, &a, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT, "NULL path accepted");
+    CHECK(t, pt_write_exr("", &a, NULL, NULL, 0) == PT_ERROR_INVALID_ARGUMENT, "empty path accepted");
+    o.pixel_type = (pt_exr_pixel_type)7;
+    o.compression = PT_EXR_ZIP;
+    CHECK(t, pt_write_exr(path, &a, &o, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT, "bad pixel type accepted");
+    o.pixel_type = PT_EXR_FLOAT;
+    o.compression = (pt_exr_compression)9;
+    CHECK(t, pt_write_exr(path, &a, &o, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT, "bad compression accepted");
+    CHECK(t, !exists(path), "a rejected write left %s", path);
+    /* replacing an existing file works */
+    CHECK(t, pt_write_exr(path, &a, NULL, err, sizeof err) == PT_OK, "write: %s", err);
+    CHECK(t, pt_write_exr(path, &a, NULL, err, sizeof err) == PT_OK, "rewrite: %s", err);
+    CHECK(t, count_entries(dir) == 1, "%d files after rewriting", count_entries(dir));
+done:
+    pt_image_free(&a);
+    remove_dir(dir);
+}
+
+const test_case test_exr_cases[] = {
+    TEST_CASE(round_trip),
+    TEST_CASE(half_rounding),
+    TEST_CASE(rgba_written_by_library),
+    TEST_CASE(bad_files),
+    TEST_CASE(write_errors),
+    TEST_END
+};
+
+#endif /* PDFTRACE_OPENEXR */
