@@ -1050,6 +1050,13 @@ typedef struct pt__prim {
     int32_t type;     /* PT__PRIM_* */
 } pt__prim;
 
+/* Per-ray data computed once per traversal. */
+typedef struct pt__rayctx {
+    pt_vec3 o, d, inv_d;
+    int kx, ky, kz;       /* watertight triangle test: axis permutation */
+    float sx, sy, sz;     /* and shear */
+} pt__rayctx;
+
 typedef struct pt__material {
     pt_material_type type;
     pt_color albedo;
@@ -1180,7 +1187,7 @@ static float pt__cone_one_minus_cos(float s2)
     float cosmax = pt__safe_sqrt(1.0f - s2);
     return s2 / (1.0f + cosmax);
 }
-static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w, float t_known);
+static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w);
 static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided, float u1, float u2,
                                    pt__light_sample *ls)
 {
@@ -1222,7 +1229,7 @@ static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided,
         ls->dir = pt_scale(v, 1.0f / dist);
         /* the density of a uniform area sample, dist^2 / (|cos| A), in the closed form that
            pt__sphere_light_value uses, so that sample and value agree */
-        ls->pdf = pt__sphere_light_value(o, c, r, 1, ls->dir, -1.0f);
+        ls->pdf = pt__sphere_light_value(o, c, r, 1, ls->dir);
         if (!(ls->pdf > 0.0f)) return 0;
         ls->dist = dist;
         ls->point = p;
@@ -1230,9 +1237,8 @@ static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided,
         return pt__isfinite(ls->pdf);
     }
 }
-/* Density of unit direction w; when the caller already knows the hit distance along w (from
-   the inside), pass it as t_known (else a negative value). */
-static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w, float t_known)
+/* Density of unit direction w. */
+static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w)
 {
     pt_vec3 wc = pt_sub(c, o);
     float d2 = pt_length2(wc);
@@ -1251,7 +1257,6 @@ static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided
         double b = (double)w.x * wc.x + (double)w.y * wc.y + (double)w.z * wc.z;
         double dd = (double)wc.x * wc.x + (double)wc.y * wc.y + (double)wc.z * wc.z;
         double D = (double)r * r - dd + b * b, sD, t;
-        (void)t_known;
         if (!(D > 0.0)) return 0.0f;
         sD = sqrt(D);
         t = b + sD;
@@ -1268,63 +1273,107 @@ static int pt__planar_faces(pt_vec3 o, pt_vec3 q, pt_vec3 n, int two_sided)
     float side = pt_dot(n, pt_sub(o, q));
     return two_sided ? side != 0.0f : side > 0.0f;
 }
-static int pt__planar_finish(pt_vec3 o, pt_vec3 p, pt_vec3 n, float area, pt__light_sample *ls)
+/* dist^2 / (|cos theta_l| A) for a light point at distance t along unit w. */
+static float pt__planar_density(pt_vec3 n, float area, float t, pt_vec3 w)
 {
-    pt_vec3 v = pt_sub(p, o);
-    float dist2 = pt_length2(v), dist, cosl;
+    float cosl = fabsf(pt_dot(n, w));
+    return cosl > 0.0f ? (t * t) / (cosl * area) : 0.0f;
+}
+/* The geometry section's primitive set-up and intersection, used here so that the public
+   light PDFs and the scene's light table share one sampler and one density. */
+static void pt__set_quad(pt__prim *p, pt_vec3 q, pt_vec3 u, pt_vec3 v);
+static void pt__set_triangle(pt__prim *p, pt_vec3 a, pt_vec3 b, pt_vec3 c);
+static float pt__prim_area(const pt__prim *p);
+static void pt__rayctx_init2(pt__rayctx *rc, pt_ray r, int need_triangles);
+static int pt__hit_prim(const pt__rayctx *rc, const pt__prim *p, float tmax, float *t, float *bary);
+
+/* A uniform point on a quad, or on a triangle with b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1)
+   (Osada, Funkhouser, Chazelle & Dobkin, "Shape Distributions", ACM TOG 21(4), 2002, eq. 1). */
+static pt_vec3 pt__planar_point(const pt__prim *p, float u1, float u2)
+{
+    float su, b0, b1;
+    if (p->type == PT__PRIM_QUAD) return pt_madd(pt_madd(p->p0, p->p1, u1), p->p2, u2);
+    su = sqrtf(u1);
+    b0 = 1.0f - su;
+    b1 = u2 * su;
+    return pt_add(pt_add(pt_scale(p->p0, b0), pt_scale(p->p1, b1)), pt_scale(p->p2, 1.0f - b0 - b1));
+}
+/* Samples quad or triangle primitive p (of area `area`) from o. */
+static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided, pt_vec3 o, float u1, float u2,
+                                   pt__light_sample *ls)
+{
+    pt_vec3 q, v;
+    float dist2, dist;
+    if (!pt__planar_faces(o, p->p0, p->n, two_sided)) return 0;
+    q = pt__planar_point(p, u1, u2);
+    v = pt_sub(q, o);
+    dist2 = pt_length2(v);
     if (!(dist2 > 0.0f)) return 0;
     dist = sqrtf(dist2);
     ls->dir = pt_scale(v, 1.0f / dist);
-    cosl = fabsf(pt_dot(n, ls->dir));
-    if (!(cosl > 0.0f)) return 0;
-    ls->pdf = dist2 / (cosl * area);
+    ls->pdf = pt__planar_density(p->n, area, dist, ls->dir);
     ls->dist = dist;
-    ls->point = p;
-    ls->normal = n;
-    return pt__isfinite(ls->pdf);
+    ls->point = q;
+    ls->normal = p->n;
+    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
+}
+/* The density of unit direction w towards quad or triangle primitive p from o. */
+static float pt__planar_light_value(const pt__prim *p, float area, int two_sided, pt_vec3 o, pt_vec3 w)
+{
+    pt__rayctx rc;
+    pt_ray r;
+    float t, bary[3];
+    if (!pt__planar_faces(o, p->p0, p->n, two_sided)) return 0.0f;
+    r.origin = o;
+    r.dir = w;
+    pt__rayctx_init2(&rc, r, p->type == PT__PRIM_TRIANGLE);
+    if (!pt__hit_prim(&rc, p, PT__INF, &t, bary)) return 0.0f;
+    return pt__planar_density(p->n, area, t, w);
+}
+/* The public quad and triangle PDFs: a temporary primitive (0 when it has no area). */
+static int pt__planar_make(pt__prim *p, int type, pt_vec3 a, pt_vec3 b, pt_vec3 c, float *area)
+{
+    memset(p, 0, sizeof *p);
+    p->type = type;
+    if (type == PT__PRIM_QUAD) {
+        if (!(pt_length2(pt_cross(b, c)) > 0.0f)) return 0;
+        pt__set_quad(p, a, b, c);
+    } else {
+        if (!(pt_length2(pt_cross(pt_sub(b, a), pt_sub(c, a))) > 0.0f)) return 0;
+        pt__set_triangle(p, a, b, c);
+    }
+    *area = pt__prim_area(p);
+    return *area > 0.0f;
 }
 static int pt__quad_light_sample(pt_vec3 o, pt_vec3 q, pt_vec3 u, pt_vec3 v, int two_sided, float u1, float u2,
                                  pt__light_sample *ls)
 {
-    pt_vec3 nn = pt_cross(u, v), n = pt_normalize(nn);
-    float area = pt_length(nn);
-    if (!(area > 0.0f) || !pt__planar_faces(o, q, n, two_sided)) return 0;
-    return pt__planar_finish(o, pt_madd(pt_madd(q, u, u1), v, u2), n, area, ls);
+    pt__prim p;
+    float area;
+    return pt__planar_make(&p, PT__PRIM_QUAD, q, u, v, &area) &&
+           pt__planar_light_sample(&p, area, two_sided, o, u1, u2, ls);
 }
 static float pt__quad_light_value(pt_vec3 o, pt_vec3 q, pt_vec3 u, pt_vec3 v, int two_sided, pt_vec3 w)
 {
-    pt_vec3 nn = pt_cross(u, v), n = pt_normalize(nn);
-    float area = pt_length(nn), t, cosl;
-    pt_ray ray;
-    if (!(area > 0.0f) || !pt__planar_faces(o, q, n, two_sided)) return 0.0f;
-    ray.origin = o; ray.dir = w;
-    if (!pt_intersect_quad(ray, q, u, v, PT__INF, &t)) return 0.0f;
-    cosl = fabsf(pt_dot(n, w));
-    if (!(cosl > 0.0f)) return 0.0f;
-    return (t * t) / (cosl * area);
+    pt__prim p;
+    float area;
+    return pt__planar_make(&p, PT__PRIM_QUAD, q, u, v, &area) ? pt__planar_light_value(&p, area, two_sided, o, w)
+                                                              : 0.0f;
 }
-/* Uniform point in a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Osada, Funkhouser,
-   Chazelle & Dobkin, "Shape Distributions", ACM TOG 21(4), 2002, eq. 1). */
 static int pt__triangle_light_sample(pt_vec3 o, pt_vec3 a, pt_vec3 b, pt_vec3 c, int two_sided, float u1, float u2,
                                      pt__light_sample *ls)
 {
-    pt_vec3 nn = pt_cross(pt_sub(b, a), pt_sub(c, a)), n = pt_normalize(nn), p;
-    float area = 0.5f * pt_length(nn), su = sqrtf(u1), b0 = 1.0f - su, b1 = u2 * su;
-    if (!(area > 0.0f) || !pt__planar_faces(o, a, n, two_sided)) return 0;
-    p = pt_add(pt_add(pt_scale(a, b0), pt_scale(b, b1)), pt_scale(c, 1.0f - b0 - b1));
-    return pt__planar_finish(o, p, n, area, ls);
+    pt__prim p;
+    float area;
+    return pt__planar_make(&p, PT__PRIM_TRIANGLE, a, b, c, &area) &&
+           pt__planar_light_sample(&p, area, two_sided, o, u1, u2, ls);
 }
 static float pt__triangle_light_value(pt_vec3 o, pt_vec3 a, pt_vec3 b, pt_vec3 c, int two_sided, pt_vec3 w)
 {
-    pt_vec3 nn = pt_cross(pt_sub(b, a), pt_sub(c, a)), n = pt_normalize(nn);
-    float area = 0.5f * pt_length(nn), t, cosl;
-    pt_ray ray;
-    if (!(area > 0.0f) || !pt__planar_faces(o, a, n, two_sided)) return 0.0f;
-    ray.origin = o; ray.dir = w;
-    if (!pt_intersect_triangle(ray, a, b, c, PT__INF, &t)) return 0.0f;
-    cosl = fabsf(pt_dot(n, w));
-    if (!(cosl > 0.0f)) return 0.0f;
-    return (t * t) / (cosl * area);
+    pt__prim p;
+    float area;
+    return pt__planar_make(&p, PT__PRIM_TRIANGLE, a, b, c, &area) ? pt__planar_light_value(&p, area, two_sided, o, w)
+                                                                  : 0.0f;
 }
 
 /* --- fuzzy metal lobe: the direction of r + f s, with r the unit mirror direction and s
@@ -1504,7 +1553,7 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     case PT_PDF_COSINE_HEMISPHERE: v = pt__maxf(0.0f, pt_dot(w, pdf->as.cosine.basis.n)) * PT__INV_PI; break;
     case PT_PDF_SPHERE_LIGHT:
         v = pt__sphere_light_value(pdf->origin, pdf->as.sphere.center, pdf->as.sphere.radius, pdf->as.sphere.two_sided,
-                                   w, -1.0f);
+                                   w);
         break;
     case PT_PDF_QUAD_LIGHT:
         v = pt__quad_light_value(pdf->origin, pdf->as.quad.q, pdf->as.quad.u, pdf->as.quad.v, pdf->as.quad.two_sided, w);
@@ -1643,13 +1692,6 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
 /* ------------------------------------------------------------------------------------------
    3. Geometry and scenes
    ------------------------------------------------------------------------------------------ */
-
-/* Per-ray data computed once per traversal. */
-typedef struct pt__rayctx {
-    pt_vec3 o, d, inv_d;
-    int kx, ky, kz;       /* watertight triangle test: axis permutation */
-    float sx, sy, sz;     /* and shear */
-} pt__rayctx;
 
 /* need_triangles = 0 skips the shear set-up in scenes without triangles. */
 static PT__HOT void pt__rayctx_init2(pt__rayctx *rc, pt_ray r, int need_triangles)
@@ -2678,47 +2720,23 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
 static int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
                                  pt__light_sample *ls)
 {
-    /* same arithmetic as pt__quad_light_sample / pt__triangle_light_sample, with the normal
-       and area computed once at commit */
     int two = s->mats[p->material].two_sided;
-    float area = s->lights[p->light].area;
     if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_sample(o, p->p0, p->p1.x, two, u1, u2, ls);
-    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0;
-    if (p->type == PT__PRIM_QUAD) return pt__planar_finish(o, pt_madd(pt_madd(p->p0, p->p1, u1), p->p2, u2), p->n, area, ls);
-    {
-        float su = sqrtf(u1), b0 = 1.0f - su, b1 = u2 * su;
-        pt_vec3 q = pt_add(pt_add(pt_scale(p->p0, b0), pt_scale(p->p1, b1)), pt_scale(p->p2, 1.0f - b0 - b1));
-        return pt__planar_finish(o, q, p->n, area, ls);
-    }
+    return pt__planar_light_sample(p, s->lights[p->light].area, two, o, u1, u2, ls);
 }
 static float pt__light_prim_value(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w)
 {
     int two = s->mats[p->material].two_sided;
-    pt__rayctx rc;
-    pt_ray r;
-    float t, bary[3], cosl;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w, -1.0f);
-    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
-    r.origin = o;
-    r.dir = w;
-    pt__rayctx_init2(&rc, r, p->type == PT__PRIM_TRIANGLE);
-    if (!pt__hit_prim(&rc, p, PT__INF, &t, bary)) return 0.0f;
-    cosl = fabsf(pt_dot(p->n, w));
-    if (!(cosl > 0.0f)) return 0.0f;
-    return (t * t) / (cosl * s->lights[p->light].area);
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
+    return pt__planar_light_value(p, s->lights[p->light].area, two, o, w);
 }
-/* Density of w for one light whose surface a ray from o along w reaches at distance t with
-   unit geometric normal n (no ray cast needed). */
-static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w, float t, pt_vec3 n)
+/* Density of w for one light that a ray from o along w reaches at distance t (no ray cast). */
+static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w, float t)
 {
-    const pt__material *m = &s->mats[p->material];
-    float cosl, area;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, m->two_sided, w, t);
-    if (!m->two_sided && pt_dot(n, pt_sub(o, p->p0)) <= 0.0f) return 0.0f;
-    cosl = fabsf(pt_dot(n, w));
-    area = s->lights[p->light].area;
-    if (!(cosl > 0.0f)) return 0.0f;
-    return (t * t) / (cosl * area);
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
+    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
+    return pt__planar_density(p->n, s->lights[p->light].area, t, w);
 }
 static uint32_t pt__pick_light(const pt_scene *s, float u)
 {
@@ -2991,7 +3009,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                 if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
                 else if (cfg->strategy == PT_STRATEGY_MIS) {
                     float pl = s->lights[prim->light].select_pdf *
-                               pt__light_prim_value_at(s, prim, prev_p, ray.dir, t, h.geometric_normal);
+                               pt__light_prim_value_at(s, prim, prev_p, ray.dir, t);
                     w = pt__power_heuristic(prev_pdf, pl);
                 }
             }
