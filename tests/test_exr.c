@@ -31,36 +31,6 @@ const test_case test_exr_cases[] = {
 #include <unistd.h>
 
 /* ---- files ---- */
-static int make_tmpdir(char *buf, size_t n)
-{
-    snprintf(buf, n, "/tmp/pdftrace-exr-XXXXXX");
-    return mkdtemp(buf) != NULL;
-}
-static int count_entries(const char *dir)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    int count = 0;
-    if (!d) return -1;
-    while ((e = readdir(d)) != NULL)
-        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) count++;
-    closedir(d);
-    return count;
-}
-static void remove_dir(const char *dir)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    char path[600];
-    if (!d) return;
-    while ((e = readdir(d)) != NULL) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        unlink(path);
-    }
-    closedir(d);
-    rmdir(dir);
-}
 static int exists(const char *path)
 {
     struct stat st;
@@ -173,15 +143,15 @@ done:
 static void round_trip(test_ctx *t)
 {
     char dir[64];
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     round_trip_one(t, dir, PT_EXR_HALF, PT_EXR_ZIP, "half-zip");
     round_trip_one(t, dir, PT_EXR_HALF, PT_EXR_PIZ, "half-piz");
     round_trip_one(t, dir, PT_EXR_FLOAT, PT_EXR_ZIP, "float-zip");
     round_trip_one(t, dir, PT_EXR_FLOAT, PT_EXR_PIZ, "float-piz");
     round_trip_one(t, dir, PT_EXR_HALF, PT_EXR_NONE, "half-none");
     round_trip_one(t, dir, PT_EXR_FLOAT, PT_EXR_NONE, "float-none");
-    CHECK(t, count_entries(dir) == 6, "expected 6 files (no temporaries), found %d", count_entries(dir));
-    remove_dir(dir);
+    CHECK(t, tu_dir_entries(dir, NULL, 0) == 6, "expected 6 files (no temporaries), found %d", tu_dir_entries(dir, NULL, 0));
+    tu_remove_tree(dir);
 }
 
 /* Exact binary16 cases: rounding at the top of the range, ties, subnormals, inf, NaN. */
@@ -204,7 +174,7 @@ static void half_rounding(test_ctx *t)
     pt_image a = { 0, 0, NULL }, b = { 0, 0, NULL };
     char dir[64], path[128], err[512];
     int i, rc;
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     snprintf(path, sizeof path, "%s/h.exr", dir);
     if (!CHECK(t, pt_image_init(&a, n + 3, 1) == PT_OK, "init")) goto done;
     for (i = 0; i < n; ++i) a.rgb[3 * i] = a.rgb[3 * i + 1] = a.rgb[3 * i + 2] = cases[i].in;
@@ -228,7 +198,7 @@ static void half_rounding(test_ctx *t)
 done:
     pt_image_free(&a);
     pt_image_free(&b);
-    remove_dir(dir);
+    tu_remove_tree(dir);
 }
 
 /* A file written with OpenEXRCore directly: channels A (half), B (uint), G (float), R (half),
@@ -290,7 +260,7 @@ static void rgba_written_by_library(test_ctx *t)
     pt_image b = { 0, 0, NULL };
     char dir[64], path[128], err[512];
     int i, rc, bad = 0;
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     snprintf(path, sizeof path, "%s/rgba.exr", dir);
     for (i = 0; i < W * H; ++i) {
         hr[i] = (uint16_t)(0x3c00u + (unsigned)i % 1024u); /* 1 + (i mod 1024)/1024 as half */
@@ -314,7 +284,7 @@ static void rgba_written_by_library(test_ctx *t)
     test_note(t, "A/B/G/R = half/uint/float/half, data window at (5, 7)");
 done:
     pt_image_free(&b);
-    remove_dir(dir);
+    tu_remove_tree(dir);
 }
 
 static void expect_read_error(test_ctx *t, const char *path, const char *what)
@@ -339,7 +309,7 @@ static void bad_files(test_ctx *t)
     char dir[64], good[128], path[128], err[512];
     long size = 0, i;
     int rc;
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     snprintf(good, sizeof good, "%s/good.exr", dir);
     if (!CHECK(t, make_test_image(&a, 64, 48), "image")) goto done;
     o.pixel_type = PT_EXR_HALF;
@@ -388,7 +358,7 @@ static void bad_files(test_ctx *t)
 done:
     free(buf);
     pt_image_free(&a);
-    remove_dir(dir);
+    tu_remove_tree(dir);
 }
 
 static void write_errors(test_ctx *t)
@@ -397,7 +367,7 @@ static void write_errors(test_ctx *t)
     pt_exr_options o;
     char dir[64], path[160], tmp[200], err[512];
     int rc;
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     if (!CHECK(t, make_test_image(&a, 8, 5), "image")) goto done;
     snprintf(path, sizeof path, "%s/no/such/dir/x.exr", dir);
     rc = pt_write_exr(path, &a, NULL, err, sizeof err);
@@ -411,7 +381,7 @@ static void write_errors(test_ctx *t)
     CHECK(t, rc == PT_ERROR_IO && err[0], "directory as target: rc %d '%s'", rc, err);
     CHECK(t, !exists(tmp), "directory as target: %s left behind", tmp);
     rmdir(path);
-    CHECK(t, count_entries(dir) == 0, "%d files left in %s", count_entries(dir), dir);
+    CHECK(t, tu_dir_entries(dir, NULL, 0) == 0, "%d files left in %s", tu_dir_entries(dir, NULL, 0), dir);
     /* bad arguments */
     snprintf(path, sizeof path, "%s/ok.exr", dir);
     CHECK(t, pt_write_exr(path, &none, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT, "empty image accepted");
@@ -427,10 +397,10 @@ static void write_errors(test_ctx *t)
     /* replacing an existing file works */
     CHECK(t, pt_write_exr(path, &a, NULL, err, sizeof err) == PT_OK, "write: %s", err);
     CHECK(t, pt_write_exr(path, &a, NULL, err, sizeof err) == PT_OK, "rewrite: %s", err);
-    CHECK(t, count_entries(dir) == 1, "%d files after rewriting", count_entries(dir));
+    CHECK(t, tu_dir_entries(dir, NULL, 0) == 1, "%d files after rewriting", tu_dir_entries(dir, NULL, 0));
 done:
     pt_image_free(&a);
-    remove_dir(dir);
+    tu_remove_tree(dir);
 }
 
 const test_case test_exr_cases[] = {

@@ -17,16 +17,6 @@
 
 static double alpha_each(void) { return tu_sidak(FILE_ALPHA, MAT_STAT_TESTS); }
 
-static pt_render_desc base_desc(int w, int h, int spp)
-{
-    pt_render_desc d;
-    memset(&d, 0, sizeof d);
-    d.width = w;
-    d.height = h;
-    d.samples_per_pixel = spp;
-    d.seed = 12345;
-    return d;
-}
 
 static void checker_parity(test_ctx *t)
 {
@@ -76,7 +66,7 @@ static void checker_in_render(test_ctx *t)
     pt_scene *s = pt_scene_create();
     pt_color even = pt_v3(0.2f, 0.3f, 0.4f), odd = pt_v3(0.8f, 0.6f, 0.5f);
     const float scale = 0.5f;
-    pt_render_desc d = base_desc(40, 30, 4);
+    pt_render_desc d = tu_base_desc(40, 30, 4, 12345);
     pt_material_desc md;
     pt_film film;
     pt_render_stats st;
@@ -202,7 +192,7 @@ static void furnace_spheres(test_ctx *t)
         if (!CHECK(t, rc == PT_OK, "%s: %s", mats[mi].name, pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
         for (rr = 0; rr < 2; rr++) {
             for (strat = 0; strat < 4; strat++) {
-                pt_render_desc d = base_desc(24, 24, 16);
+                pt_render_desc d = tu_base_desc(24, 24, 16, 12345);
                 pt_film film;
                 pt_render_stats st;
                 pt_camera cam;
@@ -288,7 +278,7 @@ static void dielectric_slab_fresnel(test_ctx *t)
             double th = angles[ai] * TU_PI / 180.0, F = tu_fresnel_dielectric(cos(th), 1.0, ior), want = 2 * F / (1 + F);
             int strat;
             for (strat = 0; strat < 2; strat++) {
-                pt_render_desc d = base_desc(1, 1, 1);
+                pt_render_desc d = tu_base_desc(1, 1, 1, 12345);
                 pt_rng rng;
                 pt_path_stats ps;
                 tu_acc acc;
@@ -327,7 +317,7 @@ static void mirror_reflection(test_ctx *t)
        deterministic and carries albedo * radiance. A ray aimed 0.2 beside it sees nothing. */
     pt_scene *s = pt_scene_create();
     int mir, emit, rc, i, bad = 0, bad_miss = 0;
-    pt_render_desc d = base_desc(1, 1, 1);
+    pt_render_desc d = tu_base_desc(1, 1, 1, 12345);
     pt_rng rng;
     if (!CHECK(t, s != NULL, "scene")) return;
     mir = pt_scene_add_metal(s, pt_v3(0.8f, 0.6f, 0.4f), 0.0f);
@@ -364,7 +354,7 @@ static void emission_sides(test_ctx *t)
     pt_scene *s = pt_scene_create();
     pt_material_desc md;
     int one, two, lam_emit, rc, k;
-    pt_render_desc d = base_desc(1, 1, 1);
+    pt_render_desc d = tu_base_desc(1, 1, 1, 12345);
     pt_rng rng;
     if (!CHECK(t, s != NULL, "scene")) return;
     one = pt_scene_add_emitter(s, pt_v3(1, 2, 3), 0);

@@ -12,49 +12,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-/* ---- temporary directories ---- */
-static int make_tmpdir(char *buf, size_t n)
-{
-    snprintf(buf, n, "/tmp/pdftrace-test-XXXXXX");
-    return mkdtemp(buf) != NULL;
-}
 
-/* Number of entries in dir (excluding . and ..); names into list if given. */
-static int dir_entries(const char *dir, char *list, size_t n)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    int count = 0;
-    if (list && n) list[0] = '\0';
-    if (!d) return -1;
-    while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-        count++;
-        if (list && strlen(list) + strlen(e->d_name) + 2 < n) {
-            strcat(list, e->d_name);
-            strcat(list, " ");
-        }
-    }
-    closedir(d);
-    return count;
-}
 
-static void remove_tree(const char *dir)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    char path[512];
-    if (!d) return;
-    while ((e = readdir(d)) != NULL) {
-        struct stat st;
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) remove_tree(path);
-        else unlink(path);
-    }
-    closedir(d);
-    rmdir(dir);
-}
 
 static unsigned char *read_file(const char *path, long *size)
 {
@@ -116,11 +75,11 @@ static void pfm_layout(test_ctx *t)
     unsigned char *b;
     long n, off;
     int x, y, c, rc, bad = 0;
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     snprintf(path, sizeof path, "%s/a.pfm", dir);
     memset(&img, 0, sizeof img);
     if (!CHECK(t, pt_image_init(&img, 5, 3) == PT_OK && img.rgb && img.width == 5 && img.height == 3, "pt_image_init")) {
-        remove_tree(dir);
+        tu_remove_tree(dir);
         return;
     }
     for (y = 0; y < 3; y++)
@@ -145,10 +104,10 @@ static void pfm_layout(test_ctx *t)
         }
         free(b);
     }
-    CHECK(t, dir_entries(dir, NULL, 0) == 1, "the writer left extra files in the directory");
+    CHECK(t, tu_dir_entries(dir, NULL, 0) == 1, "the writer left extra files in the directory");
     pt_image_free(&img);
     CHECK(t, img.rgb == NULL, "pt_image_free left a dangling pointer");
-    remove_tree(dir);
+    tu_remove_tree(dir);
 }
 
 static void ppm_srgb(test_ctx *t)
@@ -162,10 +121,10 @@ static void ppm_srgb(test_ctx *t)
     unsigned char *b;
     long n, off;
     int i, c, bad = 0, rc;
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     snprintf(path, sizeof path, "%s/a.ppm", dir);
     memset(&img, 0, sizeof img);
-    if (!CHECK(t, pt_image_init(&img, w, h) == PT_OK, "pt_image_init")) { remove_tree(dir); return; }
+    if (!CHECK(t, pt_image_init(&img, w, h) == PT_OK, "pt_image_init")) { tu_remove_tree(dir); return; }
     for (i = 0; i < w * h; i++)
         for (c = 0; c < 3; c++) img.rgb[3 * i + c] = vals[(i + 5 * c) % 15];
     rc = pt_write_ppm(path, &img);
@@ -190,7 +149,7 @@ static void ppm_srgb(test_ctx *t)
         free(b);
     }
     pt_image_free(&img);
-    remove_tree(dir);
+    tu_remove_tree(dir);
 }
 
 static void srgb_encode_function(test_ctx *t)
@@ -219,11 +178,11 @@ static void write_errors(test_ctx *t)
     pt_image img, small;
     int rc, k;
     FILE *f;
-    if (!CHECK(t, make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
     memset(&img, 0, sizeof img);
     memset(&small, 0, sizeof small);
     if (!CHECK(t, pt_image_init(&img, 4, 4) == PT_OK && pt_image_init(&small, 1, 1) == PT_OK, "pt_image_init")) {
-        remove_tree(dir);
+        tu_remove_tree(dir);
         return;
     }
     for (k = 0; k < 2; k++) {
@@ -233,13 +192,13 @@ static void write_errors(test_ctx *t)
         snprintf(path, sizeof path, "%s/missing/out.img", dir);
         rc = writer(path, &img);
         CHECK(t, rc == PT_ERROR_IO, "%s into a missing directory: %d, want PT_ERROR_IO", name, rc);
-        CHECK(t, dir_entries(dir, list, sizeof list) == 0, "%s left files behind: %s", name, list);
+        CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "%s left files behind: %s", name, list);
         /* the target is an existing directory: the temporary file must be removed */
         snprintf(path, sizeof path, "%s/target", dir);
         mkdir(path, 0700);
         rc = writer(path, &img);
         CHECK(t, rc == PT_ERROR_IO, "%s onto a directory: %d, want PT_ERROR_IO", name, rc);
-        CHECK(t, dir_entries(dir, list, sizeof list) == 1 && dir_entries(path, NULL, 0) == 0,
+        CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1 && tu_dir_entries(path, NULL, 0) == 0,
               "%s onto a directory left files behind: %s", name, list);
         rmdir(path);
         /* a path through a regular file */
@@ -262,7 +221,7 @@ static void write_errors(test_ctx *t)
             empty.height = 4;
             CHECK(t, writer(path, &empty) == PT_ERROR_INVALID_ARGUMENT, "%s with rgb == NULL did not fail", name);
         }
-        CHECK(t, dir_entries(dir, list, sizeof list) == 0, "%s: invalid calls left files: %s", name, list);
+        CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "%s: invalid calls left files: %s", name, list);
         /* replacing an existing file: the new content, nothing else in the directory */
         rc = writer(path, &img);
         rc |= writer(path, &small);
@@ -280,12 +239,12 @@ static void write_errors(test_ctx *t)
             free(b2);
             unlink(other);
         }
-        CHECK(t, dir_entries(dir, list, sizeof list) == 1, "%s: after overwriting, the directory holds: %s", name, list);
+        CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1, "%s: after overwriting, the directory holds: %s", name, list);
         unlink(path);
     }
     pt_image_free(&img);
     pt_image_free(&small);
-    remove_tree(dir);
+    tu_remove_tree(dir);
 }
 
 static void film_math(test_ctx *t)

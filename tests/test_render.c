@@ -24,16 +24,6 @@
 #define RENDER_STAT_FAMILIES 6
 #define FAMILY_ALPHA 0.01
 
-static pt_render_desc base_desc(int w, int h, int spp)
-{
-    pt_render_desc d;
-    memset(&d, 0, sizeof d);
-    d.width = w;
-    d.height = h;
-    d.samples_per_pixel = spp;
-    d.seed = 4242;
-    return d;
-}
 
 /* The Cornell box of "Ray Tracing: The Rest of Your Life" (two rotated boxes; optionally the glass
    sphere), with its camera. */
@@ -192,7 +182,7 @@ static void host_threads(void *user, int count, pt_job_fn job, void *job_data)
 
 static void threads_bit_identical(test_ctx *t)
 {
-    pt_render_desc d = base_desc(40, 28, 4);
+    pt_render_desc d = tu_base_desc(40, 28, 4, 4242);
     pt_scene *s = cornell(1, &d);
     pt_film ref, f;
     pt_render_stats st;
@@ -233,7 +223,7 @@ static void progressive_equals_single(test_ctx *t)
 {
     /* Two renders of 8 spp into one film = one render of 16 spp in passes of 8, bit for bit; a
        16-spp render in passes of 5 (5+5+5+1) takes exactly 16 samples per pixel. */
-    pt_render_desc d = base_desc(24, 24, 8);
+    pt_render_desc d = tu_base_desc(24, 24, 8, 4242);
     pt_scene *s = cornell(0, &d);
     pt_film a, b;
     pt_render_stats st;
@@ -282,7 +272,7 @@ static int on_progress(void *user, const pt_progress *p)
 
 static void cancellation_and_progress(test_ctx *t)
 {
-    pt_render_desc d = base_desc(32, 32, 12);
+    pt_render_desc d = tu_base_desc(32, 32, 12, 4242);
     pt_scene *s = cornell(0, &d);
     pt_film f;
     pt_render_stats st;
@@ -342,7 +332,7 @@ static void cancellation_and_progress(test_ctx *t)
 static void render_image_matches_film(test_ctx *t)
 {
     /* pt_render_image = pt_render into a fresh film + pt_film_resolve, bit for bit */
-    pt_render_desc d = base_desc(20, 16, 3);
+    pt_render_desc d = tu_base_desc(20, 16, 3, 4242);
     pt_scene *s = cornell(1, &d);
     pt_film f;
     pt_image a, b;
@@ -383,7 +373,7 @@ static void furnace_closed_sphere(test_ctx *t)
     rc = tu_add_closed_furnace(s);
     if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     for (strat = 0; strat < 4; strat++) {
-        pt_render_desc d = base_desc(16, 16, 45); /* a non-square count on purpose */
+        pt_render_desc d = tu_base_desc(16, 16, 45, 4242); /* a non-square count on purpose */
         pt_film f;
         tu_region reg[16];
         d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
@@ -426,7 +416,7 @@ static void furnace_one_bounce(test_ctx *t)
     rc = tu_add_closed_furnace(s);
     if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     for (strat = 0; strat < 4; strat++) {
-        pt_render_desc d = base_desc(1, 1, 1);
+        pt_render_desc d = tu_base_desc(1, 1, 1, 4242);
         pt_rng rng, dirs;
         pt_path_stats ps;
         tu_acc acc;
@@ -462,7 +452,7 @@ static void strategies_agree_cornell(test_ctx *t)
        region (4x4) and channel, z = (m_s - m_mis) / sqrt(se_s^2 + se_mis^2) with standard errors from
        the films' per-pixel variances; 3 strategies x 16 regions x 3 channels = 144 comparisons at
        alpha 0.01 Sidak. Also reports how many |z| exceed 3. 200 spp. */
-    pt_render_desc d = base_desc(48, 48, 200);
+    pt_render_desc d = tu_base_desc(48, 48, 200, 4242);
     pt_scene *s = cornell(0, &d);
     pt_film f[4];
     tu_region reg[4][16];
@@ -517,7 +507,7 @@ static void direct_light_lambert(test_ctx *t)
     pt_scene *s = pt_scene_create();
     pt_vec3 q = pt_v3(-0.2f, 2.0f, -0.3f), u = pt_v3(1, 0, 0), v = pt_v3(0, 0, 1); /* u x v = -y */
     dv3 verts[4];
-    pt_render_desc d = base_desc(32, 32, 128);
+    pt_render_desc d = tu_base_desc(32, 32, 128, 4242);
     pt_camera cam;
     double *ref = NULL, zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 96)), worst = 0;
     int floor_m, light_m, rc, x, y, k, strat, over3 = 0;
@@ -619,7 +609,7 @@ static void direct_sphere_light_formula(test_ctx *t)
             double d2 = ddot(l, l), sin2 = R * R / d2, cos_t = l.y / sqrt(d2);
             double want = 0.5 * (double)(float)L * sin2 * cos_t;
             for (strat = 0; strat < 4; strat++) {
-                pt_render_desc d = base_desc(1, 1, 1);
+                pt_render_desc d = tu_base_desc(1, 1, 1, 4242);
                 pt_rng rng;
                 pt_path_stats ps;
                 tu_acc acc;
@@ -656,7 +646,7 @@ static void no_nonfinite_anywhere(test_ctx *t)
     /* Everything at once -- glass, mirror, fuzzy metals (0.3 and 1), a checker texture, a two-sided
        sphere light, a tiny sphere light of huge radiance, a triangle light, a light behind a wall --
        with all strategies and a guide: no non-finite sample, no negative or NaN pixel. */
-    pt_render_desc d = base_desc(32, 32, 4);
+    pt_render_desc d = tu_base_desc(32, 32, 4, 4242);
     pt_scene *s = pt_scene_create();
     int m_l, m_glass, m_mirror, m_fuzz, m_fuzz1, m_tex, m_emit2, m_emit, m_tiny, tex, rc = 0, strat;
     pt_material_desc md;
@@ -714,7 +704,7 @@ static void render_desc_validation(test_ctx *t)
 {
     /* Settings outside their documented ranges are rejected; pt_trace_path is a pure function of
        its rng state. */
-    pt_render_desc d = base_desc(8, 8, 1);
+    pt_render_desc d = tu_base_desc(8, 8, 1, 4242);
     pt_scene *s = cornell(0, &d);
     pt_film f;
     int rc;

@@ -1,9 +1,13 @@
+#define _POSIX_C_SOURCE 200809L /* mkdtemp, rmdir, unlink */
 /* test_util.c - statistics, closed forms and the PDF checker shared by the tests (see test_util.h). */
 #include "test_util.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 int tu_verbose(void)
 {
@@ -1132,4 +1136,59 @@ int tu_add_closed_furnace(pt_scene *s)
     if (m < 0) return m;
     rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
     return rc >= 0 ? pt_scene_commit(s) : rc;
+}
+
+/* ---- temporary directories (output and EXR writer tests) ---- */
+int tu_make_tmpdir(char *buf, size_t n)
+{
+    snprintf(buf, n, "/tmp/pdftrace-test-XXXXXX");
+    return mkdtemp(buf) != NULL;
+}
+
+/* Number of entries in dir (excluding . and ..); names into list if given. */
+int tu_dir_entries(const char *dir, char *list, size_t n)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    int count = 0;
+    if (list && n) list[0] = '\0';
+    if (!d) return -1;
+    while ((e = readdir(d)) != NULL) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        count++;
+        if (list && strlen(list) + strlen(e->d_name) + 2 < n) {
+            strcat(list, e->d_name);
+            strcat(list, " ");
+        }
+    }
+    closedir(d);
+    return count;
+}
+
+void tu_remove_tree(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    char path[512];
+    if (!d) return;
+    while ((e = readdir(d)) != NULL) {
+        struct stat st;
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) tu_remove_tree(path);
+        else unlink(path);
+    }
+    closedir(d);
+    rmdir(dir);
+}
+
+pt_render_desc tu_base_desc(int w, int h, int spp, uint64_t seed)
+{
+    pt_render_desc d;
+    memset(&d, 0, sizeof d);
+    d.width = w;
+    d.height = h;
+    d.samples_per_pixel = spp;
+    d.seed = seed;
+    return d;
 }

@@ -38,6 +38,13 @@ dv3 tu_sample_cone(pt_rng *r, dv3 axis, double omc);
 /* The closed furnace (pbrt-v4's test): adds to s a sphere of radius 1 at the origin, Lambertian albedo
    0.5 with two-sided emission 0.5, so every point inside sees Le/(1 - rho) = 1, and commits. */
 int tu_add_closed_furnace(pt_scene *s);
+/* Temporary directories for the writer tests: create one under /tmp (1 on success), count its
+   entries (names into list if given; -1 if it cannot be read), remove it with its contents. */
+int tu_make_tmpdir(char *buf, size_t n);
+int tu_dir_entries(const char *dir, char *list, size_t n);
+void tu_remove_tree(const char *dir);
+/* A render desc with every field zero (defaults) but size, samples per pixel and seed. */
+pt_render_desc tu_base_desc(int w, int h, int spp, uint64_t seed);
 double tu_sidak(double alpha, int k);      /* per-test level for family-wise alpha over k tests */
 double tu_z_two_sided(double alpha);       /* z with P(|Z| > z) = alpha, Z standard normal */
 double tu_chi2_sf(double x, double dof);   /* P(X > x) for X ~ chi-square(dof) */
