@@ -1330,7 +1330,7 @@ static float pt__planar_light_value(const pt__prim *p, float area, int two_sided
     if (!pt__hit_prim(&rc, p, PT__INF, &t, bary)) return 0.0f;
     return pt__planar_density(p->n, area, t, w);
 }
-/* The public quad and triangle PDFs: a temporary primitive (0 when it has no area). */
+/* A temporary primitive for the public quad and triangle PDFs (0 when it has no area). */
 static int pt__planar_make(pt__prim *p, int type, pt_vec3 a, pt_vec3 b, pt_vec3 c, float *area)
 {
     memset(p, 0, sizeof *p);
@@ -1345,35 +1345,15 @@ static int pt__planar_make(pt__prim *p, int type, pt_vec3 a, pt_vec3 b, pt_vec3 
     *area = pt__prim_area(p);
     return *area > 0.0f;
 }
-static int pt__quad_light_sample(pt_vec3 o, pt_vec3 q, pt_vec3 u, pt_vec3 v, int two_sided, float u1, float u2,
-                                 pt__light_sample *ls)
+/* The primitive of a PT_PDF_QUAD_LIGHT or PT_PDF_TRIANGLE_LIGHT pdf. */
+static int pt__pdf_planar(const pt_pdf *pdf, pt__prim *p, float *area, int *two_sided)
 {
-    pt__prim p;
-    float area;
-    return pt__planar_make(&p, PT__PRIM_QUAD, q, u, v, &area) &&
-           pt__planar_light_sample(&p, area, two_sided, o, u1, u2, ls);
-}
-static float pt__quad_light_value(pt_vec3 o, pt_vec3 q, pt_vec3 u, pt_vec3 v, int two_sided, pt_vec3 w)
-{
-    pt__prim p;
-    float area;
-    return pt__planar_make(&p, PT__PRIM_QUAD, q, u, v, &area) ? pt__planar_light_value(&p, area, two_sided, o, w)
-                                                              : 0.0f;
-}
-static int pt__triangle_light_sample(pt_vec3 o, pt_vec3 a, pt_vec3 b, pt_vec3 c, int two_sided, float u1, float u2,
-                                     pt__light_sample *ls)
-{
-    pt__prim p;
-    float area;
-    return pt__planar_make(&p, PT__PRIM_TRIANGLE, a, b, c, &area) &&
-           pt__planar_light_sample(&p, area, two_sided, o, u1, u2, ls);
-}
-static float pt__triangle_light_value(pt_vec3 o, pt_vec3 a, pt_vec3 b, pt_vec3 c, int two_sided, pt_vec3 w)
-{
-    pt__prim p;
-    float area;
-    return pt__planar_make(&p, PT__PRIM_TRIANGLE, a, b, c, &area) ? pt__planar_light_value(&p, area, two_sided, o, w)
-                                                                  : 0.0f;
+    if (pdf->type == PT_PDF_QUAD_LIGHT) {
+        *two_sided = pdf->as.quad.two_sided;
+        return pt__planar_make(p, PT__PRIM_QUAD, pdf->as.quad.q, pdf->as.quad.u, pdf->as.quad.v, area);
+    }
+    *two_sided = pdf->as.triangle.two_sided;
+    return pt__planar_make(p, PT__PRIM_TRIANGLE, pdf->as.triangle.a, pdf->as.triangle.b, pdf->as.triangle.c, area);
 }
 
 /* --- fuzzy metal lobe: the direction of r + f s, with r the unit mirror direction and s
@@ -1556,12 +1536,13 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
                                    w);
         break;
     case PT_PDF_QUAD_LIGHT:
-        v = pt__quad_light_value(pdf->origin, pdf->as.quad.q, pdf->as.quad.u, pdf->as.quad.v, pdf->as.quad.two_sided, w);
+    case PT_PDF_TRIANGLE_LIGHT: {
+        pt__prim prim;
+        float area;
+        int two;
+        if (pt__pdf_planar(pdf, &prim, &area, &two)) v = pt__planar_light_value(&prim, area, two, pdf->origin, w);
         break;
-    case PT_PDF_TRIANGLE_LIGHT:
-        v = pt__triangle_light_value(pdf->origin, pdf->as.triangle.a, pdf->as.triangle.b, pdf->as.triangle.c,
-                                     pdf->as.triangle.two_sided, w);
-        break;
+    }
     case PT_PDF_SCENE_LIGHTS:
         if (pdf->as.lights.scene && pdf->as.lights.scene->committed)
             v = pt__lights_value(pdf->as.lights.scene, pdf->origin, w);
@@ -1620,17 +1601,12 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         w = ls.dir; p = ls.pdf;
         break;
     }
-    case PT_PDF_QUAD_LIGHT: {
-        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-        ok = pt__quad_light_sample(pdf->origin, pdf->as.quad.q, pdf->as.quad.u, pdf->as.quad.v, pdf->as.quad.two_sided,
-                                   u1, u2, &ls);
-        w = ls.dir; p = ls.pdf;
-        break;
-    }
+    case PT_PDF_QUAD_LIGHT:
     case PT_PDF_TRIANGLE_LIGHT: {
-        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-        ok = pt__triangle_light_sample(pdf->origin, pdf->as.triangle.a, pdf->as.triangle.b, pdf->as.triangle.c,
-                                       pdf->as.triangle.two_sided, u1, u2, &ls);
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng), area;
+        pt__prim prim;
+        int two;
+        ok = pt__pdf_planar(pdf, &prim, &area, &two) && pt__planar_light_sample(&prim, area, two, pdf->origin, u1, u2, &ls);
         w = ls.dir; p = ls.pdf;
         break;
     }

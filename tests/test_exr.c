@@ -36,21 +36,6 @@ static int exists(const char *path)
     struct stat st;
     return stat(path, &st) == 0;
 }
-static unsigned char *slurp(const char *path, long *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *buf;
-    long n;
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    buf = (unsigned char *)malloc(n > 0 ? (size_t)n : 1u);
-    if (buf && n > 0 && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
-    fclose(f);
-    *size = n;
-    return buf;
-}
 static int spit(const char *path, const unsigned char *buf, long n)
 {
     FILE *f = fopen(path, "wb");
@@ -316,7 +301,7 @@ static void bad_files(test_ctx *t)
     o.compression = PT_EXR_ZIP;
     rc = pt_write_exr(good, &a, &o, err, sizeof err);
     if (!CHECK(t, rc == PT_OK, "write rc %d %s", rc, err)) goto done;
-    buf = slurp(good, &size);
+    buf = tu_read_file(good, &size);
     if (!CHECK(t, buf && size > 400, "reading back %s", good)) goto done;
 
     /* corrupt: 64 bytes inverted in the middle of the pixel data */

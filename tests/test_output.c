@@ -15,21 +15,6 @@
 
 
 
-static unsigned char *read_file(const char *path, long *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *buf;
-    long n;
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    buf = (unsigned char *)malloc((size_t)n + 1);
-    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
-    fclose(f);
-    *size = n;
-    return buf;
-}
 
 /* Parses a Netpbm-style header: magic, then `fields` whitespace-separated tokens, then exactly one
    whitespace byte. Returns the offset of the data or -1. */
@@ -87,7 +72,7 @@ static void pfm_layout(test_ctx *t)
             for (c = 0; c < 3; c++) img.rgb[3 * (y * 5 + x) + c] = (float)(x + 10 * y + 100 * c) + 0.25f - (c == 2 ? 1000.0f : 0.0f);
     rc = pt_write_pfm(path, &img);
     CHECK(t, rc == PT_OK, "pt_write_pfm: %d", rc);
-    b = read_file(path, &n);
+    b = tu_read_file(path, &n);
     if (CHECK(t, b != NULL, "cannot read %s", path)) {
         off = parse_header(b, n, "PF", tok, 3);
         if (CHECK(t, off > 0, "PFM header malformed")) {
@@ -129,7 +114,7 @@ static void ppm_srgb(test_ctx *t)
         for (c = 0; c < 3; c++) img.rgb[3 * i + c] = vals[(i + 5 * c) % 15];
     rc = pt_write_ppm(path, &img);
     CHECK(t, rc == PT_OK, "pt_write_ppm: %d", rc);
-    b = read_file(path, &n);
+    b = tu_read_file(path, &n);
     if (CHECK(t, b != NULL, "cannot read the PPM")) {
         off = parse_header(b, n, "P6", tok, 3);
         if (CHECK(t, off > 0, "PPM header malformed")) {
@@ -231,8 +216,8 @@ static void write_errors(test_ctx *t)
             char other[160];
             snprintf(other, sizeof other, "%s/y.img", dir);
             writer(other, &small);
-            b1 = read_file(path, &n1);
-            b2 = read_file(other, &n2);
+            b1 = tu_read_file(path, &n1);
+            b2 = tu_read_file(other, &n2);
             CHECK(t, rc == PT_OK && b1 && b2 && n1 == n2 && memcmp(b1, b2, (size_t)n1) == 0,
                   "%s: overwriting a file does not leave exactly the new image", name);
             free(b1);

@@ -1192,3 +1192,21 @@ pt_render_desc tu_base_desc(int w, int h, int spp, uint64_t seed)
     d.seed = seed;
     return d;
 }
+
+/* The whole file at path (size into *size; one spare byte allocated), or NULL. */
+unsigned char *tu_read_file(const char *path, long *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *buf;
+    long n;
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    if (n < 0) { fclose(f); return NULL; }
+    buf = (unsigned char *)malloc((size_t)n + 1);
+    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
+    fclose(f);
+    *size = n;
+    return buf;
+}
