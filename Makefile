@@ -10,6 +10,10 @@
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
 #                         and input through OpenEXRCore; needs libopenexr-dev). Default 0.
+#   make EMBREE=1 ...     build the examples and test runners with PDFTRACE_EMBREE (Embree 3
+#                         traversal, pdftrace.h section 5b; needs libembree-dev). Default 0.
+#                         Either or both: make OPENEXR=1 EMBREE=1 test (use a separate BUILD=
+#                         per combination, or let the options stamp rebuild on a change).
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
 #                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
@@ -58,8 +62,19 @@ ifeq ($(OPENEXR),1)
 PT_CPPFLAGS += $(EXR_FLAGS)
 PT_LDLIBS   := $(EXR_LIBS) $(PT_LDLIBS)
 endif
-# Rebuild the examples and runners when OPENEXR changes (the file is rewritten only then).
-OPT_STAMP := $(BUILD)/options-openexr
+# Embree 3 (pdftrace.h section 5b): header embree3/rtcore.h, library -lembree3 (no .pc file).
+EMBREE          ?= 0
+EMBREE_INCLUDES ?=
+EMBREE_LIBS     ?= -lembree3
+EMBREE_FLAGS    := -DPDFTRACE_EMBREE $(patsubst -I%,-isystem %,$(EMBREE_INCLUDES))
+EMBREE_HEADER   ?= $(or $(patsubst -I%,%,$(firstword $(EMBREE_INCLUDES))),/usr/include)/embree3/rtcore.h
+ifeq ($(EMBREE),1)
+PT_CPPFLAGS += $(EMBREE_FLAGS)
+PT_LDLIBS   := $(EMBREE_LIBS) $(PT_LDLIBS)
+endif
+# Rebuild the examples and runners when OPENEXR or EMBREE changes (the file is rewritten only then).
+OPT_STAMP := $(BUILD)/options
+OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE)
 
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
@@ -74,7 +89,7 @@ $(BUILD) $(OUT):
 	mkdir -p $@
 
 $(OPT_STAMP): FORCE | $(BUILD)
-	@echo '$(OPENEXR)' | cmp -s - $@ || echo '$(OPENEXR)' > $@
+	@echo '$(OPT_VALUE)' | cmp -s - $@ || echo '$(OPT_VALUE)' > $@
 
 $(BUILD)/%: examples/%.c pdftrace.h $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PT_LDLIBS)
@@ -193,6 +208,29 @@ check-warnings: | $(BUILD)
 	else \
 	    echo "SKIP the PDFTRACE_OPENEXR variants: no openexr.h (apt-get install libopenexr-dev)"; \
 	fi; \
+	if [ -f "$(EMBREE_HEADER)" ]; then \
+	    for cc in $(WARN_CC); do \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_EMBREE examples/cornell.c tests/test_embree.c (then link)"; \
+	        $$cc $(WARN_CFLAGS) -I. $(EMBREE_FLAGS) $(PT_THREADS) examples/cornell.c -o $(BUILD)/warn-$$cc-embree $(EMBREE_LIBS) -lm; \
+	        $$cc $(WARN_CFLAGS) -I. $(EMBREE_FLAGS) -c tests/test_embree.c -o $(BUILD)/warn-$$cc-test-embree.o; \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_EMBREE -DPDFTRACE_NO_THREADS -DPDFTRACE_STATIC examples/minimal.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(EMBREE_FLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_STATIC -c examples/minimal.c -o $(BUILD)/warn-$$cc-embree-static.o; \
+	    done; \
+	    for cxx in $(WARN_CXX); do \
+	        echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_EMBREE examples/cpp_check.cpp (the optional Embree section; then run it)"; \
+	        $$cxx $(WARN_CXXFLAGS) -I. $(EMBREE_FLAGS) $(PT_THREADS) examples/cpp_check.cpp -o $(BUILD)/cpp_check-embree-$$cxx $(EMBREE_LIBS) -lm; \
+	        ./$(BUILD)/cpp_check-embree-$$cxx; \
+	    done; \
+	else \
+	    echo "SKIP the PDFTRACE_EMBREE variants: no $(EMBREE_HEADER) (apt-get install libembree-dev)"; \
+	fi; \
+	echo "the default build includes no Embree header:"; \
+	for cc in $(WARN_CC); do \
+	    if $$cc -M -I. $(PT_THREADS) examples/cornell.c tests/test_main.c | grep -i embree; then \
+	        echo "FAILED: $$cc's default build of pdftrace.h includes an Embree header" >&2; exit 1; \
+	    fi; \
+	done; \
+	echo "  no embree in the dependencies of examples/cornell.c and tests/test_main.c"; \
 	echo "check-warnings: all clean"
 
 clean:

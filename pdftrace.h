@@ -31,6 +31,9 @@
    PDFTRACE_NO_THREADS     build without pthreads; rendering runs on the calling thread
                            unless the host passes its own parallel-for (pt_render_desc).
    PDFTRACE_STATIC         make every public function static to the implementing file.
+   PDFTRACE_EMBREE         trace rays with Embree 3 (section 5b; include path embree3/,
+                           link -lembree3); PDFTRACE_EMBREE4 selects Embree 4 (untested).
+                           PDFTRACE_EMBREE_MIN_PRIMS: see section 5b.
    PT_MALLOC(sz), PT_REALLOC(p,sz), PT_FREE(p)   override the allocator (all three).
    PT_ASSERT(x)            override assert() (used only for internal invariants; API
                            misuse returns an error code, it never asserts).
@@ -67,6 +70,7 @@
    3. Geometry and scenes
    4. Materials and textures
    5. BVH
+   5b. Embree traversal (optional: define PDFTRACE_EMBREE; links embree3)
    6. Camera
    7. Integrator (strategies)
    8. Rendering (tiles, threads, passes, statistics)
@@ -343,6 +347,13 @@ enum {
     PT_FEATURE_TRANSFORMS      = 1 << 12  /* some shape was added under a non-identity transform */
 };
 
+/* Traversal backends (pt_scene_set_backend, section 5b). */
+typedef enum pt_backend {
+    PT_BACKEND_AUTO = 0,          /* Embree for large scenes when compiled in, else built-in */
+    PT_BACKEND_BUILTIN = 1,       /* pdftrace's own BVH (section 5) */
+    PT_BACKEND_EMBREE = 2         /* Embree (section 5b; needs PDFTRACE_EMBREE) */
+} pt_backend;
+
 typedef struct pt_scene_info {
     unsigned features;            /* PT_FEATURE_* */
     int committed;                /* 1 when committed and unchanged since */
@@ -351,9 +362,16 @@ typedef struct pt_scene_info {
     uint32_t emitter_count;       /* emitting primitives: each is one light */
     uint32_t material_count, texture_count;
     uint32_t degenerate_triangles_skipped; /* zero-area mesh triangles left out */
-    uint32_t bvh_node_count, bvh_max_depth;
+    uint32_t bvh_node_count, bvh_max_depth; /* built-in BVH (0 when Embree traces the scene) */
     double total_emitted_power;   /* sum of light powers (W, in radiance x area x sr units) */
     pt_vec3 bounds_min, bounds_max;
+    pt_backend backend;           /* the backend the last commit chose (never AUTO) */
+    double build_seconds;         /* acceleration-structure build time at the last commit (wall) */
+    size_t accel_bytes;           /* memory the backend allocated for traversal: built-in, the BVH
+                                     nodes; Embree, everything its device allocated (its BVH,
+                                     the triangle vertex/index buffers) plus pdftrace's primitive
+                                     id maps. The scene's own primitive array, which shading uses
+                                     with either backend, is not counted. */
 } pt_scene_info;
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
@@ -465,6 +483,47 @@ typedef struct pt_shading_point {
 /* ==========================================================================================
    5. BVH: built by pt_scene_commit (binned SAH; see the implementation for details).
    ========================================================================================== */
+
+/* ==========================================================================================
+   5b. EMBREE TRAVERSAL (optional: define PDFTRACE_EMBREE)
+   With PDFTRACE_EMBREE defined in the implementing file (include path with embree3/rtcore.h,
+   link -lembree3; `make EMBREE=1`), pt_scene_commit can hand the scene to Intel Embree 3
+   instead of building the built-in BVH. Everything else (materials, lights, the integrator,
+   the image) is the same; only the closest-hit and any-hit queries change. Without the
+   macro the header never includes an Embree header and PT_BACKEND_EMBREE is refused.
+   - Every primitive is traced by Embree: triangles (single ones and mesh triangles) as
+     Embree triangles; quads and spheres as Embree user geometry whose callbacks run
+     pdftrace's own exact tests (section 3), so their hits are the built-in ones bit for bit.
+   - pdftrace bakes transforms into primitives when they are added (it has no instance
+     objects), so "instances" reach Embree flattened: one copy per placement. (Embree's
+     instancing would share the memory of repeated objects; pdftrace does not use it.)
+   - Embree's BVH build runs on its own (TBB) threads; rays are traced on pdftrace's render
+     threads (or the host's parallel_for). Those set flush-to-zero and denormals-are-zero
+     for the duration of each tile, as Embree asks, and restore the previous state, so the
+     host's floating-point state is unchanged afterwards. pt_scene_intersect and
+     pt_scene_occluded leave the caller's state alone (correct, maybe slower on denormals).
+   - Embree errors become pdftrace error codes with Embree's message in
+     pt_scene_error_message; the library never aborts.
+   PDFTRACE_EMBREE4: include embree4/rtcore.h and use Embree 4's query arguments (written to
+   Embree 4's documentation, not compiled here: untested).
+   ========================================================================================== */
+
+/* Chooses the traversal backend that the next pt_scene_commit builds. A different choice on a
+   committed scene uncommits it (like adding a shape): commit again before rendering or
+   querying (until then they fail with PT_ERROR_INVALID_STATE). So a scene built by
+   pt_scene_desc_build can be switched and re-committed. PT_BACKEND_EMBREE without
+   PDFTRACE_EMBREE compiled in: PT_ERROR_UNSUPPORTED. AUTO (the default) uses Embree, when
+   compiled in, for scenes of at least PDFTRACE_EMBREE_MIN_PRIMS primitives, and falls back to
+   the built-in BVH if Embree fails; an explicit EMBREE reports the failure instead.
+   pt_scene_info.backend says which one the commit chose. */
+PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
+
+/* AUTO uses Embree (when compiled in) for scenes with at least this many primitives.
+   PROVISIONAL: to be set from the BVH benchmark (make bench-bvh), which measures where Embree
+   starts to trace faster than the built-in BVH. */
+#ifndef PDFTRACE_EMBREE_MIN_PRIMS
+#define PDFTRACE_EMBREE_MIN_PRIMS 10000
+#endif
 
 /* ==========================================================================================
    6. CAMERA
@@ -824,6 +883,17 @@ PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_siz
 #include <pthread.h>
 #include <unistd.h>
 #endif
+#ifdef PDFTRACE_EMBREE
+#ifdef PDFTRACE_EMBREE4
+#include <embree4/rtcore.h>
+#else
+#include <embree3/rtcore.h>
+#endif
+#if defined(__SSE__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 1)
+#include <xmmintrin.h> /* _mm_getcsr/_mm_setcsr: flush-to-zero and denormals-are-zero */
+#define PT__HAVE_MXCSR 1
+#endif
+#endif
 
 #if defined(PT_MALLOC) && defined(PT_FREE) && defined(PT_REALLOC)
 /* all three given */
@@ -1075,6 +1145,23 @@ typedef struct pt__light {
     float area;
 } pt__light;
 
+#ifdef PDFTRACE_EMBREE
+/* The user data of an Embree user geometry: the scene and its primID -> prims index map. */
+typedef struct pt__rtc_geom { const pt_scene *scene; const uint32_t *map; float pad; } pt__rtc_geom;
+/* The Embree side of a committed scene (section 5b). Geometry ids are the primitive types
+   (PT__PRIM_*): one Embree geometry per type present. */
+typedef struct pt__rtc {
+    RTCDevice device;
+    RTCScene scene;
+    uint32_t *map[3];          /* per geometry: Embree primID -> index into scene->prims */
+    uint32_t count[3];
+    pt__rtc_geom user[3];
+    long long device_bytes;    /* the device's memory, from its memory monitor */
+    int error_code;            /* first RTCError reported by the error callback (0: none) */
+    char error_text[160];
+} pt__rtc;
+#endif
+
 typedef struct pt__node {
     float lo[3];
     uint32_t index;   /* leaf: first primitive; inner: second child (first child is next) */
@@ -1103,6 +1190,13 @@ struct pt_scene {
     unsigned features;
     uint32_t sphere_count, quad_count, triangle_count, mesh_count, degenerate_skipped;
     pt_vec3 lo, hi;
+    int backend_request;       /* pt_backend from pt_scene_set_backend */
+    int backend;               /* what the last commit built: PT_BACKEND_BUILTIN or _EMBREE */
+    double build_seconds;
+    size_t accel_bytes;
+#ifdef PDFTRACE_EMBREE
+    pt__rtc rtc;
+#endif
     char error[256];
 };
 
@@ -1855,11 +1949,18 @@ PTDEF pt_scene *pt_scene_create(void)
     memset(s, 0, sizeof *s);
     s->xf = pt_transform_identity();
     s->xf_identity = 1;
+    s->backend = PT_BACKEND_BUILTIN;
     return s;
 }
+#ifdef PDFTRACE_EMBREE
+static void pt__rtc_release(pt_scene *s);
+#endif
 PTDEF void pt_scene_destroy(pt_scene *s)
 {
     if (!s) return;
+#ifdef PDFTRACE_EMBREE
+    pt__rtc_release(s);
+#endif
     PT_FREE(s->prims);
     PT_FREE(s->mats);
     PT_FREE(s->texs);
@@ -2595,6 +2696,431 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
     return 0;
 }
 
+/* ------------------------------------------------------------------------------------------
+   5b. Embree traversal (PDFTRACE_EMBREE). One Embree device and scene per pt_scene, made at
+   commit. Geometry id = primitive type (PT__PRIM_*), one geometry per type present:
+   - triangles: RTC_GEOMETRY_TYPE_TRIANGLE, three vertices of their own each (pdftrace keeps
+     no shared mesh vertices after pt_scene_add_mesh). Embree's hit (u, v) weights vertices
+     1 and 2: pdftrace's barycentrics (weights of a, b, c) are (1 - u - v, u, v). Embree's
+     triangle test differs from the built-in watertight test (Woop et al. 2013) only by
+     rounding; RTC_SCENE_FLAG_ROBUST asks for its watertight variant (no cracks on shared
+     edges; see PDFTRACE_EMBREE_SCENE_FLAGS).
+   - quads and spheres: RTC_GEOMETRY_TYPE_USER calling pt__hit_quad and pt__hit_sphere.
+     Embree's native quads would be two triangles, with t and edge decisions of their own,
+     and its native spheres (RTC_GEOMETRY_TYPE_SPHERE_POINT) solve the plain quadratic, which
+     loses the digits that the Haines et al. form keeps for small or distant spheres: the
+     light code relies on those hits (points within 1e-5 of a sphere light count as on it).
+     User geometry keeps every quad and sphere hit identical to the built-in one, at the
+     price of a callback per candidate; scenes large enough for Embree to pay are meshes.
+   Rays are traced from pdftrace's offset origins (no epsilon of Embree's own) with
+   tnear = FLT_MIN and tfar just below tmax: the built-in accepts 0 < t < tmax, Embree
+   tnear <= t <= tfar. The callbacks
+   find pdftrace's per-ray data (pt__rayctx) in an extended intersect context (Embree 3
+   docs, rtcInitIntersectContext: "the context can be extended by the application").
+   ------------------------------------------------------------------------------------------ */
+#ifdef PDFTRACE_EMBREE
+
+/* Scene flags and build quality; measured choices, see the test section embree. */
+#ifndef PDFTRACE_EMBREE_SCENE_FLAGS
+#define PDFTRACE_EMBREE_SCENE_FLAGS RTC_SCENE_FLAG_ROBUST
+#endif
+#ifndef PDFTRACE_EMBREE_BUILD_QUALITY
+#define PDFTRACE_EMBREE_BUILD_QUALITY RTC_BUILD_QUALITY_MEDIUM
+#endif
+/* Device configuration string passed to rtcNewDevice (NULL: Embree's defaults). */
+#ifndef PDFTRACE_EMBREE_CONFIG
+#define PDFTRACE_EMBREE_CONFIG NULL
+#endif
+
+typedef struct pt__rtc_ctx {
+#if RTC_VERSION_MAJOR >= 4
+    struct RTCRayQueryContext base; /* first member: the callbacks cast the context back */
+#else
+    struct RTCIntersectContext base;
+#endif
+    const pt__rayctx *rc;
+} pt__rtc_ctx;
+
+static void pt__rtc_ctx_init(pt__rtc_ctx *c, const pt__rayctx *rc)
+{
+#if RTC_VERSION_MAJOR >= 4
+    rtcInitRayQueryContext(&c->base);
+#else
+    rtcInitIntersectContext(&c->base);
+#endif
+    c->rc = rc;
+}
+
+static const char *pt__rtc_error_name(int code)
+{
+    switch (code) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown error";
+    }
+}
+static int pt__rtc_result(int code)
+{
+    switch (code) {
+    case RTC_ERROR_INVALID_ARGUMENT: return PT_ERROR_INVALID_ARGUMENT;
+    case RTC_ERROR_OUT_OF_MEMORY: return PT_ERROR_OUT_OF_MEMORY;
+    case RTC_ERROR_UNSUPPORTED_CPU: return PT_ERROR_UNSUPPORTED;
+    case RTC_ERROR_CANCELLED: return PT_ERROR_CANCELLED;
+    default: return PT_ERROR_INVALID_STATE;
+    }
+}
+
+/* Device callbacks. Embree may call them from its build threads: the first error wins (a
+   later one may race with it, but only ever to replace one message by another). */
+static void pt__rtc_on_error(void *user, enum RTCError code, const char *str)
+{
+    pt_scene *s = (pt_scene *)user;
+    if (!s || code == RTC_ERROR_NONE || s->rtc.error_code) return;
+    s->rtc.error_code = (int)code;
+    snprintf(s->rtc.error_text, sizeof s->rtc.error_text, "%s", str ? str : "");
+}
+static bool pt__rtc_on_memory(void *user, ssize_t bytes, bool post)
+{
+    pt_scene *s = (pt_scene *)user;
+    (void)post; /* allocations are reported before (post = false), frees after, negative */
+#if defined(__GNUC__) || defined(__clang__)
+    __atomic_fetch_add(&s->rtc.device_bytes, (long long)bytes, __ATOMIC_RELAXED);
+#else
+    s->rtc.device_bytes += (long long)bytes; /* no atomics: a racy but harmless statistic */
+#endif
+    return true;
+}
+
+static void pt__rtc_release(pt_scene *s)
+{
+    int k;
+    if (s->rtc.scene) rtcReleaseScene(s->rtc.scene);
+    if (s->rtc.device) rtcReleaseDevice(s->rtc.device);
+    for (k = 0; k < 3; ++k) PT_FREE(s->rtc.map[k]);
+    memset(&s->rtc, 0, sizeof s->rtc);
+}
+
+/* User geometry callbacks (quads and spheres). geometryUserPtr is the geometry's pt__rtc_geom.
+   Only single-ray queries are issued, so N == 1 and the packet is a plain RTCRayHit / RTCRay. */
+static const pt__prim *pt__rtc_user_prim(void *user, unsigned prim_id)
+{
+    const pt__rtc_geom *g = (const pt__rtc_geom *)user;
+    return &g->scene->prims[g->map[prim_id]];
+}
+static void pt__rtc_bounds(const struct RTCBoundsFunctionArguments *a)
+{
+    const pt__prim *p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
+    pt_vec3 lo, hi;
+    float e = ((const pt__rtc_geom *)a->geometryUserPtr)->pad;
+    pt__prim_bounds(p, &lo, &hi);
+    /* Padded like the built-in nodes, plus 2^-24 of the scene's extent: Embree culled rays
+       running exactly in the plane of an axis-aligned quad when the bounds were padded by less
+       than ~1e-12 absolute at coordinate 0 (141 of 20000 in-plane rays over integer boxes;
+       none with this pad). */
+    a->bounds_o->lower_x = pt__pad_down(lo.x) - e; a->bounds_o->lower_y = pt__pad_down(lo.y) - e;
+    a->bounds_o->lower_z = pt__pad_down(lo.z) - e;
+    a->bounds_o->upper_x = pt__pad_up(hi.x) + e; a->bounds_o->upper_y = pt__pad_up(hi.y) + e;
+    a->bounds_o->upper_z = pt__pad_up(hi.z) + e;
+}
+static int pt__rtc_user_hit(const pt__prim *p, const pt__rayctx *rc, float tfar, float *t)
+{
+    /* Embree keeps hits with t <= tfar; the built-in tests keep t < tmax */
+    float tmax = nextafterf(tfar, FLT_MAX);
+    return p->type == PT__PRIM_SPHERE ? pt__hit_sphere(rc, p->p0, p->p1.x, tmax, t) : pt__hit_quad(rc, p, tmax, t);
+}
+static void pt__rtc_intersect(const struct RTCIntersectFunctionNArguments *a)
+{
+    const pt__rtc_ctx *c = (const pt__rtc_ctx *)(const void *)a->context;
+    struct RTCRayHit *rh = (struct RTCRayHit *)(void *)a->rayhit;
+    const pt__prim *p;
+    float t;
+    if (a->N != 1 || !a->valid[0]) return;
+    p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
+    if (!pt__rtc_user_hit(p, c->rc, rh->ray.tfar, &t)) return;
+    rh->ray.tfar = t;
+    rh->hit.u = 0.0f;
+    rh->hit.v = 0.0f;
+    rh->hit.Ng_x = p->n.x; rh->hit.Ng_y = p->n.y; rh->hit.Ng_z = p->n.z; /* unused by pdftrace */
+    rh->hit.primID = a->primID;
+    rh->hit.geomID = a->geomID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+static void pt__rtc_occluded(const struct RTCOccludedFunctionNArguments *a)
+{
+    const pt__rtc_ctx *c = (const pt__rtc_ctx *)(const void *)a->context;
+    struct RTCRay *ray = (struct RTCRay *)(void *)a->ray;
+    float t;
+    if (a->N != 1 || !a->valid[0]) return;
+    if (pt__rtc_user_hit(pt__rtc_user_prim(a->geometryUserPtr, a->primID), c->rc, ray->tfar, &t))
+        ray->tfar = -INFINITY; /* Embree's "occluded" mark */
+}
+
+static int pt__rtc_fail(pt_scene *s, int fallback_code, const char *what)
+{
+    int code = s->rtc.error_code;
+    if (!code && s->rtc.device) code = (int)rtcGetDeviceError(s->rtc.device);
+    if (!code) code = fallback_code;
+    pt__fail(s, pt__rtc_result(code), "commit: Embree %s: %s%s%s", what, pt__rtc_error_name(code),
+             s->rtc.error_text[0] ? ": " : "", s->rtc.error_text);
+    pt__rtc_release(s);
+    return pt__rtc_result(code);
+}
+
+/* Builds the Embree scene for s->prims (in their current order). */
+static int pt__rtc_build(pt_scene *s)
+{
+    uint32_t i, n[3] = {0, 0, 0};
+    int k, code;
+    float extent = 0.0f;
+    pt__rtc_release(s);
+    for (i = 0; i < s->prim_count; ++i) n[s->prims[i].type]++;
+    for (k = 0; k < 3; ++k) {
+        if (!n[k]) continue;
+        s->rtc.map[k] = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * n[k]);
+        if (!s->rtc.map[k]) {
+            pt__rtc_release(s);
+            return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory for Embree (%u primitives)",
+                            (unsigned)s->prim_count);
+        }
+    }
+    for (i = 0; i < s->prim_count; ++i) {
+        int t = s->prims[i].type;
+        pt_vec3 lo, hi;
+        s->rtc.map[t][s->rtc.count[t]++] = i;
+        pt__prim_bounds(&s->prims[i], &lo, &hi);
+        extent = pt__maxf(extent, pt__maxf(pt_max_component(pt_neg(lo)), pt_max_component(hi)));
+    }
+    for (k = 0; k < 3; ++k) {
+        s->rtc.user[k].scene = s;
+        s->rtc.user[k].map = s->rtc.map[k];
+        s->rtc.user[k].pad = extent * 5.9604645e-8f + 1e-30f; /* 2^-24 of the largest coordinate */
+    }
+    s->rtc.device = rtcNewDevice(PDFTRACE_EMBREE_CONFIG);
+    if (!s->rtc.device) {
+        code = (int)rtcGetDeviceError(NULL);
+        return pt__rtc_fail(s, code ? code : RTC_ERROR_UNKNOWN, "could not create a device");
+    }
+    rtcSetDeviceErrorFunction(s->rtc.device, pt__rtc_on_error, s);
+    rtcSetDeviceMemoryMonitorFunction(s->rtc.device, pt__rtc_on_memory, s);
+    s->rtc.scene = rtcNewScene(s->rtc.device);
+    if (!s->rtc.scene) return pt__rtc_fail(s, RTC_ERROR_UNKNOWN, "could not create a scene");
+    rtcSetSceneFlags(s->rtc.scene, (enum RTCSceneFlags)(PDFTRACE_EMBREE_SCENE_FLAGS));
+    rtcSetSceneBuildQuality(s->rtc.scene, PDFTRACE_EMBREE_BUILD_QUALITY);
+    for (k = 0; k < 3; ++k) {
+        RTCGeometry g;
+        if (!n[k]) continue;
+        g = rtcNewGeometry(s->rtc.device, k == PT__PRIM_TRIANGLE ? RTC_GEOMETRY_TYPE_TRIANGLE : RTC_GEOMETRY_TYPE_USER);
+        if (!g) return pt__rtc_fail(s, RTC_ERROR_UNKNOWN, "could not create a geometry");
+        if (k == PT__PRIM_TRIANGLE) {
+            float *v = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                        3 * sizeof(float), 3u * (size_t)n[k]);
+            unsigned *ix = (unsigned *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                               3 * sizeof(unsigned), (size_t)n[k]);
+            if (!v || !ix) {
+                rtcReleaseGeometry(g);
+                return pt__rtc_fail(s, RTC_ERROR_OUT_OF_MEMORY, "could not allocate the triangle buffers");
+            }
+            for (i = 0; i < n[k]; ++i) {
+                const pt__prim *p = &s->prims[s->rtc.map[k][i]];
+                float *w = v + 9u * (size_t)i;
+                w[0] = p->p0.x; w[1] = p->p0.y; w[2] = p->p0.z;
+                w[3] = p->p1.x; w[4] = p->p1.y; w[5] = p->p1.z;
+                w[6] = p->p2.x; w[7] = p->p2.y; w[8] = p->p2.z;
+                ix[3u * (size_t)i] = 3u * i; ix[3u * (size_t)i + 1u] = 3u * i + 1u; ix[3u * (size_t)i + 2u] = 3u * i + 2u;
+            }
+        } else {
+            rtcSetGeometryUserPrimitiveCount(g, n[k]);
+            rtcSetGeometryUserData(g, &s->rtc.user[k]);
+            rtcSetGeometryBoundsFunction(g, pt__rtc_bounds, &s->rtc.user[k]);
+            rtcSetGeometryIntersectFunction(g, pt__rtc_intersect);
+            rtcSetGeometryOccludedFunction(g, pt__rtc_occluded);
+        }
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(s->rtc.scene, g, (unsigned)k);
+        rtcReleaseGeometry(g); /* the scene holds it */
+    }
+    rtcCommitScene(s->rtc.scene);
+    code = (int)rtcGetDeviceError(s->rtc.device);
+    if (code != RTC_ERROR_NONE || s->rtc.error_code) return pt__rtc_fail(s, code, "failed to build the scene");
+    return PT_OK;
+}
+
+static size_t pt__rtc_bytes(const pt_scene *s)
+{
+    size_t b = s->rtc.device_bytes > 0 ? (size_t)s->rtc.device_bytes : 0u;
+    int k;
+    for (k = 0; k < 3; ++k) b += sizeof(uint32_t) * s->rtc.count[k];
+    return b;
+}
+
+static PT__HOT void pt__rtc_ray(struct RTCRay *r, const pt__rayctx *rc, float tmax)
+{
+    r->org_x = rc->o.x; r->org_y = rc->o.y; r->org_z = rc->o.z;
+    r->dir_x = rc->d.x; r->dir_y = rc->d.y; r->dir_z = rc->d.z;
+    r->tnear = FLT_MIN; /* 0 < t, as the built-in: Embree keeps t >= tnear and returned t = -0 for
+                           an origin on a triangle with tnear = 0 (a denormal would be flushed) */
+    r->tfar = nextafterf(tmax, 0.0f); /* t < tmax, as the built-in */
+    r->time = 0.0f;
+    r->mask = 0xffffffffu;
+    r->id = 0u;
+    r->flags = 0u;
+}
+static int pt__rtc_ray_ok(const pt__rayctx *rc, float tmax)
+{
+    return tmax > 0.0f && (rc->d.x != 0.0f || rc->d.y != 0.0f || rc->d.z != 0.0f);
+}
+
+static int pt__rtc_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
+                           float *bary)
+{
+    pt__rtc_ctx c;
+    struct RTCRayHit rh;
+    unsigned g;
+    if (!pt__rtc_ray_ok(rc, tmax)) return 0;
+    pt__rtc_ctx_init(&c, rc);
+    pt__rtc_ray(&rh.ray, rc, tmax);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+#if RTC_VERSION_MAJOR >= 4
+    {
+        struct RTCIntersectArguments args;
+        rtcInitIntersectArguments(&args);
+        args.context = &c.base;
+        rtcIntersect1(s->rtc.scene, &rh, &args);
+    }
+#else
+    rtcIntersect1(s->rtc.scene, &c.base, &rh);
+#endif
+    g = rh.hit.geomID;
+    if (g >= 3u || rh.hit.primID >= s->rtc.count[g]) return 0;
+    *prim = s->rtc.map[g][rh.hit.primID];
+    *t_out = rh.ray.tfar;
+    if (g == PT__PRIM_TRIANGLE) {
+        bary[0] = 1.0f - rh.hit.u - rh.hit.v;
+        bary[1] = rh.hit.u;
+        bary[2] = rh.hit.v;
+    } else {
+        bary[0] = bary[1] = bary[2] = 0.0f;
+    }
+    return 1;
+}
+static int pt__rtc_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
+{
+    pt__rtc_ctx c;
+    struct RTCRay r;
+    if (!pt__rtc_ray_ok(rc, tmax)) return 0;
+    pt__rtc_ctx_init(&c, rc);
+    pt__rtc_ray(&r, rc, tmax);
+#if RTC_VERSION_MAJOR >= 4
+    {
+        struct RTCOccludedArguments args;
+        rtcInitOccludedArguments(&args);
+        args.context = &c.base;
+        rtcOccluded1(s->rtc.scene, &r, &args);
+    }
+#else
+    rtcOccluded1(s->rtc.scene, &c.base, &r);
+#endif
+    return r.tfar < 0.0f;
+}
+
+/* Flush-to-zero and denormals-are-zero (MXCSR bits 15 and 6) for Embree's traversal; the
+   previous state is returned for pt__ftz_end. A no-op without SSE (e.g. on ARM). */
+static unsigned pt__ftz_begin(void)
+{
+#ifdef PT__HAVE_MXCSR
+    unsigned old = _mm_getcsr();
+    _mm_setcsr(old | 0x8040u);
+    return old;
+#else
+    return 0u;
+#endif
+}
+static void pt__ftz_end(unsigned old)
+{
+#ifdef PT__HAVE_MXCSR
+    _mm_setcsr(old);
+#else
+    (void)old;
+#endif
+}
+#endif /* PDFTRACE_EMBREE */
+
+/* --- the traversal dispatch: every closest-hit and any-hit query goes through these --- */
+static PT__HOT int pt__scene_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
+                                     float *bary)
+{
+#ifdef PDFTRACE_EMBREE
+    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_closest(s, rc, tmax, prim, t_out, bary);
+#endif
+    return pt__bvh_closest(s, rc, tmax, prim, t_out, bary);
+}
+static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
+{
+#ifdef PDFTRACE_EMBREE
+    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_any(s, rc, tmax);
+#endif
+    return pt__bvh_any(s, rc, tmax);
+}
+
+PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
+{
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if ((int)backend < (int)PT_BACKEND_AUTO || (int)backend > (int)PT_BACKEND_EMBREE)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "set_backend: %d is not a backend (0 auto, 1 built-in, 2 Embree)",
+                        (int)backend);
+#ifndef PDFTRACE_EMBREE
+    if (backend == PT_BACKEND_EMBREE)
+        return pt__fail(s, PT_ERROR_UNSUPPORTED,
+                        "set_backend: Embree is not compiled in (define PDFTRACE_EMBREE, link -lembree3: make EMBREE=1)");
+#endif
+    if (backend != (pt_backend)s->backend_request) s->committed = 0; /* commit again to switch */
+    s->backend_request = (int)backend;
+    return PT_OK;
+}
+
+static double pt__now(void);
+
+/* Builds the acceleration structure of the backend chosen for s (commit's first step). */
+static int pt__accel_build(pt_scene *s)
+{
+    double t0 = pt__now();
+    int rc;
+#ifdef PDFTRACE_EMBREE
+    int want = s->backend_request;
+    if (want == PT_BACKEND_AUTO)
+        want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN;
+    pt__rtc_release(s);
+    if (want == PT_BACKEND_EMBREE) {
+        rc = pt__rtc_build(s);
+        if (rc == PT_OK) {
+            PT_FREE(s->nodes);
+            s->nodes = NULL;
+            s->node_count = 0;
+            s->bvh_depth = 0;
+            s->backend = PT_BACKEND_EMBREE;
+            s->build_seconds = pt__now() - t0;
+            s->accel_bytes = pt__rtc_bytes(s);
+            return PT_OK;
+        }
+        if (s->backend_request == PT_BACKEND_EMBREE) return rc;
+        s->error[0] = '\0'; /* AUTO: the built-in BVH instead */
+        t0 = pt__now();
+    }
+#endif
+    s->backend = PT_BACKEND_BUILTIN;
+    if ((rc = pt__bvh_build_scene(s)) != PT_OK) return rc;
+    s->build_seconds = pt__now() - t0;
+    s->accel_bytes = sizeof(pt__node) * (size_t)s->node_count;
+    return PT_OK;
+}
+
+/* --- commit, scene info, lights and the public queries (sections 3, 5 and 5b) --- */
 static float pt__prim_area(const pt__prim *p)
 {
     if (p->type == PT__PRIM_SPHERE) return 4.0f * PT__PI * p->p1.x * p->p1.x;
@@ -2610,7 +3136,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
     unsigned f;
     if (!s) return PT_ERROR_INVALID_ARGUMENT;
     s->error[0] = '\0';
-    if ((rc = pt__bvh_build_scene(s)) != PT_OK) return rc;
+    if ((rc = pt__accel_build(s)) != PT_OK) return rc;
     /* light table: every emitting primitive is a light, picked in proportion to its power */
     PT_FREE(s->lights);
     s->lights = NULL;
@@ -2655,6 +3181,15 @@ PTDEF int pt_scene_commit(pt_scene *s)
     if (s->node_count) {
         s->lo = pt_v3(s->nodes[0].lo[0], s->nodes[0].lo[1], s->nodes[0].lo[2]);
         s->hi = pt_v3(s->nodes[0].hi[0], s->nodes[0].hi[1], s->nodes[0].hi[2]);
+    } else if (s->prim_count) { /* no built-in BVH (Embree): the same padded union of the bounds */
+        pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_neg(lo), a, b;
+        for (i = 0; i < s->prim_count; ++i) {
+            pt__prim_bounds(&s->prims[i], &a, &b);
+            lo = pt__vmin(lo, a);
+            hi = pt__vmax(hi, b);
+        }
+        s->lo = pt_v3(pt__pad_down(lo.x), pt__pad_down(lo.y), pt__pad_down(lo.z));
+        s->hi = pt_v3(pt__pad_up(hi.x), pt__pad_up(hi.y), pt__pad_up(hi.z));
     }
     for (i = 0; i < s->prim_count; ++i) {
         const pt__material *m = &s->mats[s->prims[i].material];
@@ -2689,6 +3224,9 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     info->total_emitted_power = s->total_power;
     info->bounds_min = s->lo;
     info->bounds_max = s->hi;
+    info->backend = (pt_backend)s->backend;
+    info->build_seconds = s->build_seconds;
+    info->accel_bytes = s->accel_bytes;
     return PT_OK;
 }
 
@@ -2762,7 +3300,7 @@ PTDEF int pt_scene_intersect(const pt_scene *s, pt_ray ray, float tmax, pt_hit *
     if (e != PT_OK) return e;
     if (!hit) return PT_ERROR_INVALID_ARGUMENT;
     pt__rayctx_init(&rc, ray);
-    if (!pt__bvh_closest(s, &rc, tmax, &prim, &t, bary)) return 0;
+    if (!pt__scene_closest(s, &rc, tmax, &prim, &t, bary)) return 0;
     pt__fill_hit(s, &s->prims[prim], ray, t, bary, hit);
     return 1;
 }
@@ -2772,7 +3310,7 @@ PTDEF int pt_scene_occluded(const pt_scene *s, pt_ray ray, float tmax)
     int e = pt__query_ok(s, ray, tmax);
     if (e != PT_OK) return e;
     pt__rayctx_init(&rc, ray);
-    return pt__bvh_any(s, &rc, tmax);
+    return pt__scene_any(s, &rc, tmax);
 }
 PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tmax, pt_hit *hit)
 {
@@ -2971,7 +3509,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         pt_hit h;
         pt_vec3 wi;
         pt__rayctx_init2(&rc, ray, tri);
-        if (!pt__bvh_closest(s, &rc, PT__INF, &pi, &t, bary)) {
+        if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) {
             L = pt_add(L, pt_mul(beta, cfg->background));
             break;
         }
@@ -3049,7 +3587,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                         sr.dir = pt_sub(target, sr.origin);
                         pt__rayctx_init2(&src, sr, tri);
                         st->shadow_rays++;
-                        if (!pt__bvh_any(s, &src, 1.0f - 1e-4f)) {
+                        if (!pt__scene_any(s, &src, 1.0f - 1e-4f)) {
                             const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
                             L = pt_add(L, pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls.pdf)));
                         }
@@ -3200,17 +3738,39 @@ static void pt__render_tile(void *data, int index)
     ps->tile_done[index] = 1;
 }
 
+#ifdef PDFTRACE_EMBREE
+/* A tile with flush-to-zero and denormals-are-zero on (Embree's requirement for speed), and the
+   thread's previous state restored: the host's threads (parallel_for, the calling thread) keep
+   their floating-point state. */
+static void pt__render_tile_ftz(void *data, int index)
+{
+    unsigned old = pt__ftz_begin();
+    pt__render_tile(data, index);
+    pt__ftz_end(old);
+}
+#endif
+static pt_job_fn pt__tile_job(const pt_scene *s)
+{
+#ifdef PDFTRACE_EMBREE
+    if (s->backend == PT_BACKEND_EMBREE) return pt__render_tile_ftz;
+#else
+    (void)s;
+#endif
+    return pt__render_tile;
+}
+
 #ifndef PDFTRACE_NO_THREADS
 static void *pt__worker(void *data)
 {
     pt__pass *ps = (pt__pass *)data;
+    pt_job_fn job = pt__tile_job(ps->scene);
     for (;;) {
         int i;
         pthread_mutex_lock(&ps->lock);
         i = ps->next++;
         pthread_mutex_unlock(&ps->lock);
         if (i >= ps->count) break;
-        pt__render_tile(ps, i);
+        job(ps, i);
     }
     return NULL;
 }
@@ -3220,8 +3780,9 @@ static void *pt__worker(void *data)
 static int pt__run_pass(pt__pass *ps, int tiles, int threads, const pt_render_desc *d)
 {
     int i;
+    pt_job_fn job = pt__tile_job(ps->scene);
     if (d->parallel_for) {
-        d->parallel_for(d->parallel_for_user, tiles, pt__render_tile, ps);
+        d->parallel_for(d->parallel_for_user, tiles, job, ps);
         return threads;
     }
 #ifndef PDFTRACE_NO_THREADS
@@ -3240,7 +3801,7 @@ static int pt__run_pass(pt__pass *ps, int tiles, int threads, const pt_render_de
         return started + 1;
     }
 #endif
-    for (i = 0; i < tiles; ++i) pt__render_tile(ps, i);
+    for (i = 0; i < tiles; ++i) job(ps, i);
     return 1;
 }
 

@@ -14,6 +14,9 @@ int main()
     int rc = white < 0 ? white : light;
     if (rc >= 0) rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, white);
     if (rc >= 0) rc = pt_scene_add_quad(s, pt_v3(-1, 3, -1), pt_v3(2, 0, 0), pt_v3(0, 0, 2), light);
+#ifdef PDFTRACE_EMBREE
+    if (rc >= 0) rc = pt_scene_set_backend(s, PT_BACKEND_EMBREE); // section 5b, compiled as C++
+#endif
     if (rc >= 0) rc = pt_scene_commit(s);
     pt_render_desc d = {};
     pt_image img = {};

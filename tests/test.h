@@ -55,6 +55,7 @@ extern const test_case test_bvh_cases[];
 extern const test_case test_render_cases[];
 extern const test_case test_output_cases[];
 extern const test_case test_exr_cases[];    /* OpenEXR (a SKIP line without PDFTRACE_OPENEXR) */
+extern const test_case test_embree_cases[]; /* backends; Embree's tests with PDFTRACE_EMBREE */
 extern const test_case test_analytic_cases[];
 extern const test_case test_regress_cases[];
 extern const test_case test_suite_cases[];  /* last: summaries over the whole run */

@@ -8,6 +8,7 @@
 
    This file compiles the library implementation (PDFTRACE_IMPLEMENTATION). */
 #define PDFTRACE_IMPLEMENTATION
+#define PDFTRACE_SCENE_FILES /* section 10: the embree section renders the scenes of scenes/ */
 #include "pdftrace.h"
 
 #include <stdarg.h>
@@ -78,6 +79,7 @@ int main(int argc, char **argv)
         { "render", test_render_cases },
         { "output", test_output_cases },
         { "exr", test_exr_cases },
+        { "embree", test_embree_cases },
         { "analytic", test_analytic_cases },
         { "regress", test_regress_cases },
         { "suite", test_suite_cases },
