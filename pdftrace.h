@@ -517,6 +517,12 @@ typedef struct pt_shading_point {
    the built-in BVH if Embree fails; an explicit EMBREE reports the failure instead.
    pt_scene_info.backend says which one the commit chose. */
 PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
+/* The configuration string handed to rtcNewDevice at the next commit with Embree (see
+   Embree's rtcNewDevice documentation; e.g. "threads=2" caps the threads of its BVH build).
+   NULL or "": Embree's defaults (or PDFTRACE_EMBREE_CONFIG). Copied; at most 127 characters.
+   A configuration Embree refuses makes an EMBREE commit fail with Embree's error (AUTO falls
+   back to the built-in BVH). Without PDFTRACE_EMBREE: PT_ERROR_UNSUPPORTED. */
+PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
 
 /* AUTO uses Embree (when compiled in) for scenes with at least this many primitives.
    PROVISIONAL: to be set from the BVH benchmark (make bench-bvh), which measures where Embree
@@ -1191,6 +1197,7 @@ struct pt_scene {
     uint32_t sphere_count, quad_count, triangle_count, mesh_count, degenerate_skipped;
     pt_vec3 lo, hi;
     int backend_request;       /* pt_backend from pt_scene_set_backend */
+    char embree_config[128];   /* pt_scene_set_embree_config */
     int backend;               /* what the last commit built: PT_BACKEND_BUILTIN or _EMBREE */
     double build_seconds;
     size_t accel_bytes;
@@ -2899,9 +2906,11 @@ static int pt__rtc_build(pt_scene *s)
         s->rtc.user[k].map = s->rtc.map[k];
         s->rtc.user[k].pad = extent * 5.9604645e-8f + 1e-30f; /* 2^-24 of the largest coordinate */
     }
-    s->rtc.device = rtcNewDevice(PDFTRACE_EMBREE_CONFIG);
+    s->rtc.device = rtcNewDevice(s->embree_config[0] ? s->embree_config : PDFTRACE_EMBREE_CONFIG);
     if (!s->rtc.device) {
         code = (int)rtcGetDeviceError(NULL);
+        snprintf(s->rtc.error_text, sizeof s->rtc.error_text, "configuration \"%s\"",
+                 s->embree_config[0] ? s->embree_config : "(default)");
         return pt__rtc_fail(s, code ? code : RTC_ERROR_UNKNOWN, "could not create a device");
     }
     rtcSetDeviceErrorFunction(s->rtc.device, pt__rtc_on_error, s);
@@ -3082,6 +3091,23 @@ PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
     if (backend != (pt_backend)s->backend_request) s->committed = 0; /* commit again to switch */
     s->backend_request = (int)backend;
     return PT_OK;
+}
+
+PTDEF int pt_scene_set_embree_config(pt_scene *s, const char *config)
+{
+    size_t n = config ? strlen(config) : 0u;
+    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+#ifndef PDFTRACE_EMBREE
+    (void)n;
+    return pt__fail(s, PT_ERROR_UNSUPPORTED, "set_embree_config: Embree is not compiled in (define PDFTRACE_EMBREE)");
+#else
+    if (n >= sizeof s->embree_config)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "set_embree_config: %u characters (at most %u)", (unsigned)n,
+                        (unsigned)(sizeof s->embree_config - 1u));
+    if (n) memcpy(s->embree_config, config, n);
+    s->embree_config[n] = '\0';
+    return PT_OK;
+#endif
 }
 
 static double pt__now(void);

@@ -94,6 +94,7 @@ static void embree_backend_errors(test_ctx *t)
 #else
     CHECK(t, rc == PT_ERROR_UNSUPPORTED && strstr(pt_scene_error_message(s), "Embree is not compiled in"),
           "EMBREE without PDFTRACE_EMBREE: %d '%s'", rc, pt_scene_error_message(s));
+    CHECK(t, pt_scene_set_embree_config(s, "threads=1") == PT_ERROR_UNSUPPORTED, "set_embree_config without Embree");
     pt_scene_get_info(s, &info);
     CHECK(t, info.committed && info.backend == PT_BACKEND_BUILTIN, "a refused switch changed the scene");
     test_note(t, "Embree not compiled in: set_backend(EMBREE) -> %s", pt_result_string(rc));
@@ -455,6 +456,55 @@ done:
     pt_scene_destroy(se);
 }
 
+/* Errors from Embree itself: a device configuration it refuses ("threads=abc": rtcNewDevice
+   fails) becomes a pdftrace error with Embree's message for EMBREE, and a fallback for AUTO. */
+static void embree_device_errors(test_ctx *t)
+{
+    pt_scene *s = te_small_scene();
+    pt_scene_info info;
+    pt_ray r;
+    pt_hit h;
+    char longer[200];
+    int rc, k;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    memset(longer, 'x', sizeof longer - 1);
+    longer[sizeof longer - 1] = '\0';
+    CHECK(t, pt_scene_set_embree_config(s, longer) == PT_ERROR_INVALID_ARGUMENT, "a 199-character configuration");
+    CHECK(t, pt_scene_set_embree_config(s, "threads=abc") == PT_OK && pt_scene_set_backend(s, PT_BACKEND_EMBREE) == PT_OK,
+          "set");
+    rc = pt_scene_commit(s);
+    CHECK(t, rc < 0 && strstr(pt_scene_error_message(s), "Embree could not create a device") &&
+             strstr(pt_scene_error_message(s), "threads=abc"),
+          "EMBREE with a bad configuration: %d '%s'", rc, pt_scene_error_message(s));
+    test_note(t, "bad configuration -> %s: %s", pt_result_string(rc), pt_scene_error_message(s));
+    pt_scene_get_info(s, &info);
+    r.origin = pt_v3(0, 1, -10);
+    r.dir = pt_v3(0, 0, 1);
+    CHECK(t, !info.committed && pt_scene_intersect(s, r, INFINITY, &h) == PT_ERROR_INVALID_STATE,
+          "a failed commit left the scene usable");
+    /* AUTO falls back to the built-in BVH (the small scene is below the threshold: force the
+       decision with a scene above it) */
+    pt_scene_destroy(s);
+    s = pt_scene_create();
+    k = s ? pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f)) : -1;
+    for (rc = k; rc >= 0 && s && (int)(pt_scene_get_info(s, &info), info.primitive_count) < PDFTRACE_EMBREE_MIN_PRIMS;)
+        rc = pt_scene_add_sphere(s, pt_v3((float)(info.primitive_count % 100), (float)(info.primitive_count / 100), 0),
+                                 0.25f, k);
+    if (rc >= 0) rc = pt_scene_set_embree_config(s, "threads=abc");
+    if (rc >= 0) rc = pt_scene_commit(s);
+    if (s) pt_scene_get_info(s, &info);
+    CHECK(t, rc == PT_OK && info.backend == PT_BACKEND_BUILTIN && pt_scene_error_message(s)[0] == '\0',
+          "AUTO with a bad configuration: %d, backend %d '%s'", rc, (int)info.backend, s ? pt_scene_error_message(s) : "");
+    /* a good configuration again: Embree */
+    if (s) {
+        CHECK(t, pt_scene_set_embree_config(s, "threads=1") == PT_OK && pt_scene_set_backend(s, PT_BACKEND_EMBREE) == PT_OK &&
+                     pt_scene_commit(s) == PT_OK && (pt_scene_get_info(s, &info), info.backend == PT_BACKEND_EMBREE),
+              "threads=1: %s", pt_scene_error_message(s));
+        CHECK(t, pt_scene_set_embree_config(s, NULL) == PT_OK, "NULL configuration");
+    }
+    pt_scene_destroy(s);
+}
+
 static void embree_auto_and_rebuild(test_ctx *t)
 {
     /* AUTO: Embree from PDFTRACE_EMBREE_MIN_PRIMS primitives on, the built-in BVH below */
@@ -704,6 +754,7 @@ static void embree_scene_images(test_ctx *t)
 
 const test_case test_embree_cases[] = {
     TEST_CASE(embree_backend_errors),
+    TEST_CASE(embree_device_errors),
     TEST_CASE(embree_auto_and_rebuild),
     TEST_CASE(embree_fp_state),
     TEST_CASE(embree_first_hits),
