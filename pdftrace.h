@@ -801,6 +801,12 @@ PTDEF int pt_scene_desc_load(const char *path, pt_scene_desc *out, char *err, si
 PTDEF int pt_scene_desc_parse(const char *text, size_t length, const char *name, const char *base_dir,
                               pt_scene_desc *out, char *err, size_t err_size);
 PTDEF void pt_scene_desc_free(pt_scene_desc *desc);
+/* Parses a Wavefront OBJ file held in memory (the subset the `mesh` statement reads) into
+   *out; `name` is used in messages ("name:line: message"). On failure *out is left empty.
+   Free the result with pt_sd_mesh_free. */
+PTDEF int pt_scene_desc_parse_obj(const char *text, size_t length, const char *name, pt_sd_mesh *out, char *err,
+                                  size_t err_size);
+PTDEF void pt_sd_mesh_free(pt_sd_mesh *mesh);
 /* Builds a committed scene and fills *render (size, spp, depth, strategy, seed, camera,
    background; other fields zero) with the public API. On failure *scene is NULL. */
 PTDEF int pt_scene_desc_build(const pt_scene_desc *desc, pt_scene **scene, pt_render_desc *render, char *err,
@@ -859,6 +865,15 @@ PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_optio
    file, not an EXR, corrupt or truncated data: PT_ERROR_IO; no R/G/B channel, subsampled
    channels, tiled or deep parts: PT_ERROR_UNSUPPORTED. */
 PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_size);
+/* The same from a whole EXR file held in memory (size bytes at data, read in place, not
+   copied); `name` is used in messages (NULL: "<memory>"). */
+PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt_image *out, char *err,
+                             size_t err_size);
+/* Both readers refuse images of more than this many pixels (PT_ERROR_UNSUPPORTED) before
+   allocating them: a damaged or hostile header cannot make them allocate gigabytes. */
+#ifndef PDFTRACE_EXR_MAX_PIXELS
+#define PDFTRACE_EXR_MAX_PIXELS (1u << 28)
+#endif
 
 #endif /* PDFTRACE_OPENEXR */
 
@@ -4304,13 +4319,17 @@ static int pt__sd_parse_double(const char *t, double *v)
     return *end == '\0';
 }
 
+/* Without arithmetic on the value (Inf - Inf would raise FE_INVALID): != and the comparison
+   of a non-NaN with DBL_MAX are quiet. */
+static int pt__sd_finite(double v) { return v == v && fabs(v) <= DBL_MAX; }
+
 static int pt__sd_num(pt__sdp *p, const char *what, float *out)
 {
     const char *t = pt__sd_next(p);
     double v;
     if (!t) return pt__sd_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: missing number (line ends early)", what);
     if (!pt__sd_parse_double(t, &v)) return pt__sd_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: '%s' is not a number", what, t);
-    if (v != v || v - v != 0.0) return pt__sd_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: '%s' is not finite", what, t);
+    if (!pt__sd_finite(v)) return pt__sd_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: '%s' is not finite", what, t);
     if (fabs(v) > PT__SD_MAX_VALUE)
         return pt__sd_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: %s is out of range (magnitude at most 1e7)", what, t);
     *out = (float)v;
@@ -4425,7 +4444,7 @@ static int pt__obj_floats(pt__obj *o, char **tok, int n, int line, float *out)
     for (i = 0; i < 3; ++i) {
         double v;
         if (i + 1 >= n) return pt__obj_fail(o, line, "'%s' needs 3 numbers", tok[0]);
-        if (!pt__sd_parse_double(tok[i + 1], &v) || v != v || v - v != 0.0 || fabs(v) > PT__SD_MAX_VALUE)
+        if (!pt__sd_parse_double(tok[i + 1], &v) || !pt__sd_finite(v) || fabs(v) > PT__SD_MAX_VALUE)
             return pt__obj_fail(o, line, "'%s' is not a finite number of magnitude <= 1e7", tok[i + 1]);
         out[i] = (float)v;
     }
@@ -4536,13 +4555,46 @@ static int pt__obj_line(void *ctx, char *line, int number)
         return PT_OK;
     return pt__obj_fail(o, number, "unsupported OBJ statement '%s' (v, vn, f, vt, o, g, s, usemtl, mtllib)", tok[0]);
 }
+PTDEF void pt_sd_mesh_free(pt_sd_mesh *m)
+{
+    if (!m) return;
+    PT_FREE(m->positions);
+    PT_FREE(m->normals);
+    PT_FREE(m->indices);
+    memset(m, 0, sizeof *m);
+}
+
+PTDEF int pt_scene_desc_parse_obj(const char *text, size_t length, const char *name, pt_sd_mesh *out, char *err,
+                                  size_t err_size)
+{
+    pt__obj o;
+    int rc;
+    if (err && err_size) err[0] = '\0';
+    if (!out) return PT_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!name) name = "<obj>";
+    if (!text) return pt__sd_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no text");
+    memset(&o, 0, sizeof o);
+    o.m = out;
+    o.with_normals = -1;
+    o.file = name;
+    o.err = err;
+    o.err_size = err_size;
+    rc = pt__sd_lines(text, length, &o, pt__obj_line, err, err_size, name);
+    if (rc == PT_OK && out->triangle_count == 0) rc = pt__obj_fail(&o, 0, "no faces");
+    if (rc == PT_ERROR_OUT_OF_MEMORY) pt__sd_failf(err, err_size, name, 0, rc, "out of memory");
+    PT_FREE(o.v);
+    PT_FREE(o.vn);
+    if (rc != PT_OK) pt_sd_mesh_free(out);
+    return rc;
+}
+
 static int pt__sd_load_obj(pt__sdp *p, const char *rel, pt_sd_mesh *m)
 {
     char path[1024];
     char *text = NULL;
     size_t len = 0;
     int rc, n;
-    pt__obj o;
     memset(m, 0, sizeof *m);
     if (rel[0] == '/' || !p->base_dir || !*p->base_dir) n = snprintf(path, sizeof path, "%s", rel);
     else n = snprintf(path, sizeof path, "%s/%s", p->base_dir, rel);
@@ -4551,24 +4603,8 @@ static int pt__sd_load_obj(pt__sdp *p, const char *rel, pt_sd_mesh *m)
     if (rc != PT_OK)
         return pt__sd_fail(p, rc, "mesh: cannot read '%s': %s", path,
                            rc == PT_ERROR_IO ? strerror(errno) : rc == PT_ERROR_UNSUPPORTED ? "file too large" : "out of memory");
-    memset(&o, 0, sizeof o);
-    o.m = m;
-    o.with_normals = -1;
-    o.file = path;
-    o.err = p->err;
-    o.err_size = p->err_size;
-    rc = pt__sd_lines(text, len, &o, pt__obj_line, p->err, p->err_size, path);
-    if (rc == PT_OK && m->triangle_count == 0) rc = pt__obj_fail(&o, 0, "no faces");
-    if (rc == PT_ERROR_OUT_OF_MEMORY) pt__sd_fail(p, rc, "mesh: out of memory reading '%s'", path);
+    rc = pt_scene_desc_parse_obj(text, len, path, m, p->err, p->err_size);
     PT_FREE(text);
-    PT_FREE(o.v);
-    PT_FREE(o.vn);
-    if (rc != PT_OK) {
-        PT_FREE(m->positions);
-        PT_FREE(m->normals);
-        PT_FREE(m->indices);
-        memset(m, 0, sizeof *m);
-    }
     return rc;
 }
 
@@ -5455,14 +5491,45 @@ PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_optio
     return rc;
 }
 
-PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_size)
+/* The source of pt_read_exr_memory. The message comes first: the error callback reads the
+   context's user data as a pt__exr_msg. */
+typedef struct pt__exr_src {
+    pt__exr_msg msg;
+    const unsigned char *data; /* NULL: read the file named path */
+    size_t size;
+} pt__exr_src;
+
+/* pread semantics on the memory buffer: a short count at the end, 0 past it. */
+static int64_t pt__exr_mem_read(exr_const_context_t ctxt, void *user, void *buffer, uint64_t sz, uint64_t offset,
+                                exr_stream_error_func_ptr_t error_cb)
+{
+    const pt__exr_src *src = (const pt__exr_src *)user;
+    uint64_t avail;
+    (void)ctxt;
+    (void)error_cb;
+    if (!src || !buffer) return -1;
+    if (offset >= (uint64_t)src->size) return 0;
+    avail = (uint64_t)src->size - offset;
+    if (sz > avail) sz = avail;
+    if (sz > (uint64_t)INT64_MAX) sz = (uint64_t)INT64_MAX;
+    memcpy(buffer, src->data + offset, (size_t)sz);
+    return (int64_t)sz;
+}
+static int64_t pt__exr_mem_size(exr_const_context_t ctxt, void *user)
+{
+    const pt__exr_src *src = (const pt__exr_src *)user;
+    (void)ctxt;
+    return src && (uint64_t)src->size <= (uint64_t)INT64_MAX ? (int64_t)src->size : -1;
+}
+
+static int pt__exr_read(const char *path, pt__exr_src *src, pt_image *out, char *err, size_t err_size)
 {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     exr_context_t ctx = NULL;
     const exr_attr_chlist_t *chl = NULL;
     exr_attr_box2i_t dw;
     exr_storage_t storage;
-    pt__exr_msg m;
+    pt__exr_msg *mp = &src->msg;
     pt_image img;
     int32_t spc = 0;
     int64_t w, h, y;
@@ -5470,19 +5537,18 @@ PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_siz
     int found[3] = { 0, 0, 0 }, c, rc;
     exr_result_t rv;
 
-    if (err && err_size) err[0] = '\0';
-    if (out) memset(out, 0, sizeof *out);
-    if (!path || !*path || !out)
-        return pt__exr_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "reading EXR", "no path or no output image");
-    memset(&m, 0, sizeof m);
     memset(&img, 0, sizeof img);
     init.error_handler_fn = pt__exr_error_cb;
-    init.user_data = &m;
+    init.user_data = src;
+    if (src->data) {
+        init.read_fn = pt__exr_mem_read;
+        init.size_fn = pt__exr_mem_size;
+    }
     /* The header is parsed here: a missing file, a non-EXR file or a damaged header fail. */
     rv = exr_start_read(&ctx, path, &init);
     if (rv != EXR_ERR_SUCCESS) {
         if (ctx) exr_finish(&ctx);
-        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "cannot read as EXR", rv, &m);
+        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "cannot read as EXR", rv, mp);
     }
     rv = exr_get_storage(ctx, 0, &storage);
     if (rv == EXR_ERR_SUCCESS && storage != EXR_STORAGE_SCANLINE) {
@@ -5495,7 +5561,7 @@ PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_siz
     if (rv == EXR_ERR_SUCCESS) rv = exr_get_scanlines_per_chunk(ctx, 0, &spc);
     if (rv != EXR_ERR_SUCCESS) {
         exr_finish(&ctx);
-        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "reading the header", rv, &m);
+        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "reading the header", rv, mp);
     }
     for (c = 0; chl && c < chl->num_channels; ++c) {
         int k = pt__exr_channel_index(chl->entries[c].name.str);
@@ -5515,6 +5581,11 @@ PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_siz
     if (w < 1 || h < 1 || w > INT32_MAX / 12 || h > INT32_MAX || spc < 1 || !pt__pixels((int)w, (int)h, &n)) {
         exr_finish(&ctx);
         return pt__exr_fail(err, err_size, PT_ERROR_IO, path, "reading EXR", "bad data window");
+    }
+    if ((uint64_t)n > (uint64_t)(PDFTRACE_EXR_MAX_PIXELS)) {
+        exr_finish(&ctx);
+        return pt__exr_fail(err, err_size, PT_ERROR_UNSUPPORTED, path, "reading EXR",
+                            "image larger than PDFTRACE_EXR_MAX_PIXELS pixels");
     }
     rc = pt_image_init(&img, (int)w, (int)h);
     if (rc != PT_OK) {
@@ -5552,10 +5623,36 @@ PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_siz
     exr_finish(&ctx);
     if (rv != EXR_ERR_SUCCESS) {
         pt_image_free(&img);
-        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "reading pixels (corrupt or truncated file)", rv, &m);
+        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "reading pixels (corrupt or truncated file)", rv, mp);
     }
     *out = img;
     return PT_OK;
+}
+
+PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_size)
+{
+    pt__exr_src src;
+    if (err && err_size) err[0] = '\0';
+    if (out) memset(out, 0, sizeof *out);
+    if (!path || !*path || !out)
+        return pt__exr_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "reading EXR", "no path or no output image");
+    memset(&src, 0, sizeof src);
+    return pt__exr_read(path, &src, out, err, err_size);
+}
+
+PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt_image *out, char *err,
+                             size_t err_size)
+{
+    pt__exr_src src;
+    if (err && err_size) err[0] = '\0';
+    if (!name || !*name) name = "<memory>";
+    if (out) memset(out, 0, sizeof *out);
+    if (!data || !out)
+        return pt__exr_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, name, "reading EXR", "no data or no output image");
+    memset(&src, 0, sizeof src);
+    src.data = (const unsigned char *)data;
+    src.size = size;
+    return pt__exr_read(name, &src, out, err, err_size);
 }
 
 #endif /* PDFTRACE_OPENEXR */
