@@ -388,12 +388,90 @@ done:
     tu_remove_tree(dir);
 }
 
+/* pt_read_exr_memory: the same pixels as pt_read_exr from the file's bytes (float and half),
+   every truncation of a small file fails cleanly, a header asking for more than
+   PDFTRACE_EXR_MAX_PIXELS is refused before allocating, bad arguments. */
+static void memory_reader(test_ctx *t)
+{
+    pt_image a = { 0, 0, NULL }, f = { 0, 0, NULL }, m = { 0, 0, NULL };
+    pt_exr_options o;
+    unsigned char *buf = NULL;
+    char dir[64], path[128], err[512];
+    long size = 0, cut;
+    int rc, k, bad = 0;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, make_test_image(&a, 13, 37), "image")) goto done;
+    for (k = 0; k < 2; ++k) {
+        o.pixel_type = k ? PT_EXR_HALF : PT_EXR_FLOAT;
+        o.compression = k ? PT_EXR_PIZ : PT_EXR_ZIP;
+        snprintf(path, sizeof path, "%s/m%d.exr", dir, k);
+        rc = pt_write_exr(path, &a, &o, err, sizeof err);
+        if (!CHECK(t, rc == PT_OK, "write rc %d %s", rc, err)) goto done;
+        free(buf);
+        buf = tu_read_file(path, &size);
+        if (!CHECK(t, buf && size > 100, "reading back %s", path)) goto done;
+        rc = pt_read_exr(path, &f, err, sizeof err);
+        if (!CHECK(t, rc == PT_OK, "file read rc %d %s", rc, err)) goto done;
+        rc = pt_read_exr_memory(buf, (size_t)size, "mem.exr", &m, err, sizeof err);
+        if (!CHECK(t, rc == PT_OK && err[0] == '\0', "memory read rc %d '%s'", rc, err)) goto done;
+        CHECK(t, m.width == 13 && m.height == 37 && memcmp(f.rgb, m.rgb, sizeof(float) * 3u * 13u * 37u) == 0,
+              "%s: memory read differs from the file read", k ? "half/PIZ" : "float/ZIP");
+        if (k == 0) CHECK(t, memcmp(a.rgb, m.rgb, sizeof(float) * 3u * 13u * 37u) == 0, "float data not bit-exact");
+        pt_image_free(&f);
+        pt_image_free(&m);
+    }
+    /* every prefix of the half/PIZ file fails with PT_ERROR_IO, an empty image and a message */
+    for (cut = 0; cut < size; ++cut) {
+        m.width = 5; m.height = 5; m.rgb = NULL;
+        rc = pt_read_exr_memory(buf, (size_t)cut, "cut.exr", &m, err, sizeof err);
+        if (rc != PT_ERROR_IO || !image_empty(&m) || strncmp(err, "cut.exr: ", 9) != 0) {
+            if (bad++ == 0) CHECK(t, 0, "prefix of %ld bytes: rc %d '%s'", cut, rc, err);
+            if (rc == PT_OK) pt_image_free(&m);
+        }
+    }
+    CHECK(t, bad == 0, "%d of %ld prefixes not rejected cleanly", bad, size);
+    /* the dataWindow attribute patched to 2^14 x 2^15 pixels > PDFTRACE_EXR_MAX_PIXELS: refused
+       from the header, before allocating (layout: name, type "box2i", size 16, 4 int32 LE) */
+    {
+        static const char key[] = "dataWindow\0box2i\0";
+        long at = -1, j;
+        for (j = 0; j + (long)sizeof key + 20 <= size && at < 0; ++j)
+            if (memcmp(buf + j, key, sizeof key - 1) == 0) at = j + (long)sizeof key - 1 + 4;
+        if (CHECK(t, at > 0, "no dataWindow attribute found")) {
+            unsigned char save[16];
+            static const unsigned char big[16] = { 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0x3f, 0, 0, 0xff, 0x7f, 0, 0 };
+            memcpy(save, buf + at, 16);
+            memcpy(buf + at, big, 16);
+            m.width = 1; m.height = 1; m.rgb = NULL;
+            rc = pt_read_exr_memory(buf, (size_t)size, "huge.exr", &m, err, sizeof err);
+            CHECK(t, rc == PT_ERROR_UNSUPPORTED && image_empty(&m) && strstr(err, "PDFTRACE_EXR_MAX_PIXELS"),
+                  "2^29-pixel data window: rc %d '%s' (want PT_ERROR_UNSUPPORTED)", rc, err);
+            if (rc == PT_OK) pt_image_free(&m);
+            memcpy(buf + at, save, 16);
+        }
+    }
+    CHECK(t, pt_read_exr_memory(NULL, 10, "x", &m, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT && image_empty(&m),
+          "NULL data accepted");
+    CHECK(t, pt_read_exr_memory(buf, (size_t)size, NULL, NULL, NULL, 0) == PT_ERROR_INVALID_ARGUMENT, "NULL image accepted");
+    rc = pt_read_exr_memory(buf, (size_t)size, NULL, &m, NULL, 0);
+    CHECK(t, rc == PT_OK && m.width == 13, "no name, no err buffer: rc %d", rc);
+    pt_image_free(&m);
+    test_note(t, "file = memory (float/ZIP, half/PIZ); %ld prefixes rejected; 2^29-pixel header refused", size);
+done:
+    free(buf);
+    pt_image_free(&a);
+    pt_image_free(&f);
+    pt_image_free(&m);
+    tu_remove_tree(dir);
+}
+
 const test_case test_exr_cases[] = {
     TEST_CASE(round_trip),
     TEST_CASE(half_rounding),
     TEST_CASE(rgba_written_by_library),
     TEST_CASE(bad_files),
     TEST_CASE(write_errors),
+    TEST_CASE(memory_reader),
     TEST_END
 };
 
