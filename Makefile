@@ -14,6 +14,14 @@
 #                         traversal, pdftrace.h section 5b; needs libembree-dev). Default 0.
 #                         Either or both: make OPENEXR=1 EMBREE=1 test (use a separate BUILD=
 #                         per combination, or let the options stamp rebuild on a change).
+#   make fuzz             build the libFuzzer targets (clang, libclang-rt-14-dev) for the scene
+#                         loader, the OBJ loader and the EXR reader (tests/fuzz/) and run each for
+#                         FUZZ_SECONDS (default 60) from tests/fuzz/corpus/<target>/; new inputs go
+#                         to $(BUILD)/fuzz-corpus/, crashes to $(BUILD)/fuzz-artifacts/
+#   make fuzz-merge       minimise tests/fuzz/corpus/<target>/ plus $(BUILD)/fuzz-corpus/<target>/
+#                         into tests/fuzz/corpus/<target>/ (libFuzzer -set_cover_merge=1)
+#   make fptrap-test      render every scenes/*.scene and the built-in test scenes at low spp
+#                         with FE_INVALID and FE_DIVBYZERO trapping (glibc; part of make test)
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
 #                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
@@ -125,7 +133,8 @@ $(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
 	$(need_tests)
 	$(CC) -I. $(EXR_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(EXR_LIBS) -lm
 
-exr-test: $(BUILD)/test_runner_exr
+exr-test: $(BUILD)/test_runner_exr $(BUILD)/fuzz_replay_exr
+	./$(BUILD)/fuzz_replay_exr tests/fuzz/corpus
 	./$(BUILD)/test_runner_exr exr
 
 # ---- scene files and POV-Ray validation (validation/ptv.c). OpenEXR (POV-Ray's +FE output) and
@@ -163,9 +172,15 @@ validate-refs: $(BUILD)/ptv
 # The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed".
 # First the scene-file runner (malformed inputs, scenes/ loading, --scene = built-in box, and
 # the fast POV-Ray comparisons when povray is installed).
-test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads $(BUILD)/test_runner_asan
+# Then the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
+# ASan+UBSan) and the FP-trap renders of the scene suite.
+test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads $(BUILD)/test_runner_asan \
+      $(BUILD)/fuzz_replay $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
 	mkdir -p $(BUILD)/ptv-work
 	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/cornell
+	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus 2>/dev/null
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus
+	./$(BUILD)/fptrap scenes/*.scene
 	./$(BUILD)/test_runner
 	./$(BUILD)/test_runner_nothreads
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan
@@ -188,6 +203,13 @@ check-warnings: | $(BUILD)
 	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC examples/minimal.c"; \
 	    $$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC $(PT_CPPFLAGS) $(PT_THREADS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-static.o; \
 	done; \
+	for cc in $(WARN_CC); do \
+	    echo "$$cc $(WARN_CFLAGS) tests/fuzz/harness.c tests/fuzz/replay.c tests/fptrap/fptrap.c"; \
+	    $$cc $(WARN_CFLAGS) -I. -Itests/fuzz $(PT_THREADS) -c tests/fuzz/harness.c -o $(BUILD)/warn-$$cc-fuzz-harness.o; \
+	    $$cc $(WARN_CFLAGS) -I. -Itests/fuzz -c tests/fuzz/replay.c -o $(BUILD)/warn-$$cc-fuzz-replay.o; \
+	    $$cc $(WARN_CFLAGS) -I. -Itests/fuzz -c tests/fuzz/fuzz_target.c -DPT_FUZZ_ENTRY=pt_fuzz_scene -o $(BUILD)/warn-$$cc-fuzz-target.o; \
+	    $$cc $(WARN_CFLAGS) -I. $(PT_THREADS) -c tests/fptrap/fptrap.c -o $(BUILD)/warn-$$cc-fptrap.o; \
+	done; \
 	for cxx in $(WARN_CXX); do \
 	    echo "$$cxx $(WARN_CXXFLAGS) examples/cpp_check.cpp (then run it)"; \
 	    $$cxx $(WARN_CXXFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) examples/cpp_check.cpp -o $(BUILD)/cpp_check-$$cxx $(PT_LDLIBS); \
@@ -200,6 +222,7 @@ check-warnings: | $(BUILD)
 	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_OPENEXR examples/cornell.c tests/test_exr.c"; \
 	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c examples/cornell.c -o $(BUILD)/warn-$$cc-exr.o; \
 	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) -c tests/test_exr.c -o $(BUILD)/warn-$$cc-test-exr.o; \
+	        $$cc $(WARN_CFLAGS) -I. -Itests/fuzz $(EXR_FLAGS) $(PT_THREADS) -c tests/fuzz/harness.c -o $(BUILD)/warn-$$cc-fuzz-harness-exr.o; \
 	    done; \
 	    for cxx in $(WARN_CXX); do \
 	        echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_OPENEXR examples/cpp_check.cpp (the optional EXR section)"; \
@@ -238,3 +261,65 @@ clean:
 
 help:
 	@sed -n '2,/^$$/p' Makefile | sed -n 's/^# \{0,1\}//p'
+
+# ---- fuzzing (tests/fuzz/, issue 7). libFuzzer targets need clang with -fsanitize=fuzzer
+# (Debian: clang and libclang-rt-14-dev); the EXR target needs libopenexr-dev (skipped without
+# it). The corpus replay is built with the normal compiler and runs inside make test.
+FUZZ_CC      ?= clang
+FUZZ_SECONDS ?= 60
+FUZZ_FLAGS   ?= -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
+FUZZ_ARGS    ?= -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
+FUZZ_HAVE_EXR := $(shell [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ] && echo yes)
+FUZZ_TARGETS := scene obj $(if $(FUZZ_HAVE_EXR),exr)
+FUZZ_SRCS    := tests/fuzz/harness.c tests/fuzz/harness.h
+FUZZ_MAXLEN_scene := 8192
+FUZZ_MAXLEN_obj   := 16384
+FUZZ_MAXLEN_exr   := 16384
+FUZZ_DICT_scene := -dict=tests/fuzz/scene.dict
+FUZZ_DICT_obj   := -dict=tests/fuzz/obj.dict
+FUZZ_DICT_exr   :=
+
+.PHONY: fuzz fuzz-build fuzz-merge fptrap-test
+
+$(BUILD)/fuzz_%: tests/fuzz/fuzz_target.c $(FUZZ_SRCS) pdftrace.h | $(BUILD)
+	$(FUZZ_CC) $(FUZZ_FLAGS) -I. -Itests/fuzz $(if $(FUZZ_HAVE_EXR),$(EXR_FLAGS)) -DPT_FUZZ_ENTRY=pt_fuzz_$* \
+	    -o $@ tests/fuzz/harness.c tests/fuzz/fuzz_target.c $(if $(FUZZ_HAVE_EXR),$(EXR_LIBS)) -lm -pthread
+
+fuzz-build: $(FUZZ_TARGETS:%=$(BUILD)/fuzz_%)
+
+# Every target runs even if an earlier one found a crash; the exit status says whether any did.
+fuzz: fuzz-build
+	@status=0; for t in $(FUZZ_TARGETS); do \
+	    mkdir -p $(BUILD)/fuzz-corpus/$$t $(BUILD)/fuzz-artifacts; \
+	    case $$t in scene) ml=$(FUZZ_MAXLEN_scene); d='$(FUZZ_DICT_scene)';; obj) ml=$(FUZZ_MAXLEN_obj); d='$(FUZZ_DICT_obj)';; \
+	                *) ml=$(FUZZ_MAXLEN_exr); d='$(FUZZ_DICT_exr)';; esac; \
+	    echo "== fuzz $$t for $(FUZZ_SECONDS) s"; \
+	    ./$(BUILD)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -max_len=$$ml $$d $(FUZZ_ARGS) \
+	        -artifact_prefix=$(BUILD)/fuzz-artifacts/$$t- $(BUILD)/fuzz-corpus/$$t tests/fuzz/corpus/$$t || status=1; \
+	done; \
+	if [ $$status != 0 ]; then echo "make fuzz: crashes in $(BUILD)/fuzz-artifacts/"; ls $(BUILD)/fuzz-artifacts; fi; \
+	exit $$status
+
+fuzz-merge: fuzz-build
+	@set -e; for t in $(FUZZ_TARGETS); do \
+	    rm -rf $(BUILD)/fuzz-merge-$$t; mkdir -p $(BUILD)/fuzz-merge-$$t $(BUILD)/fuzz-corpus/$$t; \
+	    ./$(BUILD)/fuzz_$$t -merge=1 $(BUILD)/fuzz-merge-$$t tests/fuzz/corpus/$$t $(BUILD)/fuzz-corpus/$$t; \
+	    echo "fuzz-merge $$t: $$(ls $(BUILD)/fuzz-merge-$$t | wc -l) files in $(BUILD)/fuzz-merge-$$t (review, then copy)"; \
+	done
+
+# Corpus replay: the harnesses on every committed input, normal compiler / ASan+UBSan / EXR.
+FUZZ_REPLAY_SRCS := tests/fuzz/replay.c tests/fuzz/harness.c
+$(BUILD)/fuzz_replay: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) -Itests/fuzz $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(PT_LDLIBS)
+$(BUILD)/fuzz_replay_asan: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) -Itests/fuzz $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(PT_LDLIBS)
+$(BUILD)/fuzz_replay_exr: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h | $(BUILD)
+	$(CC) -I. -Itests/fuzz $(EXR_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(EXR_LIBS) -lm
+
+# FP-trap test (issue 7 item 6): scene files and built-in scenes with FE_INVALID|FE_DIVBYZERO
+# trapping. Built with the normal compiler and flags (what users run).
+$(BUILD)/fptrap: tests/fptrap/fptrap.c pdftrace.h | $(BUILD)
+	$(CC) -I. $(CPPFLAGS) $(CFLAGS) -g $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) -lm
+
+fptrap-test: $(BUILD)/fptrap
+	./$(BUILD)/fptrap scenes/*.scene
