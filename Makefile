@@ -303,7 +303,7 @@ fuzz: fuzz-build
 fuzz-merge: fuzz-build
 	@set -e; for t in $(FUZZ_TARGETS); do \
 	    rm -rf $(BUILD)/fuzz-merge-$$t; mkdir -p $(BUILD)/fuzz-merge-$$t $(BUILD)/fuzz-corpus/$$t; \
-	    ./$(BUILD)/fuzz_$$t -merge=1 $(BUILD)/fuzz-merge-$$t tests/fuzz/corpus/$$t $(BUILD)/fuzz-corpus/$$t; \
+	    ./$(BUILD)/fuzz_$$t -set_cover_merge=1 $(BUILD)/fuzz-merge-$$t tests/fuzz/corpus/$$t $(BUILD)/fuzz-corpus/$$t; \
 	    echo "fuzz-merge $$t: $$(ls $(BUILD)/fuzz-merge-$$t | wc -l) files in $(BUILD)/fuzz-merge-$$t (review, then copy)"; \
 	done
 

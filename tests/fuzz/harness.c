@@ -24,6 +24,7 @@
 
 const char *pt_fuzz_input_name = NULL;
 int pt_fuzz_verbose = 0;
+int pt_fuzz_expect = 0;
 
 /* With pt_fuzz_verbose (replay: PT_FUZZ_VERBOSE=1), one line per input: what happened. */
 static void fz_note(const char *target, const char *stage, const char *detail)
@@ -103,7 +104,7 @@ static void fz_check_rays(const char *target, const pt_scene *s, pt_vec3 from, i
                      (double)r.origin.y, (double)r.origin.z, (double)r.dir.x, (double)r.dir.y, (double)r.dir.z);
             /* The contract of tests/test_bvh.c: t within 1e-5 relative. Coplanar overlapping
                triangles differ by an ulp in t and the box test may order them either way
-               (corpus obj/bvh-coplanar-overlap-1ulp.obj); a nearer primitive missed fails. */
+               (corpus obj/accept-bvh-coplanar-overlap-1ulp.obj); a nearer primitive missed fails. */
             FZ_CHECK(target, fabsf(h1.t - h2.t) <= 1e-5f * h2.t, why);
             FZ_CHECK(target, h1.t > 0 && pt__isfinite(h1.t), "hit t not positive and finite");
             FZ_CHECK(target, pt__isfinite(h1.point.x) && pt__isfinite(h1.point.y) && pt__isfinite(h1.point.z),
@@ -153,6 +154,8 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
 
     if (size > 65536 || fz_unsafe_mesh_path(text, size)) return 0;
     rc = pt_scene_desc_parse(text, size, "fuzz.scene", PT_FUZZ_SCENE_DIR, &d, err, sizeof err);
+    FZ_CHECK(T, pt_fuzz_expect == 0 || (pt_fuzz_expect > 0) == (rc == PT_OK),
+             rc == PT_OK ? "an input named reject-* was accepted" : err);
     if (rc != PT_OK) {
         FZ_CHECK(T, rc < 0, err);
         FZ_CHECK(T, fz_all_zero(&d, sizeof d), "a failed parse left something in the description");
@@ -244,6 +247,8 @@ int pt_fuzz_obj(const uint8_t *data, size_t size)
 
     if (size > 1u << 20) return 0;
     rc = pt_scene_desc_parse_obj((const char *)data, size, "fuzz.obj", &m, err, sizeof err);
+    FZ_CHECK(T, pt_fuzz_expect == 0 || (pt_fuzz_expect > 0) == (rc == PT_OK),
+             rc == PT_OK ? "an input named reject-* was accepted" : err);
     if (rc != PT_OK) {
         FZ_CHECK(T, rc < 0, err);
         FZ_CHECK(T, fz_all_zero(&m, sizeof m), "a failed parse left something in the mesh");
@@ -301,6 +306,8 @@ int pt_fuzz_exr(const uint8_t *data, size_t size)
     int rc;
     memset(&img, 0x55, sizeof img); /* the reader must overwrite it */
     rc = pt_read_exr_memory(data, size, "fuzz.exr", &img, err, sizeof err);
+    FZ_CHECK(T, pt_fuzz_expect == 0 || (pt_fuzz_expect > 0) == (rc == PT_OK),
+             rc == PT_OK ? "an input named reject-* was accepted" : err);
     if (rc != PT_OK) {
         FZ_CHECK(T, rc < 0, err);
         FZ_CHECK(T, img.width == 0 && img.height == 0 && img.rgb == NULL, "a failed read left an image");

@@ -21,6 +21,9 @@ int pt_fuzz_exr(const uint8_t *data, size_t size);
 
 /* The input being run, named in failure messages (the replay sets it; may be NULL). */
 extern const char *pt_fuzz_input_name;
+/* What the input must do, from its name (the replay sets it): 1 "accept-*": the loader must
+   succeed; -1 "reject-*": it must fail with a message; 0: either. */
+extern int pt_fuzz_expect;
 /* Non-zero: one line per input on stderr saying what happened (replay: PT_FUZZ_VERBOSE=1). */
 extern int pt_fuzz_verbose;
 

@@ -1,7 +1,8 @@
 /* Corpus replay (make test): feeds every file of tests/fuzz/corpus/<target>/ to the harness
    entry point of that target (tests/fuzz/harness.c), the same code the libFuzzer targets
    run. A failing harness check or a sanitizer report aborts with the input's name; the last
-   line is "fuzz replay: N inputs (...), 0 failures".
+   line is "fuzz replay: N inputs (...), 0 failures". Inputs named accept-* must load, reject-*
+   must be refused (with a message); others may do either.
    Usage: fuzz_replay CORPUS_DIR   (the directory holding scene/, obj/ and exr/)
    PT_FUZZ_VERBOSE=1: one line per input. PT_FUZZ_FPTRAP=1 (glibc): FE_INVALID and
    FE_DIVBYZERO trap (SIGFPE) while the inputs run, e.g. to replay a fuzzer's own corpus. */
@@ -70,6 +71,7 @@ static long replay_dir(const char *dir, const char *sub, entry_fn fn)
         }
         fclose(f);
         pt_fuzz_input_name = path;
+        pt_fuzz_expect = !strncmp(names[i], "accept-", 7) ? 1 : !strncmp(names[i], "reject-", 7) ? -1 : 0;
         if (trap_mode) fprintf(stderr, "> %s\n", path);
         fn(buf, (size_t)len); /* exactly len bytes: no terminator is promised to the harness */
         pt_fuzz_input_name = NULL;
