@@ -178,7 +178,7 @@ test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_no
       $(BUILD)/fuzz_replay $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
 	mkdir -p $(BUILD)/ptv-work
 	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/cornell
-	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus 2>/dev/null
+	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus
 	./$(BUILD)/fptrap scenes/*.scene
 	./$(BUILD)/test_runner

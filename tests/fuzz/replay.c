@@ -9,13 +9,29 @@
 #define _GNU_SOURCE 1
 #include <dirent.h>
 #include <fenv.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "harness.h"
 
 static int trap_mode = 0;
+
+/* SIGFPE in trap mode: name the input (async-signal-safe writes only) and exit 1. */
+static void on_fpe(int sig)
+{
+    static const char msg[] = "fuzz replay: floating-point trap (FE_INVALID or FE_DIVBYZERO) in input ";
+    const char *name = pt_fuzz_input_name ? pt_fuzz_input_name : "?";
+    ssize_t w;
+    (void)sig;
+    w = write(2, msg, sizeof msg - 1);
+    w = write(2, name, strlen(name));
+    w = write(2, "\n", 1);
+    (void)w;
+    _exit(1);
+}
 
 typedef int (*entry_fn)(const uint8_t *, size_t);
 
@@ -72,7 +88,6 @@ static long replay_dir(const char *dir, const char *sub, entry_fn fn)
         fclose(f);
         pt_fuzz_input_name = path;
         pt_fuzz_expect = !strncmp(names[i], "accept-", 7) ? 1 : !strncmp(names[i], "reject-", 7) ? -1 : 0;
-        if (trap_mode) fprintf(stderr, "> %s\n", path);
         fn(buf, (size_t)len); /* exactly len bytes: no terminator is promised to the harness */
         pt_fuzz_input_name = NULL;
         free(buf);
@@ -94,7 +109,11 @@ int main(int argc, char **argv)
     if (getenv("PT_FUZZ_FPTRAP") != NULL && getenv("PT_FUZZ_FPTRAP")[0] == '1') {
 #if defined(__GLIBC__) && defined(FE_INVALID) && defined(FE_DIVBYZERO)
         feenableexcept(FE_INVALID | FE_DIVBYZERO);
-        trap_mode = 1; /* each input is named before it runs: the last name before a SIGFPE */
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_fpe;
+        sigaction(SIGFPE, &sa, NULL);
+        trap_mode = 1;
 #else
         fprintf(stderr, "fuzz replay: PT_FUZZ_FPTRAP ignored (needs glibc's feenableexcept)\n");
 #endif
