@@ -27,6 +27,11 @@
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
 #                         write validation/out/index.html (needs povray, libopenexr-dev, libpng-dev)
 #   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
+#   make bench            error against time for every scene and strategy, POV-Ray on the same
+#                         axes, adaptive sampling and skips -> bench/out/ (summary.md, CSV,
+#                         PNG plots by gnuplot; ~25 min on 2 cores; BENCH_OUT, BENCH_ARGS)
+#   make bench-quick      the same in under 3 minutes -> $(BUILD)/bench-quick/
+#   make bench-refs       re-render the benchmark's reference images in bench/ref/ (~30 min)
 #   make clean            remove build/ and out/
 #   make help             this text
 #
@@ -89,7 +94,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c)
 TEST_HDRS    := $(wildcard tests/*.h)
 
-.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs FORCE
+.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs FORCE
 
 all: $(EXAMPLE_BINS)
 
@@ -154,7 +159,7 @@ PTV_CPPFLAGS += -DPTV_HAVE_PNG $(shell pkg-config --cflags libpng)
 PTV_LDLIBS   += $(shell pkg-config --libs libpng)
 endif
 
-$(BUILD)/ptv: validation/ptv.c pdftrace.h | $(BUILD)
+$(BUILD)/ptv: validation/ptv.c validation/ptv_common.h pdftrace.h | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(PTV_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PTV_LDLIBS) $(PT_LDLIBS)
 
 # scenes/mesh.obj is committed; this remakes it.
@@ -168,6 +173,25 @@ validate: $(BUILD)/ptv
 
 validate-refs: $(BUILD)/ptv
 	validation/validate-refs.sh $(BUILD)/ptv
+
+# ---- benchmarks (bench/bench.c): error against time for every scene and strategy, POV-Ray on
+# the same axes, adaptive sampling, the scene-feature skips. Built like ptv (OpenEXR and libpng
+# when present; without OpenEXR the POV-Ray part SKIPs). gnuplot (gnuplot-nox) draws the plots;
+# without it the plots SKIP and the data and plots.gp are still written.
+BENCH_OUT  ?= bench/out
+BENCH_ARGS ?=
+
+$(BUILD)/bench: bench/bench.c validation/ptv_common.h pdftrace.h | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) $(PTV_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PTV_LDLIBS) $(PT_LDLIBS)
+
+bench: $(BUILD)/bench
+	./$(BUILD)/bench run --out $(BENCH_OUT) $(BENCH_ARGS)
+
+bench-quick: $(BUILD)/bench
+	./$(BUILD)/bench run --quick --out $(BUILD)/bench-quick $(BENCH_ARGS)
+
+bench-refs: $(BUILD)/bench
+	./$(BUILD)/bench refs
 
 # The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed".
 # First the scene-file runner (malformed inputs, scenes/ loading, --scene = built-in box, and
@@ -202,6 +226,9 @@ check-warnings: | $(BUILD)
 	    $$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS $(PT_CPPFLAGS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-nothreads.o; \
 	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC examples/minimal.c"; \
 	    $$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC $(PT_CPPFLAGS) $(PT_THREADS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-static.o; \
+	    echo "$$cc $(WARN_CFLAGS) bench/bench.c (with and without OpenEXR/libpng)"; \
+	    $$cc $(WARN_CFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) -c bench/bench.c -o $(BUILD)/warn-$$cc-bench.o; \
+	    $$cc $(WARN_CFLAGS) $(PT_CPPFLAGS) $(PTV_CPPFLAGS) $(PT_THREADS) -c bench/bench.c -o $(BUILD)/warn-$$cc-bench-libs.o; \
 	done; \
 	for cc in $(WARN_CC); do \
 	    echo "$$cc $(WARN_CFLAGS) tests/fuzz/harness.c tests/fuzz/replay.c tests/fptrap/fptrap.c"; \

@@ -1,0 +1,1679 @@
+/* bench.c - `make bench` / `make bench-quick`: error against time for every strategy and scene,
+   POV-Ray on the same axes, adaptive sampling and the scene-feature skips.
+
+     bench run [--quick] [--out DIR] [--budget S] [--seeds N] [--parts LIST] [--scenes LIST]
+     bench refs [NAME...]      render the stored references bench/ref/NAME.pfm (+ NAME.txt)
+     bench list                the scenes, their files and their references
+
+   Error metric (x = the render, r = the stored reference, over all pixels p and channels c of
+   the 128 x 128 image):
+     relMSE = mean_{p,c} (x - r)^2 / (r^2 + 0.01)
+     bias   = sum_{p,c} x / sum_{p,c} r - 1               (mean relative bias, one number)
+   The reference is itself a Monte Carlo render (MIS, many samples); its noise adds its own
+   floor = mean_{p,c} var(r) / (r^2 + 0.01) (var = the variance of the pixel mean, from
+   pt_film_pixel) to every measured relMSE. We report relMSE - floor (the raw value is in the
+   CSV too) and stop a series once the raw relMSE is within 10x the floor.
+
+   Runs: each scene x strategy (material, light, mixture with light weight 0.25/0.5/0.75, MIS)
+   renders progressively at 1, 2, 4, ... samples per pixel into one film (each step adds
+   samples with new sample indices, so step k is exactly a render at 2^k spp), until the
+   cumulative render time reaches the budget. The first seed fixes the ladder; seeds 2..N render
+   the same ladder. Seeds are interleaved (seed-major), so slow phases of a shared machine hit
+   every strategy alike; every figure is the median over seeds of that point.
+
+   Output (DIR, default bench/out): series.csv (medians), series-seeds.csv (every seed),
+   fits.csv, pov.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts (*.gp), PNG
+   plots and summary.md. Missing povray or gnuplot: that part prints SKIP and the rest runs.
+   Exit status: 0 when everything ran (acceptance lines may still say FAIL: this is a
+   measurement, not a test), 1 on an error, 2 on bad usage. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/utsname.h>
+#include <time.h>
+#include <unistd.h>
+
+#define PDFTRACE_SCENE_FILES
+#define PDFTRACE_IMPLEMENTATION
+#include "pdftrace.h"
+
+#define PTV_PROG "bench"
+#include "validation/ptv_common.h"
+
+/* ---- configuration -------------------------------------------------------------------- */
+
+#define BENCH_SIZE 128         /* every render and reference is BENCH_SIZE x BENCH_SIZE */
+#define MAX_SEEDS 15
+#define MAX_LEVELS 20          /* 1 .. 2^19 spp */
+#define REF_SEED 0x5eedULL     /* run seeds are 1..N */
+#define FLOOR_STOP 10.0        /* stop a series when raw relMSE < FLOOR_STOP x floor */
+#define FIT_MIN_SPP 4          /* the slope fit leaves out 1 and 2 spp (fixed per-render costs) */
+
+typedef struct bench_scene {
+    const char *name;          /* also bench/ref/NAME.pfm and the output file names */
+    const char *file;          /* the scene file (paths relative to the repository root) */
+    int ref_spp;               /* samples per pixel of the stored reference */
+    int pov_numeric;           /* 1: POV-Ray is a numeric reference here (per the recipe) */
+    const char *about;         /* one line for the summary */
+    const char *pov_about;     /* why POV-Ray is or is not a numeric reference */
+} bench_scene;
+
+static const bench_scene scenes[] = {
+    {"cornell", "scenes/cornell.scene", 8192, 0,
+     "the final Cornell box of The Rest of Your Life (= examples/cornell.c; glass ball), global illumination",
+     "loose only: POV-Ray has no caustics without photons (the glass ball's caustic) and radiosity is biased"},
+    {"tiny-light", "bench/scenes/tiny-light.scene", 8192, 1,
+     "a tiny, very bright sphere light plus a large dim window, diffuse, global illumination",
+     "numeric, loose (diffuse global illumination: radiosity, the recipe's 'Cornell box' row); the bulb is a point light"},
+    {"tiny-light-pure", "bench/scenes/tiny-light-pure.scene", 8192, 1,
+     "the same room with the tiny sphere light alone (no window)",
+     "numeric, loose (as tiny-light)"},
+    {"metal-glass", "bench/scenes/metal-glass.scene", 8192, 0,
+     "chrome, gold and glass balls in a small room under a ceiling light, global illumination",
+     "not numeric: caustics (glass and mirrors) need photons, which the exporter does not emit"},
+    {"many-lights", "bench/scenes/many-lights.scene", 8192, 1,
+     "five lights whose powers span four orders of magnitude, diffuse, global illumination",
+     "numeric, loose (diffuse global illumination); the sphere lights are point lights"},
+};
+#define SCENE_COUNT ((int)(sizeof scenes / sizeof scenes[0]))
+
+typedef struct bench_strategy {
+    const char *name;
+    pt_strategy strategy;
+    float light_weight;
+} bench_strategy;
+
+static const bench_strategy strategies[] = {
+    {"material", PT_STRATEGY_MATERIAL, 0.0f}, {"light", PT_STRATEGY_LIGHT, 0.0f},
+    {"mix0.25", PT_STRATEGY_MIXTURE, 0.25f},  {"mix0.5", PT_STRATEGY_MIXTURE, 0.5f},
+    {"mix0.75", PT_STRATEGY_MIXTURE, 0.75f},  {"mis", PT_STRATEGY_MIS, 0.0f},
+};
+#define STRATEGY_COUNT ((int)(sizeof strategies / sizeof strategies[0]))
+#define S_MATERIAL 0
+#define S_LIGHT 1
+#define S_MIS 5
+
+enum { PART_SERIES = 1, PART_ADAPTIVE = 2, PART_SKIPS = 4, PART_POV = 8, PART_ALL = 15 };
+
+typedef struct config {
+    int quick;
+    double budget;             /* seconds of render time per series (first seed) */
+    int seeds;
+    unsigned parts;
+    const char *out;
+    const char *ref_dir;
+    int scene_on[SCENE_COUNT];
+} config;
+
+/* ---- small utilities ------------------------------------------------------------------ */
+
+static void die_oom(void)
+{
+    fprintf(stderr, "bench: out of memory\n");
+    exit(1);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double median(const double *v, int n)
+{
+    double t[64];
+    int i;
+    if (n <= 0) return NAN;
+    if (n > 64) n = 64;
+    for (i = 0; i < n; ++i) t[i] = v[i];
+    qsort(t, (size_t)n, sizeof t[0], cmp_double);
+    return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+}
+
+static int mkdirs(const char *path)
+{
+    char buf[2048];
+    size_t i, n = strlen(path);
+    if (n == 0 || n >= sizeof buf) return 0;
+    memcpy(buf, path, n + 1);
+    for (i = 1; i <= n; ++i)
+        if (buf[i] == '/' || buf[i] == '\0') {
+            char c = buf[i];
+            buf[i] = '\0';
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST) {
+                fprintf(stderr, "bench: cannot create %s: %s\n", buf, strerror(errno));
+                return 0;
+            }
+            buf[i] = c;
+        }
+    return 1;
+}
+
+static FILE *open_out(const config *cfg, const char *name)
+{
+    char path[2048];
+    FILE *f;
+    snprintf(path, sizeof path, "%s/%s", cfg->out, name);
+    f = fopen(path, "w");
+    if (!f) fprintf(stderr, "bench: cannot write %s: %s\n", path, strerror(errno));
+    return f;
+}
+
+static int close_out(FILE *f, const char *name)
+{
+    if (fclose(f) != 0) {
+        fprintf(stderr, "bench: error writing %s\n", name);
+        return 0;
+    }
+    return 1;
+}
+
+static int have_program(const char *name)
+{
+    char cmd[256];
+    snprintf(cmd, sizeof cmd, "command -v %s >/dev/null 2>&1", name);
+    return system(cmd) == 0;
+}
+
+/* ---- scenes and references ------------------------------------------------------------ */
+
+typedef struct loaded {
+    pt_scene_desc sd;
+    pt_scene *scene;
+    pt_render_desc rd;         /* from the scene file, size BENCH_SIZE */
+    pt_image ref;              /* the stored reference */
+    double floor;              /* its noise floor in relMSE units */
+    int ref_spp;
+} loaded;
+
+static int load_scene(const bench_scene *bs, loaded *L)
+{
+    char err[1024];
+    memset(L, 0, sizeof *L);
+    if (access(bs->file, R_OK) != 0) {
+        fprintf(stderr, "bench: scene file %s: %s (run from the repository root, e.g. `make bench`)\n", bs->file,
+                strerror(errno));
+        return 0;
+    }
+    if (pt_scene_desc_load(bs->file, &L->sd, err, sizeof err) != PT_OK) {
+        fprintf(stderr, "bench: %s\n", err);
+        return 0;
+    }
+    if (pt_scene_desc_build(&L->sd, &L->scene, &L->rd, err, sizeof err) != PT_OK) {
+        fprintf(stderr, "bench: %s\n", err);
+        pt_scene_desc_free(&L->sd);
+        return 0;
+    }
+    L->rd.width = L->rd.height = BENCH_SIZE;
+    return 1;
+}
+
+static void free_scene(loaded *L)
+{
+    pt_scene_destroy(L->scene);
+    pt_scene_desc_free(&L->sd);
+    pt_image_free(&L->ref);
+    memset(L, 0, sizeof *L);
+}
+
+/* Reads bench/ref/NAME.pfm and the floor and spp from NAME.txt. */
+static int load_reference(const config *cfg, const bench_scene *bs, loaded *L)
+{
+    char path[2048], line[512];
+    FILE *f;
+    int have_floor = 0;
+    snprintf(path, sizeof path, "%s/%s.pfm", cfg->ref_dir, bs->name);
+    if (access(path, R_OK) != 0) {
+        fprintf(stderr, "bench: reference %s is missing: run `make bench-refs` (build/bench refs %s)\n", path, bs->name);
+        return 0;
+    }
+    if (!read_pfm(path, &L->ref)) return 0;
+    if (L->ref.width != BENCH_SIZE || L->ref.height != BENCH_SIZE) {
+        fprintf(stderr, "bench: %s is %dx%d, expected %dx%d: run `make bench-refs`\n", path, L->ref.width,
+                L->ref.height, BENCH_SIZE, BENCH_SIZE);
+        return 0;
+    }
+    snprintf(path, sizeof path, "%s/%s.txt", cfg->ref_dir, bs->name);
+    f = fopen(path, "r");
+    if (!f) {
+        fprintf(stderr, "bench: cannot read %s: %s (run `make bench-refs`)\n", path, strerror(errno));
+        return 0;
+    }
+    while (fgets(line, sizeof line, f)) {
+        if (sscanf(line, "noise_floor_relmse %lf", &L->floor) == 1) have_floor = 1;
+        (void)sscanf(line, "spp %d", &L->ref_spp);
+    }
+    fclose(f);
+    if (!have_floor || !(L->floor >= 0) || !(L->floor < 1)) {
+        fprintf(stderr, "bench: %s: no valid 'noise_floor_relmse' line\n", path);
+        return 0;
+    }
+    return 1;
+}
+
+/* relMSE and bias of x against r (definitions at the top of the file). */
+static void measure(const pt_image *x, const pt_image *r, double *relmse, double *bias)
+{
+    size_t n = 3u * (size_t)x->width * (size_t)x->height, i;
+    double mse = 0, sx = 0, sr = 0;
+    for (i = 0; i < n; ++i) {
+        double xv = x->rgb[i], rv = r->rgb[i];
+        mse += (xv - rv) * (xv - rv) / (rv * rv + 0.01);
+        sx += xv;
+        sr += rv;
+    }
+    *relmse = mse / (double)n;
+    *bias = sr > 0 ? sx / sr - 1.0 : 0.0;
+}
+
+/* ---- bench refs ----------------------------------------------------------------------- */
+
+static int progress_print(void *user, const pt_progress *p)
+{
+    (void)user;
+    fprintf(stderr, "\r  pass %d/%d, %.0f s   ", p->pass, p->pass_count, p->seconds);
+    return 0;
+}
+
+static int make_reference(const config *cfg, const bench_scene *bs, int spp_override)
+{
+    const int ref_spp = spp_override > 0 ? spp_override : bs->ref_spp;
+    loaded L;
+    pt_film film;
+    pt_image mean = {0, 0, NULL};
+    pt_render_stats st;
+    char path[2048];
+    double fl = 0;
+    int x, y, rc, ok = 1;
+    FILE *f;
+    if (!load_scene(bs, &L)) return 0;
+    L.rd.samples_per_pixel = ref_spp;
+    L.rd.samples_per_pass = ref_spp / 64 > 0 ? ref_spp / 64 : 1;
+    L.rd.strategy = PT_STRATEGY_MIS;
+    L.rd.seed = REF_SEED;
+    L.rd.progress = progress_print;
+    printf("bench refs: %s (%s), %dx%d, MIS, %d spp, seed %llu\n", bs->name, bs->file, BENCH_SIZE, BENCH_SIZE,
+           ref_spp, (unsigned long long)REF_SEED);
+    fflush(stdout);
+    if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
+    rc = pt_render(L.scene, &L.rd, &film, &st);
+    fprintf(stderr, "\n");
+    if (rc != PT_OK || pt_film_resolve(&film, &mean) != PT_OK) {
+        fprintf(stderr, "bench: reference render of %s failed: %s\n", bs->name, pt_scene_error_message(L.scene));
+        ok = 0;
+    }
+    if (ok && st.nonfinite_samples) {
+        fprintf(stderr, "bench: reference render of %s caught %llu NaN/Inf samples\n", bs->name,
+                (unsigned long long)st.nonfinite_samples);
+        ok = 0;
+    }
+    for (y = 0; ok && y < BENCH_SIZE; ++y)
+        for (x = 0; x < BENCH_SIZE; ++x) {
+            pt_color m = pt_v3(0, 0, 0), v = pt_v3(0, 0, 0);
+            if (pt_film_pixel(&film, x, y, &m, &v) != PT_OK) ok = 0; /* cannot happen: x, y are in range */
+            fl += v.x / ((double)m.x * m.x + 0.01) + v.y / ((double)m.y * m.y + 0.01) + v.z / ((double)m.z * m.z + 0.01);
+        }
+    fl /= 3.0 * BENCH_SIZE * BENCH_SIZE;
+    pt_film_free(&film);
+    if (ok) {
+        snprintf(path, sizeof path, "%s/%s.pfm", cfg->ref_dir, bs->name);
+        if (pt_write_pfm(path, &mean) != PT_OK) {
+            fprintf(stderr, "bench: cannot write %s\n", path);
+            ok = 0;
+        }
+    }
+    if (ok) {
+        char tmp[2100];
+        snprintf(path, sizeof path, "%s/%s.txt", cfg->ref_dir, bs->name);
+        snprintf(tmp, sizeof tmp, "%s.tmp", path);
+        f = fopen(tmp, "w");
+        if (!f) {
+            fprintf(stderr, "bench: cannot write %s: %s\n", tmp, strerror(errno));
+            ok = 0;
+        } else {
+            fprintf(f, "# Reference image %s.pfm for the benchmark scene '%s' (bench/bench.c).\n", bs->name, bs->name);
+            fprintf(f, "# Remake it with: make bench-refs   (or: build/bench refs %s, from the repository root)\n", bs->name);
+            fprintf(f, "scene %s\nsize %d %d\nstrategy mis\nspp %d\nseed %llu\nseconds %.1f\nthreads %d\n", bs->file,
+                    BENCH_SIZE, BENCH_SIZE, ref_spp, (unsigned long long)REF_SEED, st.seconds, st.threads);
+            fprintf(f, "# mean over pixels and channels of var(pixel mean) / (r^2 + 0.01): the relMSE that this\n"
+                       "# reference's own noise adds to every error measured against it\n");
+            fprintf(f, "noise_floor_relmse %.6e\n", fl);
+            if (fclose(f) != 0 || rename(tmp, path) != 0) {
+                fprintf(stderr, "bench: cannot write %s\n", path);
+                ok = 0;
+            }
+        }
+    }
+    if (ok) printf("  wrote %s/%s.pfm (%.1f s, noise floor %.3e)\n", cfg->ref_dir, bs->name, st.seconds, fl);
+    pt_image_free(&mean);
+    free_scene(&L);
+    return ok;
+}
+
+/* ---- series: error against time ------------------------------------------------------- */
+
+typedef struct point {
+    int spp;
+    double time;               /* cumulative render seconds to reach spp */
+    double relmse;             /* raw, against the reference */
+    double bias;
+    double samples, rays;      /* cumulative */
+} point;
+
+typedef struct series {
+    int levels;                /* points per seed */
+    point seed[MAX_SEEDS][MAX_LEVELS];
+    point med[MAX_LEVELS];     /* median over seeds, per field */
+    double err[MAX_LEVELS];    /* median relMSE - floor */
+    double slope, slope_lo, slope_hi; /* least-squares slope of log err vs log time (and its 95 % interval) */
+    int fit_points;
+    uint64_t nonfinite;
+    int stopped_by_floor;
+} series;
+
+typedef struct results {
+    int done[SCENE_COUNT];
+    loaded L[SCENE_COUNT];
+    series s[SCENE_COUNT][STRATEGY_COUNT];
+} results;
+
+/* Renders a progressive series into one film: 1, 2, 4, ... spp. With levels_fixed > 0 renders
+   exactly that many levels; otherwise until the cumulative time reaches budget or the raw
+   relMSE comes within FLOOR_STOP x floor, and returns the count in *levels. */
+static int run_series(const loaded *L, const bench_strategy *bst, uint64_t seed, int levels_fixed, double budget,
+                      point *pts, int *levels, uint64_t *nonfinite, int *by_floor)
+{
+    pt_film film;
+    pt_image img = {0, 0, NULL};
+    pt_render_desc d = L->rd;
+    double t = 0, samples = 0, rays = 0;
+    int k, spp_done = 0, ok = 1;
+    if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
+    d.strategy = bst->strategy;
+    d.light_weight = bst->light_weight;
+    d.seed = seed;
+    d.progress = NULL;
+    *by_floor = 0;
+    for (k = 0; k < MAX_LEVELS; ++k) {
+        pt_render_stats st;
+        int target = 1 << k, rc;
+        double t0;
+        d.samples_per_pixel = target - spp_done;
+        d.samples_per_pass = d.samples_per_pixel; /* one pass per step */
+        t0 = ptv_now();
+        rc = pt_render(L->scene, &d, &film, &st);
+        t += ptv_now() - t0;
+        if (rc != PT_OK) {
+            fprintf(stderr, "bench: render failed: %s\n", pt_scene_error_message(L->scene));
+            ok = 0;
+            break;
+        }
+        spp_done = target;
+        samples += (double)st.samples;
+        rays += (double)(st.camera_rays + st.bounce_rays + st.shadow_rays);
+        *nonfinite += st.nonfinite_samples;
+        if (pt_film_resolve(&film, &img) != PT_OK) die_oom();
+        pts[k].spp = target;
+        pts[k].time = t;
+        pts[k].samples = samples;
+        pts[k].rays = rays;
+        measure(&img, &L->ref, &pts[k].relmse, &pts[k].bias);
+        if (levels_fixed > 0) {
+            if (k + 1 >= levels_fixed) break;
+        } else if (t >= budget) {
+            break;
+        } else if (pts[k].relmse < FLOOR_STOP * L->floor) {
+            *by_floor = 1;
+            break;
+        }
+    }
+    if (levels_fixed <= 0) *levels = k < MAX_LEVELS ? k + 1 : MAX_LEVELS;
+    pt_image_free(&img);
+    pt_film_free(&film);
+    return ok;
+}
+
+/* Least squares y = a + b x over (log t, log err) of the median points with spp >= FIT_MIN_SPP
+   and err > 0; the 95 % interval from the slope's standard error (t quantile approximated by
+   2 + 4/(n-2)... kept simple: 2.0 for n-2 >= 8, else the exact two-sided table value). */
+static void fit_slope(series *s)
+{
+    static const double t975[] = {0, 12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228};
+    double sx = 0, sy = 0, sxx = 0, sxy = 0, x[MAX_LEVELS], y[MAX_LEVELS], b, a, rss = 0, se;
+    int n = 0, k;
+    for (k = 0; k < s->levels; ++k)
+        if (s->med[k].spp >= FIT_MIN_SPP && s->err[k] > 0 && s->med[k].time > 0) {
+            x[n] = log(s->med[k].time);
+            y[n] = log(s->err[k]);
+            ++n;
+        }
+    s->fit_points = n;
+    if (n < 3) {
+        s->slope = s->slope_lo = s->slope_hi = NAN;
+        return;
+    }
+    for (k = 0; k < n; ++k) {
+        sx += x[k];
+        sy += y[k];
+        sxx += x[k] * x[k];
+        sxy += x[k] * y[k];
+    }
+    b = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+    a = (sy - b * sx) / n;
+    for (k = 0; k < n; ++k) rss += (y[k] - a - b * x[k]) * (y[k] - a - b * x[k]);
+    se = sqrt(rss / (n - 2) / (sxx - sx * sx / n));
+    s->slope = b;
+    s->slope_lo = b - (n - 2 <= 10 ? t975[n - 2] : 2.0) * se;
+    s->slope_hi = b + (n - 2 <= 10 ? t975[n - 2] : 2.0) * se;
+}
+
+static void summarize_series(series *s, int seeds, double floor)
+{
+    int k, j;
+    for (k = 0; k < s->levels; ++k) {
+        double v[6][MAX_SEEDS];
+        for (j = 0; j < seeds; ++j) {
+            v[0][j] = s->seed[j][k].time;
+            v[1][j] = s->seed[j][k].relmse;
+            v[2][j] = s->seed[j][k].bias;
+            v[3][j] = s->seed[j][k].samples;
+            v[4][j] = s->seed[j][k].rays;
+        }
+        s->med[k].spp = s->seed[0][k].spp;
+        s->med[k].time = median(v[0], seeds);
+        s->med[k].relmse = median(v[1], seeds);
+        s->med[k].bias = median(v[2], seeds);
+        s->med[k].samples = median(v[3], seeds);
+        s->med[k].rays = median(v[4], seeds);
+        s->err[k] = s->med[k].relmse - floor;
+    }
+    fit_slope(s);
+}
+
+/* Time at which a median curve reaches err `target`: log-log interpolation between the two
+   points that bracket it. Beyond the last point, extrapolated with slope -1 from it (*extrap
+   = 1). Before the first point (the curve starts below target), the first point's time
+   (an upper bound, *extrap = -1). */
+static double time_to_reach(const series *s, double target, int *extrap)
+{
+    int k;
+    *extrap = 0;
+    if (s->levels <= 0 || !(target > 0)) return NAN;
+    if (s->err[0] <= target) {
+        *extrap = -1;
+        return s->med[0].time;
+    }
+    for (k = 1; k < s->levels; ++k)
+        if (s->err[k] <= target && s->err[k] > 0 && s->err[k - 1] > 0) {
+            double f = (log(target) - log(s->err[k - 1])) / (log(s->err[k]) - log(s->err[k - 1]));
+            return exp(log(s->med[k - 1].time) + f * (log(s->med[k].time) - log(s->med[k - 1].time)));
+        }
+    *extrap = 1;
+    k = s->levels - 1;
+    return s->med[k].time * s->err[k] / target;
+}
+
+/* Error of a median curve at time t (log-log interpolation; outside the measured range,
+   extrapolated with slope -1 from the nearest end and *extrap set). */
+PTV_MAYBE_UNUSED static double err_at_time(const series *s, double t, int *extrap)
+{
+    int k;
+    *extrap = 0;
+    if (s->levels <= 0 || !(t > 0)) return NAN;
+    if (t <= s->med[0].time) {
+        *extrap = t < s->med[0].time ? 1 : 0;
+        return s->err[0] * s->med[0].time / t;
+    }
+    for (k = 1; k < s->levels; ++k)
+        if (t <= s->med[k].time && s->err[k] > 0 && s->err[k - 1] > 0) {
+            double f = (log(t) - log(s->med[k - 1].time)) / (log(s->med[k].time) - log(s->med[k - 1].time));
+            return exp(log(s->err[k - 1]) + f * (log(s->err[k]) - log(s->err[k - 1])));
+        }
+    *extrap = 1;
+    k = s->levels - 1;
+    return s->err[k] * s->med[k].time / t;
+}
+
+static double efficiency(const series *s)
+{
+    const point *p = &s->med[s->levels - 1];
+    double e = s->err[s->levels - 1];
+    return e > 0 && p->time > 0 ? 1.0 / (e * p->time) : NAN;
+}
+
+static int run_all_series(const config *cfg, results *R)
+{
+    int i, j, seed;
+    for (seed = 0; seed < cfg->seeds; ++seed) {
+        for (i = 0; i < SCENE_COUNT; ++i) {
+            if (!R->done[i]) continue;
+            for (j = 0; j < STRATEGY_COUNT; ++j) {
+                series *s = &R->s[i][j];
+                int by_floor = 0;
+                if (!run_series(&R->L[i], &strategies[j], (uint64_t)(seed + 1), seed == 0 ? 0 : s->levels, cfg->budget,
+                                s->seed[seed], &s->levels, &s->nonfinite, &by_floor))
+                    return 0;
+                if (seed == 0) s->stopped_by_floor = by_floor;
+            }
+            printf("  seed %d/%d %-16s done\n", seed + 1, cfg->seeds, scenes[i].name);
+            fflush(stdout);
+        }
+    }
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (R->done[i])
+            for (j = 0; j < STRATEGY_COUNT; ++j) summarize_series(&R->s[i][j], cfg->seeds, R->L[i].floor);
+    return 1;
+}
+
+static int write_series_csv(const config *cfg, const results *R)
+{
+    FILE *f = open_out(cfg, "series.csv"), *g, *h;
+    int i, j, k, q;
+    if (!f) return 0;
+    fprintf(f, "scene,strategy,light_weight,spp,seeds,time_s,relmse,relmse_raw,floor,bias,samples_per_s,rays_per_s\n");
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (R->done[i])
+            for (j = 0; j < STRATEGY_COUNT; ++j) {
+                const series *s = &R->s[i][j];
+                for (k = 0; k < s->levels; ++k)
+                    fprintf(f, "%s,%s,%.2f,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", scenes[i].name, strategies[j].name,
+                            strategies[j].light_weight, s->med[k].spp, cfg->seeds, s->med[k].time, s->err[k],
+                            s->med[k].relmse, R->L[i].floor, s->med[k].bias, s->med[k].samples / s->med[k].time,
+                            s->med[k].rays / s->med[k].time);
+            }
+    if (!close_out(f, "series.csv")) return 0;
+    g = open_out(cfg, "series-seeds.csv");
+    if (!g) return 0;
+    fprintf(g, "scene,strategy,seed,spp,time_s,relmse_raw,bias,samples,rays\n");
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (R->done[i])
+            for (j = 0; j < STRATEGY_COUNT; ++j)
+                for (q = 0; q < cfg->seeds; ++q)
+                    for (k = 0; k < R->s[i][j].levels; ++k) {
+                        const point *p = &R->s[i][j].seed[q][k];
+                        fprintf(g, "%s,%s,%d,%d,%.6g,%.6g,%.6g,%.0f,%.0f\n", scenes[i].name, strategies[j].name, q + 1,
+                                p->spp, p->time, p->relmse, p->bias, p->samples, p->rays);
+                    }
+    if (!close_out(g, "series-seeds.csv")) return 0;
+    h = open_out(cfg, "fits.csv");
+    if (!h) return 0;
+    fprintf(h, "scene,strategy,slope,slope_95lo,slope_95hi,fit_points,final_spp,final_time_s,final_relmse,efficiency,nonfinite\n");
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (R->done[i])
+            for (j = 0; j < STRATEGY_COUNT; ++j) {
+                const series *s = &R->s[i][j];
+                const int l = s->levels - 1;
+                fprintf(h, "%s,%s,%.4f,%.4f,%.4f,%d,%d,%.6g,%.6g,%.6g,%llu\n", scenes[i].name, strategies[j].name, s->slope,
+                        s->slope_lo, s->slope_hi, s->fit_points, s->med[l].spp, s->med[l].time, s->err[l], efficiency(s),
+                        (unsigned long long)s->nonfinite);
+            }
+    return close_out(h, "fits.csv");
+}
+
+/* ---- POV-Ray on the same axes ---------------------------------------------------------- */
+
+typedef struct pov_level {
+    const char *name;
+    int radiosity;             /* 0 none .. 3 high (pt_pov_options) */
+    int grid;                  /* spotlights per quad emitter: grid x grid */
+    const char *aa;            /* antialiasing options */
+    int in_quick;
+} pov_level;
+
+/* Quality levels, fastest first. "+A0.0 +AM2 +Rn": adaptive supersampling of every pixel to
+   depth n (the recipe's box-filter match is n = 4). */
+static const pov_level pov_levels[] = {
+    {"no radiosity, 2x2 grid, no AA", 0, 2, "-A", 1},
+    {"radiosity default, 4x4 grid, AA R2", 1, 4, "+A0.0 +AM2 +R2", 1},
+    {"radiosity medium, 8x8 grid, AA R3", 2, 8, "+A0.0 +AM2 +R3", 0},
+};
+/* Not run: medium radiosity with a 16x16 grid and AA R4 took 235 s for tiny-light (error
+   4.5e-4), and the recipe's high radiosity is slower still (872 s at 256x256): too slow for
+   the 25-minute budget of `make bench`. */
+#define POV_LEVEL_COUNT ((int)(sizeof pov_levels / sizeof pov_levels[0]))
+
+typedef struct pov_result {
+    int ran;
+    double time, err, bias;    /* median seconds; relMSE - floor; bias */
+    int reps;
+    double pt_err;             /* pdftrace MIS at the same time */
+    int pt_extrap;
+} pov_result;
+
+typedef struct pov_results {
+    int available;
+    char skip_reason[256];
+    pov_result r[SCENE_COUNT][POV_LEVEL_COUNT];
+    series equal_time[SCENE_COUNT]; /* pdftrace MIS, seed 1, as long as the slowest POV-Ray level */
+} pov_results;
+
+static int run_pov(const config *cfg, results *R, pov_results *P)
+{
+    char dir[2048];
+    int i, l;
+    double tmax;
+    memset(P, 0, sizeof *P);
+#ifndef PTV_HAVE_EXR
+    snprintf(P->skip_reason, sizeof P->skip_reason, "bench was built without OpenEXR (apt-get install libopenexr-dev), "
+                                                    "so POV-Ray's +FE output cannot be read");
+    printf("SKIP POV-Ray: %s\n", P->skip_reason);
+    (void)cfg; (void)R; (void)i; (void)l; (void)dir; (void)tmax;
+    return 1;
+#else
+    if (!have_povray()) {
+        snprintf(P->skip_reason, sizeof P->skip_reason, "povray is not installed (apt-get install povray)");
+        printf("SKIP POV-Ray: %s\n", P->skip_reason);
+        return 1;
+    }
+    snprintf(dir, sizeof dir, "%s/pov", cfg->out);
+    if (!mkdirs(dir)) return 0;
+    P->available = 1;
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        if (!R->done[i]) continue;
+        tmax = 0;
+        for (l = 0; l < POV_LEVEL_COUNT; ++l) {
+            const pov_level *pl = &pov_levels[l];
+            pov_result *pr = &P->r[i][l];
+            char pov[2300], exr[2300], log[2300], png[2300], err[1024];
+            pt_pov_options o;
+            pt_image img = {0, 0, NULL};
+            double times[5];
+            int rep, reps;
+            if (cfg->quick && !pl->in_quick) continue;
+            snprintf(pov, sizeof pov, "%s/%s-q%d.pov", dir, scenes[i].name, l);
+            snprintf(exr, sizeof exr, "%s/%s-q%d.exr", dir, scenes[i].name, l);
+            snprintf(log, sizeof log, "%s/%s-q%d.log", dir, scenes[i].name, l);
+            snprintf(png, sizeof png, "%s/%s-q%d.png", dir, scenes[i].name, l);
+            memset(&o, 0, sizeof o);
+            o.radiosity = pl->radiosity;
+            o.light_grid = pl->grid;
+            o.width = o.height = BENCH_SIZE;
+            if (pt_scene_desc_write_pov(&R->L[i].sd, pov, &o, err, sizeof err) != PT_OK) {
+                fprintf(stderr, "bench: POV-Ray export of %s: %s\n", scenes[i].name, err);
+                return 0;
+            }
+            /* Repeat cheap renders (median of up to 5); a render is deterministic, only its time varies. */
+            reps = 1;
+            for (rep = 0; rep < reps; ++rep) {
+                if (!run_povray(pov, exr, BENCH_SIZE, BENCH_SIZE, pl->aa, log, &times[rep])) {
+                    fprintf(stderr, "bench: povray failed on %s (quality %d), see %s\n", scenes[i].name, l, log);
+                    return 0;
+                }
+                if (rep == 0) reps = times[0] < 2.0 ? 5 : times[0] < 10.0 ? 3 : 1;
+                if (cfg->quick) reps = 1;
+            }
+            if (!read_exr(exr, &img)) return 0;
+            if (img.width != BENCH_SIZE || img.height != BENCH_SIZE) {
+                fprintf(stderr, "bench: %s is %dx%d\n", exr, img.width, img.height);
+                pt_image_free(&img);
+                return 0;
+            }
+            measure(&img, &R->L[i].ref, &pr->err, &pr->bias);
+            pr->err -= R->L[i].floor;
+            pr->time = median(times, reps);
+            pr->reps = reps;
+            pr->ran = 1;
+            png_tonemapped(png, &img);
+            pt_image_free(&img);
+            printf("  POV-Ray %-16s q%d %-38s %7.2f s  relMSE %.3e  bias %+.2f%%\n", scenes[i].name, l, pl->name,
+                   pr->time, pr->err, 100 * pr->bias);
+            fflush(stdout);
+            if (pr->time > tmax) tmax = pr->time;
+        }
+        /* pdftrace at equal time: one MIS series (seed 1) rendered until it has used as much
+           time as the slowest POV-Ray level, read off at each level's time (log-log
+           interpolation between the bracketing steps). */
+        if (tmax > 0) {
+            series *e = &P->equal_time[i];
+            int by_floor = 0;
+            memset(e, 0, sizeof *e);
+            if (!run_series(&R->L[i], &strategies[S_MIS], 1, 0, tmax, e->seed[0], &e->levels, &e->nonfinite, &by_floor))
+                return 0;
+            summarize_series(e, 1, R->L[i].floor);
+            for (l = 0; l < POV_LEVEL_COUNT; ++l) {
+                pov_result *pr = &P->r[i][l];
+                if (!pr->ran) continue;
+                pr->pt_err = err_at_time(e, pr->time, &pr->pt_extrap);
+                printf("  pdftrace MIS %-16s at %7.2f s: relMSE %.3e%s (POV-Ray q%d: %.3e)\n", scenes[i].name, pr->time,
+                       pr->pt_err, pr->pt_extrap ? " (extrapolated)" : "", l, pr->err);
+            }
+        }
+    }
+    return 1;
+#endif
+}
+
+static int write_pov_csv(const config *cfg, const results *R, const pov_results *P)
+{
+    FILE *f;
+    int i, l;
+    if (!P->available) return 1;
+    f = open_out(cfg, "pov.csv");
+    if (!f) return 0;
+    fprintf(f, "scene,level,quality,radiosity,grid,aa,reps,time_s,relmse,bias,pdftrace_mis_relmse_at_time,extrapolated,pov_numeric\n");
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (R->done[i])
+            for (l = 0; l < POV_LEVEL_COUNT; ++l) {
+                const pov_result *pr = &P->r[i][l];
+                if (!pr->ran) continue;
+                fprintf(f, "%s,%d,%s,%d,%d,%s,%d,%.6g,%.6g,%.6g,%.6g,%d,%d\n", scenes[i].name, l, pov_levels[l].name,
+                        pov_levels[l].radiosity, pov_levels[l].grid, pov_levels[l].aa, pr->reps, pr->time, pr->err,
+                        pr->bias, pr->pt_err, pr->pt_extrap, scenes[i].pov_numeric);
+            }
+    return close_out(f, "pov.csv");
+}
+
+/* ---- adaptive sampling and the scene-feature skips ------------------------------------ */
+
+#define ADAPTIVE_MAX 12
+#define ADAPTIVE_CAP 4 /* adaptive renders may give a pixel up to 4x the uniform render's spp */
+typedef struct adaptive_results {
+    int available;
+    char skip_reason[256];
+    int n_uniform, n_adaptive;
+    point uniform[MAX_LEVELS];         /* medians over seeds */
+    double uniform_err[MAX_LEVELS];
+    point adaptive[ADAPTIVE_MAX];
+    double adaptive_err[ADAPTIVE_MAX];
+    double threshold[ADAPTIVE_MAX];
+    double converged[ADAPTIVE_MAX];    /* fraction of pixels that stopped early */
+    double target_err, uniform_time, adaptive_time, ratio;
+    int ratio_extrap;
+    char image_uniform[256], image_adaptive[256], image_map[256];
+} adaptive_results;
+
+#define SKIP_MAX 16
+typedef struct skip_result {
+    const char *name, *scene, *what;
+    unsigned bit;
+    double t_on, t_off, ratio;         /* medians: specialised path, general path forced */
+    double relmse_between;             /* relMSE of one image against the other (0: bit-identical) */
+    int reps, spp;
+} skip_result;
+typedef struct skip_results {
+    int available, n;
+    char skip_reason[256];
+    skip_result r[SKIP_MAX];
+} skip_results;
+
+#ifdef PT_SKIP_ALL
+/* Writes a PNG (libpng) of img, sRGB-encoded; without libpng a PPM beside it. */
+static void save_image(const config *cfg, const char *name, const pt_image *img, char *shown, size_t shown_size)
+{
+    char path[2300];
+#ifdef PTV_HAVE_PNG
+    snprintf(path, sizeof path, "%s/%s.png", cfg->out, name);
+    if (png_tonemapped(path, img)) snprintf(shown, shown_size, "%s.png", name);
+#else
+    snprintf(path, sizeof path, "%s/%s.ppm", cfg->out, name);
+    if (pt_write_ppm(path, img) == PT_OK) snprintf(shown, shown_size, "%s.ppm", name);
+#endif
+}
+
+/* Adaptive sampling against uniform sampling on the Cornell box, MIS. Uniform: the MIS series
+   (progressive, median of the seeds), which ends at N spp. Adaptive: one render per threshold
+   with samples_per_pixel capped at ADAPTIVE_CAP x N, min spp max(8, N/8) (the header's default,
+   cap/8, would be N/2), the default pass size (cap/16) and check interval (every pass), and
+   thresholds around the RMS error the uniform series ends at; time and relMSE are medians over
+   the seeds.
+   The time adaptive needs to reach the uniform series' final error is interpolated (log-log)
+   between the two thresholds that bracket it. */
+static int run_adaptive(const config *cfg, results *R, adaptive_results *A)
+{
+    const int sc = 0; /* cornell */
+    const series *u = &R->s[sc][S_MIS];
+    loaded *L = &R->L[sc];
+    int k, seed, n, nu;
+    double base, kept_err = 1;
+    pt_image keep = {0, 0, NULL};
+    memset(A, 0, sizeof *A);
+    if (!R->done[sc] || u->levels < 2) {
+        snprintf(A->skip_reason, sizeof A->skip_reason, "needs the cornell MIS series (--parts series,adaptive)");
+        printf("SKIP adaptive: %s\n", A->skip_reason);
+        return 1;
+    }
+    A->available = 1;
+    A->n_uniform = u->levels;
+    for (k = 0; k < u->levels; ++k) {
+        A->uniform[k] = u->med[k];
+        A->uniform_err[k] = u->err[k];
+    }
+    nu = u->med[u->levels - 1].spp;
+    A->target_err = u->err[u->levels - 1];
+    A->uniform_time = u->med[u->levels - 1].time;
+    base = sqrt(A->target_err);
+    n = cfg->quick ? 4 : 6;
+    A->n_adaptive = n;
+    printf("adaptive: cornell, MIS, uniform ends at relMSE %.3e in %.3f s (%d spp); %d thresholds x %d seeds\n",
+           A->target_err, A->uniform_time, u->med[u->levels - 1].spp, n, cfg->seeds);
+    for (k = 0; k < n; ++k) A->threshold[k] = base * pow(2.0, (cfg->quick ? 1.0 : 1.5) - 0.5 * k);
+    for (k = 0; k < n; ++k) {
+        double t[MAX_SEEDS], e[MAX_SEEDS], b[MAX_SEEDS], smp[MAX_SEEDS], cv[MAX_SEEDS];
+        for (seed = 0; seed < cfg->seeds; ++seed) {
+            pt_render_desc d = L->rd;
+            pt_render_stats st;
+            pt_film film;
+            pt_image img = {0, 0, NULL};
+            double t0;
+            d.strategy = PT_STRATEGY_MIS;
+            d.seed = (uint64_t)(seed + 1);
+            d.samples_per_pixel = ADAPTIVE_CAP * nu;
+            d.samples_per_pass = 0; /* the default: 1/16 of the cap per pass, a check after each */
+            d.adaptive_min_spp = nu / 8 > 8 ? nu / 8 : 8;
+            d.adaptive_threshold = (float)A->threshold[k];
+            if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
+            t0 = ptv_now();
+            if (pt_render(L->scene, &d, &film, &st) != PT_OK) {
+                fprintf(stderr, "bench: adaptive render failed: %s\n", pt_scene_error_message(L->scene));
+                pt_film_free(&film);
+                return 0;
+            }
+            t[seed] = ptv_now() - t0;
+            if (pt_film_resolve(&film, &img) != PT_OK) die_oom();
+            measure(&img, &L->ref, &e[seed], &b[seed]);
+            e[seed] -= L->floor;
+            smp[seed] = (double)st.samples;
+            cv[seed] = (double)st.pixels_converged / (BENCH_SIZE * BENCH_SIZE);
+            /* keep seed 1's image nearest the target, and its samples-per-pixel map */
+            if (seed == 0 && (k == 0 || fabs(log(e[0] / A->target_err)) < fabs(log(kept_err / A->target_err)))) {
+                pt_image map = {0, 0, NULL};
+                int i;
+                uint32_t maxc = 1;
+                kept_err = e[0];
+                pt_image_free(&keep);
+                keep = img;
+                img.rgb = NULL;
+                if (pt_image_init(&map, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
+                for (i = 0; i < BENCH_SIZE * BENCH_SIZE; ++i)
+                    if (film.count[i] > maxc) maxc = film.count[i];
+                for (i = 0; i < BENCH_SIZE * BENCH_SIZE; ++i) {
+                    /* grey level: log2 of the samples, scaled so the cap is white (then sRGB-decoded,
+                       so the PNG shows the grey level itself) */
+                    float g = (float)(log((double)film.count[i] + 1.0) / log((double)maxc + 1.0));
+                    float lin = g <= 0.04045f ? g / 12.92f : (float)pow((g + 0.055) / 1.055, 2.4);
+                    map.rgb[3 * i] = map.rgb[3 * i + 1] = map.rgb[3 * i + 2] = lin;
+                }
+                save_image(cfg, "adaptive-spp", &map, A->image_map, sizeof A->image_map);
+                pt_image_free(&map);
+            }
+            pt_image_free(&img);
+            pt_film_free(&film);
+        }
+        A->adaptive[k].spp = ADAPTIVE_CAP * nu;
+        A->adaptive[k].time = median(t, cfg->seeds);
+        A->adaptive_err[k] = median(e, cfg->seeds);
+        A->adaptive[k].bias = median(b, cfg->seeds);
+        A->adaptive[k].samples = median(smp, cfg->seeds);
+        A->converged[k] = median(cv, cfg->seeds);
+        printf("  threshold %.4f: %.3f s, relMSE %.3e, %.1f%% of pixels stopped early, %.2g samples\n", A->threshold[k],
+               A->adaptive[k].time, A->adaptive_err[k], 100 * A->converged[k], A->adaptive[k].samples);
+        fflush(stdout);
+    }
+    if (keep.rgb) save_image(cfg, "adaptive-image", &keep, A->image_adaptive, sizeof A->image_adaptive);
+    pt_image_free(&keep);
+    {
+        /* the uniform image at the series' last spp, seed 1 */
+        pt_render_desc d = L->rd;
+        pt_image img = {0, 0, NULL};
+        d.strategy = PT_STRATEGY_MIS;
+        d.seed = 1;
+        d.samples_per_pixel = u->med[u->levels - 1].spp;
+        if (pt_render_image(L->scene, &d, &img, NULL) == PT_OK)
+            save_image(cfg, "adaptive-uniform", &img, A->image_uniform, sizeof A->image_uniform);
+        pt_image_free(&img);
+    }
+    /* time to the uniform error: the adaptive points ordered by threshold (decreasing error) */
+    {
+        series tmp;
+        memset(&tmp, 0, sizeof tmp);
+        tmp.levels = n;
+        for (k = 0; k < n; ++k) {
+            tmp.med[k] = A->adaptive[k];
+            tmp.err[k] = A->adaptive_err[k];
+        }
+        A->adaptive_time = time_to_reach(&tmp, A->target_err, &A->ratio_extrap);
+        A->ratio = A->adaptive_time / A->uniform_time;
+    }
+    printf("  adaptive reaches the uniform error %.3e in %.3f s vs %.3f s: ratio %.2f%s\n", A->target_err,
+           A->adaptive_time, A->uniform_time, A->ratio, A->ratio_extrap ? " (extrapolated)" : "");
+    return 1;
+}
+
+/* One scene-feature skip: its bit, the scene where it applies and the strategy. */
+typedef struct skip_case {
+    const char *name;
+    unsigned bit;
+    const char *scene_file, *scene_name;
+    pt_strategy strategy;
+    const char *what;
+} skip_case;
+
+static const skip_case skip_cases[] = {
+    {"NO_EMITTERS", PT_SKIP_NO_EMITTERS, "bench/scenes/sky.scene", "sky", PT_STRATEGY_MIS,
+     "no light sampling in a scene without emitters"},
+    {"LIGHT_SELECTION", PT_SKIP_LIGHT_SELECTION, "scenes/cornell.scene", "cornell", PT_STRATEGY_MIS,
+     "no light-CDF search with one emitter"},
+    {"DELTA_VERTEX", PT_SKIP_DELTA_VERTEX, "bench/scenes/metal-glass.scene", "metal-glass", PT_STRATEGY_MIS,
+     "no light sample at mirror/glass vertices"},
+    {"FACING_AWAY", PT_SKIP_FACING_AWAY, "scenes/cornell.scene", "cornell (mixture 0.5)", PT_STRATEGY_MIXTURE,
+     "mixture drops the light of a one-sided emitter facing away"},
+    {"NO_TEXTURES", PT_SKIP_NO_TEXTURES, "scenes/cornell.scene", "cornell", PT_STRATEGY_MIS,
+     "albedo read directly, no texture lookup"},
+    {"NO_TRIANGLES", PT_SKIP_NO_TRIANGLES, "scenes/cornell.scene", "cornell", PT_STRATEGY_MIS,
+     "no watertight-triangle ray set-up"},
+    {"ZERO_BSDF_SHADOW", PT_SKIP_ZERO_BSDF_SHADOW, "bench/scenes/many-lights.scene", "many-lights", PT_STRATEGY_MIS,
+     "no shadow ray to a light below the surface"},
+};
+#define SKIP_CASE_COUNT ((int)(sizeof skip_cases / sizeof skip_cases[0]))
+
+/* For each skip: renders with every skip on and with that skip's general path forced, same
+   seed and spp, alternating (on, off, on, off, ...), and compares the median times. The spp is
+   calibrated so that one render takes about a target time. */
+static int run_skips(const config *cfg, results *R, skip_results *S)
+{
+    const double target = cfg->quick ? 0.08 : 0.4;
+    const int reps = cfg->quick ? 5 : 9;
+    int c;
+    (void)R;
+    memset(S, 0, sizeof *S);
+    S->available = 1;
+    printf("skips: %d cases, %d alternating repetitions of ~%.2f s each\n", SKIP_CASE_COUNT, reps, target);
+    for (c = 0; c < SKIP_CASE_COUNT && c < SKIP_MAX; ++c) {
+        const skip_case *sk = &skip_cases[c];
+        bench_scene bs;
+        loaded L;
+        pt_render_desc d;
+        pt_image on = {0, 0, NULL}, off = {0, 0, NULL};
+        double t_on[MAX_SEEDS * 2], t_off[MAX_SEEDS * 2], bias;
+        int spp = 1, r;
+        memset(&bs, 0, sizeof bs);
+        bs.name = sk->scene_name;
+        bs.file = sk->scene_file;
+        if (!load_scene(&bs, &L)) return 0;
+        d = L.rd;
+        d.strategy = sk->strategy;
+        d.light_weight = 0.5f;
+        d.seed = 1;
+        /* calibrate: double spp until one render takes at least target / 2 */
+        for (;;) {
+            double t0 = ptv_now();
+            d.samples_per_pixel = spp;
+            d.samples_per_pass = spp;
+            if (pt_render_image(L.scene, &d, &on, NULL) != PT_OK) {
+                fprintf(stderr, "bench: render failed: %s\n", pt_scene_error_message(L.scene));
+                free_scene(&L);
+                return 0;
+            }
+            if (ptv_now() - t0 >= target / 2 || spp >= 1 << 16) break;
+            spp *= 2;
+        }
+        for (r = 0; r < reps; ++r) {
+            int half;
+            for (half = 0; half < 2; ++half) {
+                /* alternate which of the two goes first */
+                int general = (r + half) % 2;
+                double t0;
+                d.disable_skips = general ? sk->bit : 0u;
+                t0 = ptv_now();
+                if (pt_render_image(L.scene, &d, general ? &off : &on, NULL) != PT_OK) {
+                    fprintf(stderr, "bench: render failed: %s\n", pt_scene_error_message(L.scene));
+                    free_scene(&L);
+                    return 0;
+                }
+                (general ? t_off : t_on)[r] = ptv_now() - t0;
+            }
+        }
+        S->r[S->n].name = sk->name;
+        S->r[S->n].bit = sk->bit;
+        S->r[S->n].scene = sk->scene_name;
+        S->r[S->n].what = sk->what;
+        S->r[S->n].reps = reps;
+        S->r[S->n].spp = spp;
+        S->r[S->n].t_on = median(t_on, reps);
+        S->r[S->n].t_off = median(t_off, reps);
+        S->r[S->n].ratio = S->r[S->n].t_on / S->r[S->n].t_off;
+        /* how far apart the two images are, in relMSE (0: bit-identical) */
+        measure(&on, &off, &S->r[S->n].relmse_between, &bias);
+        printf("  %-17s %-22s %5d spp: specialised %.4f s, general %.4f s, ratio %.3f, images differ by relMSE %.2e\n",
+               sk->name, sk->scene_name, spp, S->r[S->n].t_on, S->r[S->n].t_off, S->r[S->n].ratio,
+               S->r[S->n].relmse_between);
+        fflush(stdout);
+        S->n++;
+        pt_image_free(&on);
+        pt_image_free(&off);
+        free_scene(&L);
+    }
+    return 1;
+}
+#else
+/* Built against a header without adaptive sampling and skip switches, these parts SKIP. */
+static int run_adaptive(const config *cfg, results *R, adaptive_results *A)
+{
+    (void)cfg; (void)R;
+    memset(A, 0, sizeof *A);
+    snprintf(A->skip_reason, sizeof A->skip_reason, "this pdftrace.h has no adaptive sampling (pt_render_desc.adaptive_threshold)");
+    printf("SKIP adaptive: %s\n", A->skip_reason);
+    return 1;
+}
+static int run_skips(const config *cfg, results *R, skip_results *S)
+{
+    (void)cfg; (void)R;
+    memset(S, 0, sizeof *S);
+    snprintf(S->skip_reason, sizeof S->skip_reason, "this pdftrace.h has no skip switches (pt_render_desc.disable_skips)");
+    printf("SKIP skips: %s\n", S->skip_reason);
+    return 1;
+}
+#endif
+
+static int write_adaptive_csv(const config *cfg, const adaptive_results *A)
+{
+    FILE *f;
+    int k;
+    if (!A->available) return 1;
+    f = open_out(cfg, "adaptive.csv");
+    if (!f) return 0;
+    fprintf(f, "mode,threshold,spp_max,time_s,relmse,bias,samples,converged_fraction\n");
+    for (k = 0; k < A->n_uniform; ++k)
+        fprintf(f, "uniform,0,%d,%.6g,%.6g,%.6g,%.0f,0\n", A->uniform[k].spp, A->uniform[k].time, A->uniform_err[k],
+                A->uniform[k].bias, A->uniform[k].samples);
+    for (k = 0; k < A->n_adaptive; ++k)
+        fprintf(f, "adaptive,%.4g,%d,%.6g,%.6g,%.6g,%.0f,%.4f\n", A->threshold[k], A->adaptive[k].spp, A->adaptive[k].time,
+                A->adaptive_err[k], A->adaptive[k].bias, A->adaptive[k].samples, A->converged[k]);
+    return close_out(f, "adaptive.csv");
+}
+
+static int write_skips_csv(const config *cfg, const skip_results *S)
+{
+    FILE *f;
+    int k;
+    if (!S->available) return 1;
+    f = open_out(cfg, "skips.csv");
+    if (!f) return 0;
+    fprintf(f, "skip,bit,scene,spp,reps,time_specialised_s,time_general_s,ratio,relmse_between_images\n");
+    for (k = 0; k < S->n; ++k)
+        fprintf(f, "%s,%u,%s,%d,%d,%.6g,%.6g,%.4f,%.6g\n", S->r[k].name, S->r[k].bit, S->r[k].scene, S->r[k].spp,
+                S->r[k].reps, S->r[k].t_on, S->r[k].t_off, S->r[k].ratio, S->r[k].relmse_between);
+    return close_out(f, "skips.csv");
+}
+
+/* ---- plots (gnuplot) ------------------------------------------------------------------- */
+
+static const char *const strategy_style[STRATEGY_COUNT] = {
+    "lc rgb '#d62728' pt 5", "lc rgb '#1f77b4' pt 7", "lc rgb '#ff7f0e' pt 9 dt 2", "lc rgb '#9467bd' pt 11 dt 2",
+    "lc rgb '#8c564b' pt 13 dt 2", "lc rgb '#2ca02c' pt 4 lw 2"};
+
+/* SCENE.dat: one block per strategy (time, relMSE - floor), then the POV-Ray points. */
+static int write_plot_data(const config *cfg, const results *R, const pov_results *P, int i)
+{
+    char name[256];
+    FILE *f;
+    int j, k, l;
+    snprintf(name, sizeof name, "%s.dat", scenes[i].name);
+    f = open_out(cfg, name);
+    if (!f) return 0;
+    for (j = 0; j < STRATEGY_COUNT; ++j) {
+        const series *s = &R->s[i][j];
+        fprintf(f, "# %s: time_s relmse spp\n", strategies[j].name);
+        for (k = 0; k < s->levels; ++k)
+            if (s->err[k] > 0) fprintf(f, "%.6g %.6g %d\n", s->med[k].time, s->err[k], s->med[k].spp);
+        fprintf(f, "\n\n");
+    }
+    fprintf(f, "# POV-Ray: time_s relmse level\n");
+    for (l = 0; l < POV_LEVEL_COUNT; ++l)
+        if (P->available && P->r[i][l].ran && P->r[i][l].err > 0)
+            fprintf(f, "%.6g %.6g %d\n", P->r[i][l].time, P->r[i][l].err, l);
+    fprintf(f, "\n\n");
+    return close_out(f, name);
+}
+
+static void plot_commands(FILE *g, const results *R, const pov_results *P, int i, int small)
+{
+    int j, l, any_pov = 0;
+    for (l = 0; l < POV_LEVEL_COUNT; ++l)
+        if (P->available && P->r[i][l].ran && P->r[i][l].err > 0) any_pov = 1;
+    fprintf(g, "set title '%s (%dx%d, median of seeds)'\n", scenes[i].name, BENCH_SIZE, BENCH_SIZE);
+    fprintf(g, "set logscale xy\nset format x '10^{%%L}'\nset format y '10^{%%L}'\n");
+    fprintf(g, "set xlabel 'render time (s)'\nset ylabel 'relMSE'\nset grid\n");
+    fprintf(g, "set key %s\n", small ? "bottom left font ',8' spacing 0.8" : "outside right");
+    fprintf(g, "plot ");
+    for (j = 0; j < STRATEGY_COUNT; ++j)
+        fprintf(g, "%s'%s.dat' index %d using 1:2 with linespoints %s title '%s'", j ? ", \\\n     " : "", scenes[i].name,
+                j, strategy_style[j], strategies[j].name);
+    if (any_pov)
+        fprintf(g, ", \\\n     '%s.dat' index %d using 1:2:(sprintf('q%%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' "
+                   "offset 0.8,0.6 font ',8' title 'POV-Ray'", scenes[i].name, STRATEGY_COUNT);
+    fprintf(g, "\n");
+    (void)R;
+}
+
+static int make_plots(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
+                      char *status, size_t status_size)
+{
+    FILE *g;
+    int i, n = 0;
+    char cmd[4096];
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (R->done[i] && !write_plot_data(cfg, R, P, i)) return 0;
+    if (A->available) {
+        FILE *f = open_out(cfg, "adaptive.dat");
+        int k;
+        if (!f) return 0;
+        fprintf(f, "# uniform MIS: time_s relmse\n");
+        for (k = 0; k < A->n_uniform; ++k)
+            if (A->uniform_err[k] > 0) fprintf(f, "%.6g %.6g\n", A->uniform[k].time, A->uniform_err[k]);
+        fprintf(f, "\n\n# adaptive MIS: time_s relmse threshold\n");
+        for (k = 0; k < A->n_adaptive; ++k)
+            if (A->adaptive_err[k] > 0) fprintf(f, "%.6g %.6g %.3g\n", A->adaptive[k].time, A->adaptive_err[k], A->threshold[k]);
+        fprintf(f, "\n\n");
+        if (!close_out(f, "adaptive.dat")) return 0;
+    }
+    g = open_out(cfg, "plots.gp");
+    if (!g) return 0;
+    fprintf(g, "# gnuplot script written by bench/bench.c; run in %s: gnuplot plots.gp\n", cfg->out);
+    fprintf(g, "set terminal pngcairo size 900,560 font 'sans,11'\n");
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        if (!R->done[i]) continue;
+        fprintf(g, "set output '%s.png'\n", scenes[i].name);
+        plot_commands(g, R, P, i, 0);
+        fprintf(g, "reset\n");
+    }
+    if (A->available) {
+        fprintf(g, "set output 'adaptive.png'\nset title 'cornell: adaptive vs uniform sampling (MIS)'\n"
+                   "set logscale xy\nset format x '10^{%%L}'\nset format y '10^{%%L}'\nset grid\n"
+                   "set xlabel 'render time (s)'\nset ylabel 'relMSE'\n"
+                   "plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \\\n"
+                   "     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive'\nreset\n");
+    }
+    /* The headline: every scene on one page. */
+    fprintf(g, "set terminal pngcairo size 1500,900 font 'sans,10'\nset output 'headline.png'\n"
+               "set multiplot layout 2,3 title 'pdftrace: relMSE against render time, %dx%d, 2 cores (make bench)'\n",
+            BENCH_SIZE, BENCH_SIZE);
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        if (!R->done[i]) continue;
+        plot_commands(g, R, P, i, 1);
+        ++n;
+    }
+    if (A->available && n < 6)
+        fprintf(g, "set title 'cornell: adaptive vs uniform (MIS)'\n"
+                   "plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \\\n"
+                   "     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive'\n");
+    fprintf(g, "unset multiplot\n");
+    if (!close_out(g, "plots.gp")) return 0;
+    if (!have_program("gnuplot")) {
+        snprintf(status, status_size, "SKIP plots: gnuplot is not installed (apt-get install gnuplot-nox); the data and "
+                                      "%s/plots.gp are written", cfg->out);
+        printf("%s\n", status);
+        return 1;
+    }
+    snprintf(cmd, sizeof cmd, "cd '%s' && gnuplot plots.gp 2>gnuplot.log", cfg->out);
+    if (system(cmd) != 0) {
+        snprintf(status, status_size, "gnuplot failed: see %s/gnuplot.log", cfg->out);
+        fprintf(stderr, "bench: %s\n", status);
+        return 0;
+    }
+    snprintf(status, status_size, "plots written by gnuplot");
+    return 1;
+}
+
+/* ---- summary.md ------------------------------------------------------------------------ */
+
+/* MIS against the best single strategy (material or light; `all` = also the mixtures): the time
+   MIS needs to reach that strategy's final error, over that strategy's time. */
+typedef struct mis_ratio {
+    int best;                  /* strategy index */
+    double target, t_best, t_mis, ratio;
+    int extrap;
+} mis_ratio;
+
+static mis_ratio mis_vs_best(const results *R, int i, int all)
+{
+    mis_ratio m;
+    int j;
+    double best_eff = -1;
+    memset(&m, 0, sizeof m);
+    m.best = -1;
+    for (j = 0; j < STRATEGY_COUNT; ++j) {
+        double e;
+        if (j == S_MIS || (!all && j != S_MATERIAL && j != S_LIGHT)) continue;
+        e = efficiency(&R->s[i][j]);
+        if (e > best_eff) {
+            best_eff = e;
+            m.best = j;
+        }
+    }
+    if (m.best < 0) {
+        m.ratio = NAN;
+        return m;
+    }
+    {
+        const series *b = &R->s[i][m.best];
+        m.target = b->err[b->levels - 1];
+        m.t_best = b->med[b->levels - 1].time;
+        m.t_mis = time_to_reach(&R->s[i][S_MIS], m.target, &m.extrap);
+        m.ratio = m.t_mis / m.t_best;
+    }
+    return m;
+}
+
+static const char *pass_fail(int ok) { return ok ? "**PASS**" : "**FAIL**"; }
+
+static void fmt_g(char *buf, size_t n, double v)
+{
+    if (v != v) snprintf(buf, n, "-");
+    else snprintf(buf, n, "%.3g", v);
+}
+
+static int write_summary(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
+                         const skip_results *S, const char *plot_status, double total_seconds)
+{
+    FILE *f = open_out(cfg, "summary.md"), *h;
+    int i, j, l, k, in_range = 0, n_series = 0;
+    time_t now = time(NULL);
+    char date[64], b1[64];
+    struct utsname un;
+    if (!f) return 0;
+    strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&now));
+    if (uname(&un) != 0) strcpy(un.machine, "?");
+    fprintf(f, "# pdftrace benchmark: error against time\n\n");
+    fprintf(f, "Written by `build/bench run%s` (bench/bench.c) on %s, %s %s, %ld cores online; %s mode, %.2f s of render "
+               "time per series, median of %d seeds, %dx%d images, whole run %.0f s. Remake: `make bench` (full) or "
+               "`make bench-quick`.\n\n",
+            cfg->quick ? " --quick" : "", date, un.sysname, un.machine, sysconf(_SC_NPROCESSORS_ONLN),
+            cfg->quick ? "quick" : "full", cfg->budget, cfg->seeds, BENCH_SIZE, BENCH_SIZE, total_seconds);
+    fprintf(f, "**Metric.** relMSE = mean over pixels and channels of (x − r)² / (r² + 0.01), x the render, r the "
+               "stored reference (bench/ref, MIS at many samples), **minus the reference's own noise floor** "
+               "(mean var(r)/(r² + 0.01), in bench/ref/NAME.txt); a series stops when the raw relMSE comes within "
+               "%.0f× that floor. Bias = Σx/Σr − 1 over all pixels and channels. Time = wall-clock render time "
+               "(cumulative over the progressive steps 1, 2, 4, … spp; scene build excluded), 2 threads. "
+               "Efficiency = 1/(relMSE · time) at a series' last point. Every figure is the median over seeds.\n\n",
+            FLOOR_STOP);
+
+    /* acceptance */
+    fprintf(f, "## Acceptance\n\n| line | figure (this run) | result |\n|---|---|---|\n");
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        mis_ratio m;
+        if (!R->done[i] || strncmp(scenes[i].name, "tiny-light", 10) != 0) continue;
+        m = mis_vs_best(R, i, 0);
+        if (m.best < 0) continue;
+        fprintf(f, "| %s: MIS reaches the best single strategy's final error in at most half its time | best single = %s "
+                   "(relMSE %.3g in %.3g s); MIS reaches it in %.3g s%s: **ratio %.2f** | %s |\n",
+                scenes[i].name, strategies[m.best].name, m.target, m.t_best, m.t_mis,
+                m.extrap > 0 ? " (extrapolated)" : m.extrap < 0 ? " (at its first point already)" : "", m.ratio,
+                !strcmp(scenes[i].name, "tiny-light") ? pass_fail(m.ratio <= 0.5) : "control (not an acceptance line)");
+    }
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (R->done[i])
+            for (j = 0; j < STRATEGY_COUNT; ++j) {
+                const series *s = &R->s[i][j];
+                if (s->slope == s->slope) {
+                    ++n_series;
+                    if (fabs(s->slope + 1.0) <= 0.1) ++in_range;
+                }
+            }
+    if (R->done[0])
+        fprintf(f, "| slope of log relMSE vs log time, independent sampling: −1 ± 0.1 | cornell MIS %.3f; %d of %d "
+                   "series (all scenes × strategies) within ±0.1 (table below) | %s |\n",
+                R->s[0][S_MIS].slope, in_range, n_series, pass_fail(in_range == n_series && n_series > 0));
+    if (A->available)
+        fprintf(f, "| adaptive reaches the uniform render's error in ≤ 0.7× the time (cornell) | uniform MIS: relMSE %.3g "
+                   "in %.3g s; adaptive reaches it in %.3g s%s: **ratio %.2f** | %s (seams: see the images) |\n",
+                A->target_err, A->uniform_time, A->adaptive_time, A->ratio_extrap ? " (extrapolated)" : "", A->ratio,
+                pass_fail(A->ratio <= 0.7));
+    else
+        fprintf(f, "| adaptive sampling | SKIP: %s | - |\n", A->skip_reason);
+    if (S->available) {
+        int all = 1;
+        fprintf(f, "| each scene-feature skip pays (time ratio < 1) | ");
+        for (k = 0; k < S->n; ++k) {
+            fprintf(f, "%s%s %.3f", k ? "; " : "", S->r[k].name, S->r[k].ratio);
+            if (!(S->r[k].ratio < 1.0)) all = 0;
+        }
+        fprintf(f, " | %s |\n", pass_fail(all));
+    } else
+        fprintf(f, "| scene-feature skips | SKIP: %s | - |\n", S->skip_reason);
+    if (P->available) {
+        int all = 1, any = 0;
+        fprintf(f, "| pdftrace (MIS) below POV-Ray's error at equal time on every scene where POV-Ray is numeric | ");
+        for (i = 0; i < SCENE_COUNT; ++i) {
+            double worst = 0;
+            int n = 0;
+            if (!R->done[i] || !scenes[i].pov_numeric) continue;
+            for (l = 0; l < POV_LEVEL_COUNT; ++l)
+                if (P->r[i][l].ran) {
+                    double q = P->r[i][l].pt_err / P->r[i][l].err;
+                    if (!(P->r[i][l].err > 0)) q = INFINITY;
+                    if (q > worst || q != q) worst = q;
+                    ++n;
+                }
+            if (!n) continue;
+            fprintf(f, "%s%s: worst pdftrace/POV-Ray error ratio %.3g over %d levels", any ? "; " : "", scenes[i].name, worst, n);
+            any = 1;
+            if (!(worst < 1)) all = 0;
+        }
+        fprintf(f, " | %s |\n", any ? pass_fail(all) : "-");
+    } else
+        fprintf(f, "| POV-Ray | SKIP: %s | - |\n", P->skip_reason);
+    fprintf(f, "\n![relMSE against time](headline.png)\n\n");
+
+    /* efficiency table */
+    fprintf(f, "## Efficiency 1/(relMSE · time) at the last point (higher is better; best per scene in bold)\n\n| scene |");
+    for (j = 0; j < STRATEGY_COUNT; ++j) fprintf(f, " %s |", strategies[j].name);
+    fprintf(f, " MIS time ratio* |\n|---|");
+    for (j = 0; j <= STRATEGY_COUNT; ++j) fprintf(f, "---|");
+    fprintf(f, "\n");
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        double best = -1;
+        mis_ratio m;
+        if (!R->done[i]) continue;
+        for (j = 0; j < STRATEGY_COUNT; ++j)
+            if (efficiency(&R->s[i][j]) > best) best = efficiency(&R->s[i][j]);
+        fprintf(f, "| %s |", scenes[i].name);
+        for (j = 0; j < STRATEGY_COUNT; ++j) {
+            double e = efficiency(&R->s[i][j]);
+            fmt_g(b1, sizeof b1, e);
+            fprintf(f, e == best ? " **%s** |" : " %s |", b1);
+        }
+        m = mis_vs_best(R, i, 0);
+        fprintf(f, " %.2f (vs %s) |\n", m.ratio, m.best >= 0 ? strategies[m.best].name : "-");
+    }
+    fprintf(f, "\n\\* time MIS needs to reach the final error of the best single strategy (material or light, by "
+               "efficiency), divided by that strategy's time.\n\n");
+    /* the same table for the README */
+    h = open_out(cfg, "headline.md");
+    if (h) {
+        fprintf(h, "| scene | material | light | mixture 0.5 | MIS | MIS time to the best single strategy's error |\n"
+                   "|---|---|---|---|---|---|\n");
+        for (i = 0; i < SCENE_COUNT; ++i) {
+            mis_ratio m;
+            if (!R->done[i]) continue;
+            m = mis_vs_best(R, i, 0);
+            fprintf(h, "| %s | %.3g | %.3g | %.3g | %.3g | %.2f× (vs %s) |\n", scenes[i].name, efficiency(&R->s[i][0]),
+                    efficiency(&R->s[i][1]), efficiency(&R->s[i][3]), efficiency(&R->s[i][S_MIS]), m.ratio,
+                    m.best >= 0 ? strategies[m.best].name : "-");
+        }
+        close_out(h, "headline.md");
+    }
+
+    /* per scene */
+    fprintf(f, "## Scenes\n\n");
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        mis_ratio m, ma;
+        if (!R->done[i]) continue;
+        fprintf(f, "### %s\n\n%s (`%s`). Reference: %d spp MIS, noise floor %.3g. POV-Ray: %s.\n\n![%s](%s.png)\n\n",
+                scenes[i].name, scenes[i].about, scenes[i].file, R->L[i].ref_spp, R->L[i].floor, scenes[i].pov_about,
+                scenes[i].name, scenes[i].name);
+        fprintf(f, "| strategy | last spp | time (s) | relMSE | bias | samples/s | rays/s | slope [95 %%] | efficiency |\n"
+                   "|---|---|---|---|---|---|---|---|---|\n");
+        for (j = 0; j < STRATEGY_COUNT; ++j) {
+            const series *s = &R->s[i][j];
+            const point *p = &s->med[s->levels - 1];
+            fprintf(f, "| %s | %d | %.3g | %.3g | %+.2f%% | %.3g M | %.3g M | %.3f [%.3f, %.3f] | %.3g |\n",
+                    strategies[j].name, p->spp, p->time, s->err[s->levels - 1], 100 * p->bias, p->samples / p->time / 1e6,
+                    p->rays / p->time / 1e6, s->slope, s->slope_lo, s->slope_hi, efficiency(s));
+        }
+        m = mis_vs_best(R, i, 0);
+        ma = mis_vs_best(R, i, 1);
+        fprintf(f, "\nMIS reaches the final error of %s (the best single strategy) in %.2f× its time%s; of %s (the best "
+                   "non-MIS strategy, mixtures included) in %.2f× its time%s.",
+                m.best >= 0 ? strategies[m.best].name : "-", m.ratio, m.extrap > 0 ? " (extrapolated)" : "",
+                ma.best >= 0 ? strategies[ma.best].name : "-", ma.ratio, ma.extrap > 0 ? " (extrapolated)" : "");
+        for (j = 0; j < STRATEGY_COUNT; ++j)
+            if (R->s[i][j].stopped_by_floor) fprintf(f, " %s stopped at the reference's noise floor.", strategies[j].name);
+        for (j = 0; j < STRATEGY_COUNT; ++j)
+            if (R->s[i][j].nonfinite) fprintf(f, " %s: %llu NaN/Inf samples caught.", strategies[j].name,
+                                              (unsigned long long)R->s[i][j].nonfinite);
+        fprintf(f, "\n\n");
+        if (P->available) {
+            int any = 0;
+            for (l = 0; l < POV_LEVEL_COUNT; ++l) any |= P->r[i][l].ran;
+            if (any) {
+                fprintf(f, "| POV-Ray quality | time (s) | relMSE | bias | pdftrace MIS relMSE at that time (seed 1) | ratio |\n"
+                           "|---|---|---|---|---|---|\n");
+                for (l = 0; l < POV_LEVEL_COUNT; ++l) {
+                    const pov_result *pr = &P->r[i][l];
+                    if (!pr->ran) continue;
+                    fprintf(f, "| q%d: %s | %.3g | %.3g | %+.2f%% | %.3g%s | %.3g |\n", l, pov_levels[l].name, pr->time,
+                            pr->err, 100 * pr->bias, pr->pt_err, pr->pt_extrap ? " (extrapolated)" : "", pr->pt_err / pr->err);
+                }
+                fprintf(f, "\n");
+            }
+        }
+    }
+
+    /* adaptive */
+    fprintf(f, "## Adaptive sampling (cornell, MIS)\n\n");
+    if (!A->available)
+        fprintf(f, "SKIP: %s\n\n", A->skip_reason);
+    else {
+        fprintf(f, "![adaptive](adaptive.png)\n\n| mode | threshold | spp (max) | time (s) | relMSE | bias | pixels stopped early |\n"
+                   "|---|---|---|---|---|---|---|\n");
+        for (k = 0; k < A->n_uniform; ++k)
+            fprintf(f, "| uniform | - | %d | %.3g | %.3g | %+.2f%% | - |\n", A->uniform[k].spp, A->uniform[k].time,
+                    A->uniform_err[k], 100 * A->uniform[k].bias);
+        for (k = 0; k < A->n_adaptive; ++k)
+            fprintf(f, "| adaptive | %.3g | %d | %.3g | %.3g | %+.2f%% | %.1f%% |\n", A->threshold[k], A->adaptive[k].spp,
+                    A->adaptive[k].time, A->adaptive_err[k], 100 * A->adaptive[k].bias, 100 * A->converged[k]);
+        fprintf(f, "\nUniform reaches relMSE %.3g in %.3g s; adaptive in %.3g s: ratio %.2f%s. Images for the seam check: "
+                   "`%s`, `%s`, samples per pixel `%s`.\n\n",
+                A->target_err, A->uniform_time, A->adaptive_time, A->ratio, A->ratio_extrap ? " (extrapolated)" : "",
+                A->image_uniform, A->image_adaptive, A->image_map);
+    }
+
+    /* skips */
+    fprintf(f, "## Scene-feature skips\n\n");
+    if (!S->available)
+        fprintf(f, "SKIP: %s\n\n", S->skip_reason);
+    else {
+        fprintf(f, "Time of a render with every skip on (specialised) against the same render with one skip's general "
+                   "path forced (pt_render_desc.disable_skips), same scene, seed and spp, alternating, median of the "
+                   "repetitions; ratio < 1: the skip pays. The last column compares the two images (relMSE of one "
+                   "against the other: 0 = bit-identical, as the exact skips must be).\n\n"
+                   "| skip | scene | what it skips | spp | reps | specialised (s) | general (s) | ratio | images differ by |\n"
+                   "|---|---|---|---|---|---|---|---|---|\n");
+        for (k = 0; k < S->n; ++k)
+            fprintf(f, "| %s | %s | %s | %d | %d | %.4g | %.4g | **%.3f** | %.2g |\n", S->r[k].name, S->r[k].scene,
+                    S->r[k].what, S->r[k].spp, S->r[k].reps, S->r[k].t_on, S->r[k].t_off, S->r[k].ratio,
+                    S->r[k].relmse_between);
+        fprintf(f, "\n");
+    }
+    fprintf(f, "## Files\n\nseries.csv (medians per spp), series-seeds.csv (every seed), fits.csv (slopes, efficiency), "
+               "pov.csv, adaptive.csv, skips.csv; SCENE.png and headline.png (%s), from plots.gp and the .dat files.\n",
+            plot_status);
+    return close_out(f, "summary.md");
+}
+
+/* ---- main ------------------------------------------------------------------------------ */
+
+static int usage(void)
+{
+    fprintf(stderr,
+            "usage: bench run [--quick] [--out DIR] [--budget SECONDS] [--seeds N] [--parts LIST] [--scenes LIST]\n"
+            "       bench refs [--spp N] [NAME...]   (--spp: override the table, for experiments)\n"
+            "       bench list\n"
+            "  --parts: comma-separated series,adaptive,skips,pov (default all; pov needs series)\n"
+            "  --scenes: comma-separated scene names (default all; see bench list)\n"
+            "Run from the repository root (make bench / make bench-quick / make bench-refs).\n");
+    return 2;
+}
+
+static int find_scene(const char *name)
+{
+    int i;
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (!strcmp(scenes[i].name, name)) return i;
+    return -1;
+}
+
+/* Parses a comma-separated list; calls fn for each item; returns 0 on an unknown item. */
+static int parse_list(const char *list, int (*fn)(config *, const char *), config *cfg)
+{
+    char buf[512], *tok, *save = NULL;
+    if (strlen(list) >= sizeof buf) return 0;
+    strcpy(buf, list);
+    for (tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save))
+        if (!fn(cfg, tok)) return 0;
+    return 1;
+}
+static int add_part(config *cfg, const char *p)
+{
+    if (!strcmp(p, "series")) cfg->parts |= PART_SERIES;
+    else if (!strcmp(p, "adaptive")) cfg->parts |= PART_ADAPTIVE;
+    else if (!strcmp(p, "skips")) cfg->parts |= PART_SKIPS;
+    else if (!strcmp(p, "pov")) cfg->parts |= PART_POV;
+    else {
+        fprintf(stderr, "bench: unknown part '%s' (series, adaptive, skips, pov)\n", p);
+        return 0;
+    }
+    return 1;
+}
+static int add_scene(config *cfg, const char *name)
+{
+    int i = find_scene(name);
+    if (i < 0) {
+        fprintf(stderr, "bench: unknown scene '%s' (bench list)\n", name);
+        return 0;
+    }
+    cfg->scene_on[i] = 1;
+    return 1;
+}
+
+static int parse_positive(const char *opt, const char *v, double lo, double hi, double *out)
+{
+    char *end;
+    double x;
+    errno = 0;
+    x = strtod(v, &end);
+    if (errno || end == v || *end || !(x >= lo && x <= hi)) {
+        fprintf(stderr, "bench: %s needs a number in [%g, %g], got '%s'\n", opt, lo, hi, v);
+        return 0;
+    }
+    *out = x;
+    return 1;
+}
+
+static int cmd_run(int argc, char **argv)
+{
+    config cfg;
+    static results R;
+    static pov_results P;
+    static adaptive_results A;
+    static skip_results S;
+    char plot_status[512] = "not made";
+    int i, any_scene = 0, ok = 1, budget_set = 0;
+    double t0 = ptv_now(), v;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.out = "bench/out";
+    cfg.ref_dir = "bench/ref";
+    cfg.seeds = 5;
+    for (i = 2; i < argc; ++i) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--quick")) cfg.quick = 1;
+        else if (!strcmp(a, "--out") && i + 1 < argc) cfg.out = argv[++i];
+        else if (!strcmp(a, "--budget") && i + 1 < argc) {
+            if (!parse_positive(a, argv[++i], 0.001, 3600, &cfg.budget)) return 2;
+            budget_set = 1;
+        } else if (!strcmp(a, "--seeds") && i + 1 < argc) {
+            if (!parse_positive(a, argv[++i], 5, MAX_SEEDS, &v)) return 2;
+            cfg.seeds = (int)v;
+        } else if (!strcmp(a, "--parts") && i + 1 < argc) {
+            if (!parse_list(argv[++i], add_part, &cfg)) return 2;
+        } else if (!strcmp(a, "--scenes") && i + 1 < argc) {
+            if (!parse_list(argv[++i], add_scene, &cfg)) return 2;
+        } else {
+            fprintf(stderr, "bench: unknown or incomplete option '%s'\n", a);
+            return usage();
+        }
+    }
+    if (!budget_set) cfg.budget = cfg.quick ? 0.12 : 2.5;
+    if (!cfg.parts) cfg.parts = PART_ALL;
+    for (i = 0; i < SCENE_COUNT; ++i) any_scene |= cfg.scene_on[i];
+    if (!any_scene)
+        for (i = 0; i < SCENE_COUNT; ++i) cfg.scene_on[i] = 1;
+    if ((cfg.parts & PART_POV) && !(cfg.parts & PART_SERIES)) {
+        fprintf(stderr, "bench: --parts pov needs series (POV-Ray is compared with the MIS series at equal time)\n");
+        return 2;
+    }
+    if (!mkdirs(cfg.out)) return 1;
+    printf("bench: %s mode, %.2f s per series, %d seeds, %dx%d, output in %s\n", cfg.quick ? "quick" : "full", cfg.budget,
+           cfg.seeds, BENCH_SIZE, BENCH_SIZE, cfg.out);
+    /* Check every input before measuring anything. */
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        if (!cfg.scene_on[i]) continue;
+        if (!load_scene(&scenes[i], &R.L[i]) || !load_reference(&cfg, &scenes[i], &R.L[i])) {
+            int k;
+            for (k = 0; k <= i; ++k) free_scene(&R.L[k]);
+            return 1;
+        }
+        R.done[i] = 1;
+    }
+    if (cfg.parts & PART_SERIES) {
+        printf("series: %d scenes x %d strategies x %d seeds\n", SCENE_COUNT, STRATEGY_COUNT, cfg.seeds);
+        ok = run_all_series(&cfg, &R) && write_series_csv(&cfg, &R);
+    } else
+        for (i = 0; i < SCENE_COUNT; ++i) R.done[i] = 0; /* nothing to report per scene */
+    if (ok && (cfg.parts & PART_ADAPTIVE)) ok = run_adaptive(&cfg, &R, &A) && write_adaptive_csv(&cfg, &A);
+    if (ok && (cfg.parts & PART_SKIPS)) ok = run_skips(&cfg, &R, &S) && write_skips_csv(&cfg, &S);
+    if (ok && (cfg.parts & PART_POV)) ok = run_pov(&cfg, &R, &P) && write_pov_csv(&cfg, &R, &P);
+    if (!(cfg.parts & PART_ADAPTIVE)) snprintf(A.skip_reason, sizeof A.skip_reason, "not run (--parts)");
+    if (!(cfg.parts & PART_SKIPS)) snprintf(S.skip_reason, sizeof S.skip_reason, "not run (--parts)");
+    if (!(cfg.parts & PART_POV)) snprintf(P.skip_reason, sizeof P.skip_reason, "not run (--parts)");
+    if (ok && (cfg.parts & PART_SERIES)) ok = make_plots(&cfg, &R, &P, &A, plot_status, sizeof plot_status);
+    if (ok) ok = write_summary(&cfg, &R, &P, &A, &S, plot_status, ptv_now() - t0);
+    for (i = 0; i < SCENE_COUNT; ++i) free_scene(&R.L[i]);
+    if (!ok) {
+        fprintf(stderr, "bench: failed\n");
+        return 1;
+    }
+    printf("bench: wrote %s/summary.md (%.0f s)\n", cfg.out, ptv_now() - t0);
+    return 0;
+}
+
+static int cmd_refs(int argc, char **argv)
+{
+    config cfg;
+    int i, k, ok = 1, first = 2, spp = 0, names = 0;
+    double v;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.ref_dir = "bench/ref";
+    if (argc >= 4 && !strcmp(argv[2], "--spp")) {
+        if (!parse_positive("--spp", argv[3], 1, 1 << 24, &v)) return 2;
+        spp = (int)v;
+        first = 4;
+    }
+    for (k = first; k < argc; ++k) {
+        if (find_scene(argv[k]) < 0) {
+            fprintf(stderr, "bench: unknown scene '%s' (bench list)\n", argv[k]);
+            return 2;
+        }
+        ++names;
+    }
+    if (!mkdirs(cfg.ref_dir)) return 1;
+    for (i = 0; i < SCENE_COUNT && ok; ++i) {
+        int want = names == 0;
+        for (k = first; k < argc; ++k) want |= !strcmp(argv[k], scenes[i].name);
+        if (want) ok = make_reference(&cfg, &scenes[i], spp);
+    }
+    return ok ? 0 : 1;
+}
+
+static int cmd_list(void)
+{
+    int i;
+    for (i = 0; i < SCENE_COUNT; ++i)
+        printf("%-16s %-36s ref %5d spp  POV-Ray %s\n    %s\n", scenes[i].name, scenes[i].file, scenes[i].ref_spp,
+               scenes[i].pov_numeric ? "numeric" : "not numeric", scenes[i].about);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc >= 2 && !strcmp(argv[1], "run")) return cmd_run(argc, argv);
+    if (argc >= 2 && !strcmp(argv[1], "refs")) return cmd_refs(argc, argv);
+    if (argc == 2 && !strcmp(argv[1], "list")) return cmd_list();
+    return usage();
+}

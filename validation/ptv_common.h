@@ -1,0 +1,215 @@
+/* ptv_common.h - what validation/ptv.c and bench/bench.c share: PFM and EXR readers, PNG
+   writers, rendering a scene description into per-pixel means and variances of the mean, and
+   running POV-Ray 3.7 on an exported scene. Static functions, included once by each program
+   after pdftrace.h (with PDFTRACE_SCENE_FILES). The programs are built with -DPTV_HAVE_EXR
+   (OpenEXR Core C API: reading POV-Ray's +FE output) and -DPTV_HAVE_PNG (libpng) when those
+   libraries are present. */
+#ifndef PTV_COMMON_H
+#define PTV_COMMON_H
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+/* The name that starts error messages. */
+#ifndef PTV_PROG
+#define PTV_PROG "ptv"
+#endif
+
+#ifdef PTV_HAVE_EXR
+#include <openexr.h>
+#endif
+/* A program need not use every helper (without OpenEXR nothing compares images). */
+#if defined(__GNUC__) || defined(__clang__)
+#define PTV_MAYBE_UNUSED __attribute__((unused))
+#else
+#define PTV_MAYBE_UNUSED
+#endif
+#ifdef PTV_HAVE_PNG
+#include <png.h>
+#endif
+
+/* ---- images ------------------------------------------------------------------------- */
+
+/* PFM (Portable Float Map): "PF\n<w> <h>\n<scale>\n", scale < 0 little-endian, rows bottom first. */
+PTV_MAYBE_UNUSED static int read_pfm(const char *path, pt_image *img)
+{
+    FILE *f = fopen(path, "rb");
+    char magic[3] = {0};
+    int w, h, y;
+    double scale;
+    if (!f) { fprintf(stderr, PTV_PROG ": cannot open %s: %s\n", path, strerror(errno)); return 0; }
+    if (fscanf(f, "%2s %d %d %lf", magic, &w, &h, &scale) != 4 || strcmp(magic, "PF") || w <= 0 || h <= 0 ||
+        w > 16384 || h > 16384 || !(scale < 0) || fgetc(f) == EOF || pt_image_init(img, w, h) != PT_OK) {
+        fprintf(stderr, PTV_PROG ": %s: not a little-endian colour PFM\n", path);
+        fclose(f);
+        return 0;
+    }
+    for (y = h - 1; y >= 0; --y) {
+        int x, c;
+        for (x = 0; x < w; ++x)
+            for (c = 0; c < 3; ++c) {
+                unsigned char b[4];
+                uint32_t u;
+                float v;
+                if (fread(b, 1, 4, f) != 4) { fprintf(stderr, PTV_PROG ": %s: truncated\n", path); fclose(f); pt_image_free(img); return 0; }
+                u = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+                memcpy(&v, &u, 4);
+                img->rgb[3 * ((size_t)y * (size_t)w + (size_t)x) + (size_t)c] = v;
+            }
+    }
+    fclose(f);
+    return 1;
+}
+
+#ifdef PTV_HAVE_EXR
+/* Scanline EXR (what POV-Ray's +FE writes), channels R, G, B decoded to float. */
+PTV_MAYBE_UNUSED static int read_exr(const char *path, pt_image *img)
+{
+    exr_context_t ctx = NULL;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    exr_attr_box2i_t dw;
+    exr_storage_t storage;
+    int32_t spc = 0;
+    int w, h, y, ok = 0;
+    exr_result_t rv = exr_start_read(&ctx, path, &init);
+    if (rv != EXR_ERR_SUCCESS) { fprintf(stderr, PTV_PROG ": %s: %s\n", path, exr_get_error_code_as_string(rv)); return 0; }
+    if (exr_get_storage(ctx, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
+        exr_get_data_window(ctx, 0, &dw) != EXR_ERR_SUCCESS || exr_get_scanlines_per_chunk(ctx, 0, &spc) != EXR_ERR_SUCCESS) {
+        fprintf(stderr, PTV_PROG ": %s: not a scanline EXR\n", path);
+        exr_finish(&ctx);
+        return 0;
+    }
+    w = dw.max.x - dw.min.x + 1;
+    h = dw.max.y - dw.min.y + 1;
+    if (w <= 0 || h <= 0 || w > 16384 || h > 16384 || pt_image_init(img, w, h) != PT_OK) { exr_finish(&ctx); return 0; }
+    memset(img->rgb, 0, sizeof(float) * 3u * (size_t)w * (size_t)h);
+    for (y = dw.min.y; y <= dw.max.y; y += spc) {
+        exr_chunk_info_t ci;
+        exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+        int c;
+        if ((rv = exr_read_scanline_chunk_info(ctx, 0, y, &ci)) != EXR_ERR_SUCCESS) break;
+        if ((rv = exr_decoding_initialize(ctx, 0, &ci, &dec)) != EXR_ERR_SUCCESS) break;
+        for (c = 0; c < dec.channel_count; ++c) {
+            exr_coding_channel_info_t *ch = &dec.channels[c];
+            int k = !strcmp(ch->channel_name, "R") ? 0 : !strcmp(ch->channel_name, "G") ? 1 : !strcmp(ch->channel_name, "B") ? 2 : -1;
+            if (k < 0) { ch->decode_to_ptr = NULL; continue; }
+            ch->decode_to_ptr = (uint8_t *)(img->rgb + 3 * ((size_t)(ci.start_y - dw.min.y) * (size_t)w) + k);
+            ch->user_pixel_stride = 12;
+            ch->user_line_stride = 12 * w;
+            ch->user_bytes_per_element = 4;
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+        }
+        rv = exr_decoding_choose_default_routines(ctx, 0, &dec);
+        if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_run(ctx, 0, &dec);
+        exr_decoding_destroy(ctx, &dec);
+        if (rv != EXR_ERR_SUCCESS) break;
+    }
+    if (rv == EXR_ERR_SUCCESS) ok = 1;
+    else fprintf(stderr, PTV_PROG ": %s: %s\n", path, exr_get_error_code_as_string(rv));
+    exr_finish(&ctx);
+    if (!ok) pt_image_free(img);
+    return ok;
+}
+#endif
+
+PTV_MAYBE_UNUSED static int write_png(const char *path, int w, int h, const unsigned char *rgb)
+{
+#ifdef PTV_HAVE_PNG
+    png_image im;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    im.width = (png_uint_32)w;
+    im.height = (png_uint_32)h;
+    im.format = PNG_FORMAT_RGB;
+    if (!png_image_write_to_file(&im, path, 0, rgb, 0, NULL)) {
+        fprintf(stderr, PTV_PROG ": writing %s: %s\n", path, im.message);
+        return 0;
+    }
+    return 1;
+#else
+    (void)path; (void)w; (void)h; (void)rgb;
+    return 1; /* no libpng: the report shows no images */
+#endif
+}
+
+PTV_MAYBE_UNUSED static int png_tonemapped(const char *path, const pt_image *img)
+{
+    size_t n = (size_t)img->width * (size_t)img->height * 3u, i;
+    unsigned char *b = (unsigned char *)malloc(n);
+    int ok;
+    if (!b) return 0;
+    for (i = 0; i < n; ++i) b[i] = (unsigned char)(pt_srgb_encode(img->rgb[i]) * 255.0f + 0.5f);
+    ok = write_png(path, img->width, img->height, b);
+    free(b);
+    return ok;
+}
+
+/* ---- rendering ------------------------------------------------------------------------ */
+
+PTV_MAYBE_UNUSED static int render_desc(const pt_scene_desc *sd, int w, int h, int spp, pt_image *mean, pt_image *var)
+{
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_film film;
+    char err[1024];
+    int rc = pt_scene_desc_build(sd, &scene, &rd, err, sizeof err), x, y;
+    if (rc != PT_OK) { fprintf(stderr, PTV_PROG ": %s\n", err); return 0; }
+    if (w > 0) { rd.width = w; rd.height = h; }
+    if (spp > 0) rd.samples_per_pixel = spp;
+    if (pt_film_init(&film, rd.width, rd.height) != PT_OK) { pt_scene_destroy(scene); return 0; }
+    rc = pt_render(scene, &rd, &film, NULL);
+    pt_scene_destroy(scene);
+    if (rc != PT_OK || pt_image_init(mean, rd.width, rd.height) != PT_OK || pt_image_init(var, rd.width, rd.height) != PT_OK) {
+        fprintf(stderr, PTV_PROG ": render failed: %s\n", pt_result_string(rc));
+        pt_film_free(&film);
+        return 0;
+    }
+    for (y = 0; y < rd.height; ++y)
+        for (x = 0; x < rd.width; ++x) {
+            pt_color m = pt_v3(0, 0, 0), v = pt_v3(0, 0, 0);
+            size_t i = 3 * ((size_t)y * (size_t)rd.width + (size_t)x);
+            if (pt_film_pixel(&film, x, y, &m, &v) != PT_OK) m = v = pt_v3(-1, -1, -1); /* cannot happen */
+            mean->rgb[i] = m.x; mean->rgb[i + 1] = m.y; mean->rgb[i + 2] = m.z;
+            var->rgb[i] = v.x; var->rgb[i + 1] = v.y; var->rgb[i + 2] = v.z;
+        }
+    pt_film_free(&film);
+    return 1;
+}
+
+/* ---- POV-Ray --------------------------------------------------------------------------- */
+
+/* Seconds on a monotonic clock. */
+PTV_MAYBE_UNUSED static double ptv_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* 1 when `povray` is on the PATH. */
+PTV_MAYBE_UNUSED static int have_povray(void) { return system("command -v povray >/dev/null 2>&1") == 0; }
+
+/* Renders POV (an exported scene) into EXR (+FE: linear half float) at W x H with the
+   antialiasing options AA (NULL: the recipe's "+A0.0 +AM2 +R4", closest to a box-filtered
+   pixel average); POV-Ray's output goes to LOG. Returns 1 when povray succeeded and wrote the
+   file, and the wall time of the run (process start to exit) in *seconds (may be NULL). */
+PTV_MAYBE_UNUSED static int run_povray(const char *pov, const char *exr, int w, int h, const char *aa, const char *log,
+                                       double *seconds)
+{
+    char cmd[8192];
+    double t0;
+    int rc;
+    remove(exr);
+    snprintf(cmd, sizeof cmd, "povray +I'%s' +O'%s' +FE +W%d +H%d %s -D -V -GA >'%s' 2>&1", pov, exr, w, h,
+             aa ? aa : "+A0.0 +AM2 +R4", log);
+    t0 = ptv_now();
+    rc = system(cmd);
+    if (seconds) *seconds = ptv_now() - t0;
+    return rc == 0 && access(exr, F_OK) == 0;
+}
+
+#endif /* PTV_COMMON_H */
