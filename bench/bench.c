@@ -182,6 +182,23 @@ static int have_program(const char *name)
 
 /* ---- scenes and references ------------------------------------------------------------ */
 
+/* FNV-1a (64 bit) of a file's bytes: a reference records the hash of the scene file it was
+   rendered from, so a changed scene file is caught instead of measured against a stale image. */
+static int file_hash(const char *path, uint64_t *hash)
+{
+    FILE *f = fopen(path, "rb");
+    int c;
+    uint64_t h = 1469598103934665603ULL;
+    if (!f) return 0;
+    while ((c = fgetc(f)) != EOF) {
+        h ^= (uint64_t)(unsigned char)c;
+        h *= 1099511628211ULL;
+    }
+    fclose(f);
+    *hash = h;
+    return 1;
+}
+
 typedef struct loaded {
     pt_scene_desc sd;
     pt_scene *scene;
@@ -226,7 +243,9 @@ static int load_reference(const config *cfg, const bench_scene *bs, loaded *L)
 {
     char path[2048], line[512];
     FILE *f;
-    int have_floor = 0;
+    int have_floor = 0, have_hash = 0;
+    unsigned long long stored = 0;
+    uint64_t hash = 0;
     snprintf(path, sizeof path, "%s/%s.pfm", cfg->ref_dir, bs->name);
     if (access(path, R_OK) != 0) {
         fprintf(stderr, "bench: reference %s is missing: run `make bench-refs` (build/bench refs %s)\n", path, bs->name);
@@ -246,9 +265,15 @@ static int load_reference(const config *cfg, const bench_scene *bs, loaded *L)
     }
     while (fgets(line, sizeof line, f)) {
         if (sscanf(line, "noise_floor_relmse %lf", &L->floor) == 1) have_floor = 1;
+        if (sscanf(line, "scene_fnv1a %llx", &stored) == 1) have_hash = 1;
         (void)sscanf(line, "spp %d", &L->ref_spp);
     }
     fclose(f);
+    if (!have_hash || !file_hash(bs->file, &hash) || hash != (uint64_t)stored) {
+        fprintf(stderr, "bench: %s: the reference was rendered from a different %s (scene_fnv1a %s): run `make "
+                        "bench-refs` (build/bench refs %s)\n", path, bs->file, have_hash ? "differs" : "missing", bs->name);
+        return 0;
+    }
     if (!have_floor || !(L->floor >= 0) || !(L->floor < 1)) {
         fprintf(stderr, "bench: %s: no valid 'noise_floor_relmse' line\n", path);
         return 0;
@@ -291,7 +316,8 @@ static int make_reference(const config *cfg, const bench_scene *bs, int spp_over
     double fl = 0;
     int x, y, rc, ok = 1;
     FILE *f;
-    if (!load_scene(bs, &L)) return 0;
+    uint64_t hash = 0;
+    if (!file_hash(bs->file, &hash) || !load_scene(bs, &L)) return 0;
     L.rd.samples_per_pixel = ref_spp;
     L.rd.samples_per_pass = ref_spp / 64 > 0 ? ref_spp / 64 : 1;
     L.rd.strategy = PT_STRATEGY_MIS;
@@ -338,8 +364,9 @@ static int make_reference(const config *cfg, const bench_scene *bs, int spp_over
         } else {
             fprintf(f, "# Reference image %s.pfm for the benchmark scene '%s' (bench/bench.c).\n", bs->name, bs->name);
             fprintf(f, "# Remake it with: make bench-refs   (or: build/bench refs %s, from the repository root)\n", bs->name);
-            fprintf(f, "scene %s\nsize %d %d\nstrategy mis\nspp %d\nseed %llu\nseconds %.1f\nthreads %d\n", bs->file,
-                    BENCH_SIZE, BENCH_SIZE, ref_spp, (unsigned long long)REF_SEED, st.seconds, st.threads);
+            fprintf(f, "scene %s\nscene_fnv1a %016llx\nsize %d %d\nstrategy mis\nspp %d\nseed %llu\nseconds %.1f\nthreads %d\n",
+                    bs->file, (unsigned long long)hash, BENCH_SIZE, BENCH_SIZE, ref_spp, (unsigned long long)REF_SEED,
+                    st.seconds, st.threads);
             fprintf(f, "# mean over pixels and channels of var(pixel mean) / (r^2 + 0.01): the relMSE that this\n"
                        "# reference's own noise adds to every error measured against it\n");
             fprintf(f, "noise_floor_relmse %.6e\n", fl);
@@ -1412,9 +1439,14 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
         for (j = 0; j < STRATEGY_COUNT; ++j) {
             const series *s = &R->s[i][j];
             const point *p = &s->med[s->levels - 1];
-            fprintf(f, "| %s | %d | %.3g | %.3g | %+.2f%% | %.3g M | %.3g M | %.3f [%.3f, %.3f] | %.3g |\n",
-                    strategies[j].name, p->spp, p->time, s->err[s->levels - 1], 100 * p->bias, p->samples / p->time / 1e6,
-                    p->rays / p->time / 1e6, s->slope, s->slope_lo, s->slope_hi, efficiency(s));
+            char slope[96];
+            if (s->slope == s->slope)
+                snprintf(slope, sizeof slope, "%.3f [%.3f, %.3f]", s->slope, s->slope_lo, s->slope_hi);
+            else
+                snprintf(slope, sizeof slope, "- (%d points with >= %d spp)", s->fit_points, FIT_MIN_SPP);
+            fprintf(f, "| %s | %d | %.3g | %.3g | %+.2f%% | %.3g M | %.3g M | %s | %.3g |\n", strategies[j].name, p->spp,
+                    p->time, s->err[s->levels - 1], 100 * p->bias, p->samples / p->time / 1e6, p->rays / p->time / 1e6,
+                    slope, efficiency(s));
         }
         m = mis_vs_best(R, i, 0);
         ma = mis_vs_best(R, i, 1);
@@ -1589,7 +1621,7 @@ static int cmd_run(int argc, char **argv)
             return usage();
         }
     }
-    if (!budget_set) cfg.budget = cfg.quick ? 0.12 : 2.5;
+    if (!budget_set) cfg.budget = cfg.quick ? 0.12 : 2.0;
     if (!cfg.parts) cfg.parts = PART_ALL;
     for (i = 0; i < SCENE_COUNT; ++i) any_scene |= cfg.scene_on[i];
     if (!any_scene)
@@ -1601,6 +1633,7 @@ static int cmd_run(int argc, char **argv)
     if (!mkdirs(cfg.out)) return 1;
     printf("bench: %s mode, %.2f s per series, %d seeds, %dx%d, output in %s\n", cfg.quick ? "quick" : "full", cfg.budget,
            cfg.seeds, BENCH_SIZE, BENCH_SIZE, cfg.out);
+    fflush(stdout);
     /* Check every input before measuring anything. */
     for (i = 0; i < SCENE_COUNT; ++i) {
         if (!cfg.scene_on[i]) continue;
