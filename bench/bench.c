@@ -878,7 +878,7 @@ static int run_adaptive(const config *cfg, results *R, adaptive_results *A)
     A->n_adaptive = n;
     printf("adaptive: cornell, MIS, uniform ends at relMSE %.3e in %.3f s (%d spp); %d thresholds x %d seeds\n",
            A->target_err, A->uniform_time, u->med[u->levels - 1].spp, n, cfg->seeds);
-    for (k = 0; k < n; ++k) A->threshold[k] = base * pow(2.0, (cfg->quick ? 1.0 : 1.5) - 0.5 * k);
+    for (k = 0; k < n; ++k) A->threshold[k] = base * pow(2.0, 0.5 - 0.5 * k); /* sqrt(2) .. 1/4 x sqrt(E) */
     for (k = 0; k < n; ++k) {
         double t[MAX_SEEDS], e[MAX_SEEDS], b[MAX_SEEDS], smp[MAX_SEEDS], cv[MAX_SEEDS];
         for (seed = 0; seed < cfg->seeds; ++seed) {
