@@ -752,10 +752,20 @@ static int run_pov(const config *cfg, results *R, pov_results *P)
             fflush(stdout);
             if (pr->time > tmax) tmax = pr->time;
         }
-        /* pdftrace at equal time: one MIS series (seed 1) rendered until it has used as much
-           time as the slowest POV-Ray level, read off at each level's time (log-log
-           interpolation between the bracketing steps). */
-        if (tmax > 0) {
+        /* pdftrace at equal time. Where POV-Ray is a numeric reference: one MIS series (seed 1)
+           rendered until it has used as much time as the slowest POV-Ray level, read off at each
+           level's time (log-log interpolation between the bracketing steps). Elsewhere (to keep
+           within the time budget) the MIS series of the runs, extrapolated with slope -1 beyond
+           its last point (marked). */
+        if (tmax > 0 && !scenes[i].pov_numeric) {
+            for (l = 0; l < POV_LEVEL_COUNT; ++l) {
+                pov_result *pr = &P->r[i][l];
+                if (!pr->ran) continue;
+                pr->pt_err = R->s[i][S_MIS].levels > 0 ? err_at_time(&R->s[i][S_MIS], pr->time, &pr->pt_extrap) : NAN;
+                printf("  pdftrace MIS %-16s at %7.2f s: relMSE %.3e%s (POV-Ray q%d: %.3e)\n", scenes[i].name, pr->time,
+                       pr->pt_err, pr->pt_extrap ? " (extrapolated)" : "", l, pr->err);
+            }
+        } else if (tmax > 0) {
             series *e = &P->equal_time[i];
             int by_floor = 0;
             memset(e, 0, sizeof *e);
