@@ -1352,10 +1352,25 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
                     if (fabs(s->slope + 1.0) <= 0.1) ++in_range;
                 }
             }
-    if (R->done[0])
-        fprintf(f, "| slope of log relMSE vs log time, independent sampling: −1 ± 0.1 | cornell MIS %.3f; %d of %d "
-                   "series (all scenes × strategies) within ±0.1 (table below) | %s |\n",
-                R->s[0][S_MIS].slope, in_range, n_series, pass_fail(in_range == n_series && n_series > 0));
+    {
+        int first = 1;
+        fprintf(f, "| slope of log relMSE vs log time, independent sampling: −1 ± 0.1 | %d of %d fitted series (scenes × "
+                   "strategies, ≥ 3 points with ≥ %d spp) within ±0.1", in_range, n_series, FIT_MIN_SPP);
+        for (i = 0; i < SCENE_COUNT; ++i)
+            if (R->done[i])
+                for (j = 0; j < STRATEGY_COUNT; ++j) {
+                    const series *s = &R->s[i][j];
+                    if (s->slope == s->slope && !(fabs(s->slope + 1.0) <= 0.1)) {
+                        fprintf(f, "%s%s %s %.2f", first ? "; outside: " : ", ", scenes[i].name, strategies[j].name, s->slope);
+                        first = 0;
+                    }
+                }
+        if (R->done[0]) {
+            fmt_g(b1, sizeof b1, R->s[0][S_MIS].slope);
+            fprintf(f, "; cornell MIS %s", b1);
+        }
+        fprintf(f, " | %s |\n", pass_fail(in_range == n_series && n_series > 0));
+    }
     if (A->available)
         fprintf(f, "| adaptive reaches the uniform render's error in ≤ 0.7× the time (cornell) | uniform MIS: relMSE %.3g "
                    "in %.3g s; adaptive reaches it in %.3g s%s: **ratio %.2f** | %s (seams: see the images) |\n",
