@@ -294,7 +294,11 @@ help:
 # it). The corpus replay is built with the normal compiler and runs inside make test.
 FUZZ_CC      ?= clang
 FUZZ_SECONDS ?= 60
-FUZZ_FLAGS   ?= -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
+FUZZ_FLAGS   ?= -std=c99 -O1 -g -ftrapping-math -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
+# Programs that run with FP traps enabled (the replay, fptrap): gcc's default; clang's default
+# FP model ("ignore exceptions") may divide in unused SIMD lanes (0/0 in the padding lanes of
+# a vectorised 1/dir) and trap where the source does not.
+FPTRAP_FLAGS ?= -ftrapping-math
 FUZZ_ARGS    ?= -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
 FUZZ_HAVE_EXR := $(shell [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ] && echo yes)
 FUZZ_TARGETS := scene obj $(if $(FUZZ_HAVE_EXR),exr)
@@ -337,7 +341,7 @@ fuzz-merge: fuzz-build
 # Corpus replay: the harnesses on every committed input, normal compiler / ASan+UBSan / EXR.
 FUZZ_REPLAY_SRCS := tests/fuzz/replay.c tests/fuzz/harness.c
 $(BUILD)/fuzz_replay: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h $(OPT_STAMP) | $(BUILD)
-	$(CC) $(PT_CPPFLAGS) -Itests/fuzz $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) -Itests/fuzz $(CPPFLAGS) $(CFLAGS) $(FPTRAP_FLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(PT_LDLIBS)
 $(BUILD)/fuzz_replay_asan: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) -Itests/fuzz $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(PT_LDLIBS)
 $(BUILD)/fuzz_replay_exr: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h | $(BUILD)
@@ -346,7 +350,7 @@ $(BUILD)/fuzz_replay_exr: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h | $(BUILD)
 # FP-trap test (issue 7 item 6): scene files and built-in scenes with FE_INVALID|FE_DIVBYZERO
 # trapping. Built with the normal compiler and flags (what users run).
 $(BUILD)/fptrap: tests/fptrap/fptrap.c pdftrace.h | $(BUILD)
-	$(CC) -I. $(CPPFLAGS) $(CFLAGS) -g $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) -lm
+	$(CC) -I. $(CPPFLAGS) $(CFLAGS) $(FPTRAP_FLAGS) -g $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) -lm
 
 fptrap-test: $(BUILD)/fptrap
 	./$(BUILD)/fptrap scenes/*.scene

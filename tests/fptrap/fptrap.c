@@ -6,7 +6,11 @@
    invalid operation (0/0, Inf-Inf, 0*Inf, sqrt(-x), NaN compared ...) or division by zero
    raises SIGFPE: the handler prints the case and the faulting address and exits 1 (rerun the
    case under gdb for the line). Overflow, underflow and inexact are not trapped.
-   Needs glibc's feenableexcept; elsewhere it prints SKIP and exits 0.
+   Needs glibc's feenableexcept; elsewhere it prints SKIP and exits 0. Build with
+   -ftrapping-math (make does: FPTRAP_FLAGS; gcc's default): under clang's default FP model
+   the compiler may divide in unused SIMD lanes (clang -O3 vectorises the three 1/dir of the
+   ray set-up two lanes at a time with 0/0 in the padding lanes) and trap where the source
+   does not.
    Usage: fptrap SCENE_FILE...   (make fptrap-test passes every .scene file of scenes/) */
 #define _GNU_SOURCE 1
 #define PDFTRACE_IMPLEMENTATION
