@@ -2721,8 +2721,9 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
 /* ------------------------------------------------------------------------------------------
    5b. Embree traversal (PDFTRACE_EMBREE). One Embree device and scene per pt_scene, made at
    commit. Geometry id = primitive type (PT__PRIM_*), one geometry per type present:
-   - triangles: RTC_GEOMETRY_TYPE_TRIANGLE, three vertices of their own each (pdftrace keeps
-     no shared mesh vertices after pt_scene_add_mesh). Embree's hit (u, v) weights vertices
+   - triangles: RTC_GEOMETRY_TYPE_TRIANGLE over the vertices stored in the primitives
+     (pdftrace keeps no shared mesh vertices after pt_scene_add_mesh), shared with Embree
+     rather than copied (see pt__rtc_build). Embree's hit (u, v) weights vertices
      1 and 2: pdftrace's barycentrics (weights of a, b, c) are (1 - u - v, u, v). Embree's
      triangle test differs from the built-in watertight test (Woop et al. 2013) only by
      rounding; RTC_SCENE_FLAG_ROBUST asks for its watertight variant (no cracks on shared
@@ -2940,15 +2941,32 @@ static int pt__rtc_build(pt_scene *s)
         g = rtcNewGeometry(s->rtc.device, k == PT__PRIM_TRIANGLE ? RTC_GEOMETRY_TYPE_TRIANGLE : RTC_GEOMETRY_TYPE_USER);
         if (!g) return pt__rtc_fail(s, RTC_ERROR_UNKNOWN, "could not create a geometry");
         if (k == PT__PRIM_TRIANGLE) {
-            float *v = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                        3 * sizeof(float), 3u * (size_t)n[k]);
+            /* Zero copy where the indices fit in 32 bits: the vertex buffer is s->prims itself,
+               read as floats (byte stride 4), a triangle's vertices being the floats at its
+               p0, p1 and p2; only the index buffer (12 bytes a triangle) is Embree's. The last
+               element ends 16 bytes before the array does (Embree loads vertices 16 bytes at a
+               time). The array stays put until the next commit (a shape added in between
+               uncommits the scene, and no query runs on an uncommitted scene). */
+            size_t bytes = sizeof(pt__prim) * (size_t)s->prim_count, nvert = (bytes - 16u) / 4u + 1u;
+            int shared = bytes >= 16u && nvert <= 0xffffffffu;
+            float *v = shared ? NULL
+                              : (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                 3 * sizeof(float), 3u * (size_t)n[k]);
             unsigned *ix = (unsigned *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                3 * sizeof(unsigned), (size_t)n[k]);
-            if (!v || !ix) {
+            if (shared && ix) {
+                rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, s->prims, 0, 4u, nvert);
+                for (i = 0; i < n[k]; ++i) {
+                    size_t base = sizeof(pt__prim) * (size_t)s->rtc.map[k][i];
+                    ix[3u * (size_t)i] = (unsigned)((base + offsetof(pt__prim, p0)) / 4u);
+                    ix[3u * (size_t)i + 1u] = (unsigned)((base + offsetof(pt__prim, p1)) / 4u);
+                    ix[3u * (size_t)i + 2u] = (unsigned)((base + offsetof(pt__prim, p2)) / 4u);
+                }
+            } else if (!v || !ix) {
                 rtcReleaseGeometry(g);
                 return pt__rtc_fail(s, RTC_ERROR_OUT_OF_MEMORY, "could not allocate the triangle buffers");
             }
-            for (i = 0; i < n[k]; ++i) {
+            if (!shared) for (i = 0; i < n[k]; ++i) {
                 const pt__prim *p = &s->prims[s->rtc.map[k][i]];
                 float *w = v + 9u * (size_t)i;
                 w[0] = p->p0.x; w[1] = p->p0.y; w[2] = p->p0.z;
