@@ -369,9 +369,10 @@ typedef struct pt_scene_info {
     double build_seconds;         /* acceleration-structure build time at the last commit (wall) */
     size_t accel_bytes;           /* memory the backend allocated for traversal: built-in, the BVH
                                      nodes; Embree, everything its device allocated (its BVH,
-                                     the triangle vertex/index buffers) plus pdftrace's primitive
-                                     id maps. The scene's own primitive array, which shading uses
-                                     with either backend, is not counted. */
+                                     the triangle index buffer; the vertices are shared with the
+                                     primitive array) plus pdftrace's primitive id maps. The
+                                     scene's own primitive array, which shading uses with either
+                                     backend, is not counted. */
 } pt_scene_info;
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
