@@ -3017,6 +3017,20 @@ static int pt__rtc_ray_ok(const pt__rayctx *rc, float tmax)
     return tmax > 0.0f && (rc->d.x != 0.0f || rc->d.y != 0.0f || rc->d.z != 0.0f);
 }
 
+/* Embree's SIMD code relies on IEEE defaults (a zero direction component gives 1/0 = inf, and
+   0 * inf = NaN in its slab tests): with a host that unmasked floating-point exceptions
+   (feenableexcept(FE_INVALID | FE_DIVBYZERO)) it would raise SIGFPE. Every call into Embree
+   masks all SSE exceptions (MXCSR bits 7-12) for its duration when any is unmasked and
+   restores the caller's MXCSR after it (flags raised inside Embree are dropped with it);
+   pdftrace's own code keeps running under the host's traps. */
+#ifdef PT__HAVE_MXCSR
+#define PT__RTC_GUARD_BEGIN unsigned pt__csr_ = _mm_getcsr(); if ((pt__csr_ & 0x1f80u) != 0x1f80u) _mm_setcsr(pt__csr_ | 0x1f80u)
+#define PT__RTC_GUARD_END if ((pt__csr_ & 0x1f80u) != 0x1f80u) _mm_setcsr(pt__csr_)
+#else
+#define PT__RTC_GUARD_BEGIN (void)0
+#define PT__RTC_GUARD_END (void)0
+#endif
+
 static int pt__rtc_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
                            float *bary)
 {
@@ -3029,16 +3043,18 @@ static int pt__rtc_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-#if RTC_VERSION_MAJOR >= 4
     {
+        PT__RTC_GUARD_BEGIN;
+#if RTC_VERSION_MAJOR >= 4
         struct RTCIntersectArguments args;
         rtcInitIntersectArguments(&args);
         args.context = &c.base;
         rtcIntersect1(s->rtc.scene, &rh, &args);
-    }
 #else
-    rtcIntersect1(s->rtc.scene, &c.base, &rh);
+        rtcIntersect1(s->rtc.scene, &c.base, &rh);
 #endif
+        PT__RTC_GUARD_END;
+    }
     g = rh.hit.geomID;
     if (g >= 3u || rh.hit.primID >= s->rtc.count[g]) return 0;
     *prim = s->rtc.map[g][rh.hit.primID];
@@ -3059,16 +3075,18 @@ static int pt__rtc_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
     if (!pt__rtc_ray_ok(rc, tmax)) return 0;
     pt__rtc_ctx_init(&c, rc);
     pt__rtc_ray(&r, rc, tmax);
-#if RTC_VERSION_MAJOR >= 4
     {
+        PT__RTC_GUARD_BEGIN;
+#if RTC_VERSION_MAJOR >= 4
         struct RTCOccludedArguments args;
         rtcInitOccludedArguments(&args);
         args.context = &c.base;
         rtcOccluded1(s->rtc.scene, &r, &args);
-    }
 #else
-    rtcOccluded1(s->rtc.scene, &c.base, &r);
+        rtcOccluded1(s->rtc.scene, &c.base, &r);
 #endif
+        PT__RTC_GUARD_END;
+    }
     return r.tfar < 0.0f;
 }
 
@@ -3157,7 +3175,11 @@ static int pt__accel_build(pt_scene *s)
         want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN;
     pt__rtc_release(s);
     if (want == PT_BACKEND_EMBREE) {
-        rc = pt__rtc_build(s);
+        {
+            PT__RTC_GUARD_BEGIN; /* the calling thread takes part in Embree's build */
+            rc = pt__rtc_build(s);
+            PT__RTC_GUARD_END;
+        }
         if (rc == PT_OK) {
             PT_FREE(s->nodes);
             s->nodes = NULL;
