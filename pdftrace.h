@@ -504,7 +504,9 @@ typedef struct pt_shading_point {
      host's floating-point state is unchanged afterwards. pt_scene_intersect and
      pt_scene_occluded leave the caller's state alone (correct, maybe slower on denormals).
    - Embree errors become pdftrace error codes with Embree's message in
-     pt_scene_error_message; the library never aborts.
+     pt_scene_error_message; the library never aborts. Embree's own code computes with
+     inf and NaN on purpose, so every call into it masks SSE floating-point exceptions
+     for its duration: a host that traps FE_INVALID or FE_DIVBYZERO keeps working.
    PDFTRACE_EMBREE4: include embree4/rtcore.h and use Embree 4's query arguments (written to
    Embree 4's documentation, not compiled here: untested).
    ========================================================================================== */
