@@ -595,6 +595,35 @@ typedef struct pt_path_stats {
     uint64_t nonfinite_samples;   /* samples that were NaN/Inf, counted and replaced by zero */
 } pt_path_stats;
 
+/* Scene-feature skips (see "SKIPPING WORK A SCENE DOES NOT NEED" at the top). Each skip is on by
+   default; a bit set in pt_render_desc.disable_skips makes the integrator take the general path
+   for that feature instead (for benchmarks and tests: the image has the same expectation either
+   way; "exact" skips give the same image bit for bit, the others consume random numbers
+   differently and agree within noise). */
+#define PT_SKIP_NO_EMITTERS      (1u << 0) /* no emitters: no light sampling at all. General: light
+                                              sampling is attempted (and finds nothing); the mixture
+                                              keeps its light component (which ends the path) */
+#define PT_SKIP_LIGHT_SELECTION  (1u << 1) /* one emitter: no CDF search. General: the binary search
+                                              runs (and finds light 0). Exact */
+#define PT_SKIP_DELTA_VERTEX     (1u << 2) /* at a delta vertex (mirror, glass): no light sample, no
+                                              material evaluation toward it. General: a light is sampled
+                                              and the material evaluated (it reflects nothing there). In
+                                              a scene with only delta materials this skips light
+                                              sampling everywhere */
+#define PT_SKIP_FACING_AWAY      (1u << 3) /* mixture, single one-sided emitter facing away from the
+                                              vertex: the light component is dropped from the mixture.
+                                              General: it stays (its samples fail and end the path) */
+#define PT_SKIP_NO_TEXTURES      (1u << 4) /* untextured material: albedo read directly. General: it is
+                                              looked up as a constant texture. Exact */
+#define PT_SKIP_NO_TRIANGLES     (1u << 5) /* no triangles in the scene: no watertight ray set-up
+                                              (shear constants, Woop et al. 2013). General: every ray
+                                              is set up for triangles. Exact */
+#define PT_SKIP_ZERO_BSDF_SHADOW (1u << 6) /* no shadow ray toward a light sample the material does not
+                                              reflect (light below the surface). General: the shadow ray
+                                              is traced and its result multiplied by zero. Exact (only
+                                              the shadow-ray count differs) */
+#define PT_SKIP_ALL              ((1u << 7) - 1u)
+
 /* ==========================================================================================
    8. RENDERING: tiles, threads, progressive passes, statistics
    ========================================================================================== */
@@ -633,6 +662,16 @@ typedef struct pt_render_desc {
     pt_guide_fn guide;           /* optional user PDF, see pt_guide_fn */
     void *guide_user;
     float guide_weight;          /* in [0, 1); 0 with a guide: 0.5 */
+    /* Adaptive sampling (see section 8 of the implementation): pixels are grouped in 8x8 blocks;
+       a block stops taking samples once the estimated relative error of its pixels and of its
+       eight neighbour blocks is below adaptive_threshold. */
+    float adaptive_threshold;    /* 0: off (every pixel gets samples_per_pixel). Otherwise a finite
+                                    value > 0: the RMS relative error sqrt(mean((x-r)^2/(r^2+0.01)))
+                                    a block must reach, estimated from two half-buffers; e.g. 0.05 */
+    int adaptive_min_spp;        /* samples every pixel gets before it can stop, >= 2; 0: a default
+                                    of max(8, samples_per_pixel / 8); capped at samples_per_pixel */
+    int adaptive_check_passes;   /* blocks are re-checked every this many passes, >= 1; 0: 1 */
+    unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on */
 } pt_render_desc;
 
 typedef struct pt_render_stats {
@@ -641,13 +680,17 @@ typedef struct pt_render_stats {
     uint64_t nonfinite_samples;  /* NaN/Inf samples caught, zeroed and counted */
     double seconds;              /* wall clock */
     int passes, threads;
+    uint64_t pixels_converged;   /* adaptive: pixels that stopped before samples_per_pixel */
+    uint32_t min_spp, max_spp;   /* fewest and most samples this render added to a pixel */
 } pt_render_stats;
 
 /* ==========================================================================================
    9. OUTPUT: framebuffer (film), images, writers
    The film accumulates per pixel, in double precision, the sum and the sum of squares of the
-   samples and their count. Rendering into a film that already holds samples continues with
-   new sample indices, so renders can be resumed and refined.
+   samples and their count, and the sum of the odd-numbered samples alone (the "B" half-buffer;
+   the even-numbered "A" half is sum - sum_odd): 76 bytes per pixel. Rendering into a film that
+   already holds samples continues with new sample indices, so renders can be resumed and
+   refined.
    ========================================================================================== */
 
 typedef struct pt_film {
@@ -655,6 +698,7 @@ typedef struct pt_film {
     double *sum;      /* 3 per pixel, row 0 at the top */
     double *sum_sq;   /* 3 per pixel */
     uint32_t *count;  /* samples per pixel */
+    double *sum_odd;  /* 3 per pixel: the samples with an odd sample index k */
 } pt_film;
 
 typedef struct pt_image {
@@ -669,6 +713,13 @@ PTDEF void pt_film_clear(pt_film *film);
 PTDEF int pt_film_resolve(const pt_film *film, pt_image *image);
 /* Mean of pixel (x, y) and the variance of that mean (sample variance / count). */
 PTDEF int pt_film_pixel(const pt_film *film, int x, int y, pt_color *mean, pt_color *variance_of_mean);
+/* The error estimate adaptive sampling uses, for the pixels x0 <= x < x1, y0 <= y < y1: the mean
+   over pixels and channels of (A - B)^2 nA nB / n^2 / (I^2 + 0.01), where A and B are the means
+   of the even- and odd-numbered samples (nA, nB of them), I the pixel mean and n = nA + nB.
+   (A - B)^2 nA nB / n^2 is an unbiased estimate of the variance of I, so *rel_mse estimates
+   the region's relMSE mean((I - r)^2 / (r^2 + 0.01)). Pixels with fewer than 2 samples count
+   as unknown: *rel_mse is then +Inf. */
+PTDEF int pt_film_error(const pt_film *film, int x0, int y0, int x1, int y1, double *rel_mse);
 
 PTDEF int pt_image_init(pt_image *image, int width, int height);
 PTDEF void pt_image_free(pt_image *image);
@@ -1497,8 +1548,8 @@ static pt_vec3 pt__fuzz_sample(pt_vec3 r, float f, float u1, float u2, float u3)
 static pt_vec3 pt__reflect(pt_vec3 wo, pt_vec3 n) { return pt_sub(pt_scale(n, 2.0f * pt_dot(wo, n)), wo); }
 
 /* Forward declarations of scene-side helpers used by the public PDFs. */
-static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index);
+static int pt__lights_sample(const pt_scene *s, int always_search, pt_vec3 o, float u0, float u1, float u2,
+                             pt__light_sample *ls, uint32_t *light_index);
 static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w);
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
                                    float u3, pt_vec3 *dir, float *pdf);
@@ -1733,7 +1784,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
         uint32_t li;
         if (!pdf->as.lights.scene || !pdf->as.lights.scene->committed) break;
-        ok = pt__lights_sample(pdf->as.lights.scene, pdf->origin, u0, u1, u2, &ls, &li);
+        ok = pt__lights_sample(pdf->as.lights.scene, 0, pdf->origin, u0, u1, u2, &ls, &li);
         if (ok) {
             w = ls.dir;
             /* the density of the direction over all lights, not the picked one's alone */
@@ -3346,13 +3397,14 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
     }
     return lo;
 }
-/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
-static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index)
+/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). With a single light the
+   pick is skipped unless always_search (the general path of PT_SKIP_LIGHT_SELECTION). */
+static int pt__lights_sample(const pt_scene *s, int always_search, pt_vec3 o, float u0, float u1, float u2,
+                             pt__light_sample *ls, uint32_t *light_index)
 {
     uint32_t li;
     if (!s->light_count) return 0;
-    li = s->light_count == 1 ? 0u : pt__pick_light(s, u0);
+    li = s->light_count == 1 && !always_search ? 0u : pt__pick_light(s, u0);
     if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls)) return 0;
     ls->pdf *= s->lights[li].select_pdf;
     *light_index = li;
@@ -3500,7 +3552,11 @@ typedef struct pt__settings {
     pt_guide_fn guide;
     void *guide_user;
     float guide_weight;
+    unsigned general;  /* PT_SKIP_* bits whose general path is forced (pt_render_desc.disable_skips) */
 } pt__settings;
+
+/* Whether the skip `bit` is taken (not disabled by pt_render_desc.disable_skips). */
+#define PT__SKIP(cfg, bit) (((cfg)->general & (bit)) == 0u)
 
 static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c)
 {
@@ -3521,6 +3577,8 @@ static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c)
     c->guide_weight = d->guide ? (d->guide_weight == 0.0f ? 0.5f : d->guide_weight) : 0.0f;
     if (!pt__isfinite(c->guide_weight) || c->guide_weight < 0.0f || c->guide_weight >= 1.0f)
         return PT_ERROR_INVALID_ARGUMENT;
+    if (d->disable_skips & ~PT_SKIP_ALL) return PT_ERROR_INVALID_ARGUMENT;
+    c->general = d->disable_skips;
     return PT_OK;
 }
 
@@ -3560,27 +3618,57 @@ static int pt__scatter_sample(const pt__vertex *v, pt_rng *rng, pt_vec3 *wi)
     }
 }
 
-/* Whether any light can be sampled from p at all; exact (and cheap) for one light. */
+/* Whether any light can be sampled from p at all; exact (and cheap) for one light. Called only
+   with at least one light (PT_SKIP_NO_EMITTERS is the caller's). */
 static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
 {
     const pt__prim *lp;
     int two;
-    if (!s->light_count) return 0;
-    if (s->light_count > 1) return 1;
+    if (s->light_count != 1) return 1;
     lp = &s->prims[s->lights[0].prim];
     two = s->mats[lp->material].two_sided;
     if (lp->type == PT__PRIM_SPHERE) return two || !pt__sphere_inside(p, lp->p0, lp->p1.x);
     return pt__planar_faces(p, lp->p0, lp->n, two);
 }
 
+/* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
+   if it is unoccluded, the contribution beta f Le w / p_light. */
+static pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+                                     const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
+                                     pt_path_stats *st)
+{
+    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
+    float w = 1.0f;
+    pt_ray sr;
+    pt__rayctx src;
+    pt_vec3 target;
+    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
+    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
+        w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
+    sr.origin = v->o;
+    target = pt_offset_ray_origin(ls->point, ls->normal, pt_neg(ls->dir));
+    sr.dir = pt_sub(target, sr.origin);
+    pt__rayctx_init2(&src, sr, tri);
+    st->shadow_rays++;
+    if (pt__scene_any(s, &src, 1.0f - 1e-4f)) return pt_v3(0, 0, 0);
+    {
+        const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
+        return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
+    }
+}
+
+/* The scene-feature skips (PT_SKIP_*) appear below as PT__SKIP(cfg, bit) tests; with the bit
+   in cfg->general the general path runs instead. */
 static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_rng *rng, pt_path_stats *st)
 {
     pt_color L = pt_v3(0, 0, 0), beta = pt_v3(1, 1, 1);
     int depth, prev_delta = 1;
     float prev_pdf = 0.0f;
     pt_vec3 prev_p = ray.origin;
-    const int any_lights = s->light_count > 0;
-    const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    const int any_lights = s->light_count > 0 || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
+    const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0 || !PT__SKIP(cfg, PT_SKIP_NO_TRIANGLES);
+    const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
+    const int search = !PT__SKIP(cfg, PT_SKIP_LIGHT_SELECTION);
     pt__vertex v;
     memset(&v, 0, sizeof v);
     st->camera_rays++;
@@ -3620,9 +3708,25 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         v.wo = pt_neg(ray.dir);
         v.ng = h.front_face ? h.geometric_normal : pt_neg(h.geometric_normal);
         v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
-        v.albedo = pt__albedo(s, m, h.point);
+        if (m->texture || PT__SKIP(cfg, PT_SKIP_NO_TEXTURES)) {
+            v.albedo = pt__albedo(s, m, h.point);
+        } else { /* general path: an untextured material looked up as a constant texture */
+            pt__texture ct;
+            ct.even = ct.odd = m->albedo;
+            ct.inv_scale = 1.0f;
+            v.albedo = pt__checker(&ct, h.point);
+        }
 
         v.o = pt_offset_ray_origin(v.p, v.ng, v.ng);
+        if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
+            /* general path: next-event estimation as at any vertex; a delta material reflects
+               nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */
+            pt__light_sample ls;
+            uint32_t li;
+            float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+            if (pt__lights_sample(s, search, v.o, u0, u1, u2, &ls, &li))
+                L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
+        }
         if (m->delta) {
             /* perfectly specular: follow the delta direction; no light PDF here */
             if (m->type == PT_MATERIAL_DIELECTRIC) {
@@ -3654,39 +3758,23 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
             }
             /* next-event estimation (LIGHT and MIS) */
-            if (any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT)) {
+            if (nee) {
                 pt__light_sample ls;
                 uint32_t li;
                 float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) {
-                    f = pt__material_eval(m, v.albedo, v.ns, v.ng, v.wo, ls.dir);
-                    if (!pt__is_black(f)) {
-                        float w = 1.0f;
-                        pt_ray sr;
-                        pt__rayctx src;
-                        pt_vec3 target;
-                        if (cfg->strategy == PT_STRATEGY_MIS) w = pt__power_heuristic(ls.pdf, pt__scatter_density(&v, ls.dir));
-                        sr.origin = v.o;
-                        target = pt_offset_ray_origin(ls.point, ls.normal, pt_neg(ls.dir));
-                        sr.dir = pt_sub(target, sr.origin);
-                        pt__rayctx_init2(&src, sr, tri);
-                        st->shadow_rays++;
-                        if (!pt__scene_any(s, &src, 1.0f - 1e-4f)) {
-                            const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
-                            L = pt_add(L, pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls.pdf)));
-                        }
-                    }
-                }
+                if (pt__lights_sample(s, search, v.o, u0, u1, u2, &ls, &li))
+                    L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
             /* the direction that continues the path */
-            if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights && pt__lights_reachable(s, v.o)) {
+            if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights &&
+                (!s->light_count || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v.o))) {
                 u = pt_rng_float(rng);
                 use_light = u < cfg->light_weight;
                 if (use_light) {
                     pt__light_sample ls;
                     uint32_t li;
                     float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-                    if (!pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) break;
+                    if (!pt__lights_sample(s, search, v.o, u0, u1, u2, &ls, &li)) break;
                     wi = ls.dir;
                 } else if (!pt__scatter_sample(&v, rng, &wi)) break;
                 p_total = cfg->light_weight * pt__lights_value(s, v.o, wi) +
@@ -3752,8 +3840,32 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    pixel of every tile. Tiles are handed out by a pthreads pool (or the host's parallel-for).
    A pixel's k-th sample draws from the stream pt_rng_for_sample(seed, pixel, k) and is added
    to the pixel in sample order by the one job that owns the tile, so the image does not
-   depend on the thread count or the order in which tiles run.
+   depend on the thread count or the order in which tiles run. Even-numbered samples also go to
+   half-buffer A, odd-numbered ones to B (the film keeps sum and sum_odd; A = sum - sum_odd).
+
+   Adaptive sampling (adaptive_threshold > 0). The image is divided into 8x8-pixel blocks.
+   After every adaptive_check_passes passes, once each pixel has min_spp samples from this
+   render, every block still sampling gets the error estimate of pt_film_error: the mean over
+   its pixels and channels of (A - B)^2 nA nB / n^2 / (I^2 + 0.01), an unbiased estimate of
+   the variance of the pixel mean I divided by the regularised square I^2 + 0.01, i.e. an
+   estimate of the block's relMSE, the metric mean((I - r)^2 / (r^2 + 0.01)) that rendering
+   benchmarks use. Half buffers as in Rousselle, Manzi & Zwicker, "Robust Denoising using
+   Feature and Color Information" (2013); the relative |A - B|-based stopping criterion per
+   block after Dammertz, Hanika, Keller & Lensch, "A Hierarchical Automatic Stopping Condition
+   for Monte Carlo Global Illumination" (WSCG 2010), here squared and regularised to match
+   relMSE. A block is converged when its estimate is below threshold^2; it stops taking samples
+   only when its eight neighbours are converged too (dilation: the boundary between stopped and
+   running pixels always lies inside converged image, so no seam appears), and once stopped it
+   stays stopped. Every decision is taken between passes on the calling thread from the film
+   alone, so the image stays independent of the thread count. Memory: 6 bytes per block and
+   12 per tile besides the film.
+   Bias: a block stops when its noisy estimate first dips below the threshold, and the
+   estimate is correlated with the pixel values (a brighter-than-expected I lowers the relative
+   error). The bias this causes is of the order of the remaining noise; the minimum sample count
+   and the 64-pixel pooling keep it small (README: measured figures).
    ------------------------------------------------------------------------------------------ */
+
+#define PT__BLOCK 8 /* adaptive sampling: block size in pixels */
 
 static double pt__now(void)
 {
@@ -3781,7 +3893,11 @@ typedef struct pt__pass {
     uint64_t seed;
     int tile_size, tiles_x, spp;
     const volatile int *cancel;
+    const int *jobs;            /* job i renders tile jobs[i] */
+    const unsigned char *block_active; /* adaptive: 1 per block that still takes samples; NULL: all */
+    int blocks_x;
     pt_path_stats *tile_stats;  /* one per tile */
+    uint64_t *tile_samples;     /* one per tile */
     unsigned char *tile_done;   /* one per tile */
 #ifndef PDFTRACE_NO_THREADS
     pthread_mutex_t lock;
@@ -3789,13 +3905,15 @@ typedef struct pt__pass {
 #endif
 } pt__pass;
 
-static void pt__render_tile(void *data, int index)
+static void pt__render_tile(void *data, int job)
 {
     pt__pass *ps = (pt__pass *)data;
     pt_film *film = ps->film;
+    int index = ps->jobs[job];
     int tx = index % ps->tiles_x, ty = index / ps->tiles_x;
     int x0 = tx * ps->tile_size, y0 = ty * ps->tile_size;
     int x1 = x0 + ps->tile_size, y1 = y0 + ps->tile_size, x, y, k;
+    uint64_t taken = 0;
     pt_path_stats st;
     if (ps->cancel && *ps->cancel) return;
     memset(&st, 0, sizeof st);
@@ -3805,20 +3923,25 @@ static void pt__render_tile(void *data, int index)
         for (x = x0; x < x1; ++x) {
             uint32_t pix = (uint32_t)y * (uint32_t)film->width + (uint32_t)x;
             uint32_t base = film->count[pix];
-            double *sum = film->sum + 3u * pix, *sq = film->sum_sq + 3u * pix;
+            double *sum = film->sum + 3u * pix, *sq = film->sum_sq + 3u * pix, *odd = film->sum_odd + 3u * pix;
+            if (ps->block_active && !ps->block_active[(y / PT__BLOCK) * ps->blocks_x + x / PT__BLOCK]) continue;
             for (k = 0; k < ps->spp; ++k) {
-                pt_rng rng = pt_rng_for_sample(ps->seed, pix, base + (uint32_t)k);
+                uint32_t index_k = base + (uint32_t)k;
+                pt_rng rng = pt_rng_for_sample(ps->seed, pix, index_k);
                 float jx = pt_rng_float(&rng), jy = pt_rng_float(&rng);
                 float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
                 pt_ray r = pt_camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
                 pt_color L = pt__sample(ps->scene, ps->cfg, r, &rng, &st);
                 sum[0] += L.x; sum[1] += L.y; sum[2] += L.z;
                 sq[0] += (double)L.x * L.x; sq[1] += (double)L.y * L.y; sq[2] += (double)L.z * L.z;
+                if (index_k & 1u) { odd[0] += L.x; odd[1] += L.y; odd[2] += L.z; }
             }
             film->count[pix] = base + (uint32_t)ps->spp;
+            taken += (uint64_t)ps->spp;
         }
     }
     ps->tile_stats[index] = st;
+    ps->tile_samples[index] = taken;
     ps->tile_done[index] = 1;
 }
 
@@ -3860,22 +3983,22 @@ static void *pt__worker(void *data)
 }
 #endif
 
-/* Runs every tile of a pass; returns the number of threads used. */
-static int pt__run_pass(pt__pass *ps, int tiles, int threads, const pt_render_desc *d)
+/* Runs `jobs` tiles (ps->jobs) of a pass; returns the number of threads used. */
+static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_desc *d)
 {
     int i;
     pt_job_fn job = pt__tile_job(ps->scene);
     if (d->parallel_for) {
-        d->parallel_for(d->parallel_for_user, tiles, job, ps);
+        d->parallel_for(d->parallel_for_user, jobs, job, ps);
         return threads;
     }
 #ifndef PDFTRACE_NO_THREADS
-    if (threads > 1 && tiles > 1) {
+    if (threads > 1 && jobs > 1) {
         pthread_t tid[256];
-        int started = 0, n = threads > tiles ? tiles : threads;
+        int started = 0, n = threads > jobs ? jobs : threads;
         if (n > 256) n = 256;
         ps->next = 0;
-        ps->count = tiles;
+        ps->count = jobs;
         for (i = 0; i < n - 1; ++i) {
             if (pthread_create(&tid[i], NULL, pt__worker, ps) != 0) break; /* fewer threads: still correct */
             started++;
@@ -3885,8 +4008,49 @@ static int pt__run_pass(pt__pass *ps, int tiles, int threads, const pt_render_de
         return started + 1;
     }
 #endif
-    for (i = 0; i < tiles; ++i) job(ps, i);
+    for (i = 0; i < jobs; ++i) job(ps, i);
     return 1;
+}
+
+/* Adaptive sampling state of one pt_render call (see the comment at the top of section 8). */
+typedef struct pt__adaptive {
+    double limit;              /* threshold^2: a block is converged when its estimate is below */
+    int min_spp, check_passes;
+    int blocks_x, blocks_y;
+    unsigned char *active;     /* 1 per block: still taking samples */
+    unsigned char *converged;  /* 1 per block: estimate below the limit at the last check */
+    uint32_t *stopped_at;      /* 1 per block: samples this render had added when it stopped */
+} pt__adaptive;
+
+/* Re-checks every active block; stops the converged blocks whose neighbours are converged too. */
+static void pt__adaptive_check(pt__adaptive *a, const pt_film *film, uint32_t added)
+{
+    int bx, by, b;
+    for (by = 0; by < a->blocks_y; ++by)
+        for (bx = 0; bx < a->blocks_x; ++bx) {
+            int b = by * a->blocks_x + bx;
+            double e = 0.0;
+            if (!a->active[b]) continue;
+            (void)pt_film_error(film, bx * PT__BLOCK, by * PT__BLOCK, (bx + 1) * PT__BLOCK, (by + 1) * PT__BLOCK, &e);
+            a->converged[b] = e < a->limit;
+        }
+    for (by = 0; by < a->blocks_y; ++by)
+        for (bx = 0; bx < a->blocks_x; ++bx) {
+            int b = by * a->blocks_x + bx, nx, ny, all = 1;
+            if (!a->active[b]) continue;
+            for (ny = by - 1; ny <= by + 1 && all; ++ny)
+                for (nx = bx - 1; nx <= bx + 1; ++nx)
+                    if (nx >= 0 && ny >= 0 && nx < a->blocks_x && ny < a->blocks_y &&
+                        !a->converged[ny * a->blocks_x + nx]) { all = 0; break; }
+            /* decided from the converged flags alone (2 = stops after this check), so the
+               result does not depend on the scan order */
+            if (all) a->active[b] = 2;
+        }
+    for (b = 0; b < a->blocks_y * a->blocks_x; ++b)
+        if (a->active[b] == 2) {
+            a->active[b] = 0;
+            a->stopped_at[b] = added;
+        }
 }
 
 PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
@@ -3894,11 +4058,15 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     pt__settings cfg;
     pt_camera cam;
     pt__pass ps;
+    pt__adaptive ad;
     int rc, spp, per_pass, passes, pass, tiles, tiles_x, tiles_y, tile, threads, used = 1, result = PT_OK;
+    int jobs, *job_list = NULL, adaptive = d ? d->adaptive_threshold != 0.0f : 0;
     uint64_t done = 0;
+    uint32_t added = 0;
     double t0 = pt__now();
     pt_render_stats total;
     memset(&total, 0, sizeof total);
+    memset(&ad, 0, sizeof ad);
     if (stats) memset(stats, 0, sizeof *stats);
     if (!s || !d || !film) return PT_ERROR_INVALID_ARGUMENT;
     if (!s->committed)
@@ -3907,11 +4075,19 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
         d->tile_size < 0)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "render: width %d, height %d, samples %d: sizes must be > 0",
                         d->width, d->height, d->samples_per_pixel);
-    if (!film->sum || !film->sum_sq || !film->count || film->width != d->width || film->height != d->height)
+    if (!film->sum || !film->sum_sq || !film->count || !film->sum_odd || film->width != d->width ||
+        film->height != d->height)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "render: the film is not initialised to %dx%d", d->width,
                         d->height);
     if ((rc = pt__settings_from_desc(d, &cfg)) != PT_OK)
-        return pt__fail(s, rc, "render: invalid settings (strategy, light_weight, max_depth, background or guide)");
+        return pt__fail(s, rc, "render: invalid settings (strategy, light_weight, max_depth, background, guide or "
+                               "disable_skips)");
+    if (!pt__isfinite(d->adaptive_threshold) || d->adaptive_threshold < 0.0f || d->adaptive_min_spp < 0 ||
+        d->adaptive_min_spp == 1 || d->adaptive_check_passes < 0)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "render: adaptive_threshold %g (finite, >= 0), adaptive_min_spp %d (0 or >= 2), "
+                        "adaptive_check_passes %d (>= 0)", (double)d->adaptive_threshold, d->adaptive_min_spp,
+                        d->adaptive_check_passes);
     if ((rc = pt_camera_init(&cam, &d->camera, d->width, d->height)) != PT_OK)
         return pt__fail(s, rc, "render: invalid camera (look_from == look_at, up parallel to the view, fov ...)");
     spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
@@ -3935,40 +4111,55 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     ps.tiles_x = tiles_x;
     ps.cancel = d->cancel;
     ps.tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)tiles);
+    ps.tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)tiles);
     ps.tile_done = (unsigned char *)PT_MALLOC((size_t)tiles);
-    if (!ps.tile_stats || !ps.tile_done) {
-        PT_FREE(ps.tile_stats);
-        PT_FREE(ps.tile_done);
-        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "render: out of memory");
+    job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)tiles);
+    if (adaptive) {
+        size_t nb;
+        ad.limit = (double)d->adaptive_threshold * (double)d->adaptive_threshold;
+        ad.min_spp = d->adaptive_min_spp ? d->adaptive_min_spp : (spp / 8 > 8 ? spp / 8 : 8);
+        ad.check_passes = d->adaptive_check_passes ? d->adaptive_check_passes : 1;
+        ad.blocks_x = (d->width + PT__BLOCK - 1) / PT__BLOCK;
+        ad.blocks_y = (d->height + PT__BLOCK - 1) / PT__BLOCK;
+        nb = (size_t)ad.blocks_x * (size_t)ad.blocks_y;
+        ad.active = (unsigned char *)PT_MALLOC(nb);
+        ad.converged = (unsigned char *)PT_MALLOC(nb);
+        ad.stopped_at = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * nb);
+        if (ad.active) memset(ad.active, 1, nb);
+        if (ad.converged) memset(ad.converged, 0, nb);
+        if (ad.stopped_at) memset(ad.stopped_at, 0, sizeof(uint32_t) * nb);
+        ps.block_active = ad.active;
+        ps.blocks_x = ad.blocks_x;
     }
+    if (!ps.tile_stats || !ps.tile_samples || !ps.tile_done || !job_list ||
+        (adaptive && (!ad.active || !ad.converged || !ad.stopped_at))) {
+        result = pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "render: out of memory");
+        goto cleanup;
+    }
+    for (tile = 0; tile < tiles; ++tile) job_list[tile] = tile;
+    jobs = tiles;
+    ps.jobs = job_list;
 #ifndef PDFTRACE_NO_THREADS
     if (pthread_mutex_init(&ps.lock, NULL) != 0) {
-        PT_FREE(ps.tile_stats);
-        PT_FREE(ps.tile_done);
-        return pt__fail(s, PT_ERROR_THREAD, "render: pthread_mutex_init failed");
+        result = pt__fail(s, PT_ERROR_THREAD, "render: pthread_mutex_init failed");
+        goto cleanup;
     }
 #endif
-    for (pass = 0; pass < passes; ++pass) {
-        int all_done = 1;
+    for (pass = 0; pass < passes && jobs > 0; ++pass) {
+        int all_done = 1, j;
         ps.spp = (pass == passes - 1) ? spp - per_pass * (passes - 1) : per_pass;
-        memset(ps.tile_stats, 0, sizeof(pt_path_stats) * (size_t)tiles);
-        memset(ps.tile_done, 0, (size_t)tiles);
-        used = pt__run_pass(&ps, tiles, threads, d);
-        for (tile = 0; tile < tiles; ++tile) {
-            const pt_path_stats *ts = &ps.tile_stats[tile];
-            if (!ps.tile_done[tile]) { all_done = 0; continue; }
+        for (j = 0; j < jobs; ++j) ps.tile_done[job_list[j]] = 0;
+        used = pt__run_pass(&ps, jobs, threads, d);
+        for (j = 0; j < jobs; ++j) {
+            const pt_path_stats *ts = &ps.tile_stats[job_list[j]];
+            if (!ps.tile_done[job_list[j]]) { all_done = 0; continue; }
             total.camera_rays += ts->camera_rays;
             total.bounce_rays += ts->bounce_rays;
             total.shadow_rays += ts->shadow_rays;
             total.nonfinite_samples += ts->nonfinite_samples;
-            {
-                int tx = tile % tiles_x, ty = tile / tiles_x;
-                int w = d->width - tx * ps.tile_size, h = d->height - ty * ps.tile_size;
-                if (w > ps.tile_size) w = ps.tile_size;
-                if (h > ps.tile_size) h = ps.tile_size;
-                done += (uint64_t)w * (uint64_t)h * (uint64_t)ps.spp;
-            }
+            done += ps.tile_samples[job_list[j]];
         }
+        added += (uint32_t)ps.spp;
         total.passes = pass + 1;
         if (!all_done || (d->cancel && *d->cancel)) { result = PT_ERROR_CANCELLED; break; }
         if (d->progress) {
@@ -3980,12 +4171,49 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
             pr.seconds = pt__now() - t0;
             if (d->progress(d->progress_user, &pr)) { result = PT_ERROR_CANCELLED; break; }
         }
+        if (adaptive && pass + 1 < passes && added >= (uint32_t)ad.min_spp && (pass + 1) % ad.check_passes == 0) {
+            pt__adaptive_check(&ad, film, added);
+            /* the next pass renders only the tiles that still hold an active block */
+            jobs = 0;
+            for (tile = 0; tile < tiles; ++tile) {
+                int bx0 = (tile % tiles_x) * ps.tile_size / PT__BLOCK, by0 = (tile / tiles_x) * ps.tile_size / PT__BLOCK;
+                int bx1 = ((tile % tiles_x + 1) * ps.tile_size - 1) / PT__BLOCK;
+                int by1 = ((tile / tiles_x + 1) * ps.tile_size - 1) / PT__BLOCK, bx, by, any = 0;
+                if (bx1 >= ad.blocks_x) bx1 = ad.blocks_x - 1;
+                if (by1 >= ad.blocks_y) by1 = ad.blocks_y - 1;
+                for (by = by0; by <= by1 && !any; ++by)
+                    for (bx = bx0; bx <= bx1; ++bx)
+                        if (ad.active[by * ad.blocks_x + bx]) { any = 1; break; }
+                if (any) job_list[jobs++] = tile;
+            }
+        }
+    }
+    total.min_spp = total.max_spp = added;
+    if (adaptive) {
+        int bx, by;
+        for (by = 0; by < ad.blocks_y; ++by)
+            for (bx = 0; bx < ad.blocks_x; ++bx) {
+                int b = by * ad.blocks_x + bx;
+                int w = d->width - bx * PT__BLOCK, h = d->height - by * PT__BLOCK;
+                uint32_t n = ad.active[b] ? added : ad.stopped_at[b];
+                if (w > PT__BLOCK) w = PT__BLOCK;
+                if (h > PT__BLOCK) h = PT__BLOCK;
+                if (!ad.active[b]) total.pixels_converged += (uint64_t)w * (uint64_t)h;
+                if (n < total.min_spp) total.min_spp = n;
+            }
     }
 #ifndef PDFTRACE_NO_THREADS
     pthread_mutex_destroy(&ps.lock);
 #endif
+cleanup:
     PT_FREE(ps.tile_stats);
+    PT_FREE(ps.tile_samples);
     PT_FREE(ps.tile_done);
+    PT_FREE(job_list);
+    PT_FREE(ad.active);
+    PT_FREE(ad.converged);
+    PT_FREE(ad.stopped_at);
+    if (result != PT_OK && result != PT_ERROR_CANCELLED) return result;
     total.samples = done;
     total.seconds = pt__now() - t0;
     total.threads = used;
@@ -4030,7 +4258,8 @@ PTDEF int pt_film_init(pt_film *f, int w, int h)
     f->sum = (double *)PT_MALLOC(sizeof(double) * 3u * n);
     f->sum_sq = (double *)PT_MALLOC(sizeof(double) * 3u * n);
     f->count = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * n);
-    if (!f->sum || !f->sum_sq || !f->count) {
+    f->sum_odd = (double *)PT_MALLOC(sizeof(double) * 3u * n);
+    if (!f->sum || !f->sum_sq || !f->count || !f->sum_odd) {
         pt_film_free(f);
         return PT_ERROR_OUT_OF_MEMORY;
     }
@@ -4045,15 +4274,17 @@ PTDEF void pt_film_free(pt_film *f)
     PT_FREE(f->sum);
     PT_FREE(f->sum_sq);
     PT_FREE(f->count);
+    PT_FREE(f->sum_odd);
     memset(f, 0, sizeof *f);
 }
 PTDEF void pt_film_clear(pt_film *f)
 {
     size_t n;
-    if (!f || !f->sum || !pt__pixels(f->width, f->height, &n)) return;
+    if (!f || !f->sum || !f->sum_sq || !f->count || !f->sum_odd || !pt__pixels(f->width, f->height, &n)) return;
     memset(f->sum, 0, sizeof(double) * 3u * n);
     memset(f->sum_sq, 0, sizeof(double) * 3u * n);
     memset(f->count, 0, sizeof(uint32_t) * n);
+    memset(f->sum_odd, 0, sizeof(double) * 3u * n);
 }
 PTDEF int pt_image_init(pt_image *img, int w, int h)
 {
@@ -4105,6 +4336,38 @@ PTDEF int pt_film_pixel(const pt_film *f, int x, int y, pt_color *mean, pt_color
     }
     if (mean) *mean = pt_v3((float)m[0], (float)m[1], (float)m[2]);
     if (var_of_mean) *var_of_mean = pt_v3((float)v[0], (float)v[1], (float)v[2]);
+    return PT_OK;
+}
+
+PTDEF int pt_film_error(const pt_film *f, int x0, int y0, int x1, int y1, double *rel_mse)
+{
+    int x, y, c;
+    double acc = 0.0;
+    if (rel_mse) *rel_mse = 0.0;
+    if (!f || !f->sum || !f->count || !f->sum_odd || !rel_mse) return PT_ERROR_INVALID_ARGUMENT;
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 > f->width) x1 = f->width;
+    if (y1 > f->height) y1 = f->height;
+    if (x0 >= x1 || y0 >= y1) return PT_ERROR_INVALID_ARGUMENT;
+    for (y = y0; y < y1; ++y)
+        for (x = x0; x < x1; ++x) {
+            size_t i = (size_t)y * (size_t)f->width + (size_t)x;
+            uint32_t n = f->count[i], nb = n / 2u, na = n - nb; /* sample indices 0..n-1: nb odd ones */
+            double dn = (double)n, scale;
+            if (n < 2u) {
+                *rel_mse = HUGE_VAL;
+                return PT_OK;
+            }
+            scale = (double)na * (double)nb / (dn * dn);
+            for (c = 0; c < 3; ++c) {
+                double sb = f->sum_odd[3u * i + (size_t)c], sum = f->sum[3u * i + (size_t)c];
+                double a = (sum - sb) / (double)na, b = sb / (double)nb, m = sum / dn;
+                acc += (a - b) * (a - b) * scale / (m * m + 0.01);
+            }
+        }
+    *rel_mse = acc / (3.0 * (double)(x1 - x0) * (double)(y1 - y0));
+    if (!(*rel_mse < HUGE_VAL)) *rel_mse = HUGE_VAL; /* NaN from overflowing sums counts as unknown */
     return PT_OK;
 }
 

@@ -33,6 +33,9 @@ typedef struct options {
     const char *outputs[MAX_OUTPUTS];
     int output_count;
     const char *scene;   /* --scene PATH, or NULL for the built-in Cornell box */
+    float adaptive;      /* --adaptive THRESHOLD, 0 = off */
+    int adaptive_min_spp, adaptive_check;
+    unsigned disable_skips; /* PT_SKIP_* bits */
     unsigned given;      /* GIVEN_* bits: options set on the command line win over the scene file */
 } options;
 
@@ -124,6 +127,17 @@ static void usage(FILE *f)
         "      --scene PATH      render a scene file (format: pdftrace.h, section 10) instead of\n"
         "                        the built-in box; its size, spp, depth, strategy and seed are the\n"
         "                        defaults, options given here override them\n"
+        "      --adaptive T      adaptive sampling: 8x8 blocks stop once their estimated RMS relative\n"
+        "                        error is below T (e.g. 0.05) and so is their neighbours'; --spp is\n"
+        "                        then the most a pixel gets (default 0 = off)\n"
+        "      --adaptive-min-spp N  samples every pixel gets before it can stop, >= 2\n"
+        "                        (default max(8, spp/8))\n"
+        "      --adaptive-check N    re-check the blocks every N passes (default 1)\n"
+        "      --disable-skips L force the general path for the scene-feature skips in the\n"
+        "                        comma-separated list L, or 'all': no-emitters, light-selection,\n"
+        "                        delta-vertex, facing-away, no-textures, no-triangles,\n"
+        "                        zero-bsdf-shadow (for benchmarks; the image is the same in\n"
+        "                        expectation)\n"
         "      --help            show this help and exit\n"
         "\n"
         "Long options also accept --name=value.\n",
@@ -186,6 +200,53 @@ static int parse_light_weight(const char *opt, const char *text, float *out)
         return fail("option %s: expected a number in (0, 1], got '%s'", opt, text);
     }
     *out = (float)v;
+    return 1;
+}
+
+static int parse_threshold(const char *opt, const char *text, float *out)
+{
+    char *end;
+    double v;
+    errno = 0;
+    v = strtod(text, &end);
+    /* !(v >= 0 && v < 1e30) also rejects NaN and infinity. */
+    if (text[0] == '\0' || *end != '\0' || errno == ERANGE || !(v >= 0.0 && v < 1e30)) {
+        return fail("option %s: expected a finite number >= 0, got '%s'", opt, text);
+    }
+    *out = (float)v;
+    return 1;
+}
+
+static const struct { const char *name; unsigned bit; } skip_names[] = {
+    { "no-emitters", PT_SKIP_NO_EMITTERS },       { "light-selection", PT_SKIP_LIGHT_SELECTION },
+    { "delta-vertex", PT_SKIP_DELTA_VERTEX },     { "facing-away", PT_SKIP_FACING_AWAY },
+    { "no-textures", PT_SKIP_NO_TEXTURES },       { "no-triangles", PT_SKIP_NO_TRIANGLES },
+    { "zero-bsdf-shadow", PT_SKIP_ZERO_BSDF_SHADOW }
+};
+
+/* "all" or a comma-separated list of the names above. */
+static int parse_skips(const char *opt, const char *text, unsigned *out)
+{
+    const char *p = text;
+    unsigned bits = 0;
+    if (strcmp(text, "all") == 0) {
+        *out = PT_SKIP_ALL;
+        return 1;
+    }
+    for (;;) {
+        const char *comma = strchr(p, ',');
+        size_t n = comma ? (size_t)(comma - p) : strlen(p), k;
+        int found = 0;
+        for (k = 0; k < sizeof skip_names / sizeof skip_names[0]; k++)
+            if (strlen(skip_names[k].name) == n && strncmp(p, skip_names[k].name, n) == 0) {
+                bits |= skip_names[k].bit;
+                found = 1;
+            }
+        if (!found) return fail("option %s: unknown skip '%.*s' (see --help)", opt, (int)n, p);
+        if (!comma) break;
+        p = comma + 1;
+    }
+    *out = bits;
     return 1;
 }
 
@@ -261,6 +322,10 @@ static int parse_options(int argc, char **argv, options *o)
     o->output_count = 0;
     o->scene = NULL;
     o->given = 0;
+    o->adaptive = 0.0f;
+    o->adaptive_min_spp = 0;
+    o->adaptive_check = 0;
+    o->disable_skips = 0;
 
     for (i = 1; i < argc; i++) {
         const char *arg = argv[i];
@@ -295,7 +360,8 @@ static int parse_options(int argc, char **argv, options *o)
             strcmp(name, "--spp") && strcmp(name, "--strategy") && strcmp(name, "--light-weight") &&
             strcmp(name, "--max-depth") && strcmp(name, "--threads") && strcmp(name, "--seed") &&
             strcmp(name, "-o") && strcmp(name, "--output") && strcmp(name, "--ppm") && strcmp(name, "--pfm") &&
-            strcmp(name, "--scene")) {
+            strcmp(name, "--scene") && strcmp(name, "--adaptive") && strcmp(name, "--adaptive-min-spp") &&
+            strcmp(name, "--adaptive-check") && strcmp(name, "--disable-skips")) {
             return fail("unknown option '%s'", arg);
         }
         if (!value) {
@@ -325,6 +391,14 @@ static int parse_options(int argc, char **argv, options *o)
         } else if (!strcmp(name, "--seed")) {
             if (!parse_u64(name, value, &o->seed)) return 0;
             o->given |= GIVEN_SEED;
+        } else if (!strcmp(name, "--adaptive")) {
+            if (!parse_threshold(name, value, &o->adaptive)) return 0;
+        } else if (!strcmp(name, "--adaptive-min-spp")) {
+            if (!parse_int(name, value, 2, 1 << 20, &o->adaptive_min_spp)) return 0;
+        } else if (!strcmp(name, "--adaptive-check")) {
+            if (!parse_int(name, value, 1, 1 << 20, &o->adaptive_check)) return 0;
+        } else if (!strcmp(name, "--disable-skips")) {
+            if (!parse_skips(name, value, &o->disable_skips)) return 0;
         } else if (!strcmp(name, "--scene")) {
             if (o->scene) return fail("option %s given twice", name);
             if (!*value) return fail("option %s: empty path", name);
@@ -369,6 +443,13 @@ static void print_stats(const options *o, const pt_render_stats *st)
     printf("time       %.3f s on %d thread%s, %d pass%s\n", st->seconds, st->threads, st->threads == 1 ? "" : "s",
            st->passes, st->passes == 1 ? "" : "es");
     printf("samples    %llu (%.3f M samples/s)\n", (unsigned long long)st->samples, (double)st->samples / secs * 1e-6);
+    if (o->adaptive > 0.0f)
+        printf("adaptive   threshold %g: %llu of %llu pixels converged early (%.1f%%), %u to %u spp, mean %.1f\n",
+               (double)o->adaptive, (unsigned long long)st->pixels_converged,
+               (unsigned long long)o->width * (unsigned long long)o->height,
+               100.0 * (double)st->pixels_converged / ((double)o->width * (double)o->height), st->min_spp,
+               st->max_spp, (double)st->samples / ((double)o->width * (double)o->height));
+    if (o->disable_skips) printf("skips      general path forced for mask 0x%x\n", o->disable_skips);
     printf("rays       %llu camera + %llu bounce + %llu shadow = %llu\n", (unsigned long long)st->camera_rays,
            (unsigned long long)st->bounce_rays, (unsigned long long)st->shadow_rays, (unsigned long long)rays);
     printf("rays/s     %.3f M\n", (double)rays / secs * 1e-6);
@@ -439,6 +520,10 @@ int main(int argc, char **argv)
     desc.max_depth = opt.max_depth;
     desc.threads = opt.threads;
     desc.seed = opt.seed;
+    desc.adaptive_threshold = opt.adaptive;
+    desc.adaptive_min_spp = opt.adaptive_min_spp;
+    desc.adaptive_check_passes = opt.adaptive_check;
+    desc.disable_skips = opt.disable_skips;
     if (!opt.quiet) {
         desc.progress = show_progress;
         desc.progress_user = &stderr_is_tty;
