@@ -732,7 +732,9 @@ PTDEF int pt_render(const pt_scene *scene, const pt_render_desc *desc, pt_film *
 PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_image *image, pt_render_stats *stats);
 /* Radiance along one camera ray: one path-traced sample, with the desc's strategy and depth.
    The desc's width, height and camera are not used. stats may be NULL. Non-finite results
-   are counted in stats and returned as zero. */
+   are counted in stats and returned as zero. The direction is normalised unless it is already
+   unit length to float precision (then it is used as given, so a pt_camera_ray sample traced
+   here equals the one pt_render takes). */
 PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, pt_ray ray, pt_rng *rng,
                              pt_path_stats *stats);
 
@@ -3823,7 +3825,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
     if (!s || !d || !rng || !s->committed || pt__settings_from_desc(d, &cfg) != PT_OK || !pt__vfinite(ray.origin) ||
         !pt__vfinite(ray.dir) || !(pt_length2(ray.dir) > 0.0f))
         return pt_v3(0, 0, 0);
-    ray.dir = pt_normalize(ray.dir);
+    if (!(fabsf(pt_length2(ray.dir) - 1.0f) <= 1e-6f)) ray.dir = pt_normalize(ray.dir); /* unit: as given */
     memset(&local, 0, sizeof local);
     L = pt__sample(s, &cfg, ray, rng, &local);
     if (stats) {

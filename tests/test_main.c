@@ -77,6 +77,7 @@ int main(int argc, char **argv)
         { "materials", test_materials_cases },
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
+        { "adaptive", test_adaptive_cases },
         { "output", test_output_cases },
         { "exr", test_exr_cases },
         { "embree", test_embree_cases },

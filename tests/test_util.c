@@ -954,7 +954,8 @@ int tu_film_equal(const pt_film *a, const pt_film *b)
     n = (size_t)a->width * (size_t)a->height;
     return memcmp(a->sum, b->sum, n * 3 * sizeof(double)) == 0 &&
            memcmp(a->sum_sq, b->sum_sq, n * 3 * sizeof(double)) == 0 &&
-           memcmp(a->count, b->count, n * sizeof(uint32_t)) == 0;
+           memcmp(a->count, b->count, n * sizeof(uint32_t)) == 0 &&
+           memcmp(a->sum_odd, b->sum_odd, n * 3 * sizeof(double)) == 0;
 }
 
 /* ------------------------------------------------------------------------------------------ */

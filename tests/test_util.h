@@ -197,7 +197,7 @@ typedef struct tu_region { double mean[3], se[3]; int pixels; } tu_region;
 /* Splits the film into rx * ry regions (row-major, region 0 top-left) and computes each region's
    mean and its standard error from pt_film_pixel's per-pixel variance of the mean. */
 int tu_film_regions(const pt_film *f, int rx, int ry, tu_region *out);
-int tu_film_equal(const pt_film *a, const pt_film *b); /* bit-identical sums, squares and counts */
+int tu_film_equal(const pt_film *a, const pt_film *b); /* bit-identical sums, squares, counts, half-buffers */
 
 /* ---- analytic images: a Lambertian plane lit by one light, direct light only ----
    The plane y = 0 (albedo rho) under one emitter of radiance L (a sphere, a quad or a triangle, all

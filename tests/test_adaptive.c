@@ -1,0 +1,510 @@
+#define _POSIX_C_SOURCE 200809L
+/* test_adaptive.c - adaptive sampling (pdftrace.h section 8) and the scene-feature skip switches
+   (PT_SKIP_*, section 7).
+
+   adaptive: easy blocks stop and noisy ones keep sampling, with the dilation that keeps a converged
+   block running beside an unconverged one; every stopped block's error estimate (recomputed here
+   from the film's half-buffers with separate code) is below the threshold; the image mean agrees
+   with a uniform render; films are bit-identical across thread counts, tile sizes and host
+   parallel-fors; threshold 0 is the uniform path bit for bit (checked against a render rebuilt
+   here from pt_trace_path); invalid settings are rejected before anything is rendered.
+   skips: each PT_SKIP_* bit's general path gives the same image: bit for bit where the skip is
+   exact, within noise (per-region z-tests) where it draws random numbers differently.
+
+   Statistical checks use fixed seeds. The z-tests of this file form one family: alpha = 0.01,
+   Sidak-corrected over ADAPTIVE_Z_TESTS comparisons. */
+#include "test_util.h"
+
+#ifndef PDFTRACE_NO_THREADS
+#include <pthread.h>
+#endif
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define ADAPTIVE_Z_TESTS 128 /* 16 regions x (1 adaptive-vs-uniform + 7 skip comparisons) */
+#define FAMILY_ALPHA 0.01
+
+static double z_limit(void) { return tu_z_two_sided(tu_sidak(FAMILY_ALPHA, ADAPTIVE_Z_TESTS)); }
+
+static int render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *st,
+                       const char *what)
+{
+    int rc;
+    pt_render_stats local;
+    if (!st) st = &local;
+    if (!CHECK(t, pt_film_init(film, d->width, d->height) == PT_OK, "%s: film", what)) return 0;
+    rc = pt_render(s, d, film, st);
+    CHECK(t, rc == PT_OK, "%s: pt_render returned %d (%s)", what, rc, pt_result_string(rc));
+    CHECK(t, st->nonfinite_samples == 0, "%s: %llu non-finite samples", what, (unsigned long long)st->nonfinite_samples);
+    return rc == PT_OK;
+}
+
+/* Per-region z-tests (4 x 4 regions, channel 1) between two renders of the same expectation.
+   Returns the number of regions with |z| above the family limit; *worst gets the largest |z|. */
+static int compare_regions(const pt_film *a, const pt_film *b, double *worst)
+{
+    tu_region ra[16], rb[16];
+    int i, fails = 0;
+    double zlim = z_limit();
+    tu_film_regions(a, 4, 4, ra);
+    tu_film_regions(b, 4, 4, rb);
+    for (i = 0; i < 16; i++) {
+        double se = sqrt(ra[i].se[1] * ra[i].se[1] + rb[i].se[1] * rb[i].se[1]);
+        double z = tu_z_floor(ra[i].mean[1], rb[i].mean[1], se, TU_FLOAT_FLOOR * fabs(rb[i].mean[1]));
+        if (z > *worst) *worst = z;
+        fails += z > zlim;
+    }
+    return fails;
+}
+
+/* The test's own error estimate for the pixels of [x0,x1) x [y0,y1), from the film's sums: the mean
+   over pixels and channels of Var(I)/(I^2 + 0.01), Var(I) estimated from the half means A (even
+   sample indices) and B (odd) as (A - B)^2 nA nB / n^2. */
+static double block_estimate(const pt_film *f, int x0, int y0, int x1, int y1)
+{
+    double acc = 0;
+    int x, y, c, terms = 0;
+    for (y = y0; y < y1 && y < f->height; y++)
+        for (x = x0; x < x1 && x < f->width; x++) {
+            size_t i = (size_t)y * f->width + x;
+            double n = f->count[i], nb = (double)(f->count[i] / 2), na = n - nb;
+            for (c = 0; c < 3; c++) {
+                double sb = f->sum_odd[3 * i + c], s = f->sum[3 * i + c];
+                double a = (s - sb) / na, b = sb / nb, m = s / n;
+                acc += (a - b) * (a - b) * na * nb / (n * n) / (m * m + 0.01);
+                terms++;
+            }
+        }
+    return acc / terms;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* scenes                                                                                      */
+
+/* A wall z = 0 seen head-on (screen right is -x) under a sky of radiance 1: its part on the
+   image's left (x > 0) is a two-sided emitter of radiance 1 (every sample exactly 1: zero
+   variance), the rest a Lambertian wall with a checker far finer than a pixel (albedo 0.1 or 0.9
+   at random under the pixel jitter; every bounce sees radiance 1, so a sample is its albedo:
+   noisy). The image is 64 x 16, the boundary at the centre of pixel column 32, so 8x8 blocks 0-3
+   of each row see only the emitter. */
+static pt_scene *half_easy_scene(pt_render_desc *d)
+{
+    pt_scene *s = pt_scene_create();
+    pt_material_desc md;
+    int glow, wall, fine, rc;
+    float half_w;
+    if (!s) return NULL;
+    glow = pt_scene_add_emitter(s, pt_v3(1, 1, 1), 1);
+    fine = pt_scene_add_checker(s, pt_v3(0.1f, 0.1f, 0.1f), pt_v3(0.9f, 0.9f, 0.9f), 0.0013f);
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_LAMBERTIAN;
+    md.albedo_texture = fine;
+    wall = pt_scene_add_material(s, &md);
+    /* vfov 30 at distance 10: half height 10 tan 15deg, half width 4x that (64 x 16 pixels) */
+    half_w = 4.0f * 10.0f * (float)tan(15.0 * TU_PI / 180.0);
+    /* the boundary: half a pixel right of the image centre, at x = -(pixel width 2 half_w / 64) / 2 */
+    rc = pt_scene_add_quad(s, pt_v3(-half_w / 64.0f, -50, 0), pt_v3(50, 0, 0), pt_v3(0, 100, 0), glow);
+    rc |= pt_scene_add_quad(s, pt_v3(-50, -50, 0), pt_v3(50.0f - half_w / 64.0f, 0, 0), pt_v3(0, 100, 0), wall);
+    if (fine < 0 || wall < 0 || rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    *d = tu_base_desc(64, 16, 64, 99);
+    d->camera.look_from = pt_v3(0, 0, -10);
+    d->camera.look_at = pt_v3(0, 0, 0);
+    d->camera.vfov_degrees = 30;
+    d->strategy = PT_STRATEGY_MATERIAL;
+    d->background = pt_v3(1, 1, 1);
+    return s;
+}
+
+/* A small box room lit by a quad light, with a mirror, a glass and a white sphere: noise that
+   varies over the image, every skip but "no emitters" and "no triangles" applicable. */
+static pt_scene *room_scene(pt_render_desc *d, int w, int h, int spp)
+{
+    pt_scene *s = pt_scene_create();
+    int white, red, light, mirror, glass, rc;
+    if (!s) return NULL;
+    white = pt_scene_add_lambertian(s, pt_v3(0.7f, 0.7f, 0.7f));
+    red = pt_scene_add_lambertian(s, pt_v3(0.7f, 0.1f, 0.1f));
+    light = pt_scene_add_emitter(s, pt_v3(12, 12, 12), 0);
+    mirror = pt_scene_add_metal(s, pt_v3(0.9f, 0.9f, 0.9f), 0);
+    glass = pt_scene_add_dielectric(s, 1.5f);
+    rc = pt_scene_add_quad(s, pt_v3(-2, 0, -2), pt_v3(4, 0, 0), pt_v3(0, 0, 4), white);     /* floor */
+    rc |= pt_scene_add_quad(s, pt_v3(-2, 3, -2), pt_v3(0, 0, 4), pt_v3(4, 0, 0), white);    /* ceiling */
+    rc |= pt_scene_add_quad(s, pt_v3(-2, 0, 2), pt_v3(4, 0, 0), pt_v3(0, 3, 0), white);     /* back */
+    rc |= pt_scene_add_quad(s, pt_v3(-2, 0, -2), pt_v3(0, 0, 4), pt_v3(0, 3, 0), red);      /* left */
+    rc |= pt_scene_add_quad(s, pt_v3(2, 0, -2), pt_v3(0, 3, 0), pt_v3(0, 0, 4), white);     /* right */
+    rc |= pt_scene_add_quad(s, pt_v3(-0.5f, 2.99f, -0.5f), pt_v3(1, 0, 0), pt_v3(0, 0, 1), light); /* faces down */
+    rc |= pt_scene_add_sphere(s, pt_v3(-0.8f, 0.6f, 0.5f), 0.6f, mirror);
+    rc |= pt_scene_add_sphere(s, pt_v3(0.9f, 0.5f, -0.2f), 0.5f, glass);
+    rc |= pt_scene_add_sphere(s, pt_v3(0.2f, 0.3f, 1.2f), 0.3f, white);
+    if (rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    *d = tu_base_desc(w, h, spp, 7);
+    d->camera.look_from = pt_v3(0, 1.5f, -5.5f);
+    d->camera.look_at = pt_v3(0, 1.3f, 0);
+    d->camera.vfov_degrees = 45;
+    d->max_depth = 8;
+    return s;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* adaptive sampling                                                                           */
+
+static void easy_region_stops(test_ctx *t)
+{
+    /* Blocks 0-2 of each row (all neighbours zero-variance emitter) stop at the first check; block 3
+       is converged too but borders block 4 (half emitter, half noisy wall), so dilation keeps it
+       sampling; blocks 4-7 never converge. */
+    pt_render_desc d;
+    pt_scene *s = half_easy_scene(&d);
+    pt_film f;
+    pt_render_stats st;
+    int x, y, bad_easy = 0, bad_rest = 0;
+    uint64_t below = 0;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.adaptive_threshold = 0.05f;
+    d.adaptive_min_spp = 8;
+    d.samples_per_pass = 4;
+    if (render_into(t, s, &d, &f, &st, "adaptive")) {
+        for (y = 0; y < 16; y++)
+            for (x = 0; x < 64; x++) {
+                uint32_t n = f.count[y * 64 + x];
+                below += n < 64u;
+                if (x < 24) bad_easy += n != 8u;  /* stopped at the first check, after 8 samples */
+                else bad_rest += n != 64u;
+            }
+        CHECK(t, bad_easy == 0, "%d pixels of blocks 0-2 did not stop after 8 samples", bad_easy);
+        CHECK(t, bad_rest == 0, "%d pixels of blocks 3-7 (block 3: dilation) got fewer than 64 samples", bad_rest);
+        CHECK(t, st.pixels_converged == below && below == 24u * 16u, "stats.pixels_converged %llu, film: %llu below 64 spp",
+              (unsigned long long)st.pixels_converged, (unsigned long long)below);
+        CHECK(t, st.min_spp == 8u && st.max_spp == 64u, "stats spp range %u..%u, want 8..64", st.min_spp, st.max_spp);
+        CHECK(t, st.samples == (uint64_t)24 * 16 * 8 + (uint64_t)40 * 16 * 64, "stats.samples %llu",
+              (unsigned long long)st.samples);
+        test_note(t, "%llu of 1024 pixels stopped at 8 spp, %llu samples", (unsigned long long)st.pixels_converged,
+                  (unsigned long long)st.samples);
+    }
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+}
+
+static void stopped_blocks_below_threshold(test_ctx *t)
+{
+    /* In a room with noise that varies over the image, every block that stopped early has an error
+       estimate below threshold^2 (a stopped block's film no longer changes, so the estimate at the
+       end is the one it stopped on), recomputed here with the test's own code; pt_film_error agrees
+       with it. Some blocks must stop and some must run to the end, so the test sees both. */
+    pt_render_desc d;
+    pt_scene *s = room_scene(&d, 48, 40, 64);
+    pt_film f;
+    pt_render_stats st;
+    const float T = 0.15f;
+    int bx, by, stopped = 0, running = 0, bad = 0, mismatch = 0;
+    double worst = 0;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.adaptive_threshold = T;
+    d.adaptive_check_passes = 2;
+    if (render_into(t, s, &d, &f, &st, "adaptive")) {
+        for (by = 0; by < 5; by++)
+            for (bx = 0; bx < 6; bx++) {
+                uint32_t n = f.count[(by * 8) * 48 + bx * 8];
+                double e = block_estimate(&f, bx * 8, by * 8, bx * 8 + 8, by * 8 + 8), lib = -1;
+                pt_film_error(&f, bx * 8, by * 8, bx * 8 + 8, by * 8 + 8, &lib);
+                mismatch += !(fabs(lib - e) <= 1e-9 * e + 1e-300);
+                if (n < 64u) {
+                    stopped++;
+                    bad += !(e < (double)T * T);
+                    if (e > worst) worst = e;
+                } else {
+                    running++;
+                }
+            }
+        CHECK(t, bad == 0, "%d stopped blocks have an error estimate >= threshold^2 (worst %.4g)", bad, worst);
+        CHECK(t, mismatch == 0, "pt_film_error differs from the test's estimate in %d blocks", mismatch);
+        CHECK(t, stopped > 0 && running > 0, "%d blocks stopped, %d ran to the end: want both", stopped, running);
+        CHECK(t, st.pixels_converged == (uint64_t)stopped * 64u, "stats.pixels_converged %llu, %d blocks stopped",
+              (unsigned long long)st.pixels_converged, stopped);
+        test_note(t, "%d of 30 blocks stopped, worst estimate %.3g < %.3g; %.1f spp on average", stopped, worst,
+                  (double)T * T, (double)st.samples / (48.0 * 40.0));
+    }
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+}
+
+static void mean_matches_uniform(test_ctx *t)
+{
+    /* The adaptive image against a uniform render with another seed: 16 region means (channel 1),
+       z-tests in the file's family. The bias of stopping on a noisy estimate must be below noise. */
+    pt_render_desc d;
+    pt_scene *s = room_scene(&d, 48, 40, 96);
+    pt_film a, u;
+    pt_render_stats sa, su;
+    double worst = 0;
+    int fails;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.adaptive_threshold = 0.25f;
+    d.adaptive_min_spp = 16;
+    if (render_into(t, s, &d, &a, &sa, "adaptive")) {
+        pt_render_desc e = d;
+        e.adaptive_threshold = 0;
+        e.seed = d.seed + 1000;
+        if (render_into(t, s, &e, &u, &su, "uniform")) {
+            fails = compare_regions(&a, &u, &worst);
+            CHECK(t, fails == 0, "%d of 16 regions differ (|z| > %.2f, max %.2f)", fails, z_limit(), worst);
+            CHECK(t, sa.pixels_converged > 0, "no pixel converged: the test does not exercise stopping");
+            test_note(t, "max |z| %.2f (limit %.2f), %.0f%% of pixels stopped early, %.0f%% of the samples", worst,
+                      z_limit(), 100.0 * (double)sa.pixels_converged / (48.0 * 40.0),
+                      100.0 * (double)sa.samples / (double)su.samples);
+        }
+        pt_film_free(&u);
+    }
+    pt_film_free(&a);
+    pt_scene_destroy(s);
+}
+
+static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
+{
+    int i;
+    (void)user;
+    for (i = count - 1; i >= 0; i--) job(job_data, i);
+}
+
+static void threads_bit_identical(test_ctx *t)
+{
+    /* The adaptive film with threads 1, 2, 3, tile size 5 and a host parallel-for running tiles in
+       reverse: identical bit for bit (sums, squares, half-buffers, counts), with stopped blocks. */
+    pt_render_desc d;
+    pt_scene *s = room_scene(&d, 40, 32, 32);
+    pt_film ref, f;
+    pt_render_stats st, st0;
+    int k;
+    const char *names[4] = { "threads=2", "threads=3", "tile_size=5, threads=2", "host parallel_for (reverse)" };
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.adaptive_threshold = 0.15f;
+    d.adaptive_min_spp = 8;
+    d.samples_per_pass = 4;
+    d.threads = 1;
+    if (!render_into(t, s, &d, &ref, &st0, "threads=1")) { pt_film_free(&ref); pt_scene_destroy(s); return; }
+    CHECK(t, st0.pixels_converged > 0 && st0.pixels_converged < 40u * 32u, "%llu pixels converged: want some, not all",
+          (unsigned long long)st0.pixels_converged);
+    for (k = 0; k < 4; k++) {
+        pt_render_desc e = d;
+        e.threads = k == 1 ? 3 : 2;
+        if (k == 2) e.tile_size = 5;
+        if (k == 3) { e.parallel_for = host_reverse; e.threads = 1; }
+        if (render_into(t, s, &e, &f, &st, names[k])) {
+            CHECK(t, tu_film_equal(&ref, &f), "%s: film differs from threads=1", names[k]);
+            CHECK(t, st.samples == st0.samples && st.pixels_converged == st0.pixels_converged,
+                  "%s: stats differ from threads=1", names[k]);
+        }
+        pt_film_free(&f);
+    }
+    test_note(t, "5 renders, %llu of 1280 pixels stopped early, bit-identical", (unsigned long long)st0.pixels_converged);
+    pt_film_free(&ref);
+    pt_scene_destroy(s);
+}
+
+static void threshold_zero_is_uniform(test_ctx *t)
+{
+    /* adaptive_threshold 0 is the uniform renderer: the film equals one rebuilt here sample by
+       sample from pt_trace_path (the documented stream pt_rng_for_sample(seed, pixel, k), jitter,
+       lens, path), and the other adaptive settings are ignored. */
+    pt_render_desc d;
+    pt_scene *s = room_scene(&d, 20, 16, 6);
+    pt_film f, g;
+    pt_camera cam;
+    int x, y, k, diff = 0;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.samples_per_pass = 4; /* 4 + 2 */
+    if (render_into(t, s, &d, &f, NULL, "threshold 0")) {
+        pt_camera_init(&cam, &d.camera, d.width, d.height);
+        if (CHECK(t, pt_film_init(&g, d.width, d.height) == PT_OK, "film")) {
+            for (y = 0; y < d.height; y++)
+                for (x = 0; x < d.width; x++) {
+                    uint32_t pix = (uint32_t)(y * d.width + x);
+                    for (k = 0; k < 6; k++) {
+                        pt_rng rng = pt_rng_for_sample(d.seed, pix, (uint32_t)k);
+                        float jx = pt_rng_float(&rng), jy = pt_rng_float(&rng);
+                        float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
+                        pt_ray r = pt_camera_ray(&cam, (float)x + jx, (float)y + jy, l1, l2);
+                        pt_color L = pt_trace_path(s, &d, r, &rng, NULL);
+                        double v[3];
+                        int c;
+                        v[0] = L.x; v[1] = L.y; v[2] = L.z;
+                        for (c = 0; c < 3; c++) {
+                            g.sum[3 * pix + c] += v[c];
+                            g.sum_sq[3 * pix + c] += v[c] * v[c];
+                            if (k & 1) g.sum_odd[3 * pix + c] += v[c];
+                        }
+                        g.count[pix]++;
+                    }
+                }
+            CHECK(t, tu_film_equal(&f, &g), "the render differs from the sample-by-sample rebuild");
+            pt_film_free(&g);
+        }
+        {   /* min spp and check interval are ignored when the threshold is 0 */
+            pt_render_desc e = d;
+            e.adaptive_min_spp = 2;
+            e.adaptive_check_passes = 1;
+            if (render_into(t, s, &e, &g, NULL, "threshold 0, other settings")) diff = !tu_film_equal(&f, &g);
+            CHECK(t, !diff, "adaptive_min_spp/check_passes changed a render with threshold 0");
+            pt_film_free(&g);
+        }
+    }
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+}
+
+static void invalid_settings(test_ctx *t)
+{
+    /* Each bad value returns PT_ERROR_INVALID_ARGUMENT, renders nothing and names the setting. */
+    pt_render_desc d;
+    pt_scene *s = room_scene(&d, 8, 8, 4);
+    pt_film f;
+    int k, i;
+    const char *names[8] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
+                             "check_passes -1", "disable_skips unknown bit", "disable_skips ~0" };
+    if (!CHECK(t, s != NULL, "scene")) return;
+    if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); return; }
+    for (k = 0; k < 8; k++) {
+        pt_render_desc e = d;
+        pt_render_stats st;
+        int rc, touched = 0;
+        e.adaptive_threshold = 0.1f;
+        if (k == 0) e.adaptive_threshold = -0.1f;
+        if (k == 1) e.adaptive_threshold = (float)(0.0 * HUGE_VAL);
+        if (k == 2) e.adaptive_threshold = (float)HUGE_VAL;
+        if (k == 3) e.adaptive_min_spp = -1;
+        if (k == 4) e.adaptive_min_spp = 1;
+        if (k == 5) e.adaptive_check_passes = -1;
+        if (k == 6) e.disable_skips = PT_SKIP_ALL + 1u;
+        if (k == 7) e.disable_skips = ~0u;
+        rc = pt_render(s, &e, &f, &st);
+        for (i = 0; i < 64; i++) touched += f.count[i] != 0;
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "%s: pt_render returned %d", names[k], rc);
+        CHECK(t, touched == 0 && st.samples == 0, "%s: %d pixels rendered", names[k], touched);
+        CHECK(t, strstr(pt_scene_error_message(s), k >= 6 ? "disable_skips" : "adaptive") != NULL, "%s: message '%s'",
+              names[k], pt_scene_error_message(s));
+    }
+    {   /* the valid extremes work: every skip disabled, min_spp 2, check every pass */
+        pt_render_desc e = d;
+        e.adaptive_threshold = 0.1f;
+        e.adaptive_min_spp = 2;
+        e.adaptive_check_passes = 1;
+        e.disable_skips = PT_SKIP_ALL;
+        CHECK(t, pt_render(s, &e, &f, NULL) == PT_OK, "valid extreme settings rejected: %s", pt_scene_error_message(s));
+    }
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* scene-feature skips                                                                         */
+
+/* Renders d with and without `bits` disabled; exact: the films must be equal; otherwise 16 region
+   z-tests (and the films must differ, showing that the general path ran). */
+static void skip_case(test_ctx *t, const pt_scene *s, const pt_render_desc *d, unsigned bits, int exact,
+                      const char *what, double *worst)
+{
+    pt_film a, b;
+    pt_render_stats sa, sb;
+    pt_render_desc e = *d;
+    e.disable_skips = bits;
+    if (render_into(t, s, d, &a, &sa, what) && render_into(t, s, &e, &b, &sb, what)) {
+        if (exact) {
+            CHECK(t, tu_film_equal(&a, &b), "%s: the general path changed the film", what);
+        } else {
+            int fails = compare_regions(&a, &b, worst);
+            CHECK(t, fails == 0, "%s: %d of 16 regions differ (|z| > %.2f, max %.2f)", what, fails, z_limit(), *worst);
+            CHECK(t, !tu_film_equal(&a, &b), "%s: the same film: the general path did not run", what);
+        }
+        if ((bits & PT_SKIP_ZERO_BSDF_SHADOW) && d->strategy == PT_STRATEGY_MIS)
+            CHECK(t, sb.shadow_rays > sa.shadow_rays, "%s: %llu shadow rays with the general path, %llu without", what,
+                  (unsigned long long)sb.shadow_rays, (unsigned long long)sa.shadow_rays);
+    }
+    pt_film_free(&a);
+    pt_film_free(&b);
+}
+
+static void skips_exact(test_ctx *t)
+{
+    /* Light selection (one emitter), untextured albedo, no triangles, zero-BSDF shadow rays: the
+       general path changes no random number, so the films are bit-identical (MIS and mixture). */
+    pt_render_desc d;
+    pt_scene *s = room_scene(&d, 24, 20, 8);
+    double worst = 0;
+    static const unsigned bits[4] = { PT_SKIP_LIGHT_SELECTION, PT_SKIP_NO_TEXTURES, PT_SKIP_NO_TRIANGLES,
+                                      PT_SKIP_ZERO_BSDF_SHADOW };
+    static const char *names[4] = { "light selection", "no textures", "no triangles", "zero-BSDF shadow" };
+    int k, strat;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    for (strat = 0; strat < 2; strat++)
+        for (k = 0; k < 4; k++) {
+            char what[96];
+            d.strategy = strat ? PT_STRATEGY_MIXTURE : PT_STRATEGY_MIS;
+            snprintf(what, sizeof what, "%s (%s)", names[k], strat ? "mixture" : "MIS");
+            skip_case(t, s, &d, bits[k], 1, what, &worst);
+        }
+    test_note(t, "8 pairs of films bit-identical");
+    pt_scene_destroy(s);
+}
+
+static void skips_within_noise(test_ctx *t)
+{
+    /* The skips that draw random numbers differently: no emitters (a sky-lit scene: MIS, light,
+       mixture), delta vertex (mirror and glass: MIS, light), one-sided light facing away (mixture;
+       the ceiling and the light's back are behind it), and every skip at once (MIS). 8 comparisons of
+       16 regions in the file's family. */
+    pt_render_desc d;
+    pt_scene *s = room_scene(&d, 32, 24, 48), *sky;
+    double worst = 0;
+    int k;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.strategy = PT_STRATEGY_MIS;
+    skip_case(t, s, &d, PT_SKIP_DELTA_VERTEX, 0, "delta vertex (MIS)", &worst);
+    d.strategy = PT_STRATEGY_LIGHT;
+    skip_case(t, s, &d, PT_SKIP_DELTA_VERTEX, 0, "delta vertex (light)", &worst);
+    d.strategy = PT_STRATEGY_MIXTURE;
+    skip_case(t, s, &d, PT_SKIP_FACING_AWAY, 0, "facing away (mixture)", &worst);
+    d.strategy = PT_STRATEGY_MIS;
+    skip_case(t, s, &d, PT_SKIP_ALL, 0, "all (MIS)", &worst);
+    pt_scene_destroy(s);
+
+    /* no emitters: an open scene (floor, two spheres) under a uniform sky of radiance 1 */
+    sky = pt_scene_create();
+    if (!CHECK(t, sky != NULL, "sky scene")) return;
+    {
+        int white = pt_scene_add_lambertian(sky, pt_v3(0.6f, 0.6f, 0.6f));
+        int rc = pt_scene_add_quad(sky, pt_v3(-5, 0, -5), pt_v3(0, 0, 10), pt_v3(10, 0, 0), white);
+        rc |= pt_scene_add_sphere(sky, pt_v3(-0.6f, 0.5f, 0), 0.5f, white);
+        rc |= pt_scene_add_sphere(sky, pt_v3(0.6f, 0.5f, 0), 0.5f, pt_scene_add_metal(sky, pt_v3(0.8f, 0.8f, 0.8f), 0.3f));
+        if (!CHECK(t, rc >= 0 && pt_scene_commit(sky) == PT_OK, "sky scene: %s", pt_scene_error_message(sky))) {
+            pt_scene_destroy(sky);
+            return;
+        }
+    }
+    d = tu_base_desc(32, 24, 32, 11);
+    d.camera.look_from = pt_v3(0, 1.2f, -4);
+    d.camera.look_at = pt_v3(0, 0.4f, 0);
+    d.background = pt_v3(1, 1, 1);
+    d.max_depth = 6;
+    for (k = 0; k < 3; k++) {
+        static const pt_strategy st[3] = { PT_STRATEGY_MIS, PT_STRATEGY_LIGHT, PT_STRATEGY_MIXTURE };
+        static const char *nm[3] = { "no emitters (MIS)", "no emitters (light)", "no emitters (mixture)" };
+        d.strategy = st[k];
+        skip_case(t, sky, &d, PT_SKIP_NO_EMITTERS, 0, nm[k], &worst);
+    }
+    pt_scene_destroy(sky);
+    test_note(t, "7 comparisons of 16 regions, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over %d)", worst, z_limit(),
+              ADAPTIVE_Z_TESTS);
+}
+
+const test_case test_adaptive_cases[] = {
+    TEST_CASE(easy_region_stops),
+    TEST_CASE(stopped_blocks_below_threshold),
+    TEST_CASE(mean_matches_uniform),
+    TEST_CASE(threads_bit_identical),
+    TEST_CASE(threshold_zero_is_uniform),
+    TEST_CASE(invalid_settings),
+    TEST_CASE(skips_exact),
+    TEST_CASE(skips_within_noise),
+    TEST_END
+};
