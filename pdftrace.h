@@ -81,16 +81,27 @@
    SKIPPING WORK A SCENE DOES NOT NEED
    ===================================
    pt_scene_commit records what a scene contains (pt_scene_info.features). The integrator
-   then skips work that cannot change the estimate:
+   then skips work that cannot change the estimate. Each skip has a bit in
+   pt_render_desc.disable_skips that forces the general path instead (for benchmarks; the
+   image keeps its expectation, and "exact" skips give it bit for bit):
    - no emitters: no light selection, no light sampling, no shadow rays; the mixture
      strategy samples the material PDF alone (the light component has no mass).
-   - exactly one emitter: no light selection (no random number, no CDF search).
+     PT_SKIP_NO_EMITTERS.
+   - exactly one emitter: no light selection (no CDF search; the random number is still
+     drawn). PT_SKIP_LIGHT_SELECTION, exact.
    - a delta (perfectly specular) vertex: no light PDF, no shadow ray; the path follows
      the specular direction and counts emission it hits at full weight.
-   - only delta materials in the scene: no light sampling anywhere.
+     PT_SKIP_DELTA_VERTEX. With only delta materials in the scene this skips light
+     sampling everywhere (the same bit: there is no separate scene-level test).
    - one-sided emitters facing away from the shading point (single-emitter scenes):
-     the light component is dropped from the mixture for that vertex.
-   - no textures: albedo is read directly from the material.
+     the light component is dropped from the mixture for that vertex. PT_SKIP_FACING_AWAY.
+   - no texture on a material: albedo is read directly from it. PT_SKIP_NO_TEXTURES, exact.
+   - no triangles in the scene: rays skip the watertight triangle set-up.
+     PT_SKIP_NO_TRIANGLES, exact.
+   - a light sample the material does not reflect (below the surface): no shadow ray.
+     PT_SKIP_ZERO_BSDF_SHADOW, exact.
+   Adaptive sampling (pt_render_desc.adaptive_threshold) skips pixels whose estimate has
+   converged: see section 8.
 */
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
