@@ -127,11 +127,12 @@ static void usage(FILE *f)
         "      --scene PATH      render a scene file (format: pdftrace.h, section 10) instead of\n"
         "                        the built-in box; its size, spp, depth, strategy and seed are the\n"
         "                        defaults, options given here override them\n"
-        "      --adaptive T      adaptive sampling: 8x8 blocks stop once their estimated RMS relative\n"
-        "                        error is below T (e.g. 0.05) and so is their neighbours'; --spp is\n"
-        "                        then the most a pixel gets (default 0 = off)\n"
+        "      --adaptive T      adaptive sampling toward an image RMS relative error T (e.g. 0.05):\n"
+        "                        4x4 blocks get samples in proportion to their noise and stop when\n"
+        "                        they and their neighbours have their share; --spp is then the most\n"
+        "                        a pixel gets (default 0 = off)\n"
         "      --adaptive-min-spp N  samples every pixel gets before it can stop, >= 2\n"
-        "                        (default max(8, spp/8))\n"
+        "                        (default max(16, spp/16))\n"
         "      --adaptive-check N    re-check the blocks every N passes (default 1)\n"
         "      --disable-skips L force the general path for the scene-feature skips in the\n"
         "                        comma-separated list L, or 'all': no-emitters, light-selection,\n"
@@ -449,6 +450,8 @@ static void print_stats(const options *o, const pt_render_stats *st)
                (unsigned long long)o->width * (unsigned long long)o->height,
                100.0 * (double)st->pixels_converged / ((double)o->width * (double)o->height), st->min_spp,
                st->max_spp, (double)st->samples / ((double)o->width * (double)o->height));
+    if (st->estimated_error >= 0)
+        printf("error      estimated RMS relative error %.4f (half-buffer estimate)\n", st->estimated_error);
     if (o->disable_skips) printf("skips      general path forced for mask 0x%x\n", o->disable_skips);
     printf("rays       %llu camera + %llu bounce + %llu shadow = %llu\n", (unsigned long long)st->camera_rays,
            (unsigned long long)st->bounce_rays, (unsigned long long)st->shadow_rays, (unsigned long long)rays);

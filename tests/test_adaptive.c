@@ -3,8 +3,9 @@
    (PT_SKIP_*, section 7).
 
    adaptive: easy blocks stop and noisy ones keep sampling, with the dilation that keeps a converged
-   block running beside an unconverged one; every stopped block's error estimate (recomputed here
-   from the film's half-buffers with separate code) is below the threshold; the image mean agrees
+   block running beside an unconverged one; samples go to blocks in proportion to the square root
+   of their noise (Neyman) and the image reaches the threshold, by the test's own error estimate
+   from the film's half-buffers; the image mean agrees
    with a uniform render; films are bit-identical across thread counts, tile sizes and host
    parallel-fors; threshold 0 is the uniform path bit for bit (checked against a render rebuilt
    here from pt_trace_path); invalid settings are rejected before anything is rendered.
@@ -88,25 +89,34 @@ static double block_estimate(const pt_film *f, int x0, int y0, int x1, int y1)
    at random under the pixel jitter; every bounce sees radiance 1, so a sample is its albedo:
    noisy). The image is 64 x 16, the boundary at the centre of pixel column 32, so 8x8 blocks 0-3
    of each row see only the emitter. */
-static pt_scene *half_easy_scene(pt_render_desc *d)
+/* A Lambertian material with a checker far finer than a pixel (the pixel jitter picks `a` or
+   `b` with probability 1/2 each). */
+static int fine_checker(pt_scene *s, float a, float b)
 {
-    pt_scene *s = pt_scene_create();
     pt_material_desc md;
-    int glow, wall, fine, rc;
-    float half_w;
-    if (!s) return NULL;
-    glow = pt_scene_add_emitter(s, pt_v3(1, 1, 1), 1);
-    fine = pt_scene_add_checker(s, pt_v3(0.1f, 0.1f, 0.1f), pt_v3(0.9f, 0.9f, 0.9f), 0.0013f);
+    int tex = pt_scene_add_checker(s, pt_v3(a, a, a), pt_v3(b, b, b), 0.0013f);
+    if (tex < 0) return tex;
     memset(&md, 0, sizeof md);
     md.type = PT_MATERIAL_LAMBERTIAN;
-    md.albedo_texture = fine;
-    wall = pt_scene_add_material(s, &md);
+    md.albedo_texture = tex;
+    return pt_scene_add_material(s, &md);
+}
+
+/* The wall of half_easy_scene with materials left (image left, x > 0) and right. */
+static pt_scene *two_halves_scene(pt_render_desc *d, int left_glows, float la, float lb)
+{
+    pt_scene *s = pt_scene_create();
+    int glow, wall, rc;
+    float half_w;
+    if (!s) return NULL;
+    glow = left_glows ? pt_scene_add_emitter(s, pt_v3(1, 1, 1), 1) : fine_checker(s, la, lb);
+    wall = fine_checker(s, 0.1f, 0.9f);
     /* vfov 30 at distance 10: half height 10 tan 15deg, half width 4x that (64 x 16 pixels) */
     half_w = 4.0f * 10.0f * (float)tan(15.0 * TU_PI / 180.0);
     /* the boundary: half a pixel right of the image centre, at x = -(pixel width 2 half_w / 64) / 2 */
     rc = pt_scene_add_quad(s, pt_v3(-half_w / 64.0f, -50, 0), pt_v3(50, 0, 0), pt_v3(0, 100, 0), glow);
     rc |= pt_scene_add_quad(s, pt_v3(-50, -50, 0), pt_v3(50.0f - half_w / 64.0f, 0, 0), pt_v3(0, 100, 0), wall);
-    if (fine < 0 || wall < 0 || rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    if (glow < 0 || wall < 0 || rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
     *d = tu_base_desc(64, 16, 64, 99);
     d->camera.look_from = pt_v3(0, 0, -10);
     d->camera.look_at = pt_v3(0, 0, 0);
@@ -115,6 +125,7 @@ static pt_scene *half_easy_scene(pt_render_desc *d)
     d->background = pt_v3(1, 1, 1);
     return s;
 }
+static pt_scene *half_easy_scene(pt_render_desc *d) { return two_halves_scene(d, 1, 0, 0); }
 
 /* A small box room lit by a quad light, with a mirror, a glass and a white sphere: noise that
    varies over the image, every skip but "no emitters" and "no triangles" applicable. */
@@ -151,9 +162,10 @@ static pt_scene *room_scene(pt_render_desc *d, int w, int h, int spp)
 
 static void easy_region_stops(test_ctx *t)
 {
-    /* Blocks 0-2 of each row (all neighbours zero-variance emitter) stop at the first check; block 3
-       is converged too but borders block 4 (half emitter, half noisy wall), so dilation keeps it
-       sampling; blocks 4-7 never converge. */
+    /* 4x4 blocks 0-6 of each row (all neighbours zero-variance emitter) stop at the first check;
+       block 7 has its share too but borders block 8 (half emitter, half noisy wall), so dilation
+       keeps it sampling; the noisy blocks need more than the 64 samples allowed (share
+       sqrt(v) S / T^2 ~ 120) and never stop. */
     pt_render_desc d;
     pt_scene *s = half_easy_scene(&d);
     pt_film f;
@@ -169,15 +181,15 @@ static void easy_region_stops(test_ctx *t)
             for (x = 0; x < 64; x++) {
                 uint32_t n = f.count[y * 64 + x];
                 below += n < 64u;
-                if (x < 24) bad_easy += n != 8u;  /* stopped at the first check, after 8 samples */
+                if (x < 28) bad_easy += n != 8u;  /* stopped at the first check, after 8 samples */
                 else bad_rest += n != 64u;
             }
-        CHECK(t, bad_easy == 0, "%d pixels of blocks 0-2 did not stop after 8 samples", bad_easy);
-        CHECK(t, bad_rest == 0, "%d pixels of blocks 3-7 (block 3: dilation) got fewer than 64 samples", bad_rest);
-        CHECK(t, st.pixels_converged == below && below == 24u * 16u, "stats.pixels_converged %llu, film: %llu below 64 spp",
+        CHECK(t, bad_easy == 0, "%d pixels of blocks 0-6 did not stop after 8 samples", bad_easy);
+        CHECK(t, bad_rest == 0, "%d pixels of blocks 7-15 (block 7: dilation) got fewer than 64 samples", bad_rest);
+        CHECK(t, st.pixels_converged == below && below == 28u * 16u, "stats.pixels_converged %llu, film: %llu below 64 spp",
               (unsigned long long)st.pixels_converged, (unsigned long long)below);
         CHECK(t, st.min_spp == 8u && st.max_spp == 64u, "stats spp range %u..%u, want 8..64", st.min_spp, st.max_spp);
-        CHECK(t, st.samples == (uint64_t)24 * 16 * 8 + (uint64_t)40 * 16 * 64, "stats.samples %llu",
+        CHECK(t, st.samples == (uint64_t)28 * 16 * 8 + (uint64_t)36 * 16 * 64, "stats.samples %llu",
               (unsigned long long)st.samples);
         test_note(t, "%llu of 1024 pixels stopped at 8 spp, %llu samples", (unsigned long long)st.pixels_converged,
                   (unsigned long long)st.samples);
@@ -186,44 +198,48 @@ static void easy_region_stops(test_ctx *t)
     pt_scene_destroy(s);
 }
 
-static void stopped_blocks_below_threshold(test_ctx *t)
+static void neyman_allocation(test_ctx *t)
 {
-    /* In a room with noise that varies over the image, every block that stopped early has an error
-       estimate below threshold^2 (a stopped block's film no longer changes, so the estimate at the
-       end is the one it stopped on), recomputed here with the test's own code; pt_film_error agrees
-       with it. Some blocks must stop and some must run to the end, so the test sees both. */
+    /* Two halves of known noise: albedo 0.4 or 0.6 (left) and 0.1 or 0.9 (right), each with
+       probability 1/2 per sample, so the relative variance of one sample is v = 0.01/0.26 and
+       0.16/0.26: the right half needs sqrt(16) = 4 times the samples of the left one (uniform
+       sampling would give 1, stopping at equal error 16). Checks the ratio of the mean counts of
+       the blocks away from the boundary (2.5 to 6; dilation takes the largest share of 3x3 noisy estimates, which lifts the small shares most), that every block stopped, that the image's
+       estimated RMS relative error (stats, and the test's own estimate) is near the threshold
+       (0.7 T to 1.1 T), and that pt_film_error agrees with the test's estimator on every block. */
     pt_render_desc d;
-    pt_scene *s = room_scene(&d, 48, 40, 64);
+    pt_scene *s = two_halves_scene(&d, 0, 0.4f, 0.6f);
     pt_film f;
     pt_render_stats st;
-    const float T = 0.15f;
-    int bx, by, stopped = 0, running = 0, bad = 0, mismatch = 0;
-    double worst = 0;
+    const float T = 0.05f;
+    int x, y, bx, mismatch = 0;
+    double nl = 0, nr = 0, ratio, own;
     if (!CHECK(t, s != NULL, "scene")) return;
+    d.samples_per_pixel = 512;
+    d.samples_per_pass = 4;
     d.adaptive_threshold = T;
-    d.adaptive_check_passes = 2;
     if (render_into(t, s, &d, &f, &st, "adaptive")) {
-        for (by = 0; by < 5; by++)
-            for (bx = 0; bx < 6; bx++) {
-                uint32_t n = f.count[(by * 8) * 48 + bx * 8];
-                double e = block_estimate(&f, bx * 8, by * 8, bx * 8 + 8, by * 8 + 8), lib = -1;
-                pt_film_error(&f, bx * 8, by * 8, bx * 8 + 8, by * 8 + 8, &lib);
-                mismatch += !(fabs(lib - e) <= 1e-9 * e + 1e-300);
-                if (n < 64u) {
-                    stopped++;
-                    bad += !(e < (double)T * T);
-                    if (e > worst) worst = e;
-                } else {
-                    running++;
-                }
+        for (y = 0; y < 16; y++)
+            for (x = 0; x < 64; x++) {
+                if (x < 24) nl += f.count[y * 64 + x];
+                if (x >= 40) nr += f.count[y * 64 + x];
             }
-        CHECK(t, bad == 0, "%d stopped blocks have an error estimate >= threshold^2 (worst %.4g)", bad, worst);
+        ratio = nr / nl;
+        for (y = 0; y < 16; y += 4)
+            for (bx = 0; bx < 16; bx++) {
+                double e = block_estimate(&f, bx * 4, y, bx * 4 + 4, y + 4), lib = -1;
+                pt_film_error(&f, bx * 4, y, bx * 4 + 4, y + 4, &lib);
+                mismatch += !(fabs(lib - e) <= 1e-9 * e + 1e-300);
+            }
+        own = sqrt(block_estimate(&f, 0, 0, 64, 16));
+        CHECK(t, ratio > 2.5 && ratio < 6.0, "samples right/left %.2f, want ~4 (sqrt of the noise ratio)", ratio);
+        CHECK(t, st.pixels_converged == 1024u, "%llu of 1024 pixels stopped", (unsigned long long)st.pixels_converged);
+        CHECK(t, fabs(st.estimated_error - own) <= 1e-9 * own, "stats.estimated_error %.6g, test's estimate %.6g",
+              st.estimated_error, own);
+        CHECK(t, own > 0.7 * T && own < 1.1 * T, "estimated RMS relative error %.4f, threshold %.4f", own, (double)T);
         CHECK(t, mismatch == 0, "pt_film_error differs from the test's estimate in %d blocks", mismatch);
-        CHECK(t, stopped > 0 && running > 0, "%d blocks stopped, %d ran to the end: want both", stopped, running);
-        CHECK(t, st.pixels_converged == (uint64_t)stopped * 64u, "stats.pixels_converged %llu, %d blocks stopped",
-              (unsigned long long)st.pixels_converged, stopped);
-        test_note(t, "%d of 30 blocks stopped, worst estimate %.3g < %.3g; %.1f spp on average", stopped, worst,
-                  (double)T * T, (double)st.samples / (48.0 * 40.0));
+        test_note(t, "spp left %.1f, right %.1f (ratio %.2f), estimated error %.4f for threshold %.2f", nl / (24 * 16),
+                  nr / (24 * 16), ratio, own, (double)T);
     }
     pt_film_free(&f);
     pt_scene_destroy(s);
@@ -240,7 +256,7 @@ static void mean_matches_uniform(test_ctx *t)
     double worst = 0;
     int fails;
     if (!CHECK(t, s != NULL, "scene")) return;
-    d.adaptive_threshold = 0.25f;
+    d.adaptive_threshold = 0.15f;
     d.adaptive_min_spp = 16;
     if (render_into(t, s, &d, &a, &sa, "adaptive")) {
         pt_render_desc e = d;
@@ -249,7 +265,8 @@ static void mean_matches_uniform(test_ctx *t)
         if (render_into(t, s, &e, &u, &su, "uniform")) {
             fails = compare_regions(&a, &u, &worst);
             CHECK(t, fails == 0, "%d of 16 regions differ (|z| > %.2f, max %.2f)", fails, z_limit(), worst);
-            CHECK(t, sa.pixels_converged > 0, "no pixel converged: the test does not exercise stopping");
+            CHECK(t, sa.pixels_converged > 0 && sa.pixels_converged < 48u * 40u,
+                  "%llu of %d pixels stopped early: want some, not all", (unsigned long long)sa.pixels_converged, 48 * 40);
             test_note(t, "max |z| %.2f (limit %.2f), %.0f%% of pixels stopped early, %.0f%% of the samples", worst,
                       z_limit(), 100.0 * (double)sa.pixels_converged / (48.0 * 40.0),
                       100.0 * (double)sa.samples / (double)su.samples);
@@ -499,7 +516,7 @@ static void skips_within_noise(test_ctx *t)
 
 const test_case test_adaptive_cases[] = {
     TEST_CASE(easy_region_stops),
-    TEST_CASE(stopped_blocks_below_threshold),
+    TEST_CASE(neyman_allocation),
     TEST_CASE(mean_matches_uniform),
     TEST_CASE(threads_bit_identical),
     TEST_CASE(threshold_zero_is_uniform),
