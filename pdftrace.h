@@ -4082,8 +4082,9 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film, uint32_t ad
             pixels += area;
         }
     S /= pixels;
+    if (!(S < HUGE_VAL)) return; /* an unknown or overflowing estimate somewhere: nothing stops */
     for (b = 0; b < nb; ++b)
-        if (a->active[b]) a->converged[b] = sqrt(a->noise[b]) * S <= a->target * a->spp[b]; /* false for NaN/Inf */
+        if (a->active[b]) a->converged[b] = a->noise[b] < HUGE_VAL && sqrt(a->noise[b]) * S <= a->target * a->spp[b];
     for (by = 0; by < a->blocks_y; ++by)
         for (bx = 0; bx < a->blocks_x; ++bx) {
             int nx, ny, all = 1;
