@@ -5,7 +5,7 @@
 #   make run-all          also render the other examples into out/
 #   make test             build and run the test runner, then again without threads and
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer
-#   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS
+#   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS (and -DPDFTRACE_NO_SIMD)
 #   make exr-test         build the test runner with OpenEXR (build/test_runner_exr) and run
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
@@ -128,10 +128,11 @@ $(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
-# Without threads: no -pthread at all, to show the library does not need it.
+# Without threads: no -pthread at all, to show the library does not need it. Also without SIMD
+# (PDFTRACE_NO_SIMD), so that the scalar BVH code other architectures get is tested too.
 $(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
-	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
 # Always with OpenEXR, whatever OPENEXR says; `make exr-test` runs only its exr section.
 $(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
@@ -222,8 +223,8 @@ check-warnings: | $(BUILD)
 	        echo "$$cc $(WARN_CFLAGS) examples/$$ex.c"; \
 	        $$cc $(WARN_CFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) -c examples/$$ex.c -o $(BUILD)/warn-$$cc-$$ex.o; \
 	    done; \
-	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS examples/minimal.c"; \
-	    $$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS $(PT_CPPFLAGS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-nothreads.o; \
+	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD examples/minimal.c"; \
+	    $$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(PT_CPPFLAGS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-nothreads.o; \
 	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC examples/minimal.c"; \
 	    $$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC $(PT_CPPFLAGS) $(PT_THREADS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-static.o; \
 	    echo "$$cc $(WARN_CFLAGS) bench/bench.c (with and without OpenEXR/libpng)"; \
