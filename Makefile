@@ -22,6 +22,10 @@
 #                         into tests/fuzz/corpus/<target>/ (libFuzzer -set_cover_merge=1)
 #   make fptrap-test      render every scenes/*.scene and the built-in test scenes at low spp
 #                         with FE_INVALID and FE_DIVBYZERO trapping (glibc; part of make test)
+#   make bench-bvh        rays/s of the built-in BVH and of Embree side by side (Cornell box and a
+#                         generated 1M-triangle terrain), build time, memory, the AUTO crossover:
+#                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
+#                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
 #                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
@@ -94,7 +98,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c)
 TEST_HDRS    := $(wildcard tests/*.h)
 
-.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs FORCE
+.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh FORCE
 
 all: $(EXAMPLE_BINS)
 
@@ -213,6 +217,15 @@ test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_no
 nothreads-test: $(BUILD)/test_runner_nothreads
 	./$(BUILD)/test_runner_nothreads
 
+# ---- make bench-bvh (bench/bvh.c): always built with Embree, whatever EMBREE says.
+BENCH_BVH_ARGS ?=
+$(BUILD)/bench_bvh: bench/bvh.c pdftrace.h | $(BUILD)
+	@test -f "$(EMBREE_HEADER)" || { echo "make bench-bvh: needs Embree 3 (apt-get install libembree-dev)" >&2; exit 1; }
+	$(CC) -I. $(EMBREE_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(EMBREE_LIBS) -lm
+
+bench-bvh: $(BUILD)/bench_bvh
+	./$(BUILD)/bench_bvh $(BENCH_BVH_ARGS) bench/out
+
 # ---- warnings: each example is a complete program with the implementation included.
 # The PDFTRACE_STATIC build is checked too (its functions are marked unused under gcc/clang,
 # so a file need not call every one).
@@ -264,6 +277,8 @@ check-warnings: | $(BUILD)
 	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_EMBREE examples/cornell.c tests/test_embree.c (then link)"; \
 	        $$cc $(WARN_CFLAGS) -I. $(EMBREE_FLAGS) $(PT_THREADS) examples/cornell.c -o $(BUILD)/warn-$$cc-embree $(EMBREE_LIBS) -lm; \
 	        $$cc $(WARN_CFLAGS) -I. $(EMBREE_FLAGS) -c tests/test_embree.c -o $(BUILD)/warn-$$cc-test-embree.o; \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_EMBREE bench/bvh.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(EMBREE_FLAGS) $(PT_THREADS) -c bench/bvh.c -o $(BUILD)/warn-$$cc-bench-bvh.o; \
 	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_EMBREE -DPDFTRACE_NO_THREADS -DPDFTRACE_STATIC examples/minimal.c"; \
 	        $$cc $(WARN_CFLAGS) -I. $(EMBREE_FLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_STATIC -c examples/minimal.c -o $(BUILD)/warn-$$cc-embree-static.o; \
 	    done; \

@@ -2923,7 +2923,7 @@ oom:
 typedef struct pt__trav {
     const pt__rayctx *rc;
     float o[3], inv[3];
-    int near_row[3], far_row[3];
+    int near_row[3];      /* the far plane is in row near_row ^ 1 */
     int kx, ky, kz;
 #ifdef PT__SSE
     __m128 o4[3], inv4[3], d4[3];
@@ -2941,7 +2941,6 @@ static PT__HOT void pt__trav_init(pt__trav *tv, const pt__rayctx *rc)
     for (a = 0; a < 3; ++a) {
         if (!(fabsf(tv->inv[a]) <= FLT_MAX)) tv->inv[a] = copysignf(FLT_MAX, tv->inv[a]);
         tv->near_row[a] = 2 * a + (tv->inv[a] < 0.0f);
-        tv->far_row[a] = 2 * a + (tv->inv[a] >= 0.0f);
     }
 #ifdef PT__SSE
     for (a = 0; a < 3; ++a) {
@@ -2968,9 +2967,9 @@ static PT__HOT unsigned pt__box4(const pt__node4 *n, const pt__trav *tv, float t
     __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->near_row[0]]), tv->o4[0]), tv->inv4[0]);
     __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->near_row[1]]), tv->o4[1]), tv->inv4[1]);
     __m128 nz = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->near_row[2]]), tv->o4[2]), tv->inv4[2]);
-    __m128 fx = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->far_row[0]]), tv->o4[0]), tv->inv4[0]);
-    __m128 fy = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->far_row[1]]), tv->o4[1]), tv->inv4[1]);
-    __m128 fz = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->far_row[2]]), tv->o4[2]), tv->inv4[2]);
+    __m128 fx = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[(tv->near_row[0] ^ 1)]), tv->o4[0]), tv->inv4[0]);
+    __m128 fy = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[(tv->near_row[1] ^ 1)]), tv->o4[1]), tv->inv4[1]);
+    __m128 fz = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[(tv->near_row[2] ^ 1)]), tv->o4[2]), tv->inv4[2]);
     __m128 t0 = _mm_max_ps(_mm_max_ps(nx, ny), _mm_max_ps(nz, _mm_setzero_ps()));
     __m128 t1 = _mm_mul_ps(_mm_min_ps(_mm_min_ps(fx, fy), fz), _mm_set1_ps(1.00000036f));
     t1 = _mm_min_ps(t1, _mm_set1_ps(tmax));
@@ -2982,9 +2981,9 @@ static PT__HOT unsigned pt__box4(const pt__node4 *n, const pt__trav *tv, float t
         float nx = (n->box[tv->near_row[0]][i] - tv->o[0]) * tv->inv[0];
         float ny = (n->box[tv->near_row[1]][i] - tv->o[1]) * tv->inv[1];
         float nz = (n->box[tv->near_row[2]][i] - tv->o[2]) * tv->inv[2];
-        float fx = (n->box[tv->far_row[0]][i] - tv->o[0]) * tv->inv[0];
-        float fy = (n->box[tv->far_row[1]][i] - tv->o[1]) * tv->inv[1];
-        float fz = (n->box[tv->far_row[2]][i] - tv->o[2]) * tv->inv[2];
+        float fx = (n->box[(tv->near_row[0] ^ 1)][i] - tv->o[0]) * tv->inv[0];
+        float fy = (n->box[(tv->near_row[1] ^ 1)][i] - tv->o[1]) * tv->inv[1];
+        float fz = (n->box[(tv->near_row[2] ^ 1)][i] - tv->o[2]) * tv->inv[2];
         float t0 = pt__maxf(pt__maxf(nx, ny), pt__maxf(nz, 0.0f));
         float t1 = pt__minf(pt__minf(pt__minf(fx, fy), fz) * 1.00000036f, tmax);
         tnear[i] = t0;
@@ -3037,7 +3036,9 @@ static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tma
     det = _mm_add_ps(_mm_add_ps(U, V), W);
     T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(tv->s4[2], Akz)), _mm_mul_ps(V, _mm_mul_ps(tv->s4[2], Bkz))),
                    _mm_mul_ps(W, _mm_mul_ps(tv->s4[2], Ckz)));
-    tdet = _mm_mul_ps(tmax4, det);
+    /* tmax * det only where det != 0: inf * 0 would raise FE_INVALID (FP-trap builds) */
+    tdet = _mm_cmpneq_ps(det, zero);
+    tdet = _mm_mul_ps(tmax4, _mm_or_ps(_mm_and_ps(tdet, det), _mm_andnot_ps(tdet, _mm_set1_ps(1.0f))));
     dneg = _mm_cmplt_ps(det, zero);
     rej = _mm_or_ps(_mm_and_ps(dneg, _mm_or_ps(_mm_cmpge_ps(T, zero), _mm_cmple_ps(T, tdet))),
                     _mm_andnot_ps(dneg, _mm_or_ps(_mm_cmple_ps(T, zero), _mm_cmpge_ps(T, tdet))));
@@ -3112,6 +3113,7 @@ static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt
     t = _mm_div_ps(t, _mm_or_ps(_mm_and_ps(ok, denom), _mm_andnot_ps(ok, one)));
     ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(tmax))));
     if (!_mm_movemask_ps(ok)) return -1;
+    t = _mm_and_ps(ok, t); /* lanes out of range: t = 0, so that no o + d t overflows into inf * 0 */
     hx = _mm_sub_ps(_mm_add_ps(tv->o4[0], _mm_mul_ps(dx, t)), px);
     hy = _mm_sub_ps(_mm_add_ps(tv->o4[1], _mm_mul_ps(dy, t)), py);
     hz = _mm_sub_ps(_mm_add_ps(tv->o4[2], _mm_mul_ps(dz, t)), pz);
