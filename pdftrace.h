@@ -75,7 +75,7 @@
    5b. Embree traversal (optional: define PDFTRACE_EMBREE; links embree3)
    6. Camera
    7. Integrator (strategies)
-   8. Rendering (tiles, threads, passes, statistics)
+   8. Rendering (tiles, threads, passes, adaptive sampling, statistics)
    9. Output (framebuffer, PFM and PPM writers)
    10. Scene files and POV-Ray export (optional: define PDFTRACE_SCENE_FILES)
    11. OpenEXR output and input (optional: define PDFTRACE_OPENEXR; links OpenEXRCore)
@@ -645,7 +645,7 @@ typedef struct pt_path_stats {
 #define PT_SKIP_ALL              ((1u << 7) - 1u)
 
 /* ==========================================================================================
-   8. RENDERING: tiles, threads, progressive passes, statistics
+   8. RENDERING: tiles, threads, progressive passes, adaptive sampling, statistics
    ========================================================================================== */
 
 typedef struct pt_progress {
