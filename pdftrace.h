@@ -693,7 +693,8 @@ typedef struct pt_render_desc {
     int adaptive_min_spp;        /* samples every pixel gets before it can stop, >= 2; 0: a default
                                     of max(16, samples_per_pixel / 16); capped at samples_per_pixel */
     int adaptive_check_passes;   /* blocks are re-checked every this many passes, >= 1; 0: 1 */
-    unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on */
+    unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on; bits
+                                    outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
 } pt_render_desc;
 
 typedef struct pt_render_stats {
