@@ -281,6 +281,19 @@ static int load_reference(const config *cfg, const bench_scene *bs, loaded *L)
     return 1;
 }
 
+/* The reference of a scene that may have none (the skip timings): 1 if loaded. */
+static int load_reference_quiet(const config *cfg, const bench_scene *bs, loaded *L)
+{
+    char path[2048];
+    int i;
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (!strcmp(scenes[i].file, bs->file)) break;
+    if (i == SCENE_COUNT) return 0;
+    snprintf(path, sizeof path, "%s/%s.pfm", cfg->ref_dir, scenes[i].name);
+    if (access(path, R_OK) != 0) return 0;
+    return load_reference(cfg, &scenes[i], L);
+}
+
 /* relMSE and bias of x against r (definitions at the top of the file). */
 static void measure(const pt_image *x, const pt_image *r, double *relmse, double *bias)
 {
@@ -829,7 +842,9 @@ typedef struct skip_result {
     const char *name, *scene, *what;
     unsigned bit;
     double t_on, t_off, ratio;         /* medians: specialised path, general path forced */
-    double relmse_between;             /* relMSE of one image against the other (0: bit-identical) */
+    double relmse_between;             /* relMSE of one image against the other, same seed (0: bit-identical) */
+    double err_on, err_off, eff_ratio; /* median relMSE against the reference (NAN: no reference);
+                                          eff_ratio = (time x relMSE) specialised / general */
     int reps, spp;
 } skip_result;
 typedef struct skip_results {
@@ -853,10 +868,10 @@ static void save_image(const config *cfg, const char *name, const pt_image *img,
 }
 
 /* Adaptive sampling against uniform sampling on the Cornell box, MIS. Uniform: the MIS series
-   (progressive, median of the seeds), which ends at N spp. Adaptive: one render per threshold
-   with samples_per_pixel capped at ADAPTIVE_CAP x N, min spp max(8, N/8) (the header's default,
-   cap/8, would be N/2), the default pass size (cap/16) and check interval (every pass), and
-   thresholds around the RMS error the uniform series ends at; time and relMSE are medians over
+   (progressive, median of the seeds), which ends at N spp with error E. Adaptive: one render per
+   threshold T (the image's target RMS relative error, so T^2 targets relMSE), T from sqrt(2E)
+   down to sqrt(E)/4, samples_per_pixel capped at ADAPTIVE_CAP x N, everything else at the
+   header's defaults (pass size, minimum spp, check interval); time and relMSE are medians over
    the seeds.
    The time adaptive needs to reach the uniform series' final error is interpolated (log-log)
    between the two thresholds that bracket it. */
@@ -900,8 +915,9 @@ static int run_adaptive(const config *cfg, results *R, adaptive_results *A)
             d.strategy = PT_STRATEGY_MIS;
             d.seed = (uint64_t)(seed + 1);
             d.samples_per_pixel = ADAPTIVE_CAP * nu;
-            d.samples_per_pass = 0; /* the default: 1/16 of the cap per pass, a check after each */
-            d.adaptive_min_spp = nu / 8 > 8 ? nu / 8 : 8;
+            d.samples_per_pass = 0;   /* the header's defaults: cap/64 per pass, */
+            d.adaptive_min_spp = 0;   /* min spp max(16, cap/16), */
+            d.adaptive_check_passes = 0; /* a check after every pass */
             d.adaptive_threshold = (float)A->threshold[k];
             if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
             t0 = ptv_now();
@@ -1026,8 +1042,8 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         loaded L;
         pt_render_desc d;
         pt_image on = {0, 0, NULL}, off = {0, 0, NULL};
-        double t_on[MAX_SEEDS * 2], t_off[MAX_SEEDS * 2], bias;
-        int spp = 1, r;
+        double t_on[MAX_SEEDS * 2], t_off[MAX_SEEDS * 2], e_on[MAX_SEEDS * 2], e_off[MAX_SEEDS * 2], bias;
+        int spp = 1, r, has_ref;
         memset(&bs, 0, sizeof bs);
         bs.name = sk->scene_name;
         bs.file = sk->scene_file;
@@ -1049,8 +1065,10 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
             if (ptv_now() - t0 >= target / 2 || spp >= 1 << 16) break;
             spp *= 2;
         }
+        has_ref = load_reference_quiet(cfg, &bs, &L);
         for (r = 0; r < reps; ++r) {
             int half;
+            d.seed = (uint64_t)(r + 1);
             for (half = 0; half < 2; ++half) {
                 /* alternate which of the two goes first */
                 int general = (r + half) % 2;
@@ -1063,7 +1081,10 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
                     return 0;
                 }
                 (general ? t_off : t_on)[r] = ptv_now() - t0;
+                if (has_ref) measure(general ? &off : &on, &L.ref, general ? &e_off[r] : &e_on[r], &bias);
             }
+            /* the first pair (same seed): how far apart the two images are */
+            if (r == 0) measure(&on, &off, &S->r[S->n].relmse_between, &bias);
         }
         S->r[S->n].name = sk->name;
         S->r[S->n].bit = sk->bit;
@@ -1074,11 +1095,12 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         S->r[S->n].t_on = median(t_on, reps);
         S->r[S->n].t_off = median(t_off, reps);
         S->r[S->n].ratio = S->r[S->n].t_on / S->r[S->n].t_off;
-        /* how far apart the two images are, in relMSE (0: bit-identical) */
-        measure(&on, &off, &S->r[S->n].relmse_between, &bias);
-        printf("  %-17s %-22s %5d spp: specialised %.4f s, general %.4f s, ratio %.3f, images differ by relMSE %.2e\n",
-               sk->name, sk->scene_name, spp, S->r[S->n].t_on, S->r[S->n].t_off, S->r[S->n].ratio,
-               S->r[S->n].relmse_between);
+        S->r[S->n].err_on = has_ref ? median(e_on, reps) - L.floor : NAN;
+        S->r[S->n].err_off = has_ref ? median(e_off, reps) - L.floor : NAN;
+        S->r[S->n].eff_ratio = S->r[S->n].ratio * S->r[S->n].err_on / S->r[S->n].err_off;
+        printf("  %-17s %-22s %5d spp: specialised %.4f s, general %.4f s, time ratio %.3f, time x relMSE ratio %.3f, "
+               "images differ by relMSE %.2e\n", sk->name, sk->scene_name, spp, S->r[S->n].t_on, S->r[S->n].t_off,
+               S->r[S->n].ratio, S->r[S->n].eff_ratio, S->r[S->n].relmse_between);
         fflush(stdout);
         S->n++;
         pt_image_free(&on);
@@ -1131,10 +1153,12 @@ static int write_skips_csv(const config *cfg, const skip_results *S)
     if (!S->available) return 1;
     f = open_out(cfg, "skips.csv");
     if (!f) return 0;
-    fprintf(f, "skip,bit,scene,spp,reps,time_specialised_s,time_general_s,ratio,relmse_between_images\n");
+    fprintf(f, "skip,bit,scene,spp,reps,time_specialised_s,time_general_s,time_ratio,relmse_specialised,relmse_general,"
+               "time_x_relmse_ratio,relmse_between_images\n");
     for (k = 0; k < S->n; ++k)
-        fprintf(f, "%s,%u,%s,%d,%d,%.6g,%.6g,%.4f,%.6g\n", S->r[k].name, S->r[k].bit, S->r[k].scene, S->r[k].spp,
-                S->r[k].reps, S->r[k].t_on, S->r[k].t_off, S->r[k].ratio, S->r[k].relmse_between);
+        fprintf(f, "%s,%u,%s,%d,%d,%.6g,%.6g,%.4f,%.6g,%.6g,%.4f,%.6g\n", S->r[k].name, S->r[k].bit, S->r[k].scene,
+                S->r[k].spp, S->r[k].reps, S->r[k].t_on, S->r[k].t_off, S->r[k].ratio, S->r[k].err_on, S->r[k].err_off,
+                S->r[k].eff_ratio, S->r[k].relmse_between);
     return close_out(f, "skips.csv");
 }
 
@@ -1380,9 +1404,11 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
         fprintf(f, "| adaptive sampling | SKIP: %s | - |\n", A->skip_reason);
     if (S->available) {
         int all = 1;
-        fprintf(f, "| each scene-feature skip pays (time ratio < 1) | ");
+        fprintf(f, "| each scene-feature skip pays (time ratio < 1) | time ratios: ");
         for (k = 0; k < S->n; ++k) {
             fprintf(f, "%s%s %.3f", k ? "; " : "", S->r[k].name, S->r[k].ratio);
+            if (S->r[k].relmse_between > 0 && S->r[k].eff_ratio == S->r[k].eff_ratio)
+                fprintf(f, " (time × relMSE %.3f)", S->r[k].eff_ratio);
             if (!(S->r[k].ratio < 1.0)) all = 0;
         }
         fprintf(f, " | %s |\n", pass_fail(all));
@@ -1526,16 +1552,21 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
     if (!S->available)
         fprintf(f, "SKIP: %s\n\n", S->skip_reason);
     else {
-        fprintf(f, "Time of a render with every skip on (specialised) against the same render with one skip's general "
-                   "path forced (pt_render_desc.disable_skips), same scene, seed and spp, alternating, median of the "
-                   "repetitions; ratio < 1: the skip pays. The last column compares the two images (relMSE of one "
-                   "against the other: 0 = bit-identical, as the exact skips must be).\n\n"
-                   "| skip | scene | what it skips | spp | reps | specialised (s) | general (s) | ratio | images differ by |\n"
-                   "|---|---|---|---|---|---|---|---|---|\n");
-        for (k = 0; k < S->n; ++k)
-            fprintf(f, "| %s | %s | %s | %d | %d | %.4g | %.4g | **%.3f** | %.2g |\n", S->r[k].name, S->r[k].scene,
-                    S->r[k].what, S->r[k].spp, S->r[k].reps, S->r[k].t_on, S->r[k].t_off, S->r[k].ratio,
+        fprintf(f, "A render with every skip on (specialised) against the same render with one skip's general path "
+                   "forced (pt_render_desc.disable_skips): same scene and spp, repetition r uses seed r for both, the two "
+                   "alternate (which goes first too), medians of the repetitions. Time ratio < 1: the skip pays. Exact "
+                   "skips give the same image (last column: relMSE of one image against the other at the same seed, 0 = "
+                   "bit-identical); the others change how samples are drawn, so where the scene has a reference the "
+                   "efficiency ratio (time × relMSE, specialised / general) says whether the skip pays for the error "
+                   "too.\n\n"
+                   "| skip | scene | what it skips | spp | reps | specialised (s) | general (s) | time ratio | time × relMSE ratio | images differ by |\n"
+                   "|---|---|---|---|---|---|---|---|---|---|\n");
+        for (k = 0; k < S->n; ++k) {
+            fmt_g(b1, sizeof b1, S->r[k].eff_ratio);
+            fprintf(f, "| %s | %s | %s | %d | %d | %.4g | %.4g | **%.3f** | %s | %.2g |\n", S->r[k].name, S->r[k].scene,
+                    S->r[k].what, S->r[k].spp, S->r[k].reps, S->r[k].t_on, S->r[k].t_off, S->r[k].ratio, b1,
                     S->r[k].relmse_between);
+        }
         fprintf(f, "\n");
     }
     fprintf(f, "## Files\n\nseries.csv (medians per spp), series-seeds.csv (every seed), fits.csv (slopes, efficiency), "
