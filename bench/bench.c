@@ -853,7 +853,6 @@ typedef struct skip_results {
     skip_result r[SKIP_MAX];
 } skip_results;
 
-#ifdef PT_SKIP_ALL
 /* Writes a PNG (libpng) of img, sRGB-encoded; without libpng a PPM beside it. */
 static void save_image(const config *cfg, const char *name, const pt_image *img, char *shown, size_t shown_size)
 {
@@ -1109,25 +1108,6 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
     }
     return 1;
 }
-#else
-/* Built against a header without adaptive sampling and skip switches, these parts SKIP. */
-static int run_adaptive(const config *cfg, results *R, adaptive_results *A)
-{
-    (void)cfg; (void)R;
-    memset(A, 0, sizeof *A);
-    snprintf(A->skip_reason, sizeof A->skip_reason, "this pdftrace.h has no adaptive sampling (pt_render_desc.adaptive_threshold)");
-    printf("SKIP adaptive: %s\n", A->skip_reason);
-    return 1;
-}
-static int run_skips(const config *cfg, results *R, skip_results *S)
-{
-    (void)cfg; (void)R;
-    memset(S, 0, sizeof *S);
-    snprintf(S->skip_reason, sizeof S->skip_reason, "this pdftrace.h has no skip switches (pt_render_desc.disable_skips)");
-    printf("SKIP skips: %s\n", S->skip_reason);
-    return 1;
-}
-#endif
 
 static int write_adaptive_csv(const config *cfg, const adaptive_results *A)
 {
