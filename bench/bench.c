@@ -1495,8 +1495,9 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
             int any = 0;
             for (l = 0; l < POV_LEVEL_COUNT; ++l) any |= P->r[i][l].ran;
             if (any) {
-                fprintf(f, "| POV-Ray quality | time (s) | relMSE | bias | pdftrace MIS relMSE at that time (seed 1) | ratio |\n"
-                           "|---|---|---|---|---|---|\n");
+                fprintf(f, "| POV-Ray quality | time (s) | relMSE | bias | pdftrace MIS relMSE at that time (%s) | pdftrace / POV-Ray (< 1: pdftrace lower) |\n"
+                           "|---|---|---|---|---|---|\n",
+                        scenes[i].pov_numeric ? "one seed-1 render as long as the slowest level" : "the median MIS series");
                 for (l = 0; l < POV_LEVEL_COUNT; ++l) {
                     const pov_result *pr = &P->r[i][l];
                     if (!pr->ran) continue;
