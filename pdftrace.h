@@ -544,14 +544,16 @@ PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
 
 /* AUTO uses Embree (when compiled in) for scenes with at least this many primitives.
    Measured by make bench-bvh (bench/bvh.c: one batch of camera, bounce and shadow rays traced
-   by both backends through pt_scene_intersect/occluded, interleaved, medians of 5 paired
-   ratios; terrains of 8 to 1M triangles; 2 x AMD EPYC cores, Embree 3.13.5, gcc 12 -O3):
-   built-in/Embree rays/s 1.49 at 9 primitives, 1.22 at 513, 1.02 at 1059, 0.98-1.05 from
-   2179 to 4419 (a tie), 0.95 at 6499, 0.93 at 8979, 0.90 at 18051, 0.81-0.89 from 73k to 1M.
-   The built-in BVH wins below ~2k primitives (no per-ray Embree set-up, quads and spheres
-   tested natively instead of through user-geometry callbacks), Embree above ~5k. */
+   by both backends through pt_scene_intersect/occluded on one thread, interleaved, medians of
+   paired ratios; terrains of 8 to 1M triangles; shared 2-core AMD EPYC, Embree 3.13.5,
+   gcc 12 -O3). Built-in/Embree rays/s in three runs: 1.5 at 9 primitives, 1.2-1.3 at 513,
+   1.0-1.2 at 1059, 0.98-1.38 from 2179 to 3201, 1.00-1.10 at 4419, then Embree ahead: 0.90-0.95
+   at 6499, 0.88-0.99 at 8979, 0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M. The built-in BVH
+   wins on small scenes (no per-ray Embree set-up; quads and spheres tested natively instead of
+   through user-geometry callbacks); the threshold sits between the last size where it led or
+   tied in every run (4419) and the first where Embree led in every run (6499). */
 #ifndef PDFTRACE_EMBREE_MIN_PRIMS
-#define PDFTRACE_EMBREE_MIN_PRIMS 4096
+#define PDFTRACE_EMBREE_MIN_PRIMS 5000
 #endif
 
 /* ==========================================================================================
