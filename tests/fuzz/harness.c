@@ -64,7 +64,7 @@ static float fz_rand01(uint64_t *s)
     return (float)((*s >> 40) & 0xffffffu) / 16777216.0f;
 }
 
-/* 1 when the hit point is farther from origin + t dir than 1e-4 of the coordinates involved
+/* 1 when the hit point is farther from origin + t dir than 2e-6 (~30 float ulps) of the coordinates involved
    (double arithmetic). */
 static int fz_inconsistent(pt_ray r, const pt_hit *h)
 {
@@ -78,7 +78,7 @@ static int fz_inconsistent(pt_ray r, const pt_hit *h)
         e = fabs(q - p) > e ? fabs(q - p) : e;
         scale += fabs(o) + fabs(p) + (double)h->t * fabs(d);
     }
-    return e > 1e-4 * scale;
+    return e > 2e-6 * scale;
 }
 
 /* Rays from `from` towards points of the scene's bounds (and its corners): the BVH and the
