@@ -197,7 +197,16 @@ PT_INLINE pt_vec3 pt_ray_at(pt_ray r, float t) { return pt_madd(r.origin, r.dir,
 /* Offsets a surface point p along the geometric normal n, to the side of w, far enough that a
    ray leaving from the result cannot hit the surface it left, yet close enough not to skip
    nearby geometry (Waechter & Binder, "A Fast and Robust Method for Avoiding
-   Self-Intersection", Ray Tracing Gems ch. 6, 2019). */
+   Self-Intersection", Ray Tracing Gems ch. 6, 2019): each coordinate moves by 256 ulps, or by
+   magnitude/65536 where it is below magnitude/32. `magnitude` is the size of the coordinates
+   that computed p, along n (pt_hit.magnitude; 0 for an axis-aligned plane through 0, whose
+   points are exact; |p| is used when larger); the original method's constants assume 1, and fail for scenes far smaller (an offset of 1.5e-5
+   leaves a 1e-6 scene altogether) or far larger (a coordinate near 0 of a point computed from
+   coordinates near 1e6 has an error far above 1.5e-5). The offset is ~3e-5 magnitude: geometry
+   closer than that to a surface is skipped, and float coordinates resolve 2^-24 of their
+   magnitude, so a scene d away from the origin needs features >= ~1e-3 d (e.g. >= 1e3 at 1e6). */
+PTDEF pt_vec3 pt_offset_ray_origin_scaled(pt_vec3 p, pt_vec3 n, pt_vec3 w, float magnitude);
+/* The same with magnitude 1 (Waechter & Binder's constants: scenes of unit scale). */
 PTDEF pt_vec3 pt_offset_ray_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w);
 
 /* Affine transform: a 3x4 row-major matrix m, p' = M p + t (t = column 3). */
@@ -314,7 +323,11 @@ PTDEF pt_pdf pt_pdf_scene_lights(const struct pt_scene *scene, pt_vec3 origin);
    viewer is not required), for outgoing direction wo (unit, pointing away from the surface).
    Delta materials have no PDF: sampling returns 0 and value is 0. */
 PTDEF pt_pdf pt_pdf_material(const struct pt_scene *scene, int material, pt_vec3 normal, pt_vec3 wo);
-/* Weights must be >= 0 and sum to 1 (within 1e-4); pt_pdf_validate checks it. */
+/* Weights must be >= 0 and sum to 1 (within 1e-4); pt_pdf_validate checks it. Unvalidated
+   weights behave as documented, finite: weights that are not > 0 (zero, negative, NaN) are
+   ignored and the others are divided by their sum, so sampling and pt_pdf_value always agree
+   (a mixture of 0.1 p1 + 0.3 p2 is 0.25 p1 + 0.75 p2); with no positive weight it has no
+   density (sampling fails, value 0). */
 PTDEF pt_pdf pt_pdf_mixture(int count, const pt_pdf *components, const float *weights);
 PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_fn value);
 
@@ -401,7 +414,10 @@ PTDEF const char *pt_scene_error_message(const pt_scene *scene);
    other transform fails with PT_ERROR_UNSUPPORTED. */
 PTDEF int pt_scene_set_transform(pt_scene *scene, const pt_transform *transform);
 
-/* Shapes. Each returns the index of its first primitive (>= 0) or an error code. */
+/* Shapes. Each returns the index of its first primitive (>= 0) or an error code (with
+   pt_scene_error_message): non-finite input, zero radius or area, coordinates beyond 1e18 in
+   magnitude (products of two must stay finite in float), and shapes whose area underflows in
+   float (edges below ~1e-9 of the scene's units: keep scenes within ~1e-9 .. 1e9). */
 PTDEF int pt_scene_add_sphere(pt_scene *scene, pt_vec3 center, float radius, int material);
 PTDEF int pt_scene_add_quad(pt_scene *scene, pt_vec3 q, pt_vec3 u, pt_vec3 v, int material);
 PTDEF int pt_scene_add_triangle(pt_scene *scene, pt_vec3 a, pt_vec3 b, pt_vec3 c, int material);
@@ -432,6 +448,9 @@ typedef struct pt_hit {
     int front_face;           /* 1 when the ray arrives on the side the geometric normal points to */
     uint32_t primitive;       /* index as returned by pt_scene_add_* (+ triangle index in a mesh) */
     int material;
+    float magnitude;          /* the scale of point's rounding error along the normal (the
+                                 primitive's coordinates weighted by |normal|), for
+                                 pt_offset_ray_origin_scaled */
 } pt_hit;
 
 /* Closest hit with 0 < t < tmax. Returns 1 on a hit, 0 on a miss, an error code on misuse
@@ -1025,6 +1044,9 @@ PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt
 #define PT__INV_PI 0.31830988618379067154f
 #define PT__INV_4PI 0.07957747154594766788f
 #define PT__INF FLT_MAX
+/* Largest coordinate magnitude accepted for shapes: products of two coordinates (dot and cross
+   products, squared radii) stay finite in float. */
+#define PT__MAX_COORD 1e18f
 #if defined(__GNUC__) || defined(__clang__)
 #define PT__HOT inline __attribute__((always_inline))
 #else
@@ -1067,6 +1089,7 @@ static float pt__maxf(float a, float b) { return a > b ? a : b; }
 static float pt__safe_sqrt(float x) { return sqrtf(x > 0.0f ? x : 0.0f); }
 static pt_vec3 pt__vmin(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__minf(a.x, b.x), pt__minf(a.y, b.y), pt__minf(a.z, b.z)); }
 static pt_vec3 pt__vmax(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__maxf(a.x, b.x), pt__maxf(a.y, b.y), pt__maxf(a.z, b.z)); }
+static float pt__vmaxabs(pt_vec3 v) { return pt__maxf(fabsf(v.x), pt__maxf(fabsf(v.y), fabsf(v.z))); }
 static float pt__vget(pt_vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 static int pt__is_black(pt_vec3 c) { return c.x <= 0.0f && c.y <= 0.0f && c.z <= 0.0f; }
 
@@ -1075,18 +1098,25 @@ static int pt__is_black(pt_vec3 c) { return c.x <= 0.0f && c.y <= 0.0f && c.z <=
    the origin where ulps are too small to matter. */
 static float pt__int_as_float(int32_t i) { float f; memcpy(&f, &i, sizeof f); return f; }
 static int32_t pt__float_as_int(float f) { int32_t i; memcpy(&i, &f, sizeof i); return i; }
-static float pt__offset_coord(float p, float n)
+static float pt__offset_coord(float p, float n, float magnitude)
 {
-    const float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
+    const float origin = magnitude * (1.0f / 32.0f), float_scale = magnitude * (1.0f / 65536.0f), int_scale = 256.0f;
     int32_t of_i = (int32_t)(int_scale * n);
     float p_i = pt__int_as_float(pt__float_as_int(p) + ((p < 0.0f) ? -of_i : of_i));
     return fabsf(p) < origin ? p + float_scale * n : p_i;
 }
-PTDEF pt_vec3 pt_offset_ray_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w)
+PTDEF pt_vec3 pt_offset_ray_origin_scaled(pt_vec3 p, pt_vec3 n, pt_vec3 w, float magnitude)
 {
     if (pt_dot(n, w) < 0.0f) n = pt_neg(n);
-    return pt_v3(pt__offset_coord(p.x, n.x), pt__offset_coord(p.y, n.y), pt__offset_coord(p.z, n.z));
+    if (!(magnitude >= 0.0f) || !pt__isfinite(magnitude)) magnitude = 1.0f;
+    /* never below p's own size, and never 0: the ulp step is only valid away from 0 (from
+       p_i = 0 towards -n_i it would build a NaN), so a coordinate at 0 must take the additive path */
+    magnitude = pt__maxf(magnitude, pt__vmaxabs(p));
+    if (!(magnitude > 0.0f)) magnitude = FLT_MIN;
+    return pt_v3(pt__offset_coord(p.x, n.x, magnitude), pt__offset_coord(p.y, n.y, magnitude),
+                 pt__offset_coord(p.z, n.z, magnitude));
 }
+PTDEF pt_vec3 pt_offset_ray_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w) { return pt_offset_ray_origin_scaled(p, n, w, 1.0f); }
 
 PTDEF pt_transform pt_transform_identity(void)
 {
@@ -1775,10 +1805,14 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
         break;
     case PT_PDF_MIXTURE: {
         int k;
+        float wsum = 0.0f;
         if (!pdf->as.mixture.components || !pdf->as.mixture.weights) break;
         for (k = 0; k < pdf->as.mixture.count; ++k)
-            if (pdf->as.mixture.weights[k] > 0.0f)
+            if (pdf->as.mixture.weights[k] > 0.0f) {
+                wsum += pdf->as.mixture.weights[k];
                 v += pdf->as.mixture.weights[k] * pt__pdf_value_depth(&pdf->as.mixture.components[k], w, depth + 1);
+            }
+        v = wsum > 0.0f ? v / wsum : 0.0f; /* unnormalised weights (see pt_pdf_mixture) */
         break;
     }
     case PT_PDF_CALLBACK:
@@ -1853,8 +1887,12 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
     }
     case PT_PDF_MIXTURE: {
         int k, n = pdf->as.mixture.count, chosen = -1;
-        float u = pt_rng_float(rng), acc = 0.0f, pk = 0.0f;
+        float u = pt_rng_float(rng), acc = 0.0f, pk = 0.0f, wsum = 0.0f;
         if (n <= 0 || !pdf->as.mixture.components || !pdf->as.mixture.weights) break;
+        for (k = 0; k < n; ++k)
+            if (pdf->as.mixture.weights[k] > 0.0f) wsum += pdf->as.mixture.weights[k];
+        if (!(wsum > 0.0f) || !pt__isfinite(wsum)) break;
+        u *= wsum; /* select in proportion to the positive weights, whatever their sum */
         for (k = 0; k < n; ++k) {
             float wk = pdf->as.mixture.weights[k];
             if (!(wk > 0.0f)) continue;
@@ -1871,6 +1909,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
             if (!(wk > 0.0f)) continue;
             p += wk * (k == chosen ? pk : pt__pdf_value_depth(&pdf->as.mixture.components[k], w, depth + 1));
         }
+        p /= wsum;
         ok = p > 0.0f;
         break;
     }
@@ -1950,7 +1989,18 @@ static PT__HOT int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float t
     h = pt_sub(pt_madd(rc->o, rc->d, t), p->p0);
     a = pt_dot(h, p->w);
     b = pt_dot(h, p->w2);
-    if (a < 0.0f || a > 1.0f || b < 0.0f || b > 1.0f) return 0;
+    if (a < 0.0f || a > 1.0f || b < 0.0f || b > 1.0f) {
+        /* Quads that share an edge (a box) compute it each from their own Q, u, v: without a
+           margin a ray exactly at the edge can fail both (rays escaped closed boxes). Accept
+           points within the rounding error of a and b: h = (o + t d) - Q is off by ~u |o + t d|
+           from the sum and ~u t |d| from the product, plus t's own relative error (a few u)
+           times |d| (u = FLT_EPSILON / 2; Higham, "Accuracy and Stability of Numerical
+           Algorithms", sec. 3.1), and a = h.w by that times the sum of |w|. */
+        float e = FLT_EPSILON * (pt__vmaxabs(pt_add(h, p->p0)) + 2.0f * t * pt__vmaxabs(rc->d));
+        float ta = e * (fabsf(p->w.x) + fabsf(p->w.y) + fabsf(p->w.z));
+        float tb = e * (fabsf(p->w2.x) + fabsf(p->w2.y) + fabsf(p->w2.z));
+        if (a < -ta || a > 1.0f + ta || b < -tb || b > 1.0f + tb) return 0;
+    }
     *t_out = t;
     return 1;
 }
@@ -2037,6 +2087,29 @@ static PT__HOT int pt__hit_prim(const pt__rayctx *rc, const pt__prim *p, float t
     }
 }
 
+/* The scale of the rounding error, along unit normal n, of a point computed on p and of a
+   re-intersection of p from near it: sum_i |n_i| m_i, m_i the largest |coordinate i| that
+   enters (sphere: |c_i| + r; quad: |Q_i| + |u_i| + |v_i|; triangle: the vertices'). Products
+   with exact zeros are exact, so an axis-aligned plane through 0 has magnitude 0 and its points
+   leave it by a few ulps, where a fixed 1/65536 would lift them 1e-3 above a floor 50 wide or
+   leave a 1e-6 scene altogether (pt_offset_ray_origin_scaled). */
+static float pt__prim_magnitude(const pt__prim *p, pt_vec3 n)
+{
+    pt_vec3 m;
+    if (p->type == PT__PRIM_SPHERE) {
+        float r = p->p1.x;
+        m = pt_v3(fabsf(p->p0.x) + r, fabsf(p->p0.y) + r, fabsf(p->p0.z) + r);
+    } else if (p->type == PT__PRIM_QUAD) {
+        m = pt_v3(fabsf(p->p0.x) + fabsf(p->p1.x) + fabsf(p->p2.x), fabsf(p->p0.y) + fabsf(p->p1.y) + fabsf(p->p2.y),
+                  fabsf(p->p0.z) + fabsf(p->p1.z) + fabsf(p->p2.z));
+    } else {
+        m = pt_v3(pt__maxf(fabsf(p->p0.x), pt__maxf(fabsf(p->p1.x), fabsf(p->p2.x))),
+                  pt__maxf(fabsf(p->p0.y), pt__maxf(fabsf(p->p1.y), fabsf(p->p2.y))),
+                  pt__maxf(fabsf(p->p0.z), pt__maxf(fabsf(p->p1.z), fabsf(p->p2.z))));
+    }
+    return fabsf(n.x) * m.x + fabsf(n.y) * m.y + fabsf(n.z) * m.z;
+}
+
 /* Fills a public hit record for primitive p hit at t. */
 static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float t, const float *bary, pt_hit *h)
 {
@@ -2050,7 +2123,10 @@ static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float
         h->geometric_normal = n;
         h->shading_normal = n;
     } else if (p->type == PT__PRIM_QUAD) {
-        h->point = pt_ray_at(ray, t);
+        /* on the plane: Q + a u + b v, not o + t d, whose error grows with the distance the ray
+           travelled (a far camera put points below a floor: acne and light leaks) */
+        pt_vec3 hq = pt_sub(pt_ray_at(ray, t), p->p0);
+        h->point = pt_madd(pt_madd(p->p0, p->p1, pt_dot(hq, p->w)), p->p2, pt_dot(hq, p->w2));
         h->geometric_normal = p->n;
         h->shading_normal = p->n;
     } else {
@@ -2066,6 +2142,7 @@ static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float
         }
     }
     h->front_face = pt_dot(ray.dir, h->geometric_normal) < 0.0f;
+    h->magnitude = pt__prim_magnitude(p, h->geometric_normal);
 }
 
 PTDEF pt_scene *pt_scene_create(void)
@@ -2173,6 +2250,10 @@ PTDEF int pt_scene_add_sphere(pt_scene *s, pt_vec3 center, float radius, int mat
     if (!pt__vfinite(center) || !pt__isfinite(radius) || !(radius > 0.0f))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "sphere: centre must be finite and radius > 0 (radius %g)",
                         (double)radius);
+    if (pt__vmaxabs(center) > PT__MAX_COORD || radius > PT__MAX_COORD)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "sphere: centre and radius must have magnitude <= %g (radius %g): products of two "
+                        "coordinates must stay finite in float", (double)PT__MAX_COORD, (double)radius);
     if (!s->xf_identity) {
         /* a similarity transform has M^T M = k^2 I */
         pt_vec3 c0 = pt_v3(s->xf.m[0][0], s->xf.m[1][0], s->xf.m[2][0]);
@@ -2186,7 +2267,8 @@ PTDEF int pt_scene_add_sphere(pt_scene *s, pt_vec3 center, float radius, int mat
                             "scale); a sphere would become an ellipsoid");
         center = pt_transform_point(&s->xf, center);
         r = radius * sqrtf(k2);
-        if (!pt__vfinite(center) || !pt__isfinite(r) || !(r > 0.0f))
+        if (!pt__vfinite(center) || !pt__isfinite(r) || !(r > 0.0f) || pt__vmaxabs(center) > PT__MAX_COORD ||
+            r > PT__MAX_COORD)
             return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "sphere: transformed sphere is not finite");
     }
     p = pt__new_prim(s, PT__PRIM_SPHERE, material);
@@ -2209,7 +2291,8 @@ static int pt__xf_quad(const pt_scene *s, pt_vec3 *q, pt_vec3 *u, pt_vec3 *v)
         if (pt__transform_det(&s->xf) < 0.0f) { pt_vec3 t = *u; *u = *v; *v = t; }
     }
     return pt__vfinite(*q) && pt__vfinite(*u) && pt__vfinite(*v) && pt_length2(pt_cross(*u, *v)) > 0.0f &&
-           pt__isfinite(pt_length2(pt_cross(*u, *v)));
+           pt__isfinite(pt_length2(pt_cross(*u, *v))) &&
+           pt__vmaxabs(*q) + pt__vmaxabs(*u) + pt__vmaxabs(*v) <= PT__MAX_COORD;
 }
 static void pt__set_quad(pt__prim *p, pt_vec3 q, pt_vec3 u, pt_vec3 v)
 {
@@ -2225,7 +2308,9 @@ PTDEF int pt_scene_add_quad(pt_scene *s, pt_vec3 q, pt_vec3 u, pt_vec3 v, int ma
     if (!pt__vfinite(q) || !pt__vfinite(u) || !pt__vfinite(v))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "quad: Q, u and v must be finite");
     if (!pt__xf_quad(s, &q, &u, &v))
-        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "quad: u and v are parallel or zero (no area)");
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "quad: no area in float (u and v parallel or zero, |u x v|^2 under- or overflows, or a "
+                        "corner beyond %g)", (double)PT__MAX_COORD);
     p = pt__new_prim(s, PT__PRIM_QUAD, material);
     if (!p) return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "quad: out of memory");
     pt__set_quad(p, q, u, v);
@@ -2242,7 +2327,8 @@ static void pt__set_triangle(pt__prim *p, pt_vec3 a, pt_vec3 b, pt_vec3 c)
 static int pt__tri_ok(pt_vec3 a, pt_vec3 b, pt_vec3 c)
 {
     float a2 = pt_length2(pt_cross(pt_sub(b, a), pt_sub(c, a)));
-    return pt__vfinite(a) && pt__vfinite(b) && pt__vfinite(c) && a2 > 0.0f && pt__isfinite(a2);
+    return pt__vfinite(a) && pt__vfinite(b) && pt__vfinite(c) && a2 > 0.0f && pt__isfinite(a2) &&
+           pt__vmaxabs(a) <= PT__MAX_COORD && pt__vmaxabs(b) <= PT__MAX_COORD && pt__vmaxabs(c) <= PT__MAX_COORD;
 }
 PTDEF int pt_scene_add_triangle(pt_scene *s, pt_vec3 a, pt_vec3 b, pt_vec3 c, int material)
 {
@@ -2258,7 +2344,10 @@ PTDEF int pt_scene_add_triangle(pt_scene *s, pt_vec3 a, pt_vec3 b, pt_vec3 c, in
         c = pt_transform_point(&s->xf, c);
         if (pt__transform_det(&s->xf) < 0.0f) { pt_vec3 t = b; b = c; c = t; }
     }
-    if (!pt__tri_ok(a, b, c)) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "triangle: zero area or not finite");
+    if (!pt__tri_ok(a, b, c))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "triangle: no area in float (collinear or coincident vertices, |(b-a) x (c-a)|^2 under- or "
+                        "overflows, or a vertex beyond %g)", (double)PT__MAX_COORD);
     p = pt__new_prim(s, PT__PRIM_TRIANGLE, material);
     if (!p) return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "triangle: out of memory");
     pt__set_triangle(p, a, b, c);
@@ -2312,8 +2401,10 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
     if (m->triangle_count > 0x3fffffffu / 3u)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: too many triangles (%u)", (unsigned)m->triangle_count);
     for (i = 0; i < m->vertex_count; ++i) {
-        if (!pt__vfinite(pt_v3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2])))
-            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: vertex %u is not finite", (unsigned)i);
+        pt_vec3 p = pt_v3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2]);
+        if (!pt__vfinite(p) || pt__vmaxabs(p) > PT__MAX_COORD)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: vertex %u is not finite or beyond %g", (unsigned)i,
+                            (double)PT__MAX_COORD);
         if (m->normals &&
             !pt__vfinite(pt_v3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2])))
             return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: normal %u is not finite", (unsigned)i);
@@ -2346,7 +2437,7 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
             pt_vec3 t = v[1]; v[1] = v[2]; v[2] = t;
             t = n[1]; n[1] = n[2]; n[2] = t;
         }
-        if (!pt__tri_ok(v[0], v[1], v[2])) { s->degenerate_skipped++; continue; }
+        if (!pt__tri_ok(v[0], v[1], v[2])) continue; /* counted below, once the mesh is added */
         p = pt__new_prim(s, PT__PRIM_TRIANGLE, m->material);
         pt__set_triangle(p, v[0], v[1], v[2]);
         if (m->normals) {
@@ -2359,6 +2450,7 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
         good++;
     }
     if (!good) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: every triangle has zero area");
+    s->degenerate_skipped += m->triangle_count - good;
     s->triangle_count += good;
     s->mesh_count++;
     s->features |= PT_FEATURE_TRIANGLES | PT_FEATURE_MESHES | (m->normals ? (unsigned)PT_FEATURE_SHADING_NORMALS : 0u);
@@ -4162,7 +4254,8 @@ static pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg,
     if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
         w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     sr.origin = v->o;
-    target = pt_offset_ray_origin(ls->point, ls->normal, pt_neg(ls->dir));
+    target = pt_offset_ray_origin_scaled(ls->point, ls->normal, pt_neg(ls->dir),
+                                         pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
     sr.dir = pt_sub(target, sr.origin);
     pt__rayctx_init2(&src, sr, tri);
     st->shadow_rays++;
@@ -4233,7 +4326,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
             v.albedo = pt__checker(&ct, h.point);
         }
 
-        v.o = pt_offset_ray_origin(v.p, v.ng, v.ng);
+        v.o = pt_offset_ray_origin_scaled(v.p, v.ng, v.ng, h.magnitude);
         if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
             /* general path: next-event estimation as at any vertex; a delta material reflects
                nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */
@@ -4308,7 +4401,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         /* non-delta directions always leave on the side of ng (pt__material_eval), so the
            spawn point is v.o, the point that light sampling used */
         prev_p = v.o;
-        ray.origin = prev_delta ? pt_offset_ray_origin(v.p, v.ng, wi) : v.o;
+        ray.origin = prev_delta ? pt_offset_ray_origin_scaled(v.p, v.ng, wi, h.magnitude) : v.o;
         ray.dir = wi;
         if (depth + 1 >= cfg->rr_start) {
             float q = pt__minf(0.95f, pt_max_component(beta));
