@@ -1419,13 +1419,15 @@ static int pt__sphere_inside(pt_vec3 o, pt_vec3 c, float r)
     pt_vec3 wc = pt_sub(c, o);
     return pt_length2(wc) <= r * r * (1.0f + 1e-5f);
 }
-/* Whether the float direction w lies in the cone of directions from the origin that meet the
-   sphere (wc = centre - origin): sin^2 of the angle from the cross product, in double, so the
-   test is exact for the given float w and stays accurate for tiny angles (no tolerance band:
-   a band would add mass to the density of tiny, distant spheres). */
-static int pt__in_cone(pt_vec3 w, pt_vec3 wc, float r)
+/* Whether the float direction w from o lies in the cone of directions that meet the sphere
+   (c, r): sin^2 of the angle from the cross product, in double, with c - o exact in double,
+   so the test is exact for the given floats and stays accurate for tiny angles (no tolerance
+   band: a band would add mass to the density of tiny, distant spheres). pt__hit_sphere decides
+   tiny spheres by the same formula, so a direction in the cone is a ray that hits. */
+static int pt__in_cone(pt_vec3 w, pt_vec3 o, pt_vec3 c, float r)
 {
-    double wx = w.x, wy = w.y, wz = w.z, cx = wc.x, cy = wc.y, cz = wc.z;
+    double wx = w.x, wy = w.y, wz = w.z;
+    double cx = (double)c.x - o.x, cy = (double)c.y - o.y, cz = (double)c.z - o.z;
     double xx = wy * cz - wz * cy, yy = wz * cx - wx * cz, zz = wx * cy - wy * cx;
     double ww = wx * wx + wy * wy + wz * wz;
     if (wx * cx + wy * cy + wz * cz <= 0.0) return 0;
@@ -1458,9 +1460,9 @@ static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided,
                sample and value agree for every direction */
             int k;
             float step = 1e-4f;
-            for (k = 0; k < 24 && !pt__in_cone(ls->dir, wc, r); ++k, step *= 2.0f)
+            for (k = 0; k < 24 && !pt__in_cone(ls->dir, o, c, r); ++k, step *= 2.0f)
                 ls->dir = pt_normalize(pt_add(ls->dir, pt_scale(pt_sub(b.n, ls->dir), step)));
-            if (!pt__in_cone(ls->dir, wc, r)) return 0;
+            if (!pt__in_cone(ls->dir, o, c, r)) return 0;
         }
         ls->pdf = 1.0f / (2.0f * PT__PI * omc);
         /* distance to the near intersection: d (cos - sqrt(s^2 - sin^2)) */
@@ -1494,7 +1496,7 @@ static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided
     float d2 = pt_length2(wc);
     if (!pt__sphere_inside(o, c, r)) {
         float s2 = (r * r) / d2;
-        if (!pt__in_cone(w, wc, r)) return 0.0f;
+        if (!pt__in_cone(w, o, c, r)) return 0.0f;
         return 1.0f / (2.0f * PT__PI * pt__cone_one_minus_cos(s2));
     }
     if (!two_sided) return 0.0f;
@@ -1961,6 +1963,23 @@ static PT__HOT int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, floa
     float a = pt_dot(rc->d, rc->d), bp = -pt_dot(f, rc->d), cc, disc, q, t0, t1, ll;
     pt_vec3 l;
     if (!(a > 0.0f)) return 0;
+    if (r * r < 1e-6f * pt_dot(f, f)) {
+        /* Tiny or distant (r < 1e-3 |o - c|): the float o - c alone is off by 2^-24 |o - c|,
+           6% of a sphere 1e-6 away as far (tiny sphere lights lost 2% of their light where
+           rays from the mixture had to hit them). In double, from the exact o - c, with the
+           perpendicular distance by the cross product as in pt__in_cone. */
+        double fx = (double)rc->o.x - c.x, fy = (double)rc->o.y - c.y, fz = (double)rc->o.z - c.z;
+        double dx = rc->d.x, dy = rc->d.y, dz = rc->d.z, dd = dx * dx + dy * dy + dz * dz;
+        double xx = dy * fz - dz * fy, yy = dz * fx - dx * fz, zz = dx * fy - dy * fx;
+        double b = -(fx * dx + fy * dy + fz * dz), h2 = (double)r * r * dd - (xx * xx + yy * yy + zz * zz);
+        double tm;
+        if (h2 < 0.0 || b <= 0.0) return 0; /* missed, or the sphere is behind (o is outside it) */
+        /* the near root (b - sqrt(h2)) / dd as (|f|^2 - r^2) / (b + sqrt(h2)): no cancellation */
+        tm = (fx * fx + fy * fy + fz * fz - (double)r * r) / (b + sqrt(h2));
+        if (!(tm > 0.0 && tm < (double)tmax)) return 0;
+        *t_out = (float)tm;
+        return *t_out > 0.0f;
+    }
     l = pt_add(f, pt_scale(rc->d, bp / a));
     ll = pt_length(l);
     disc = a * (r - ll) * (r + ll);
@@ -2117,16 +2136,31 @@ static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float
     h->primitive = p->id;
     h->material = p->material;
     if (p->type == PT__PRIM_SPHERE) {
-        /* re-project onto the sphere to remove the error of o + t d (pbrt-v4 sec. 6.8.5) */
-        pt_vec3 n = pt_normalize(pt_sub(pt_ray_at(ray, t), p->p0));
+        /* re-project onto the sphere to remove the error of o + t d (pbrt-v4 sec. 6.8.5); the
+           direction from the centre in double, from the exact o - c: in float it is off by
+           2^-24 |o - c|, which turned the normals of tiny far spheres (a light 1e-6 wide seen
+           from 1 away) by up to ~4 degrees and made rim hits back faces */
+        double ex = (double)ray.origin.x - p->p0.x + (double)t * ray.dir.x;
+        double ey = (double)ray.origin.y - p->p0.y + (double)t * ray.dir.y;
+        double ez = (double)ray.origin.z - p->p0.z + (double)t * ray.dir.z;
+        double el = sqrt(ex * ex + ey * ey + ez * ez);
+        pt_vec3 n = el > 0.0 ? pt_v3((float)(ex / el), (float)(ey / el), (float)(ez / el)) : pt_v3(0, 0, 1);
         h->point = pt_madd(p->p0, n, p->p1.x);
         h->geometric_normal = n;
         h->shading_normal = n;
     } else if (p->type == PT__PRIM_QUAD) {
         /* on the plane: Q + a u + b v, not o + t d, whose error grows with the distance the ray
-           travelled (a far camera put points below a floor: acne and light leaks) */
+           travelled (a far camera put points below a floor: acne and light leaks); a and b a
+           few ulps inside [0, 1]: a point on an edge shared with another face (a room's
+           corner) lies in that face's plane, where a ray leaving into it finds t = 0, no hit,
+           and leaves the room */
         pt_vec3 hq = pt_sub(pt_ray_at(ray, t), p->p0);
-        h->point = pt_madd(pt_madd(p->p0, p->p1, pt_dot(hq, p->w)), p->p2, pt_dot(hq, p->w2));
+        float mq = pt__vmaxabs(p->p0), mu = pt__vmaxabs(p->p1), mv = pt__vmaxabs(p->p2);
+        float ea = pt__minf(0.5f, 4.0f * FLT_EPSILON * (mq + mu) / mu);
+        float eb = pt__minf(0.5f, 4.0f * FLT_EPSILON * (mq + mv) / mv);
+        float a = pt__minf(1.0f - ea, pt__maxf(ea, pt_dot(hq, p->w)));
+        float b = pt__minf(1.0f - eb, pt__maxf(eb, pt_dot(hq, p->w2)));
+        h->point = pt_madd(pt_madd(p->p0, p->p1, a), p->p2, b);
         h->geometric_normal = p->n;
         h->shading_normal = p->n;
     } else {
@@ -2142,6 +2176,14 @@ static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float
         }
     }
     h->front_face = pt_dot(ray.dir, h->geometric_normal) < 0.0f;
+    if (p->type == PT__PRIM_SPHERE) {
+        /* a ray from outside meets the outside: decided by the exact origin, not by a normal
+           that is a few degrees off at the rim of a tiny far sphere (0.2% of the rays aimed at
+           a light 1e-6 wide hit its "back" and found no emission) */
+        double ox = (double)ray.origin.x - p->p0.x, oy = (double)ray.origin.y - p->p0.y;
+        double oz = (double)ray.origin.z - p->p0.z, d2 = ox * ox + oy * oy + oz * oz, r2 = (double)p->p1.x * p->p1.x;
+        if (d2 != r2) h->front_face = d2 > r2;
+    }
     h->magnitude = pt__prim_magnitude(p, h->geometric_normal);
 }
 
