@@ -36,6 +36,8 @@
 #                         PNG plots by gnuplot; ~25 min on 2 cores; BENCH_OUT, BENCH_ARGS)
 #   make bench-quick      the same in under 3 minutes -> $(BUILD)/bench-quick/
 #   make bench-refs       re-render the benchmark's reference images in bench/ref/ (~30 min)
+#   make stress          the numerical stress cases at full size (~1-2 min CPU): a table
+#                         case | metric | bound | result, non-zero exit on any failing row
 #   make clean            remove build/ and out/
 #   make help             this text
 #
@@ -95,10 +97,10 @@ OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE)
 
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
-TEST_SRCS    := $(wildcard tests/*.c)
-TEST_HDRS    := $(wildcard tests/*.h)
+TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
+TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
 
-.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh FORCE
+.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress FORCE
 
 all: $(EXAMPLE_BINS)
 
@@ -214,6 +216,19 @@ test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_no
 	./$(BUILD)/test_runner_nothreads
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan
 
+# ---- make stress: the numerical stress cases at full size (tests/stress/; the same cases run
+# small in the runner's `stress` section). Prints case | metric | bound | result; non-zero exit
+# on any failing row. STRESS_ARGS: a case filter (sweep, spawn, tiny, watertight, edges, lights,
+# degenerate).
+STRESS_SRCS := tests/stress/stress_main.c tests/stress/stress_cases.c tests/test_util.c
+STRESS_ARGS ?=
+
+$(BUILD)/stress: $(STRESS_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(STRESS_SRCS) $(LDLIBS) $(PT_LDLIBS)
+
+stress: $(BUILD)/stress
+	./$(BUILD)/stress $(STRESS_ARGS)
+
 nothreads-test: $(BUILD)/test_runner_nothreads
 	./$(BUILD)/test_runner_nothreads
 
@@ -250,6 +265,10 @@ check-warnings: | $(BUILD)
 	    $$cc $(WARN_CFLAGS) -I. -Itests/fuzz -c tests/fuzz/replay.c -o $(BUILD)/warn-$$cc-fuzz-replay.o; \
 	    $$cc $(WARN_CFLAGS) -I. -Itests/fuzz -c tests/fuzz/fuzz_target.c -DPT_FUZZ_ENTRY=pt_fuzz_scene -o $(BUILD)/warn-$$cc-fuzz-target.o; \
 	    $$cc $(WARN_CFLAGS) -I. $(PT_THREADS) -c tests/fptrap/fptrap.c -o $(BUILD)/warn-$$cc-fptrap.o; \
+	    echo "$$cc $(WARN_CFLAGS) tests/stress/*.c (make stress)"; \
+	    for f in tests/stress/stress_main.c tests/stress/stress_cases.c; do \
+	        $$cc $(WARN_CFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) -c $$f -o $(BUILD)/warn-$$cc-$$(basename $$f .c).o; \
+	    done; \
 	done; \
 	for cxx in $(WARN_CXX); do \
 	    echo "$$cxx $(WARN_CXXFLAGS) examples/cpp_check.cpp (then run it)"; \

@@ -59,6 +59,7 @@ extern const test_case test_exr_cases[];    /* OpenEXR (a SKIP line without PDFT
 extern const test_case test_embree_cases[]; /* backends; Embree's tests with PDFTRACE_EMBREE */
 extern const test_case test_analytic_cases[];
 extern const test_case test_regress_cases[];
+extern const test_case test_stress_cases[];  /* numerical stress (tests/stress/, fast sizes) */
 extern const test_case test_suite_cases[];  /* last: summaries over the whole run */
 
 #endif

@@ -83,6 +83,7 @@ int main(int argc, char **argv)
         { "embree", test_embree_cases },
         { "analytic", test_analytic_cases },
         { "regress", test_regress_cases },
+        { "stress", test_stress_cases },
         { "suite", test_suite_cases },
     };
     const char *filter = argc > 1 ? argv[1] : NULL;
