@@ -1995,6 +1995,15 @@ static PT__HOT int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, floa
     return 0;
 }
 
+/* How far beyond its edges (in space) pt__hit_quad may accept a point: 2^-20 of the quad's
+   coordinates. The a, b margin below is capped by it (a sliver quad's a, b are so
+   ill-conditioned that its rounding bound would cover its whole plane), and pt__prim_bounds
+   pads quads by twice it, so the BVH never culls what the test accepts. */
+static float pt__quad_margin(const pt__prim *p)
+{
+    return 9.5367431640625e-7f * (pt__vmaxabs(p->p0) + pt__vmaxabs(p->p1) + pt__vmaxabs(p->p2));
+}
+
 /* Parallelogram Q + a u + b v: plane hit, then plane coordinates a = w.(h x v), b = w.(u x h)
    with w = n'/(n'.n'), h = hit - Q (Shirley, "Ray Tracing: The Next Week", sec. 6), as
    a = h.(v x w), b = h.(w x u) with both vectors precomputed. */
@@ -2016,8 +2025,9 @@ static PT__HOT int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float t
            times |d| (u = FLT_EPSILON / 2; Higham, "Accuracy and Stability of Numerical
            Algorithms", sec. 3.1), and a = h.w by that times the sum of |w|. */
         float e = FLT_EPSILON * (pt__vmaxabs(pt_add(h, p->p0)) + 2.0f * t * pt__vmaxabs(rc->d));
-        float ta = e * (fabsf(p->w.x) + fabsf(p->w.y) + fabsf(p->w.z));
-        float tb = e * (fabsf(p->w2.x) + fabsf(p->w2.y) + fabsf(p->w2.z));
+        float cap = pt__quad_margin(p) * 0.57735f; /* |u| <= sqrt(3) max|u_i| */
+        float ta = pt__minf(e * (fabsf(p->w.x) + fabsf(p->w.y) + fabsf(p->w.z)), cap / pt__vmaxabs(p->p1));
+        float tb = pt__minf(e * (fabsf(p->w2.x) + fabsf(p->w2.y) + fabsf(p->w2.z)), cap / pt__vmaxabs(p->p2));
         if (a < -ta || a > 1.0f + ta || b < -tb || b > 1.0f + tb) return 0;
     }
     *t_out = t;
@@ -2755,8 +2765,9 @@ static void pt__prim_bounds(const pt__prim *p, pt_vec3 *lo, pt_vec3 *hi)
         *hi = pt_add(p->p0, r);
     } else if (p->type == PT__PRIM_QUAD) {
         pt_vec3 a = p->p0, b = pt_add(p->p0, p->p1), c = pt_add(p->p0, p->p2), d = pt_add(b, p->p2);
-        *lo = pt__vmin(pt__vmin(a, b), pt__vmin(c, d));
-        *hi = pt__vmax(pt__vmax(a, b), pt__vmax(c, d));
+        float m = 2.0f * pt__quad_margin(p); /* pt__hit_quad accepts points this close to the edges */
+        *lo = pt_sub(pt__vmin(pt__vmin(a, b), pt__vmin(c, d)), pt_v3(m, m, m));
+        *hi = pt_add(pt__vmax(pt__vmax(a, b), pt__vmax(c, d)), pt_v3(m, m, m));
     } else {
         *lo = pt__vmin(pt__vmin(p->p0, p->p1), p->p2);
         *hi = pt__vmax(pt__vmax(p->p0, p->p1), p->p2);
