@@ -3277,9 +3277,29 @@ static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt
     out = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(a, zero), _mm_cmpgt_ps(a, one)),
                     _mm_or_ps(_mm_cmplt_ps(bb, zero), _mm_cmpgt_ps(bb, one)));
     bits = _mm_movemask_ps(_mm_andnot_ps(out, ok));
+    _mm_storeu_ps(ts, t);
+    {
+        /* lanes that hit the plane just outside [0,1]^2: pt__hit_quad's rounding margin decides
+           (a ray through the edge two quads share must hit one of them; stress, watertight box) */
+        int edge = _mm_movemask_ps(_mm_and_ps(out, ok));
+        if (edge) {
+            float as[4], bs[4];
+            _mm_storeu_ps(as, a);
+            _mm_storeu_ps(bs, bb);
+            for (lane = 0; lane < 4; ++lane) {
+                const pt__prim *p;
+                float ta, tb, tq;
+                if (!(edge & (1 << lane))) continue;
+                p = &s->prims[q->prim[lane]];
+                ta = pt__quad_margin(p) * 0.57735f / pt__vmaxabs(p->p1);
+                tb = pt__quad_margin(p) * 0.57735f / pt__vmaxabs(p->p2);
+                if (as[lane] < -ta || as[lane] > 1.0f + ta || bs[lane] < -tb || bs[lane] > 1.0f + tb) continue;
+                if (pt__hit_quad(tv->rc, p, tmax, &tq)) { bits |= 1 << lane; ts[lane] = tq; }
+            }
+        }
+    }
     if (!bits) return -1;
     if (any) return pt__lowest_bit[bits];
-    _mm_storeu_ps(ts, t);
     for (lane = 0; lane < 4; ++lane)
         if ((bits & (1 << lane)) && ts[lane] < best_t) { best_t = ts[lane]; best = lane; }
     (void)s;
