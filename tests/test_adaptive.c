@@ -28,19 +28,6 @@
 
 static double z_limit(void) { return tu_z_two_sided(tu_sidak(FAMILY_ALPHA, ADAPTIVE_Z_TESTS)); }
 
-static int render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *st,
-                       const char *what)
-{
-    int rc;
-    pt_render_stats local;
-    if (!st) st = &local;
-    if (!CHECK(t, pt_film_init(film, d->width, d->height) == PT_OK, "%s: film", what)) return 0;
-    rc = pt_render(s, d, film, st);
-    CHECK(t, rc == PT_OK, "%s: pt_render returned %d (%s)", what, rc, pt_result_string(rc));
-    CHECK(t, st->nonfinite_samples == 0, "%s: %llu non-finite samples", what, (unsigned long long)st->nonfinite_samples);
-    return rc == PT_OK;
-}
-
 /* Per-region z-tests (4 x 4 regions, channel 1) between two renders of the same expectation.
    Returns the number of regions with |z| above the family limit; *worst gets the largest |z|. */
 static int compare_regions(const pt_film *a, const pt_film *b, double *worst)
@@ -176,7 +163,7 @@ static void easy_region_stops(test_ctx *t)
     d.adaptive_threshold = 0.05f;
     d.adaptive_min_spp = 8;
     d.samples_per_pass = 4;
-    if (render_into(t, s, &d, &f, &st, "adaptive")) {
+    if (tu_render_into(t, s, &d, &f, &st, "adaptive")) {
         for (y = 0; y < 16; y++)
             for (x = 0; x < 64; x++) {
                 uint32_t n = f.count[y * 64 + x];
@@ -218,7 +205,7 @@ static void neyman_allocation(test_ctx *t)
     d.samples_per_pixel = 512;
     d.samples_per_pass = 4;
     d.adaptive_threshold = T;
-    if (render_into(t, s, &d, &f, &st, "adaptive")) {
+    if (tu_render_into(t, s, &d, &f, &st, "adaptive")) {
         for (y = 0; y < 16; y++)
             for (x = 0; x < 64; x++) {
                 if (x < 24) nl += f.count[y * 64 + x];
@@ -258,11 +245,11 @@ static void mean_matches_uniform(test_ctx *t)
     if (!CHECK(t, s != NULL, "scene")) return;
     d.adaptive_threshold = 0.15f;
     d.adaptive_min_spp = 16;
-    if (render_into(t, s, &d, &a, &sa, "adaptive")) {
+    if (tu_render_into(t, s, &d, &a, &sa, "adaptive")) {
         pt_render_desc e = d;
         e.adaptive_threshold = 0;
         e.seed = d.seed + 1000;
-        if (render_into(t, s, &e, &u, &su, "uniform")) {
+        if (tu_render_into(t, s, &e, &u, &su, "uniform")) {
             fails = compare_regions(&a, &u, &worst);
             CHECK(t, fails == 0, "%d of 16 regions differ (|z| > %.2f, max %.2f)", fails, z_limit(), worst);
             CHECK(t, sa.pixels_converged > 0 && sa.pixels_converged < 48u * 40u,
@@ -299,7 +286,7 @@ static void threads_bit_identical(test_ctx *t)
     d.adaptive_min_spp = 8;
     d.samples_per_pass = 4;
     d.threads = 1;
-    if (!render_into(t, s, &d, &ref, &st0, "threads=1")) { pt_film_free(&ref); pt_scene_destroy(s); return; }
+    if (!tu_render_into(t, s, &d, &ref, &st0, "threads=1")) { pt_film_free(&ref); pt_scene_destroy(s); return; }
     CHECK(t, st0.pixels_converged > 0 && st0.pixels_converged < 40u * 32u, "%llu pixels converged: want some, not all",
           (unsigned long long)st0.pixels_converged);
     for (k = 0; k < 4; k++) {
@@ -307,7 +294,7 @@ static void threads_bit_identical(test_ctx *t)
         e.threads = k == 1 ? 3 : 2;
         if (k == 2) e.tile_size = 5;
         if (k == 3) { e.parallel_for = host_reverse; e.threads = 1; }
-        if (render_into(t, s, &e, &f, &st, names[k])) {
+        if (tu_render_into(t, s, &e, &f, &st, names[k])) {
             CHECK(t, tu_film_equal(&ref, &f), "%s: film differs from threads=1", names[k]);
             CHECK(t, st.samples == st0.samples && st.pixels_converged == st0.pixels_converged,
                   "%s: stats differ from threads=1", names[k]);
@@ -331,7 +318,7 @@ static void threshold_zero_is_uniform(test_ctx *t)
     int x, y, k, diff = 0;
     if (!CHECK(t, s != NULL, "scene")) return;
     d.samples_per_pass = 4; /* 4 + 2 */
-    if (render_into(t, s, &d, &f, NULL, "threshold 0")) {
+    if (tu_render_into(t, s, &d, &f, NULL, "threshold 0")) {
         pt_camera_init(&cam, &d.camera, d.width, d.height);
         if (CHECK(t, pt_film_init(&g, d.width, d.height) == PT_OK, "film")) {
             for (y = 0; y < d.height; y++)
@@ -361,7 +348,7 @@ static void threshold_zero_is_uniform(test_ctx *t)
             pt_render_desc e = d;
             e.adaptive_min_spp = 2;
             e.adaptive_check_passes = 1;
-            if (render_into(t, s, &e, &g, NULL, "threshold 0, other settings")) diff = !tu_film_equal(&f, &g);
+            if (tu_render_into(t, s, &e, &g, NULL, "threshold 0, other settings")) diff = !tu_film_equal(&f, &g);
             CHECK(t, !diff, "adaptive_min_spp/check_passes changed a render with threshold 0");
             pt_film_free(&g);
         }
@@ -425,7 +412,7 @@ static void skip_case(test_ctx *t, const pt_scene *s, const pt_render_desc *d, u
     pt_render_stats sa, sb;
     pt_render_desc e = *d;
     e.disable_skips = bits;
-    if (render_into(t, s, d, &a, &sa, what) && render_into(t, s, &e, &b, &sb, what)) {
+    if (tu_render_into(t, s, d, &a, &sa, what) && tu_render_into(t, s, &e, &b, &sb, what)) {
         if (exact) {
             CHECK(t, tu_film_equal(&a, &b), "%s: the general path changed the film", what);
         } else {

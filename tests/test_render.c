@@ -62,19 +62,6 @@ static pt_scene *cornell(int glass, pt_render_desc *d)
     return s;
 }
 
-static int render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *st,
-                       const char *what)
-{
-    int rc;
-    pt_render_stats local;
-    if (!st) st = &local;
-    if (!CHECK(t, pt_film_init(film, d->width, d->height) == PT_OK, "%s: film", what)) return 0;
-    rc = pt_render(s, d, film, st);
-    CHECK(t, rc == PT_OK, "%s: pt_render returned %d (%s)", what, rc, pt_result_string(rc));
-    CHECK(t, st->nonfinite_samples == 0, "%s: %llu non-finite samples", what, (unsigned long long)st->nonfinite_samples);
-    return rc == PT_OK;
-}
-
 /* ------------------------------------------------------------------------------------------ */
 /* camera                                                                                      */
 
@@ -192,7 +179,7 @@ static void threads_bit_identical(test_ctx *t)
     if (!CHECK(t, s != NULL, "Cornell scene")) return;
     d.max_depth = 8;
     d.threads = 1;
-    if (!render_into(t, s, &d, &ref, &st, "threads=1")) { pt_scene_destroy(s); return; }
+    if (!tu_render_into(t, s, &d, &ref, &st, "threads=1")) { pt_scene_destroy(s); return; }
     CHECK(t, st.samples == (uint64_t)40 * 28 * 4, "stats.samples %llu, want %d", (unsigned long long)st.samples, 40 * 28 * 4);
     for (k = 0; k < 6; k++) {
         pt_render_desc e = d;
@@ -204,14 +191,14 @@ static void threads_bit_identical(test_ctx *t)
 #else
         if (k == 4) e.parallel_for = host_reverse; /* no threads in this build */
 #endif
-        if (render_into(t, s, &e, &f, &st, names[k]))
+        if (tu_render_into(t, s, &e, &f, &st, names[k]))
             CHECK(t, tu_film_equal(&ref, &f), "%s: film differs from threads=1", names[k]);
         pt_film_free(&f);
     }
     {   /* and the seed matters */
         pt_render_desc e = d;
         e.seed = d.seed + 1;
-        if (render_into(t, s, &e, &f, &st, "seed + 1")) CHECK(t, !tu_film_equal(&ref, &f), "a different seed gave the same film");
+        if (tu_render_into(t, s, &e, &f, &st, "seed + 1")) CHECK(t, !tu_film_equal(&ref, &f), "a different seed gave the same film");
         pt_film_free(&f);
     }
     pt_film_free(&ref);
@@ -231,19 +218,19 @@ static void progressive_equals_single(test_ctx *t)
     if (!CHECK(t, s != NULL, "Cornell scene")) return;
     d.max_depth = 6;
     d.threads = 2;
-    if (render_into(t, s, &d, &a, &st, "first 8 spp")) {
+    if (tu_render_into(t, s, &d, &a, &st, "first 8 spp")) {
         rc = pt_render(s, &d, &a, &st);
         CHECK(t, rc == PT_OK && st.nonfinite_samples == 0, "second 8 spp: %d", rc);
     }
     d.samples_per_pixel = 16;
     d.samples_per_pass = 8;
-    if (render_into(t, s, &d, &b, &st, "16 spp in passes of 8")) {
+    if (tu_render_into(t, s, &d, &b, &st, "16 spp in passes of 8")) {
         CHECK(t, st.passes == 2, "16 spp in passes of 8 took %d passes", st.passes);
         CHECK(t, tu_film_equal(&a, &b), "8 + 8 spp differs from 16 spp (passes of 8)");
     }
     pt_film_free(&b);
     d.samples_per_pass = 5;
-    if (render_into(t, s, &d, &b, &st, "16 spp in passes of 5")) {
+    if (tu_render_into(t, s, &d, &b, &st, "16 spp in passes of 5")) {
         int bad = 0;
         for (i = 0; i < d.width * d.height; i++) bad += b.count[i] != 16;
         CHECK(t, bad == 0, "%d pixels without exactly 16 samples (passes of 5)", bad);
@@ -287,7 +274,7 @@ static void cancellation_and_progress(test_ctx *t)
     memset(&log, 0, sizeof log);
     d.progress = on_progress;
     d.progress_user = &log;
-    if (render_into(t, s, &d, &f, &st, "with progress")) {
+    if (tu_render_into(t, s, &d, &f, &st, "with progress")) {
         CHECK(t, log.calls == 4 && log.pass_count == 4 && log.bad_order == 0, "progress: %d calls, pass_count %d, %d out of order",
               log.calls, log.pass_count, log.bad_order);
         CHECK(t, log.last_done == (uint64_t)32 * 32 * 12 && log.total == (uint64_t)32 * 32 * 12, "samples_done %llu total %llu",
@@ -344,7 +331,7 @@ static void render_image_matches_film(test_ctx *t)
     memset(&b, 0, sizeof b);
     rc = pt_render_image(s, &d, &a, &st);
     CHECK(t, rc == PT_OK && st.nonfinite_samples == 0, "pt_render_image: %d", rc);
-    if (render_into(t, s, &d, &f, NULL, "pt_render")) {
+    if (tu_render_into(t, s, &d, &f, NULL, "pt_render")) {
         rc = pt_film_resolve(&f, &b);
         CHECK(t, rc == PT_OK && a.width == 20 && a.height == 16 && b.width == 20 && b.height == 16 &&
                      memcmp(a.rgb, b.rgb, sizeof(float) * 3 * 20 * 16) == 0,
@@ -381,7 +368,7 @@ static void furnace_closed_sphere(test_ctx *t)
         d.camera.vfov_degrees = 90;
         d.strategy = (pt_strategy)strat;
         d.seed = 500 + strat;
-        if (!render_into(t, s, &d, &f, NULL, names[strat])) { pt_film_free(&f); continue; }
+        if (!tu_render_into(t, s, &d, &f, NULL, names[strat])) { pt_film_free(&f); continue; }
         tu_film_regions(&f, 4, 4, reg);
         {
             int fails = 0;
@@ -464,7 +451,7 @@ static void strategies_agree_cornell(test_ctx *t)
     for (strat = 0; strat < 4; strat++) {
         d.strategy = (pt_strategy)strat;
         d.seed = 900 + strat;
-        ok &= render_into(t, s, &d, &f[strat], NULL, names[strat]);
+        ok &= tu_render_into(t, s, &d, &f[strat], NULL, names[strat]);
         if (ok) tu_film_regions(&f[strat], 4, 4, reg[strat]);
     }
     if (ok) {
@@ -556,7 +543,7 @@ static void direct_light_lambert(test_ctx *t)
         d.guide = NULL;
         d.light_weight = strat == 5 ? 0.2f : 0.0f;
         if (strat == 4) { d.guide = quad_guide; d.guide_user = &g; d.guide_weight = 0.5f; }
-        if (!render_into(t, s, &d, &f, NULL, names[strat])) { pt_film_free(&f); continue; }
+        if (!tu_render_into(t, s, &d, &f, NULL, names[strat])) { pt_film_free(&f); continue; }
         tu_film_regions(&f, 4, 4, reg);
         for (i = 0; i < 16; i++) {
             double want = 0, z;
@@ -690,7 +677,7 @@ static void no_nonfinite_anywhere(test_ctx *t)
         d.strategy = (pt_strategy)(strat % 4);
         if (strat == 4) { d.guide = quad_guide; d.guide_user = &g; }
         memset(&img, 0, sizeof img);
-        if (render_into(t, s, &d, &f, NULL, "all-features scene") && pt_film_resolve(&f, &img) == PT_OK) {
+        if (tu_render_into(t, s, &d, &f, NULL, "all-features scene") && pt_film_resolve(&f, &img) == PT_OK) {
             for (k = 0; k < 3 * 32 * 32; k++) bad += !(img.rgb[k] >= 0.0f) || !isfinite(img.rgb[k]);
             CHECK(t, bad == 0, "strategy %d: %d negative or non-finite pixel values", strat, bad);
         }
