@@ -550,7 +550,8 @@ typedef struct pt_shading_point {
    querying (until then they fail with PT_ERROR_INVALID_STATE). So a scene built by
    pt_scene_desc_build can be switched and re-committed. PT_BACKEND_EMBREE without
    PDFTRACE_EMBREE compiled in: PT_ERROR_UNSUPPORTED. AUTO (the default) uses Embree, when
-   compiled in, for scenes of at least PDFTRACE_EMBREE_MIN_PRIMS primitives, and falls back to
+   compiled in, for scenes of at least PDFTRACE_EMBREE_MIN_PRIMS primitives and for scenes made
+   mostly of quads and spheres (see PDFTRACE_EMBREE_MIN_PRIMS), and falls back to
    the built-in BVH if Embree fails; an explicit EMBREE reports the failure instead.
    pt_scene_info.backend says which one the commit chose. */
 PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
@@ -561,16 +562,21 @@ PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
    back to the built-in BVH). Without PDFTRACE_EMBREE: PT_ERROR_UNSUPPORTED. */
 PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
 
-/* AUTO uses Embree (when compiled in) for scenes with at least this many primitives.
+/* AUTO uses Embree (when compiled in) for scenes with at least this many primitives, and for
+   smaller scenes made mostly of quads and spheres (triangles less than half the primitives).
    Measured by make bench-bvh (bench/bvh.c: one batch of camera, bounce and shadow rays traced
    by both backends through pt_scene_intersect/occluded on one thread, interleaved, medians of
-   paired ratios; terrains of 8 to 1M triangles; shared 2-core AMD EPYC, Embree 3.13.5,
-   gcc 12 -O3). Built-in/Embree rays/s in three runs: 1.5 at 9 primitives, 1.2-1.3 at 513,
-   1.0-1.2 at 1059, 0.98-1.38 from 2179 to 3201, 1.00-1.10 at 4419, then Embree ahead: 0.90-0.95
-   at 6499, 0.88-0.99 at 8979, 0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M. The built-in BVH
-   wins on small scenes (no per-ray Embree set-up; quads and spheres tested natively instead of
-   through user-geometry callbacks); the threshold sits between the last size where it led or
-   tied in every run (4419) and the first where Embree led in every run (6499). */
+   paired ratios; shared 2-core AMD EPYC, Embree 3.13.5, gcc 12 -O3; bench/out/bvh.md).
+   - Triangles (terrains of 8 to 1M triangles lit by one sphere). Built-in/Embree rays/s in
+     three runs: 1.5 at 9 primitives, 1.2-1.3 at 513, 1.0-1.2 at 1059, 0.98-1.38 from 2179 to
+     3201, 1.00-1.10 at 4419, then Embree ahead: 0.90-0.95 at 6499, 0.88-0.99 at 8979,
+     0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M. The threshold sits between the last size
+     where the built-in BVH led or tied in every run (4419) and the first where Embree led in
+     every run (6499).
+   - Quads and spheres (the scene files in scenes/, 3 to 81 primitives): Embree was ahead
+     on every scene of 3 to 13 quads and spheres (built-in/Embree 0.64-0.80, Cornell box 0.73-0.81)
+     and tied on 80 quads (1.01), so such scenes go to Embree at any size; a 2304-triangle mesh
+     on a 2-quad floor tied (1.02) and stays with the built-in BVH by the triangle rule. */
 #ifndef PDFTRACE_EMBREE_MIN_PRIMS
 #define PDFTRACE_EMBREE_MIN_PRIMS 5000
 #endif
@@ -3913,7 +3919,8 @@ static int pt__accel_build(pt_scene *s)
 #ifdef PDFTRACE_EMBREE
     int want = s->backend_request;
     if (want == PT_BACKEND_AUTO)
-        want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN;
+        want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) || 2u * (uint64_t)s->triangle_count < s->prim_count
+                   ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN; /* the rule measured at PDFTRACE_EMBREE_MIN_PRIMS */
     pt__rtc_release(s);
     if (want == PT_BACKEND_EMBREE) {
         {

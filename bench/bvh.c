@@ -37,6 +37,7 @@
 #include <time.h>
 #include <errno.h>
 #include <sys/stat.h>
+#include <dirent.h>
 
 #define PDFTRACE_SCENE_FILES
 #define PDFTRACE_IMPLEMENTATION
@@ -160,23 +161,24 @@ static pt_scene *terrain_scene(const terrain *t, pt_backend backend, pt_render_d
     return s;
 }
 
-/* scenes/cornell.scene (the scene of `make run`), committed with the given backend. */
-static pt_scene *cornell_scene(pt_backend backend, pt_render_desc *rd)
+/* A scene file (scenes/cornell.scene is the scene of `make run`), committed with the given backend. */
+static pt_scene *file_scene(const char *path, pt_backend backend, pt_render_desc *rd)
 {
     pt_scene_desc sd;
     pt_scene *s = NULL;
     char err[1024];
-    int rc = pt_scene_desc_load("scenes/cornell.scene", &sd, err, sizeof err);
+    int rc = pt_scene_desc_load(path, &sd, err, sizeof err);
     if (rc == PT_OK) {
         rc = pt_scene_desc_build(&sd, &s, rd, err, sizeof err);
         pt_scene_desc_free(&sd);
     }
-    if (rc != PT_OK) { fprintf(stderr, "bench_bvh: scenes/cornell.scene: %s\n", err); exit(1); }
+    if (rc != PT_OK) { fprintf(stderr, "bench_bvh: %s: %s\n", path, err); exit(1); }
     /* the loader commits with the default backend: choose ours and commit again */
     if ((rc = pt_scene_set_backend(s, backend)) != PT_OK) die("pt_scene_set_backend", rc, s);
-    if ((rc = pt_scene_commit(s)) != PT_OK) die("pt_scene_commit (cornell)", rc, s);
+    if ((rc = pt_scene_commit(s)) != PT_OK) die("pt_scene_commit (scene file)", rc, s);
     return s;
 }
+static pt_scene *cornell_scene(pt_backend backend, pt_render_desc *rd) { return file_scene("scenes/cornell.scene", backend, rd); }
 
 /* ---------------------------------------------------------------------------------------
    The ray batch
@@ -229,6 +231,51 @@ static void make_batch(const pt_scene *s, const pt_render_desc *rd, int w, int h
         }
 }
 
+/* The same kind of batch for any scene: camera rays, a cosine bounce from every hit, and a
+   shadow ray towards a point on a light (a direction from pt_pdf_scene_lights, the light's
+   distance found by a closest-hit query; tmax 1 - 1e-4 of it, as the integrator's). */
+static void make_batch_lights(const pt_scene *s, const pt_render_desc *rd, int w, int h, batch *b)
+{
+    pt_camera cam;
+    pt_rng rng;
+    uint64_t st = 12345;
+    int x, y, rc;
+    b->rays = (bray *)malloc(sizeof(bray) * 3 * (size_t)w * (size_t)h);
+    b->n = b->shadow = 0;
+    if (!b->rays) { fprintf(stderr, "bench_bvh: out of memory (rays)\n"); exit(1); }
+    if ((rc = pt_camera_init(&cam, &rd->camera, w, h)) != PT_OK) die("pt_camera_init", rc, NULL);
+    pt_rng_seed(&rng, 7, 11);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            pt_ray r = pt_camera_ray(&cam, (float)x + 0.5f, (float)y + 0.5f, 0.5f, 0.5f);
+            pt_hit hit, lh;
+            b->rays[b->n].r = r; b->rays[b->n].tmax = INFINITY; b->rays[b->n].shadow = 0; b->n++;
+            if (pt_scene_intersect(s, r, INFINITY, &hit) == 1) {
+                pt_vec3 n = hit.geometric_normal, d, o, ld;
+                pt_onb basis;
+                pt_pdf lp;
+                float u1 = rnd(&st), u2 = rnd(&st), rr = sqrtf(u1), ph = 6.2831853f * u2, pv;
+                if (pt_dot(n, r.dir) > 0) n = pt_neg(n);
+                basis = pt_onb_from_normal(n);
+                d = pt_onb_to_world(&basis, pt_v3(rr * cosf(ph), rr * sinf(ph), sqrtf(1 - u1)));
+                o = pt_offset_ray_origin(hit.point, n, d);
+                b->rays[b->n].r.origin = o; b->rays[b->n].r.dir = d; b->rays[b->n].tmax = INFINITY;
+                b->rays[b->n].shadow = 0; b->n++;
+                o = pt_offset_ray_origin(hit.point, n, n);
+                lp = pt_pdf_scene_lights(s, o);
+                if (pt_pdf_sample(&lp, &rng, &ld, &pv)) {
+                    pt_ray lr;
+                    lr.origin = o; lr.dir = ld;
+                    if (pt_scene_intersect(s, lr, INFINITY, &lh) == 1) {
+                        b->rays[b->n].r.origin = o; b->rays[b->n].r.dir = pt_scale(ld, lh.t);
+                        b->rays[b->n].tmax = 1.0f - 1e-4f; b->rays[b->n].shadow = 1; b->n++;
+                        b->shadow++;
+                    }
+                }
+            }
+        }
+}
+
 /* Traces the batch `passes` times; returns seconds, counts the hits of one pass. */
 static double trace_batch(const pt_scene *s, const batch *b, int passes, long *hits)
 {
@@ -251,6 +298,7 @@ static double trace_batch(const pt_scene *s, const batch *b, int passes, long *h
    Statistics and output
    --------------------------------------------------------------------------------------- */
 
+static int cmp_name(const void *a, const void *b) { return strcmp((const char *)a, (const char *)b); }
 static int cmp_d(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -280,6 +328,7 @@ typedef struct result {
     size_t rays;
     int reps, rendered;
     pt_backend autob;
+    uint32_t kinds[3];          /* spheres, quads, triangles */
 } result;
 
 static FILE *csv;
@@ -300,6 +349,7 @@ static void compare(result *res, pt_scene *sc[2], const batch *b, const pt_rende
         res->build[k] = info.build_seconds;
         res->bytes[k] = info.accel_bytes;
         res->prims = info.primitive_count;
+        res->kinds[0] = info.sphere_count; res->kinds[1] = info.quad_count; res->kinds[2] = info.triangle_count;
         if (info.backend != (k ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN)) {
             fprintf(stderr, "bench_bvh: %s: scene %d reports backend %d\n", res->scene, k, (int)info.backend);
             exit(1);
@@ -368,7 +418,9 @@ int main(int argc, char **argv)
     int quick = 0, reps = 7, i, rc, cross_only = 0;
     char path[1024];
     FILE *md;
-    result res_cornell, res_mesh, cross[24];
+    result res_cornell, res_mesh, cross[24], suite[32];
+    static char suite_names[32][256];
+    int nsuite = 0;
     const double tie = 0.03; /* paired ratios within 3 % of 1 count as a tie (the noise of this machine) */
     int ncross = 0;
     static const int cross_n[] = { 3, 5, 8, 12, 17, 24, 34, 41, 48, 58, 68, 80, 96, 113, 136, 192, 272, 384, 543, 708 };
@@ -434,7 +486,39 @@ int main(int argc, char **argv)
         free(b.rays);
         terrain_free(&t);
     }
-    /* 3. crossover: terrains of growing size, trace only */
+    /* 3. the scene suite (every scenes/NAME.scene, sorted by name), trace only: small scenes of every
+       primitive kind, for AUTO's rule below MIN_PRIMS */
+    if (!cross_only) {
+        DIR *dir = opendir("scenes");
+        struct dirent *e;
+        if (!dir) { fprintf(stderr, "bench_bvh: cannot open scenes/\n"); return 1; }
+        while ((e = readdir(dir)) != NULL && nsuite < 32) {
+            size_t len = strlen(e->d_name);
+            if (len < 7 || strcmp(e->d_name + len - 6, ".scene") != 0) continue;
+            snprintf(suite_names[nsuite], sizeof suite_names[nsuite], "scenes/%s", e->d_name);
+            nsuite++;
+        }
+        closedir(dir);
+        qsort(suite_names, (size_t)nsuite, sizeof suite_names[0], cmp_name);
+        for (i = 0; i < nsuite; i++) {
+            pt_scene *sc[2];
+            pt_render_desc rd;
+            batch b;
+            result *r = &suite[i];
+            memset(r, 0, sizeof *r);
+            r->scene = suite_names[i];
+            sc[0] = file_scene(suite_names[i], PT_BACKEND_BUILTIN, &rd);
+            sc[1] = file_scene(suite_names[i], PT_BACKEND_EMBREE, &rd);
+            make_batch_lights(sc[0], &rd, 160, 120, &b);
+            compare(r, sc, &b, &rd, reps, 0, quick ? 100000 : 500000);
+            r->autob = auto_choice_for(sc[0]);
+            fprintf(stderr, "suite: %s, %u prims, built-in/Embree %.2f\n", r->scene, r->prims, median(r->trace_ratio, reps));
+            pt_scene_destroy(sc[0]);
+            pt_scene_destroy(sc[1]);
+            free(b.rays);
+        }
+    }
+    /* 4. crossover: terrains of growing size, trace only */
     for (i = 0; i < ncross_sizes && ncross < 24; i++) {
         terrain t;
         pt_scene *sc[2];
@@ -482,6 +566,23 @@ int main(int argc, char **argv)
     fprintf(md, "\nRays per trace batch: Cornell %zu, terrain %zu. Hits in the batch (built-in / Embree): Cornell %ld / %ld, "
                 "terrain %ld / %ld (they may differ by a few rays that graze an edge).\n",
             res_cornell.rays, res_mesh.rays, res_cornell.hits[0], res_cornell.hits[1], res_mesh.hits[0], res_mesh.hits[1]);
+    if (nsuite) {
+        int bad = 0;
+        fprintf(md, "\n## Scene suite (scenes/*.scene, trace only)\n\n| scene | spheres / quads / triangles | "
+                    "trace Mrays/s built-in | trace Mrays/s Embree | ratio | faster | AUTO uses |\n"
+                    "|---|---:|---:|---:|---:|---|---|\n");
+        for (i = 0; i < nsuite; i++) {
+            const result *r = &suite[i];
+            double ratio = median(r->trace_ratio, r->reps);
+            int slower = (r->autob == PT_BACKEND_EMBREE && ratio > 1.0 + tie) || (r->autob == PT_BACKEND_BUILTIN && ratio < 1.0 - tie);
+            bad += slower;
+            fprintf(md, "| %s | %u / %u / %u | %.3f | %.3f | %.2f | %s | %s%s |\n", r->scene, r->kinds[0], r->kinds[1],
+                    r->kinds[2], median(r->trace[0], r->reps) * 1e-6, median(r->trace[1], r->reps) * 1e-6, ratio,
+                    ratio < 1 ? "embree" : "builtin", backend_name(r->autob), slower ? " (the slower one)" : "");
+        }
+        fprintf(md, "\nAUTO's choice is the faster backend, or within %.0f %% of it, on %d of %d suite scenes.\n", 100 * tie,
+                nsuite - bad, nsuite);
+    }
     fprintf(md, "\n## Crossover (terrains of growing size, trace only)\n\n| primitives | build s (built-in / Embree) | "
                 "trace Mrays/s built-in | trace Mrays/s Embree | ratio | faster | AUTO uses |\n|---:|---:|---:|---:|---:|---|---|\n");
     {

@@ -55,6 +55,14 @@ static void compare_ray(const pt_scene *s, pt_ray r, float tmax, bvh_stats *st, 
     }
 }
 
+/* This section tests the built-in BVH: with Embree compiled in, AUTO would hand scenes mostly of
+   quads and spheres to Embree (section 5b; its own tests are in test_embree.c). */
+static int tb_commit_builtin(pt_scene *s)
+{
+    int rc = pt_scene_set_backend(s, PT_BACKEND_BUILTIN);
+    return rc == PT_OK ? pt_scene_commit(s) : rc;
+}
+
 static void report(test_ctx *t, const char *name, const bvh_stats *st, const char *example, const pt_scene *s)
 {
     pt_scene_info info;
@@ -217,7 +225,7 @@ static void bvh_random_scenes(test_ctx *t)
             if (rc >= 0) rc = add_uv_sphere(s, dv(4, 3, -2), 2.5, 16, 24, m[1]);
             if (rc >= 0) rc = pt_scene_add_box(s, pt_v3(-6, -2, 3), pt_v3(-3, 4, 7), m[2]);
         }
-        rc = rc >= 0 ? pt_scene_commit(s) : rc;
+        rc = rc >= 0 ? tb_commit_builtin(s) : rc;
         if (!CHECK(t, rc == PT_OK, "%s: %d %s", names[k], rc, pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
         memset(&st, 0, sizeof st);
         random_rays(s, &rng, 12, 20000, &st, ex, sizeof ex);
@@ -244,7 +252,7 @@ static void bvh_axis_aligned(test_ctx *t)
         int sx = 1 + (int)(tu_rand(&rng) * 3), sy = 1 + (int)(tu_rand(&rng) * 3), sz = 1 + (int)(tu_rand(&rng) * 3);
         rc = pt_scene_add_box(s, pt_v3((float)x, (float)y, (float)z), pt_v3((float)(x + sx), (float)(y + sy), (float)(z + sz)), m);
     }
-    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    rc = rc >= 0 ? tb_commit_builtin(s) : rc;
     if (!CHECK(t, rc == PT_OK, "boxes: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     memset(&st, 0, sizeof st);
     for (i = 0; i < 20000; i++) {
@@ -275,7 +283,7 @@ static void bvh_ray_along_max_bound(test_ctx *t)
     if (!CHECK(t, s != NULL, "scene")) return;
     m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
     rc = pt_scene_add_quad(s, pt_v3(-3, -7, 3), pt_v3(2, 0, 0), pt_v3(0, 2, 0), m);
-    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    rc = rc >= 0 ? tb_commit_builtin(s) : rc;
     if (!CHECK(t, rc == PT_OK, "scene")) { pt_scene_destroy(s); return; }
     for (i = 0; i < 3; i++) {
         for (j = 0; j < 3; j++) {
@@ -304,9 +312,9 @@ static void bvh_rebuild_after_change(test_ctx *t)
     if (!CHECK(t, s != NULL, "scene")) return;
     m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
     rc = pt_scene_add_sphere(s, pt_v3(0, 0, -10), 1, m);
-    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    rc = rc >= 0 ? tb_commit_builtin(s) : rc;
     id = pt_scene_add_sphere(s, pt_v3(0, 0, -5), 1, m);
-    rc = rc >= 0 && id >= 0 ? pt_scene_commit(s) : -1;
+    rc = rc >= 0 && id >= 0 ? tb_commit_builtin(s) : -1;
     if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
     r.origin = pt_v3(0, 0, 0);
     r.dir = pt_v3(0, 0, -1);

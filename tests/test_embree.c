@@ -71,17 +71,30 @@ static void embree_backend_errors(test_ctx *t)
     /* before any commit the info names the built-in BVH (never AUTO) */
     CHECK(t, pt_scene_get_info(s, &info) == PT_OK && info.backend == PT_BACKEND_BUILTIN,
           "uncommitted scene: backend %d", (int)info.backend);
-    /* AUTO on a small scene: the built-in BVH, with a build time and its memory */
+    /* BUILTIN on a small scene: a build time and its memory (AUTO would pick Embree here when it
+       is compiled in: 3 of the 4 primitives are quads and spheres) */
+    CHECK(t, pt_scene_set_backend(s, PT_BACKEND_BUILTIN) == PT_OK, "set BUILTIN");
     CHECK(t, pt_scene_commit(s) == PT_OK, "commit: %s", pt_scene_error_message(s));
     pt_scene_get_info(s, &info);
-    CHECK(t, info.backend == PT_BACKEND_BUILTIN && info.bvh_node_count > 0, "AUTO, 4 primitives: backend %d, %u nodes",
+    CHECK(t, info.backend == PT_BACKEND_BUILTIN && info.bvh_node_count > 0, "BUILTIN, 4 primitives: backend %d, %u nodes",
           (int)info.backend, (unsigned)info.bvh_node_count);
     CHECK(t, info.build_seconds >= 0.0 && info.build_seconds < 10.0 && info.accel_bytes >= info.bvh_node_count * 16u,
           "built-in: build %g s, %zu bytes for %u nodes", info.build_seconds, info.accel_bytes,
           (unsigned)info.bvh_node_count);
     /* the same backend again leaves the scene committed; another one uncommits it */
-    CHECK(t, pt_scene_set_backend(s, PT_BACKEND_AUTO) == PT_OK && (pt_scene_get_info(s, &info), info.committed),
+    CHECK(t, pt_scene_set_backend(s, PT_BACKEND_BUILTIN) == PT_OK && (pt_scene_get_info(s, &info), info.committed),
           "setting the same backend uncommitted the scene");
+    rc = pt_scene_set_backend(s, PT_BACKEND_AUTO);
+    pt_scene_get_info(s, &info);
+    CHECK(t, rc == PT_OK && !info.committed, "switch to AUTO: %d, committed %d", rc, info.committed);
+    CHECK(t, pt_scene_commit(s) == PT_OK, "commit (AUTO): %s", pt_scene_error_message(s));
+    pt_scene_get_info(s, &info);
+#ifdef PDFTRACE_EMBREE
+    CHECK(t, info.backend == PT_BACKEND_EMBREE, "AUTO, 4 primitives, 3 of them quads and spheres: backend %d",
+          (int)info.backend);
+#else
+    CHECK(t, info.backend == PT_BACKEND_BUILTIN, "AUTO without Embree: backend %d", (int)info.backend);
+#endif
     rc = pt_scene_set_backend(s, PT_BACKEND_BUILTIN);
     pt_scene_get_info(s, &info);
     CHECK(t, rc == PT_OK && !info.committed, "switch to BUILTIN: %d, committed %d", rc, info.committed);
@@ -516,7 +529,8 @@ static void embree_device_errors(test_ctx *t)
 
 static void embree_auto_and_rebuild(test_ctx *t)
 {
-    /* AUTO: Embree from PDFTRACE_EMBREE_MIN_PRIMS primitives on, the built-in BVH below */
+    /* AUTO: for scenes mostly of triangles, Embree from PDFTRACE_EMBREE_MIN_PRIMS primitives on and
+       the built-in BVH below; scenes mostly of quads and spheres go to Embree at any size */
     int n[2], k;
     n[0] = PDFTRACE_EMBREE_MIN_PRIMS - 1;
     n[1] = PDFTRACE_EMBREE_MIN_PRIMS;
@@ -524,10 +538,13 @@ static void embree_auto_and_rebuild(test_ctx *t)
         pt_scene *s = pt_scene_create();
         pt_scene_info info;
         int m = s ? pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f)) : -1, i, rc = m;
-        for (i = 0; i < n[k] && rc >= 0; i++)
-            rc = pt_scene_add_sphere(s, pt_v3((float)(i % 100), (float)(i / 100), 0), 0.25f, m);
+        for (i = 0; i < n[k] && rc >= 0; i++) { /* a triangle of the same extent as a 0.25 sphere */
+            float cx = (float)(i % 100), cy = (float)(i / 100);
+            rc = pt_scene_add_triangle(s, pt_v3(cx - 0.25f, cy - 0.25f, -0.25f), pt_v3(cx + 0.25f, cy - 0.25f, -0.25f),
+                                       pt_v3(cx, cy + 0.25f, -0.25f), m);
+        }
         if (rc >= 0) rc = pt_scene_commit(s);
-        if (CHECK(t, rc >= 0, "scene of %d spheres: %d", n[k], rc)) {
+        if (CHECK(t, rc >= 0, "scene of %d triangles: %d", n[k], rc)) {
             pt_ray r;
             pt_hit h;
             pt_scene_get_info(s, &info);
