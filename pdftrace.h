@@ -35,7 +35,8 @@
                            the SSE2 code is used on x86-64 and wherever __SSE2__ is defined).
    PDFTRACE_EMBREE         trace rays with Embree 3 (section 5b; include path embree3/,
                            link -lembree3); PDFTRACE_EMBREE4 selects Embree 4 (untested).
-                           PDFTRACE_EMBREE_MIN_PRIMS: see section 5b.
+                           PDFTRACE_EMBREE_MIN_PRIMS, PDFTRACE_EMBREE_SMALL_PRIMS: AUTO's
+                           rule (see pt_scene_set_backend).
    PT_MALLOC(sz), PT_REALLOC(p,sz), PT_FREE(p)   override the allocator (all three).
    PT_ASSERT(x)            override assert() (used only for internal invariants; API
                            misuse returns an error code, it never asserts).
@@ -550,8 +551,8 @@ typedef struct pt_shading_point {
    querying (until then they fail with PT_ERROR_INVALID_STATE). So a scene built by
    pt_scene_desc_build can be switched and re-committed. PT_BACKEND_EMBREE without
    PDFTRACE_EMBREE compiled in: PT_ERROR_UNSUPPORTED. AUTO (the default) uses Embree, when
-   compiled in, for scenes of at least PDFTRACE_EMBREE_MIN_PRIMS primitives and for scenes made
-   mostly of quads and spheres (see PDFTRACE_EMBREE_MIN_PRIMS), and falls back to
+   compiled in, for scenes of at least PDFTRACE_EMBREE_MIN_PRIMS primitives and for tiny scenes
+   made mostly of quads and spheres (see PDFTRACE_EMBREE_SMALL_PRIMS), and falls back to
    the built-in BVH if Embree fails; an explicit EMBREE reports the failure instead.
    pt_scene_info.backend says which one the commit chose. */
 PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
@@ -562,8 +563,9 @@ PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
    back to the built-in BVH). Without PDFTRACE_EMBREE: PT_ERROR_UNSUPPORTED. */
 PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
 
-/* AUTO uses Embree (when compiled in) for scenes with at least this many primitives, and for
-   smaller scenes made mostly of quads and spheres (triangles less than half the primitives).
+/* AUTO uses Embree (when compiled in) for scenes with at least PDFTRACE_EMBREE_MIN_PRIMS
+   primitives, and for tiny scenes (fewer than PDFTRACE_EMBREE_SMALL_PRIMS) made mostly of quads
+   and spheres (triangles less than half the primitives); the built-in BVH otherwise.
    Measured by make bench-bvh (bench/bvh.c: one batch of camera, bounce and shadow rays traced
    by both backends through pt_scene_intersect/occluded on one thread, interleaved, medians of
    paired ratios; shared 2-core AMD EPYC, Embree 3.13.5, gcc 12 -O3; bench/out/bvh.md).
@@ -573,10 +575,15 @@ PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
      0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M. The threshold sits between the last size
      where the built-in BVH led or tied in every run (4419) and the first where Embree led in
      every run (6499).
-   - Quads and spheres (the scene files in scenes/, 3 to 81 primitives): Embree was ahead
-     on every scene of 3 to 13 quads and spheres (built-in/Embree 0.64-0.80, Cornell box 0.73-0.81)
-     and tied on 80 quads (1.01), so such scenes go to Embree at any size; a 2304-triangle mesh
-     on a 2-quad floor tied (1.02) and stays with the built-in BVH by the triangle rule. */
+   - Quads and spheres (the scene files in scenes/, two runs): Embree was ahead on every scene
+     of 3 to 13 quads and spheres (built-in/Embree 0.64-0.84; the Cornell box 0.73-0.79: with so
+     few primitives the built-in BVH tests the large walls together in one leaf block, Embree
+     culls them by their own boxes), the built-in BVH on 81 (80 quads and a sphere: 1.01-1.07).
+     Nothing was measured between 13 and 81; PDFTRACE_EMBREE_SMALL_PRIMS = 32 splits the gap.
+     A 2304-triangle mesh on a 2-quad floor: built-in 1.02-1.06 (the triangle rule). */
+#ifndef PDFTRACE_EMBREE_SMALL_PRIMS
+#define PDFTRACE_EMBREE_SMALL_PRIMS 32
+#endif
 #ifndef PDFTRACE_EMBREE_MIN_PRIMS
 #define PDFTRACE_EMBREE_MIN_PRIMS 5000
 #endif
@@ -3919,7 +3926,9 @@ static int pt__accel_build(pt_scene *s)
 #ifdef PDFTRACE_EMBREE
     int want = s->backend_request;
     if (want == PT_BACKEND_AUTO)
-        want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) || 2u * (uint64_t)s->triangle_count < s->prim_count
+        want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ||
+                       (2u * (uint64_t)s->triangle_count < s->prim_count &&
+                        s->prim_count < (uint32_t)(PDFTRACE_EMBREE_SMALL_PRIMS))
                    ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN; /* the rule measured at PDFTRACE_EMBREE_MIN_PRIMS */
     pt__rtc_release(s);
     if (want == PT_BACKEND_EMBREE) {

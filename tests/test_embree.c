@@ -560,6 +560,21 @@ static void embree_auto_and_rebuild(test_ctx *t)
         }
         pt_scene_destroy(s);
     }
+    /* scenes mostly of spheres: Embree below PDFTRACE_EMBREE_SMALL_PRIMS, then the built-in BVH */
+    for (k = 0; k < 2; k++) {
+        int count = PDFTRACE_EMBREE_SMALL_PRIMS - 1 + k, i, rc;
+        pt_scene *s = pt_scene_create();
+        pt_scene_info info;
+        int m = s ? pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f)) : -1;
+        for (i = 0, rc = m; i < count && rc >= 0; i++) rc = pt_scene_add_sphere(s, pt_v3((float)i, 0, 0), 0.25f, m);
+        if (rc >= 0) rc = pt_scene_commit(s);
+        if (CHECK(t, rc >= 0, "scene of %d spheres: %d", count, rc)) {
+            pt_scene_get_info(s, &info);
+            CHECK(t, info.backend == (k ? PT_BACKEND_BUILTIN : PT_BACKEND_EMBREE), "AUTO with %d spheres chose %d", count,
+                  (int)info.backend);
+        }
+        pt_scene_destroy(s);
+    }
     /* a change after an Embree commit: commit again rebuilds, the new shape is hit */
     {
         pt_scene *s = te_small_scene();
