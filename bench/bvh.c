@@ -14,8 +14,8 @@
    (pt_scene_set_backend before pt_scene_commit), and both are traced in the same process:
    - trace: one fixed batch of rays, recorded once (with the built-in backend) per scene:
      a camera ray through every pixel centre, and for every camera ray that hits, a
-     cosine-distributed bounce ray from the hit point and a shadow ray towards the light
-     (tmax 1 - 1e-4, as the integrator's). Both backends trace exactly this batch through the
+     cosine-distributed bounce ray from the hit point and a shadow ray towards a point on a
+     light sampled by pt_pdf_scene_lights (tmax 1 - 1e-4, as the integrator's). Both backends trace exactly this batch through the
      public pt_scene_intersect / pt_scene_occluded, on one thread.
    - render: pt_render_image with the same settings and the same thread count (2) for both;
      rays/s = (camera + bounce + shadow rays) / wall-clock seconds, as pt_render_stats counts
@@ -196,45 +196,10 @@ static float rnd(uint64_t *st) /* splitmix64 -> [0,1) */
     return (float)(z >> 40) * (1.0f / 16777216.0f);
 }
 
-/* light_c + (jitter in x and z of +-light_h): the shadow-ray target. */
-static void make_batch(const pt_scene *s, const pt_render_desc *rd, int w, int h, pt_vec3 light_c, pt_vec3 light_h,
-                       batch *b)
-{
-    pt_camera cam;
-    uint64_t st = 12345;
-    int x, y, rc;
-    b->rays = (bray *)malloc(sizeof(bray) * 3 * (size_t)w * (size_t)h);
-    b->n = b->shadow = 0;
-    if (!b->rays) { fprintf(stderr, "bench_bvh: out of memory (rays)\n"); exit(1); }
-    if ((rc = pt_camera_init(&cam, &rd->camera, w, h)) != PT_OK) die("pt_camera_init", rc, NULL);
-    for (y = 0; y < h; y++)
-        for (x = 0; x < w; x++) {
-            pt_ray r = pt_camera_ray(&cam, (float)x + 0.5f, (float)y + 0.5f, 0.5f, 0.5f);
-            pt_hit hit;
-            b->rays[b->n].r = r; b->rays[b->n].tmax = INFINITY; b->rays[b->n].shadow = 0; b->n++;
-            if (pt_scene_intersect(s, r, INFINITY, &hit) == 1) {
-                pt_vec3 n = hit.geometric_normal, d, o, target;
-                pt_onb basis;
-                float u1 = rnd(&st), u2 = rnd(&st), rr = sqrtf(u1), ph = 6.2831853f * u2;
-                if (pt_dot(n, r.dir) > 0) n = pt_neg(n);
-                basis = pt_onb_from_normal(n);
-                d = pt_onb_to_world(&basis, pt_v3(rr * cosf(ph), rr * sinf(ph), sqrtf(1 - u1)));
-                o = pt_offset_ray_origin(hit.point, n, d);
-                b->rays[b->n].r.origin = o; b->rays[b->n].r.dir = d; b->rays[b->n].tmax = INFINITY;
-                b->rays[b->n].shadow = 0; b->n++;
-                target = pt_v3(light_c.x + (2 * rnd(&st) - 1) * light_h.x, light_c.y, light_c.z + (2 * rnd(&st) - 1) * light_h.z);
-                o = pt_offset_ray_origin(hit.point, n, pt_sub(target, hit.point));
-                b->rays[b->n].r.origin = o; b->rays[b->n].r.dir = pt_sub(target, o); b->rays[b->n].tmax = 1.0f - 1e-4f;
-                b->rays[b->n].shadow = 1; b->n++;
-                b->shadow++;
-            }
-        }
-}
-
-/* The same kind of batch for any scene: camera rays, a cosine bounce from every hit, and a
-   shadow ray towards a point on a light (a direction from pt_pdf_scene_lights, the light's
+/* The ray batch of a scene: camera rays, a cosine bounce from every hit, and a shadow ray
+   towards a point on a light (a direction from pt_pdf_scene_lights, the light's
    distance found by a closest-hit query; tmax 1 - 1e-4 of it, as the integrator's). */
-static void make_batch_lights(const pt_scene *s, const pt_render_desc *rd, int w, int h, batch *b)
+static void make_batch(const pt_scene *s, const pt_render_desc *rd, int w, int h, batch *b)
 {
     pt_camera cam;
     pt_rng rng;
@@ -457,7 +422,7 @@ int main(int argc, char **argv)
         sc[1] = cornell_scene(PT_BACKEND_EMBREE, &rd);
         rd.samples_per_pixel = quick ? 1 : 4;
         if (quick) { rd.width = 200; rd.height = 200; }
-        make_batch(sc[0], &rd, rd.width, rd.height, pt_v3(278, 553.9f, 279.5f), pt_v3(60, 0, 50), &b);
+        make_batch(sc[0], &rd, rd.width, rd.height, &b);
         fprintf(stderr, "cornell: %zu rays per batch\n", b.n);
         compare(&res_cornell, sc, &b, &rd, reps, 1, 1);
         res_cornell.autob = auto_choice_for(sc[0]);
@@ -477,7 +442,7 @@ int main(int argc, char **argv)
         sc[0] = terrain_scene(&t, PT_BACKEND_BUILTIN, &rd);
         sc[1] = terrain_scene(&t, PT_BACKEND_EMBREE, &rd);
         if (quick) { rd.width = 160; rd.height = 120; rd.samples_per_pixel = 1; }
-        make_batch(sc[0], &rd, 2 * rd.width, 2 * rd.height, pt_v3(40, 77.9f, 30), pt_v3(5, 0, 5), &b);
+        make_batch(sc[0], &rd, 2 * rd.width, 2 * rd.height, &b);
         fprintf(stderr, "terrain: %u triangles, %zu rays per batch\n", t.nt, b.n);
         compare(&res_mesh, sc, &b, &rd, reps, 1, 1);
         res_mesh.autob = auto_choice_for(sc[0]);
@@ -509,7 +474,7 @@ int main(int argc, char **argv)
             r->scene = suite_names[i];
             sc[0] = file_scene(suite_names[i], PT_BACKEND_BUILTIN, &rd);
             sc[1] = file_scene(suite_names[i], PT_BACKEND_EMBREE, &rd);
-            make_batch_lights(sc[0], &rd, 160, 120, &b);
+            make_batch(sc[0], &rd, 160, 120, &b);
             compare(r, sc, &b, &rd, reps, 0, quick ? 100000 : 500000);
             r->autob = auto_choice_for(sc[0]);
             fprintf(stderr, "suite: %s, %u prims, built-in/Embree %.2f\n", r->scene, r->prims, median(r->trace_ratio, reps));
@@ -533,7 +498,7 @@ int main(int argc, char **argv)
         r->scene = names[ncross];
         sc[0] = terrain_scene(&t, PT_BACKEND_BUILTIN, &rd);
         sc[1] = terrain_scene(&t, PT_BACKEND_EMBREE, &rd);
-        make_batch(sc[0], &rd, 160, 120, pt_v3(40, 77.9f, 30), pt_v3(5, 0, 5), &b);
+        make_batch(sc[0], &rd, 160, 120, &b);
         compare(r, sc, &b, &rd, reps, 0, quick ? 100000 : 500000);
         r->autob = auto_choice_for(sc[0]);
         fprintf(stderr, "crossover: %u prims, built-in/Embree %.2f\n", r->prims, median(r->trace_ratio, reps));
