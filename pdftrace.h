@@ -4236,9 +4236,16 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
    - MIS: both of LIGHT's and MATERIAL's estimates of direct light, weighted by the power
      heuristic w_a = p_a^2 / (p_a^2 + p_b^2) (Veach & Guibas, "Optimally Combining Sampling
      Techniques for Monte Carlo Rendering", SIGGRAPH 1995).
-   Russian roulette from rr_start_depth continues with probability q = min(0.95, max(beta))
-   and divides beta by q (Arvo & Kirk 1990). Depth counts scattering events: max_depth 1 is
-   direct light only.
+   Russian roulette from rr_start_depth continues with probability q = min(0.95, max(beta_in))
+   and divides beta by q (Arvo & Kirk 1990), where beta_in is the throughput that reached this
+   vertex, before its scatter weight f/p. Any q chosen before the coin is flipped keeps the
+   estimator unbiased; taking it from the throughput after the scatter weight (the textbook
+   choice) turns a well-sampled direction into a firefly: when f/p is tiny because p is large
+   (a light-sampled direction towards a small bright light under MIXTURE), the path survived
+   with q ~ f/p and was rescaled by 1/q, so the light it then hit counted at full strength in
+   a few rare paths instead of at weight f/p in all of them (measured on bench/scenes/many-
+   lights.scene, mixture 0.5, 64 spp: relMSE 1.3-1.9 with that q, 0.03 without roulette).
+   Depth counts scattering events: max_depth 1 is direct light only.
    ------------------------------------------------------------------------------------------ */
 
 typedef struct pt__settings {
@@ -4359,7 +4366,7 @@ static pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg,
    in cfg->general the general path runs instead. */
 static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_rng *rng, pt_path_stats *st)
 {
-    pt_color L = pt_v3(0, 0, 0), beta = pt_v3(1, 1, 1);
+    pt_color L = pt_v3(0, 0, 0), beta = pt_v3(1, 1, 1), beta_in;
     int depth, prev_delta = 1;
     float prev_pdf = 0.0f;
     pt_vec3 prev_p = ray.origin;
@@ -4401,6 +4408,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         }
         if (depth >= cfg->max_depth || !m->scatters) break;
 
+        beta_in = beta;
         v.m = m;
         v.p = h.point;
         v.wo = pt_neg(ray.dir);
@@ -4493,7 +4501,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         ray.origin = prev_delta ? pt_offset_ray_origin_scaled(v.p, v.ng, wi, h.magnitude) : v.o;
         ray.dir = wi;
         if (depth + 1 >= cfg->rr_start) {
-            float q = pt__minf(0.95f, pt_max_component(beta));
+            float q = pt__minf(0.95f, pt_max_component(beta_in));
             if (!(q > 0.0f) || pt_rng_float(rng) >= q) break;
             beta = pt_scale(beta, 1.0f / q);
         }
