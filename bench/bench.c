@@ -19,7 +19,8 @@
    samples with new sample indices, so step k is exactly a render at 2^k spp), until the
    cumulative render time reaches the budget. The first seed fixes the ladder; seeds 2..N render
    the same ladder. Seeds are interleaved (seed-major), so slow phases of a shared machine hit
-   every strategy alike; every figure is the median over seeds of that point.
+   every strategy alike; every figure is the median over seeds of that point, except the slope
+   of log relMSE against log time, fitted to the mean over seeds (see fit_loglog).
 
    Output (DIR, default bench/out): series.csv (medians), series-seeds.csv (every seed),
    fits.csv, pov.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts (*.gp), PNG
