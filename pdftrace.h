@@ -86,12 +86,12 @@
    pt_scene_commit records what a scene contains (pt_scene_info.features). The integrator
    then skips work that cannot change the estimate. Each skip has a bit in
    pt_render_desc.disable_skips that forces the general path instead (for benchmarks; the
-   image keeps its expectation, and "exact" skips give it bit for bit):
+   image keeps its expectation, and "exact" skips give it bit for bit). Each is kept because
+   `make bench` shows it pays (bench/out/summary.md, "Scene-feature skips": the 95 % interval
+   of its time ratio, or of its time ratio at equal error, lies below 1):
    - no emitters: no light selection, no light sampling, no shadow rays; the mixture
      strategy samples the material PDF alone (the light component has no mass).
      PT_SKIP_NO_EMITTERS.
-   - exactly one emitter: no light selection (no CDF search; the random number is still
-     drawn). PT_SKIP_LIGHT_SELECTION, exact.
    - a delta (perfectly specular) vertex: no light PDF, no shadow ray; the path follows
      the specular direction and counts emission it hits at full weight.
      PT_SKIP_DELTA_VERTEX. With only delta materials in the scene this skips light
@@ -103,6 +103,9 @@
      PT_SKIP_NO_TRIANGLES, exact.
    - a light sample the material does not reflect (below the surface): no shadow ray.
      PT_SKIP_ZERO_BSDF_SHADOW, exact.
+   Removed because the benchmark showed no gain (its bit, 1u << 1, is now rejected):
+   PT_SKIP_LIGHT_SELECTION (no CDF search with one emitter: the binary search over a
+   one-entry CDF does not even compare; time ratio 0.998 [0.992, 1.002]).
    Adaptive sampling (pt_render_desc.adaptive_threshold) skips pixels whose estimate has
    converged: see section 8.
 */
@@ -657,8 +660,6 @@ typedef struct pt_path_stats {
 #define PT_SKIP_NO_EMITTERS      (1u << 0) /* no emitters: no light sampling at all. General: light
                                               sampling is attempted (and finds nothing); the mixture
                                               keeps its light component (which ends the path) */
-#define PT_SKIP_LIGHT_SELECTION  (1u << 1) /* one emitter: no CDF search. General: the binary search
-                                              runs (and finds light 0). Exact */
 #define PT_SKIP_DELTA_VERTEX     (1u << 2) /* at a delta vertex (mirror, glass): no light sample, no
                                               material evaluation toward it. General: a light is sampled
                                               and the material evaluated (it reflects nothing there). In
@@ -676,7 +677,9 @@ typedef struct pt_path_stats {
                                               reflect (light below the surface). General: the shadow ray
                                               is traced and its result multiplied by zero. Exact (only
                                               the shadow-ray count differs) */
-#define PT_SKIP_ALL              ((1u << 7) - 1u)
+/* bit 1u << 1 was PT_SKIP_LIGHT_SELECTION (removed) */
+#define PT_SKIP_ALL              (PT_SKIP_NO_EMITTERS | PT_SKIP_DELTA_VERTEX | PT_SKIP_FACING_AWAY | \
+                                  PT_SKIP_NO_TEXTURES | PT_SKIP_NO_TRIANGLES | PT_SKIP_ZERO_BSDF_SHADOW)
 
 /* ==========================================================================================
    8. RENDERING: tiles, threads, progressive passes, adaptive sampling, statistics
@@ -1643,8 +1646,8 @@ static pt_vec3 pt__fuzz_sample(pt_vec3 r, float f, float u1, float u2, float u3)
 static pt_vec3 pt__reflect(pt_vec3 wo, pt_vec3 n) { return pt_sub(pt_scale(n, 2.0f * pt_dot(wo, n)), wo); }
 
 /* Forward declarations of scene-side helpers used by the public PDFs. */
-static int pt__lights_sample(const pt_scene *s, int always_search, pt_vec3 o, float u0, float u1, float u2,
-                             pt__light_sample *ls, uint32_t *light_index);
+static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
+                             uint32_t *light_index);
 static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w);
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
                                    float u3, pt_vec3 *dir, float *pdf);
@@ -1883,7 +1886,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
         uint32_t li;
         if (!pdf->as.lights.scene || !pdf->as.lights.scene->committed) break;
-        ok = pt__lights_sample(pdf->as.lights.scene, 0, pdf->origin, u0, u1, u2, &ls, &li);
+        ok = pt__lights_sample(pdf->as.lights.scene, pdf->origin, u0, u1, u2, &ls, &li);
         if (ok) {
             w = ls.dir;
             /* the density of the direction over all lights, not the picked one's alone */
@@ -4094,14 +4097,13 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
     }
     return lo;
 }
-/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). With a single light the
-   pick is skipped unless always_search (the general path of PT_SKIP_LIGHT_SELECTION). */
-static int pt__lights_sample(const pt_scene *s, int always_search, pt_vec3 o, float u0, float u1, float u2,
-                             pt__light_sample *ls, uint32_t *light_index)
+/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
+static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
+                             uint32_t *light_index)
 {
     uint32_t li;
     if (!s->light_count) return 0;
-    li = s->light_count == 1 && !always_search ? 0u : pt__pick_light(s, u0);
+    li = pt__pick_light(s, u0);
     if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls)) return 0;
     ls->pdf *= s->lights[li].select_pdf;
     *light_index = li;
@@ -4373,7 +4375,6 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     const int any_lights = s->light_count > 0 || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
     const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0 || !PT__SKIP(cfg, PT_SKIP_NO_TRIANGLES);
     const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
-    const int search = !PT__SKIP(cfg, PT_SKIP_LIGHT_SELECTION);
     pt__vertex v;
     memset(&v, 0, sizeof v);
     st->camera_rays++;
@@ -4430,7 +4431,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
             pt__light_sample ls;
             uint32_t li;
             float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-            if (pt__lights_sample(s, search, v.o, u0, u1, u2, &ls, &li))
+            if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
         if (m->delta) {
@@ -4468,7 +4469,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                 pt__light_sample ls;
                 uint32_t li;
                 float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-                if (pt__lights_sample(s, search, v.o, u0, u1, u2, &ls, &li))
+                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
             /* the direction that continues the path */
@@ -4480,7 +4481,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                     pt__light_sample ls;
                     uint32_t li;
                     float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-                    if (!pt__lights_sample(s, search, v.o, u0, u1, u2, &ls, &li)) break;
+                    if (!pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) break;
                     wi = ls.dir;
                 } else if (!pt__scatter_sample(&v, rng, &wi)) break;
                 p_total = cfg->light_weight * pt__lights_value(s, v.o, wi) +

@@ -365,7 +365,7 @@ static void invalid_settings(test_ctx *t)
     pt_film f;
     int k, i;
     const char *names[8] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
-                             "check_passes -1", "disable_skips unknown bit", "disable_skips ~0" };
+                             "check_passes -1", "disable_skips removed bit 1u << 1", "disable_skips ~0" };
     if (!CHECK(t, s != NULL, "scene")) return;
     if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); return; }
     for (k = 0; k < 8; k++) {
@@ -379,7 +379,7 @@ static void invalid_settings(test_ctx *t)
         if (k == 3) e.adaptive_min_spp = -1;
         if (k == 4) e.adaptive_min_spp = 1;
         if (k == 5) e.adaptive_check_passes = -1;
-        if (k == 6) e.disable_skips = PT_SKIP_ALL + 1u;
+        if (k == 6) e.disable_skips = 1u << 1; /* was PT_SKIP_LIGHT_SELECTION, removed */
         if (k == 7) e.disable_skips = ~0u;
         rc = pt_render(s, &e, &f, &st);
         for (i = 0; i < 64; i++) touched += f.count[i] != 0;
@@ -430,24 +430,23 @@ static void skip_case(test_ctx *t, const pt_scene *s, const pt_render_desc *d, u
 
 static void skips_exact(test_ctx *t)
 {
-    /* Light selection (one emitter), untextured albedo, no triangles, zero-BSDF shadow rays: the
-       general path changes no random number, so the films are bit-identical (MIS and mixture). */
+    /* Untextured albedo, no triangles, zero-BSDF shadow rays: the general path changes no random
+       number, so the films are bit-identical (MIS and mixture). */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 24, 20, 8);
     double worst = 0;
-    static const unsigned bits[4] = { PT_SKIP_LIGHT_SELECTION, PT_SKIP_NO_TEXTURES, PT_SKIP_NO_TRIANGLES,
-                                      PT_SKIP_ZERO_BSDF_SHADOW };
-    static const char *names[4] = { "light selection", "no textures", "no triangles", "zero-BSDF shadow" };
+    static const unsigned bits[3] = { PT_SKIP_NO_TEXTURES, PT_SKIP_NO_TRIANGLES, PT_SKIP_ZERO_BSDF_SHADOW };
+    static const char *names[3] = { "no textures", "no triangles", "zero-BSDF shadow" };
     int k, strat;
     if (!CHECK(t, s != NULL, "scene")) return;
     for (strat = 0; strat < 2; strat++)
-        for (k = 0; k < 4; k++) {
+        for (k = 0; k < 3; k++) {
             char what[96];
             d.strategy = strat ? PT_STRATEGY_MIXTURE : PT_STRATEGY_MIS;
             snprintf(what, sizeof what, "%s (%s)", names[k], strat ? "mixture" : "MIS");
             skip_case(t, s, &d, bits[k], 1, what, &worst);
         }
-    test_note(t, "8 pairs of films bit-identical");
+    test_note(t, "6 pairs of films bit-identical");
     pt_scene_destroy(s);
 }
 
@@ -455,8 +454,8 @@ static void skips_within_noise(test_ctx *t)
 {
     /* The skips that draw random numbers differently: no emitters (a sky-lit scene: MIS, light,
        mixture), delta vertex (mirror and glass: MIS, light), one-sided light facing away (mixture;
-       the ceiling and the light's back are behind it), and every skip at once (MIS). 8 comparisons of
-       16 regions in the file's family. */
+       the ceiling and the light's back are behind it), and every skip at once (MIS). 7 comparisons
+       of 16 regions in the file's family. */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 32, 24, 48), *sky;
     double worst = 0;
