@@ -349,6 +349,37 @@ PTDEF pt_vec3 pt_sample_uniform_sphere(float u1, float u2);                  /* 
 PTDEF pt_vec3 pt_sample_cosine_hemisphere(float u1, float u2);               /* z/pi, z up */
 PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y); /* Shirley & Chiu 1997 */
 
+/* Samplers: where the renderer's random numbers come from (pt_render_desc.sampler).
+   INDEPENDENT: every number of a camera sample comes from its own PCG stream
+   (pt_rng_for_sample). SOBOL: randomised quasi-Monte Carlo. Each group of numbers the
+   integrator draws together (the pixel position, the lens position, and at every bounce the
+   light choice, the point on the light, the scattered direction, Russian roulette, ...) is
+   one fixed "set" of one or two dimensions; a set's value for a pixel's k-th sample is point
+   k of Sobol's two-dimensional (0,2)-sequence after a nested uniform shuffle of k and an Owen
+   scramble of each coordinate, keyed by a hash of (seed, pixel, set) (Burley, "Practical
+   Hash-based Owen Scrambling", JCGT 9(4), 2020; sets padded as in Pharr, Jakob & Humphreys,
+   "Physically Based Rendering", 4th ed., ch. 8). Every point is uniformly distributed, so
+   the estimate stays unbiased, while any 2^m consecutive samples of a pixel (from an aligned
+   start, e.g. the first 2^m) are stratified in every set: one point in each elementary
+   interval of area 2^-m. Error falls faster than with independent numbers where the
+   integrand is smooth (direct light, anti-aliasing). The k-th sample is a pure function of
+   (seed, pixel, k), as with INDEPENDENT. */
+typedef enum pt_sampler {
+    PT_SAMPLER_INDEPENDENT = 0,
+    PT_SAMPLER_SOBOL = 1
+} pt_sampler;
+
+/* Sobol's sequence, unscrambled: coordinate dim (0: van der Corput, 1: Sobol's second
+   dimension, primitive polynomial x + 1) of point `index`, as a 32-bit binary fraction
+   (the value is result / 2^32). Returns 0 for a dim other than 0 or 1. */
+PTDEF uint32_t pt_sobol_u32(uint32_t index, int dim);
+/* The point PT_SAMPLER_SOBOL uses: point `index` of the 2D Sobol sequence with the index
+   shuffled (nested uniform scramble of its low 16 bits) and both coordinates Owen-scrambled,
+   all keyed by `seed`; u[0], u[1] in [0, 1). For a uniformly random seed, each point is
+   uniform on [0, 1)^2; for any fixed seed, points j 2^m ... (j + 1) 2^m - 1 form a (0,m,2)-net
+   (m <= 16). The renderer's one-dimensional sets use u[0]. */
+PTDEF void pt_sobol_scrambled(uint32_t index, uint64_t seed, float u[2]);
+
 /* ==========================================================================================
    3. GEOMETRY AND SCENES
    A scene owns materials, textures and shapes. Shapes are added under the scene's current
@@ -732,6 +763,8 @@ typedef struct pt_render_desc {
     int adaptive_check_passes;   /* blocks are re-checked every this many passes, >= 1; 0: 1 */
     unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on; bits
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
+    pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
+                                    quasi-Monte Carlo (section 2), lower error at equal samples */
 } pt_render_desc;
 
 typedef struct pt_render_stats {
@@ -794,7 +827,8 @@ PTDEF int pt_render(const pt_scene *scene, const pt_render_desc *desc, pt_film *
 /* Convenience: a fresh film, rendered and resolved into *image. */
 PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_image *image, pt_render_stats *stats);
 /* Radiance along one camera ray: one path-traced sample, with the desc's strategy and depth.
-   The desc's width, height and camera are not used. stats may be NULL. Non-finite results
+   The desc's width, height, camera and sampler are not used (every number comes from *rng, which
+   advances). stats may be NULL. Non-finite results
    are counted in stats and returned as zero. The direction is normalised unless it is already
    unit length to float precision (then it is used as given, so a pt_camera_ray sample traced
    here equals the one pt_render takes). */
@@ -1387,6 +1421,177 @@ static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
 /* ------------------------------------------------------------------------------------------
    2. Sampling and PDFs
    ------------------------------------------------------------------------------------------ */
+
+/* ---- Samplers (pt_sampler). The integrator draws its random numbers through a pt__sampler:
+   in INDEPENDENT mode every draw is the next number of the sample's PCG stream, in the order the
+   integrator asks (the images of before samplers existed, bit for bit); in SOBOL mode a draw
+   names its set (PT__SET_*: pixel, lens, and per bounce light choice, light point, scatter
+   direction, ...), whose value is a function of (seed, pixel, sample index, set) alone, so a
+   set keeps its dimensions whatever branches a path took before it.
+
+   A set's point (pt_sobol_scrambled), for sample index k and a 64-bit set seed:
+   1. Shuffle: k' = a nested uniform scramble of k's low 16 bits (a random permutation in which
+      bit b of k' depends only on bits >= b of k, so each aligned block of 2^m indices maps onto
+      an aligned block of 2^m: the first 2^m samples are still a whole block of the sequence;
+      Burley 2020, sec. 4). Independent shuffles decorrelate sets that share the sequence
+      ("padding", Kollig & Keller, "Efficient Multidimensional Sampling", EG 2002; pbrt-v4's
+      PaddedSobolSampler).
+   2. Sobol's (0,2)-sequence at k': x0 = van der Corput (the bits of k' reversed), x1 = the
+      generator matrix of Sobol's second dimension (Sobol 1967; Joe & Kuo, "Constructing Sobol
+      sequences with better two-dimensional projections", SIAM J. Sci. Comput. 30(5), 2008:
+      primitive polynomial x + 1, m_1 = 1, so m_k = m_{k-1} xor 2 m_{k-1}).
+   3. Owen scramble of each coordinate (Owen, "Randomly permuted (t,m,s)-nets and
+      (t,s)-sequences", 1995): a random nested permutation of the binary digits, made by
+      reversing the bits and applying a hash in which each output bit depends only on the seed
+      and the bits below it (Laine & Karras, "Stratified sampling for stochastic transparency",
+      EGSR 2011; Burley 2020, sec. 3), then reversing back.
+   Step 3 starts by adding a uniform 32-bit seed, and the rest is a fixed bijection, so every
+   coordinate is exactly uniform over the 2^32 binary fractions whatever k is: each sample is
+   uniform on the unit square and the estimator unbiased. Seeds come from SplitMix64 (pt__mix64). */
+
+/* The bits of x in reverse order. */
+static uint32_t pt__reverse_bits(uint32_t x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+#if defined(__GNUC__) || defined(__clang__)
+#define PT__CTZ32(x) ((unsigned)__builtin_ctz(x))
+#else
+static unsigned pt__ctz32(uint32_t x)
+{
+    unsigned n = 0;
+    while (!(x & 1u)) { x >>= 1; ++n; }
+    return n;
+}
+#define PT__CTZ32(x) pt__ctz32(x)
+#endif
+/* A random permutation of 32-bit words in which output bit b is input bit b xor a function of the
+   seed and input bits 0..b-1: adding, multiplying by an odd number and x ^= x * (an even number)
+   each have that form, and so has their composition (Laine & Karras 2011). Applied to reversed
+   bits it is a nested uniform (Owen) scramble of the binary fraction. The seed-dependent
+   multiplier follows Vegdahl ("Building a Better LK Hash", 2021); the even constants are ours. */
+static uint32_t pt__nested_hash(uint32_t x, uint32_t seed)
+{
+    x += seed;
+    x ^= x * 0xf9b439fcu;
+    x *= (seed >> 16) | 1u;
+    x ^= x * 0x91d93080u;
+    x ^= x * 0x8142c8eau;
+    return x;
+}
+/* Column j of the generator matrix of Sobol's second dimension, bit-reversed: the coefficients of
+   (1 + x)^j over GF(2) (row j of Pascal's triangle mod 2), i.e. the reversed direction number
+   v_j = m_{j+1} / 2^{j+1}, m_k = m_{k-1} xor 2 m_{k-1}, m_1 = 1 (x + 1 is its own reversal). */
+static const uint32_t pt__sobol1_rev[32] = {
+    0x00000001u, 0x00000003u, 0x00000005u, 0x0000000fu, 0x00000011u, 0x00000033u,
+    0x00000055u, 0x000000ffu, 0x00000101u, 0x00000303u, 0x00000505u, 0x00000f0fu,
+    0x00001111u, 0x00003333u, 0x00005555u, 0x0000ffffu, 0x00010001u, 0x00030003u,
+    0x00050005u, 0x000f000fu, 0x00110011u, 0x00330033u, 0x00550055u, 0x00ff00ffu,
+    0x01010101u, 0x03030303u, 0x05050505u, 0x0f0f0f0fu, 0x11111111u, 0x33333333u,
+    0x55555555u, 0xffffffffu};
+/* Sobol's second coordinate of point i, bit-reversed (a sum over i's set bits). */
+static uint32_t pt__sobol1_reversed(uint32_t i)
+{
+    uint32_t x = 0u;
+    while (i) {
+        x ^= pt__sobol1_rev[PT__CTZ32(i)];
+        i &= i - 1u;
+    }
+    return x;
+}
+PTDEF uint32_t pt_sobol_u32(uint32_t index, int dim)
+{
+    if (dim == 0) return pt__reverse_bits(index);
+    if (dim == 1) return pt__reverse_bits(pt__sobol1_reversed(index));
+    return 0u;
+}
+/* A 32-bit binary fraction to a float in [0, 1) (its top 24 bits, as pt_rng_float). */
+static float pt__fraction_float(uint32_t x) { return (float)(x >> 8) * (1.0f / 16777216.0f); }
+/* dims (1 or 2) coordinates of pt_sobol_scrambled, from the reversed index. */
+static void pt__sobol_point(uint32_t index_reversed, uint64_t seed, int dims, float *u)
+{
+    uint64_t h = pt__mix64(seed);
+    /* 1. shuffle: the index's low 16 bits are the top 16 of index_reversed */
+    uint32_t r = (pt__nested_hash(index_reversed, (uint32_t)h) & 0xffff0000u) | (index_reversed & 0x0000ffffu);
+    uint32_t k = pt__reverse_bits(r);
+    /* 2 and 3, x0: van der Corput's fraction is reverse(k), so its reversal is k itself */
+    u[0] = pt__fraction_float(pt__reverse_bits(pt__nested_hash(k, (uint32_t)(h >> 32))));
+    if (dims > 1) {
+        uint32_t s1 = (uint32_t)pt__mix64(h ^ 0x2545f4914f6cdd1dULL);
+        u[1] = pt__fraction_float(pt__reverse_bits(pt__nested_hash(pt__sobol1_reversed(k), s1)));
+    }
+}
+PTDEF void pt_sobol_scrambled(uint32_t index, uint64_t seed, float u[2])
+{
+    if (!u) return;
+    pt__sobol_point(pt__reverse_bits(index), seed, 2, u);
+}
+
+/* The integrator's source of random numbers for one camera sample (see above). */
+typedef struct pt__sampler {
+    pt_rng rng;            /* INDEPENDENT: every draw. SOBOL: only user PDFs (a guide's pt_pdf_sample) */
+    int sobol;
+    uint32_t index_reversed; /* SOBOL: the sample's index within its pixel, bits reversed */
+    uint64_t key;          /* SOBOL: a hash of (seed, pixel) */
+} pt__sampler;
+
+/* Sets: the pixel and lens positions, then PT__SLOTS per bounce (depth d's slot s is set
+   PT__SET_BOUNCE(d, s)). Two-dimensional: PIXEL, LENS, LIGHT_POINT, SCATTER_DIR. */
+#define PT__SET_PIXEL 0u
+#define PT__SET_LENS 1u
+enum {
+    PT__SLOT_LIGHT_PICK = 0,  /* which light (pt__lights_sample's u0) */
+    PT__SLOT_LIGHT_POINT,     /* the point on it (u1, u2) */
+    PT__SLOT_SCATTER_DIR,     /* the material's direction (u1, u2) */
+    PT__SLOT_SCATTER_EXTRA,   /* the material's third number (fuzz radius) */
+    PT__SLOT_GUIDE,           /* guide or material */
+    PT__SLOT_MIXTURE,         /* mixture strategy: light or scatter */
+    PT__SLOT_FRESNEL,         /* glass: reflect or refract */
+    PT__SLOT_RR,              /* Russian roulette */
+    PT__SLOTS
+};
+#define PT__SET_BOUNCE(depth, slot) (2u + (uint32_t)PT__SLOTS * (uint32_t)(depth) + (uint32_t)(slot))
+
+static void pt__sampler_init(pt__sampler *smp, pt_sampler kind, uint64_t seed, uint32_t pixel, uint32_t sample)
+{
+    smp->rng = pt_rng_for_sample(seed, pixel, sample);
+    smp->sobol = kind == PT_SAMPLER_SOBOL;
+    smp->index_reversed = 0u;
+    smp->key = 0u;
+    if (smp->sobol) {
+        smp->index_reversed = pt__reverse_bits(sample);
+        smp->key = pt__mix64(pt__mix64(seed ^ 0x6a09e667f3bcc909ULL) + (uint64_t)pixel);
+    }
+}
+static uint64_t pt__set_seed(const pt__sampler *smp, uint32_t set)
+{
+    return smp->key + 0x9e3779b97f4a7c15ULL * (uint64_t)(set + 1u);
+}
+/* One number of set `set`. */
+static float pt__draw1(pt__sampler *smp, uint32_t set)
+{
+    float u[1];
+    if (!smp->sobol) return pt_rng_float(&smp->rng);
+    pt__sobol_point(smp->index_reversed, pt__set_seed(smp, set), 1, u);
+    return u[0];
+}
+/* Two numbers of set `set` (independent: *a, then *b). */
+static void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b)
+{
+    float u[2];
+    if (!smp->sobol) {
+        *a = pt_rng_float(&smp->rng);
+        *b = pt_rng_float(&smp->rng);
+        return;
+    }
+    pt__sobol_point(smp->index_reversed, pt__set_seed(smp, set), 2, u);
+    *a = u[0];
+    *b = u[1];
+}
 
 /* Concentric map of the square to the disk (Shirley & Chiu, "A Low Distortion Map Between
    Disk and Square", JGT 2(3), 1997). */
@@ -4259,6 +4464,7 @@ typedef struct pt__settings {
     void *guide_user;
     float guide_weight;
     unsigned general;  /* PT_SKIP_* bits whose general path is forced (pt_render_desc.disable_skips) */
+    pt_sampler sampler;
 } pt__settings;
 
 /* Whether the skip `bit` is taken (not disabled by pt_render_desc.disable_skips). */
@@ -4285,6 +4491,9 @@ static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c)
         return PT_ERROR_INVALID_ARGUMENT;
     if (d->disable_skips & ~PT_SKIP_ALL) return PT_ERROR_INVALID_ARGUMENT;
     c->general = d->disable_skips;
+    if ((int)d->sampler < (int)PT_SAMPLER_INDEPENDENT || (int)d->sampler > (int)PT_SAMPLER_SOBOL)
+        return PT_ERROR_INVALID_ARGUMENT;
+    c->sampler = d->sampler;
     return PT_OK;
 }
 
@@ -4312,14 +4521,16 @@ static float pt__scatter_density(const pt__vertex *v, pt_vec3 wi)
     if (!v->has_guide) return pm;
     return (1.0f - v->g) * pm + v->g * pt_pdf_value(&v->guide, wi);
 }
-static int pt__scatter_sample(const pt__vertex *v, pt_rng *rng, pt_vec3 *wi)
+static int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int depth, pt_vec3 *wi)
 {
-    float u0 = v->has_guide ? pt_rng_float(rng) : 1.0f;
+    float u0 = v->has_guide ? pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_GUIDE)) : 1.0f;
     if (v->has_guide && u0 < v->g) {
         float pg;
-        return pt_pdf_sample(&v->guide, rng, wi, &pg);
+        return pt_pdf_sample(&v->guide, &smp->rng, wi, &pg);
     } else {
-        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng), u3 = pt_rng_float(rng), pm;
+        float u1, u2, u3, pm;
+        pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_DIR), &u1, &u2);
+        u3 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA));
         return pt__material_sample_dir(v->m, v->ns, v->wo, u1, u2, u3, wi, &pm);
     }
 }
@@ -4366,7 +4577,7 @@ static pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg,
 
 /* The scene-feature skips (PT_SKIP_*) appear below as PT__SKIP(cfg, bit) tests; with the bit
    in cfg->general the general path runs instead. */
-static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_rng *rng, pt_path_stats *st)
+static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt__sampler *smp, pt_path_stats *st)
 {
     pt_color L = pt_v3(0, 0, 0), beta = pt_v3(1, 1, 1), beta_in;
     int depth, prev_delta = 1;
@@ -4430,7 +4641,8 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */
             pt__light_sample ls;
             uint32_t li;
-            float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+            float u0 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK)), u1, u2;
+            pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
             if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
@@ -4440,7 +4652,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                 float eta = h.front_face ? 1.0f / m->ior : m->ior, cos_t = 0.0f;
                 float cos_i = pt__minf(1.0f, pt_dot(v.wo, v.ns));
                 float F = pt__fresnel_dielectric(cos_i, eta, &cos_t);
-                if (pt_rng_float(rng) < F) wi = pt__reflect(v.wo, v.ns);
+                if (pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_FRESNEL)) < F) wi = pt__reflect(v.wo, v.ns);
                 else wi = pt_normalize(pt_add(pt_scale(v.wo, -eta), pt_scale(v.ns, eta * cos_i - cos_t)));
                 /* weight F/F or (1-F)/(1-F) = 1: clear glass */
             } else {
@@ -4468,26 +4680,28 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
             if (nee) {
                 pt__light_sample ls;
                 uint32_t li;
-                float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+                float u0 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK)), u1, u2;
+                pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                 if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
             /* the direction that continues the path */
             if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights &&
                 (!s->light_count || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v.o))) {
-                u = pt_rng_float(rng);
+                u = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_MIXTURE));
                 use_light = u < cfg->light_weight;
                 if (use_light) {
                     pt__light_sample ls;
                     uint32_t li;
-                    float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+                    float u0 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK)), u1, u2;
+                    pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                     if (!pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) break;
                     wi = ls.dir;
-                } else if (!pt__scatter_sample(&v, rng, &wi)) break;
+                } else if (!pt__scatter_sample(&v, smp, depth, &wi)) break;
                 p_total = cfg->light_weight * pt__lights_value(s, v.o, wi) +
                           (1.0f - cfg->light_weight) * pt__scatter_density(&v, wi);
             } else {
-                if (!pt__scatter_sample(&v, rng, &wi)) break;
+                if (!pt__scatter_sample(&v, smp, depth, &wi)) break;
                 p_total = pt__scatter_density(&v, wi);
             }
             f = pt__material_eval(m, v.albedo, v.ns, v.ng, v.wo, wi);
@@ -4503,7 +4717,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         ray.dir = wi;
         if (depth + 1 >= cfg->rr_start) {
             float q = pt__minf(0.95f, pt_max_component(beta_in));
-            if (!(q > 0.0f) || pt_rng_float(rng) >= q) break;
+            if (!(q > 0.0f) || pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_RR)) >= q) break;
             beta = pt_scale(beta, 1.0f / q);
         }
         st->bounce_rays++;
@@ -4512,9 +4726,10 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
 }
 
 /* One camera sample with the per-sample NaN/Inf guard. */
-static pt_color pt__sample(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_rng *rng, pt_path_stats *st)
+static pt_color pt__sample(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt__sampler *smp,
+                          pt_path_stats *st)
 {
-    pt_color L = pt__trace(s, cfg, ray, rng, st);
+    pt_color L = pt__trace(s, cfg, ray, smp, st);
     if (!pt__vfinite(L)) {
         st->nonfinite_samples++;
         return pt_v3(0, 0, 0);
@@ -4526,13 +4741,17 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
 {
     pt__settings cfg;
     pt_path_stats local;
+    pt__sampler smp;
     pt_color L;
     if (!s || !d || !rng || !s->committed || pt__settings_from_desc(d, &cfg) != PT_OK || !pt__vfinite(ray.origin) ||
         !pt__vfinite(ray.dir) || !(pt_length2(ray.dir) > 0.0f))
         return pt_v3(0, 0, 0);
     if (!(fabsf(pt_length2(ray.dir) - 1.0f) <= 1e-6f)) ray.dir = pt_normalize(ray.dir); /* unit: as given */
     memset(&local, 0, sizeof local);
-    L = pt__sample(s, &cfg, ray, rng, &local);
+    memset(&smp, 0, sizeof smp);
+    smp.rng = *rng; /* independent: one path from the caller's stream, which advances as it draws */
+    L = pt__sample(s, &cfg, ray, &smp, &local);
+    *rng = smp.rng;
     if (stats) {
         stats->camera_rays += local.camera_rays;
         stats->bounce_rays += local.bounce_rays;
@@ -4545,7 +4764,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
 /* ------------------------------------------------------------------------------------------
    8. Rendering: the image is cut into tiles; each pass adds samples_per_pass samples to every
    pixel of every tile. Tiles are handed out by a pthreads pool (or the host's parallel-for).
-   A pixel's k-th sample draws from the stream pt_rng_for_sample(seed, pixel, k) and is added
+   A pixel's k-th sample draws from the stream pt_rng_for_sample(seed, pixel, k) (with
+   PT_SAMPLER_SOBOL: from the scrambled Sobol sets keyed by (seed, pixel, k), section 2) and is added
    to the pixel in sample order by the one job that owns the tile, so the image does not
    depend on the thread count or the order in which tiles run. Even-numbered samples also go to
    half-buffer A, odd-numbered ones to B (the film keeps sum and sum_odd; A = sum - sum_odd).
@@ -4646,11 +4866,15 @@ static void pt__render_tile(void *data, int job)
             if (ps->block_active && !ps->block_active[(y / PT__BLOCK) * ps->blocks_x + x / PT__BLOCK]) continue;
             for (k = 0; k < ps->spp; ++k) {
                 uint32_t index_k = base + (uint32_t)k;
-                pt_rng rng = pt_rng_for_sample(ps->seed, pix, index_k);
-                float jx = pt_rng_float(&rng), jy = pt_rng_float(&rng);
-                float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
-                pt_ray r = pt_camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
-                pt_color L = pt__sample(ps->scene, ps->cfg, r, &rng, &st);
+                pt__sampler smp;
+                float jx, jy, l1, l2;
+                pt_ray r;
+                pt_color L;
+                pt__sampler_init(&smp, ps->cfg->sampler, ps->seed, pix, index_k);
+                pt__draw2(&smp, PT__SET_PIXEL, &jx, &jy);
+                pt__draw2(&smp, PT__SET_LENS, &l1, &l2);
+                r = pt_camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
+                L = pt__sample(ps->scene, ps->cfg, r, &smp, &st);
                 sum[0] += L.x; sum[1] += L.y; sum[2] += L.z;
                 sq[0] += (double)L.x * L.x; sq[1] += (double)L.y * L.y; sq[2] += (double)L.z * L.z;
                 if (index_k & 1u) { odd[0] += L.x; odd[1] += L.y; odd[2] += L.z; }
