@@ -852,6 +852,8 @@ PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, cl
      spp N                            samples per pixel (default 64)
      max_depth N                      scattering events per path (default 50; 1 = direct only)
      strategy mis|material|light|mixture
+     sampler independent|sobol        where random numbers come from (default independent;
+                                      sobol: scrambled Sobol points, section 2)
      seed N                           random seed (default 0)
      background R G B                 radiance of rays leaving the scene (default 0 0 0)
      camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES]      (required, once)
@@ -935,6 +937,7 @@ typedef struct pt_scene_desc {
     char file[256];              /* the name used in messages */
     int width, height, samples_per_pixel, max_depth;
     pt_strategy strategy;
+    pt_sampler sampler;
     uint64_t seed;
     pt_color background;
     pt_camera_desc camera;
@@ -960,8 +963,8 @@ PTDEF void pt_scene_desc_free(pt_scene_desc *desc);
 PTDEF int pt_scene_desc_parse_obj(const char *text, size_t length, const char *name, pt_sd_mesh *out, char *err,
                                   size_t err_size);
 PTDEF void pt_sd_mesh_free(pt_sd_mesh *mesh);
-/* Builds a committed scene and fills *render (size, spp, depth, strategy, seed, camera,
-   background; other fields zero) with the public API. On failure *scene is NULL. */
+/* Builds a committed scene and fills *render (size, spp, depth, strategy, sampler, seed,
+   camera, background; other fields zero) with the public API. On failure *scene is NULL. */
 PTDEF int pt_scene_desc_build(const pt_scene_desc *desc, pt_scene **scene, pt_render_desc *render, char *err,
                               size_t err_size);
 
@@ -1449,26 +1452,19 @@ static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
    coordinate is exactly uniform over the 2^32 binary fractions whatever k is: each sample is
    uniform on the unit square and the estimator unbiased. Seeds come from SplitMix64 (pt__mix64). */
 
-/* The bits of x in reverse order. */
+/* The bits of x in reverse order: bits within bytes swapped in three steps, then the bytes. */
 static uint32_t pt__reverse_bits(uint32_t x)
 {
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
     x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+#if defined(__GNUC__) || defined(__clang__)
+    return __builtin_bswap32(x);
+#else
     x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
     return (x >> 16) | (x << 16);
-}
-#if defined(__GNUC__) || defined(__clang__)
-#define PT__CTZ32(x) ((unsigned)__builtin_ctz(x))
-#else
-static unsigned pt__ctz32(uint32_t x)
-{
-    unsigned n = 0;
-    while (!(x & 1u)) { x >>= 1; ++n; }
-    return n;
-}
-#define PT__CTZ32(x) pt__ctz32(x)
 #endif
+}
 /* A random permutation of 32-bit words in which output bit b is input bit b xor a function of the
    seed and input bits 0..b-1: adding, multiplying by an odd number and x ^= x * (an even number)
    each have that form, and so has their composition (Laine & Karras 2011). Applied to reversed
@@ -1483,25 +1479,18 @@ static uint32_t pt__nested_hash(uint32_t x, uint32_t seed)
     x ^= x * 0x8142c8eau;
     return x;
 }
-/* Column j of the generator matrix of Sobol's second dimension, bit-reversed: the coefficients of
-   (1 + x)^j over GF(2) (row j of Pascal's triangle mod 2), i.e. the reversed direction number
-   v_j = m_{j+1} / 2^{j+1}, m_k = m_{k-1} xor 2 m_{k-1}, m_1 = 1 (x + 1 is its own reversal). */
-static const uint32_t pt__sobol1_rev[32] = {
-    0x00000001u, 0x00000003u, 0x00000005u, 0x0000000fu, 0x00000011u, 0x00000033u,
-    0x00000055u, 0x000000ffu, 0x00000101u, 0x00000303u, 0x00000505u, 0x00000f0fu,
-    0x00001111u, 0x00003333u, 0x00005555u, 0x0000ffffu, 0x00010001u, 0x00030003u,
-    0x00050005u, 0x000f000fu, 0x00110011u, 0x00330033u, 0x00550055u, 0x00ff00ffu,
-    0x01010101u, 0x03030303u, 0x05050505u, 0x0f0f0f0fu, 0x11111111u, 0x33333333u,
-    0x55555555u, 0xffffffffu};
-/* Sobol's second coordinate of point i, bit-reversed (a sum over i's set bits). */
+/* Sobol's second coordinate of point i, bit-reversed. Its direction numbers are v_j = m_{j+1} /
+   2^{j+1} with m_k = m_{k-1} xor 2 m_{k-1}, m_1 = 1: m_{j+1} = (1 + x)^j over GF(2), row j of
+   Pascal's triangle mod 2, a palindrome, so reversed v_j has bit b set iff C(j, b) is odd, iff b's
+   bits are a subset of j's (Lucas). Bit b of the result is then the parity of i's set bits j that
+   are supersets of b: the GF(2) superset-sum transform of i's bit vector, five butterfly steps. */
 static uint32_t pt__sobol1_reversed(uint32_t i)
 {
-    uint32_t x = 0u;
-    while (i) {
-        x ^= pt__sobol1_rev[PT__CTZ32(i)];
-        i &= i - 1u;
-    }
-    return x;
+    i ^= (i >> 1) & 0x55555555u;
+    i ^= (i >> 2) & 0x33333333u;
+    i ^= (i >> 4) & 0x0f0f0f0fu;
+    i ^= (i >> 8) & 0x00ff00ffu;
+    return i ^ (i >> 16);
 }
 PTDEF uint32_t pt_sobol_u32(uint32_t index, int dim)
 {
@@ -1578,6 +1567,13 @@ static float pt__draw1(pt__sampler *smp, uint32_t set)
     if (!smp->sobol) return pt_rng_float(&smp->rng);
     pt__sobol_point(smp->index_reversed, pt__set_seed(smp, set), 1, u);
     return u[0];
+}
+/* The same for a number the caller may not use: independent mode draws it anyway (to keep the
+   stream's order); SOBOL skips the work when `used` is 0 (the value is then 0.5, never read). */
+static float pt__draw1_if(pt__sampler *smp, uint32_t set, int used)
+{
+    if (smp->sobol && !used) return 0.5f;
+    return pt__draw1(smp, set);
 }
 /* Two numbers of set `set` (independent: *a, then *b). */
 static void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b)
@@ -4530,7 +4526,7 @@ static int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int depth, 
     } else {
         float u1, u2, u3, pm;
         pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_DIR), &u1, &u2);
-        u3 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA));
+        u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA), v->m->type != PT_MATERIAL_LAMBERTIAN);
         return pt__material_sample_dir(v->m, v->ns, v->wo, u1, u2, u3, wi, &pm);
     }
 }
@@ -4586,6 +4582,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     const int any_lights = s->light_count > 0 || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
     const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0 || !PT__SKIP(cfg, PT_SKIP_NO_TRIANGLES);
     const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
+    const int pick = s->light_count != 1; /* the light choice's number is used (pt__pick_light) */
     pt__vertex v;
     memset(&v, 0, sizeof v);
     st->camera_rays++;
@@ -4641,7 +4638,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */
             pt__light_sample ls;
             uint32_t li;
-            float u0 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK)), u1, u2;
+            float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
             pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
             if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
@@ -4680,7 +4677,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
             if (nee) {
                 pt__light_sample ls;
                 uint32_t li;
-                float u0 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK)), u1, u2;
+                float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                 if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
@@ -4693,7 +4690,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
                 if (use_light) {
                     pt__light_sample ls;
                     uint32_t li;
-                    float u0 = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK)), u1, u2;
+                    float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                     pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                     if (!pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) break;
                     wi = ls.dir;
@@ -4872,7 +4869,8 @@ static void pt__render_tile(void *data, int job)
                 pt_color L;
                 pt__sampler_init(&smp, ps->cfg->sampler, ps->seed, pix, index_k);
                 pt__draw2(&smp, PT__SET_PIXEL, &jx, &jy);
-                pt__draw2(&smp, PT__SET_LENS, &l1, &l2);
+                if (smp.sobol && !(ps->cam->lens_radius > 0.0f)) l1 = l2 = 0.5f; /* pinhole: unused */
+                else pt__draw2(&smp, PT__SET_LENS, &l1, &l2);
                 r = pt_camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
                 L = pt__sample(ps->scene, ps->cfg, r, &smp, &st);
                 sum[0] += L.x; sum[1] += L.y; sum[2] += L.z;
@@ -5950,6 +5948,13 @@ static int pt__sd_statement(pt__sdp *p)
                                names[1], names[2], names[3], t ? t : "nothing");
         if (kw[0] == 's') d->strategy = (pt_strategy)found;
         else d->pov_radiosity = found;
+    } else if (!strcmp(kw, "sampler")) {
+        const char *t = pt__sd_next(p);
+        if (t && !strcmp(t, "independent")) d->sampler = PT_SAMPLER_INDEPENDENT;
+        else if (t && !strcmp(t, "sobol")) d->sampler = PT_SAMPLER_SOBOL;
+        else
+            return pt__sd_fail(p, PT_ERROR_INVALID_ARGUMENT, "sampler: expected independent or sobol, got '%s'",
+                               t ? t : "nothing");
     } else if (!strcmp(kw, "background")) {
         rc = pt__sd_color(p, "background", &d->background);
     } else if (!strcmp(kw, "camera")) {
@@ -6253,6 +6258,7 @@ done:
     r->samples_per_pixel = d->samples_per_pixel;
     r->max_depth = d->max_depth;
     r->strategy = d->strategy;
+    r->sampler = d->sampler;
     r->seed = d->seed;
     r->background = d->background;
     r->camera = d->camera;

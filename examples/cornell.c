@@ -25,6 +25,7 @@ typedef struct options {
     int width, height;
     int spp;
     pt_strategy strategy;
+    pt_sampler sampler;
     float light_weight;
     int max_depth;
     int threads;
@@ -39,7 +40,8 @@ typedef struct options {
     unsigned given;      /* GIVEN_* bits: options set on the command line win over the scene file */
 } options;
 
-enum { GIVEN_W = 1, GIVEN_H = 2, GIVEN_SPP = 4, GIVEN_STRATEGY = 8, GIVEN_DEPTH = 16, GIVEN_SEED = 32 };
+enum { GIVEN_W = 1, GIVEN_H = 2, GIVEN_SPP = 4, GIVEN_STRATEGY = 8, GIVEN_DEPTH = 16, GIVEN_SEED = 32,
+       GIVEN_SAMPLER = 64 };
 
 /* ---------------------------------------------------------------------------------------
    The scene: exactly the book's final Cornell box. A quad is Q + a*u + b*v, a, b in [0,1].
@@ -114,6 +116,9 @@ static void usage(FILE *f)
         "  -h, --height N        image height in pixels (default 600)\n"
         "      --spp N           samples per pixel (default 128)\n"
         "      --strategy S      mis | material | light | mixture (default mis)\n"
+        "      --sampler S       independent | sobol: where random numbers come from; sobol =\n"
+        "                        scrambled Sobol points, lower error at equal spp (default\n"
+        "                        independent)\n"
         "      --light-weight W  light PDF weight of the mixture strategy, in (0, 1] (default 0.5)\n"
         "      --max-depth N     maximum scattering events per path (default 50)\n"
         "      --threads N       worker threads, 0 = all cores (default 0)\n"
@@ -125,7 +130,7 @@ static void usage(FILE *f)
         "      --pfm PATH        same as -o PATH, PATH must end in .pfm\n"
         "  -q, --quiet           no progress line\n"
         "      --scene PATH      render a scene file (format: pdftrace.h, section 10) instead of\n"
-        "                        the built-in box; its size, spp, depth, strategy and seed are the\n"
+        "                        the built-in box; its size, spp, depth, strategy, sampler and seed are the\n"
         "                        defaults, options given here override them\n"
         "      --adaptive T      adaptive sampling toward an image RMS relative error T (e.g. 0.05):\n"
         "                        4x4 blocks get samples in proportion to their noise and stop when\n"
@@ -260,6 +265,14 @@ static int parse_strategy(const char *opt, const char *text, pt_strategy *out)
     return 1;
 }
 
+static int parse_sampler(const char *opt, const char *text, pt_sampler *out)
+{
+    if (strcmp(text, "independent") == 0) *out = PT_SAMPLER_INDEPENDENT;
+    else if (strcmp(text, "sobol") == 0) *out = PT_SAMPLER_SOBOL;
+    else return fail("option %s: expected independent or sobol, got '%s'", opt, text);
+    return 1;
+}
+
 static const char *strategy_name(pt_strategy s)
 {
     switch (s) {
@@ -314,6 +327,7 @@ static int parse_options(int argc, char **argv, options *o)
     o->height = 600;
     o->spp = 128;
     o->strategy = PT_STRATEGY_MIS;
+    o->sampler = PT_SAMPLER_INDEPENDENT;
     o->light_weight = 0.5f;
     o->max_depth = 50;
     o->threads = 0;
@@ -357,7 +371,8 @@ static int parse_options(int argc, char **argv, options *o)
 
         /* Every other option takes a value. */
         if (strcmp(name, "-w") && strcmp(name, "--width") && strcmp(name, "-h") && strcmp(name, "--height") &&
-            strcmp(name, "--spp") && strcmp(name, "--strategy") && strcmp(name, "--light-weight") &&
+            strcmp(name, "--spp") && strcmp(name, "--strategy") && strcmp(name, "--sampler") &&
+            strcmp(name, "--light-weight") &&
             strcmp(name, "--max-depth") && strcmp(name, "--threads") && strcmp(name, "--seed") &&
             strcmp(name, "-o") && strcmp(name, "--output") && strcmp(name, "--ppm") && strcmp(name, "--pfm") &&
             strcmp(name, "--scene") && strcmp(name, "--adaptive") && strcmp(name, "--adaptive-min-spp") &&
@@ -381,6 +396,9 @@ static int parse_options(int argc, char **argv, options *o)
         } else if (!strcmp(name, "--strategy")) {
             if (!parse_strategy(name, value, &o->strategy)) return 0;
             o->given |= GIVEN_STRATEGY;
+        } else if (!strcmp(name, "--sampler")) {
+            if (!parse_sampler(name, value, &o->sampler)) return 0;
+            o->given |= GIVEN_SAMPLER;
         } else if (!strcmp(name, "--light-weight")) {
             if (!parse_light_weight(name, value, &o->light_weight)) return 0;
         } else if (!strcmp(name, "--max-depth")) {
@@ -439,6 +457,7 @@ static void print_stats(const options *o, const pt_render_stats *st)
     double secs = st->seconds > 0 ? st->seconds : 1e-9;
     printf("image      %d x %d, %d spp, strategy %s", o->width, o->height, o->spp, strategy_name(o->strategy));
     if (o->strategy == PT_STRATEGY_MIXTURE) printf(" (light weight %g)", (double)o->light_weight);
+    if (o->sampler == PT_SAMPLER_SOBOL) printf(", sobol sampler");
     printf(", max depth %d, seed %llu\n", o->max_depth, (unsigned long long)o->seed);
     printf("time       %.3f s on %d thread%s, %d pass%s\n", st->seconds, st->threads, st->threads == 1 ? "" : "s",
            st->passes, st->passes == 1 ? "" : "es");
@@ -494,6 +513,7 @@ int main(int argc, char **argv)
         if (!(opt.given & GIVEN_H)) opt.height = from_file.height;
         if (!(opt.given & GIVEN_SPP)) opt.spp = from_file.samples_per_pixel;
         if (!(opt.given & GIVEN_STRATEGY)) opt.strategy = from_file.strategy;
+        if (!(opt.given & GIVEN_SAMPLER)) opt.sampler = from_file.sampler;
         if (!(opt.given & GIVEN_DEPTH)) opt.max_depth = from_file.max_depth;
         if (!(opt.given & GIVEN_SEED)) opt.seed = from_file.seed;
         desc.camera = from_file.camera;
@@ -518,6 +538,7 @@ int main(int argc, char **argv)
     desc.height = opt.height;
     desc.samples_per_pixel = opt.spp;
     desc.strategy = opt.strategy;
+    desc.sampler = opt.sampler;
     desc.light_weight = opt.light_weight;
     desc.max_depth = opt.max_depth;
     desc.threads = opt.threads;

@@ -78,6 +78,7 @@ int main(int argc, char **argv)
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
         { "adaptive", test_adaptive_cases },
+        { "sampler", test_sampler_cases },
         { "output", test_output_cases },
         { "exr", test_exr_cases },
         { "embree", test_embree_cases },
