@@ -1378,7 +1378,8 @@ typedef struct pt__tri4 {
     uint32_t prim[4]; /* index into scene->prims */
 } pt__tri4;
 typedef struct pt__quad4 {
-    float v[12][4];   /* Q, unit normal, w, w2 (pt__prim fields), by axis, then lane */
+    float v[14][4];   /* Q, unit normal, w, w2 (pt__prim fields), by axis, then lane; then the
+                         largest a and b margins pt__hit_quad can accept (pt__quad_edge_caps) */
     uint32_t prim[4];
 } pt__quad4;
 
@@ -2226,6 +2227,14 @@ static PT__HOT int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, floa
 static float pt__quad_margin(const pt__prim *p)
 {
     return 9.5367431640625e-7f * (pt__vmaxabs(p->p0) + pt__vmaxabs(p->p1) + pt__vmaxabs(p->p2));
+}
+/* The caps of pt__hit_quad's a and b margins (its ta, tb are never larger): a point with a or b
+   beyond them is a miss whatever the ray. Stored per quad in the BVH's quad blocks, so that
+   the SIMD test sends only lanes within them to the scalar test. */
+static void pt__quad_edge_caps(const pt__prim *p, float *ta, float *tb)
+{
+    *ta = pt__quad_margin(p) * 0.57735f / pt__vmaxabs(p->p1);
+    *tb = pt__quad_margin(p) * 0.57735f / pt__vmaxabs(p->p2);
 }
 
 /* Parallelogram Q + a u + b v: plane hit, then plane coordinates a = w.(h x v), b = w.(u x h)
@@ -3113,10 +3122,10 @@ static void pt__leaf_kinds(const pt__bvh_build *b, const pt__bnode *leaf, uint32
     }
 }
 /* Size of a leaf in the pool, in 16-byte units: a header, then triangle blocks (10 units),
-   quad blocks (13) and blocks of other primitive indices (1). */
+   quad blocks (15) and blocks of other primitive indices (1). */
 static size_t pt__leaf_units(uint32_t tri, uint32_t quad, uint32_t other)
 {
-    return 1u + 10u * (size_t)((tri + 3u) / 4u) + 13u * (size_t)((quad + 3u) / 4u) + (size_t)((other + 3u) / 4u);
+    return 1u + 10u * (size_t)((tri + 3u) / 4u) + 15u * (size_t)((quad + 3u) / 4u) + (size_t)((other + 3u) / 4u);
 }
 
 /* Writes a binary leaf into the pool (its primitives reordered: triangles, quads, others) and
@@ -3159,6 +3168,7 @@ static uint32_t pt__emit_leaf(pt__bvh_build *b, const pt__bnode *leaf)
             q->v[3][lane] = p->n.x; q->v[4][lane] = p->n.y; q->v[5][lane] = p->n.z;
             q->v[6][lane] = p->w.x; q->v[7][lane] = p->w.y; q->v[8][lane] = p->w.z;
             q->v[9][lane] = p->w2.x; q->v[10][lane] = p->w2.y; q->v[11][lane] = p->w2.z;
+            pt__quad_edge_caps(p, &q->v[12][lane], &q->v[13][lane]);
             q->prim[lane] = begin + k;
         }
     }
@@ -3507,18 +3517,15 @@ static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt
            (a ray through the edge two quads share must hit one of them; stress, watertight box) */
         int edge = _mm_movemask_ps(_mm_and_ps(out, ok));
         if (edge) {
-            float as[4], bs[4];
-            _mm_storeu_ps(as, a);
-            _mm_storeu_ps(bs, bb);
+            /* only lanes within the caps of the margin (pt__quad_edge_caps) can be hits */
+            __m128 ta = _mm_loadu_ps(q->v[12]), tb = _mm_loadu_ps(q->v[13]);
+            __m128 far_out = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(a, _mm_sub_ps(zero, ta)), _mm_cmpgt_ps(a, _mm_add_ps(one, ta))),
+                                       _mm_or_ps(_mm_cmplt_ps(bb, _mm_sub_ps(zero, tb)), _mm_cmpgt_ps(bb, _mm_add_ps(one, tb))));
+            edge &= ~_mm_movemask_ps(far_out);
             for (lane = 0; lane < 4; ++lane) {
-                const pt__prim *p;
-                float ta, tb, tq;
+                float tq;
                 if (!(edge & (1 << lane))) continue;
-                p = &s->prims[q->prim[lane]];
-                ta = pt__quad_margin(p) * 0.57735f / pt__vmaxabs(p->p1);
-                tb = pt__quad_margin(p) * 0.57735f / pt__vmaxabs(p->p2);
-                if (as[lane] < -ta || as[lane] > 1.0f + ta || bs[lane] < -tb || bs[lane] > 1.0f + tb) continue;
-                if (pt__hit_quad(tv->rc, p, tmax, &tq)) { bits |= 1 << lane; ts[lane] = tq; }
+                if (pt__hit_quad(tv->rc, &s->prims[q->prim[lane]], tmax, &tq)) { bits |= 1 << lane; ts[lane] = tq; }
             }
         }
     }
@@ -3611,7 +3618,7 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
             }
             for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__leaf16)) {
                 const pt__leaf16 *q = (const pt__leaf16 *)(const void *)blk;
-                for (lane = 0; lane < 4; ++lane) {
+                for (lane = 0; lane < 4 && (lane == 0 || q->u[lane] != q->u[0]); ++lane) { /* to the padding */
                     float t, bb[3] = {0.0f, 0.0f, 0.0f};
                     if (pt__hit_prim(rc, &s->prims[q->u[lane]], tmax, &t, bb)) {
                         tmax = t;
@@ -3673,7 +3680,7 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
             }
             for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__leaf16)) {
                 const pt__leaf16 *q = (const pt__leaf16 *)(const void *)blk;
-                for (lane = 0; lane < 4; ++lane) {
+                for (lane = 0; lane < 4 && (lane == 0 || q->u[lane] != q->u[0]); ++lane) { /* to the padding */
                     float t, bb[3];
                     if (pt__hit_prim(rc, &s->prims[q->u[lane]], tmax, &t, bb)) return 1;
                 }
