@@ -1323,9 +1323,10 @@ typedef struct pt__prim {
 
 /* Per-ray data computed once per traversal. */
 typedef struct pt__rayctx {
-    pt_vec3 o, d, inv_d;
+    pt_vec3 o, d;
     int kx, ky, kz;       /* watertight triangle test: axis permutation */
     float sx, sy, sz;     /* and shear */
+    int triangles;        /* whether the permutation and shear were set up */
 } pt__rayctx;
 
 typedef struct pt__material {
@@ -2161,8 +2162,7 @@ static PT__HOT void pt__rayctx_init2(pt__rayctx *rc, pt_ray r, int need_triangle
     float ax, ay, az, dk;
     rc->o = r.origin;
     rc->d = r.dir;
-    rc->inv_d = pt_v3(r.dir.x != 0.0f ? 1.0f / r.dir.x : FLT_MAX, r.dir.y != 0.0f ? 1.0f / r.dir.y : FLT_MAX,
-                      r.dir.z != 0.0f ? 1.0f / r.dir.z : FLT_MAX);
+    rc->triangles = need_triangles;
     if (!need_triangles) { rc->kx = 0; rc->ky = 1; rc->kz = 2; rc->sx = rc->sy = rc->sz = 0.0f; return; }
     ax = fabsf(r.dir.x); ay = fabsf(r.dir.y); az = fabsf(r.dir.z);
     /* Woop, Benthin & Wald 2013: kz = dominant axis, kx/ky follow cyclically (swapped to keep
@@ -3305,44 +3305,71 @@ oom:
     return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory building the BVH (%u primitives)", (unsigned)n);
 }
 
-/* Per-ray traversal data. The inverse direction is clamped to +-FLT_MAX, so that no slab
-   product is 0 * inf; near[a] is the row of node->box holding the entry plane of axis a. */
+/* Per-ray traversal data. The inverse direction (FLT_MAX for a zero component) is clamped to
+   +-FLT_MAX, so that no slab product is 0 * inf; near[a] is the row of node->box holding the
+   entry plane of axis a. */
 typedef struct pt__trav {
     const pt__rayctx *rc;
-    float o[3], inv[3];
     int near_row[3];      /* the far plane is in row near_row ^ 1 */
     int kx, ky, kz;
 #ifdef PT__SSE
     __m128 o4[3], inv4[3], d4[3];
     __m128 ok4[3], s4[3]; /* watertight test: origin and shear in the permuted axes */
+#else
+    float o[3], inv[3];
 #endif
 } pt__trav;
 
 static PT__HOT void pt__trav_init(pt__trav *tv, const pt__rayctx *rc)
 {
-    int a;
     tv->rc = rc;
-    tv->o[0] = rc->o.x; tv->o[1] = rc->o.y; tv->o[2] = rc->o.z;
-    tv->inv[0] = rc->inv_d.x; tv->inv[1] = rc->inv_d.y; tv->inv[2] = rc->inv_d.z;
     tv->kx = rc->kx; tv->ky = rc->ky; tv->kz = rc->kz;
-    for (a = 0; a < 3; ++a) {
-        if (!(fabsf(tv->inv[a]) <= FLT_MAX)) tv->inv[a] = copysignf(FLT_MAX, tv->inv[a]);
-        tv->near_row[a] = 2 * a + (tv->inv[a] < 0.0f);
-    }
 #ifdef PT__SSE
-    for (a = 0; a < 3; ++a) {
-        tv->o4[a] = _mm_set1_ps(tv->o[a]);
-        tv->inv4[a] = _mm_set1_ps(tv->inv[a]);
+    {
+        /* the scalar branch's values, three axes at once (no division by zero: FE_DIVBYZERO
+           traps in make fptrap-test) */
+        const __m128 one = _mm_set1_ps(1.0f), big = _mm_set1_ps(FLT_MAX), sign = _mm_set1_ps(-0.0f);
+        __m128 o = _mm_set_ps(0.0f, rc->o.z, rc->o.y, rc->o.x), d = _mm_set_ps(1.0f, rc->d.z, rc->d.y, rc->d.x);
+        __m128 zero_d = _mm_cmpeq_ps(d, _mm_setzero_ps()), inv, finite;
+        int neg;
+        inv = _mm_div_ps(one, _mm_or_ps(_mm_and_ps(zero_d, one), _mm_andnot_ps(zero_d, d)));
+        inv = _mm_or_ps(_mm_and_ps(zero_d, big), _mm_andnot_ps(zero_d, inv));
+        finite = _mm_cmple_ps(_mm_andnot_ps(sign, inv), big); /* false for inf and NaN */
+        inv = _mm_or_ps(_mm_and_ps(finite, inv), _mm_andnot_ps(finite, _mm_or_ps(_mm_and_ps(sign, inv), big)));
+        neg = _mm_movemask_ps(_mm_cmplt_ps(inv, _mm_setzero_ps()));
+        tv->near_row[0] = neg & 1; tv->near_row[1] = 2 + ((neg >> 1) & 1); tv->near_row[2] = 4 + ((neg >> 2) & 1);
+        tv->o4[0] = _mm_shuffle_ps(o, o, _MM_SHUFFLE(0, 0, 0, 0));
+        tv->o4[1] = _mm_shuffle_ps(o, o, _MM_SHUFFLE(1, 1, 1, 1));
+        tv->o4[2] = _mm_shuffle_ps(o, o, _MM_SHUFFLE(2, 2, 2, 2));
+        tv->inv4[0] = _mm_shuffle_ps(inv, inv, _MM_SHUFFLE(0, 0, 0, 0));
+        tv->inv4[1] = _mm_shuffle_ps(inv, inv, _MM_SHUFFLE(1, 1, 1, 1));
+        tv->inv4[2] = _mm_shuffle_ps(inv, inv, _MM_SHUFFLE(2, 2, 2, 2));
+        tv->d4[0] = _mm_shuffle_ps(d, d, _MM_SHUFFLE(0, 0, 0, 0));
+        tv->d4[1] = _mm_shuffle_ps(d, d, _MM_SHUFFLE(1, 1, 1, 1));
+        tv->d4[2] = _mm_shuffle_ps(d, d, _MM_SHUFFLE(2, 2, 2, 2));
     }
-    tv->d4[0] = _mm_set1_ps(rc->d.x);
-    tv->d4[1] = _mm_set1_ps(rc->d.y);
-    tv->d4[2] = _mm_set1_ps(rc->d.z);
-    tv->ok4[0] = _mm_set1_ps(tv->o[rc->kx]);
-    tv->ok4[1] = _mm_set1_ps(tv->o[rc->ky]);
-    tv->ok4[2] = _mm_set1_ps(tv->o[rc->kz]);
-    tv->s4[0] = _mm_set1_ps(rc->sx);
-    tv->s4[1] = _mm_set1_ps(rc->sy);
-    tv->s4[2] = _mm_set1_ps(rc->sz);
+    if (rc->triangles) {
+        const float *o = &rc->o.x;
+        tv->ok4[0] = _mm_set1_ps(o[rc->kx]);
+        tv->ok4[1] = _mm_set1_ps(o[rc->ky]);
+        tv->ok4[2] = _mm_set1_ps(o[rc->kz]);
+        tv->s4[0] = _mm_set1_ps(rc->sx);
+        tv->s4[1] = _mm_set1_ps(rc->sy);
+        tv->s4[2] = _mm_set1_ps(rc->sz);
+    } else { /* no triangle blocks in the scene */
+        tv->ok4[0] = tv->ok4[1] = tv->ok4[2] = tv->s4[0] = tv->s4[1] = tv->s4[2] = _mm_setzero_ps();
+    }
+#else
+    {
+        int a;
+        const float d[3] = { rc->d.x, rc->d.y, rc->d.z };
+        tv->o[0] = rc->o.x; tv->o[1] = rc->o.y; tv->o[2] = rc->o.z;
+        for (a = 0; a < 3; ++a) {
+            tv->inv[a] = d[a] != 0.0f ? 1.0f / d[a] : FLT_MAX;
+            if (!(fabsf(tv->inv[a]) <= FLT_MAX)) tv->inv[a] = copysignf(FLT_MAX, tv->inv[a]);
+            tv->near_row[a] = 2 * a + (tv->inv[a] < 0.0f);
+        }
+    }
 #endif
 }
 
@@ -3522,7 +3549,7 @@ static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt
             __m128 far_out = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(a, _mm_sub_ps(zero, ta)), _mm_cmpgt_ps(a, _mm_add_ps(one, ta))),
                                        _mm_or_ps(_mm_cmplt_ps(bb, _mm_sub_ps(zero, tb)), _mm_cmpgt_ps(bb, _mm_add_ps(one, tb))));
             edge &= ~_mm_movemask_ps(far_out);
-            for (lane = 0; lane < 4; ++lane) {
+            for (lane = 0; edge && lane < 4; ++lane) {
                 float tq;
                 if (!(edge & (1 << lane))) continue;
                 if (pt__hit_quad(tv->rc, &s->prims[q->prim[lane]], tmax, &tq)) { bits |= 1 << lane; ts[lane] = tq; }
