@@ -1314,6 +1314,8 @@ typedef struct pt__prim {
     pt_vec3 n;        /* quad, triangle: unit geometric normal */
     pt_vec3 w;        /* quad: v x w0 and ... */
     pt_vec3 w2;       /* ... w0 x u, with w0 = n'/(n'.n'), n' = u x v: a = h.w, b = h.w2 */
+    pt_vec3 mag;      /* set at commit (pt__prim_cache): per-axis magnitude (pt__prim_magnitude) */
+    float inset[2];   /* set at commit, quad: how far inside [0, 1] pt__fill_hit keeps a and b */
     uint32_t id;      /* public primitive index */
     int32_t material;
     int32_t light;    /* index into scene->lights, or -1 */
@@ -2357,6 +2359,12 @@ static PT__HOT int pt__hit_prim(const pt__rayctx *rc, const pt__prim *p, float t
    leave a 1e-6 scene altogether (pt_offset_ray_origin_scaled). */
 static float pt__prim_magnitude(const pt__prim *p, pt_vec3 n)
 {
+    return fabsf(n.x) * p->mag.x + fabsf(n.y) * p->mag.y + fabsf(n.z) * p->mag.z;
+}
+/* What pt__fill_hit needs per primitive, computed once at commit: m_i of pt__prim_magnitude
+   and a quad's insets (see pt__fill_hit). */
+static void pt__prim_cache(pt__prim *p)
+{
     pt_vec3 m;
     if (p->type == PT__PRIM_SPHERE) {
         float r = p->p1.x;
@@ -2369,7 +2377,13 @@ static float pt__prim_magnitude(const pt__prim *p, pt_vec3 n)
                   pt__maxf(fabsf(p->p0.y), pt__maxf(fabsf(p->p1.y), fabsf(p->p2.y))),
                   pt__maxf(fabsf(p->p0.z), pt__maxf(fabsf(p->p1.z), fabsf(p->p2.z))));
     }
-    return fabsf(n.x) * m.x + fabsf(n.y) * m.y + fabsf(n.z) * m.z;
+    p->mag = m;
+    p->inset[0] = p->inset[1] = 0.0f;
+    if (p->type == PT__PRIM_QUAD) {
+        float mq = pt__vmaxabs(p->p0), mu = pt__vmaxabs(p->p1), mv = pt__vmaxabs(p->p2);
+        p->inset[0] = pt__minf(0.5f, 4.0f * FLT_EPSILON * (mq + mu) / mu);
+        p->inset[1] = pt__minf(0.5f, 4.0f * FLT_EPSILON * (mq + mv) / mv);
+    }
 }
 
 /* Fills a public hit record for primitive p hit at t. */
@@ -2398,9 +2412,7 @@ static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float
            corner) lies in that face's plane, where a ray leaving into it finds t = 0, no hit,
            and leaves the room */
         pt_vec3 hq = pt_sub(pt_ray_at(ray, t), p->p0);
-        float mq = pt__vmaxabs(p->p0), mu = pt__vmaxabs(p->p1), mv = pt__vmaxabs(p->p2);
-        float ea = pt__minf(0.5f, 4.0f * FLT_EPSILON * (mq + mu) / mu);
-        float eb = pt__minf(0.5f, 4.0f * FLT_EPSILON * (mq + mv) / mv);
+        float ea = p->inset[0], eb = p->inset[1]; /* min(0.5, 4 eps (max|Q_i| + max|u_i|) / max|u_i|), v alike */
         float a = pt__minf(1.0f - ea, pt__maxf(ea, pt_dot(hq, p->w)));
         float b = pt__minf(1.0f - eb, pt__maxf(eb, pt_dot(hq, p->w2)));
         h->point = pt_madd(pt_madd(p->p0, p->p1, a), p->p2, b);
@@ -4223,6 +4235,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
     s->lights = NULL;
     s->light_count = 0;
     for (i = 0; i < s->prim_count; ++i) {
+        pt__prim_cache(&s->prims[i]);
         s->prims[i].light = -1;
         if (s->mats[s->prims[i].material].emits) nl++;
     }
