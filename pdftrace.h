@@ -3658,11 +3658,13 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
             for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__leaf16)) {
                 const pt__leaf16 *q = (const pt__leaf16 *)(const void *)blk;
                 for (lane = 0; lane < 4 && (lane == 0 || q->u[lane] != q->u[0]); ++lane) { /* to the padding */
-                    float t, bb[3] = {0.0f, 0.0f, 0.0f};
-                    if (pt__hit_prim(rc, &s->prims[q->u[lane]], tmax, &t, bb)) {
+                    const pt__prim *p = &s->prims[q->u[lane]];
+                    float t;
+                    PT_ASSERT(p->type == PT__PRIM_SPHERE); /* the only other kind */
+                    if (pt__hit_sphere(rc, p->p0, p->p1.x, tmax, &t)) {
                         tmax = t;
                         *prim = q->u[lane];
-                        bary[0] = bb[0]; bary[1] = bb[1]; bary[2] = bb[2];
+                        bary[0] = bary[1] = bary[2] = 0.0f;
                         found = 1;
                     }
                 }
@@ -3720,8 +3722,10 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
             for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__leaf16)) {
                 const pt__leaf16 *q = (const pt__leaf16 *)(const void *)blk;
                 for (lane = 0; lane < 4 && (lane == 0 || q->u[lane] != q->u[0]); ++lane) { /* to the padding */
-                    float t, bb[3];
-                    if (pt__hit_prim(rc, &s->prims[q->u[lane]], tmax, &t, bb)) return 1;
+                    const pt__prim *p = &s->prims[q->u[lane]];
+                    float t;
+                    PT_ASSERT(p->type == PT__PRIM_SPHERE); /* the only other kind */
+                    if (pt__hit_sphere(rc, p->p0, p->p1.x, tmax, &t)) return 1;
                 }
             }
         }
