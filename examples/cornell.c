@@ -141,8 +141,8 @@ static void usage(FILE *f)
         "      --adaptive-check N    re-check the blocks every N passes (default 1)\n"
         "      --disable-skips L force the general path for the scene-feature skips in the\n"
         "                        comma-separated list L, or 'all': no-emitters, delta-vertex,\n"
-        "                        facing-away, no-textures, no-triangles, zero-bsdf-shadow\n"
-        "                        (for benchmarks; the image is the same in\n"
+        "                        facing-away, no-textures, zero-bsdf-shadow (for\n"
+        "                        benchmarks; the image is the same in\n"
         "                        expectation)\n"
         "      --help            show this help and exit\n"
         "\n"
@@ -226,7 +226,7 @@ static int parse_threshold(const char *opt, const char *text, float *out)
 static const struct { const char *name; unsigned bit; } skip_names[] = {
     { "no-emitters", PT_SKIP_NO_EMITTERS },   { "delta-vertex", PT_SKIP_DELTA_VERTEX },
     { "facing-away", PT_SKIP_FACING_AWAY },   { "no-textures", PT_SKIP_NO_TEXTURES },
-    { "no-triangles", PT_SKIP_NO_TRIANGLES }, { "zero-bsdf-shadow", PT_SKIP_ZERO_BSDF_SHADOW }
+    { "zero-bsdf-shadow", PT_SKIP_ZERO_BSDF_SHADOW }
 };
 
 /* "all" or a comma-separated list of the names above. */

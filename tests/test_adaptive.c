@@ -364,11 +364,12 @@ static void invalid_settings(test_ctx *t)
     pt_scene *s = room_scene(&d, 8, 8, 4);
     pt_film f;
     int k, i;
-    const char *names[8] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
-                             "check_passes -1", "disable_skips removed bit 1u << 1", "disable_skips ~0" };
+    const char *names[9] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
+                             "check_passes -1", "disable_skips removed bit 1u << 1", "disable_skips ~0",
+                             "disable_skips removed bit 1u << 5" };
     if (!CHECK(t, s != NULL, "scene")) return;
     if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); return; }
-    for (k = 0; k < 8; k++) {
+    for (k = 0; k < 9; k++) {
         pt_render_desc e = d;
         pt_render_stats st;
         int rc, touched = 0;
@@ -381,6 +382,7 @@ static void invalid_settings(test_ctx *t)
         if (k == 5) e.adaptive_check_passes = -1;
         if (k == 6) e.disable_skips = 1u << 1; /* was PT_SKIP_LIGHT_SELECTION, removed */
         if (k == 7) e.disable_skips = ~0u;
+        if (k == 8) e.disable_skips = 1u << 5; /* was PT_SKIP_NO_TRIANGLES, removed */
         rc = pt_render(s, &e, &f, &st);
         for (i = 0; i < 64; i++) touched += f.count[i] != 0;
         CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "%s: pt_render returned %d", names[k], rc);
@@ -430,23 +432,23 @@ static void skip_case(test_ctx *t, const pt_scene *s, const pt_render_desc *d, u
 
 static void skips_exact(test_ctx *t)
 {
-    /* Untextured albedo, no triangles, zero-BSDF shadow rays: the general path changes no random
-       number, so the films are bit-identical (MIS and mixture). */
+    /* Untextured albedo, zero-BSDF shadow rays: the general path changes no random number, so
+       the films are bit-identical (MIS and mixture). */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 24, 20, 8);
     double worst = 0;
-    static const unsigned bits[3] = { PT_SKIP_NO_TEXTURES, PT_SKIP_NO_TRIANGLES, PT_SKIP_ZERO_BSDF_SHADOW };
-    static const char *names[3] = { "no textures", "no triangles", "zero-BSDF shadow" };
+    static const unsigned bits[2] = { PT_SKIP_NO_TEXTURES, PT_SKIP_ZERO_BSDF_SHADOW };
+    static const char *names[2] = { "no textures", "zero-BSDF shadow" };
     int k, strat;
     if (!CHECK(t, s != NULL, "scene")) return;
     for (strat = 0; strat < 2; strat++)
-        for (k = 0; k < 3; k++) {
+        for (k = 0; k < 2; k++) {
             char what[96];
             d.strategy = strat ? PT_STRATEGY_MIXTURE : PT_STRATEGY_MIS;
             snprintf(what, sizeof what, "%s (%s)", names[k], strat ? "mixture" : "MIS");
             skip_case(t, s, &d, bits[k], 1, what, &worst);
         }
-    test_note(t, "6 pairs of films bit-identical");
+    test_note(t, "4 pairs of films bit-identical");
     pt_scene_destroy(s);
 }
 
