@@ -1375,7 +1375,7 @@ typedef struct pt__node4 {
     uint32_t pad[4];  /* 128 bytes: two cache lines */
 } pt__node4;
 typedef struct pt__leaf16 {
-    uint32_t u[4];    /* leaf header: triangle, quad, other blocks, 0 | other block: primitive indices */
+    uint32_t u[4];    /* leaf header: triangle, quad, sphere blocks, 0 */
 } pt__leaf16;
 typedef struct pt__tri4 {
     float v[9][4];    /* v[3 * vertex + axis][lane] */
@@ -1386,6 +1386,10 @@ typedef struct pt__quad4 {
                          largest a and b margins pt__hit_quad can accept (pt__quad_edge_caps) */
     uint32_t prim[4];
 } pt__quad4;
+typedef struct pt__sphere4 {
+    float v[4][4];    /* centre x, y, z, radius, then lane */
+    uint32_t prim[4];
+} pt__sphere4;
 
 struct pt_scene {
     pt__prim *prims;
@@ -3135,10 +3139,10 @@ static void pt__leaf_kinds(const pt__bvh_build *b, const pt__bnode *leaf, uint32
     }
 }
 /* Size of a leaf in the pool, in 16-byte units: a header, then triangle blocks (10 units),
-   quad blocks (15) and blocks of other primitive indices (1). */
+   quad blocks (15) and sphere blocks (5; spheres are the only other kind). */
 static size_t pt__leaf_units(uint32_t tri, uint32_t quad, uint32_t other)
 {
-    return 1u + 10u * (size_t)((tri + 3u) / 4u) + 15u * (size_t)((quad + 3u) / 4u) + (size_t)((other + 3u) / 4u);
+    return 1u + 10u * (size_t)((tri + 3u) / 4u) + 15u * (size_t)((quad + 3u) / 4u) + 5u * (size_t)((other + 3u) / 4u);
 }
 
 /* Writes a binary leaf into the pool (its primitives reordered: triangles, quads, others) and
@@ -3185,9 +3189,15 @@ static uint32_t pt__emit_leaf(pt__bvh_build *b, const pt__bnode *leaf)
             q->prim[lane] = begin + k;
         }
     }
-    for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__leaf16)) {
-        pt__leaf16 *q = (pt__leaf16 *)(void *)blk;
-        for (lane = 0; lane < 4; ++lane) q->u[lane] = begin + nt + nq + 4u * j + (4u * j + lane < no ? lane : 0u);
+    for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
+        pt__sphere4 *q = (pt__sphere4 *)(void *)blk;
+        for (lane = 0; lane < 4; ++lane) {
+            uint32_t k = nt + nq + 4u * j + (4u * j + lane < no ? lane : 0u);
+            const pt__prim *p = &b->prims[b->idx[begin + k]];
+            PT_ASSERT(p->type == PT__PRIM_SPHERE);
+            q->v[0][lane] = p->p0.x; q->v[1][lane] = p->p0.y; q->v[2][lane] = p->p0.z; q->v[3][lane] = p->p1.x;
+            q->prim[lane] = begin + k;
+        }
     }
     b->pool_used += pt__leaf_units(nt, nq, no);
     PT_ASSERT((size_t)(blk - (char *)h) == 16u * pt__leaf_units(nt, nq, no));
@@ -3589,6 +3599,81 @@ static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt
     return best;
 }
 
+/* The spheres of a block (pt__hit_sphere's operations, four lanes at a time; lanes of tiny or
+   distant spheres, which pt__hit_sphere decides in double, go to it): returns the lane of the
+   nearest hit with 0 < t < tmax (lowest lane at a tie), or -1. Blocks are padded with copies of
+   lane 0. */
+static PT__HOT int pt__sphere4_hit(const pt__trav *tv, const pt__sphere4 *q, float tmax, float *t_out, int any)
+{
+    const pt__rayctx *rc = tv->rc;
+    int lane, best = -1;
+    float best_t = tmax;
+#ifdef PT__SSE
+    float a = pt_dot(rc->d, rc->d), ts[4];
+    __m128 zero = _mm_setzero_ps(), sign = _mm_set1_ps(-0.0f), a4, cx, cy, cz, r, fx, fy, fz, bp, ff, rr, k, lx, ly, lz;
+    __m128 ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t;
+    int bits, tiny;
+    if (q->prim[1] == q->prim[0]) { /* a single sphere: the scalar test is cheaper */
+        if (!pt__hit_sphere(rc, pt_v3(q->v[0][0], q->v[1][0], q->v[2][0]), q->v[3][0], tmax, t_out)) return -1;
+        return 0;
+    }
+    if (!(a > 0.0f)) return -1; /* as every lane's scalar test */
+    a4 = _mm_set1_ps(a);
+    cx = _mm_loadu_ps(q->v[0]); cy = _mm_loadu_ps(q->v[1]); cz = _mm_loadu_ps(q->v[2]); r = _mm_loadu_ps(q->v[3]);
+    fx = _mm_sub_ps(tv->o4[0], cx); fy = _mm_sub_ps(tv->o4[1], cy); fz = _mm_sub_ps(tv->o4[2], cz);
+    bp = _mm_xor_ps(sign, _mm_add_ps(_mm_add_ps(_mm_mul_ps(fx, tv->d4[0]), _mm_mul_ps(fy, tv->d4[1])),
+                                     _mm_mul_ps(fz, tv->d4[2])));
+    ff = _mm_add_ps(_mm_add_ps(_mm_mul_ps(fx, fx), _mm_mul_ps(fy, fy)), _mm_mul_ps(fz, fz));
+    rr = _mm_mul_ps(r, r);
+    tiny = _mm_movemask_ps(_mm_cmplt_ps(rr, _mm_mul_ps(_mm_set1_ps(1e-6f), ff)));
+    k = _mm_div_ps(bp, a4);
+    lx = _mm_add_ps(fx, _mm_mul_ps(tv->d4[0], k));
+    ly = _mm_add_ps(fy, _mm_mul_ps(tv->d4[1], k));
+    lz = _mm_add_ps(fz, _mm_mul_ps(tv->d4[2], k));
+    ll = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(lx, lx), _mm_mul_ps(ly, ly)), _mm_mul_ps(lz, lz)));
+    disc = _mm_mul_ps(_mm_mul_ps(a4, _mm_sub_ps(r, ll)), _mm_add_ps(r, ll));
+    ok = _mm_andnot_ps(_mm_cmplt_ps(disc, zero), _mm_castsi128_ps(_mm_set1_epi32(-1)));
+    cc = _mm_sub_ps(ff, rr);
+    sq = _mm_sqrt_ps(_mm_and_ps(ok, disc)); /* no square root of a negative: FE_INVALID traps */
+    qq = _mm_add_ps(bp, _mm_or_ps(_mm_andnot_ps(sign, sq), _mm_and_ps(sign, bp)));
+    ok = _mm_andnot_ps(_mm_cmpeq_ps(qq, zero), ok);
+    qd = _mm_or_ps(_mm_and_ps(ok, qq), _mm_andnot_ps(ok, _mm_set1_ps(1.0f)));
+    t0 = _mm_div_ps(cc, qd);
+    t1 = _mm_div_ps(qq, a4);
+    sw = _mm_cmpgt_ps(t0, t1); /* if (t0 > t1) swap */
+    lo = _mm_or_ps(_mm_and_ps(sw, t1), _mm_andnot_ps(sw, t0));
+    hi = _mm_or_ps(_mm_and_ps(sw, t0), _mm_andnot_ps(sw, t1));
+    h0 = _mm_and_ps(_mm_cmpgt_ps(lo, zero), _mm_cmplt_ps(lo, _mm_set1_ps(tmax)));
+    h1 = _mm_and_ps(_mm_cmpgt_ps(hi, zero), _mm_cmplt_ps(hi, _mm_set1_ps(tmax)));
+    t = _mm_or_ps(_mm_and_ps(h0, lo), _mm_andnot_ps(h0, hi));
+    bits = _mm_movemask_ps(_mm_and_ps(ok, _mm_or_ps(h0, h1))) & ~tiny;
+    if (!bits && !tiny) return -1;
+    if (any && bits) return pt__lowest_bit[bits];
+    _mm_storeu_ps(ts, t);
+    for (lane = 0; lane < 4 && (lane == 0 || q->prim[lane] != q->prim[0]); ++lane) { /* to the padding */
+        if (tiny & (1 << lane)) {
+            float tz;
+            if (pt__hit_sphere(rc, pt_v3(q->v[0][lane], q->v[1][lane], q->v[2][lane]), q->v[3][lane], best_t, &tz)) {
+                if (any) return lane;
+                best_t = tz; best = lane;
+            }
+        } else if ((bits & (1 << lane)) && ts[lane] < best_t) {
+            best_t = ts[lane]; best = lane;
+        }
+    }
+#else
+    for (lane = 0; lane < 4 && (lane == 0 || q->prim[lane] != q->prim[0]); ++lane) { /* to the padding */
+        float t;
+        if (pt__hit_sphere(rc, pt_v3(q->v[0][lane], q->v[1][lane], q->v[2][lane]), q->v[3][lane], best_t, &t)) {
+            if (any) return lane;
+            best_t = t; best = lane;
+        }
+    }
+#endif
+    if (best >= 0) *t_out = best_t;
+    return best;
+}
+
 /* Closest hit: returns 1 and the primitive index (into s->prims), t and barycentrics. */
 static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
                            float *bary)
@@ -3643,7 +3728,7 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
         } else {
             const pt__leaf16 *h = &s->pool[ref & PT__BVH_OFFSET_MASK];
             const char *blk = (const char *)(h + 1);
-            uint32_t j, lane;
+            uint32_t j;
             for (j = 0; j < h->u[0]; ++j, blk += sizeof(pt__tri4)) {
                 const pt__tri4 *q = (const pt__tri4 *)(const void *)blk;
                 float t;
@@ -3656,19 +3741,11 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
                 int l = pt__quad4_hit(&tv, s, q, tmax, &t, 0);
                 if (l >= 0) { tmax = t; *prim = q->prim[l]; found = 1; }
             }
-            for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__leaf16)) {
-                const pt__leaf16 *q = (const pt__leaf16 *)(const void *)blk;
-                for (lane = 0; lane < 4 && (lane == 0 || q->u[lane] != q->u[0]); ++lane) { /* to the padding */
-                    const pt__prim *p = &s->prims[q->u[lane]];
-                    float t;
-                    PT_ASSERT(p->type == PT__PRIM_SPHERE); /* the only other kind */
-                    if (pt__hit_sphere(rc, p->p0, p->p1.x, tmax, &t)) {
-                        tmax = t;
-                        *prim = q->u[lane];
-                        bary[0] = bary[1] = bary[2] = 0.0f;
-                        found = 1;
-                    }
-                }
+            for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
+                const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
+                float t;
+                int l = pt__sphere4_hit(&tv, q, tmax, &t, 0);
+                if (l >= 0) { tmax = t; *prim = q->prim[l]; bary[0] = bary[1] = bary[2] = 0.0f; found = 1; }
             }
         }
         /* next: the nearest stacked node still in front of the closest hit */
@@ -3711,7 +3788,7 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
         } else {
             const pt__leaf16 *h = &s->pool[ref & PT__BVH_OFFSET_MASK];
             const char *blk = (const char *)(h + 1);
-            uint32_t j, lane;
+            uint32_t j;
             for (j = 0; j < h->u[0]; ++j, blk += sizeof(pt__tri4)) {
                 float t, bb[3];
                 if (pt__tri4_hit(&tv, (const pt__tri4 *)(const void *)blk, tmax, &t, bb, 1) >= 0) return 1;
@@ -3720,14 +3797,9 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
                 float t;
                 if (pt__quad4_hit(&tv, s, (const pt__quad4 *)(const void *)blk, tmax, &t, 1) >= 0) return 1;
             }
-            for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__leaf16)) {
-                const pt__leaf16 *q = (const pt__leaf16 *)(const void *)blk;
-                for (lane = 0; lane < 4 && (lane == 0 || q->u[lane] != q->u[0]); ++lane) { /* to the padding */
-                    const pt__prim *p = &s->prims[q->u[lane]];
-                    float t;
-                    PT_ASSERT(p->type == PT__PRIM_SPHERE); /* the only other kind */
-                    if (pt__hit_sphere(rc, p->p0, p->p1.x, tmax, &t)) return 1;
-                }
+            for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
+                float t;
+                if (pt__sphere4_hit(&tv, (const pt__sphere4 *)(const void *)blk, tmax, &t, 1) >= 0) return 1;
             }
         }
         if (sp == 0) return 0;
