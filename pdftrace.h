@@ -2954,7 +2954,10 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
    in blocks of four, intersected together with the watertight test of Woop, Benthin & Wald
    (JCGT 2(1), 2013) and giving bit for bit the scalar test's result (lanes whose edge
    function is exactly zero go to the scalar test, which redoes it in double); quads likewise
-   in blocks of four with the scalar quad test's operations; spheres one by one.
+   in blocks of four with the scalar quad test's operations (lanes within the edge margin go
+   to the scalar test), and spheres in blocks of four with the scalar sphere test's (lanes of
+   tiny or distant spheres go to its double-precision path; a block of one sphere is tested
+   by the scalar test alone).
    Traversal (single rays) visits the hit children nearest first and keeps the others on a
    stack with their entry distances; the near plane of each slab is chosen once per ray from
    the sign of the direction. Box tests widen the exit distance by 1 + 2 gamma(3) (Ize,
