@@ -1464,9 +1464,10 @@ static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
       reversing the bits and applying a hash in which each output bit depends only on the seed
       and the bits below it (Laine & Karras, "Stratified sampling for stochastic transparency",
       EGSR 2011; Burley 2020, sec. 3), then reversing back.
-   Step 3 starts by adding a uniform 32-bit seed, and the rest is a fixed bijection, so every
-   coordinate is exactly uniform over the 2^32 binary fractions whatever k is: each sample is
-   uniform on the unit square and the estimator unbiased. Seeds come from SplitMix64 (pt__mix64). */
+   Step 3 starts by adding a uniform 32-bit seed, and the rest is a bijection fixed by seeds
+   independent of it, so every coordinate is exactly uniform over the 2^32 binary fractions
+   whatever k is: each sample is uniform on the unit square and the estimator unbiased. Seeds
+   come from SplitMix64 (pt__mix64) of (seed, pixel, set). */
 
 /* The bits of x in reverse order: bits within bytes swapped in three steps, then the bytes. */
 static uint32_t pt__reverse_bits(uint32_t x)
@@ -1482,15 +1483,17 @@ static uint32_t pt__reverse_bits(uint32_t x)
 #endif
 }
 /* A random permutation of 32-bit words in which output bit b is input bit b xor a function of the
-   seed and input bits 0..b-1: adding, multiplying by an odd number and x ^= x * (an even number)
+   seeds and input bits 0..b-1: adding, multiplying by an odd number and x ^= x * (an even number)
    each have that form, and so has their composition (Laine & Karras 2011). Applied to reversed
-   bits it is a nested uniform (Owen) scramble of the binary fraction. The seed-dependent
-   multiplier follows Vegdahl ("Building a Better LK Hash", 2021); the even constants are ours. */
-static uint32_t pt__nested_hash(uint32_t x, uint32_t seed)
+   bits it is a nested uniform (Owen) scramble of the binary fraction. The multiplier is a second,
+   independent seed (a seed-dependent multiply mixes better: Vegdahl, "Building a Better LK Hash",
+   2021); the even constants are ours. For a uniform `add` the result is exactly uniform whatever
+   x and `mul` are: x + add is uniform and the rest is a bijection fixed by `mul`. */
+static uint32_t pt__nested_hash(uint32_t x, uint32_t add, uint32_t mul)
 {
-    x += seed;
+    x += add;
     x ^= x * 0xf9b439fcu;
-    x *= (seed >> 16) | 1u;
+    x *= mul | 1u;
     x ^= x * 0x91d93080u;
     x ^= x * 0x8142c8eau;
     return x;
@@ -1519,16 +1522,18 @@ static float pt__fraction_float(uint32_t x) { return (float)(x >> 8) * (1.0f / 1
 /* dims (1 or 2) coordinates of pt_sobol_scrambled, from the reversed index. */
 static void pt__sobol_point(uint32_t index_reversed, uint64_t seed, int dims, float *u)
 {
-    uint64_t h = pt__mix64(seed);
+    /* seeds: h1 = (shuffle, x0's addend), h2 = (x1's addend, x0's and x1's multipliers) */
+    uint64_t h1 = pt__mix64(seed), h2 = pt__mix64(h1 ^ 0x2545f4914f6cdd1dULL);
+    uint32_t s_shuffle = (uint32_t)h1;
     /* 1. shuffle: the index's low 16 bits are the top 16 of index_reversed */
-    uint32_t r = (pt__nested_hash(index_reversed, (uint32_t)h) & 0xffff0000u) | (index_reversed & 0x0000ffffu);
+    uint32_t r = (pt__nested_hash(index_reversed, s_shuffle, s_shuffle >> 15) & 0xffff0000u) |
+                 (index_reversed & 0x0000ffffu);
     uint32_t k = pt__reverse_bits(r);
     /* 2 and 3, x0: van der Corput's fraction is reverse(k), so its reversal is k itself */
-    u[0] = pt__fraction_float(pt__reverse_bits(pt__nested_hash(k, (uint32_t)(h >> 32))));
-    if (dims > 1) {
-        uint32_t s1 = (uint32_t)pt__mix64(h ^ 0x2545f4914f6cdd1dULL);
-        u[1] = pt__fraction_float(pt__reverse_bits(pt__nested_hash(pt__sobol1_reversed(k), s1)));
-    }
+    u[0] = pt__fraction_float(pt__reverse_bits(pt__nested_hash(k, (uint32_t)(h1 >> 32), (uint32_t)(h2 >> 48))));
+    if (dims > 1)
+        u[1] = pt__fraction_float(pt__reverse_bits(pt__nested_hash(pt__sobol1_reversed(k), (uint32_t)h2,
+                                                                   (uint32_t)(h2 >> 32) & 0xffffu)));
 }
 PTDEF void pt_sobol_scrambled(uint32_t index, uint64_t seed, float u[2])
 {
