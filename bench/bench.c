@@ -419,8 +419,9 @@ typedef struct results {
 } results;
 
 /* Renders a progressive series into one film: 1, 2, 4, ... spp. With levels_fixed > 0 renders
-   exactly that many levels; otherwise until the cumulative time reaches budget or the raw
-   relMSE comes within FLOOR_STOP x floor, and returns the count in *levels. */
+   exactly that many levels; otherwise until the cumulative time reaches budget or (when
+   *by_floor is 1 on entry) the raw relMSE comes within FLOOR_STOP x floor, and returns the
+   count in *levels. On return *by_floor says whether the floor stopped it. */
 static int run_series(const loaded *L, const bench_strategy *bst, uint64_t seed, int levels_fixed, double budget,
                       point *pts, int *levels, uint64_t *nonfinite, int *by_floor)
 {
@@ -428,7 +429,7 @@ static int run_series(const loaded *L, const bench_strategy *bst, uint64_t seed,
     pt_image img = {0, 0, NULL};
     pt_render_desc d = L->rd;
     double t = 0, samples = 0, rays = 0;
-    int k, spp_done = 0, ok = 1;
+    int k, spp_done = 0, ok = 1, floor_stop = *by_floor;
     if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
     d.strategy = bst->strategy;
     d.light_weight = bst->light_weight;
@@ -464,7 +465,7 @@ static int run_series(const loaded *L, const bench_strategy *bst, uint64_t seed,
             if (k + 1 >= levels_fixed) break;
         } else if (t >= budget) {
             break;
-        } else if (pts[k].relmse < FLOOR_STOP * L->floor) {
+        } else if (floor_stop && pts[k].relmse < FLOOR_STOP * L->floor) {
             *by_floor = 1;
             break;
         }
@@ -611,7 +612,7 @@ static int run_all_series(const config *cfg, results *R)
             if (!R->done[i]) continue;
             for (j = 0; j < STRATEGY_COUNT; ++j) {
                 series *s = &R->s[i][j];
-                int by_floor = 0;
+                int by_floor = 1; /* the runs stop at the reference's noise floor */
                 if (!run_series(&R->L[i], &strategies[j], (uint64_t)(seed + 1), seed == 0 ? 0 : s->levels, cfg->budget,
                                 s->seed[seed], &s->levels, &s->nonfinite, &by_floor))
                     return 0;
@@ -827,7 +828,7 @@ static int run_pov(const config *cfg, results *R, pov_results *P)
             for (seed = 0; seed < cfg->seeds; ++seed)
                 for (c = 0; c < POV_PT_CONFIGS; ++c) {
                     series *e = &P->equal_time[i][c];
-                    int by_floor = 0;
+                    int by_floor = 0; /* no floor stop: the series must reach the slowest level's time */
                     if (P->config_strategy[c] < 0) continue;
                     if (!run_series(&R->L[i], &strategies[P->config_strategy[c]], (uint64_t)(seed + 1),
                                     seed == 0 ? 0 : e->levels, 1.05 * tmax, e->seed[seed], &e->levels, &e->nonfinite,
