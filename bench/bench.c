@@ -1843,7 +1843,9 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
                    "whose contribution is multiplied by zero), so their error per sample is the same and the time ratio "
                    "decides; *estimator* skips change how the path is sampled (the general path keeps a mixture "
                    "component whose samples fail and end the path: shorter paths, more variance), so the time at equal "
-                   "error decides. A skip **pays** when the upper end of its deciding ratio's interval is below 1.\n\n"
+                   "error decides. (For the other skips the equal-error column is only a check: with the same estimator "
+                   "its relMSE ratio is noise around 1, and on scenes with caustics, whose rare bright paths make relMSE "
+                   "heavy-tailed, the bootstrap interval is optimistic.) A skip **pays** when the upper end of its deciding ratio's interval is below 1.\n\n"
                    "| skip | scene | strategy | kind | what it skips | spp | reps | CPU s specialised / general | time ratio "
                    "[95 %%] | equal-error ratio [95 %%] | verdict | images differ by |\n"
                    "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
