@@ -15,7 +15,8 @@ plot 'cornell.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 titl
      'cornell.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'cornell.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'cornell.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'cornell.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'cornell.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'cornell.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 reset
 set output 'tiny-light.png'
 set title 'tiny-light (128x128, median of seeds)'
@@ -32,7 +33,8 @@ plot 'tiny-light.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 t
      'tiny-light.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'tiny-light.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'tiny-light.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'tiny-light.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 reset
 set output 'tiny-light-pure.png'
 set title 'tiny-light-pure (128x128, median of seeds)'
@@ -49,7 +51,8 @@ plot 'tiny-light-pure.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' p
      'tiny-light-pure.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'tiny-light-pure.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light-pure.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'tiny-light-pure.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light-pure.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'tiny-light-pure.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 reset
 set output 'metal-glass.png'
 set title 'metal-glass (128x128, median of seeds)'
@@ -66,7 +69,8 @@ plot 'metal-glass.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'metal-glass.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'metal-glass.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'metal-glass.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'metal-glass.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'metal-glass.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'metal-glass.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 reset
 set output 'many-lights.png'
 set title 'many-lights (128x128, median of seeds)'
@@ -83,7 +87,8 @@ plot 'many-lights.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'many-lights.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'many-lights.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'many-lights.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'many-lights.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'many-lights.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'many-lights.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 reset
 set output 'adaptive.png'
 set title 'cornell: adaptive vs uniform sampling (MIS)'
@@ -113,7 +118,8 @@ plot 'cornell.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 titl
      'cornell.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'cornell.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'cornell.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'cornell.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'cornell.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'cornell.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 set title 'tiny-light (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -128,7 +134,8 @@ plot 'tiny-light.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 t
      'tiny-light.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'tiny-light.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'tiny-light.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'tiny-light.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 set title 'tiny-light-pure (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -143,7 +150,8 @@ plot 'tiny-light-pure.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' p
      'tiny-light-pure.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'tiny-light-pure.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light-pure.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'tiny-light-pure.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light-pure.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'tiny-light-pure.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 set title 'metal-glass (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -158,7 +166,8 @@ plot 'metal-glass.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'metal-glass.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'metal-glass.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'metal-glass.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'metal-glass.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'metal-glass.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'metal-glass.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 set title 'many-lights (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -173,7 +182,8 @@ plot 'many-lights.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'many-lights.dat' index 3 using 1:2 with linespoints lc rgb '#9467bd' pt 11 dt 2 title 'mix0.5', \
      'many-lights.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'many-lights.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
-     'many-lights.dat' index 6 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'many-lights.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
+     'many-lights.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 set title 'cornell: adaptive vs uniform (MIS)'
 plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \
      'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive'
