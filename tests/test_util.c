@@ -1137,16 +1137,20 @@ void tu_plane_render_compare(const tu_plane_scene *ps, pt_render_desc *d, double
     pt_film_free(&f);
 }
 
-int tu_add_closed_furnace(pt_scene *s)
+int tu_add_furnace_material(pt_scene *s)
 {
     pt_material_desc md;
-    int m, rc;
     memset(&md, 0, sizeof md);
     md.type = PT_MATERIAL_LAMBERTIAN;
     md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
     md.emission = pt_v3(0.5f, 0.5f, 0.5f);
     md.two_sided_emission = 1;
-    m = pt_scene_add_material(s, &md);
+    return pt_scene_add_material(s, &md);
+}
+
+int tu_add_closed_furnace(pt_scene *s)
+{
+    int m = tu_add_furnace_material(s), rc;
     if (m < 0) return m;
     rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
     return rc >= 0 ? pt_scene_commit(s) : rc;

@@ -37,6 +37,9 @@ dv3 tu_sample_cone(pt_rng *r, dv3 axis, double omc);
 /* ---- statistics ---- */
 /* The closed furnace (pbrt-v4's test): adds to s a sphere of radius 1 at the origin, Lambertian albedo
    0.5 with two-sided emission 0.5, so every point inside sees Le/(1 - rho) = 1, and commits. */
+/* The furnace material: Lambertian, albedo 0.5, two-sided emission 0.5 (inside a closed shape of
+   it the radiance is Le / (1 - albedo) = 1 everywhere). Returns its index or a negative pt_result. */
+int tu_add_furnace_material(pt_scene *s);
 int tu_add_closed_furnace(pt_scene *s);
 /* Temporary directories for the writer tests: create one under /tmp (1 on success), count its
    entries (names into list if given; -1 if it cannot be read), remove it with its contents. */

@@ -793,18 +793,12 @@ void st_light_geometry(st_ctx *c)
     for (pi = 0; pi < 4; pi++) {
         st_place pl;
         pt_scene *s = pt_scene_create();
-        pt_material_desc md;
         int m;
         char cas[64];
         pl.s = ss[pi];
         pl.off = pi == 3 ? dv(1e6, -1e6, 1e6) : dv(0, 0, 0);
         pl.name = pi == 0 ? "x1" : pi == 1 ? "x1e-6" : pi == 2 ? "x1e+6" : "x1e+3 at 1e6";
-        memset(&md, 0, sizeof md);
-        md.type = PT_MATERIAL_LAMBERTIAN;
-        md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
-        md.emission = pt_v3(0.5f, 0.5f, 0.5f);
-        md.two_sided_emission = 1;
-        m = pt_scene_add_material(s, &md);
+        m = tu_add_furnace_material(s);
         if (pt_scene_add_box(s, sp_p(&pl, -1, -1, -1), sp_p(&pl, 1, 1, 1), m) < 0 || pt_scene_commit(s) != PT_OK) {
             st_row(c, 0, "emitting box", "built", "PT_OK", "%s", pt_scene_error_message(s));
             pt_scene_destroy(s);
