@@ -1157,6 +1157,7 @@ static int pt__is_black(pt_vec3 c) { return c.x <= 0.0f && c.y <= 0.0f && c.z <=
 /* Waechter & Binder, Ray Tracing Gems ch. 6: move each coordinate by int(256 n_i) ulps in
    the direction of the normal (integer arithmetic on the float bits), or by n_i/65536 near
    the origin where ulps are too small to matter. */
+#ifndef PT__SSE
 static float pt__int_as_float(int32_t i) { float f; memcpy(&f, &i, sizeof f); return f; }
 static int32_t pt__float_as_int(float f) { int32_t i; memcpy(&i, &f, sizeof i); return i; }
 static float pt__offset_coord(float p, float n, float magnitude)
@@ -1166,7 +1167,8 @@ static float pt__offset_coord(float p, float n, float magnitude)
     float p_i = pt__int_as_float(pt__float_as_int(p) + ((p < 0.0f) ? -of_i : of_i));
     return fabsf(p) < origin ? p + float_scale * n : p_i;
 }
-PTDEF pt_vec3 pt_offset_ray_origin_scaled(pt_vec3 p, pt_vec3 n, pt_vec3 w, float magnitude)
+#endif
+static PT__HOT pt_vec3 pt__offset_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w, float magnitude)
 {
     if (pt_dot(n, w) < 0.0f) n = pt_neg(n);
     if (!(magnitude >= 0.0f) || !pt__isfinite(magnitude)) magnitude = 1.0f;
@@ -1174,10 +1176,32 @@ PTDEF pt_vec3 pt_offset_ray_origin_scaled(pt_vec3 p, pt_vec3 n, pt_vec3 w, float
        p_i = 0 towards -n_i it would build a NaN), so a coordinate at 0 must take the additive path */
     magnitude = pt__maxf(magnitude, pt__vmaxabs(p));
     if (!(magnitude > 0.0f)) magnitude = FLT_MIN;
+#ifdef PT__SSE
+    {
+        /* pt__offset_coord's operations on the three coordinates at once (the same results) */
+        const __m128 p4 = _mm_set_ps(0.0f, p.z, p.y, p.x), n4 = _mm_set_ps(0.0f, n.z, n.y, n.x);
+        const __m128 m4 = _mm_set1_ps(magnitude);
+        __m128i of = _mm_cvttps_epi32(_mm_mul_ps(_mm_set1_ps(256.0f), n4));
+        const __m128i neg = _mm_castps_si128(_mm_cmplt_ps(p4, _mm_setzero_ps()));
+        __m128 p_i, p_f, near;
+        float out[4];
+        of = _mm_sub_epi32(_mm_xor_si128(of, neg), neg); /* -of_i where p < 0 */
+        p_i = _mm_castsi128_ps(_mm_add_epi32(_mm_castps_si128(p4), of));
+        p_f = _mm_add_ps(p4, _mm_mul_ps(_mm_mul_ps(m4, _mm_set1_ps(1.0f / 65536.0f)), n4));
+        near = _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), p4), _mm_mul_ps(m4, _mm_set1_ps(1.0f / 32.0f)));
+        _mm_storeu_ps(out, _mm_or_ps(_mm_and_ps(near, p_f), _mm_andnot_ps(near, p_i)));
+        return pt_v3(out[0], out[1], out[2]);
+    }
+#else
     return pt_v3(pt__offset_coord(p.x, n.x, magnitude), pt__offset_coord(p.y, n.y, magnitude),
                  pt__offset_coord(p.z, n.z, magnitude));
+#endif
 }
-PTDEF pt_vec3 pt_offset_ray_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w) { return pt_offset_ray_origin_scaled(p, n, w, 1.0f); }
+PTDEF pt_vec3 pt_offset_ray_origin_scaled(pt_vec3 p, pt_vec3 n, pt_vec3 w, float magnitude)
+{
+    return pt__offset_origin(p, n, w, magnitude);
+}
+PTDEF pt_vec3 pt_offset_ray_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w) { return pt__offset_origin(p, n, w, 1.0f); }
 
 PTDEF pt_transform pt_transform_identity(void)
 {
@@ -1264,7 +1288,7 @@ static float pt__transform_det(const pt_transform *t)
 
 /* Duff, Burgess, Christensen, Hery, Kensler, Liani & Villemin, "Building an Orthonormal
    Basis, Revisited", JCGT 6(1), 2017: branch-free, exact at n.z = -1 thanks to copysign. */
-PTDEF pt_onb pt_onb_from_normal(pt_vec3 n)
+static PT__HOT pt_onb pt__onb(pt_vec3 n)
 {
     pt_onb b;
     float sign = copysignf(1.0f, n.z);
@@ -1275,6 +1299,7 @@ PTDEF pt_onb pt_onb_from_normal(pt_vec3 n)
     b.n = n;
     return b;
 }
+PTDEF pt_onb pt_onb_from_normal(pt_vec3 n) { return pt__onb(n); }
 
 /* PCG32 seeding as in O'Neill's reference: state = 0, inc = 2*stream+1, step, add seed, step. */
 PTDEF void pt_rng_seed(pt_rng *r, uint64_t seed, uint64_t stream)
@@ -1612,7 +1637,7 @@ static void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b)
 
 /* Concentric map of the square to the disk (Shirley & Chiu, "A Low Distortion Map Between
    Disk and Square", JGT 2(3), 1997). */
-PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y)
+static PT__HOT void pt__concentric_disk(float u1, float u2, float *x, float *y)
 {
     float sx = 2.0f * u1 - 1.0f, sy = 2.0f * u2 - 1.0f, r, th;
     if (sx == 0.0f && sy == 0.0f) { *x = 0.0f; *y = 0.0f; return; }
@@ -1621,13 +1646,15 @@ PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y)
     *x = r * cosf(th);
     *y = r * sinf(th);
 }
+PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y) { pt__concentric_disk(u1, u2, x, y); }
 /* Malley's method: project the uniform disk up to the hemisphere; density cos(theta)/pi. */
-PTDEF pt_vec3 pt_sample_cosine_hemisphere(float u1, float u2)
+static PT__HOT pt_vec3 pt__cosine_hemisphere(float u1, float u2)
 {
     float x, y;
-    pt_sample_concentric_disk(u1, u2, &x, &y);
+    pt__concentric_disk(u1, u2, &x, &y);
     return pt_v3(x, y, pt__safe_sqrt(1.0f - x * x - y * y));
 }
+PTDEF pt_vec3 pt_sample_cosine_hemisphere(float u1, float u2) { return pt__cosine_hemisphere(u1, u2); }
 /* Archimedes: z is uniform on [-1, 1] for uniform directions; density 1/(4 pi). */
 PTDEF pt_vec3 pt_sample_uniform_sphere(float u1, float u2)
 {
@@ -1678,7 +1705,7 @@ static float pt__cone_one_minus_cos(float s2)
     return s2 / (1.0f + cosmax);
 }
 static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w);
-static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided, float u1, float u2,
+static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided, float u1, float u2,
                                    pt__light_sample *ls)
 {
     pt_vec3 wc = pt_sub(c, o);
@@ -1689,7 +1716,7 @@ static int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided,
         float uc = u1 * omc;
         float cos_t = 1.0f - uc, sin2_t = uc * (2.0f - uc), sin_t = pt__safe_sqrt(sin2_t);
         float phi = 2.0f * PT__PI * u2, t;
-        pt_onb b = pt_onb_from_normal(pt_scale(wc, 1.0f / d));
+        pt_onb b = pt__onb(pt_scale(wc, 1.0f / d));
         if (!(omc > 0.0f)) return 0;
         ls->dir = pt_normalize(pt_onb_to_world(&b, pt_v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t)));
         {
@@ -2397,7 +2424,7 @@ static void pt__prim_cache(pt__prim *p)
 }
 
 /* Fills a public hit record for primitive p hit at t. */
-static void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float t, const float *bary, pt_hit *h)
+static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float t, const float *bary, pt_hit *h)
 {
     h->t = t;
     h->primitive = p->id;
@@ -2881,7 +2908,7 @@ static pt_color pt__albedo(const pt_scene *s, const pt__material *m, pt_vec3 p)
 /* A * pScatter(wi) = BRDF * cos for a non-delta material, with ns and ng the shading and
    geometric normals already flipped to the side of wo. Directions below the geometric
    surface carry nothing. */
-static pt_color pt__material_eval(const pt__material *m, pt_color albedo, pt_vec3 ns, pt_vec3 ng, pt_vec3 wo,
+static PT__HOT pt_color pt__material_eval(const pt__material *m, pt_color albedo, pt_vec3 ns, pt_vec3 ng, pt_vec3 wo,
                                   pt_vec3 wi)
 {
     if (pt_dot(ng, wi) <= 0.0f) return pt_v3(0, 0, 0);
@@ -2900,12 +2927,12 @@ static float pt__material_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo,
     if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f) return pt__fuzz_value(pt__reflect(wo, ns), m->fuzz, wi);
     return 0.0f;
 }
-static int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float u1, float u2, float u3,
+static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float u1, float u2, float u3,
                                    pt_vec3 *wi, float *pdf)
 {
     if (m->type == PT_MATERIAL_LAMBERTIAN) {
-        pt_onb b = pt_onb_from_normal(ns);
-        *wi = pt_normalize(pt_onb_to_world(&b, pt_sample_cosine_hemisphere(u1, u2)));
+        pt_onb b = pt__onb(ns);
+        *wi = pt_normalize(pt_onb_to_world(&b, pt__cosine_hemisphere(u1, u2)));
         *pdf = pt__maxf(0.0f, pt_dot(ns, *wi)) * PT__INV_PI;
         return *pdf > 0.0f;
     }
@@ -4406,7 +4433,7 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
 }
 
 /* --- lights of a scene (used by the integrator and by pt_pdf_scene_lights) --- */
-static int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
+static PT__HOT int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
                                  pt__light_sample *ls)
 {
     int two = s->mats[p->material].two_sided;
@@ -4438,7 +4465,7 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
     return lo;
 }
 /* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
-static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
+static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
                              uint32_t *light_index)
 {
     uint32_t li;
@@ -4547,19 +4574,23 @@ PTDEF int pt_camera_init(pt_camera *cam, const pt_camera_desc *d, int width, int
     cam->height = height;
     return PT_OK;
 }
-PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, float u2)
+static PT__HOT pt_ray pt__camera_ray(const pt_camera *cam, float x, float y, float u1, float u2)
 {
     pt_ray r;
     pt_vec3 target = pt_add(pt_add(cam->pixel00, pt_scale(cam->pixel_du, x)), pt_scale(cam->pixel_dv, y));
     r.origin = cam->origin;
     if (cam->lens_radius > 0.0f) {
         float lx, ly;
-        pt_sample_concentric_disk(u1, u2, &lx, &ly);
+        pt__concentric_disk(u1, u2, &lx, &ly);
         r.origin = pt_add(r.origin, pt_add(pt_scale(cam->right, lx * cam->lens_radius),
                                            pt_scale(cam->up, ly * cam->lens_radius)));
     }
     r.dir = pt_normalize(pt_sub(target, r.origin));
     return r;
+}
+PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, float u2)
+{
+    return pt__camera_ray(cam, x, y, u1, u2);
 }
 
 /* ------------------------------------------------------------------------------------------
@@ -4650,13 +4681,13 @@ typedef struct pt__vertex {
     pt_pdf guide;
 } pt__vertex;
 
-static float pt__scatter_density(const pt__vertex *v, pt_vec3 wi)
+static PT__HOT float pt__scatter_density(const pt__vertex *v, pt_vec3 wi)
 {
     float pm = pt__material_density(v->m, v->ns, v->wo, wi);
     if (!v->has_guide) return pm;
     return (1.0f - v->g) * pm + v->g * pt_pdf_value(&v->guide, wi);
 }
-static int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int depth, pt_vec3 *wi)
+static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int depth, pt_vec3 *wi)
 {
     float u0 = v->has_guide ? pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_GUIDE)) : 1.0f;
     if (v->has_guide && u0 < v->g) {
@@ -4685,7 +4716,7 @@ static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
 
 /* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
    if it is unoccluded, the contribution beta f Le w / p_light. */
-static pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
                                      const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
                                      pt_path_stats *st)
 {
@@ -4698,7 +4729,7 @@ static pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg,
     if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
         w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     sr.origin = v->o;
-    target = pt_offset_ray_origin_scaled(ls->point, ls->normal, pt_neg(ls->dir),
+    target = pt__offset_origin(ls->point, ls->normal, pt_neg(ls->dir),
                                          pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
     sr.dir = pt_sub(target, sr.origin);
     pt__rayctx_init2(&src, sr, tri);
@@ -4771,7 +4802,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
             v.albedo = pt__checker(&ct, h.point);
         }
 
-        v.o = pt_offset_ray_origin_scaled(v.p, v.ng, v.ng, h.magnitude);
+        v.o = pt__offset_origin(v.p, v.ng, v.ng, h.magnitude);
         if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
             /* general path: next-event estimation as at any vertex; a delta material reflects
                nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */
@@ -4849,7 +4880,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
         /* non-delta directions always leave on the side of ng (pt__material_eval), so the
            spawn point is v.o, the point that light sampling used */
         prev_p = v.o;
-        ray.origin = prev_delta ? pt_offset_ray_origin_scaled(v.p, v.ng, wi, h.magnitude) : v.o;
+        ray.origin = prev_delta ? pt__offset_origin(v.p, v.ng, wi, h.magnitude) : v.o;
         ray.dir = wi;
         if (depth + 1 >= cfg->rr_start) {
             float q = pt__minf(0.95f, pt_max_component(beta_in));
@@ -5010,7 +5041,7 @@ static void pt__render_tile(void *data, int job)
                 pt__draw2(&smp, PT__SET_PIXEL, &jx, &jy);
                 if (smp.sobol && !(ps->cam->lens_radius > 0.0f)) l1 = l2 = 0.5f; /* pinhole: unused */
                 else pt__draw2(&smp, PT__SET_LENS, &l1, &l2);
-                r = pt_camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
+                r = pt__camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
                 L = pt__sample(ps->scene, ps->cfg, r, &smp, &st);
                 sum[0] += L.x; sum[1] += L.y; sum[2] += L.z;
                 sq[0] += (double)L.x * L.x; sq[1] += (double)L.y * L.y; sq[2] += (double)L.z * L.z;
