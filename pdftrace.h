@@ -625,7 +625,11 @@ PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
      few primitives the built-in BVH tests the large walls together in one leaf block, Embree
      culls them by their own boxes), the built-in BVH on 81 (80 quads and a sphere: 1.01-1.07).
      Nothing was measured between 13 and 81; PDFTRACE_EMBREE_SMALL_PRIMS = 32 splits the gap.
-     A 2304-triangle mesh on a 2-quad floor: built-in 1.02-1.06 (the triangle rule). */
+     A 2304-triangle mesh on a 2-quad floor: built-in 1.02-1.06 (the triangle rule).
+     These figures predate one primitive per leaf in small scenes (PT__BVH_SMALL_SCENE), which
+     gives the built-in BVH the same per-quad culling; not re-run with bench/bvh.c since. Full
+     MIS renders afterwards (64x64, one thread, CPU time, 5 paired runs): built-in/Embree 0.91
+     on bench/scenes/tiny-light-pure.scene, 1.01 many-lights, 1.02 cornell. */
 #ifndef PDFTRACE_EMBREE_SMALL_PRIMS
 #define PDFTRACE_EMBREE_SMALL_PRIMS 32
 #endif
