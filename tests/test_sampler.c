@@ -2,8 +2,8 @@
 
    What is checked, and at which level:
    - sobol_sequence: pt_sobol_u32 against the sequence built here from its definition (van der
-     Corput; Sobol's second dimension from the Bratley & Fox recurrence with Joe & Kuo's
-     parameters s = 1, a = 0, m_1 = 1), exactly.
+     Corput; Sobol's dimensions 1, 2, 3 from the Bratley & Fox recurrence with Joe & Kuo's
+     parameters s = 1, a = 0, m = 1; s = 2, a = 1, m = 1, 3; s = 3, a = 1, m = 1, 3, 1), exactly.
    - sobol_nets: every aligned block of 2^m points of pt_sobol_scrambled (m = 0..12, several
      seeds, blocks at the start, further in and across the 2^16 boundary of the index shuffle) is
      a (0,m,2)-net: each of the 2^m elementary intervals of every shape 2^-a x 2^-(m-a) holds
@@ -11,9 +11,17 @@
    - sobol_randomised: the scramble is not the identity and depends on the seed (exact), and the
      point of a fixed index over many seeds is uniform on the unit square (Pearson chi-square on a
      16 x 16 grid, 4 indices, in the suite's chi-square family: tu_suite_alpha each).
+   - sobol4_nets: pt_sobol_scrambled4 (Sobol's dimensions 0..3, the renderer's pairs of scattered
+     directions): its first two coordinates are pt_sobol_scrambled's, and every 2D projection of an
+     aligned block of 2^m points (m <= 12, several seeds and blocks) is a (t,m,2)-net with the t of
+     the unscrambled sequence's first 2^m points; dims (2, 3) have t <= 2. Exact. Dimensions 2 and
+     3 are also checked in sobol_sequence (against the recurrence, Joe & Kuo's d = 3, 4) and
+     sobol_randomised (uniform over seeds, 2 more chi-square cases).
    - sobol_variance: on a smooth integrand the variance of the 256-point scrambled-Sobol estimate
      over 64 seeds must be below a tenth of the independent estimator's exact variance, at 99 %
-     confidence (the chi-square upper bound of the variance estimate, alpha = 0.01).
+     confidence (the chi-square upper bound of the variance estimate, alpha = 0.01); and the same
+     for pt_sobol_scrambled4 on a product of two centred 2D integrands (pure interaction, which two
+     separately shuffled 2D sets would estimate at the independent rate; alpha = 0.01).
    - render_unbiased: Sobol renders against analytic images (a plane under a sphere, a quad and a
      triangle light, direct light) and the closed furnace (every pixel 1, long paths: every bounce
      slot and Russian roulette), and against independent renders of a Cornell box with glass
@@ -94,7 +102,31 @@ static void sobol_sequence(test_ctx *t)
                  pt_sobol_u32(4, 1) == 0xa0000000u,
           "Sobol dimension 2 starts %08x %08x %08x %08x", pt_sobol_u32(1, 1), pt_sobol_u32(2, 1), pt_sobol_u32(3, 1),
           pt_sobol_u32(4, 1));
-    CHECK(t, pt_sobol_u32(5, 2) == 0u && pt_sobol_u32(5, -1) == 0u, "dimensions other than 0 and 1 give 0");
+    /* dimensions 2 and 3: Joe & Kuo's d = 3 (s = 2, a = 1, m = 1, 3) and d = 4 (s = 3, a = 1, m = 1, 3, 1) */
+    {
+        static const unsigned m2[2] = {1, 3}, m3[3] = {1, 3, 1};
+        uint32_t v2[32], v3[32];
+        sobol_directions(2, 1, m2, v2);
+        sobol_directions(3, 1, m3, v3);
+        for (i = 0, bad = 0; i < 70000u && bad < 5; ++i) {
+            uint32_t a = pt_sobol_u32(i, 2), b = pt_sobol_u32(i, 3);
+            if (!CHECK(t, a == sobol_ref(v2, i) && b == sobol_ref(v3, i), "dims 2, 3, point %u: (%08x, %08x), want (%08x, %08x)",
+                       i, a, b, sobol_ref(v2, i), sobol_ref(v3, i)))
+                ++bad;
+        }
+        for (j = 0; j < 32; ++j) {
+            i = 1u << j;
+            CHECK(t, pt_sobol_u32(i, 2) == v2[j] && pt_sobol_u32(i, 3) == v3[j], "dims 2, 3: direction number %d", j);
+            CHECK(t, pt_sobol_u32(i | 0xa5a5u, 3) == sobol_ref(v3, i | 0xa5a5u), "dim 3: point %u", i | 0xa5a5u);
+        }
+        /* the textbook start of dimensions 3 and 4 (1-based), Gray-code order 1, 3, 2, 6: 1/2, 1/4, 3/4, 5/8 and
+           1/2, 1/4, 3/4, 7/8 */
+        CHECK(t, pt_sobol_u32(1, 2) == 0x80000000u && pt_sobol_u32(3, 2) == 0x40000000u && pt_sobol_u32(2, 2) == 0xc0000000u &&
+                     pt_sobol_u32(6, 2) == 0xa0000000u && pt_sobol_u32(6, 3) == 0xe0000000u,
+              "Sobol dimensions 3, 4 start differently: %08x %08x %08x %08x / %08x", pt_sobol_u32(1, 2), pt_sobol_u32(3, 2),
+              pt_sobol_u32(2, 2), pt_sobol_u32(6, 2), pt_sobol_u32(6, 3));
+    }
+    CHECK(t, pt_sobol_u32(5, 4) == 0u && pt_sobol_u32(5, -1) == 0u, "dimensions outside 0..3 give 0");
 }
 
 /* ---- nets ---- */
@@ -121,6 +153,88 @@ static int is_net(const double *x, const double *y, int m, int *bad_a)
     }
     free(seen);
     return 1;
+}
+
+/* The smallest t for which the n = 2^m points form a (t,m,2)-net in base 2 (every elementary
+   interval of area 2^(t-m) holds exactly 2^t points); -1 on a point outside [0,1)^2. */
+static int net_t(const double *x, const double *y, int m)
+{
+    int n = 1 << m, t, a, i;
+    int *cnt = (int *)malloc(sizeof(int) * (size_t)n);
+    if (!cnt) return -1;
+    for (i = 0; i < n; ++i)
+        if (!(x[i] >= 0.0 && x[i] < 1.0 && y[i] >= 0.0 && y[i] < 1.0)) {
+            free(cnt);
+            return -1;
+        }
+    for (t = 0; t < m; ++t) {
+        int ok = 1, k = m - t;
+        for (a = 0; a <= k && ok; ++a) {
+            int b = k - a;
+            memset(cnt, 0, sizeof(int) * ((size_t)1 << k));
+            for (i = 0; i < n; ++i) cnt[((int)floor(x[i] * (double)(1 << a)) << b) | (int)floor(y[i] * (double)(1 << b))]++;
+            for (i = 0; i < (1 << k) && ok; ++i) ok = cnt[i] == (1 << t);
+        }
+        if (ok) break;
+    }
+    free(cnt);
+    return t;
+}
+
+/* pt_sobol_scrambled4: u[0], u[1] are pt_sobol_scrambled's; each 2D projection of an aligned block of
+   2^m points is a (t,m,2)-net with the t of the same projection of the unscrambled sequence's first
+   2^m points (an Owen scramble and the nested index shuffle keep elementary intervals whole); the
+   projection (2, 3), a scattered direction of its own, has t <= 2 for m <= 12. Exact. */
+static void sobol4_nets(test_ctx *t)
+{
+    static const uint64_t seeds[] = {3u, 0x243f6a8885a308d3ULL, 0xffffffffffffffffULL};
+    static const uint32_t starts[] = {0u, 3u, 65535u};
+    enum { MMAX = 12 };
+    double *c[4], *r[4];
+    int m, si, bi, d0, d1, k, blocks = 0, worst23 = 0;
+    uint32_t i;
+    for (k = 0; k < 4; ++k) {
+        c[k] = (double *)malloc(sizeof(double) << MMAX);
+        r[k] = (double *)malloc(sizeof(double) << MMAX);
+        if (!CHECK(t, c[k] && r[k], "out of memory")) goto done;
+    }
+    for (m = 1; m <= MMAX; ++m) {
+        int n = 1 << m, tref[4][4];
+        for (i = 0; i < (uint32_t)n; ++i)
+            for (k = 0; k < 4; ++k) r[k][i] = pt_sobol_u32(i, k) / 4294967296.0;
+        for (d0 = 0; d0 < 4; ++d0)
+            for (d1 = d0 + 1; d1 < 4; ++d1) tref[d0][d1] = net_t(r[d0], r[d1], m);
+        CHECK(t, tref[0][1] == 0 && tref[2][3] >= 0 && tref[2][3] <= 2, "unscrambled, m = %d: t(0,1) = %d, t(2,3) = %d", m,
+              tref[0][1], tref[2][3]);
+        if (tref[2][3] > worst23) worst23 = tref[2][3];
+        for (si = 0; si < 3; ++si)
+            for (bi = 0; bi < 3; ++bi) {
+                uint32_t base = (starts[bi] << m) & ~((uint32_t)n - 1u);
+                for (i = 0; i < (uint32_t)n; ++i) {
+                    float u[4], w[2];
+                    pt_sobol_scrambled4(base + i, seeds[si], u);
+                    pt_sobol_scrambled(base + i, seeds[si], w);
+                    if (!CHECK(t, u[0] == w[0] && u[1] == w[1], "point %u: scrambled4 (%g, %g) != scrambled (%g, %g)", base + i,
+                               u[0], u[1], w[0], w[1]))
+                        goto done;
+                    for (k = 0; k < 4; ++k) c[k][i] = u[k];
+                }
+                for (d0 = 0; d0 < 4; ++d0)
+                    for (d1 = d0 + 1; d1 < 4; ++d1) {
+                        int tt = net_t(c[d0], c[d1], m);
+                        if (!CHECK(t, tt == tref[d0][d1], "m = %d, seed %d, block at %u: dims (%d, %d) t = %d, unscrambled %d", m,
+                                   si, base, d0, d1, tt, tref[d0][d1]))
+                            goto done;
+                    }
+                ++blocks;
+            }
+    }
+    test_note(t, "%d scrambled 4D blocks, m <= %d; t of dims (2, 3) up to %d", blocks, MMAX, worst23);
+done:
+    for (k = 0; k < 4; ++k) {
+        free(c[k]);
+        free(r[k]);
+    }
 }
 
 static void sobol_nets(test_ctx *t)
@@ -206,6 +320,27 @@ static void sobol_randomised(test_ctx *t)
         CHECK(t, p >= alpha, "index %u over seeds: chi-square %.1f (%d dof), p = %.3g < %.3g", idx[k], chi2, G * G - 1, p,
               alpha);
     }
+    /* pt_sobol_scrambled4's dimensions 2 and 3 likewise */
+    for (k = 0; k < 2; ++k) {
+        static int count[G * G];
+        double chi2 = 0.0, e = (double)N / (G * G), p;
+        pt_rng r;
+        int c;
+        memset(count, 0, sizeof count);
+        pt_rng_seed(&r, 199u + (uint64_t)k, 5u);
+        for (c = 0; c < N; ++c) {
+            float u[4];
+            uint64_t seed = ((uint64_t)pt_rng_u32(&r) << 32) | pt_rng_u32(&r);
+            pt_sobol_scrambled4(idx[2 * k + 1], seed, u);
+            count[(int)(u[2] * G) * G + (int)(u[3] * G)]++;
+        }
+        for (c = 0; c < G * G; ++c) chi2 += (count[c] - e) * (count[c] - e) / e;
+        p = tu_chi2_sf(chi2, G * G - 1);
+        tu_suite_count(1);
+        if (p < worst_p) worst_p = p;
+        CHECK(t, p >= alpha, "dims 2, 3, index %u over seeds: chi-square %.1f (%d dof), p = %.3g < %.3g", idx[2 * k + 1], chi2,
+              G * G - 1, p, alpha);
+    }
     test_note(t, "uniform over seeds: smallest p %.3g (level %.2g each)", worst_p, alpha);
 }
 
@@ -246,6 +381,29 @@ static void sobol_variance(test_ctx *t)
           var_q, upper, var_indep);
     test_note(t, "%d points: variance %.3g vs independent %.3g (ratio %.2g, 99%% bound %.2g)", N, var_q, var_indep,
               var_q / var_indep, upper / var_indep);
+    /* pt_sobol_scrambled4 stratifies the four dimensions jointly: h = (f(u0, u1) - mean) (f(u2, u3) - mean) has
+       mean 0 and no main effects, so two separately shuffled 2D sets (padding) estimate it no better than
+       independent points (variance var_f^2 / N); the 4D point must do ten times better (99 % upper bound) */
+    {
+        double var_f = m2 - mean * mean, var_h_indep = var_f * var_f / N, ss4 = 0.0, sum4 = 0.0, upper4;
+        for (r = 0; r < R; ++r) {
+            double est = 0.0;
+            for (i = 0; i < N; ++i) {
+                float u[4];
+                pt_sobol_scrambled4(i, 0x2545f4914f6cdd1dULL * (uint64_t)(r + 1), u);
+                est += (smooth_f(u[0], u[1]) - mean) * (smooth_f(u[2], u[3]) - mean);
+            }
+            est /= N;
+            sum4 += est;
+            ss4 += est * est;
+        }
+        upper4 = ss4 / chi2_lo;
+        CHECK(t, fabs(sum4 / R) < 6.0 * sqrt(var_h_indep / R), "4D: mean of the estimates %.3g, integral 0", sum4 / R);
+        CHECK(t, upper4 < 0.1 * var_h_indep,
+              "4D: variance %.3g (99 %% upper bound %.3g) of the interaction is not below a tenth of independent points' %.3g",
+              ss4 / R, upper4, var_h_indep);
+        test_note(t, "4D interaction: ratio %.2g (99%% bound %.2g)", ss4 / R / var_h_indep, upper4 / var_h_indep);
+    }
 }
 
 /* ---- renders ---- */
@@ -557,6 +715,7 @@ static void render_deterministic(test_ctx *t)
 const test_case test_sampler_cases[] = {
     TEST_CASE(sobol_sequence),
     TEST_CASE(sobol_nets),
+    TEST_CASE(sobol4_nets),
     TEST_CASE(sobol_randomised),
     TEST_CASE(sobol_variance),
     TEST_CASE(render_unbiased),
