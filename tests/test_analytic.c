@@ -90,7 +90,7 @@ static void image_triangle_light(test_ctx *t) { analytic_image(t, TU_TRIANGLE, "
 typedef struct furnace_stats {
     int pixels, accepted, within;   /* z-test passes; |mean - want| <= tol */
     double max_dev, image_mean, image_se, image_z, mean_sample_sd;
-    uint64_t nonfinite;
+    uint64_t nonfinite, split_paths;
     int rc;
 } furnace_stats;
 
@@ -108,6 +108,7 @@ static void furnace_render(const pt_scene *s, pt_render_desc *d, double want, do
     if (fs->rc != PT_OK) return;
     fs->rc = pt_render(s, d, &f, &st);
     fs->nonfinite = st.nonfinite_samples;
+    fs->split_paths = st.split_paths;
     if (fs->rc == PT_OK) {
         for (y = 0; y < d->height; y++) {
             for (x = 0; x < d->width; x++) {
@@ -275,11 +276,94 @@ static void furnace_mirror_glass_in_emitter(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+/* A guide that concentrates 4/5 of the scatter density in a cone of half-angle ~5.7 degrees
+   towards the furnace's centre (a virtual sphere of radius 0.1 there), so every other direction
+   gets the weight rho / 0.2 = 2.5: path throughputs exceed 2 and splitting must act. */
+static int split_guide(void *user, const pt_shading_point *sp, pt_pdf *out)
+{
+    (void)user;
+    if (pt_length(sp->position) < 0.5f) return 0;
+    *out = pt_pdf_sphere_light(sp->position, pt_v3(0, 0, 0), 0.1f, 0);
+    return 1;
+}
+
+static void furnace_splitting(test_ctx *t)
+{
+    /* Splitting (section 7) in the closed furnace (albedo 0.5, two-sided emission 0.5: radiance 1
+       inside), rendered with split_guide at weight 0.8, 32 x 32, 128 spp.
+       (a) Default depth and roulette; MATERIAL, LIGHT and MIS with the independent sampler and
+       MATERIAL with Sobol (whose split copies use re-keyed sets): paths split (split_paths > 0),
+       no sample is non-finite, and the image is 1 by furnace_every_pixel's criteria (pooled
+       per-pixel z-test, >= 99.5 %% of the pixels at alpha 0.001; image mean within 3 standard
+       errors). A missing 1/k would make the image ~1.5x too bright.
+       (b) max_depth 4 without roulette, exact value 0.5 (1 + 1/2 + ... + 1/16) = 0.96875,
+       MATERIAL with each sampler, with and without splitting (max_splits < 0: no path may
+       split): all four unbiased as in (a) (the two without splitting by their image mean alone),
+       and splitting must lower the standard deviation per
+       sample by 10 %% or more: it measured 1.21 against 1.57 (both samplers). Copies that shared
+       their random numbers would be one path counted k times at weight 1/k each: the same
+       variance as no splitting. At 131,072 samples per render and bounded weights (<= 2.5^4),
+       the standard deviations are known to ~1 %%, far inside that margin. */
+    static const struct { pt_strategy strategy; pt_sampler sampler; int depth, split; const char *name; } cases[] = {
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_INDEPENDENT, 0, 1, "MATERIAL"},
+        {PT_STRATEGY_LIGHT, PT_SAMPLER_INDEPENDENT, 0, 1, "LIGHT"},
+        {PT_STRATEGY_MIS, PT_SAMPLER_INDEPENDENT, 0, 1, "MIS"},
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 0, 1, "MATERIAL, Sobol"},
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_INDEPENDENT, 4, 1, "depth 4, MATERIAL"},
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_INDEPENDENT, 4, 0, "depth 4, MATERIAL, no splitting"},
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 4, 1, "depth 4, MATERIAL, Sobol"},
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 4, 0, "depth 4, MATERIAL, Sobol, no splitting"},
+    };
+    pt_scene *s = pt_scene_create();
+    int c, rc;
+    double sd[8];
+    if (!CHECK(t, s != NULL, "scene")) return;
+    rc = tu_add_closed_furnace(s);
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (c = 0; c < 8; c++) {
+        pt_render_desc d = tu_base_desc(32, 32, 128, 35000 + (uint64_t)c);
+        furnace_stats fs;
+        double want = cases[c].depth ? 0.96875 : 1.0;
+        d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
+        d.camera.look_at = pt_v3(1, 0.5f, 0);
+        d.camera.vfov_degrees = 90;
+        d.strategy = cases[c].strategy;
+        d.sampler = cases[c].sampler;
+        d.guide = split_guide;
+        d.guide_weight = 0.8f;
+        d.max_splits = cases[c].split ? 0 : -1;
+        if (cases[c].depth) {
+            d.max_depth = cases[c].depth;
+            d.rr_start_depth = -1;
+        }
+        furnace_render(s, &d, want, 1e-3, 1, &fs);
+        sd[c] = fs.mean_sample_sd;
+        if (!CHECK(t, fs.rc == PT_OK, "%s: pt_render %d", cases[c].name, fs.rc)) continue;
+        CHECK(t, fs.nonfinite == 0, "%s: %llu non-finite samples", cases[c].name, (unsigned long long)fs.nonfinite);
+        if (cases[c].split) CHECK(t, fs.split_paths > 0, "%s: no path split", cases[c].name);
+        else CHECK(t, fs.split_paths == 0, "%s: max_splits < 0, yet %llu paths split", cases[c].name,
+                   (unsigned long long)fs.split_paths);
+        if (cases[c].split) /* (the controls without splitting are too skewed for a pixel's z-test at 128 spp) */
+            CHECK(t, fs.accepted >= ACCEPT_FRACTION * fs.pixels, "%s: only %d of %d pixels pass the z-test against %g",
+                  cases[c].name, fs.accepted, fs.pixels, want);
+        CHECK(t, fabs(fs.image_z) <= IMAGE_Z, "%s: image mean %.6f +- %.2g, not %g (z = %+.2f)", cases[c].name,
+              fs.image_mean, fs.image_se, want, fs.image_z);
+        test_note(t, "%s: %.5f +- %.1e, %.2f splits/sample, sd %.3g", cases[c].name, fs.image_mean, fs.image_se,
+                  (double)fs.split_paths / (32.0 * 32.0 * 128.0), fs.mean_sample_sd);
+    }
+    CHECK(t, sd[4] <= 0.9 * sd[5], "independent: splitting gives sd per sample %.3g, not 10 %% below %.3g without",
+          sd[4], sd[5]);
+    CHECK(t, sd[6] <= 0.9 * sd[7], "Sobol: splitting gives sd per sample %.3g, not 10 %% below %.3g without",
+          sd[6], sd[7]);
+    pt_scene_destroy(s);
+}
+
 const test_case test_analytic_cases[] = {
     TEST_CASE(image_sphere_light),
     TEST_CASE(image_quad_light),
     TEST_CASE(image_triangle_light),
     TEST_CASE(furnace_every_pixel),
     TEST_CASE(furnace_mirror_glass_in_emitter),
+    TEST_CASE(furnace_splitting),
     TEST_END
 };

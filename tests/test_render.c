@@ -705,6 +705,10 @@ static void render_desc_validation(test_ctx *t)
     rc = pt_render(s, &d, &f, NULL);
     CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "strategy 7: %d", rc);
     d.strategy = PT_STRATEGY_MIS;
+    d.max_splits = 65537;
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "max_splits 65537 (at most 65536): %d", rc);
+    d.max_splits = 0;
     d.background = pt_v3(NAN, 0, 0);
     rc = pt_render(s, &d, &f, NULL);
     CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "NaN background: %d", rc);
