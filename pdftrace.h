@@ -3942,8 +3942,10 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
     }
 }
 
-/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. */
-static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
+/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. Blocks that hold
+   only primitive `skip` (one-primitive leaves, PT__BVH_SMALL_SCENE) are not tested: the shadow
+   ray towards a point sampled on a light passes its own light (0xffffffff: none). */
+static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
 {
     uint32_t stack_ref[PT__BVH_STACK];
     int sp = 0;
@@ -3975,12 +3977,16 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
                 if (pt__tri4_hit(&tv, (const pt__tri4 *)(const void *)blk, tmax, &t, bb, 1) >= 0) return 1;
             }
             for (j = 0; j < h->u[1]; ++j, blk += sizeof(pt__quad4)) {
+                const pt__quad4 *q = (const pt__quad4 *)(const void *)blk;
                 float t;
-                if (pt__quad4_hit(&tv, s, (const pt__quad4 *)(const void *)blk, tmax, &t, 1) >= 0) return 1;
+                if (q->prim[0] == skip && q->prim[1] == skip) continue; /* a block of the skipped primitive alone */
+                if (pt__quad4_hit(&tv, s, q, tmax, &t, 1) >= 0) return 1;
             }
             for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
+                const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
                 float t;
-                if (pt__sphere4_hit(&tv, (const pt__sphere4 *)(const void *)blk, tmax, &t, 1) >= 0) return 1;
+                if (q->prim[0] == skip && q->prim[1] == skip) continue;
+                if (pt__sphere4_hit(&tv, q, tmax, &t, 1) >= 0) return 1;
             }
         }
         if (sp == 0) return 0;
@@ -4390,12 +4396,12 @@ static PT__HOT int pt__scene_closest(const pt_scene *s, const pt__rayctx *rc, fl
 #endif
     return pt__bvh_closest(s, rc, tmax, prim, t_out, bary);
 }
-static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
+static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
 {
 #ifdef PDFTRACE_EMBREE
-    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_any(s, rc, tmax);
+    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_any(s, rc, tmax); /* tests `skip` too */
 #endif
-    return pt__bvh_any(s, rc, tmax);
+    return pt__bvh_any(s, rc, tmax, skip);
 }
 
 PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
@@ -4671,7 +4677,7 @@ PTDEF int pt_scene_occluded(const pt_scene *s, pt_ray ray, float tmax)
     int e = pt__query_ok(s, ray, tmax);
     if (e != PT_OK) return e;
     pt__rayctx_init(&rc, ray);
-    return pt__scene_any(s, &rc, tmax);
+    return pt__scene_any(s, &rc, tmax, 0xffffffffu);
 }
 PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tmax, pt_hit *hit)
 {
@@ -4897,7 +4903,10 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
     sr.dir = pt_sub(target, sr.origin);
     pt__rayctx_init2(&src, sr, tri);
     st->shadow_rays++;
-    if (pt__scene_any(s, &src, 1.0f - 1e-4f)) return pt_v3(0, 0, 0);
+    /* the light itself is skipped: a segment to a point sampled on a sphere (the near side seen
+       from outside, any point from inside) or on a planar light meets that light only at the
+       point, which the segment stops short of */
+    if (pt__scene_any(s, &src, 1.0f - 1e-4f, s->lights[li].prim)) return pt_v3(0, 0, 0);
     {
         const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
         return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
