@@ -695,9 +695,11 @@ typedef enum pt_strategy {
    pt_render_desc.guide_weight: p_scatter = (1 - g) p_material + g p_guide.
    Called from every render thread at once: `user` must be safe to read concurrently. The
    pt_shading_point is valid only during the call; the pt_pdf written to *out is used while
-   that vertex is shaded (right after the call), so anything it points to (mixture components
-   and weights, callback data, a scene) must outlive the call: point into `user` or other data
-   that lives until pt_render returns, never into the callback's own stack frame. */
+   that vertex is shaded, which, where the path splits (section 7), goes on after the split
+   copies' own calls to the guide at later vertices. So anything it points to (mixture
+   components and weights, callback data, a scene) must outlive the call and must not be
+   overwritten by later calls: point into `user` or other data that stays unchanged until
+   pt_render returns, never into the callback's own stack frame or a per-call scratch buffer. */
 typedef int (*pt_guide_fn)(void *user, const pt_shading_point *sp, pt_pdf *out);
 
 /* Counters for one or more paths. */
