@@ -1713,51 +1713,24 @@ static uint64_t pt__set_seed(const pt__sampler *smp, uint32_t set)
 {
     return smp->key + 0x9e3779b97f4a7c15ULL * (uint64_t)(set + 1u);
 }
-/* One number of set `set`. */
-static float pt__draw1(pt__sampler *smp, uint32_t set)
+/* The SOBOL halves of the draws below (the independent halves are inlined into the integrator). */
+static float pt__draw1_sobol(const pt__sampler *smp, uint32_t set)
 {
     float u[1];
-    if (!smp->sobol) return pt_rng_float(&smp->rng);
     pt__sobol_point(smp->index_reversed, pt__set_seed(smp, set), 1, u);
     return u[0];
 }
-/* The same for a number the caller may not use: independent mode draws it anyway (to keep the
-   stream's order); SOBOL skips the work when `used` is 0 (the value is then 0.5, never read). */
-static float pt__draw1_if(pt__sampler *smp, uint32_t set, int used)
-{
-    if (smp->sobol && !used) return 0.5f;
-    return pt__draw1(smp, set);
-}
-/* Two numbers of set `set` (independent: *a, then *b). */
-static void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b)
+static void pt__draw2_sobol(const pt__sampler *smp, uint32_t set, float *a, float *b)
 {
     float u[2];
-    if (!smp->sobol) {
-        *a = pt_rng_float(&smp->rng);
-        *b = pt_rng_float(&smp->rng);
-        return;
-    }
     pt__sobol_point(smp->index_reversed, pt__set_seed(smp, set), 2, u);
     *a = u[0];
     *b = u[1];
 }
-/* The scattered direction's two numbers at `depth` (independent: *a, then *b, as pt__draw2).
-   SOBOL: the directions of depths 2i and 2i + 1 are one four-dimensional point (dimensions 0, 1
-   and 2, 3 of set PT__SET_BOUNCE(2i, PT__SLOT_SCATTER_DIR)), so the two-bounce integral of a
-   path's first indirect bounces is stratified jointly, not only in each direction (Burley 2020,
-   sec. 5, pads with sets of four dimensions; variance per sample 10-20 % lower on the benchmark's
-   tiny-light-pure scene than with two independent 2D sets). The key of the even depth's set is
-   kept for the odd depth (no second shuffle); a path whose even depth drew no direction (a
-   specular vertex, a guide sample) makes it again. */
-static void pt__draw_scatter(pt__sampler *smp, int depth, float *a, float *b)
+static void pt__draw_scatter_sobol(pt__sampler *smp, int depth, float *a, float *b)
 {
     uint32_t set = PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR);
     float u[2];
-    if (!smp->sobol) {
-        *a = pt_rng_float(&smp->rng);
-        *b = pt_rng_float(&smp->rng);
-        return;
-    }
     if (smp->pair_set != set) {
         smp->pair = pt__sobol_key_make(smp->index_reversed, pt__set_seed(smp, set));
         smp->pair_set = set;
@@ -1766,6 +1739,46 @@ static void pt__draw_scatter(pt__sampler *smp, int depth, float *a, float *b)
     else pt__sobol_point01(&smp->pair, 2, u);
     *a = u[0];
     *b = u[1];
+}
+/* One number of set `set`. */
+static PT__HOT float pt__draw1(pt__sampler *smp, uint32_t set)
+{
+    if (!smp->sobol) return pt_rng_float(&smp->rng);
+    return pt__draw1_sobol(smp, set);
+}
+/* The same for a number the caller may not use: independent mode draws it anyway (to keep the
+   stream's order); SOBOL skips the work when `used` is 0 (the value is then 0.5, never read). */
+static PT__HOT float pt__draw1_if(pt__sampler *smp, uint32_t set, int used)
+{
+    if (smp->sobol && !used) return 0.5f;
+    return pt__draw1(smp, set);
+}
+/* Two numbers of set `set` (independent: *a, then *b). */
+static PT__HOT void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b)
+{
+    if (!smp->sobol) {
+        *a = pt_rng_float(&smp->rng);
+        *b = pt_rng_float(&smp->rng);
+        return;
+    }
+    pt__draw2_sobol(smp, set, a, b);
+}
+/* The scattered direction's two numbers at `depth` (independent: *a, then *b, as pt__draw2).
+   SOBOL: the directions of depths 2i and 2i + 1 are one four-dimensional point (dimensions 0, 1
+   and 2, 3 of set PT__SET_BOUNCE(2i, PT__SLOT_SCATTER_DIR)), so the two-bounce integral of a
+   path's first indirect bounces is stratified jointly, not only in each direction (Burley 2020,
+   sec. 5, pads with sets of four dimensions; variance per sample 8-10 % lower on the benchmark's
+   tiny-light-pure and tiny-light scenes than with two separately shuffled 2D sets). The key of
+   the even depth's set is kept for the odd depth (no second shuffle); a path whose even depth
+   drew no direction (a specular vertex, a guide sample) makes it again. */
+static PT__HOT void pt__draw_scatter(pt__sampler *smp, int depth, float *a, float *b)
+{
+    if (!smp->sobol) {
+        *a = pt_rng_float(&smp->rng);
+        *b = pt_rng_float(&smp->rng);
+        return;
+    }
+    pt__draw_scatter_sobol(smp, depth, a, b);
 }
 
 /* Concentric map of the square to the disk (Shirley & Chiu, "A Low Distortion Map Between
