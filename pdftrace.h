@@ -4985,6 +4985,9 @@ static pt__sampler *pt__split_sampler(pt__sampler *parent, pt__sampler *child, i
     *child = *parent;
     child->key = pt__mix64(parent->key ^ (0x94d049bb133111ebULL * (uint64_t)(depth * PT__SPLIT_MAX_COPIES + copy + 1)));
     pt_rng_seed(&child->rng, child->key, (uint64_t)copy);
+    child->rng_seeded = 1;  /* (else a guide's first draw would reseed it with the parent's stream) */
+    child->pair_set = ~0u;  /* the parent's cached 4D key is not the copy's (else an odd depth's
+                               direction would repeat the parent's) */
     return child;
 }
 
