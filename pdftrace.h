@@ -373,7 +373,7 @@ PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y); /*
    integrand is smooth (direct light, anti-aliasing). The k-th sample is a pure function of
    (seed, pixel, k), as with INDEPENDENT, so progressive passes and resumed renders give the
    same image as one pass. A pixel's samples are not independent, so the film's per-pixel
-   variance and the half-buffer error estimate (pt_film_error, adaptive sampling) assume what
+   variance (adaptive sampling) and the half-buffer error estimate (pt_film_error) assume what
    is not true: they overestimate a SOBOL image's error (about 3x in relMSE at 64 spp on the
    benchmark's tiny-light scene), which makes adaptive sampling conservative, not wrong.
    Use independent seeds to measure a SOBOL render's error. */
@@ -776,17 +776,18 @@ typedef struct pt_render_desc {
     pt_guide_fn guide;           /* optional user PDF, see pt_guide_fn */
     void *guide_user;
     float guide_weight;          /* in [0, 1); 0 with a guide: 0.5 */
-    /* Adaptive sampling (see section 8 of the implementation): pixels are grouped in 4x4 blocks
-       whose noise is estimated from two half-buffers; samples go to the blocks in proportion to
-       their noise (the allocation that minimises the image's mean relative squared error), and a
-       block stops once it has its share and so do its eight neighbours. samples_per_pixel is the
-       most any pixel gets; the default samples_per_pass becomes samples_per_pixel / 64. */
+    /* Adaptive sampling (see section 8 of the implementation): each pixel's noise is estimated
+       from the sample variances of its eight neighbours; samples go to the pixels in proportion
+       to the square root of their noise per unit of cost (the allocation that minimises the
+       image's mean relative squared error for the time spent), and a pixel stops once it has its
+       share. samples_per_pixel is the most any pixel gets; the default samples_per_pass becomes
+       samples_per_pixel / 64 (more for each pixel once few pixels still sample). */
     float adaptive_threshold;    /* 0: off (every pixel gets samples_per_pixel). Otherwise a finite
                                     value > 0: the RMS relative error sqrt(mean((x-r)^2/(r^2+0.01)))
                                     the image should reach; e.g. 0.05 */
     int adaptive_min_spp;        /* samples every pixel gets before it can stop, >= 2; 0: a default
                                     of max(16, samples_per_pixel / 16); capped at samples_per_pixel */
-    int adaptive_check_passes;   /* blocks are re-checked every this many passes, >= 1; 0: 1 */
+    int adaptive_check_passes;   /* the shares are re-planned every this many passes, >= 1; 0: 1 */
     unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on; bits
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
@@ -5249,41 +5250,46 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    depend on the thread count or the order in which tiles run. Even-numbered samples also go to
    half-buffer A, odd-numbered ones to B (the film keeps sum and sum_odd; A = sum - sum_odd).
 
-   Adaptive sampling (adaptive_threshold = T > 0). The image is divided into 4x4-pixel blocks.
-   Error estimate: pt_film_error, the mean over a block's pixels and channels of
-   (A - B)^2 nA nB / n^2 / (I^2 + 0.01), with A and B the means of the even- and odd-numbered
-   samples (half buffers as in Rousselle, Manzi & Zwicker, "Robust Denoising using Feature and
-   Color Information", 2013) and I the pixel mean: (A - B)^2 nA nB / n^2 is an unbiased
-   estimate of the variance of I, so e_b estimates the block's relMSE, the metric
-   mean((I - r)^2 / (r^2 + 0.01)) of rendering benchmarks (the regularised relative form of
-   the per-block |A - B| / sqrt(I) criterion of Dammertz, Hanika, Keller & Lensch, "A
-   Hierarchical Automatic Stopping Condition for Monte Carlo Global Illumination", WSCG 2010).
-   Allocation: a block with n_b samples and error e_b has per-sample noise v_b = e_b n_b, and
-   the image's relMSE is the mean of v_b / n_b. For a given number of samples that mean is
-   smallest when n_b is proportional to sqrt(v_b) (Lagrange; Neyman's allocation for stratified
-   sampling, "On the Two Different Aspects of the Representative Method", 1934), and it is then
-   T^2 when n_b = sqrt(v_b) S / T^2 with S the pixel-weighted mean of sqrt(v_b). (Stopping each
-   block at e_b < T^2 instead, n_b proportional to v_b, costs as many samples as uniform
-   sampling for the same mean error: it only pays where samples_per_pixel caps the noisy
-   blocks.) So after every adaptive_check_passes passes, once this render has given every
-   pixel adaptive_min_spp samples, each active block gets e_b, v_b and S (stopped blocks keep
-   the v_b they stopped with) and has its share when n_b >= sqrt(v_b) S / T^2. Dilation: a
-   block stops only when all eight neighbours have their share too, so a block whose estimate
-   is low by chance next to noisy ones keeps sampling, and the boundary between stopped and
-   running pixels lies inside converged image (no seams). Once stopped a block stays stopped;
-   samples_per_pixel caps the rest. Every decision is taken between passes on the calling
-   thread from the film alone, so the image stays independent of the thread count.
-   Memory: 22 bytes per block (1.4 per pixel) and 12 per tile, besides the film's half-buffer.
-   Bias: a block stops on a noisy estimate. In scenes whose noise comes from rare bright
-   samples (caustics: fireflies) a block that has not yet seen one looks quiet and stops
-   early, so such rare light is slightly under-represented; the minimum sample count and the
-   dilation keep this small (README: measured figures).
+   Adaptive sampling (adaptive_threshold = T > 0), planned per pixel from the film alone.
+   Goal: the image's relMSE, mean_i v_i / n_i over pixels i with v_i = Var(one sample) / (r_i^2 +
+   0.01) averaged over the channels (the regularised relative error of rendering benchmarks; r_i
+   the pixel's true value) and n_i its samples, should reach T^2 for the least time. With c_i the
+   cost of one of its samples that is n_i = L sqrt(v_i / c_i) (Lagrange; Neyman's allocation for
+   stratified sampling, "On the Two Different Aspects of the Representative Method", 1934, with
+   costs as in Cochran, "Sampling Techniques", 3rd ed., 1977, sec. 5.5), L fixed by the target.
+   (Stopping each pixel at error T^2 instead, n_i proportional to v_i, costs as many samples as
+   uniform sampling for the same mean error; the ideal per-pixel allocation on the benchmark's
+   Cornell box needs 0.40x the time of uniform sampling, 4x4 blocks 0.68x.)
+   Estimates, every adaptive_check_passes passes once this render has given every pixel
+   adaptive_min_spp samples: s_i^2, the sample variance of pixel i per channel (sum_sq, n - 1
+   degrees of freedom), divided by m^2 + 0.01 with m the 3x3 mean of the pixel means (the pixel's
+   own mean is a poor stand-in for r: a pixel that caught a firefly would divide it away);
+   c_i = the rays pixel i traced per sample in this render (a count, never a clock, so the image
+   does not depend on timing). v_i and c_i used for pixel i are the means over its eight
+   neighbours, without the pixel itself: its share then does not depend on its own samples, so
+   stopping is (to first order) independent of its value and the estimate stays unbiased. With
+   the pixel's own variance in the mean, a pixel that has not yet seen a rare bright sample
+   (a caustic firefly) looks quiet and stops, one that has keeps sampling and dilutes it: on the
+   benchmark's Cornell box that biased the image mean by -0.7 % (the eight neighbours: below
+   noise) while seeming to beat the ideal allocation. The neighbourhood also spreads noise a
+   little beyond where it was seen: a zero-variance pixel beside noisy ones keeps sampling, so
+   there is no seam where the noise starts. Plan: L solves mean_i v_i / n_i(L) = T^2 with
+   n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + samples_per_pixel) (the samples already
+   taken stay; the mean is convex and decreasing in L: Newton's method safeguarded by bisection);
+   L = 0 (every pixel stops) when the target is reached, every pixel with v_i > 0 samples to the
+   cap when it is out of reach. Each pass gives pixel i min(step, what its plan still wants),
+   step = samples_per_pass, times the share of pixels that still sample (so that the last passes
+   are not a long tail of nearly empty ones); the pass's jobs are chunks of pixels in raster order
+   holding about equal work (samples x rays per sample), so the threads finish together. Every
+   decision is taken between passes on the calling thread from the film and the rays counted per
+   pixel, so the image stays independent of the thread count and job order.
+   Memory: 124 bytes per pixel during an adaptive render, besides the film.
    Threads: the workers are created per pass. Thread creation and joining cost ~0.1 ms per pass
-   on a loaded 2-core machine, against >= 10 ms of work in a pass of any image worth adapting,
-   so a persistent pool would not pay (README).
+   on a loaded 2-core machine, against >= 10 ms of work in a pass of any image worth adapting
+   (adaptive passes are kept about as long as uniform ones, above), so a persistent pool would
+   not pay (README).
    ------------------------------------------------------------------------------------------ */
 
-#define PT__BLOCK 4 /* adaptive sampling: block size in pixels */
 
 static double pt__now(void)
 {
@@ -5312,8 +5318,10 @@ typedef struct pt__pass {
     int tile_size, tiles_x, spp;
     const volatile int *cancel;
     const int *jobs;            /* job i renders tile jobs[i] */
-    const unsigned char *block_active; /* adaptive: 1 per block that still takes samples; NULL: all */
-    int blocks_x;
+    const uint32_t *pixel_spp;  /* adaptive: samples each pixel takes in this pass; NULL: spp each */
+    const uint32_t *chunk_first; /* adaptive: job i renders the pixels (raster order) chunk_first[i] to
+                                   chunk_first[i + 1] - 1 instead of tile i; NULL: tiles */
+    double *pixel_rays;         /* adaptive: rays each pixel traced in this render; NULL: not counted */
     pt_path_stats *tile_stats;  /* one per tile */
     uint64_t *tile_samples;     /* one per tile */
     unsigned char *tile_done;   /* one per tile */
@@ -5330,20 +5338,33 @@ static void pt__render_tile(void *data, int job)
     int index = ps->jobs[job];
     int tx = index % ps->tiles_x, ty = index / ps->tiles_x;
     int x0 = tx * ps->tile_size, y0 = ty * ps->tile_size;
-    int x1 = x0 + ps->tile_size, y1 = y0 + ps->tile_size, x, y, k;
+    int x1 = x0 + ps->tile_size, y1 = y0 + ps->tile_size, x, y, k, xa, xb;
     uint64_t taken = 0;
     pt_path_stats st;
     if (ps->cancel && *ps->cancel) return;
     memset(&st, 0, sizeof st);
-    if (x1 > film->width) x1 = film->width;
-    if (y1 > film->height) y1 = film->height;
+    if (ps->chunk_first) { /* adaptive: job = the pixels chunk_first[index] .. chunk_first[index + 1] - 1 */
+        uint32_t p0 = ps->chunk_first[index], p1 = ps->chunk_first[index + 1], w = (uint32_t)film->width;
+        y0 = (int)(p0 / w);
+        y1 = p1 > p0 ? (int)((p1 - 1u) / w) + 1 : y0;
+        xa = (int)(p0 % w);
+        xb = p1 > p0 ? (int)((p1 - 1u) % w) + 1 : xa;
+        x0 = 0;
+        x1 = film->width;
+    } else {
+        if (x1 > film->width) x1 = film->width;
+        if (y1 > film->height) y1 = film->height;
+        xa = x0;
+        xb = x1;
+    }
     for (y = y0; y < y1; ++y) {
-        for (x = x0; x < x1; ++x) {
+        for (x = y == y0 ? xa : x0; x < (y == y1 - 1 ? xb : x1); ++x) {
             uint32_t pix = (uint32_t)y * (uint32_t)film->width + (uint32_t)x;
-            uint32_t base = film->count[pix];
+            uint32_t base = film->count[pix], n = ps->pixel_spp ? ps->pixel_spp[pix] : (uint32_t)ps->spp;
+            uint64_t rays0 = st.camera_rays + st.bounce_rays + st.shadow_rays;
             double *sum = film->sum + 3u * pix, *sq = film->sum_sq + 3u * pix, *odd = film->sum_odd + 3u * pix;
-            if (ps->block_active && !ps->block_active[(y / PT__BLOCK) * ps->blocks_x + x / PT__BLOCK]) continue;
-            for (k = 0; k < ps->spp; ++k) {
+            if (n == 0) continue;
+            for (k = 0; k < (int)n; ++k) {
                 uint32_t index_k = base + (uint32_t)k;
                 pt__sampler smp;
                 float jx, jy, l1, l2;
@@ -5359,8 +5380,10 @@ static void pt__render_tile(void *data, int job)
                 sq[0] += (double)L.x * L.x; sq[1] += (double)L.y * L.y; sq[2] += (double)L.z * L.z;
                 if (index_k & 1u) { odd[0] += L.x; odd[1] += L.y; odd[2] += L.z; }
             }
-            film->count[pix] = base + (uint32_t)ps->spp;
-            taken += (uint64_t)ps->spp;
+            film->count[pix] = base + n;
+            taken += n;
+            if (ps->pixel_rays)
+                ps->pixel_rays[pix] += (double)(st.camera_rays + st.bounce_rays + st.shadow_rays - rays0);
         }
     }
     ps->tile_stats[index] = st;
@@ -5438,64 +5461,164 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
 /* Adaptive sampling state of one pt_render call (see the comment at the top of section 8). */
 typedef struct pt__adaptive {
     double target;             /* threshold^2: the relMSE the image should reach */
-    int min_spp, check_passes;
-    int blocks_x, blocks_y;
-    unsigned char *active;     /* 1 per block: still taking samples */
-    unsigned char *converged;  /* 1 per block: had its share of samples at the last check */
-    uint32_t *stopped_at;      /* 1 per block: samples this render had added when it stopped */
-    double *noise;             /* 1 per block: v_b, the estimated relative variance of one sample */
-    double *spp;               /* 1 per block: its mean sample count n_b at the last check */
+    int min_spp, check_passes, per_pass, cap, width, height;
+    uint32_t *start;           /* per pixel: the film's count when this render began */
+    uint32_t *want;            /* per pixel: samples it should still take, from the last check */
+    uint32_t *step;            /* per pixel: samples it takes in the next pass (0: none) */
+    double *rays;              /* per pixel: rays it traced in this render (the cost proxy) */
+    double *noise, *cost;      /* per pixel: v_i from its own samples; rays per sample */
+    double *var, *cpp;         /* per pixel: the neighbour means of noise and cost, used to plan */
+    double *lo, *hi;           /* per pixel: the fewest and most samples it can end with */
+    double *mean, *mbox;       /* 3 per pixel (channel-major): the pixel means and their 3x3 means */
+    double *tmp;               /* per pixel: scratch */
+    uint32_t *chunk_first;     /* chunks + 1: the jobs of the next pass (see pt__adaptive_plan) */
+    int chunks;                /* the most jobs a pass is cut into */
 } pt__adaptive;
 
-/* Re-checks the blocks: e_b (pt_film_error) and v_b = e_b n_b for every active block (a stopped
-   block keeps the v_b it stopped with), S = the pixel-weighted mean of sqrt(v_b) over all
-   blocks; block b has its share when n_b >= sqrt(v_b) S / threshold^2. It stops when every
-   block of its 3x3 neighbourhood has its share too (dilation). */
-static void pt__adaptive_check(pt__adaptive *a, const pt_film *film, uint32_t added)
+/* out_i = the mean of v over the 3x3 neighbourhood of pixel i (clipped at the image border), with
+   pixel i itself when self is 1, without it (its eight neighbours) when self is 0; tmp: scratch
+   for the separable row sums. */
+static void pt__box_mean(const double *v, double *out, double *tmp, int w, int h, int self)
 {
-    int bx, by, b, nb = a->blocks_x * a->blocks_y;
-    double S = 0.0, pixels = 0.0;
-    for (by = 0; by < a->blocks_y; ++by)
-        for (bx = 0; bx < a->blocks_x; ++bx) {
-            int x0 = bx * PT__BLOCK, y0 = by * PT__BLOCK, x1 = x0 + PT__BLOCK, y1 = y0 + PT__BLOCK, x, y;
-            double area;
-            b = by * a->blocks_x + bx;
-            if (x1 > film->width) x1 = film->width;
-            if (y1 > film->height) y1 = film->height;
-            area = (double)(x1 - x0) * (double)(y1 - y0);
-            if (a->active[b]) {
-                double e = HUGE_VAL, n = 0.0;
-                (void)pt_film_error(film, x0, y0, x1, y1, &e);
-                for (y = y0; y < y1; ++y)
-                    for (x = x0; x < x1; ++x) n += (double)film->count[(size_t)y * (size_t)film->width + (size_t)x];
-                a->spp[b] = n / area;
-                a->noise[b] = e < HUGE_VAL ? e * a->spp[b] : HUGE_VAL;
+    int x, y;
+    for (y = 0; y < h; ++y)
+        for (x = 0; x < w; ++x) {
+            const double *r = v + (size_t)y * (size_t)w;
+            tmp[(size_t)y * (size_t)w + (size_t)x] = r[x] + (x > 0 ? r[x - 1] : 0.0) + (x + 1 < w ? r[x + 1] : 0.0);
+        }
+    for (y = 0; y < h; ++y)
+        for (x = 0; x < w; ++x) {
+            size_t i = (size_t)y * (size_t)w + (size_t)x;
+            double box = tmp[i] + (y > 0 ? tmp[i - (size_t)w] : 0.0) + (y + 1 < h ? tmp[i + (size_t)w] : 0.0);
+            int n = (1 + (x > 0) + (x + 1 < w)) * (1 + (y > 0) + (y + 1 < h)) - !self;
+            out[i] = n > 0 ? (self ? box : box - v[i]) / n : v[i];
+        }
+}
+
+/* Re-plans the samples (see the comment at the top of section 8): per pixel i, v_i from the
+   film's sample variance, c_i = rays per sample, both smoothed over 3x3 pixels; then the
+   Lagrange multiplier L with mean_i v_i / n_i(L) = threshold^2, n_i(L) = clamp(L sqrt(v_i / c_i),
+   count_i, start_i + cap), found by Newton's method safeguarded by bisection (the mean is convex
+   and decreasing in L); the next pass gives pixel i min(per_pass, round(n_i - count_i)) samples,
+   never more than its cap allows (want_i). */
+static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
+{
+    size_t i, np = (size_t)a->width * (size_t)a->height;
+    double f_lo = 0.0, f_hi = 0.0, target_sum, lam, lam_lo = HUGE_VAL, lam_hi = 0.0;
+    int iter, all_cap = 0;
+    int c;
+    for (i = 0; i < np && !all_cap; ++i) {
+        if (film->count[i] < 2) all_cap = 1;
+        for (c = 0; c < 3; ++c) a->mean[c * np + i] = film->sum[3 * i + c] / (double)film->count[i];
+    }
+    for (c = 0; c < 3 && !all_cap; ++c) pt__box_mean(a->mean + c * np, a->mbox + c * np, a->tmp, a->width, a->height, 1);
+    for (i = 0; i < np && !all_cap; ++i) {
+        double n = (double)film->count[i], v = 0.0, added = (double)(film->count[i] - a->start[i]);
+        for (c = 0; c < 3; ++c) {
+            double m = a->mean[c * np + i], r = a->mbox[c * np + i];
+            double s2 = (film->sum_sq[3 * i + c] - film->sum[3 * i + c] * m) / (n - 1.0);
+            v += (s2 > 0.0 ? s2 : 0.0) / (r * r + 0.01);
+        }
+        a->noise[i] = v / 3.0;
+        a->cost[i] = added > 0.0 && a->rays[i] > 0.0 ? a->rays[i] / added : 1.0;
+        if (!(a->noise[i] < HUGE_VAL)) all_cap = 1;
+    }
+    if (!all_cap) {
+        pt__box_mean(a->noise, a->var, a->tmp, a->width, a->height, 0);
+        pt__box_mean(a->cost, a->cpp, a->tmp, a->width, a->height, 0);
+        /* r_i = sqrt(v_i / c_i) into tmp; the bracket of L: below lam_lo every n_i sits at its
+           count, above lam_hi at its cap */
+        for (i = 0; i < np; ++i) {
+            double r = sqrt(a->var[i] / a->cpp[i]), lo = (double)film->count[i];
+            double hi = (double)a->start[i] + (double)a->cap;
+            a->tmp[i] = r;
+            a->lo[i] = lo;
+            a->hi[i] = hi > lo ? hi : lo;
+            f_lo += a->var[i] / lo;
+            f_hi += a->var[i] / (hi > lo ? hi : lo);
+            if (r > 0.0) {
+                if (lo / r < lam_lo) lam_lo = lo / r;
+                if (hi / r > lam_hi) lam_hi = hi / r;
             }
-            S += area * sqrt(a->noise[b]);
-            pixels += area;
         }
-    S /= pixels;
-    if (!(S < HUGE_VAL)) return; /* an unknown or overflowing estimate somewhere: nothing stops */
-    for (b = 0; b < nb; ++b)
-        if (a->active[b]) a->converged[b] = a->noise[b] < HUGE_VAL && sqrt(a->noise[b]) * S <= a->target * a->spp[b];
-    for (by = 0; by < a->blocks_y; ++by)
-        for (bx = 0; bx < a->blocks_x; ++bx) {
-            int nx, ny, all = 1;
-            b = by * a->blocks_x + bx;
-            if (!a->active[b]) continue;
-            for (ny = by - 1; ny <= by + 1 && all; ++ny)
-                for (nx = bx - 1; nx <= bx + 1; ++nx)
-                    if (nx >= 0 && ny >= 0 && nx < a->blocks_x && ny < a->blocks_y &&
-                        !a->converged[ny * a->blocks_x + nx]) { all = 0; break; }
-            /* decided from the converged flags alone (2 = stops after this check), so the
-               result does not depend on the scan order */
-            if (all) a->active[b] = 2;
+        target_sum = a->target * (double)np;
+        if (!(f_lo < HUGE_VAL) || !(f_hi < HUGE_VAL)) all_cap = 1;
+        else if (f_lo <= target_sum || !(lam_hi > 0.0)) lam = 0.0;  /* reached: every pixel stops */
+        else if (f_hi >= target_sum) lam = HUGE_VAL;              /* out of reach: every noisy pixel to its cap */
+        else {
+            lam = sqrt(lam_lo * lam_hi);
+            for (iter = 0; iter < 100; ++iter) {
+                double f = 0.0, slope = 0.0, next;
+                for (i = 0; i < np; ++i) { /* branch-free, so that it vectorises */
+                    double lo = a->lo[i], hi = a->hi[i], n = lam * a->tmp[i], q;
+                    int inside = n > lo && n < hi;
+                    n = n < lo ? lo : n;
+                    n = n > hi ? hi : n;
+                    q = a->var[i] / n;
+                    f += q;
+                    slope += inside ? q : 0.0;
+                }
+                if (fabs(f - target_sum) <= 1e-6 * target_sum) break;
+                if (f > target_sum) lam_lo = lam; else lam_hi = lam;
+                /* Newton: f(L) = const + slope L0 / L near L0, so df/dL = -slope / L0 */
+                next = slope > 0.0 ? lam + (f - target_sum) * lam / slope : 0.0;
+                if (!(next > lam_lo && next < lam_hi)) next = sqrt(lam_lo * lam_hi);
+                if (!(lam_hi > lam_lo * (1.0 + 1e-12))) break;
+                lam = next;
+            }
         }
-    for (b = 0; b < nb; ++b)
-        if (a->active[b] == 2) {
-            a->active[b] = 0;
-            a->stopped_at[b] = added;
+        if (!all_cap)
+            for (i = 0; i < np; ++i) {
+                double room = (double)a->start[i] + (double)a->cap - (double)film->count[i];
+                double want = a->tmp[i] > 0.0 ? floor(lam * a->tmp[i] - (double)film->count[i] + 0.5) : 0.0;
+                if (want > room) want = room;
+                a->want[i] = want > 0.0 ? (uint32_t)want : 0u;
+            }
+    }
+    if (all_cap)  /* an unknown or overflowing estimate: every pixel samples on to its cap */
+        for (i = 0; i < np; ++i) {
+            a->want[i] = a->start[i] + (uint32_t)a->cap - film->count[i];
+            a->cpp[i] = 1.0;
         }
+}
+
+/* The next pass: pixel i takes min(per_pass, want_i) samples. The jobs are chunks of pixels in
+   raster order, cut so that each holds about the same work (samples x smoothed rays per sample):
+   a few pixels far apart that still sample split evenly over the threads, which tiles would not
+   do. Returns the number of jobs (at most a->chunks). */
+static int pt__adaptive_plan(pt__adaptive *a, pt__pass *ps, int *job_list)
+{
+    size_t i, np = (size_t)a->width * (size_t)a->height;
+    double total = 0.0, acc = 0.0;
+    int jobs = 0;
+    size_t active = 0;
+    uint32_t most;
+    for (i = 0; i < np; ++i) active += a->want[i] > 0u;
+    /* per_pass samples per pixel, more when few pixels still sample, so that a pass holds about
+       as many samples as a pass over every pixel: fewer passes, each long enough for the threads */
+    most = active > 0 && np / active > 1 ? (np / active < (size_t)a->cap ? (uint32_t)(np / active) : (uint32_t)a->cap) : 1u;
+    most = most > (uint32_t)a->cap / (uint32_t)a->per_pass ? (uint32_t)a->cap : most * (uint32_t)a->per_pass;
+    for (i = 0; i < np; ++i) {
+        uint32_t n = a->want[i] < most ? a->want[i] : most;
+        a->step[i] = n;
+        a->want[i] -= n;
+        total += (double)n * a->cpp[i];
+    }
+    a->chunk_first[0] = 0;
+    if (total > 0.0)
+        for (i = 0; i < np; ++i) {
+            if (!a->step[i]) continue;
+            if (acc >= total * (double)jobs / (double)a->chunks && jobs < a->chunks) {
+                a->chunk_first[jobs] = (uint32_t)i; /* job jobs - 1 ends before the pixel that starts this one */
+                jobs++;
+            }
+            acc += (double)a->step[i] * a->cpp[i];
+        }
+    a->chunk_first[jobs] = (uint32_t)np;
+    for (i = 0; i < (size_t)jobs; ++i) job_list[i] = (int)i;
+    ps->pixel_spp = a->step;
+    ps->chunk_first = a->chunk_first;
+    return jobs;
 }
 
 PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
@@ -5504,7 +5627,7 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     pt_camera cam;
     pt__pass ps;
     pt__adaptive ad;
-    int rc, spp, per_pass, passes, pass, tiles, tiles_x, tiles_y, tile, threads, used = 1, result = PT_OK;
+    int rc, spp, per_pass, passes, pass, tiles, tiles_x, tiles_y, tile, threads, used = 1, result = PT_OK, slots;
     int jobs, *job_list = NULL, adaptive = d ? d->adaptive_threshold != 0.0f : 0;
     uint64_t done = 0;
     uint32_t added = 0;
@@ -5555,33 +5678,42 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     ps.seed = d->seed;
     ps.tiles_x = tiles_x;
     ps.cancel = d->cancel;
-    ps.tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)tiles);
-    ps.tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)tiles);
-    ps.tile_done = (unsigned char *)PT_MALLOC((size_t)tiles);
-    job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)tiles);
+    /* jobs: tiles, or in adaptive passes up to ad.chunks chunks of pixels */
+    ad.chunks = 8 * threads < 4096 ? 8 * threads : 4096;
+    slots = adaptive && ad.chunks > tiles ? ad.chunks : tiles;
+    ps.tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
+    ps.tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
+    ps.tile_done = (unsigned char *)PT_MALLOC((size_t)slots);
+    job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)slots);
     if (adaptive) {
-        size_t nb;
+        size_t np = (size_t)d->width * (size_t)d->height;
         ad.target = (double)d->adaptive_threshold * (double)d->adaptive_threshold;
         ad.min_spp = d->adaptive_min_spp ? d->adaptive_min_spp : (spp / 16 > 16 ? spp / 16 : 16);
         ad.check_passes = d->adaptive_check_passes ? d->adaptive_check_passes : 1;
-        ad.blocks_x = (d->width + PT__BLOCK - 1) / PT__BLOCK;
-        ad.blocks_y = (d->height + PT__BLOCK - 1) / PT__BLOCK;
-        nb = (size_t)ad.blocks_x * (size_t)ad.blocks_y;
-        ad.active = (unsigned char *)PT_MALLOC(nb);
-        ad.converged = (unsigned char *)PT_MALLOC(nb);
-        ad.stopped_at = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * nb);
-        ad.noise = (double *)PT_MALLOC(sizeof(double) * nb);
-        ad.spp = (double *)PT_MALLOC(sizeof(double) * nb);
-        if (ad.active) memset(ad.active, 1, nb);
-        if (ad.converged) memset(ad.converged, 0, nb);
-        if (ad.stopped_at) memset(ad.stopped_at, 0, sizeof(uint32_t) * nb);
-        if (ad.noise) memset(ad.noise, 0, sizeof(double) * nb);
-        if (ad.spp) memset(ad.spp, 0, sizeof(double) * nb);
-        ps.block_active = ad.active;
-        ps.blocks_x = ad.blocks_x;
+        ad.per_pass = per_pass;
+        ad.cap = spp;
+        ad.width = d->width;
+        ad.height = d->height;
+        ad.start = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+        ad.want = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+        ad.step = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+        ad.rays = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.noise = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.cost = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.var = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.lo = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.hi = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.mean = (double *)PT_MALLOC(sizeof(double) * 3 * np);
+        ad.mbox = (double *)PT_MALLOC(sizeof(double) * 3 * np);
+        ad.cpp = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.tmp = (double *)PT_MALLOC(sizeof(double) * np);
+        ad.chunk_first = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * (size_t)(ad.chunks + 1));
+        if (ad.start) memcpy(ad.start, film->count, sizeof(uint32_t) * np);
+        if (ad.rays) memset(ad.rays, 0, sizeof(double) * np);
+        ps.pixel_rays = ad.rays;
     }
     if (!ps.tile_stats || !ps.tile_samples || !ps.tile_done || !job_list ||
-        (adaptive && (!ad.active || !ad.converged || !ad.stopped_at || !ad.noise || !ad.spp))) {
+        (adaptive && (!ad.start || !ad.want || !ad.step || !ad.rays || !ad.noise || !ad.cost || !ad.var || !ad.lo || !ad.hi || !ad.cpp || !ad.mean || !ad.mbox || !ad.tmp || !ad.chunk_first))) {
         result = pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "render: out of memory");
         goto cleanup;
     }
@@ -5621,21 +5753,9 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
             pr.seconds = pt__now() - t0;
             if (d->progress(d->progress_user, &pr)) { result = PT_ERROR_CANCELLED; break; }
         }
-        if (adaptive && pass + 1 < passes && added >= (uint32_t)ad.min_spp && (pass + 1) % ad.check_passes == 0) {
-            pt__adaptive_check(&ad, film, added);
-            /* the next pass renders only the tiles that still hold an active block */
-            jobs = 0;
-            for (tile = 0; tile < tiles; ++tile) {
-                int bx0 = (tile % tiles_x) * ps.tile_size / PT__BLOCK, by0 = (tile / tiles_x) * ps.tile_size / PT__BLOCK;
-                int bx1 = ((tile % tiles_x + 1) * ps.tile_size - 1) / PT__BLOCK;
-                int by1 = ((tile / tiles_x + 1) * ps.tile_size - 1) / PT__BLOCK, bx, by, any = 0;
-                if (bx1 >= ad.blocks_x) bx1 = ad.blocks_x - 1;
-                if (by1 >= ad.blocks_y) by1 = ad.blocks_y - 1;
-                for (by = by0; by <= by1 && !any; ++by)
-                    for (bx = bx0; bx <= bx1; ++bx)
-                        if (ad.active[by * ad.blocks_x + bx]) { any = 1; break; }
-                if (any) job_list[jobs++] = tile;
-            }
+        if (adaptive && pass + 1 < passes && added >= (uint32_t)ad.min_spp) {
+            if (!ps.pixel_spp || (pass + 1) % ad.check_passes == 0) pt__adaptive_check(&ad, film);
+            jobs = pt__adaptive_plan(&ad, &ps, job_list);
         }
     }
     total.min_spp = total.max_spp = added;
@@ -5645,17 +5765,15 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
         total.estimated_error = e < HUGE_VAL ? sqrt(e) : -1.0;
     }
     if (adaptive) {
-        int bx, by;
-        for (by = 0; by < ad.blocks_y; ++by)
-            for (bx = 0; bx < ad.blocks_x; ++bx) {
-                int b = by * ad.blocks_x + bx;
-                int w = d->width - bx * PT__BLOCK, h = d->height - by * PT__BLOCK;
-                uint32_t n = ad.active[b] ? added : ad.stopped_at[b];
-                if (w > PT__BLOCK) w = PT__BLOCK;
-                if (h > PT__BLOCK) h = PT__BLOCK;
-                if (!ad.active[b]) total.pixels_converged += (uint64_t)w * (uint64_t)h;
-                if (n < total.min_spp) total.min_spp = n;
-            }
+        size_t i, np = (size_t)d->width * (size_t)d->height;
+        total.min_spp = (uint32_t)spp;
+        total.max_spp = 0;
+        for (i = 0; i < np; ++i) {
+            uint32_t n = film->count[i] - ad.start[i];
+            if (n < (uint32_t)spp) total.pixels_converged++;
+            if (n < total.min_spp) total.min_spp = n;
+            if (n > total.max_spp) total.max_spp = n;
+        }
     }
 #ifndef PDFTRACE_NO_THREADS
     pthread_mutex_destroy(&ps.lock);
@@ -5665,11 +5783,20 @@ cleanup:
     PT_FREE(ps.tile_samples);
     PT_FREE(ps.tile_done);
     PT_FREE(job_list);
-    PT_FREE(ad.active);
-    PT_FREE(ad.converged);
-    PT_FREE(ad.stopped_at);
+    PT_FREE(ad.start);
+    PT_FREE(ad.want);
+    PT_FREE(ad.step);
+    PT_FREE(ad.rays);
     PT_FREE(ad.noise);
-    PT_FREE(ad.spp);
+    PT_FREE(ad.cost);
+    PT_FREE(ad.var);
+    PT_FREE(ad.lo);
+    PT_FREE(ad.hi);
+    PT_FREE(ad.mean);
+    PT_FREE(ad.mbox);
+    PT_FREE(ad.cpp);
+    PT_FREE(ad.tmp);
+    PT_FREE(ad.chunk_first);
     if (result != PT_OK && result != PT_ERROR_CANCELLED) return result;
     total.samples = done;
     total.seconds = pt__now() - t0;
