@@ -5518,7 +5518,7 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
     int iter, all_cap = 0;
     int c;
     for (i = 0; i < np && !all_cap; ++i) {
-        if (film->count[i] < 2) all_cap = 1;
+        if (film->count[i] < 2) { all_cap = 1; break; } /* no variance yet (a resumed film's edge case) */
         for (c = 0; c < 3; ++c) a->mean[c * np + i] = film->sum[3 * i + c] / (double)film->count[i];
     }
     for (c = 0; c < 3 && !all_cap; ++c) pt__box_mean(a->mean + c * np, a->mbox + c * np, a->tmp, a->width, a->height, 1, 1);
