@@ -5274,8 +5274,9 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    -0.7 % (median of 5 seeds; without the pixel itself: below noise) while seeming to beat the
    ideal allocation. 5x5 rather than 3x3 (8 neighbours) or 7x7: the benchmark's Cornell box
    reached the uniform render's error at 128 spp with 0.69x its samples (3x3: 0.73x, 7x7:
-   0.71x, 4 seeds); dropping the largest neighbour (against isolated fireflies) needed more
-   samples than uniform sampling (rare bright samples are the noise). The neighbourhood also
+   0.71x, 4 seeds); at 512 spp 0.74x (3x3: 0.70x; separate runs of 5 seeds: within noise);
+   dropping the largest neighbour (against isolated fireflies) needed more samples than
+   uniform sampling (rare bright samples are the noise). The neighbourhood also
    spreads noise a little beyond where it was seen: a zero-variance pixel near noisy ones keeps
    sampling, so there is no seam where the noise starts. Plan: L solves mean_i v_i / n_i(L) = T^2 with
    n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + samples_per_pixel) (the samples already
