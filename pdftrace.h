@@ -5283,8 +5283,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    taken stay; the mean is convex and decreasing in L: Newton's method safeguarded by bisection);
    L = 0 (every pixel stops) when the target is reached, every pixel with v_i > 0 samples to the
    cap when it is out of reach. Each pass gives pixel i min(step, what its plan still wants),
-   step = samples_per_pass x (pixels / pixels that still sample), at most the cap (so that the last passes
-   are not a long tail of nearly empty ones); the pass's jobs are chunks of pixels in raster order
+   step = samples_per_pass x (pixels / pixels that still sample), at most the cap (so that the
+   last passes are not a long tail of nearly empty ones); the pass's jobs are chunks of pixels in raster order
    holding about equal work (samples x rays per sample), so the threads finish together. Every
    decision is taken between passes on the calling thread from the film and the rays counted per
    pixel, so the image stays independent of the thread count and job order.
