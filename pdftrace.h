@@ -4790,9 +4790,18 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
    - MIS: both of LIGHT's and MATERIAL's estimates of direct light, weighted by the power
      heuristic w_a = p_a^2 / (p_a^2 + p_b^2) (Veach & Guibas, "Optimally Combining Sampling
      Techniques for Monte Carlo Rendering", SIGGRAPH 1995).
-   Russian roulette from rr_start_depth continues with probability q = min(0.95, max(beta_in))
+   Russian roulette from rr_start_depth continues with probability q = min(0.95, sqrt(max(beta_in)))
    and divides beta by q (Arvo & Kirk 1990), where beta_in is the throughput that reached this
-   vertex, before its scatter weight f/p. Any q chosen before the coin is flipped keeps the
+   vertex, before its scatter weight f/p. Why the square root: roulette trades the variance it
+   adds, b^2 E[Y^2] (1/q - 1) for a continuation b Y, against the time (1 - q) C it saves; the
+   q that minimises variance x time is proportional to b (so q = b/b_ref), with b_ref set by
+   the rest of the pixel's variance and cost, which a path does not know. q = b (b_ref = 1,
+   pbrt's choice) cut paths too early on every benchmark scene: with q = sqrt(b), which keeps
+   more paths of throughput 0.1-1, variance x CPU time per sample fell by 7.0 / 5.6 / 5.7 /
+   6.7 / 11 % with the Sobol sampler and 1.5 / 0.4 / 0.5 / 6.7 / 7.7 % with independent
+   numbers (tiny-light-pure / tiny-light / many-lights / cornell / metal-glass, MIS, 64 spp,
+   4 pairs of seeds, one thread; starting roulette at depth 2 or 5 instead of 3, or q = b,
+   was worse on at least one of them). Any q chosen before the coin is flipped keeps the
    estimator unbiased; taking it from the throughput after the scatter weight (the textbook
    choice) turns a well-sampled direction into a firefly: when f/p is tiny because p is large
    (a light-sampled direction towards a small bright light under MIXTURE), the path survived
@@ -5049,7 +5058,7 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
     ray->origin = *prev_delta ? pt__offset_origin(v->p, v->ng, wi, h->magnitude) : v->o;
     ray->dir = wi;
     if (depth + 1 >= cfg->rr_start) {
-        float q = pt__minf(0.95f, pt_max_component(beta_in));
+        float q = pt__minf(0.95f, sqrtf(pt_max_component(beta_in)));
         if (!(q > 0.0f) || pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_RR)) >= q) return 0;
         *beta = pt_scale(*beta, 1.0f / q);
     }
