@@ -90,6 +90,18 @@ static int fine_checker(pt_scene *s, float a, float b)
     return pt_scene_add_material(s, &md);
 }
 
+/* The view both wall scenes below are rendered with: 64 x 16 pixels, 64 spp, vfov 30 from
+   z = -10 towards the wall at z = 0, MATERIAL, a white background. */
+static void stripes_desc(pt_render_desc *d, uint64_t seed)
+{
+    *d = tu_base_desc(64, 16, 64, seed);
+    d->camera.look_from = pt_v3(0, 0, -10);
+    d->camera.look_at = pt_v3(0, 0, 0);
+    d->camera.vfov_degrees = 30;
+    d->strategy = PT_STRATEGY_MATERIAL;
+    d->background = pt_v3(1, 1, 1);
+}
+
 /* The wall of half_easy_scene with materials left (image left, x > 0) and right. */
 static pt_scene *two_halves_scene(pt_render_desc *d, int left_glows, float la, float lb)
 {
@@ -105,12 +117,7 @@ static pt_scene *two_halves_scene(pt_render_desc *d, int left_glows, float la, f
     rc = pt_scene_add_quad(s, pt_v3(-half_w / 64.0f, -50, 0), pt_v3(50, 0, 0), pt_v3(0, 100, 0), glow);
     rc |= pt_scene_add_quad(s, pt_v3(-50, -50, 0), pt_v3(50.0f - half_w / 64.0f, 0, 0), pt_v3(0, 100, 0), wall);
     if (glow < 0 || wall < 0 || rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
-    *d = tu_base_desc(64, 16, 64, 99);
-    d->camera.look_from = pt_v3(0, 0, -10);
-    d->camera.look_at = pt_v3(0, 0, 0);
-    d->camera.vfov_degrees = 30;
-    d->strategy = PT_STRATEGY_MATERIAL;
-    d->background = pt_v3(1, 1, 1);
+    stripes_desc(d, 99);
     return s;
 }
 static pt_scene *half_easy_scene(pt_render_desc *d) { return two_halves_scene(d, 1, 0, 0); }
@@ -210,12 +217,7 @@ static pt_scene *stripes_scene(pt_render_desc *d)
         rc |= pt_scene_add_quad(s, pt_v3(xa, -50, -0.01f), pt_v3(xb - xa, 0, 0), pt_v3(0, 100, 0), glow);
     }
     if (glow < 0 || wall < 0 || rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
-    *d = tu_base_desc(64, 16, 64, 5);
-    d->camera.look_from = pt_v3(0, 0, -10);
-    d->camera.look_at = pt_v3(0, 0, 0);
-    d->camera.vfov_degrees = 30;
-    d->strategy = PT_STRATEGY_MATERIAL;
-    d->background = pt_v3(1, 1, 1);
+    stripes_desc(d, 5);
     return s;
 }
 

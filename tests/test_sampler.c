@@ -282,10 +282,35 @@ done:
 
 /* ---- randomisation ---- */
 
+/* Chi-square p-value of point `index` of pt_sobol_scrambled (four = 0) or of dimensions 2 and 3 of
+   pt_sobol_scrambled4 (four = 1) over 25,600 random seeds, on a 16 x 16 grid (255 dof). */
+static double seeds_chi2_p(uint32_t index, uint64_t rng_seed, int four)
+{
+    enum { G = 16, N = 25600 };
+    static int count[G * G];
+    double chi2 = 0.0, e = (double)N / (G * G);
+    pt_rng r;
+    int c;
+    memset(count, 0, sizeof count);
+    pt_rng_seed(&r, rng_seed, 5u);
+    for (c = 0; c < N; ++c) {
+        float u[4];
+        uint64_t seed = ((uint64_t)pt_rng_u32(&r) << 32) | pt_rng_u32(&r);
+        if (four) {
+            pt_sobol_scrambled4(index, seed, u);
+            u[0] = u[2];
+            u[1] = u[3];
+        } else
+            pt_sobol_scrambled(index, seed, u);
+        count[(int)(u[0] * G) * G + (int)(u[1] * G)]++;
+    }
+    for (c = 0; c < G * G; ++c) chi2 += (count[c] - e) * (count[c] - e) / e;
+    return tu_chi2_sf(chi2, G * G - 1);
+}
+
 static void sobol_randomised(test_ctx *t)
 {
     static const uint32_t idx[] = {0u, 1u, 77u, 40000u};
-    enum { G = 16, N = 25600 };
     double alpha = tu_suite_alpha(), worst_p = 1.0;
     int k, differ = 0, seed_differ = 0;
     uint32_t i;
@@ -299,47 +324,15 @@ static void sobol_randomised(test_ctx *t)
     }
     CHECK(t, differ >= 60, "only %d of 64 scrambled points differ from the unscrambled ones", differ);
     CHECK(t, seed_differ >= 60, "only %d of 64 points differ between seeds 7 and 8", seed_differ);
-    /* the point of one index over random seeds is uniform on the square */
-    for (k = 0; k < (int)(sizeof idx / sizeof idx[0]); ++k) {
-        static int count[G * G];
-        double chi2 = 0.0, e = (double)N / (G * G), p;
-        pt_rng r;
-        int c;
-        memset(count, 0, sizeof count);
-        pt_rng_seed(&r, 99u + (uint64_t)k, 5u);
-        for (c = 0; c < N; ++c) {
-            float u[2];
-            uint64_t seed = ((uint64_t)pt_rng_u32(&r) << 32) | pt_rng_u32(&r);
-            pt_sobol_scrambled(idx[k], seed, u);
-            count[(int)(u[0] * G) * G + (int)(u[1] * G)]++;
-        }
-        for (c = 0; c < G * G; ++c) chi2 += (count[c] - e) * (count[c] - e) / e;
-        p = tu_chi2_sf(chi2, G * G - 1);
+    /* the point of one index over random seeds is uniform on the square; pt_sobol_scrambled4's
+       dimensions 2 and 3 likewise */
+    for (k = 0; k < (int)(sizeof idx / sizeof idx[0]) + 2; ++k) {
+        int four = k >= (int)(sizeof idx / sizeof idx[0]);
+        uint32_t index = four ? idx[2 * (k - 4) + 1] : idx[k];
+        double p = seeds_chi2_p(index, four ? 199u + (uint64_t)(k - 4) : 99u + (uint64_t)k, four);
         tu_suite_count(1);
         if (p < worst_p) worst_p = p;
-        CHECK(t, p >= alpha, "index %u over seeds: chi-square %.1f (%d dof), p = %.3g < %.3g", idx[k], chi2, G * G - 1, p,
-              alpha);
-    }
-    /* pt_sobol_scrambled4's dimensions 2 and 3 likewise */
-    for (k = 0; k < 2; ++k) {
-        static int count[G * G];
-        double chi2 = 0.0, e = (double)N / (G * G), p;
-        pt_rng r;
-        int c;
-        memset(count, 0, sizeof count);
-        pt_rng_seed(&r, 199u + (uint64_t)k, 5u);
-        for (c = 0; c < N; ++c) {
-            float u[4];
-            uint64_t seed = ((uint64_t)pt_rng_u32(&r) << 32) | pt_rng_u32(&r);
-            pt_sobol_scrambled4(idx[2 * k + 1], seed, u);
-            count[(int)(u[2] * G) * G + (int)(u[3] * G)]++;
-        }
-        for (c = 0; c < G * G; ++c) chi2 += (count[c] - e) * (count[c] - e) / e;
-        p = tu_chi2_sf(chi2, G * G - 1);
-        tu_suite_count(1);
-        if (p < worst_p) worst_p = p;
-        CHECK(t, p >= alpha, "dims 2, 3, index %u over seeds: chi-square %.1f (%d dof), p = %.3g < %.3g", idx[2 * k + 1], chi2,
-              G * G - 1, p, alpha);
+        CHECK(t, p >= alpha, "%sindex %u over seeds: chi-square p = %.3g < %.3g", four ? "dims 2, 3, " : "", index, p, alpha);
     }
     test_note(t, "uniform over seeds: smallest p %.3g (level %.2g each)", worst_p, alpha);
 }
