@@ -604,9 +604,9 @@ typedef struct pt_shading_point {
    querying (until then they fail with PT_ERROR_INVALID_STATE). So a scene built by
    pt_scene_desc_build can be switched and re-committed. PT_BACKEND_EMBREE without
    PDFTRACE_EMBREE compiled in: PT_ERROR_UNSUPPORTED. AUTO (the default) uses Embree, when
-   compiled in, for scenes of at least PDFTRACE_EMBREE_MIN_PRIMS primitives and for tiny scenes
-   made mostly of quads and spheres (see PDFTRACE_EMBREE_SMALL_PRIMS), and falls back to
-   the built-in BVH if Embree fails; an explicit EMBREE reports the failure instead.
+   compiled in, for scenes of at least PDFTRACE_EMBREE_MIN_PRIMS primitives (and, if a build
+   sets PDFTRACE_EMBREE_SMALL_PRIMS, for tiny scenes made mostly of quads and spheres), and
+   falls back to the built-in BVH if Embree fails; an explicit EMBREE reports the failure instead.
    pt_scene_info.backend says which one the commit chose. */
 PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
 /* The configuration string handed to rtcNewDevice at the next commit with Embree (see
@@ -617,29 +617,30 @@ PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
 PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
 
 /* AUTO uses Embree (when compiled in) for scenes with at least PDFTRACE_EMBREE_MIN_PRIMS
-   primitives, and for tiny scenes (fewer than PDFTRACE_EMBREE_SMALL_PRIMS) made mostly of quads
-   and spheres (triangles less than half the primitives); the built-in BVH otherwise.
+   primitives, and the built-in BVH below. PDFTRACE_EMBREE_SMALL_PRIMS (default 0: off) also
+   sends scenes of fewer primitives than it, made mostly of quads and spheres (triangles less
+   than half the primitives), to Embree.
    Measured by make bench-bvh (bench/bvh.c: one batch of camera, bounce and shadow rays traced
    by both backends through pt_scene_intersect/occluded on one thread, interleaved, medians of
    paired ratios; shared 2-core AMD EPYC, Embree 3.13.5, gcc 12 -O3; bench/out/bvh.md).
    - Triangles (terrains of 8 to 1M triangles lit by one sphere). Built-in/Embree rays/s in
      three runs: 1.5 at 9 primitives, 1.2-1.3 at 513, 1.0-1.2 at 1059, 0.98-1.38 from 2179 to
      3201, 1.00-1.10 at 4419, then Embree ahead: 0.90-0.95 at 6499, 0.88-0.99 at 8979,
-     0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M. The threshold sits between the last size
-     where the built-in BVH led or tied in every run (4419) and the first where Embree led in
-     every run (6499).
-   - Quads and spheres (the scene files in scenes/, two runs): Embree was ahead on every scene
-     of 3 to 13 quads and spheres (built-in/Embree 0.64-0.84; the Cornell box 0.73-0.79: with so
-     few primitives the built-in BVH tests the large walls together in one leaf block, Embree
-     culls them by their own boxes), the built-in BVH on 81 (80 quads and a sphere: 1.01-1.07).
-     Nothing was measured between 13 and 81; PDFTRACE_EMBREE_SMALL_PRIMS = 32 splits the gap.
-     A 2304-triangle mesh on a 2-quad floor: built-in 1.02-1.06 (the triangle rule).
-     These figures predate one primitive per leaf in small scenes (PT__BVH_SMALL_SCENE), which
-     gives the built-in BVH the same per-quad culling; not re-run with bench/bvh.c since. Full
-     MIS renders afterwards (64x64, one thread, CPU time, 5 paired runs): built-in/Embree 0.91
-     on bench/scenes/tiny-light-pure.scene, 1.01 many-lights, 1.02 cornell. */
+     0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M; two runs on 2026-11-23 (the second with
+     other jobs on the machine): 1.11-1.12 at 9, 1.23-1.55 from 33 to 513, 1.06-1.12 from 1059
+     to 4419, 0.98 and 1.06 at 6499, 0.98-1.02 from 8979 to 25089, 0.86-0.99 from 36451 to 1M.
+     The threshold sits above the last size where the built-in BVH led in every run (4419);
+     Embree was within 3 % or ahead in every run from 8979 on, and at 6499 in four of five.
+   - Quads and spheres (the scene files in scenes/). Before the built-in BVH gave scenes of at
+     most 32 primitives one primitive per leaf (PT__BVH_SMALL_SCENE), Embree was ahead on every
+     scene of 3 to 13 quads and spheres (built-in/Embree 0.64-0.84: the built-in BVH tested the
+     big walls together in one leaf block), so PDFTRACE_EMBREE_SMALL_PRIMS was 32. Since then
+     the built-in BVH is ahead on all of them (2026-11-23, two runs: 1.04-1.06 on the Cornell
+     boxes of 13 primitives, 1.48-1.61 on the scenes of 3; full 2-thread renders of the Cornell
+     box 1.04 and 1.21), and on 81 (glass, 1.41-1.43): so the small-scene rule is off by
+     default. */
 #ifndef PDFTRACE_EMBREE_SMALL_PRIMS
-#define PDFTRACE_EMBREE_SMALL_PRIMS 32
+#define PDFTRACE_EMBREE_SMALL_PRIMS 0
 #endif
 #ifndef PDFTRACE_EMBREE_MIN_PRIMS
 #define PDFTRACE_EMBREE_MIN_PRIMS 5000
@@ -4462,11 +4463,13 @@ static int pt__accel_build(pt_scene *s)
     int rc;
 #ifdef PDFTRACE_EMBREE
     int want = s->backend_request;
-    if (want == PT_BACKEND_AUTO)
-        want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ||
-                       (2u * (uint64_t)s->triangle_count < s->prim_count &&
-                        s->prim_count < (uint32_t)(PDFTRACE_EMBREE_SMALL_PRIMS))
-                   ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN; /* the rule measured at PDFTRACE_EMBREE_MIN_PRIMS */
+    if (want == PT_BACKEND_AUTO) { /* the rule measured at PDFTRACE_EMBREE_MIN_PRIMS */
+        want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN;
+#if PDFTRACE_EMBREE_SMALL_PRIMS > 0
+        if (2u * (uint64_t)s->triangle_count < s->prim_count && s->prim_count < (uint32_t)(PDFTRACE_EMBREE_SMALL_PRIMS))
+            want = PT_BACKEND_EMBREE;
+#endif
+    }
     pt__rtc_release(s);
     if (want == PT_BACKEND_EMBREE) {
         {

@@ -55,8 +55,8 @@ static void compare_ray(const pt_scene *s, pt_ray r, float tmax, bvh_stats *st, 
     }
 }
 
-/* This section tests the built-in BVH: with Embree compiled in, AUTO would hand scenes mostly of
-   quads and spheres to Embree (section 5b; its own tests are in test_embree.c). */
+/* This section tests the built-in BVH: pin it, whatever AUTO would choose with Embree compiled
+   in (section 5b; its own tests are in test_embree.c). */
 static int tb_commit_builtin(pt_scene *s)
 {
     int rc = pt_scene_set_backend(s, PT_BACKEND_BUILTIN);

@@ -230,9 +230,9 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
     FZ_CHECK(T, s != NULL, NULL);
     FZ_CHECK(T, r.width == d.width && r.height == d.height && r.samples_per_pixel == d.samples_per_pixel, NULL);
     /* The ray checks below compare the built-in BVH with brute force. With Embree compiled in,
-       AUTO gives tiny quad/sphere scenes to Embree, whose triangles may round differently on
-       degenerate input (Embree against the built-in BVH is test_embree.c's job): pin the
-       built-in BVH, as every fuzzed scene had before that rule. */
+       AUTO may give a scene to Embree (PDFTRACE_EMBREE_MIN_PRIMS, PDFTRACE_EMBREE_SMALL_PRIMS),
+       whose triangles may round differently on degenerate input (Embree against the built-in
+       BVH is test_embree.c's job): pin the built-in BVH. */
     {
         pt_scene_info bi;
         pt_scene_get_info(s, &bi);
