@@ -1534,12 +1534,13 @@ static uint32_t pt__reverse_bits(uint32_t x)
    bits it is a nested uniform (Owen) scramble of the binary fraction. The multiplier is a second,
    independent seed (a seed-dependent multiply mixes better: Vegdahl, "Building a Better LK Hash",
    2021); the even constants are ours. For a uniform `add` the result is exactly uniform whatever
-   x and `mul` are: x + add is uniform and the rest is a bijection fixed by `mul`. */
-static uint32_t pt__nested_hash(uint32_t x, uint32_t add, uint32_t mul)
+   x and `mul_odd` are: x + add is uniform and the rest is a bijection fixed by `mul_odd`. The
+   multiplier comes odd (pt__sobol_seeds stores it so). */
+static uint32_t pt__nested_hash(uint32_t x, uint32_t add, uint32_t mul_odd)
 {
     x += add;
     x ^= x * 0xf9b439fcu;
-    x *= mul | 1u;
+    x *= mul_odd;
     x ^= x * 0x91d93080u;
     x ^= x * 0x8142c8eau;
     return x;
@@ -1593,64 +1594,131 @@ PTDEF uint32_t pt_sobol_u32(uint32_t index, int dim)
     if (dim == 3) return pt__reverse_bits((uint32_t)(pt__sobol23_reversed(index) >> 32));
     return 0u;
 }
-/* A 32-bit binary fraction to a float in [0, 1) (its top 24 bits, as pt_rng_float). */
-static float pt__fraction_float(uint32_t x) { return (float)(x >> 8) * (1.0f / 16777216.0f); }
+/* The bits of a byte in reverse order (tests/test_sampler.c checks every entry). */
+static const unsigned char pt__reverse_byte[256] = {
+    0x00, 0x80, 0x40, 0xc0, 0x20, 0xa0, 0x60, 0xe0, 0x10, 0x90, 0x50, 0xd0, 0x30, 0xb0, 0x70, 0xf0,
+    0x08, 0x88, 0x48, 0xc8, 0x28, 0xa8, 0x68, 0xe8, 0x18, 0x98, 0x58, 0xd8, 0x38, 0xb8, 0x78, 0xf8,
+    0x04, 0x84, 0x44, 0xc4, 0x24, 0xa4, 0x64, 0xe4, 0x14, 0x94, 0x54, 0xd4, 0x34, 0xb4, 0x74, 0xf4,
+    0x0c, 0x8c, 0x4c, 0xcc, 0x2c, 0xac, 0x6c, 0xec, 0x1c, 0x9c, 0x5c, 0xdc, 0x3c, 0xbc, 0x7c, 0xfc,
+    0x02, 0x82, 0x42, 0xc2, 0x22, 0xa2, 0x62, 0xe2, 0x12, 0x92, 0x52, 0xd2, 0x32, 0xb2, 0x72, 0xf2,
+    0x0a, 0x8a, 0x4a, 0xca, 0x2a, 0xaa, 0x6a, 0xea, 0x1a, 0x9a, 0x5a, 0xda, 0x3a, 0xba, 0x7a, 0xfa,
+    0x06, 0x86, 0x46, 0xc6, 0x26, 0xa6, 0x66, 0xe6, 0x16, 0x96, 0x56, 0xd6, 0x36, 0xb6, 0x76, 0xf6,
+    0x0e, 0x8e, 0x4e, 0xce, 0x2e, 0xae, 0x6e, 0xee, 0x1e, 0x9e, 0x5e, 0xde, 0x3e, 0xbe, 0x7e, 0xfe,
+    0x01, 0x81, 0x41, 0xc1, 0x21, 0xa1, 0x61, 0xe1, 0x11, 0x91, 0x51, 0xd1, 0x31, 0xb1, 0x71, 0xf1,
+    0x09, 0x89, 0x49, 0xc9, 0x29, 0xa9, 0x69, 0xe9, 0x19, 0x99, 0x59, 0xd9, 0x39, 0xb9, 0x79, 0xf9,
+    0x05, 0x85, 0x45, 0xc5, 0x25, 0xa5, 0x65, 0xe5, 0x15, 0x95, 0x55, 0xd5, 0x35, 0xb5, 0x75, 0xf5,
+    0x0d, 0x8d, 0x4d, 0xcd, 0x2d, 0xad, 0x6d, 0xed, 0x1d, 0x9d, 0x5d, 0xdd, 0x3d, 0xbd, 0x7d, 0xfd,
+    0x03, 0x83, 0x43, 0xc3, 0x23, 0xa3, 0x63, 0xe3, 0x13, 0x93, 0x53, 0xd3, 0x33, 0xb3, 0x73, 0xf3,
+    0x0b, 0x8b, 0x4b, 0xcb, 0x2b, 0xab, 0x6b, 0xeb, 0x1b, 0x9b, 0x5b, 0xdb, 0x3b, 0xbb, 0x7b, 0xfb,
+    0x07, 0x87, 0x47, 0xc7, 0x27, 0xa7, 0x67, 0xe7, 0x17, 0x97, 0x57, 0xd7, 0x37, 0xb7, 0x77, 0xf7,
+    0x0f, 0x8f, 0x4f, 0xcf, 0x2f, 0xaf, 0x6f, 0xef, 0x1f, 0x9f, 0x5f, 0xdf, 0x3f, 0xbf, 0x7f, 0xff};
+/* Step 3's last part for one coordinate: h is the scrambled value bit-reversed; the float is the
+   top 24 bits of reverse(h) over 2^24 (as pt_rng_float takes a word's top 24 bits), i.e. h's low
+   24 bits reversed: three byte look-ups instead of a whole 32-bit reversal. */
+static float pt__reversed_fraction_float(uint32_t h)
+{
+    uint32_t f = ((uint32_t)pt__reverse_byte[h & 0xffu] << 16) | ((uint32_t)pt__reverse_byte[(h >> 8) & 0xffu] << 8) |
+                 (uint32_t)pt__reverse_byte[(h >> 16) & 0xffu];
+    return (float)(int32_t)f * (1.0f / 16777216.0f);
+}
 /* Step 3 for one coordinate given bit-reversed: the Owen-scrambled value as a float. */
-static float pt__owen_float(uint32_t x_reversed, uint32_t add, uint32_t mul)
+static float pt__owen_float(uint32_t x_reversed, uint32_t add, uint32_t mul_odd)
 {
-    return pt__fraction_float(pt__reverse_bits(pt__nested_hash(x_reversed, add, mul)));
+    return pt__reversed_fraction_float(pt__nested_hash(x_reversed, add, mul_odd));
 }
-/* The seeds of a set and its shuffled index (steps 1 and the seeds of 3): h1 = (shuffle, x0's
-   addend), h2 = (x1's addend, x0's and x1's multipliers); dimensions 2 and 3 take theirs from h2
-   (pt__sobol_point23). */
-typedef struct pt__sobol_key {
-    uint32_t k;  /* the shuffled index */
-    uint64_t h1, h2;
-} pt__sobol_key;
-static pt__sobol_key pt__sobol_key_make(uint32_t index_reversed, uint64_t seed)
+/* A set's seeds for steps 1 and 3, all from its 64-bit seed by SplitMix64 (pt__mix64):
+   h1 = mix64(seed) and h2 = mix64(h1 ^ c1) give the shuffle's (addend h1's low word, multiplier
+   that word shifted down 15) and coordinates 0 and 1's (addends h1's high word and h2's low word;
+   multipliers h2's top 16 bits and its bits 32..47); h3 = mix64(h2 ^ c2) and h4 = mix64(h3 ^ c1)
+   give coordinates 2 and 3's (addends h3's low and high words, multipliers h4's), made only for
+   the sets that draw them. Multipliers are stored odd (pt__nested_hash). */
+typedef struct pt__sobol_seeds {
+    uint64_t seed;  /* the set seed they come from */
+    uint64_t h2;    /* (for coordinates 2 and 3's) */
+    uint32_t shuffle_add, shuffle_mul;
+    uint32_t add[4], mul[4];
+    int has23;      /* whether add[2..3], mul[2..3] are made */
+} pt__sobol_seeds;
+static void pt__sobol_seeds_make(pt__sobol_seeds *e, uint64_t seed)
 {
-    pt__sobol_key q;
-    uint32_t s_shuffle, r;
-    q.h1 = pt__mix64(seed);
-    q.h2 = pt__mix64(q.h1 ^ 0x2545f4914f6cdd1dULL);
-    s_shuffle = (uint32_t)q.h1;
-    /* 1. shuffle: the index's low 16 bits are the top 16 of index_reversed */
-    r = (pt__nested_hash(index_reversed, s_shuffle, s_shuffle >> 15) & 0xffff0000u) | (index_reversed & 0x0000ffffu);
-    q.k = pt__reverse_bits(r);
-    return q;
+    uint64_t h1 = pt__mix64(seed), h2 = pt__mix64(h1 ^ 0x2545f4914f6cdd1dULL);
+    e->seed = seed;
+    e->h2 = h2;
+    e->shuffle_add = (uint32_t)h1;
+    e->shuffle_mul = ((uint32_t)h1 >> 15) | 1u;
+    e->add[0] = (uint32_t)(h1 >> 32);
+    e->mul[0] = (uint32_t)(h2 >> 48) | 1u;
+    e->add[1] = (uint32_t)h2;
+    e->mul[1] = ((uint32_t)(h2 >> 32) & 0xffffu) | 1u;
+    e->add[2] = e->add[3] = e->mul[2] = e->mul[3] = 0u;
+    e->has23 = 0;
 }
-/* dims (1 or 2) coordinates 0 and 1 of the point (2 and 3: van der Corput's fraction is
-   reverse(k), so its reversal is k itself). */
-static void pt__sobol_point01(const pt__sobol_key *q, int dims, float *u)
+static void pt__sobol_seeds_make23(pt__sobol_seeds *e)
 {
-    u[0] = pt__owen_float(q->k, (uint32_t)(q->h1 >> 32), (uint32_t)(q->h2 >> 48));
-    if (dims > 1) u[1] = pt__owen_float(pt__sobol1_reversed(q->k), (uint32_t)q->h2, (uint32_t)(q->h2 >> 32) & 0xffffu);
+    uint64_t h3 = pt__mix64(e->h2 ^ 0x6c62272e07bb0142ULL), h4 = pt__mix64(h3 ^ 0x2545f4914f6cdd1dULL);
+    e->add[2] = (uint32_t)h3;
+    e->mul[2] = (uint32_t)h4 | 1u;
+    e->add[3] = (uint32_t)(h3 >> 32);
+    e->mul[3] = (uint32_t)(h4 >> 32) | 1u;
+    e->has23 = 1;
 }
-/* Coordinates 2 and 3 of the point, with seeds h3 (addends) and h4 (multipliers) drawn from h2. */
-static void pt__sobol_point23(const pt__sobol_key *q, float *u)
+/* Step 1: the shuffled index k of the sample whose index is reverse(index_reversed) and whose
+   index's high 16 bits are index_high (= index & 0xffff0000). The shuffle scrambles the index's
+   low 16 bits (the top 16 of index_reversed) and keeps its high ones: k = reverse(r) with r = the
+   hash's top 16 bits over index_reversed's low 16, so k = index_high | the hash's top 16 bits
+   reversed (two byte look-ups). */
+static uint32_t pt__sobol_shuffle(const pt__sobol_seeds *e, uint32_t index_reversed, uint32_t index_high)
 {
-    uint64_t h3 = pt__mix64(q->h2 ^ 0x6c62272e07bb0142ULL), h4 = pt__mix64(h3 ^ 0x2545f4914f6cdd1dULL);
-    uint64_t x = pt__sobol23_reversed(q->k);
-    u[0] = pt__owen_float((uint32_t)x, (uint32_t)h3, (uint32_t)h4);
-    u[1] = pt__owen_float((uint32_t)(x >> 32), (uint32_t)(h3 >> 32), (uint32_t)(h4 >> 32));
+    uint32_t h = pt__nested_hash(index_reversed, e->shuffle_add, e->shuffle_mul);
+    return index_high | ((uint32_t)pt__reverse_byte[(h >> 16) & 0xffu] << 8) | (uint32_t)pt__reverse_byte[h >> 24];
 }
-static void pt__sobol_point(uint32_t index_reversed, uint64_t seed, int dims, float *u)
+/* Steps 2 and 3: dims (1 or 2) coordinates 0 and 1 of the point with shuffled index k (van der
+   Corput's fraction is reverse(k), so its reversal is k itself). */
+static void pt__sobol_point01(const pt__sobol_seeds *e, uint32_t k, int dims, float *u)
 {
-    pt__sobol_key q = pt__sobol_key_make(index_reversed, seed);
-    pt__sobol_point01(&q, dims, u);
+    u[0] = pt__owen_float(k, e->add[0], e->mul[0]);
+    if (dims > 1) u[1] = pt__owen_float(pt__sobol1_reversed(k), e->add[1], e->mul[1]);
+}
+/* Coordinates 2 and 3 of the point. */
+static void pt__sobol_point23(pt__sobol_seeds *e, uint32_t k, float *u)
+{
+    uint64_t x = pt__sobol23_reversed(k);
+    if (!e->has23) pt__sobol_seeds_make23(e);
+    u[0] = pt__owen_float((uint32_t)x, e->add[2], e->mul[2]);
+    u[1] = pt__owen_float((uint32_t)(x >> 32), e->add[3], e->mul[3]);
 }
 PTDEF void pt_sobol_scrambled(uint32_t index, uint64_t seed, float u[2])
 {
+    pt__sobol_seeds e;
     if (!u) return;
-    pt__sobol_point(pt__reverse_bits(index), seed, 2, u);
+    pt__sobol_seeds_make(&e, seed);
+    pt__sobol_point01(&e, pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u), 2, u);
 }
 PTDEF void pt_sobol_scrambled4(uint32_t index, uint64_t seed, float u[4])
 {
-    pt__sobol_key q;
+    pt__sobol_seeds e;
+    uint32_t k;
     if (!u) return;
-    q = pt__sobol_key_make(pt__reverse_bits(index), seed);
-    pt__sobol_point01(&q, 2, u);
-    pt__sobol_point23(&q, u + 2);
+    pt__sobol_seeds_make(&e, seed);
+    k = pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u);
+    pt__sobol_point01(&e, k, 2, u);
+    pt__sobol_point23(&e, k, u + 2);
+}
+/* The seeds of the sets drawn lately, by set number modulo PT__SOBOL_CACHE_SIZE, each tagged with
+   the set seed it was made from: a set's seed depends on (render seed, pixel, set) and not on the
+   sample, so a pixel's samples, drawn one after another by one tile job, share them and the
+   SplitMix64 chain runs once per pixel and set instead of once per draw. An entry is used only
+   when its tag equals the set seed wanted (else it is remade), so the values drawn never depend
+   on the cache. Entries start as the seeds of set seed 0. */
+#define PT__SOBOL_CACHE_SIZE 64u
+typedef struct pt__sobol_cache {
+    pt__sobol_seeds e[PT__SOBOL_CACHE_SIZE];
+} pt__sobol_cache;
+static void pt__sobol_cache_init(pt__sobol_cache *c)
+{
+    uint32_t i;
+    pt__sobol_seeds_make(&c->e[0], 0u);
+    for (i = 1; i < PT__SOBOL_CACHE_SIZE; ++i) c->e[i] = c->e[0];
 }
 
 /* The integrator's source of random numbers for one camera sample (see above). */
@@ -1660,11 +1728,11 @@ typedef struct pt__sampler {
     int sobol;
     int rng_seeded;        /* SOBOL: whether rng is seeded yet */
     uint32_t index_reversed; /* SOBOL: the sample's index within its pixel, bits reversed */
-    uint64_t key;          /* SOBOL: a hash of (seed, pixel) */
+    uint32_t index_high;   /* SOBOL: the index's high 16 bits (index & 0xffff0000) */
+    uint64_t key;          /* SOBOL: a hash of (seed, pixel) (pt__sobol_pixel_key) */
     uint64_t seed;         /* SOBOL: the render's seed, pixel and sample index, to seed rng */
     uint32_t pixel, sample;
-    uint32_t pair_set;     /* SOBOL: the four-dimensional set whose key `pair` holds; ~0u: none */
-    pt__sobol_key pair;
+    pt__sobol_cache *cache; /* SOBOL: set seeds, shared by the samples of one tile job */
 } pt__sampler;
 
 /* Sets: the pixel and lens positions, then PT__SLOTS per bounce (depth d's slot s is set
@@ -1686,7 +1754,14 @@ enum {
 };
 #define PT__SET_BOUNCE(depth, slot) (2u + (uint32_t)PT__SLOTS * (uint32_t)(depth) + (uint32_t)(slot))
 
-static void pt__sampler_init(pt__sampler *smp, pt_sampler kind, uint64_t seed, uint32_t pixel, uint32_t sample)
+/* SOBOL: the key of a pixel's sets (the same for all its samples). */
+static uint64_t pt__sobol_pixel_key(uint64_t seed, uint32_t pixel)
+{
+    return pt__mix64(pt__mix64(seed ^ 0x6a09e667f3bcc909ULL) + (uint64_t)pixel);
+}
+/* `pixel_key` (pt__sobol_pixel_key(seed, pixel)) and `cache` (initialised) are used by SOBOL only. */
+static void pt__sampler_init(pt__sampler *smp, pt_sampler kind, uint64_t seed, uint32_t pixel, uint32_t sample,
+                             uint64_t pixel_key, pt__sobol_cache *cache)
 {
     smp->sobol = kind == PT_SAMPLER_SOBOL;
     smp->rng_seeded = !smp->sobol;
@@ -1695,11 +1770,14 @@ static void pt__sampler_init(pt__sampler *smp, pt_sampler kind, uint64_t seed, u
     smp->pixel = pixel;
     smp->sample = sample;
     smp->index_reversed = 0u;
+    smp->index_high = 0u;
     smp->key = 0u;
-    smp->pair_set = ~0u;
+    smp->cache = NULL;
     if (smp->sobol) {
         smp->index_reversed = pt__reverse_bits(sample);
-        smp->key = pt__mix64(pt__mix64(seed ^ 0x6a09e667f3bcc909ULL) + (uint64_t)pixel);
+        smp->index_high = sample & 0xffff0000u;
+        smp->key = pixel_key;
+        smp->cache = cache;
     }
 }
 /* The sample's PCG stream (pt_rng_for_sample; a guide PDF draws from it in either mode). */
@@ -1715,30 +1793,35 @@ static uint64_t pt__set_seed(const pt__sampler *smp, uint32_t set)
 {
     return smp->key + 0x9e3779b97f4a7c15ULL * (uint64_t)(set + 1u);
 }
+/* SOBOL: the seeds of set `set` of this sample's pixel (from the cache, or made). */
+static pt__sobol_seeds *pt__sobol_set_seeds(const pt__sampler *smp, uint32_t set)
+{
+    uint64_t seed = pt__set_seed(smp, set);
+    pt__sobol_seeds *e = &smp->cache->e[set & (PT__SOBOL_CACHE_SIZE - 1u)];
+    if (e->seed != seed) pt__sobol_seeds_make(e, seed);
+    return e;
+}
 /* The SOBOL halves of the draws below (the independent halves are inlined into the integrator). */
 static float pt__draw1_sobol(const pt__sampler *smp, uint32_t set)
 {
-    float u[1];
-    pt__sobol_point(smp->index_reversed, pt__set_seed(smp, set), 1, u);
-    return u[0];
+    const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set);
+    return pt__owen_float(pt__sobol_shuffle(e, smp->index_reversed, smp->index_high), e->add[0], e->mul[0]);
 }
 static void pt__draw2_sobol(const pt__sampler *smp, uint32_t set, float *a, float *b)
 {
+    const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set);
     float u[2];
-    pt__sobol_point(smp->index_reversed, pt__set_seed(smp, set), 2, u);
+    pt__sobol_point01(e, pt__sobol_shuffle(e, smp->index_reversed, smp->index_high), 2, u);
     *a = u[0];
     *b = u[1];
 }
-static void pt__draw_scatter_sobol(pt__sampler *smp, int depth, float *a, float *b)
+static void pt__draw_scatter_sobol(const pt__sampler *smp, int depth, float *a, float *b)
 {
-    uint32_t set = PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR);
+    pt__sobol_seeds *e = pt__sobol_set_seeds(smp, PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR));
+    uint32_t k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high);
     float u[2];
-    if (smp->pair_set != set) {
-        smp->pair = pt__sobol_key_make(smp->index_reversed, pt__set_seed(smp, set));
-        smp->pair_set = set;
-    }
-    if (depth & 1) pt__sobol_point23(&smp->pair, u);
-    else pt__sobol_point01(&smp->pair, 2, u);
+    if (depth & 1) pt__sobol_point23(e, k, u);
+    else pt__sobol_point01(e, k, 2, u);
     *a = u[0];
     *b = u[1];
 }
@@ -1770,9 +1853,8 @@ static PT__HOT void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b
    and 2, 3 of set PT__SET_BOUNCE(2i, PT__SLOT_SCATTER_DIR)), so the two-bounce integral of a
    path's first indirect bounces is stratified jointly, not only in each direction (Burley 2020,
    sec. 5, pads with sets of four dimensions; variance per sample 8-10 % lower on the benchmark's
-   tiny-light-pure and tiny-light scenes than with two separately shuffled 2D sets). The key of
-   the even depth's set is kept for the odd depth (no second shuffle); a path whose even depth
-   drew no direction (a specular vertex, a guide sample) makes it again. */
+   tiny-light-pure and tiny-light scenes than with two separately shuffled 2D sets). Both depths
+   use the set's one shuffled index, whichever of them drew. */
 static PT__HOT void pt__draw_scatter(pt__sampler *smp, int depth, float *a, float *b)
 {
     if (!smp->sobol) {
@@ -4999,8 +5081,6 @@ static pt__sampler *pt__split_sampler(pt__sampler *parent, pt__sampler *child, i
     child->key = pt__mix64(parent->key ^ (0x94d049bb133111ebULL * (uint64_t)(depth * PT__SPLIT_MAX_COPIES + copy + 1)));
     pt_rng_seed(&child->rng, child->key, (uint64_t)copy);
     child->rng_seeded = 1;  /* (else a guide's first draw would reseed it with the parent's stream) */
-    child->pair_set = ~0u;  /* the parent's cached 4D key is not the copy's (else an odd depth's
-                               direction would repeat the parent's) */
     return child;
 }
 
@@ -5358,8 +5438,11 @@ static void pt__render_tile(void *data, int job)
     int x1 = x0 + ps->tile_size, y1 = y0 + ps->tile_size, x, y, k, xa, xb;
     uint64_t taken = 0;
     pt_path_stats st;
+    pt__sobol_cache cache;
+    int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
     if (ps->cancel && *ps->cancel) return;
     memset(&st, 0, sizeof st);
+    if (sobol) pt__sobol_cache_init(&cache);
     if (ps->chunk_first) { /* adaptive: job = the pixels chunk_first[index] .. chunk_first[index + 1] - 1 */
         uint32_t p0 = ps->chunk_first[index], p1 = ps->chunk_first[index + 1], w = (uint32_t)film->width;
         y0 = (int)(p0 / w);
@@ -5380,14 +5463,16 @@ static void pt__render_tile(void *data, int job)
             uint32_t base = film->count[pix], n = ps->pixel_spp ? ps->pixel_spp[pix] : (uint32_t)ps->spp;
             uint64_t rays0 = st.camera_rays + st.bounce_rays + st.shadow_rays;
             double *sum = film->sum + 3u * pix, *sq = film->sum_sq + 3u * pix, *odd = film->sum_odd + 3u * pix;
+            uint64_t pixel_key;
             if (n == 0) continue;
+            pixel_key = sobol ? pt__sobol_pixel_key(ps->seed, pix) : 0u;
             for (k = 0; k < (int)n; ++k) {
                 uint32_t index_k = base + (uint32_t)k;
                 pt__sampler smp;
                 float jx, jy, l1, l2;
                 pt_ray r;
                 pt_color L;
-                pt__sampler_init(&smp, ps->cfg->sampler, ps->seed, pix, index_k);
+                pt__sampler_init(&smp, ps->cfg->sampler, ps->seed, pix, index_k, pixel_key, &cache);
                 pt__draw2(&smp, PT__SET_PIXEL, &jx, &jy);
                 if (smp.sobol && !(ps->cam->lens_radius > 0.0f)) l1 = l2 = 0.5f; /* pinhole: unused */
                 else pt__draw2(&smp, PT__SET_LENS, &l1, &l2);

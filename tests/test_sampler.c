@@ -4,6 +4,9 @@
    - sobol_sequence: pt_sobol_u32 against the sequence built here from its definition (van der
      Corput; Sobol's dimensions 1, 2, 3 from the Bratley & Fox recurrence with Joe & Kuo's
      parameters s = 1, a = 0, m = 1; s = 2, a = 1, m = 1, 3; s = 3, a = 1, m = 1, 3, 1), exactly.
+   - sobol_definition: pt_sobol_scrambled and pt_sobol_scrambled4 against the scramble built here
+     from section 2's comment (SplitMix64 seeds, the nested hash, whole 32-bit reversals), bit for
+     bit, over indices below 2^13, around 2^16 and up to 2^32 - 1. Exact.
    - sobol_nets: every aligned block of 2^m points of pt_sobol_scrambled (m = 0..12, several
      seeds, blocks at the start, further in and across the 2^16 boundary of the index shuffle) is
      a (0,m,2)-net: each of the 2^m elementary intervals of every shape 2^-a x 2^-(m-a) holds
@@ -127,6 +130,74 @@ static void sobol_sequence(test_ctx *t)
               pt_sobol_u32(2, 2), pt_sobol_u32(6, 2), pt_sobol_u32(6, 3));
     }
     CHECK(t, pt_sobol_u32(5, 4) == 0u && pt_sobol_u32(5, -1) == 0u, "dimensions outside 0..3 give 0");
+}
+
+/* ---- the scramble from its definition ---- */
+
+static uint32_t rev32(uint32_t x)
+{
+    uint32_t r = 0;
+    int b;
+    for (b = 0; b < 32; ++b) r |= ((x >> b) & 1u) << (31 - b);
+    return r;
+}
+static uint64_t splitmix64(uint64_t z) /* Steele, Lea & Flood 2014's finaliser */
+{
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+static uint32_t lk_hash(uint32_t x, uint32_t add, uint32_t mul) /* section 2's nested hash */
+{
+    x += add;
+    x ^= x * 0xf9b439fcu;
+    x *= mul | 1u;
+    x ^= x * 0x91d93080u;
+    x ^= x * 0x8142c8eau;
+    return x;
+}
+/* Owen scramble of a coordinate (its 32 bits) to the float of the top 24 bits. */
+static float owen_ref(uint32_t x, uint32_t add, uint32_t mul)
+{
+    return (float)(rev32(lk_hash(rev32(x), add, mul)) >> 8) / 16777216.0f;
+}
+/* pt_sobol_scrambled4 as section 2's comment and pt__sobol_seeds define it, step by step with
+   whole 32-bit reversals. */
+static void scrambled4_ref(uint32_t index, uint64_t seed, float u[4])
+{
+    uint64_t h1 = splitmix64(seed), h2 = splitmix64(h1 ^ 0x2545f4914f6cdd1dULL);
+    uint64_t h3 = splitmix64(h2 ^ 0x6c62272e07bb0142ULL), h4 = splitmix64(h3 ^ 0x2545f4914f6cdd1dULL);
+    uint32_t s = (uint32_t)h1, ir = rev32(index);
+    uint32_t k = rev32((lk_hash(ir, s, s >> 15) & 0xffff0000u) | (ir & 0xffffu)); /* 1. shuffle */
+    u[0] = owen_ref(pt_sobol_u32(k, 0), (uint32_t)(h1 >> 32), (uint32_t)(h2 >> 48));
+    u[1] = owen_ref(pt_sobol_u32(k, 1), (uint32_t)h2, (uint32_t)(h2 >> 32) & 0xffffu);
+    u[2] = owen_ref(pt_sobol_u32(k, 2), (uint32_t)h3, (uint32_t)h4);
+    u[3] = owen_ref(pt_sobol_u32(k, 3), (uint32_t)(h3 >> 32), (uint32_t)(h4 >> 32));
+}
+
+/* pt_sobol_scrambled and pt_sobol_scrambled4 equal the definition above bit for bit (the library
+   computes it with byte tables and partial reversals): indices 0..4095, around 2^16 and up to
+   2^32 - 1, several seeds. */
+static void sobol_definition(test_ctx *t)
+{
+    static const uint64_t seeds[] = {0u, 1u, 0x243f6a8885a308d3ULL, 0xffffffffffffffffULL, 0x9e3779b97f4a7c15ULL};
+    static const uint32_t extra[] = {65535u, 65536u, 65537u, 0x1234567u, 0x80000000u, 0xfffffffeu, 0xffffffffu};
+    int si, bad = 0, n = 0;
+    uint32_t j;
+    for (si = 0; si < (int)(sizeof seeds / sizeof seeds[0]); ++si)
+        for (j = 0; j < 4096u + (uint32_t)(sizeof extra / sizeof extra[0]) && bad < 5; ++j) {
+            uint32_t i = j < 4096u ? j * 0x9e3779b1u % 8192u : extra[j - 4096u];
+            float u[4], v[2], w[4];
+            pt_sobol_scrambled4(i, seeds[si], u);
+            pt_sobol_scrambled(i, seeds[si], v);
+            scrambled4_ref(i, seeds[si], w);
+            ++n;
+            if (!CHECK(t, memcmp(u, w, sizeof u) == 0 && memcmp(v, w, sizeof v) == 0,
+                       "seed %d index %u: (%.9g %.9g %.9g %.9g), 2D (%.9g %.9g), want (%.9g %.9g %.9g %.9g)", si, i, u[0],
+                       u[1], u[2], u[3], v[0], v[1], w[0], w[1], w[2], w[3]))
+                ++bad;
+        }
+    test_note(t, "%d points equal", n);
 }
 
 /* ---- nets ---- */
@@ -707,6 +778,7 @@ static void render_deterministic(test_ctx *t)
 
 const test_case test_sampler_cases[] = {
     TEST_CASE(sobol_sequence),
+    TEST_CASE(sobol_definition),
     TEST_CASE(sobol_nets),
     TEST_CASE(sobol4_nets),
     TEST_CASE(sobol_randomised),
