@@ -1131,8 +1131,10 @@ PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt
 #define PT__MAX_COORD 1e18f
 #if defined(__GNUC__) || defined(__clang__)
 #define PT__HOT inline __attribute__((always_inline))
+#define PT__NOINLINE __attribute__((noinline)) /* rarely run: kept out of the hot caller's code */
 #else
 #define PT__HOT inline
+#define PT__NOINLINE
 #endif
 
 #ifdef __cplusplus
@@ -1586,6 +1588,30 @@ static uint64_t pt__sobol23_reversed(uint32_t i)
 #endif
     return x;
 }
+/* The same for the low 16 bits of i, by nibbles: row j, entry n is the xor of the reversed
+   direction numbers of n's bits placed at 4j .. 4j + 3 (made from pt__sobol23_rdir). */
+static const uint64_t pt__sobol23_rnibble[4][16] = {
+    {0x0000000000000000ULL, 0x0000000100000001ULL, 0x0000000300000003ULL, 0x0000000200000002ULL,
+     0x0000000400000006ULL, 0x0000000500000007ULL, 0x0000000700000005ULL, 0x0000000600000004ULL,
+     0x0000000a00000009ULL, 0x0000000b00000008ULL, 0x000000090000000aULL, 0x000000080000000bULL,
+     0x0000000e0000000fULL, 0x0000000f0000000eULL, 0x0000000d0000000cULL, 0x0000000c0000000dULL},
+    {0x0000000000000000ULL, 0x0000001f00000017ULL, 0x0000002e0000003aULL, 0x000000310000002dULL,
+     0x0000004500000071ULL, 0x0000005a00000066ULL, 0x0000006b0000004bULL, 0x000000740000005cULL,
+     0x000000c9000000a3ULL, 0x000000d6000000b4ULL, 0x000000e700000099ULL, 0x000000f80000008eULL,
+     0x0000008c000000d2ULL, 0x00000093000000c5ULL, 0x000000a2000000e8ULL, 0x000000bd000000ffULL},
+    {0x0000000000000000ULL, 0x0000011b00000116ULL, 0x000002a400000339ULL, 0x000003bf0000022fULL,
+     0x0000079a00000677ULL, 0x0000068100000761ULL, 0x0000053e0000054eULL, 0x0000042500000458ULL,
+     0x00000b67000009aaULL, 0x00000a7c000008bcULL, 0x000009c300000a93ULL, 0x000008d800000b85ULL,
+     0x00000cfd00000fddULL, 0x00000de600000ecbULL, 0x00000e5900000ce4ULL, 0x00000f4200000df2ULL},
+    {0x0000000000000000ULL, 0x0000101e00001601ULL, 0x0000302d00003903ULL, 0x0000203300002f02ULL,
+     0x0000404100007706ULL, 0x0000505f00006107ULL, 0x0000706c00004e05ULL, 0x0000607200005804ULL,
+     0x0000a0c30000aa09ULL, 0x0000b0dd0000bc08ULL, 0x000090ee0000930aULL, 0x000080f00000850bULL,
+     0x0000e0820000dd0fULL, 0x0000f09c0000cb0eULL, 0x0000d0af0000e40cULL, 0x0000c0b10000f20dULL}};
+static uint64_t pt__sobol23_reversed16(uint32_t i)
+{
+    return pt__sobol23_rnibble[0][i & 15u] ^ pt__sobol23_rnibble[1][(i >> 4) & 15u] ^
+           pt__sobol23_rnibble[2][(i >> 8) & 15u] ^ pt__sobol23_rnibble[3][(i >> 12) & 15u];
+}
 PTDEF uint32_t pt_sobol_u32(uint32_t index, int dim)
 {
     if (dim == 0) return pt__reverse_bits(index);
@@ -1639,7 +1665,7 @@ typedef struct pt__sobol_seeds {
     uint32_t add[4], mul[4];
     int has23;      /* whether add[2..3], mul[2..3] are made */
 } pt__sobol_seeds;
-static void pt__sobol_seeds_make(pt__sobol_seeds *e, uint64_t seed)
+static PT__NOINLINE void pt__sobol_seeds_make(pt__sobol_seeds *e, uint64_t seed)
 {
     uint64_t h1 = pt__mix64(seed), h2 = pt__mix64(h1 ^ 0x2545f4914f6cdd1dULL);
     e->seed = seed;
@@ -1653,7 +1679,7 @@ static void pt__sobol_seeds_make(pt__sobol_seeds *e, uint64_t seed)
     e->add[2] = e->add[3] = e->mul[2] = e->mul[3] = 0u;
     e->has23 = 0;
 }
-static void pt__sobol_seeds_make23(pt__sobol_seeds *e)
+static PT__NOINLINE void pt__sobol_seeds_make23(pt__sobol_seeds *e)
 {
     uint64_t h3 = pt__mix64(e->h2 ^ 0x6c62272e07bb0142ULL), h4 = pt__mix64(h3 ^ 0x2545f4914f6cdd1dULL);
     e->add[2] = (uint32_t)h3;
@@ -1682,7 +1708,7 @@ static void pt__sobol_point01(const pt__sobol_seeds *e, uint32_t k, int dims, fl
 /* Coordinates 2 and 3 of the point. */
 static void pt__sobol_point23(pt__sobol_seeds *e, uint32_t k, float *u)
 {
-    uint64_t x = pt__sobol23_reversed(k);
+    uint64_t x = pt__sobol23_reversed16(k) ^ pt__sobol23_reversed(k & 0xffff0000u);
     if (!e->has23) pt__sobol_seeds_make23(e);
     u[0] = pt__owen_float((uint32_t)x, e->add[2], e->mul[2]);
     u[1] = pt__owen_float((uint32_t)(x >> 32), e->add[3], e->mul[3]);
