@@ -1688,22 +1688,94 @@ static PT__NOINLINE void pt__sobol_seeds_make23(pt__sobol_seeds *e)
     e->mul[3] = (uint32_t)(h4 >> 32) | 1u;
     e->has23 = 1;
 }
+/* Step 1's last part by look-ups: entry b of row 0 is (reverse(b) | Sobol dimension 1's reversed
+   coordinate of index reverse(b) << 16), of row 1 the same for reverse(b) << 8 (each coordinate
+   of a 16-bit index fits 16 bits). */
+static const uint32_t pt__sobol_shuffle_bytes[2][256] = {
+    {0x00000000, 0x00ff0080, 0x00550040, 0x00aa00c0, 0x00330020, 0x00cc00a0, 0x00660060, 0x009900e0,
+     0x00110010, 0x00ee0090, 0x00440050, 0x00bb00d0, 0x00220030, 0x00dd00b0, 0x00770070, 0x008800f0,
+     0x000f0008, 0x00f00088, 0x005a0048, 0x00a500c8, 0x003c0028, 0x00c300a8, 0x00690068, 0x009600e8,
+     0x001e0018, 0x00e10098, 0x004b0058, 0x00b400d8, 0x002d0038, 0x00d200b8, 0x00780078, 0x008700f8,
+     0x00050004, 0x00fa0084, 0x00500044, 0x00af00c4, 0x00360024, 0x00c900a4, 0x00630064, 0x009c00e4,
+     0x00140014, 0x00eb0094, 0x00410054, 0x00be00d4, 0x00270034, 0x00d800b4, 0x00720074, 0x008d00f4,
+     0x000a000c, 0x00f5008c, 0x005f004c, 0x00a000cc, 0x0039002c, 0x00c600ac, 0x006c006c, 0x009300ec,
+     0x001b001c, 0x00e4009c, 0x004e005c, 0x00b100dc, 0x0028003c, 0x00d700bc, 0x007d007c, 0x008200fc,
+     0x00030002, 0x00fc0082, 0x00560042, 0x00a900c2, 0x00300022, 0x00cf00a2, 0x00650062, 0x009a00e2,
+     0x00120012, 0x00ed0092, 0x00470052, 0x00b800d2, 0x00210032, 0x00de00b2, 0x00740072, 0x008b00f2,
+     0x000c000a, 0x00f3008a, 0x0059004a, 0x00a600ca, 0x003f002a, 0x00c000aa, 0x006a006a, 0x009500ea,
+     0x001d001a, 0x00e2009a, 0x0048005a, 0x00b700da, 0x002e003a, 0x00d100ba, 0x007b007a, 0x008400fa,
+     0x00060006, 0x00f90086, 0x00530046, 0x00ac00c6, 0x00350026, 0x00ca00a6, 0x00600066, 0x009f00e6,
+     0x00170016, 0x00e80096, 0x00420056, 0x00bd00d6, 0x00240036, 0x00db00b6, 0x00710076, 0x008e00f6,
+     0x0009000e, 0x00f6008e, 0x005c004e, 0x00a300ce, 0x003a002e, 0x00c500ae, 0x006f006e, 0x009000ee,
+     0x0018001e, 0x00e7009e, 0x004d005e, 0x00b200de, 0x002b003e, 0x00d400be, 0x007e007e, 0x008100fe,
+     0x00010001, 0x00fe0081, 0x00540041, 0x00ab00c1, 0x00320021, 0x00cd00a1, 0x00670061, 0x009800e1,
+     0x00100011, 0x00ef0091, 0x00450051, 0x00ba00d1, 0x00230031, 0x00dc00b1, 0x00760071, 0x008900f1,
+     0x000e0009, 0x00f10089, 0x005b0049, 0x00a400c9, 0x003d0029, 0x00c200a9, 0x00680069, 0x009700e9,
+     0x001f0019, 0x00e00099, 0x004a0059, 0x00b500d9, 0x002c0039, 0x00d300b9, 0x00790079, 0x008600f9,
+     0x00040005, 0x00fb0085, 0x00510045, 0x00ae00c5, 0x00370025, 0x00c800a5, 0x00620065, 0x009d00e5,
+     0x00150015, 0x00ea0095, 0x00400055, 0x00bf00d5, 0x00260035, 0x00d900b5, 0x00730075, 0x008c00f5,
+     0x000b000d, 0x00f4008d, 0x005e004d, 0x00a100cd, 0x0038002d, 0x00c700ad, 0x006d006d, 0x009200ed,
+     0x001a001d, 0x00e5009d, 0x004f005d, 0x00b000dd, 0x0029003d, 0x00d600bd, 0x007c007d, 0x008300fd,
+     0x00020003, 0x00fd0083, 0x00570043, 0x00a800c3, 0x00310023, 0x00ce00a3, 0x00640063, 0x009b00e3,
+     0x00130013, 0x00ec0093, 0x00460053, 0x00b900d3, 0x00200033, 0x00df00b3, 0x00750073, 0x008a00f3,
+     0x000d000b, 0x00f2008b, 0x0058004b, 0x00a700cb, 0x003e002b, 0x00c100ab, 0x006b006b, 0x009400eb,
+     0x001c001b, 0x00e3009b, 0x0049005b, 0x00b600db, 0x002f003b, 0x00d000bb, 0x007a007b, 0x008500fb,
+     0x00070007, 0x00f80087, 0x00520047, 0x00ad00c7, 0x00340027, 0x00cb00a7, 0x00610067, 0x009e00e7,
+     0x00160017, 0x00e90097, 0x00430057, 0x00bc00d7, 0x00250037, 0x00da00b7, 0x00700077, 0x008f00f7,
+     0x0008000f, 0x00f7008f, 0x005d004f, 0x00a200cf, 0x003b002f, 0x00c400af, 0x006e006f, 0x009100ef,
+     0x0019001f, 0x00e6009f, 0x004c005f, 0x00b300df, 0x002a003f, 0x00d500bf, 0x007f007f, 0x008000ff},
+    {0x00000000, 0xffff8000, 0x55554000, 0xaaaac000, 0x33332000, 0xcccca000, 0x66666000, 0x9999e000,
+     0x11111000, 0xeeee9000, 0x44445000, 0xbbbbd000, 0x22223000, 0xddddb000, 0x77777000, 0x8888f000,
+     0x0f0f0800, 0xf0f08800, 0x5a5a4800, 0xa5a5c800, 0x3c3c2800, 0xc3c3a800, 0x69696800, 0x9696e800,
+     0x1e1e1800, 0xe1e19800, 0x4b4b5800, 0xb4b4d800, 0x2d2d3800, 0xd2d2b800, 0x78787800, 0x8787f800,
+     0x05050400, 0xfafa8400, 0x50504400, 0xafafc400, 0x36362400, 0xc9c9a400, 0x63636400, 0x9c9ce400,
+     0x14141400, 0xebeb9400, 0x41415400, 0xbebed400, 0x27273400, 0xd8d8b400, 0x72727400, 0x8d8df400,
+     0x0a0a0c00, 0xf5f58c00, 0x5f5f4c00, 0xa0a0cc00, 0x39392c00, 0xc6c6ac00, 0x6c6c6c00, 0x9393ec00,
+     0x1b1b1c00, 0xe4e49c00, 0x4e4e5c00, 0xb1b1dc00, 0x28283c00, 0xd7d7bc00, 0x7d7d7c00, 0x8282fc00,
+     0x03030200, 0xfcfc8200, 0x56564200, 0xa9a9c200, 0x30302200, 0xcfcfa200, 0x65656200, 0x9a9ae200,
+     0x12121200, 0xeded9200, 0x47475200, 0xb8b8d200, 0x21213200, 0xdedeb200, 0x74747200, 0x8b8bf200,
+     0x0c0c0a00, 0xf3f38a00, 0x59594a00, 0xa6a6ca00, 0x3f3f2a00, 0xc0c0aa00, 0x6a6a6a00, 0x9595ea00,
+     0x1d1d1a00, 0xe2e29a00, 0x48485a00, 0xb7b7da00, 0x2e2e3a00, 0xd1d1ba00, 0x7b7b7a00, 0x8484fa00,
+     0x06060600, 0xf9f98600, 0x53534600, 0xacacc600, 0x35352600, 0xcacaa600, 0x60606600, 0x9f9fe600,
+     0x17171600, 0xe8e89600, 0x42425600, 0xbdbdd600, 0x24243600, 0xdbdbb600, 0x71717600, 0x8e8ef600,
+     0x09090e00, 0xf6f68e00, 0x5c5c4e00, 0xa3a3ce00, 0x3a3a2e00, 0xc5c5ae00, 0x6f6f6e00, 0x9090ee00,
+     0x18181e00, 0xe7e79e00, 0x4d4d5e00, 0xb2b2de00, 0x2b2b3e00, 0xd4d4be00, 0x7e7e7e00, 0x8181fe00,
+     0x01010100, 0xfefe8100, 0x54544100, 0xababc100, 0x32322100, 0xcdcda100, 0x67676100, 0x9898e100,
+     0x10101100, 0xefef9100, 0x45455100, 0xbabad100, 0x23233100, 0xdcdcb100, 0x76767100, 0x8989f100,
+     0x0e0e0900, 0xf1f18900, 0x5b5b4900, 0xa4a4c900, 0x3d3d2900, 0xc2c2a900, 0x68686900, 0x9797e900,
+     0x1f1f1900, 0xe0e09900, 0x4a4a5900, 0xb5b5d900, 0x2c2c3900, 0xd3d3b900, 0x79797900, 0x8686f900,
+     0x04040500, 0xfbfb8500, 0x51514500, 0xaeaec500, 0x37372500, 0xc8c8a500, 0x62626500, 0x9d9de500,
+     0x15151500, 0xeaea9500, 0x40405500, 0xbfbfd500, 0x26263500, 0xd9d9b500, 0x73737500, 0x8c8cf500,
+     0x0b0b0d00, 0xf4f48d00, 0x5e5e4d00, 0xa1a1cd00, 0x38382d00, 0xc7c7ad00, 0x6d6d6d00, 0x9292ed00,
+     0x1a1a1d00, 0xe5e59d00, 0x4f4f5d00, 0xb0b0dd00, 0x29293d00, 0xd6d6bd00, 0x7c7c7d00, 0x8383fd00,
+     0x02020300, 0xfdfd8300, 0x57574300, 0xa8a8c300, 0x31312300, 0xcecea300, 0x64646300, 0x9b9be300,
+     0x13131300, 0xecec9300, 0x46465300, 0xb9b9d300, 0x20203300, 0xdfdfb300, 0x75757300, 0x8a8af300,
+     0x0d0d0b00, 0xf2f28b00, 0x58584b00, 0xa7a7cb00, 0x3e3e2b00, 0xc1c1ab00, 0x6b6b6b00, 0x9494eb00,
+     0x1c1c1b00, 0xe3e39b00, 0x49495b00, 0xb6b6db00, 0x2f2f3b00, 0xd0d0bb00, 0x7a7a7b00, 0x8585fb00,
+     0x07070700, 0xf8f88700, 0x52524700, 0xadadc700, 0x34342700, 0xcbcba700, 0x61616700, 0x9e9ee700,
+     0x16161700, 0xe9e99700, 0x43435700, 0xbcbcd700, 0x25253700, 0xdadab700, 0x70707700, 0x8f8ff700,
+     0x08080f00, 0xf7f78f00, 0x5d5d4f00, 0xa2a2cf00, 0x3b3b2f00, 0xc4c4af00, 0x6e6e6f00, 0x9191ef00,
+     0x19191f00, 0xe6e69f00, 0x4c4c5f00, 0xb3b3df00, 0x2a2a3f00, 0xd5d5bf00, 0x7f7f7f00, 0x8080ff00}};
 /* Step 1: the shuffled index k of the sample whose index is reverse(index_reversed) and whose
-   index's high 16 bits are index_high (= index & 0xffff0000). The shuffle scrambles the index's
-   low 16 bits (the top 16 of index_reversed) and keeps its high ones: k = reverse(r) with r = the
-   hash's top 16 bits over index_reversed's low 16, so k = index_high | the hash's top 16 bits
-   reversed (two byte look-ups). */
-static uint32_t pt__sobol_shuffle(const pt__sobol_seeds *e, uint32_t index_reversed, uint32_t index_high)
+   index's high 16 bits are index_high (= index & 0xffff0000), and *k1 = pt__sobol1_reversed(k)
+   given index_high1 = pt__sobol1_reversed(index_high). The shuffle scrambles the index's low 16
+   bits (the top 16 of index_reversed) and keeps its high ones: k = reverse(r) with r = the hash's
+   top 16 bits over index_reversed's low 16, so k = index_high | the hash's top 16 bits reversed
+   (two byte look-ups, which also give dimension 1, a linear function of k over GF(2)). */
+static uint32_t pt__sobol_shuffle(const pt__sobol_seeds *e, uint32_t index_reversed, uint32_t index_high,
+                                  uint32_t index_high1, uint32_t *k1)
 {
     uint32_t h = pt__nested_hash(index_reversed, e->shuffle_add, e->shuffle_mul);
-    return index_high | ((uint32_t)pt__reverse_byte[(h >> 16) & 0xffu] << 8) | (uint32_t)pt__reverse_byte[h >> 24];
+    uint32_t v = pt__sobol_shuffle_bytes[1][(h >> 16) & 0xffu] ^ pt__sobol_shuffle_bytes[0][h >> 24];
+    *k1 = index_high1 ^ (v >> 16);
+    return index_high | (v & 0xffffu);
 }
 /* Steps 2 and 3: dims (1 or 2) coordinates 0 and 1 of the point with shuffled index k (van der
    Corput's fraction is reverse(k), so its reversal is k itself). */
-static void pt__sobol_point01(const pt__sobol_seeds *e, uint32_t k, int dims, float *u)
+static void pt__sobol_point01(const pt__sobol_seeds *e, uint32_t k, uint32_t k1, float *u)
 {
     u[0] = pt__owen_float(k, e->add[0], e->mul[0]);
-    if (dims > 1) u[1] = pt__owen_float(pt__sobol1_reversed(k), e->add[1], e->mul[1]);
+    u[1] = pt__owen_float(k1, e->add[1], e->mul[1]);
 }
 /* Coordinates 2 and 3 of the point. */
 static void pt__sobol_point23(pt__sobol_seeds *e, uint32_t k, float *u)
@@ -1716,18 +1788,20 @@ static void pt__sobol_point23(pt__sobol_seeds *e, uint32_t k, float *u)
 PTDEF void pt_sobol_scrambled(uint32_t index, uint64_t seed, float u[2])
 {
     pt__sobol_seeds e;
+    uint32_t k, k1;
     if (!u) return;
     pt__sobol_seeds_make(&e, seed);
-    pt__sobol_point01(&e, pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u), 2, u);
+    k = pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u, pt__sobol1_reversed(index & 0xffff0000u), &k1);
+    pt__sobol_point01(&e, k, k1, u);
 }
 PTDEF void pt_sobol_scrambled4(uint32_t index, uint64_t seed, float u[4])
 {
     pt__sobol_seeds e;
-    uint32_t k;
+    uint32_t k, k1;
     if (!u) return;
     pt__sobol_seeds_make(&e, seed);
-    k = pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u);
-    pt__sobol_point01(&e, k, 2, u);
+    k = pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u, pt__sobol1_reversed(index & 0xffff0000u), &k1);
+    pt__sobol_point01(&e, k, k1, u);
     pt__sobol_point23(&e, k, u + 2);
 }
 /* The seeds of the sets drawn lately, by set number modulo PT__SOBOL_CACHE_SIZE, each tagged with
@@ -1755,6 +1829,7 @@ typedef struct pt__sampler {
     int rng_seeded;        /* SOBOL: whether rng is seeded yet */
     uint32_t index_reversed; /* SOBOL: the sample's index within its pixel, bits reversed */
     uint32_t index_high;   /* SOBOL: the index's high 16 bits (index & 0xffff0000) */
+    uint32_t index_high1;  /* SOBOL: pt__sobol1_reversed(index_high) */
     uint64_t key;          /* SOBOL: a hash of (seed, pixel) (pt__sobol_pixel_key) */
     uint64_t seed;         /* SOBOL: the render's seed, pixel and sample index, to seed rng */
     uint32_t pixel, sample;
@@ -1796,12 +1871,13 @@ static void pt__sampler_init(pt__sampler *smp, pt_sampler kind, uint64_t seed, u
     smp->pixel = pixel;
     smp->sample = sample;
     smp->index_reversed = 0u;
-    smp->index_high = 0u;
+    smp->index_high = smp->index_high1 = 0u;
     smp->key = 0u;
     smp->cache = NULL;
     if (smp->sobol) {
         smp->index_reversed = pt__reverse_bits(sample);
         smp->index_high = sample & 0xffff0000u;
+        smp->index_high1 = pt__sobol1_reversed(smp->index_high);
         smp->key = pixel_key;
         smp->cache = cache;
     }
@@ -1831,23 +1907,26 @@ static pt__sobol_seeds *pt__sobol_set_seeds(const pt__sampler *smp, uint32_t set
 static float pt__draw1_sobol(const pt__sampler *smp, uint32_t set)
 {
     const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set);
-    return pt__owen_float(pt__sobol_shuffle(e, smp->index_reversed, smp->index_high), e->add[0], e->mul[0]);
+    uint32_t k1;
+    return pt__owen_float(pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1), e->add[0],
+                          e->mul[0]);
 }
 static void pt__draw2_sobol(const pt__sampler *smp, uint32_t set, float *a, float *b)
 {
     const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set);
+    uint32_t k1, k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1);
     float u[2];
-    pt__sobol_point01(e, pt__sobol_shuffle(e, smp->index_reversed, smp->index_high), 2, u);
+    pt__sobol_point01(e, k, k1, u);
     *a = u[0];
     *b = u[1];
 }
 static void pt__draw_scatter_sobol(const pt__sampler *smp, int depth, float *a, float *b)
 {
     pt__sobol_seeds *e = pt__sobol_set_seeds(smp, PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR));
-    uint32_t k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high);
+    uint32_t k1, k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1);
     float u[2];
     if (depth & 1) pt__sobol_point23(e, k, u);
-    else pt__sobol_point01(e, k, 2, u);
+    else pt__sobol_point01(e, k, k1, u);
     *a = u[0];
     *b = u[1];
 }

@@ -6,7 +6,8 @@
      parameters s = 1, a = 0, m = 1; s = 2, a = 1, m = 1, 3; s = 3, a = 1, m = 1, 3, 1), exactly.
    - sobol_definition: pt_sobol_scrambled and pt_sobol_scrambled4 against the scramble built here
      from section 2's comment (SplitMix64 seeds, the nested hash, whole 32-bit reversals), bit for
-     bit, over indices below 2^13, around 2^16 and up to 2^32 - 1. Exact.
+     bit, over 4096 indices spread below 2^16, around 2^16 and up to 2^32 - 1 (every entry of the
+     library's byte tables is used). Exact.
    - sobol_nets: every aligned block of 2^m points of pt_sobol_scrambled (m = 0..12, several
      seeds, blocks at the start, further in and across the 2^16 boundary of the index shuffle) is
      a (0,m,2)-net: each of the 2^m elementary intervals of every shape 2^-a x 2^-(m-a) holds
@@ -176,8 +177,8 @@ static void scrambled4_ref(uint32_t index, uint64_t seed, float u[4])
 }
 
 /* pt_sobol_scrambled and pt_sobol_scrambled4 equal the definition above bit for bit (the library
-   computes it with byte tables and partial reversals): indices 0..4095, around 2^16 and up to
-   2^32 - 1, several seeds. */
+   computes it with byte tables and partial reversals): 4096 indices spread over 0..2^16 - 1 (so
+   every entry of those tables is used), around 2^16 and up to 2^32 - 1, several seeds. */
 static void sobol_definition(test_ctx *t)
 {
     static const uint64_t seeds[] = {0u, 1u, 0x243f6a8885a308d3ULL, 0xffffffffffffffffULL, 0x9e3779b97f4a7c15ULL};
@@ -186,7 +187,7 @@ static void sobol_definition(test_ctx *t)
     uint32_t j;
     for (si = 0; si < (int)(sizeof seeds / sizeof seeds[0]); ++si)
         for (j = 0; j < 4096u + (uint32_t)(sizeof extra / sizeof extra[0]) && bad < 5; ++j) {
-            uint32_t i = j < 4096u ? j * 0x9e3779b1u % 8192u : extra[j - 4096u];
+            uint32_t i = j < 4096u ? (j * 0x9e3779b1u) & 0xffffu : extra[j - 4096u];
             float u[4], v[2], w[4];
             pt_sobol_scrambled4(i, seeds[si], u);
             pt_sobol_scrambled(i, seeds[si], v);
