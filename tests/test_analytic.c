@@ -276,6 +276,73 @@ static void furnace_mirror_glass_in_emitter(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+static void furnace_indirect_paths(test_ctx *t)
+{
+    /* pt_render_desc.indirect_paths (section 7): each camera sample's path continues from its
+       first non-delta vertex as k copies of throughput 1/k, after that vertex's one next-event
+       estimate. In the closed furnace (radiance 1 inside; every camera ray's first vertex is a
+       diffuse wall), 32 x 32, 64 spp, default depth:
+       (a) the default (0: 3 with Sobol, 1 independent), 2 and 8, with MATERIAL, LIGHT and MIS and
+       both samplers, roulette
+       from depth 1 in (b): the image is 1 by furnace_every_pixel's criteria (pooled per-pixel
+       z-test, >= 99.5 %% of the pixels at alpha 0.001; image mean within 3 standard errors), no
+       sample is non-finite, and exactly k - 1 extra paths start per camera sample (no
+       throughput here reaches the weight window's 2: the furnace's albedo is 0.5). A copy
+       weighted 1 instead of 1/k would make the image ~(k + 1)/2 too bright; a copy never
+       traced, too dark.
+       (b) MATERIAL with roulette from depth 1, whose coin flips are the only randomness in the
+       furnace (the emission is 0.5 everywhere): k = 8 must lower the standard deviation per
+       camera sample by 10 %% or more against k = 1 with each sampler (the copies' coins are
+       independent; it measured 0.092 against 0.26 with either sampler). Copies sharing their random numbers
+       would give k = 1's deviation. The deviations are known to ~1 %% (65,536 samples of
+       bounded weight). */
+    static const struct { pt_strategy strategy; pt_sampler sampler; int k, rr1; } cases[] = {
+        {PT_STRATEGY_MIS, PT_SAMPLER_INDEPENDENT, 0, 0},      {PT_STRATEGY_MIS, PT_SAMPLER_SOBOL, 0, 0},
+        {PT_STRATEGY_LIGHT, PT_SAMPLER_INDEPENDENT, 8, 0},    {PT_STRATEGY_LIGHT, PT_SAMPLER_SOBOL, 2, 0},
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_INDEPENDENT, 1, 1}, {PT_STRATEGY_MATERIAL, PT_SAMPLER_INDEPENDENT, 8, 1},
+        {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 1, 1},       {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 8, 1},
+    };
+    pt_scene *s = pt_scene_create();
+    int c, rc;
+    double sd[8];
+    if (!CHECK(t, s != NULL, "scene")) return;
+    rc = tu_add_closed_furnace(s);
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (c = 0; c < 8; c++) {
+        pt_render_desc d = tu_base_desc(32, 32, 64, 36000 + (uint64_t)c);
+        furnace_stats fs;
+        const int k = cases[c].k ? cases[c].k : cases[c].sampler == PT_SAMPLER_SOBOL ? 3 : 1;
+        const double want = 1.0;
+        char name[64];
+        snprintf(name, sizeof name, "%s, %s, indirect_paths %d%s", strategy_name(cases[c].strategy),
+                 cases[c].sampler == PT_SAMPLER_SOBOL ? "Sobol" : "independent", cases[c].k,
+                 cases[c].rr1 ? ", roulette from depth 1" : "");
+        d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
+        d.camera.look_at = pt_v3(1, 0.5f, 0);
+        d.camera.vfov_degrees = 90;
+        d.strategy = cases[c].strategy;
+        d.sampler = cases[c].sampler;
+        d.indirect_paths = cases[c].k;
+        if (cases[c].rr1) d.rr_start_depth = 1;
+        furnace_render(s, &d, want, 1e-3, 1, &fs);
+        sd[c] = fs.mean_sample_sd;
+        if (!CHECK(t, fs.rc == PT_OK, "%s: pt_render %d", name, fs.rc)) continue;
+        CHECK(t, fs.nonfinite == 0, "%s: %llu non-finite samples", name, (unsigned long long)fs.nonfinite);
+        CHECK(t, fs.split_paths == (uint64_t)(k - 1) * 32u * 32u * 64u, "%s: %llu extra paths, not %d per sample", name,
+              (unsigned long long)fs.split_paths, k - 1);
+        CHECK(t, fs.accepted >= ACCEPT_FRACTION * fs.pixels, "%s: only %d of %d pixels pass the z-test against %g", name,
+              fs.accepted, fs.pixels, want);
+        CHECK(t, fabs(fs.image_z) <= IMAGE_Z, "%s: image mean %.6f +- %.2g, not %g (z = %+.2f)", name, fs.image_mean,
+              fs.image_se, want, fs.image_z);
+        test_note(t, "%s: %.5f +- %.1e, sd %.3g", name, fs.image_mean, fs.image_se, fs.mean_sample_sd);
+    }
+    CHECK(t, sd[5] <= 0.9 * sd[4], "independent: indirect_paths 8 gives sd per sample %.3g, not 10 %% below %.3g with 1",
+          sd[5], sd[4]);
+    CHECK(t, sd[7] <= 0.9 * sd[6], "Sobol: indirect_paths 8 gives sd per sample %.3g, not 10 %% below %.3g with 1", sd[7],
+          sd[6]);
+    pt_scene_destroy(s);
+}
+
 /* A guide that concentrates 4/5 of the scatter density in a cone of half-angle ~5.7 degrees
    towards the furnace's centre (a virtual sphere of radius 0.1 there), so every other direction
    gets the weight rho / 0.2 = 2.5: path throughputs exceed 2 and splitting must act. */
@@ -364,6 +431,7 @@ const test_case test_analytic_cases[] = {
     TEST_CASE(image_triangle_light),
     TEST_CASE(furnace_every_pixel),
     TEST_CASE(furnace_mirror_glass_in_emitter),
+    TEST_CASE(furnace_indirect_paths),
     TEST_CASE(furnace_splitting),
     TEST_END
 };

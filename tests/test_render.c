@@ -709,6 +709,13 @@ static void render_desc_validation(test_ctx *t)
     rc = pt_render(s, &d, &f, NULL);
     CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "max_splits 65537 (at most 65536): %d", rc);
     d.max_splits = 0;
+    d.indirect_paths = 9;
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "indirect_paths 9 (at most 8): %d", rc);
+    d.indirect_paths = -1;
+    rc = pt_render(s, &d, &f, NULL);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "indirect_paths -1: %d", rc);
+    d.indirect_paths = 0;
     d.background = pt_v3(NAN, 0, 0);
     rc = pt_render(s, &d, &f, NULL);
     CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "NaN background: %d", rc);
