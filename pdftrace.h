@@ -889,6 +889,8 @@ PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, cl
      strategy mis|material|light|mixture
      sampler independent|sobol        where random numbers come from (default independent;
                                       sobol: scrambled Sobol points, section 2)
+     indirect_paths N                 paths each camera sample continues as from its first
+                                      non-delta vertex (1..8; default 3 with sobol, else 1)
      seed N                           random seed (default 0)
      background R G B                 radiance of rays leaving the scene (default 0 0 0)
      camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES]      (required, once)
@@ -973,6 +975,7 @@ typedef struct pt_scene_desc {
     int width, height, samples_per_pixel, max_depth;
     pt_strategy strategy;
     pt_sampler sampler;
+    int indirect_paths;          /* 0: pt_render_desc's default */
     uint64_t seed;
     pt_color background;
     pt_camera_desc camera;
@@ -6815,6 +6818,9 @@ static int pt__sd_statement(pt__sdp *p)
     } else if (!strcmp(kw, "max_depth")) {
         if ((rc = pt__sd_int(p, "max_depth", 1, 100000, &v)) != PT_OK) return rc;
         d->max_depth = (int)v;
+    } else if (!strcmp(kw, "indirect_paths")) {
+        if ((rc = pt__sd_int(p, "indirect_paths", 1, PT__INDIRECT_PATHS_LIMIT, &v)) != PT_OK) return rc;
+        d->indirect_paths = (int)v;
     } else if (!strcmp(kw, "seed")) {
         if ((rc = pt__sd_int(p, "seed", 0, 2147483647L, &v)) != PT_OK) return rc;
         d->seed = (uint64_t)v;
@@ -7145,6 +7151,7 @@ done:
     r->max_depth = d->max_depth;
     r->strategy = d->strategy;
     r->sampler = d->sampler;
+    r->indirect_paths = d->indirect_paths;
     r->seed = d->seed;
     r->background = d->background;
     r->camera = d->camera;

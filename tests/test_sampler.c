@@ -747,7 +747,7 @@ static void render_deterministic(test_ctx *t)
     }
     /* the scene file statement */
     {
-        static const char text[] = "size 8 8\nsampler sobol\ncamera look_from 0 0 -3 look_at 0 0 0\n"
+        static const char text[] = "size 8 8\nsampler sobol\nindirect_paths 2\ncamera look_from 0 0 -3 look_at 0 0 0\n"
                                    "material w lambertian 0.5 0.5 0.5\nsphere 0 0 0 1 w\n";
         static const char bad[] = "size 8 8\nsampler halton\n";
         pt_scene_desc sd;
@@ -756,8 +756,10 @@ static void render_deterministic(test_ctx *t)
         char err[256];
         if (CHECK(t, pt_scene_desc_parse(text, sizeof text - 1, "t.scene", NULL, &sd, err, sizeof err) == PT_OK, "%s", err)) {
             CHECK(t, sd.sampler == PT_SAMPLER_SOBOL, "sampler sobol read as %d", (int)sd.sampler);
+            CHECK(t, sd.indirect_paths == 2, "indirect_paths 2 read as %d", sd.indirect_paths);
             if (CHECK(t, pt_scene_desc_build(&sd, &s, &rd, err, sizeof err) == PT_OK, "%s", err)) {
-                CHECK(t, rd.sampler == PT_SAMPLER_SOBOL, "build: sampler %d", (int)rd.sampler);
+                CHECK(t, rd.sampler == PT_SAMPLER_SOBOL && rd.indirect_paths == 2, "build: sampler %d, indirect_paths %d",
+                      (int)rd.sampler, rd.indirect_paths);
                 pt_scene_destroy(s);
             }
             pt_scene_desc_free(&sd);
