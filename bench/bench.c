@@ -1768,7 +1768,10 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
     fprintf(f, "## Sobol sampler (mis-sobol) against independent sampling (mis)\n\n"
                "relMSE of MIS with PT_SAMPLER_SOBOL divided by MIS with independent sampling (< 1: Sobol lower), "
                "medians over seeds: at equal spp (the last spp both series reached) and at equal time (mis-sobol's "
-               "curve interpolated log-log at mis's last time; extrapolated with slope −1 beyond its ends).\n\n"
+               "curve interpolated log-log at mis's last time; extrapolated with slope −1 beyond its ends). "
+               "Both with pdftrace's defaults, so a mis-sobol camera sample continues as 3 paths from its first "
+               "diffuse vertex (pt_render_desc.indirect_paths: 3 with Sobol, 1 with independent numbers): the "
+               "equal-spp ratio is per camera sample, not per unit of work; equal time is the fair comparison.\n\n"
                "| scene | spp | relMSE ratio at equal spp | time (s) | relMSE ratio at equal time |\n|---|---|---|---|---|\n");
     for (i = 0; i < SCENE_COUNT; ++i) {
         const series *a = &R->s[i][S_MIS], *b = &R->s[i][S_MIS_SOBOL];
