@@ -5537,7 +5537,15 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    reached the uniform render's error at 128 spp with 0.69x its samples (3x3: 0.73x, 7x7:
    0.71x, 4 seeds); at 512 spp 0.74x (3x3: 0.70x; separate runs of 5 seeds: within noise);
    dropping the largest neighbour (against isolated fireflies) needed more samples than
-   uniform sampling (rare bright samples are the noise). The neighbourhood also
+   uniform sampling (rare bright samples are the noise). Later measurements (6 seeds, samples
+   to reach the uniform render's error, thresholds 1.1-1.2x apart): this design needs 0.65x
+   at 128 spp and 0.73x at 512 spp. Not better at 128 spp: 3x3 (0.69x at 1.3x the error, the
+   closest it came), 7x7 0.71x, minimum spp N/8 0.68x or N/2 0.75x (default N/4), n_i
+   proportional to (v_i / c_i)^0.4 or ^0.65 0.69x and 0.70x, v_i shrunk towards the image mean
+   (+ 0.2 mean) 0.75x, neighbours weighted by the similarity of their 3x3 means (7x7,
+   edge-aware) 0.68x. Not better at 512 spp: 3x3 once
+   the neighbours hold >= 96 samples 0.72x, minimum spp 32 or 64 0.73x, 16 spp per pass 0.73x,
+   re-planning every 4 passes 0.74x, the edge-aware mean 0.75x. The neighbourhood also
    spreads noise a little beyond where it was seen: a zero-variance pixel near noisy ones keeps
    sampling, so there is no seam where the noise starts. Plan: L solves mean_i v_i / n_i(L) = T^2 with
    n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + samples_per_pixel) (the samples already
