@@ -5345,7 +5345,9 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
     const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
     const int pick = s->light_count != 1; /* the light choice's number is used (pt__pick_light) */
     pt__vertex v;
-    memset(&v, 0, sizeof v);
+    v.has_guide = 0; /* (every other field is set at each vertex before it is read; v.guide only
+                        when has_guide is) */
+    v.g = 0.0f;
     for (depth = depth0;; ++depth) {
         pt__rayctx rc;
         uint32_t pi;
