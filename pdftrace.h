@@ -772,7 +772,7 @@ typedef struct pt_render_desc {
                                     0: 3 with PT_SAMPLER_SOBOL, 1 (no split) with INDEPENDENT;
                                     at most 8 */
     int threads;                 /* 0: all cores */
-    int tile_size;               /* 0: 16 */
+    int tile_size;               /* 0: 8 when samples_per_pass >= 8, else 16 */
     uint64_t seed;
     pt_color background;         /* radiance of rays that leave the scene */
     pt_progress_fn progress;
@@ -5950,7 +5950,11 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     if (per_pass > spp) per_pass = spp;
     passes = (spp + per_pass - 1) / per_pass;
     memset(&ps, 0, sizeof ps);
-    ps.tile_size = d->tile_size ? d->tile_size : 16;
+    /* default tiles: 8 x 8 pixels once a pass takes >= 8 samples per pixel (a job then holds >= 512
+       samples), else 16 x 16: the smaller the jobs, the closer together the threads finish a pass
+       (on the benchmark's tiny-light-pure at 32 spp, 2 threads: the last job left one thread idle
+       for ~1.1 % of the pass with 16 x 16 tiles, ~0.3 % with 8 x 8, from per-job CPU times) */
+    ps.tile_size = d->tile_size ? d->tile_size : (per_pass >= 8 ? 8 : 16);
     tiles_x = (d->width + ps.tile_size - 1) / ps.tile_size;
     tiles_y = (d->height + ps.tile_size - 1) / ps.tile_size;
     tiles = tiles_x * tiles_y;
