@@ -1666,19 +1666,16 @@ static float pt__owen_float(uint32_t x_reversed, uint32_t add, uint32_t mul_odd)
    that word shifted down 15) and coordinates 0 and 1's (addends h1's high word and h2's low word;
    multipliers h2's top 16 bits and its bits 32..47); h3 = mix64(h2 ^ c2) and h4 = mix64(h3 ^ c1)
    give coordinates 2 and 3's (addends h3's low and high words, multipliers h4's), made only for
-   the sets that draw them. Multipliers are stored odd (pt__nested_hash). */
+   the sets that draw them (mul[2] = 0 until then). Multipliers are stored odd (pt__nested_hash). */
 typedef struct pt__sobol_seeds {
     uint64_t seed;  /* the set seed they come from */
-    uint64_t h2;    /* (for coordinates 2 and 3's) */
     uint32_t shuffle_add, shuffle_mul;
     uint32_t add[4], mul[4];
-    int has23;      /* whether add[2..3], mul[2..3] are made */
 } pt__sobol_seeds;
 static PT__NOINLINE void pt__sobol_seeds_make(pt__sobol_seeds *e, uint64_t seed)
 {
     uint64_t h1 = pt__mix64(seed), h2 = pt__mix64(h1 ^ 0x2545f4914f6cdd1dULL);
     e->seed = seed;
-    e->h2 = h2;
     e->shuffle_add = (uint32_t)h1;
     e->shuffle_mul = ((uint32_t)h1 >> 15) | 1u;
     e->add[0] = (uint32_t)(h1 >> 32);
@@ -1686,16 +1683,15 @@ static PT__NOINLINE void pt__sobol_seeds_make(pt__sobol_seeds *e, uint64_t seed)
     e->add[1] = (uint32_t)h2;
     e->mul[1] = ((uint32_t)(h2 >> 32) & 0xffffu) | 1u;
     e->add[2] = e->add[3] = e->mul[2] = e->mul[3] = 0u;
-    e->has23 = 0;
 }
 static PT__NOINLINE void pt__sobol_seeds_make23(pt__sobol_seeds *e)
 {
-    uint64_t h3 = pt__mix64(e->h2 ^ 0x6c62272e07bb0142ULL), h4 = pt__mix64(h3 ^ 0x2545f4914f6cdd1dULL);
+    uint64_t h2 = pt__mix64(pt__mix64(e->seed) ^ 0x2545f4914f6cdd1dULL);
+    uint64_t h3 = pt__mix64(h2 ^ 0x6c62272e07bb0142ULL), h4 = pt__mix64(h3 ^ 0x2545f4914f6cdd1dULL);
     e->add[2] = (uint32_t)h3;
     e->mul[2] = (uint32_t)h4 | 1u;
     e->add[3] = (uint32_t)(h3 >> 32);
     e->mul[3] = (uint32_t)(h4 >> 32) | 1u;
-    e->has23 = 1;
 }
 /* Step 1's last part by look-ups: entry b of row 0 is (reverse(b) | Sobol dimension 1's reversed
    coordinate of index reverse(b) << 16), of row 1 the same for reverse(b) << 8 (each coordinate
@@ -1790,7 +1786,7 @@ static void pt__sobol_point01(const pt__sobol_seeds *e, uint32_t k, uint32_t k1,
 static void pt__sobol_point23(pt__sobol_seeds *e, uint32_t k, float *u)
 {
     uint64_t x = pt__sobol23_reversed16(k) ^ pt__sobol23_reversed(k & 0xffff0000u);
-    if (!e->has23) pt__sobol_seeds_make23(e);
+    if (!e->mul[2]) pt__sobol_seeds_make23(e);
     u[0] = pt__owen_float((uint32_t)x, e->add[2], e->mul[2]);
     u[1] = pt__owen_float((uint32_t)(x >> 32), e->add[3], e->mul[3]);
 }
@@ -1813,13 +1809,18 @@ PTDEF void pt_sobol_scrambled4(uint32_t index, uint64_t seed, float u[4])
     pt__sobol_point01(&e, k, k1, u);
     pt__sobol_point23(&e, k, u + 2);
 }
-/* The seeds of the sets drawn lately, by set number modulo PT__SOBOL_CACHE_SIZE, each tagged with
-   the set seed it was made from: a set's seed depends on (render seed, pixel, set) and not on the
-   sample, so a pixel's samples, drawn one after another by one tile job, share them and the
-   SplitMix64 chain runs once per pixel and set instead of once per draw. An entry is used only
-   when its tag equals the set seed wanted (else it is remade), so the values drawn never depend
-   on the cache. Entries start as the seeds of set seed 0. */
-#define PT__SOBOL_CACHE_SIZE 64u
+/* The seeds of the sets drawn lately, each tagged with the set seed it was made from: a set's seed
+   depends on (render seed, pixel, set, split copy) and not on the sample, so a pixel's samples,
+   drawn one after another by one tile job, share them and the SplitMix64 chain runs once per
+   pixel and set instead of once per draw. Set s of a sampler is kept in entry (s + its
+   cache_lane) modulo PT__SOBOL_CACHE_SIZE: a camera sample's path has lane 0, and a split copy
+   the lane PT__SOBOL_CACHE_LANE x copy further on than its parent's, so the copies a path splits
+   into (indirect_paths: every camera sample) keep their sets apart (8 bounces per lane) instead
+   of evicting each other's. An entry is used only when its tag equals the set seed wanted (else
+   it is remade), so the values drawn never depend on the cache. Entries start as the seeds of
+   set seed 0. */
+#define PT__SOBOL_CACHE_SIZE 256u
+#define PT__SOBOL_CACHE_LANE 64u
 typedef struct pt__sobol_cache {
     pt__sobol_seeds e[PT__SOBOL_CACHE_SIZE];
 } pt__sobol_cache;
@@ -1843,6 +1844,7 @@ typedef struct pt__sampler {
     uint64_t seed;         /* SOBOL: the render's seed, pixel and sample index, to seed rng */
     uint32_t pixel, sample;
     pt__sobol_cache *cache; /* SOBOL: set seeds, shared by the samples of one tile job */
+    uint32_t cache_lane;   /* SOBOL: where its sets go in the cache (pt__sobol_cache) */
 } pt__sampler;
 
 /* Sets: the pixel and lens positions, then PT__SLOTS per bounce (depth d's slot s is set
@@ -1883,6 +1885,7 @@ static void pt__sampler_init(pt__sampler *smp, pt_sampler kind, uint64_t seed, u
     smp->index_high = smp->index_high1 = 0u;
     smp->key = 0u;
     smp->cache = NULL;
+    smp->cache_lane = 0u;
     if (smp->sobol) {
         smp->index_reversed = pt__reverse_bits(sample);
         smp->index_high = sample & 0xffff0000u;
@@ -1908,7 +1911,7 @@ static uint64_t pt__set_seed(const pt__sampler *smp, uint32_t set)
 static pt__sobol_seeds *pt__sobol_set_seeds(const pt__sampler *smp, uint32_t set)
 {
     uint64_t seed = pt__set_seed(smp, set);
-    pt__sobol_seeds *e = &smp->cache->e[set & (PT__SOBOL_CACHE_SIZE - 1u)];
+    pt__sobol_seeds *e = &smp->cache->e[(set + smp->cache_lane) & (PT__SOBOL_CACHE_SIZE - 1u)];
     if (e->seed != seed) pt__sobol_seeds_make(e, seed);
     return e;
 }
@@ -5233,6 +5236,7 @@ static pt__sampler *pt__split_sampler(pt__sampler *parent, pt__sampler *child, i
     child->key = pt__mix64(parent->key ^ (0x94d049bb133111ebULL * (uint64_t)(depth * PT__SPLIT_MAX_COPIES + copy + 1)));
     pt_rng_seed(&child->rng, child->key, (uint64_t)copy);
     child->rng_seeded = 1;  /* (else a guide's first draw would reseed it with the parent's stream) */
+    child->cache_lane = parent->cache_lane + PT__SOBOL_CACHE_LANE * (uint32_t)copy;
     return child;
 }
 
