@@ -5009,8 +5009,9 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
    variance per sample, which Sobol's stratification makes smaller, so roulette should cut later
    there. Measured with Sobol (and indirect_paths 3), b_ref 1/2 against 1, MIS, one thread,
    variance x CPU time per sample: tiny-light-pure 0.94 (256 spp, 3 seed pairs; b_ref 1/4: 0.96),
-   cornell 0.81, metal-glass 0.91, tiny-light 0.99, many-lights 1.02 (64 spp, 3 pairs; noisy: the
-   machine was loaded, rays per sample x variance gave 0.97 / 0.82 / 0.91 / 1.01 / 1.01).
+   cornell 0.81, metal-glass 0.91, tiny-light 0.99 (64 spp, 3 pairs), many-lights 1.00 (64 spp,
+   6 pairs; b_ref 0.7: 0.99). The machine was loaded: rays per sample x variance gave 0.97 / 0.82
+   / 0.91 / 1.01 / 1.01.
    Independent numbers keep b_ref = 1. Any q chosen before the coin is flipped keeps the
    estimator unbiased; taking it from the throughput after the scatter weight (the textbook
    choice) turns a well-sampled direction into a firefly: when f/p is tiny because p is large
