@@ -5198,12 +5198,16 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    splitting (Arvo & Kirk 1990), as in production renderers' "indirect samples per camera
    sample". The Sobol sampler stratifies the first vertex's dimensions over a pixel's samples, so
    V_c is small and k* large; with independent numbers V_c holds e.g. the choice among many
-   lights. Measured: variance x CPU time per camera sample relative to k = 1, MIS, 64 spp, 4 seed
-   pairs, one thread, on tiny-light-pure / tiny-light / many-lights / cornell / metal-glass:
+   lights. Measured (before Sobol's roulette gain of 2, below, which was then tuned with k = 3):
+   variance x CPU time per camera sample relative to k = 1, MIS, 64 spp, 4 seed pairs, one
+   thread, on tiny-light-pure / tiny-light / many-lights / cornell / metal-glass:
      Sobol        k = 2: 0.81 0.95 0.96 0.90 0.91   k = 3: 0.75 0.99 0.92 0.86 0.88
                   k = 4: 0.68 1.09 0.94 0.84 0.88
      independent  k = 2: 0.84 0.99 1.11 0.91 0.93   k = 3: 0.78 1.08 1.23 0.90 0.90
-   So the default is 3 with Sobol, and 1 (no split: images as before) with independent numbers.
+   (tiny-light-pure with Sobol at 256 spp, 3 pairs: k = 2 0.83, 3 0.81, 4 0.74.) So the default
+   is 3 with Sobol, and 1 (no split: images as before) with independent numbers. Copies carrying
+   throughput 1/k instead (so roulette's q = sqrt(b) cut them early) made it worse than no split
+   on the Cornell box (variance x time 1.36-1.50, helper rr3's measurement this session).
    The path starts with throughput k and its sum is divided by k, so each copy carries
    throughput ~1 like an unsplit path, and roulette and the weight window below treat it so. */
 #define PT__SPLIT_BETA 2.0f
