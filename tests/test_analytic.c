@@ -148,6 +148,32 @@ static void furnace_render(const pt_scene *s, pt_render_desc *d, double want, do
    0.42 %% of the pixels, at 560 spp 0.11 %%). */
 static int furnace_rr_spp(int s) { return s == PT_STRATEGY_MIS ? 300 : s == PT_STRATEGY_LIGHT ? 560 : 525; }
 
+/* The closed furnace of tu_add_closed_furnace, or NULL (the failure is a failed check). */
+static pt_scene *furnace_scene(test_ctx *t)
+{
+    pt_scene *s = pt_scene_create();
+    int rc;
+    if (!CHECK(t, s != NULL, "scene")) return NULL;
+    rc = tu_add_closed_furnace(s);
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) {
+        pt_scene_destroy(s);
+        return NULL;
+    }
+    return s;
+}
+
+/* 32 x 32 from inside the closed furnace: every camera ray's first vertex is a diffuse wall. */
+static pt_render_desc furnace_view(int spp, uint64_t seed, pt_strategy strategy, pt_sampler sampler)
+{
+    pt_render_desc d = tu_base_desc(32, 32, spp, seed);
+    d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
+    d.camera.look_at = pt_v3(1, 0.5f, 0);
+    d.camera.vfov_degrees = 90;
+    d.strategy = strategy;
+    d.sampler = sampler;
+    return d;
+}
+
 static void furnace_every_pixel(test_ctx *t)
 {
     /* Issue 3: inside a closed sphere of albedo 0.5 emitting 0.5 on both sides every pixel converges
@@ -302,14 +328,12 @@ static void furnace_indirect_paths(test_ctx *t)
         {PT_STRATEGY_MATERIAL, PT_SAMPLER_INDEPENDENT, 1, 1}, {PT_STRATEGY_MATERIAL, PT_SAMPLER_INDEPENDENT, 8, 1},
         {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 1, 1},       {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 8, 1},
     };
-    pt_scene *s = pt_scene_create();
-    int c, rc;
+    pt_scene *s = furnace_scene(t);
+    int c;
     double sd[8];
-    if (!CHECK(t, s != NULL, "scene")) return;
-    rc = tu_add_closed_furnace(s);
-    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    if (!s) return;
     for (c = 0; c < 8; c++) {
-        pt_render_desc d = tu_base_desc(32, 32, 64, 36000 + (uint64_t)c);
+        pt_render_desc d = furnace_view(64, 36000 + (uint64_t)c, cases[c].strategy, cases[c].sampler);
         furnace_stats fs;
         const int k = cases[c].k ? cases[c].k : cases[c].sampler == PT_SAMPLER_SOBOL ? 3 : 1;
         const double want = 1.0;
@@ -317,11 +341,6 @@ static void furnace_indirect_paths(test_ctx *t)
         snprintf(name, sizeof name, "%s, %s, indirect_paths %d%s", strategy_name(cases[c].strategy),
                  cases[c].sampler == PT_SAMPLER_SOBOL ? "Sobol" : "independent", cases[c].k,
                  cases[c].rr1 ? ", roulette from depth 1" : "");
-        d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
-        d.camera.look_at = pt_v3(1, 0.5f, 0);
-        d.camera.vfov_degrees = 90;
-        d.strategy = cases[c].strategy;
-        d.sampler = cases[c].sampler;
         d.indirect_paths = cases[c].k;
         if (cases[c].rr1) d.rr_start_depth = 1;
         furnace_render(s, &d, want, 1e-3, 1, &fs);
@@ -381,21 +400,14 @@ static void furnace_splitting(test_ctx *t)
         {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 4, 1, "depth 4, MATERIAL, Sobol"},
         {PT_STRATEGY_MATERIAL, PT_SAMPLER_SOBOL, 4, 0, "depth 4, MATERIAL, Sobol, no splitting"},
     };
-    pt_scene *s = pt_scene_create();
-    int c, rc;
+    pt_scene *s = furnace_scene(t);
+    int c;
     double sd[8];
-    if (!CHECK(t, s != NULL, "scene")) return;
-    rc = tu_add_closed_furnace(s);
-    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    if (!s) return;
     for (c = 0; c < 8; c++) {
-        pt_render_desc d = tu_base_desc(32, 32, 128, 35000 + (uint64_t)c);
+        pt_render_desc d = furnace_view(128, 35000 + (uint64_t)c, cases[c].strategy, cases[c].sampler);
         furnace_stats fs;
         double want = cases[c].depth ? 0.96875 : 1.0;
-        d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
-        d.camera.look_at = pt_v3(1, 0.5f, 0);
-        d.camera.vfov_degrees = 90;
-        d.strategy = cases[c].strategy;
-        d.sampler = cases[c].sampler;
         d.guide = split_guide;
         d.guide_weight = 0.8f;
         d.max_splits = cases[c].split ? 0 : -1;
@@ -455,22 +467,15 @@ static void roulette_per_sampler(test_ctx *t)
        two expectations are ~100 standard errors apart, so the wrong gain fails. The image is
        checked unbiased by the furnace tests above. */
     static const pt_sampler samplers[2] = {PT_SAMPLER_INDEPENDENT, PT_SAMPLER_SOBOL};
-    pt_scene *s = pt_scene_create();
+    pt_scene *s = furnace_scene(t);
     int c, rc;
     double zmax = tu_z_two_sided(tu_sidak(0.01, 2));
-    if (!CHECK(t, s != NULL, "scene")) return;
-    rc = tu_add_closed_furnace(s);
-    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    if (!s) return;
     for (c = 0; c < 2; c++) {
-        pt_render_desc d = tu_base_desc(32, 32, 64, 37000 + (uint64_t)c);
+        pt_render_desc d = furnace_view(64, 37000 + (uint64_t)c, PT_STRATEGY_MATERIAL, samplers[c]);
         pt_film f;
         pt_render_stats st;
         double want, var, got, z, n;
-        d.camera.look_from = pt_v3(0.2f, -0.1f, 0.3f);
-        d.camera.look_at = pt_v3(1, 0.5f, 0);
-        d.camera.vfov_degrees = 90;
-        d.strategy = PT_STRATEGY_MATERIAL;
-        d.sampler = samplers[c];
         d.indirect_paths = 1;
         roulette_bounces(c == 1 ? 2.0 : 1.0, 50, &want, &var);
         if (!CHECK(t, pt_film_init(&f, d.width, d.height) == PT_OK, "film")) break;
