@@ -1791,24 +1791,25 @@ static void pt__sobol_point23(pt__sobol_seeds *e, uint32_t k, float *u)
     u[0] = pt__owen_float((uint32_t)x, e->add[2], e->mul[2]);
     u[1] = pt__owen_float((uint32_t)(x >> 32), e->add[3], e->mul[3]);
 }
+/* The public functions' point: dimensions 0 and 1 of set `seed` at sample `index` into u, the
+   set's seeds into *e; returns the shuffled index (for dimensions 2 and 3). */
+static uint32_t pt__sobol_point_at(pt__sobol_seeds *e, uint32_t index, uint64_t seed, float *u)
+{
+    uint32_t k, k1;
+    pt__sobol_seeds_make(e, seed);
+    k = pt__sobol_shuffle(e, pt__reverse_bits(index), index & 0xffff0000u, pt__sobol1_reversed(index & 0xffff0000u), &k1);
+    pt__sobol_point01(e, k, k1, u);
+    return k;
+}
 PTDEF void pt_sobol_scrambled(uint32_t index, uint64_t seed, float u[2])
 {
     pt__sobol_seeds e;
-    uint32_t k, k1;
-    if (!u) return;
-    pt__sobol_seeds_make(&e, seed);
-    k = pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u, pt__sobol1_reversed(index & 0xffff0000u), &k1);
-    pt__sobol_point01(&e, k, k1, u);
+    if (u) (void)pt__sobol_point_at(&e, index, seed, u);
 }
 PTDEF void pt_sobol_scrambled4(uint32_t index, uint64_t seed, float u[4])
 {
     pt__sobol_seeds e;
-    uint32_t k, k1;
-    if (!u) return;
-    pt__sobol_seeds_make(&e, seed);
-    k = pt__sobol_shuffle(&e, pt__reverse_bits(index), index & 0xffff0000u, pt__sobol1_reversed(index & 0xffff0000u), &k1);
-    pt__sobol_point01(&e, k, k1, u);
-    pt__sobol_point23(&e, k, u + 2);
+    if (u) pt__sobol_point23(&e, pt__sobol_point_at(&e, index, seed, u), u + 2);
 }
 /* The seeds of the sets drawn lately, each tagged with the set seed it was made from: a set's seed
    depends on (render seed, pixel, set, split copy) and not on the sample, so a pixel's samples,
