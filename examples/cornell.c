@@ -35,7 +35,7 @@ typedef struct options {
     int output_count;
     const char *scene;   /* --scene PATH, or NULL for the built-in Cornell box */
     float adaptive;      /* --adaptive THRESHOLD, 0 = off */
-    int adaptive_min_spp, adaptive_check;
+    int adaptive_min_spp, adaptive_check, adaptive_neighbours_only;
     unsigned disable_skips; /* PT_SKIP_* bits */
     unsigned given;      /* GIVEN_* bits: options set on the command line win over the scene file */
 } options;
@@ -133,12 +133,15 @@ static void usage(FILE *f)
         "                        the built-in box; its size, spp, depth, strategy, sampler and seed are the\n"
         "                        defaults, options given here override them\n"
         "      --adaptive T      adaptive sampling toward an image RMS relative error T (e.g. 0.05):\n"
-        "                        4x4 blocks get samples in proportion to their noise and stop when\n"
-        "                        they and their neighbours have their share; --spp is then the most\n"
-        "                        a pixel gets (default 0 = off)\n"
+        "                        each pixel gets samples in proportion to the square root of the\n"
+        "                        noise of its 5x5 neighbourhood and stops when it has its share;\n"
+        "                        --spp is then the most a pixel gets (default 0 = off)\n"
         "      --adaptive-min-spp N  samples every pixel gets before it can stop, >= 2\n"
         "                        (default max(16, spp/16))\n"
-        "      --adaptive-check N    re-check the blocks every N passes (default 1)\n"
+        "      --adaptive-check N    re-plan the shares every N passes (default 1)\n"
+        "      --adaptive-neighbours-only  leave a pixel's own samples out of its noise\n"
+        "                        estimate: unbiased to first order, more samples for the same\n"
+        "                        error (default: counted, a small bias that vanishes with spp)\n"
         "      --disable-skips L force the general path for the scene-feature skips in the\n"
         "                        comma-separated list L, or 'all': no-emitters, delta-vertex,\n"
         "                        facing-away, no-textures, zero-bsdf-shadow (for\n"
@@ -339,6 +342,7 @@ static int parse_options(int argc, char **argv, options *o)
     o->adaptive = 0.0f;
     o->adaptive_min_spp = 0;
     o->adaptive_check = 0;
+    o->adaptive_neighbours_only = 0;
     o->disable_skips = 0;
 
     for (i = 1; i < argc; i++) {
@@ -366,6 +370,11 @@ static int parse_options(int argc, char **argv, options *o)
         if (strcmp(name, "-q") == 0 || strcmp(name, "--quiet") == 0) {
             if (value) return fail("option %s takes no value", name);
             o->quiet = 1;
+            continue;
+        }
+        if (strcmp(name, "--adaptive-neighbours-only") == 0) {
+            if (value) return fail("option %s takes no value", name);
+            o->adaptive_neighbours_only = 1;
             continue;
         }
 
@@ -546,6 +555,7 @@ int main(int argc, char **argv)
     desc.adaptive_threshold = opt.adaptive;
     desc.adaptive_min_spp = opt.adaptive_min_spp;
     desc.adaptive_check_passes = opt.adaptive_check;
+    desc.adaptive_neighbours_only = opt.adaptive_neighbours_only;
     desc.disable_skips = opt.disable_skips;
     if (!opt.quiet) {
         desc.progress = show_progress;
