@@ -920,6 +920,7 @@ typedef struct adaptive_results {
     double uniform_check_err;          /* median relMSE of the uniform renders timed beside (= E) */
     int ratio_extrap;
     int end_spp;                       /* the uniform render's spp that is compared */
+    int neighbours_only;               /* pt_render_desc.adaptive_neighbours_only of the adaptive renders */
     char image_uniform[256], image_adaptive[256], image_map[256];
 } adaptive_results;
 
@@ -984,15 +985,17 @@ static void save_image(const config *cfg, const char *name, const pt_image *img,
    render, then every threshold), so a slow phase of the shared machine hits both alike; the
    series' own time for N spp (measured minutes earlier, progressive in 1, 1, 2, 4, ... spp
    steps) is reported beside it. */
-/* end_spp 0: compare at the uniform series' last point (images saved); otherwise at its point
-   of end_spp samples per pixel (the Cornell scene file's own 128), if the series has it before
-   its last point. */
-static int run_adaptive(const config *cfg, results *R, adaptive_results *A, int end_spp)
+/* end_spp 0: compare at the uniform series' last point (images saved unless neighbours_only);
+   otherwise at its point of end_spp samples per pixel (the Cornell scene file's own 128), if the
+   series has it before its last point. neighbours_only: the adaptive renders set
+   pt_render_desc.adaptive_neighbours_only (a pixel's own samples left out of its noise estimate;
+   the control for the default, which counts them: section 8 of pdftrace.h). */
+static int run_adaptive(const config *cfg, results *R, adaptive_results *A, int end_spp, int neighbours_only)
 {
     const int sc = 0; /* cornell */
     const series *u = &R->s[sc][S_MIS];
     loaded *L = &R->L[sc];
-    int k, seed, n, nu, end = u->levels - 1, save = end_spp == 0;
+    int k, seed, n, nu, end = u->levels - 1, save = end_spp == 0 && !neighbours_only;
     double base, kept_err = 1;
     double t[ADAPTIVE_MAX][MAX_SEEDS], e[ADAPTIVE_MAX][MAX_SEEDS], b[ADAPTIVE_MAX][MAX_SEEDS];
     double smp[ADAPTIVE_MAX][MAX_SEEDS], cv[ADAPTIVE_MAX][MAX_SEEDS], tu[MAX_SEEDS], eu[MAX_SEEDS];
@@ -1013,6 +1016,7 @@ static int run_adaptive(const config *cfg, results *R, adaptive_results *A, int 
         }
     }
     A->available = 1;
+    A->neighbours_only = neighbours_only;
     A->n_uniform = u->levels;
     for (k = 0; k < u->levels; ++k) {
         A->uniform[k] = u->med[k];
@@ -1025,8 +1029,8 @@ static int run_adaptive(const config *cfg, results *R, adaptive_results *A, int 
     base = sqrt(A->target_err);
     n = cfg->quick ? 5 : 8;
     A->n_adaptive = n;
-    printf("adaptive: cornell, MIS, uniform series at %d spp: relMSE %.3e in %.3f s; %d thresholds x %d seeds\n", nu,
-           A->target_err, A->series_time, n, cfg->seeds);
+    printf("adaptive%s: cornell, MIS, uniform series at %d spp: relMSE %.3e in %.3f s; %d thresholds x %d seeds\n",
+           neighbours_only ? " (neighbours only)" : "", nu, A->target_err, A->series_time, n, cfg->seeds);
     for (k = 0; k < n; ++k) /* 2^(1/3) .. 2^(-5/6) x sqrt(E); quick: 2^(1/4) .. 2^(-3/4) x sqrt(E) */
         A->threshold[k] = base * (cfg->quick ? pow(2.0, 0.25 - 0.25 * k) : pow(2.0, (2.0 - k) / 6.0));
     for (seed = 0; seed < cfg->seeds; ++seed) {
@@ -1043,6 +1047,7 @@ static int run_adaptive(const config *cfg, results *R, adaptive_results *A, int 
             d.adaptive_min_spp = 0;   /* min spp max(16, cap/16), */
             d.adaptive_check_passes = 0; /* a check after every pass */
             d.adaptive_threshold = k < 0 ? 0.0f : (float)A->threshold[k];
+            d.adaptive_neighbours_only = neighbours_only;
             if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
             t0 = ptv_now();
             if (pt_render(L->scene, &d, &film, &st) != PT_OK) {
@@ -1404,20 +1409,29 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
     return 1;
 }
 
-static int write_adaptive_csv(const config *cfg, const adaptive_results *A)
+/* adaptive.csv: the uniform MIS series, then each available adaptive run's renders (mode
+   "adaptive" counts a pixel's own samples, "adaptive-neighbours" does not; end_spp: the uniform
+   render it is compared with). */
+static int write_adaptive_csv(const config *cfg, const adaptive_results *const *runs, int count)
 {
     FILE *f;
-    int k;
+    int k, r;
+    const adaptive_results *A = runs[0];
     if (!A->available) return 1;
     f = open_out(cfg, "adaptive.csv");
     if (!f) return 0;
-    fprintf(f, "mode,threshold,spp_max,time_s,relmse,bias,samples,converged_fraction\n");
+    fprintf(f, "mode,end_spp,threshold,spp_max,time_s,relmse,bias,samples,converged_fraction\n");
     for (k = 0; k < A->n_uniform; ++k)
-        fprintf(f, "uniform,0,%d,%.6g,%.6g,%.6g,%.0f,0\n", A->uniform[k].spp, A->uniform[k].time, A->uniform_err[k],
+        fprintf(f, "uniform,0,0,%d,%.6g,%.6g,%.6g,%.0f,0\n", A->uniform[k].spp, A->uniform[k].time, A->uniform_err[k],
                 A->uniform[k].bias, A->uniform[k].samples);
-    for (k = 0; k < A->n_adaptive; ++k)
-        fprintf(f, "adaptive,%.4g,%d,%.6g,%.6g,%.6g,%.0f,%.4f\n", A->threshold[k], A->adaptive[k].spp, A->adaptive[k].time,
-                A->adaptive_err[k], A->adaptive[k].bias, A->adaptive[k].samples, A->converged[k]);
+    for (r = 0; r < count; ++r) {
+        const adaptive_results *B = runs[r];
+        if (!B->available) continue;
+        for (k = 0; k < B->n_adaptive; ++k)
+            fprintf(f, "%s,%d,%.4g,%d,%.6g,%.6g,%.6g,%.0f,%.4f\n", B->neighbours_only ? "adaptive-neighbours" : "adaptive",
+                    B->end_spp, B->threshold[k], B->adaptive[k].spp, B->adaptive[k].time, B->adaptive_err[k],
+                    B->adaptive[k].bias, B->adaptive[k].samples, B->converged[k]);
+    }
     return close_out(f, "adaptive.csv");
 }
 
@@ -1497,7 +1511,7 @@ static void plot_commands(FILE *g, const results *R, const pov_results *P, int i
 }
 
 static int make_plots(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
-                      char *status, size_t status_size)
+                      const adaptive_results *A3, char *status, size_t status_size)
 {
     FILE *g;
     int i, n = 0;
@@ -1514,6 +1528,11 @@ static int make_plots(const config *cfg, const results *R, const pov_results *P,
         fprintf(f, "\n\n# adaptive MIS: time_s relmse threshold\n");
         for (k = 0; k < A->n_adaptive; ++k)
             if (A->adaptive_err[k] > 0) fprintf(f, "%.6g %.6g %.3g\n", A->adaptive[k].time, A->adaptive_err[k], A->threshold[k]);
+        fprintf(f, "\n\n# adaptive MIS, neighbours only: time_s relmse threshold\n");
+        for (k = 0; A3->available && k < A3->n_adaptive; ++k)
+            if (A3->adaptive_err[k] > 0)
+                fprintf(f, "%.6g %.6g %.3g\n", A3->adaptive[k].time, A3->adaptive_err[k], A3->threshold[k]);
+        if (!A3->available) fprintf(f, "nan nan nan\n"); /* keeps index 2 for gnuplot */
         fprintf(f, "\n\n");
         if (!close_out(f, "adaptive.dat")) return 0;
     }
@@ -1532,7 +1551,9 @@ static int make_plots(const config *cfg, const results *R, const pov_results *P,
                    "set logscale xy\nset format x '10^{%%L}'\nset format y '10^{%%L}'\nset grid\n"
                    "set xlabel 'render time (s)'\nset ylabel 'relMSE'\n"
                    "plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \\\n"
-                   "     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive'\nreset\n");
+                   "     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive', \\\n"
+                   "     'adaptive.dat' index 2 using 1:2 with linespoints lc rgb '#7f7f7f' pt 8 lw 1 dt 2 "
+                   "title 'adaptive, neighbours only'\nreset\n");
     }
     /* The headline: every scene on one page. */
     fprintf(g, "set terminal pngcairo size 1500,900 font 'sans,10'\nset output 'headline.png'\n"
@@ -1546,7 +1567,9 @@ static int make_plots(const config *cfg, const results *R, const pov_results *P,
     if (A->available && n < 6)
         fprintf(g, "set title 'cornell: adaptive vs uniform (MIS)'\n"
                    "plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \\\n"
-                   "     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive'\n");
+                   "     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive', \\\n"
+                   "     'adaptive.dat' index 2 using 1:2 with linespoints lc rgb '#7f7f7f' pt 8 lw 1 dt 2 "
+                   "title 'neighbours only'\n");
     fprintf(g, "unset multiplot\n");
     if (!close_out(g, "plots.gp")) return 0;
     if (!have_program("gnuplot")) {
@@ -1613,8 +1636,19 @@ static void fmt_g(char *buf, size_t n, double v)
     else snprintf(buf, n, "%.3g", v);
 }
 
+/* The adaptive render whose error came nearest the uniform target (log distance). */
+static int nearest_threshold(const adaptive_results *A)
+{
+    int k, best = 0;
+    for (k = 1; k < A->n_adaptive; ++k)
+        if (A->adaptive_err[k] > 0 &&
+            fabs(log(A->adaptive_err[k] / A->target_err)) < fabs(log(A->adaptive_err[best] / A->target_err)))
+            best = k;
+    return best;
+}
+
 static int write_summary(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
-                         const adaptive_results *A2,
+                         const adaptive_results *A2, const adaptive_results *A3, const adaptive_results *A4,
                          const skip_results *S, const char *plot_status, double total_seconds)
 {
     FILE *f = open_out(cfg, "summary.md"), *h;
@@ -1697,6 +1731,17 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
             fprintf(f, ". At %d spp (the Cornell scene file's own count): relMSE %.3g in %.3g s; adaptive %.3g s%s: "
                        "**ratio %.2f** (%.2f in samples)", A2->end_spp, A2->target_err, A2->uniform_time,
                     A2->adaptive_time, A2->ratio_extrap ? " (extrapolated)" : "", A2->ratio, A2->ratio_samples);
+        fprintf(f, ". Bias of the image mean (adaptive counts a pixel's own samples: stopping bias, section 8): "
+                   "%+.2f%% at the threshold nearest the target vs uniform %+.2f%%",
+                100 * A->adaptive[nearest_threshold(A)].bias, 100 * A->uniform[A->n_uniform - 1].bias);
+        if (A3->available || A4->available) {
+            fprintf(f, ". Control, `adaptive_neighbours_only` (unbiased to first order):");
+            if (A3->available)
+                fprintf(f, " %d spp ratio %.2f (%.2f in samples)", A3->end_spp, A3->ratio, A3->ratio_samples);
+            if (A4->available)
+                fprintf(f, "%s %d spp ratio %.2f (%.2f in samples)", A3->available ? ";" : "", A4->end_spp, A4->ratio,
+                        A4->ratio_samples);
+        }
         fprintf(f, " | %s (every end shown must be ≤ 0.7; seams: see the images) |\n",
                 pass_fail(A->ratio <= 0.7 && (!A2->available || A2->ratio <= 0.7)));
     } else
@@ -1899,6 +1944,29 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
             fprintf(f, "\n");
         } else
             fprintf(f, "At the Cornell scene's own 128 spp: SKIP (%s).\n\n", A2->skip_reason);
+        {   /* the control: a pixel's own samples left out of its noise estimate */
+            const adaptive_results *C[2];
+            int r;
+            C[0] = A3;
+            C[1] = A4;
+            fprintf(f, "Control: the same with `adaptive_neighbours_only` = 1 (a pixel's noise estimated from the 24 "
+                       "other pixels of its 5x5 neighbourhood only: unbiased to first order, but a pixel that drew a "
+                       "firefly does not sample on to dilute it).\n\n");
+            for (r = 0; r < 2; ++r) {
+                if (!C[r]->available) {
+                    fprintf(f, "Neighbours only, %s: SKIP (%s).\n\n", r ? "128 spp" : "the series' end", C[r]->skip_reason);
+                    continue;
+                }
+                fprintf(f, "Neighbours only, %d spp: uniform relMSE %.3g in %.3g s (timed beside); adaptive in %.3g s%s: "
+                           "ratio %.2f (%.2f in samples).\n\n| threshold | time (s) | relMSE | bias | pixels stopped early |\n"
+                           "|---|---|---|---|---|\n", C[r]->end_spp, C[r]->target_err, C[r]->uniform_time,
+                        C[r]->adaptive_time, C[r]->ratio_extrap ? " (extrapolated)" : "", C[r]->ratio, C[r]->ratio_samples);
+                for (k = 0; k < C[r]->n_adaptive; ++k)
+                    fprintf(f, "| %.3g | %.3g | %.3g | %+.2f%% | %.1f%% |\n", C[r]->threshold[k], C[r]->adaptive[k].time,
+                            C[r]->adaptive_err[k], 100 * C[r]->adaptive[k].bias, 100 * C[r]->converged[k]);
+                fprintf(f, "\n");
+            }
+        }
     }
 
     /* skips */
@@ -2019,7 +2087,7 @@ static int cmd_run(int argc, char **argv)
     config cfg;
     static results R;
     static pov_results P;
-    static adaptive_results A, A2;
+    static adaptive_results A, A2, A3, A4; /* own samples at the end / 128 spp; neighbours only, the same */
     static skip_results S;
     char plot_status[512] = "not made";
     int i, any_scene = 0, ok = 1, budget_set = 0;
@@ -2075,17 +2143,31 @@ static int cmd_run(int argc, char **argv)
         ok = run_all_series(&cfg, &R) && write_series_csv(&cfg, &R);
     } else
         for (i = 0; i < SCENE_COUNT; ++i) R.done[i] = 0; /* nothing to report per scene */
-    if (ok && (cfg.parts & PART_ADAPTIVE)) ok = run_adaptive(&cfg, &R, &A, 0) && write_adaptive_csv(&cfg, &A);
-    if (ok && (cfg.parts & PART_ADAPTIVE) && !cfg.quick) ok = run_adaptive(&cfg, &R, &A2, 128);
+    if (ok && (cfg.parts & PART_ADAPTIVE)) ok = run_adaptive(&cfg, &R, &A, 0, 0);
+    if (ok && (cfg.parts & PART_ADAPTIVE) && !cfg.quick) ok = run_adaptive(&cfg, &R, &A2, 128, 0);
+    if (ok && (cfg.parts & PART_ADAPTIVE) && !cfg.quick) ok = run_adaptive(&cfg, &R, &A3, 0, 1);
+    if (ok && (cfg.parts & PART_ADAPTIVE) && !cfg.quick) ok = run_adaptive(&cfg, &R, &A4, 128, 1);
+    if (ok && (cfg.parts & PART_ADAPTIVE)) {
+        const adaptive_results *runs[4];
+        runs[0] = &A;
+        runs[1] = &A2;
+        runs[2] = &A3;
+        runs[3] = &A4;
+        ok = write_adaptive_csv(&cfg, runs, 4);
+    }
     if (ok && (cfg.parts & PART_SKIPS)) ok = run_skips(&cfg, &R, &S) && write_skips_csv(&cfg, &S);
     if (ok && (cfg.parts & PART_POV)) ok = run_pov(&cfg, &R, &P) && write_pov_csv(&cfg, &R, &P);
     if (!(cfg.parts & PART_ADAPTIVE)) snprintf(A.skip_reason, sizeof A.skip_reason, "not run (--parts)");
     if (!A2.available && !A2.skip_reason[0])
         snprintf(A2.skip_reason, sizeof A2.skip_reason, cfg.quick ? "quick mode" : "not run (--parts)");
+    if (!A3.available && !A3.skip_reason[0])
+        snprintf(A3.skip_reason, sizeof A3.skip_reason, cfg.quick ? "quick mode" : "not run (--parts)");
+    if (!A4.available && !A4.skip_reason[0])
+        snprintf(A4.skip_reason, sizeof A4.skip_reason, cfg.quick ? "quick mode" : "not run (--parts)");
     if (!(cfg.parts & PART_SKIPS)) snprintf(S.skip_reason, sizeof S.skip_reason, "not run (--parts)");
     if (!(cfg.parts & PART_POV)) snprintf(P.skip_reason, sizeof P.skip_reason, "not run (--parts)");
-    if (ok && (cfg.parts & PART_SERIES)) ok = make_plots(&cfg, &R, &P, &A, plot_status, sizeof plot_status);
-    if (ok) ok = write_summary(&cfg, &R, &P, &A, &A2, &S, plot_status, ptv_now() - t0);
+    if (ok && (cfg.parts & PART_SERIES)) ok = make_plots(&cfg, &R, &P, &A, &A3, plot_status, sizeof plot_status);
+    if (ok) ok = write_summary(&cfg, &R, &P, &A, &A2, &A3, &A4, &S, plot_status, ptv_now() - t0);
     for (i = 0; i < SCENE_COUNT; ++i) free_scene(&R.L[i]);
     if (!ok) {
         fprintf(stderr, "bench: failed\n");
