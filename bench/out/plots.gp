@@ -99,7 +99,8 @@ set grid
 set xlabel 'render time (s)'
 set ylabel 'relMSE'
 plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \
-     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive'
+     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive', \
+     'adaptive.dat' index 2 using 1:2 with linespoints lc rgb '#7f7f7f' pt 8 lw 1 dt 2 title 'adaptive, neighbours only'
 reset
 set terminal pngcairo size 1500,900 font 'sans,10'
 set output 'headline.png'
@@ -186,5 +187,6 @@ plot 'many-lights.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'many-lights.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
 set title 'cornell: adaptive vs uniform (MIS)'
 plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \
-     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive'
+     'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive', \
+     'adaptive.dat' index 2 using 1:2 with linespoints lc rgb '#7f7f7f' pt 8 lw 1 dt 2 title 'neighbours only'
 unset multiplot
