@@ -113,7 +113,10 @@
    instructions with it (Cornell box) and no run measured it slower; it is just no longer a
    switchable, benchmarked skip.
    Adaptive sampling (pt_render_desc.adaptive_threshold) skips pixels whose estimate has
-   converged: see section 8.
+   converged: see section 8. By default a pixel's own samples count in its noise estimate, which
+   lowers the image's error and darkens it slightly (a stopping bias that vanishes as samples
+   grow); adaptive_neighbours_only = 1 plans each pixel from its neighbours only (unbiased to
+   first order).
 */
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
