@@ -36,12 +36,14 @@ typedef struct options {
     const char *scene;   /* --scene PATH, or NULL for the built-in Cornell box */
     float adaptive;      /* --adaptive THRESHOLD, 0 = off */
     int adaptive_min_spp, adaptive_check, adaptive_neighbours_only;
+    int indirect_paths;  /* --indirect-paths N, 0 = the header's default for the sampler */
+    pt_backend backend;  /* --backend: traversal backend (AUTO: the header's rule) */
     unsigned disable_skips; /* PT_SKIP_* bits */
     unsigned given;      /* GIVEN_* bits: options set on the command line win over the scene file */
 } options;
 
 enum { GIVEN_W = 1, GIVEN_H = 2, GIVEN_SPP = 4, GIVEN_STRATEGY = 8, GIVEN_DEPTH = 16, GIVEN_SEED = 32,
-       GIVEN_SAMPLER = 64 };
+       GIVEN_SAMPLER = 64, GIVEN_INDIRECT = 128 };
 
 /* ---------------------------------------------------------------------------------------
    The scene: exactly the book's final Cornell box. A quad is Q + a*u + b*v, a, b in [0,1].
@@ -119,9 +121,13 @@ static void usage(FILE *f)
         "      --sampler S       independent | sobol: where random numbers come from; sobol =\n"
         "                        scrambled Sobol points, lower error at equal spp (default\n"
         "                        independent)\n"
+        "      --indirect-paths N  a camera sample continues from its first diffuse vertex as\n"
+        "                        N paths, 1..8 (default 3 with sobol, 1 with independent)\n"
         "      --light-weight W  light PDF weight of the mixture strategy, in (0, 1] (default 0.5)\n"
         "      --max-depth N     maximum scattering events per path (default 50)\n"
         "      --threads N       worker threads, 0 = all cores (default 0)\n"
+        "      --backend B       auto | builtin | embree: ray traversal (embree needs a build with\n"
+        "                        make EMBREE=1; default auto: Embree for large scenes when built in)\n"
         "      --seed N          random seed, a non-negative integer (default 0)\n"
         "  -o, --output PATH     write the image to PATH: PPM if it ends in .ppm, PFM if .pfm,\n"
         "                        EXR (half, ZIP) if .exr (needs a build with make OPENEXR=1);\n"
@@ -130,8 +136,8 @@ static void usage(FILE *f)
         "      --pfm PATH        same as -o PATH, PATH must end in .pfm\n"
         "  -q, --quiet           no progress line\n"
         "      --scene PATH      render a scene file (format: pdftrace.h, section 10) instead of\n"
-        "                        the built-in box; its size, spp, depth, strategy, sampler and seed are the\n"
-        "                        defaults, options given here override them\n"
+        "                        the built-in box; its size, spp, depth, strategy, sampler, indirect\n"
+        "                        paths and seed are the defaults, options given here override them\n"
         "      --adaptive T      adaptive sampling toward an image RMS relative error T (e.g. 0.05):\n"
         "                        each pixel gets samples in proportion to the square root of the\n"
         "                        noise of its 5x5 neighbourhood and stops when it has its share;\n"
@@ -276,6 +282,15 @@ static int parse_sampler(const char *opt, const char *text, pt_sampler *out)
     return 1;
 }
 
+static int parse_backend(const char *opt, const char *text, pt_backend *out)
+{
+    if (strcmp(text, "auto") == 0) *out = PT_BACKEND_AUTO;
+    else if (strcmp(text, "builtin") == 0) *out = PT_BACKEND_BUILTIN;
+    else if (strcmp(text, "embree") == 0) *out = PT_BACKEND_EMBREE;
+    else return fail("option %s: expected auto, builtin or embree, got '%s'", opt, text);
+    return 1;
+}
+
 static const char *strategy_name(pt_strategy s)
 {
     switch (s) {
@@ -343,6 +358,8 @@ static int parse_options(int argc, char **argv, options *o)
     o->adaptive_min_spp = 0;
     o->adaptive_check = 0;
     o->adaptive_neighbours_only = 0;
+    o->indirect_paths = 0;
+    o->backend = PT_BACKEND_AUTO;
     o->disable_skips = 0;
 
     for (i = 1; i < argc; i++) {
@@ -381,6 +398,7 @@ static int parse_options(int argc, char **argv, options *o)
         /* Every other option takes a value. */
         if (strcmp(name, "-w") && strcmp(name, "--width") && strcmp(name, "-h") && strcmp(name, "--height") &&
             strcmp(name, "--spp") && strcmp(name, "--strategy") && strcmp(name, "--sampler") &&
+            strcmp(name, "--indirect-paths") && strcmp(name, "--backend") &&
             strcmp(name, "--light-weight") &&
             strcmp(name, "--max-depth") && strcmp(name, "--threads") && strcmp(name, "--seed") &&
             strcmp(name, "-o") && strcmp(name, "--output") && strcmp(name, "--ppm") && strcmp(name, "--pfm") &&
@@ -408,6 +426,11 @@ static int parse_options(int argc, char **argv, options *o)
         } else if (!strcmp(name, "--sampler")) {
             if (!parse_sampler(name, value, &o->sampler)) return 0;
             o->given |= GIVEN_SAMPLER;
+        } else if (!strcmp(name, "--indirect-paths")) {
+            if (!parse_int(name, value, 1, 8, &o->indirect_paths)) return 0;
+            o->given |= GIVEN_INDIRECT;
+        } else if (!strcmp(name, "--backend")) {
+            if (!parse_backend(name, value, &o->backend)) return 0;
         } else if (!strcmp(name, "--light-weight")) {
             if (!parse_light_weight(name, value, &o->light_weight)) return 0;
         } else if (!strcmp(name, "--max-depth")) {
@@ -460,14 +483,19 @@ static int show_progress(void *user, const pt_progress *p)
     return 0; /* never cancel */
 }
 
-static void print_stats(const options *o, const pt_render_stats *st)
+static void print_stats(const options *o, const pt_scene *scene, const pt_render_stats *st)
 {
+    pt_scene_info info;
     uint64_t rays = st->camera_rays + st->bounce_rays + st->shadow_rays;
     double secs = st->seconds > 0 ? st->seconds : 1e-9;
     printf("image      %d x %d, %d spp, strategy %s", o->width, o->height, o->spp, strategy_name(o->strategy));
     if (o->strategy == PT_STRATEGY_MIXTURE) printf(" (light weight %g)", (double)o->light_weight);
     if (o->sampler == PT_SAMPLER_SOBOL) printf(", sobol sampler");
+    if (o->indirect_paths) printf(", %d indirect paths", o->indirect_paths);
     printf(", max depth %d, seed %llu\n", o->max_depth, (unsigned long long)o->seed);
+    if (pt_scene_get_info(scene, &info) == PT_OK)
+        printf("scene      %u primitives, %s traversal\n", (unsigned)info.primitive_count,
+               info.backend == PT_BACKEND_EMBREE ? "Embree" : "built-in BVH");
     printf("time       %.3f s on %d thread%s, %d pass%s\n", st->seconds, st->threads, st->threads == 1 ? "" : "s",
            st->passes, st->passes == 1 ? "" : "es");
     printf("samples    %llu (%.3f M samples/s)\n", (unsigned long long)st->samples, (double)st->samples / secs * 1e-6);
@@ -525,6 +553,7 @@ int main(int argc, char **argv)
         if (!(opt.given & GIVEN_SAMPLER)) opt.sampler = from_file.sampler;
         if (!(opt.given & GIVEN_DEPTH)) opt.max_depth = from_file.max_depth;
         if (!(opt.given & GIVEN_SEED)) opt.seed = from_file.seed;
+        if (!(opt.given & GIVEN_INDIRECT)) opt.indirect_paths = from_file.indirect_paths;
         desc.camera = from_file.camera;
         desc.background = from_file.background;
     } else {
@@ -542,12 +571,22 @@ int main(int argc, char **argv)
         }
         set_cornell_camera(&desc);
     }
+    if (opt.backend != PT_BACKEND_AUTO) { /* the scene was committed with AUTO: commit again */
+        rc = pt_scene_set_backend(scene, opt.backend);
+        if (rc == PT_OK) rc = pt_scene_commit(scene);
+        if (rc != PT_OK) {
+            fprintf(stderr, "%s: --backend: %s (%s)\n", prog, pt_result_string(rc), pt_scene_error_message(scene));
+            pt_scene_destroy(scene);
+            return 1;
+        }
+    }
 
     desc.width = opt.width;
     desc.height = opt.height;
     desc.samples_per_pixel = opt.spp;
     desc.strategy = opt.strategy;
     desc.sampler = opt.sampler;
+    desc.indirect_paths = opt.indirect_paths;
     desc.light_weight = opt.light_weight;
     desc.max_depth = opt.max_depth;
     desc.threads = opt.threads;
@@ -568,7 +607,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s: rendering failed: %s\n", prog, pt_result_string(rc));
         status = 1;
     } else {
-        print_stats(&opt, &stats);
+        print_stats(&opt, scene, &stats);
         for (i = 0; i < opt.output_count; i++) {
             const char *path = opt.outputs[i];
             char err[512] = "";

@@ -627,19 +627,12 @@ static void test_fuzz(const char *dir, const char *work, int rounds)
     result(!bad, "fuzz", detail);
 }
 
-/* scenes/cornell.scene must be exactly the built-in box of examples/cornell.c: same image bytes. */
-static void test_cornell_identical(const char *cornell, const char *dir, const char *work)
+/* 1 when the files at paths a and b both open and hold the same bytes. */
+static int same_bytes(const char *a, const char *b)
 {
-    char cmd[8192], a[2048], b[2048];
     FILE *fa, *fb;
     int same = 0, ca, cb;
-    snprintf(a, sizeof a, "%s/builtin.pfm", work);
-    snprintf(b, sizeof b, "%s/from-file.pfm", work);
-    remove(a);
-    remove(b);
-    snprintf(cmd, sizeof cmd, "'%s' -q --spp 8 -w 48 -h 48 -o '%s' >/dev/null && '%s' -q --scene '%s/cornell.scene' --spp 8 "
-             "-w 48 -h 48 --max-depth 50 -o '%s' >/dev/null", cornell, a, cornell, dir, b);
-    if (system(cmd) == 0 && (fa = fopen(a, "rb")) != NULL) {
+    if ((fa = fopen(a, "rb")) != NULL) {
         if ((fb = fopen(b, "rb")) != NULL) {
             do { ca = fgetc(fa); cb = fgetc(fb); } while (ca == cb && ca != EOF);
             same = ca == cb;
@@ -647,7 +640,61 @@ static void test_cornell_identical(const char *cornell, const char *dir, const c
         }
         fclose(fa);
     }
+    return same;
+}
+
+/* scenes/cornell.scene must be exactly the built-in box of examples/cornell.c: same image bytes. */
+static void test_cornell_identical(const char *cornell, const char *dir, const char *work)
+{
+    char cmd[8192], a[2048], b[2048];
+    int same = 0;
+    snprintf(a, sizeof a, "%s/builtin.pfm", work);
+    snprintf(b, sizeof b, "%s/from-file.pfm", work);
+    remove(a);
+    remove(b);
+    snprintf(cmd, sizeof cmd, "'%s' -q --spp 8 -w 48 -h 48 -o '%s' >/dev/null && '%s' -q --scene '%s/cornell.scene' --spp 8 "
+             "-w 48 -h 48 --max-depth 50 -o '%s' >/dev/null", cornell, a, cornell, dir, b);
+    if (system(cmd) == 0) same = same_bytes(a, b);
     result(same, "scenes/cornell.scene renders bit-identical to the built-in box of examples/cornell.c", "48x48, 8 spp");
+}
+
+/* build/cornell --scene takes a scene file's sampler and indirect_paths as its defaults, and
+   --indirect-paths overrides them: cornell.scene plus "sampler sobol" and "indirect_paths 2"
+   renders as cornell.scene with --sampler sobol --indirect-paths 2 (same bytes), and with
+   --indirect-paths 1 as --indirect-paths 1 (and not as 2). */
+static void test_cornell_scene_settings(const char *cornell, const char *dir, const char *work)
+{
+    char cmd[24576], scene[2048], from_file[2048], given[2048], over[2048], one[2048], src[2048];
+    const char *common = "-q --spp 4 -w 32 -h 32";
+    int ok, same2 = 0, same1 = 0, differs = 0;
+    snprintf(src, sizeof src, "%s/cornell.scene", dir);
+    snprintf(scene, sizeof scene, "%s/cornell-sobol2.scene", work);
+    snprintf(from_file, sizeof from_file, "%s/sobol2-file.pfm", work);
+    snprintf(given, sizeof given, "%s/sobol2-given.pfm", work);
+    snprintf(over, sizeof over, "%s/sobol2-over1.pfm", work);
+    snprintf(one, sizeof one, "%s/sobol1-given.pfm", work);
+    remove(from_file);
+    remove(given);
+    remove(over);
+    remove(one);
+    snprintf(cmd, sizeof cmd,
+             "cat '%s' > '%s' && printf '\\nsampler sobol\\nindirect_paths 2\\n' >> '%s' && "
+             "'%s' %s --scene '%s' -o '%s' >/dev/null && '%s' %s --scene '%s' --sampler sobol --indirect-paths 2 -o '%s' "
+             ">/dev/null && '%s' %s --scene '%s' --indirect-paths 1 -o '%s' >/dev/null && '%s' %s --scene '%s' "
+             "--sampler sobol --indirect-paths 1 -o '%s' >/dev/null",
+             src, scene, scene, cornell, common, scene, from_file, cornell, common, src, given, cornell, common, scene, over,
+             cornell, common, src, one);
+    ok = system(cmd) == 0;
+    if (ok) {
+        same2 = same_bytes(from_file, given);
+        same1 = same_bytes(over, one);
+        differs = !same_bytes(from_file, one);
+    }
+    result(ok && same2 && same1 && differs,
+           "build/cornell --scene: the file's sampler and indirect_paths are defaults, --indirect-paths overrides",
+           !ok ? "a render failed" : !same2 ? "file's indirect_paths 2 != --indirect-paths 2"
+           : !same1 ? "--indirect-paths 1 over the file != --indirect-paths 1" : !differs ? "indirect_paths 1 and 2 gave "
+           "the same image" : "32x32, 4 spp, sobol");
 }
 
 static int cmd_test(int argc, char **argv)
@@ -656,7 +703,10 @@ static int cmd_test(int argc, char **argv)
     test_malformed(argv[3]);
     test_scenes_load(argv[2]);
     test_fuzz(argv[2], argv[3], 3000);
-    if (argc == 5) test_cornell_identical(argv[4], argv[2], argv[3]);
+    if (argc == 5) {
+        test_cornell_identical(argv[4], argv[2], argv[3]);
+        test_cornell_scene_settings(argv[4], argv[2], argv[3]);
+    }
 #ifdef PTV_HAVE_EXR
     if (have_povray()) {
         test_compare(argv[2], argv[3], "direct-quad", 64, 256, 8, 0.01);
