@@ -114,9 +114,11 @@
    switchable, benchmarked skip.
    Adaptive sampling (pt_render_desc.adaptive_threshold) skips pixels whose estimate has
    converged: see section 8. By default a pixel's own samples count in its noise estimate, which
-   lowers the image's error and darkens it slightly (a stopping bias that vanishes as samples
-   grow); adaptive_neighbours_only = 1 plans each pixel from its neighbours only (unbiased to
-   first order).
+   lowers the image's error and biases it dark: pixels that have not yet drawn a rare bright
+   sample stop sooner, so caustics and fireflies lose ~1 % of the image mean at moderate
+   thresholds, several % in some regions and at the image border (section 8), less as samples
+   grow; adaptive_neighbours_only = 1 plans each pixel from its neighbours only (a bias ~3x
+   smaller, at up to ~2x the samples). For a reference image, render uniformly.
 */
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
@@ -803,12 +805,14 @@ typedef struct pt_render_desc {
     int adaptive_neighbours_only; /* 0: a pixel's noise estimate counts its own samples (as 1 of the
                                     25 pixels of its 5x5 neighbourhood), so a pixel that drew a rare
                                     bright sample (a firefly) samples on and dilutes it: the lowest
-                                    error, with a bias (pixels that drew none stop sooner, a little
-                                    dark) that vanishes as samples grow; -0.3 % to -0.7 % of the
-                                    image mean on the benchmark's Cornell box. 1: only the 24 other
-                                    pixels, so that a pixel's stopping does not depend on its own
-                                    samples: unbiased to first order, for reference images, at ~2x
-                                    the samples for the same error there (section 8) */
+                                    error, but biased dark (pixels that drew none stop sooner): the
+                                    image mean -0.25 % to -0.7 % on the benchmark's Cornell box,
+                                    -1.2 % in the tests' room scene and up to several % in some
+                                    regions; less as samples grow. 1: only the 24 other pixels, so
+                                    that a pixel's stopping does not depend on its own samples
+                                    directly: a bias ~3x smaller (-0.4 % in the room scene), at
+                                    1.35x-1.9x the samples for the same error on the Cornell box.
+                                    For reference images render uniformly (section 8) */
     unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on; bits
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
@@ -5572,25 +5576,29 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    1/25 of its size), that pixel samples on; a pixel that drew none stops at its share. That is
    the classic stopping bias of adaptive sampling (Kirk & Arvo, "Unbiased sampling techniques
    for image synthesis", SIGGRAPH 1991): pixels that stop early are the ones that missed the
-   rare bright samples, so the image is a little dark, and the bias vanishes as the samples grow
-   (a pixel's share depends less and less on its own draws). Benchmark's Cornell box (MIS, samples
-   to reach the uniform render's error; 8 seeds at 128 spp, 4 at 512): own samples 0.36x at 128
-   spp with the image mean 0.70 % below the uniform render's, 0.54x at 512 spp with 0.25 %;
-   neighbours only ~0.7x and 0.73x, the mean within 0.1 % of the uniform one. The squared bias
-   is 0.3 % of the relMSE at 128 spp and 0.15 % at 512. In the tests' room scene (40 seeds,
-   threshold 0.18, minimum 16 spp, 35 % of the uniform samples) the own-sample bias is -0.9 % of
-   the image mean, -0.2 % to -3.4 % by region (neighbours only: -0.3 %; the global L below still
-   sees every pixel's own noise, so that mode is unbiased to first order, not exactly). The
-   default counts the own samples: the error, bias included, is what adaptive sampling is for;
-   a reference image should set adaptive_neighbours_only (or not adapt). 3x3 with the pixel
-   (1/9 of its variance) needed 0.28x at 128 spp and 0.42x at 512 with twice the bias; 7x7
-   (1/49) 0.43x at 128 spp.
+   rare bright samples, so the image is biased dark, and the bias shrinks as the samples grow
+   (each draw moves a pixel's mean by less). At the image border the own weight stays 1/25 (a
+   clipped box mean would make it 1/15 at an edge and 1/9 at a corner). Benchmark's Cornell box
+   (MIS, samples to reach the uniform render's error; 8 seeds at 128 spp, 4 at 512): own samples
+   0.36x at 128 spp with the image mean 0.70 % below the uniform render's, 0.54x at 512 spp with
+   0.25 %; neighbours only ~0.7x and 0.73x, the mean up to 0.35 % below at 128 spp and
+   within 0.05 % at 512. The squared bias is 0.3 %
+   of the relMSE at 128 spp and 0.15 % at 512; the gain shrinks with the samples too (in the
+   benchmark's adaptive plot the two modes meet near 2000 spp). The tests' room scene
+   (threshold 0.18, minimum 16 spp, ~40 % of the uniform samples; seeds 7-46): own samples
+   -1.17 % of the image mean (standard error 0.14 %), -0.2 % to -3.3 % in 4x4 regions (another
+   40 seeds), -0.71 % against the neighbours-only image inside and -2.3 % in the outer 2 pixels; neighbours only -0.38 % (0.14 %): a pixel's own
+   samples still enter L below and its neighbours' normalisation m, so that mode is not exactly
+   unbiased either. The default counts the own samples: the error, bias included, is what
+   adaptive sampling is for; a reference image should be rendered uniformly. 3x3 with the pixel
+   (1/9 of its variance) needed 0.28x at 128 spp and 0.42x at 512 with about twice the bias;
+   7x7 (1/49) 0.43x at 128 spp.
    Measurements of the neighbours-only estimate: 5x5 rather than 3x3 (8 neighbours) or 7x7: the benchmark's Cornell box
    reached the uniform render's error at 128 spp with 0.69x its samples (3x3: 0.73x, 7x7:
    0.71x, 4 seeds); at 512 spp 0.74x (3x3: 0.70x; separate runs of 5 seeds: within noise);
    dropping the largest neighbour (against isolated fireflies) needed more samples than
    uniform sampling (rare bright samples are the noise). Later measurements (6 seeds, samples
-   to reach the uniform render's error, thresholds 1.1-1.2x apart): this design needs 0.65x
+   to reach the uniform render's error, thresholds 1.1-1.2x apart): the neighbours-only estimate needs 0.65x
    at 128 spp and 0.73x at 512 spp. Not better at 128 spp: 3x3 (0.69x at 1.3x the error, the
    closest it came), 7x7 0.71x, minimum spp N/8 0.68x or N/2 0.75x (default N/4), n_i
    proportional to (v_i / c_i)^0.4 or ^0.65 0.69x and 0.70x, v_i shrunk towards the image mean
@@ -5862,7 +5870,10 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
         if (!(a->noise[i] < HUGE_VAL)) all_cap = 1;
     }
     if (!all_cap) {
-        pt__box_mean(a->noise, a->var, a->tmp, a->width, a->height, 2, a->self);
+        pt__box_mean(a->noise, a->var, a->tmp, a->width, a->height, 2, 0);
+        if (a->self) /* the pixel itself as 1 of 25, at the image border too (where a clipped box
+                        mean would weigh it 1/15 or 1/9, and darken the border more) */
+            for (i = 0; i < np; ++i) a->var[i] = (a->noise[i] + 24.0 * a->var[i]) / 25.0;
         pt__box_mean(a->cost, a->cpp, a->tmp, a->width, a->height, 2, 0);
         /* r_i = sqrt(v_i / c_i) into tmp; the bracket of L: below lam_lo every n_i sits at its
            count, above lam_hi at its cap */
