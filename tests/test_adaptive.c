@@ -309,12 +309,15 @@ static void neyman_allocation(test_ctx *t)
 static void mean_matches_uniform(test_ctx *t)
 {
     /* The adaptive image against a uniform render with another seed (room scene: caustics, so rare
-       bright samples). adaptive_neighbours_only = 1 is unbiased to first order: 16 region means
-       (channel 1), z-tests in the file's family. The default (a pixel's own samples count) has
-       the stopping bias of section 8, -0.9 % of the image mean over 40 seeds here (-0.2 % to
-       -3.4 % by region): its image mean must be within 3 % of the uniform one (a region's
-       standard error is ~0.4 %, the image's ~0.1 %), and it must stop pixels sooner than the
-       neighbours-only mode (a pixel that drew no firefly stops at its share). */
+       bright samples). adaptive_neighbours_only = 1: 16 region means (channel 1), z-tests in the
+       file's family (its bias, -0.4 % of the image mean over seeds 7-46, is below one render's
+       noise). The default (a pixel's own samples count) has the stopping bias of section 8: its
+       image mean over the neighbours-only one of the same seed (the two share most of their
+       noise) was -0.79 % with a standard deviation of 0.24 % over seeds 7-46 (range -1.32 % to
+       -0.33 %); it must lie in [-2 %, +0.5 %], 5 standard deviations either side (false failure
+       ~1e-6 if normal). Planning a pixel from its own noise alone gives about -3 % and fails
+       it. The default must also take fewer samples (a pixel that drew no firefly stops at its
+       share). */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 48, 40, 96);
     pt_film a, o, u;
@@ -332,7 +335,7 @@ static void mean_matches_uniform(test_ctx *t)
             e.adaptive_threshold = 0;
             e.seed = d.seed + 1000;
             if (tu_render_into(t, s, &e, &u, &su, "uniform")) {
-                tu_region ro[1], ru[1];
+                tu_region ro[1], rn[1];
                 double ratio;
                 fails = compare_regions(&a, &u, &worst);
                 CHECK(t, fails == 0, "neighbours only: %d of 16 regions differ (|z| > %.2f, max %.2f)", fails, z_limit(),
@@ -341,14 +344,14 @@ static void mean_matches_uniform(test_ctx *t)
                       "%llu of %d pixels stopped early: want some, not all", (unsigned long long)sa.pixels_converged,
                       48 * 40);
                 tu_film_regions(&o, 1, 1, ro);
-                tu_film_regions(&u, 1, 1, ru);
-                ratio = ro[0].mean[1] / ru[0].mean[1];
-                CHECK(t, fabs(ratio - 1.0) < 0.03, "own samples: image mean %.4f x the uniform one, want within 3 %%",
-                      ratio);
+                tu_film_regions(&a, 1, 1, rn);
+                ratio = ro[0].mean[1] / rn[0].mean[1];
+                CHECK(t, ratio > 0.98 && ratio < 1.005,
+                      "own samples: image mean %.4f x the neighbours-only one, want in [0.98, 1.005]", ratio);
                 CHECK(t, so.samples < sa.samples, "own samples took %llu samples, neighbours only %llu: want fewer",
                       (unsigned long long)so.samples, (unsigned long long)sa.samples);
                 test_note(t, "neighbours only: max |z| %.2f (limit %.2f), %.0f%% of pixels stopped early, %.0f%% of the "
-                          "samples; own samples: image mean %+.2f%%, %.0f%% of the samples", worst, z_limit(),
+                          "samples; own samples: image mean %+.2f%% against it, %.0f%% of the samples", worst, z_limit(),
                           100.0 * (double)sa.pixels_converged / (48.0 * 40.0), 100.0 * (double)sa.samples / (double)su.samples,
                           100.0 * (ratio - 1.0), 100.0 * (double)so.samples / (double)su.samples);
             }
