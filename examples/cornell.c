@@ -121,8 +121,9 @@ static void usage(FILE *f)
         "      --sampler S       independent | sobol: where random numbers come from; sobol =\n"
         "                        scrambled Sobol points, lower error at equal spp (default\n"
         "                        independent)\n"
-        "      --indirect-paths N  a camera sample continues from its first diffuse vertex as\n"
-        "                        N paths, 1..8 (default 3 with sobol, 1 with independent)\n"
+        "      --indirect-paths N  a camera sample continues from its first non-delta (not\n"
+        "                        mirror or glass) vertex as N paths, 1..8 (default 3 with\n"
+        "                        sobol, 1 with independent)\n"
         "      --light-weight W  light PDF weight of the mixture strategy, in (0, 1] (default 0.5)\n"
         "      --max-depth N     maximum scattering events per path (default 50)\n"
         "      --threads N       worker threads, 0 = all cores (default 0)\n"
@@ -146,8 +147,10 @@ static void usage(FILE *f)
         "                        (default max(16, spp/16))\n"
         "      --adaptive-check N    re-plan the shares every N passes (default 1)\n"
         "      --adaptive-neighbours-only  leave a pixel's own samples out of its noise\n"
-        "                        estimate: unbiased to first order, more samples for the same\n"
-        "                        error (default: counted, a small bias that vanishes with spp)\n"
+        "                        estimate: about a third of the default's bias, more samples for\n"
+        "                        the same error (default: counted, which darkens caustics and\n"
+        "                        fireflies by ~1 %%, more in places; for a reference image do not\n"
+        "                        use --adaptive)\n"
         "      --disable-skips L force the general path for the scene-feature skips in the\n"
         "                        comma-separated list L, or 'all': no-emitters, delta-vertex,\n"
         "                        facing-away, no-textures, zero-bsdf-shadow (for\n"
@@ -491,7 +494,7 @@ static void print_stats(const options *o, const pt_scene *scene, const pt_render
     printf("image      %d x %d, %d spp, strategy %s", o->width, o->height, o->spp, strategy_name(o->strategy));
     if (o->strategy == PT_STRATEGY_MIXTURE) printf(" (light weight %g)", (double)o->light_weight);
     if (o->sampler == PT_SAMPLER_SOBOL) printf(", sobol sampler");
-    if (o->indirect_paths) printf(", %d indirect paths", o->indirect_paths);
+    if (o->indirect_paths) printf(", %d indirect path%s", o->indirect_paths, o->indirect_paths == 1 ? "" : "s");
     printf(", max depth %d, seed %llu\n", o->max_depth, (unsigned long long)o->seed);
     if (pt_scene_get_info(scene, &info) == PT_OK)
         printf("scene      %u primitives, %s traversal\n", (unsigned)info.primitive_count,
