@@ -1636,15 +1636,26 @@ static void fmt_g(char *buf, size_t n, double v)
     else snprintf(buf, n, "%.3g", v);
 }
 
-/* The adaptive render whose error came nearest the uniform target (log distance). */
+/* The adaptive render whose error came nearest the uniform target (log distance), or -1. */
 static int nearest_threshold(const adaptive_results *A)
 {
-    int k, best = 0;
-    for (k = 1; k < A->n_adaptive; ++k)
-        if (A->adaptive_err[k] > 0 &&
-            fabs(log(A->adaptive_err[k] / A->target_err)) < fabs(log(A->adaptive_err[best] / A->target_err)))
+    int k, best = -1;
+    for (k = 0; k < A->n_adaptive; ++k)
+        if (A->adaptive_err[k] > 0 && (best < 0 || fabs(log(A->adaptive_err[k] / A->target_err)) <
+                                                       fabs(log(A->adaptive_err[best] / A->target_err))))
             best = k;
     return best;
+}
+
+/* The adaptive image mean against the uniform one at the compared spp (both measured against the
+   reference: (1 + adaptive bias) / (1 + uniform bias) - 1), at the threshold nearest the target;
+   NaN when there is none. */
+static double adaptive_bias_vs_uniform(const adaptive_results *A)
+{
+    int k = nearest_threshold(A), u;
+    for (u = 0; u < A->n_uniform && A->uniform[u].spp != A->end_spp; ++u) {}
+    if (k < 0 || u >= A->n_uniform) return 0.0 * HUGE_VAL;
+    return (1.0 + A->adaptive[k].bias) / (1.0 + A->uniform[u].bias) - 1.0;
 }
 
 static int write_summary(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
@@ -1731,16 +1742,18 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
             fprintf(f, ". At %d spp (the Cornell scene file's own count): relMSE %.3g in %.3g s; adaptive %.3g s%s: "
                        "**ratio %.2f** (%.2f in samples)", A2->end_spp, A2->target_err, A2->uniform_time,
                     A2->adaptive_time, A2->ratio_extrap ? " (extrapolated)" : "", A2->ratio, A2->ratio_samples);
-        fprintf(f, ". Bias of the image mean (adaptive counts a pixel's own samples: stopping bias, section 8): "
-                   "%+.2f%% at the threshold nearest the target vs uniform %+.2f%%",
-                100 * A->adaptive[nearest_threshold(A)].bias, 100 * A->uniform[A->n_uniform - 1].bias);
+        fprintf(f, ". The adaptive image mean against the uniform one (a pixel's own samples count: stopping "
+                   "bias, section 8; threshold nearest the target): %+.2f%% at %d spp",
+                100 * adaptive_bias_vs_uniform(A), A->end_spp);
+        if (A2->available) fprintf(f, ", %+.2f%% at %d spp", 100 * adaptive_bias_vs_uniform(A2), A2->end_spp);
         if (A3->available || A4->available) {
             fprintf(f, ". Control, `adaptive_neighbours_only` (unbiased to first order):");
             if (A3->available)
-                fprintf(f, " %d spp ratio %.2f (%.2f in samples)", A3->end_spp, A3->ratio, A3->ratio_samples);
+                fprintf(f, " %d spp ratio %.2f (%.2f in samples; mean %+.2f%%)", A3->end_spp, A3->ratio,
+                        A3->ratio_samples, 100 * adaptive_bias_vs_uniform(A3));
             if (A4->available)
-                fprintf(f, "%s %d spp ratio %.2f (%.2f in samples)", A3->available ? ";" : "", A4->end_spp, A4->ratio,
-                        A4->ratio_samples);
+                fprintf(f, "%s %d spp ratio %.2f (%.2f in samples; mean %+.2f%%)", A3->available ? ";" : "", A4->end_spp,
+                        A4->ratio, A4->ratio_samples, 100 * adaptive_bias_vs_uniform(A4));
         }
         fprintf(f, " | %s (every end shown must be ≤ 0.7; seams: see the images) |\n",
                 pass_fail(A->ratio <= 0.7 && (!A2->available || A2->ratio <= 0.7)));
