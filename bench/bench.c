@@ -1747,7 +1747,8 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
                 100 * adaptive_bias_vs_uniform(A), A->end_spp);
         if (A2->available) fprintf(f, ", %+.2f%% at %d spp", 100 * adaptive_bias_vs_uniform(A2), A2->end_spp);
         if (A3->available || A4->available) {
-            fprintf(f, ". Control, `adaptive_neighbours_only` (unbiased to first order):");
+            fprintf(f, ". Control, `adaptive_neighbours_only` (a pixel planned from its neighbours only: smaller "
+                       "bias, more samples):");
             if (A3->available)
                 fprintf(f, " %d spp ratio %.2f (%.2f in samples; mean %+.2f%%)", A3->end_spp, A3->ratio,
                         A3->ratio_samples, 100 * adaptive_bias_vs_uniform(A3));
@@ -1963,8 +1964,9 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
             C[0] = A3;
             C[1] = A4;
             fprintf(f, "Control: the same with `adaptive_neighbours_only` = 1 (a pixel's noise estimated from the 24 "
-                       "other pixels of its 5x5 neighbourhood only: unbiased to first order, but a pixel that drew a "
-                       "firefly does not sample on to dilute it).\n\n");
+                       "other pixels of its 5x5 neighbourhood only: its stopping does not depend on its own samples "
+                       "directly, so the bias is smaller, but a pixel that drew a firefly does not sample on to dilute "
+                       "it).\n\n");
             for (r = 0; r < 2; ++r) {
                 if (!C[r]->available) {
                     fprintf(f, "Neighbours only, %s: SKIP (%s).\n\n", r ? "128 spp" : "the series' end", C[r]->skip_reason);
