@@ -5582,23 +5582,23 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    (MIS, samples to reach the uniform render's error; 8 seeds at 128 spp, 4 at 512): own samples
    0.36x at 128 spp with the image mean 0.70 % below the uniform render's, 0.54x at 512 spp with
    0.25 %; neighbours only ~0.7x and 0.73x, the mean up to 0.35 % below at 128 spp and
-   within 0.05 % at 512. The squared bias is 0.3 %
-   of the relMSE at 128 spp and 0.15 % at 512; the gain shrinks with the samples too (in the
-   benchmark's adaptive plot the two modes meet near 2000 spp). The tests' room scene
-   (threshold 0.18, minimum 16 spp, ~40 % of the uniform samples; seeds 7-46): own samples
-   -1.17 % of the image mean (standard error 0.14 %), -0.2 % to -3.3 % in 4x4 regions (another
-   40 seeds), -0.71 % against the neighbours-only image inside and -2.3 % in the outer 2 pixels; neighbours only -0.38 % (0.14 %): a pixel's own
+   within 0.05 % at 512. The squared bias is 0.3 % of the relMSE at 128 spp and 0.15 % at 512;
+   the gain shrinks with the samples too (in the benchmark's adaptive plot the two modes meet
+   near 2000 spp). The tests' room scene (threshold 0.18, minimum 16 spp, ~40 % of the uniform
+   samples; seeds 7-46): own samples -1.17 % of the image mean (standard error 0.14 %), -0.2 %
+   to -3.3 % in 4x4 regions (another 40 seeds), -0.71 % against the neighbours-only image
+   inside and -2.3 % in the outer 2 pixels; neighbours only -0.38 % (0.14 %): a pixel's own
    samples still enter L below and its neighbours' normalisation m, so that mode is not exactly
    unbiased either. The default counts the own samples: the error, bias included, is what
    adaptive sampling is for; a reference image should be rendered uniformly. 3x3 with the pixel
    (1/9 of its variance) needed 0.28x at 128 spp and 0.42x at 512 with about twice the bias;
    7x7 (1/49) 0.43x at 128 spp.
-   Measurements of the neighbours-only estimate: 5x5 rather than 3x3 (8 neighbours) or 7x7: the benchmark's Cornell box
-   reached the uniform render's error at 128 spp with 0.69x its samples (3x3: 0.73x, 7x7:
+   Measurements of the neighbours-only estimate: 5x5 rather than 3x3 (8 neighbours) or 7x7: the
+   benchmark's Cornell box reached the uniform render's error at 128 spp with 0.69x its samples (3x3: 0.73x, 7x7:
    0.71x, 4 seeds); at 512 spp 0.74x (3x3: 0.70x; separate runs of 5 seeds: within noise);
    dropping the largest neighbour (against isolated fireflies) needed more samples than
    uniform sampling (rare bright samples are the noise). Later measurements (6 seeds, samples
-   to reach the uniform render's error, thresholds 1.1-1.2x apart): the neighbours-only estimate needs 0.65x
+   to reach the uniform render's error, thresholds 1.1-1.2x apart): neighbours only needs 0.65x
    at 128 spp and 0.73x at 512 spp. Not better at 128 spp: 3x3 (0.69x at 1.3x the error, the
    closest it came), 7x7 0.71x, minimum spp N/8 0.68x or N/2 0.75x (default N/4), n_i
    proportional to (v_i / c_i)^0.4 or ^0.65 0.69x and 0.70x, v_i shrunk towards the image mean
@@ -5842,8 +5842,9 @@ static void pt__box_mean(const double *v, double *out, double *tmp, int w, int h
 }
 
 /* Re-plans the samples (see the comment at the top of section 8): per pixel i, v_i from the
-   film's sample variance averaged over its 5x5 neighbourhood (itself included unless a->self is
-   0), c_i = rays per sample averaged over the other pixels of that neighbourhood; then the Lagrange multiplier L with mean_i v_i / n_i(L) = threshold^2,
+   film's sample variance averaged over its 5x5 neighbourhood (itself as 1 of 25 when a->self,
+   else the other pixels only), c_i = rays per sample averaged over the other pixels of that
+   neighbourhood; then the Lagrange multiplier L with mean_i v_i / n_i(L) = threshold^2,
    n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + cap), found by Newton's method
    safeguarded by bisection (the mean is convex and decreasing in L); want_i = round(n_i -
    count_i), the samples pixel i should still take (pt__adaptive_plan hands them out). */
