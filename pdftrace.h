@@ -5797,6 +5797,10 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
     return 1;
 }
 
+/* The neighbourhood v_i and c_i are averaged over: (2 R + 1)^2 pixels, R = 2 (section 8). */
+#define PT__ADAPTIVE_R 2
+#define PT__ADAPTIVE_BOX ((2 * PT__ADAPTIVE_R + 1) * (2 * PT__ADAPTIVE_R + 1))
+
 /* Adaptive sampling state of one pt_render call (see the comment at the top of section 8). */
 typedef struct pt__adaptive {
     double target;             /* threshold^2: the relMSE the image should reach */
@@ -5871,11 +5875,12 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
         if (!(a->noise[i] < HUGE_VAL)) all_cap = 1;
     }
     if (!all_cap) {
-        pt__box_mean(a->noise, a->var, a->tmp, a->width, a->height, 2, 0);
+        pt__box_mean(a->noise, a->var, a->tmp, a->width, a->height, PT__ADAPTIVE_R, 0);
         if (a->self) /* the pixel itself as 1 of 25, at the image border too (where a clipped box
                         mean would weigh it 1/15 or 1/9, and darken the border more) */
-            for (i = 0; i < np; ++i) a->var[i] = (a->noise[i] + 24.0 * a->var[i]) / 25.0;
-        pt__box_mean(a->cost, a->cpp, a->tmp, a->width, a->height, 2, 0);
+            for (i = 0; i < np; ++i)
+                a->var[i] = (a->noise[i] + (double)(PT__ADAPTIVE_BOX - 1) * a->var[i]) / (double)PT__ADAPTIVE_BOX;
+        pt__box_mean(a->cost, a->cpp, a->tmp, a->width, a->height, PT__ADAPTIVE_R, 0);
         /* r_i = sqrt(v_i / c_i) into tmp; the bracket of L: below lam_lo every n_i sits at its
            count, above lam_hi at its cap */
         for (i = 0; i < np; ++i) {

@@ -380,6 +380,7 @@ static void own_samples_dilute_fireflies(test_ctx *t)
         pt_film f;
         pt_render_stats st;
         const int px = 10, py = 8, cap = 8 + 64; /* the others' cap; the firefly pixel's is 9 + 64 */
+        const char *name = mode ? "neighbours only" : "own samples";
         int x, y, bad_block = 0, bad_far = 0;
         size_t p = (size_t)py * 64 + px;
         if (!CHECK(t, s != NULL, "scene")) return;
@@ -413,12 +414,11 @@ static void own_samples_dilute_fireflies(test_ctx *t)
                 else
                     CHECK(t, f.count[p] == 9u + 2u, "neighbours only: the firefly pixel took %u samples, want 11",
                           f.count[p]);
-                CHECK(t, bad_block == 0, "%s: %d of the 24 pixels around the firefly did not sample to the cap",
-                      mode ? "neighbours only" : "own samples", bad_block);
-                CHECK(t, bad_far == 0, "%s: %d quiet pixels far from the firefly did not stop after 2 samples",
-                      mode ? "neighbours only" : "own samples", bad_far);
-                test_note(t, "%s: firefly pixel %u samples, mean %.2f (true 1)", mode ? "neighbours only" : "own samples",
-                          f.count[p], fire);
+                CHECK(t, bad_block == 0, "%s: %d of the 24 pixels around the firefly did not sample to the cap", name,
+                      bad_block);
+                CHECK(t, bad_far == 0, "%s: %d quiet pixels far from the firefly did not stop after 2 samples", name,
+                      bad_far);
+                test_note(t, "%s: firefly pixel %u samples, mean %.2f (true 1)", name, f.count[p], fire);
             }
         }
         pt_film_free(&f);
