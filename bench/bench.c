@@ -1510,6 +1510,14 @@ static void plot_commands(FILE *g, const results *R, const pov_results *P, int i
     (void)R;
 }
 
+/* One adaptive run's points for adaptive.dat: time_s relmse threshold. */
+static void write_adaptive_points(FILE *f, const adaptive_results *A)
+{
+    int k;
+    for (k = 0; k < A->n_adaptive; ++k)
+        if (A->adaptive_err[k] > 0) fprintf(f, "%.6g %.6g %.3g\n", A->adaptive[k].time, A->adaptive_err[k], A->threshold[k]);
+}
+
 static int make_plots(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
                       const adaptive_results *A3, char *status, size_t status_size)
 {
@@ -1526,13 +1534,10 @@ static int make_plots(const config *cfg, const results *R, const pov_results *P,
         for (k = 0; k < A->n_uniform; ++k)
             if (A->uniform_err[k] > 0) fprintf(f, "%.6g %.6g\n", A->uniform[k].time, A->uniform_err[k]);
         fprintf(f, "\n\n# adaptive MIS: time_s relmse threshold\n");
-        for (k = 0; k < A->n_adaptive; ++k)
-            if (A->adaptive_err[k] > 0) fprintf(f, "%.6g %.6g %.3g\n", A->adaptive[k].time, A->adaptive_err[k], A->threshold[k]);
+        write_adaptive_points(f, A);
         fprintf(f, "\n\n# adaptive MIS, neighbours only: time_s relmse threshold\n");
-        for (k = 0; A3->available && k < A3->n_adaptive; ++k)
-            if (A3->adaptive_err[k] > 0)
-                fprintf(f, "%.6g %.6g %.3g\n", A3->adaptive[k].time, A3->adaptive_err[k], A3->threshold[k]);
-        if (!A3->available) fprintf(f, "nan nan nan\n"); /* keeps index 2 for gnuplot */
+        if (A3->available) write_adaptive_points(f, A3);
+        else fprintf(f, "nan nan nan\n"); /* keeps index 2 for gnuplot */
         fprintf(f, "\n\n");
         if (!close_out(f, "adaptive.dat")) return 0;
     }
@@ -1634,6 +1639,17 @@ static void fmt_g(char *buf, size_t n, double v)
 {
     if (v != v) snprintf(buf, n, "-");
     else snprintf(buf, n, "%.3g", v);
+}
+
+/* One adaptive run's renders as a Markdown table (threshold, time, relMSE, bias, pixels stopped). */
+static void write_adaptive_table(FILE *f, const adaptive_results *A)
+{
+    int k;
+    fprintf(f, "| threshold | time (s) | relMSE | bias | pixels stopped early |\n|---|---|---|---|---|\n");
+    for (k = 0; k < A->n_adaptive; ++k)
+        fprintf(f, "| %.3g | %.3g | %.3g | %+.2f%% | %.1f%% |\n", A->threshold[k], A->adaptive[k].time, A->adaptive_err[k],
+                100 * A->adaptive[k].bias, 100 * A->converged[k]);
+    fprintf(f, "\n");
 }
 
 /* The adaptive render whose error came nearest the uniform target (log distance), or -1. */
@@ -1948,14 +1964,10 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
                 A->image_adaptive, A->image_map);
         if (A2->available) {
             fprintf(f, "The same at the uniform series' %d-spp point (the Cornell scene file's own sample count): "
-                       "uniform relMSE %.3g in %.3g s (timed beside); adaptive in %.3g s%s: ratio %.2f (%.2f in samples).\n\n"
-                       "| threshold | time (s) | relMSE | bias | pixels stopped early |\n|---|---|---|---|---|\n",
+                       "uniform relMSE %.3g in %.3g s (timed beside); adaptive in %.3g s%s: ratio %.2f (%.2f in samples).\n\n",
                     A2->end_spp, A2->target_err, A2->uniform_time, A2->adaptive_time,
                     A2->ratio_extrap ? " (extrapolated)" : "", A2->ratio, A2->ratio_samples);
-            for (k = 0; k < A2->n_adaptive; ++k)
-                fprintf(f, "| %.3g | %.3g | %.3g | %+.2f%% | %.1f%% |\n", A2->threshold[k], A2->adaptive[k].time,
-                        A2->adaptive_err[k], 100 * A2->adaptive[k].bias, 100 * A2->converged[k]);
-            fprintf(f, "\n");
+            write_adaptive_table(f, A2);
         } else
             fprintf(f, "At the Cornell scene's own 128 spp: SKIP (%s).\n\n", A2->skip_reason);
         {   /* the control: a pixel's own samples left out of its noise estimate */
@@ -1973,13 +1985,9 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
                     continue;
                 }
                 fprintf(f, "Neighbours only, %d spp: uniform relMSE %.3g in %.3g s (timed beside); adaptive in %.3g s%s: "
-                           "ratio %.2f (%.2f in samples).\n\n| threshold | time (s) | relMSE | bias | pixels stopped early |\n"
-                           "|---|---|---|---|---|\n", C[r]->end_spp, C[r]->target_err, C[r]->uniform_time,
+                           "ratio %.2f (%.2f in samples).\n\n", C[r]->end_spp, C[r]->target_err, C[r]->uniform_time,
                         C[r]->adaptive_time, C[r]->ratio_extrap ? " (extrapolated)" : "", C[r]->ratio, C[r]->ratio_samples);
-                for (k = 0; k < C[r]->n_adaptive; ++k)
-                    fprintf(f, "| %.3g | %.3g | %.3g | %+.2f%% | %.1f%% |\n", C[r]->threshold[k], C[r]->adaptive[k].time,
-                            C[r]->adaptive_err[k], 100 * C[r]->adaptive[k].bias, 100 * C[r]->converged[k]);
-                fprintf(f, "\n");
+                write_adaptive_table(f, C[r]);
             }
         }
     }
@@ -2173,12 +2181,15 @@ static int cmd_run(int argc, char **argv)
     if (ok && (cfg.parts & PART_SKIPS)) ok = run_skips(&cfg, &R, &S) && write_skips_csv(&cfg, &S);
     if (ok && (cfg.parts & PART_POV)) ok = run_pov(&cfg, &R, &P) && write_pov_csv(&cfg, &R, &P);
     if (!(cfg.parts & PART_ADAPTIVE)) snprintf(A.skip_reason, sizeof A.skip_reason, "not run (--parts)");
-    if (!A2.available && !A2.skip_reason[0])
-        snprintf(A2.skip_reason, sizeof A2.skip_reason, cfg.quick ? "quick mode" : "not run (--parts)");
-    if (!A3.available && !A3.skip_reason[0])
-        snprintf(A3.skip_reason, sizeof A3.skip_reason, cfg.quick ? "quick mode" : "not run (--parts)");
-    if (!A4.available && !A4.skip_reason[0])
-        snprintf(A4.skip_reason, sizeof A4.skip_reason, cfg.quick ? "quick mode" : "not run (--parts)");
+    {   /* the full mode's runs, when not run: why */
+        adaptive_results *full_only[3];
+        full_only[0] = &A2;
+        full_only[1] = &A3;
+        full_only[2] = &A4;
+        for (i = 0; i < 3; ++i)
+            if (!full_only[i]->available && !full_only[i]->skip_reason[0])
+                snprintf(full_only[i]->skip_reason, sizeof full_only[i]->skip_reason, cfg.quick ? "quick mode" : "not run (--parts)");
+    }
     if (!(cfg.parts & PART_SKIPS)) snprintf(S.skip_reason, sizeof S.skip_reason, "not run (--parts)");
     if (!(cfg.parts & PART_POV)) snprintf(P.skip_reason, sizeof P.skip_reason, "not run (--parts)");
     if (ok && (cfg.parts & PART_SERIES)) ok = make_plots(&cfg, &R, &P, &A, &A3, plot_status, sizeof plot_status);
