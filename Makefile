@@ -53,7 +53,9 @@ LDLIBS   ?=
 BUILD ?= build
 OUT   ?= out
 
-# Added to every build: the header lives at the top level; the library wants -lm and pthreads.
+# The header family (pdftrace.h, pdftrace_scene.h, pdftrace_exr.h) lives at the top level.
+PT_HEADERS := $(wildcard pdftrace*.h)
+# Added to every build: the headers live at the top level; the library wants -lm and pthreads.
 PT_CPPFLAGS := -I.
 PT_THREADS  ?= -pthread
 PT_LDLIBS   := -lm
@@ -71,7 +73,7 @@ WARN_CXXFLAGS ?= -x c++ -O2 -Wall -Wextra -pedantic -Werror
 RUN_SPP  ?= 128
 RUN_ARGS ?=
 
-# OpenEXR (pdftrace.h section 11): only the include dirs of the OpenEXR .pc file are taken
+# OpenEXR (pdftrace_exr.h; -DPDFTRACE_OPENEXR makes the programs include it): only the include dirs of the OpenEXR .pc file are taken
 # (its libs list the C++ libraries); only the C library OpenEXRCore is linked.
 OPENEXR       ?= 0
 EXR_INCLUDES  ?= $(or $(shell pkg-config --cflags-only-I OpenEXR 2>/dev/null),-I/usr/include/OpenEXR -I/usr/include/Imath)
@@ -110,7 +112,7 @@ $(BUILD) $(OUT):
 $(OPT_STAMP): FORCE | $(BUILD)
 	@echo '$(OPT_VALUE)' | cmp -s - $@ || echo '$(OPT_VALUE)' > $@
 
-$(BUILD)/%: examples/%.c pdftrace.h $(OPT_STAMP) | $(BUILD)
+$(BUILD)/%: examples/%.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PT_LDLIBS)
 
 run: $(BUILD)/cornell | $(OUT)
@@ -126,22 +128,22 @@ define need_tests
 	@test -n "$(TEST_SRCS)" || { echo "error: no tests/*.c found" >&2; exit 1; }
 endef
 
-$(BUILD)/test_runner: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+$(BUILD)/test_runner: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
-$(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+$(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
 # Without threads: no -pthread at all, to show the library does not need it. Also without SIMD
 # (PDFTRACE_NO_SIMD), so that the scalar BVH code other architectures get is tested too.
-$(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+$(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
 # Always with OpenEXR, whatever OPENEXR says; `make exr-test` runs only its exr section.
-$(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+$(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) | $(BUILD)
 	$(need_tests)
 	$(CC) -I. $(EXR_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(EXR_LIBS) -lm
 
@@ -166,7 +168,7 @@ PTV_CPPFLAGS += -DPTV_HAVE_PNG $(shell pkg-config --cflags libpng)
 PTV_LDLIBS   += $(shell pkg-config --libs libpng)
 endif
 
-$(BUILD)/ptv: validation/ptv.c validation/ptv_common.h pdftrace.h | $(BUILD)
+$(BUILD)/ptv: validation/ptv.c validation/ptv_common.h $(PT_HEADERS) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(PTV_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PTV_LDLIBS) $(PT_LDLIBS)
 
 # scenes/mesh.obj is committed; this remakes it.
@@ -188,7 +190,7 @@ validate-refs: $(BUILD)/ptv
 BENCH_OUT  ?= bench/out
 BENCH_ARGS ?=
 
-$(BUILD)/bench: bench/bench.c validation/ptv_common.h pdftrace.h | $(BUILD)
+$(BUILD)/bench: bench/bench.c validation/ptv_common.h $(PT_HEADERS) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(PTV_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PTV_LDLIBS) $(PT_LDLIBS)
 
 bench: $(BUILD)/bench
@@ -223,7 +225,7 @@ test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_no
 STRESS_SRCS := tests/stress/stress_main.c tests/stress/stress_cases.c tests/test_util.c
 STRESS_ARGS ?=
 
-$(BUILD)/stress: $(STRESS_SRCS) $(TEST_HDRS) pdftrace.h | $(BUILD)
+$(BUILD)/stress: $(STRESS_SRCS) $(TEST_HDRS) $(PT_HEADERS) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(STRESS_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
 stress: $(BUILD)/stress
@@ -234,7 +236,7 @@ nothreads-test: $(BUILD)/test_runner_nothreads
 
 # ---- make bench-bvh (bench/bvh.c): always built with Embree, whatever EMBREE says.
 BENCH_BVH_ARGS ?=
-$(BUILD)/bench_bvh: bench/bvh.c pdftrace.h | $(BUILD)
+$(BUILD)/bench_bvh: bench/bvh.c $(PT_HEADERS) | $(BUILD)
 	@test -f "$(EMBREE_HEADER)" || { echo "make bench-bvh: needs Embree 3 (apt-get install libembree-dev)" >&2; exit 1; }
 	$(CC) -I. $(EMBREE_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(EMBREE_LIBS) -lm
 
@@ -274,8 +276,6 @@ check-warnings: | $(BUILD)
 	    echo "$$cxx $(WARN_CXXFLAGS) examples/cpp_check.cpp (then run it)"; \
 	    $$cxx $(WARN_CXXFLAGS) $(PT_CPPFLAGS) $(PT_THREADS) examples/cpp_check.cpp -o $(BUILD)/cpp_check-$$cxx $(PT_LDLIBS); \
 	    ./$(BUILD)/cpp_check-$$cxx; \
-	    echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_SCENE_FILES examples/cpp_check.cpp (the optional scene-file section)"; \
-	    $$cxx $(WARN_CXXFLAGS) -DPDFTRACE_SCENE_FILES $(PT_CPPFLAGS) $(PT_THREADS) -c examples/cpp_check.cpp -o $(BUILD)/cpp_check-scene-$$cxx.o; \
 	done; \
 	if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
 	    for cc in $(WARN_CC); do \
@@ -285,7 +285,7 @@ check-warnings: | $(BUILD)
 	        $$cc $(WARN_CFLAGS) -I. -Itests/fuzz $(EXR_FLAGS) $(PT_THREADS) -c tests/fuzz/harness.c -o $(BUILD)/warn-$$cc-fuzz-harness-exr.o; \
 	    done; \
 	    for cxx in $(WARN_CXX); do \
-	        echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_OPENEXR examples/cpp_check.cpp (the optional EXR section)"; \
+	        echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_OPENEXR examples/cpp_check.cpp (pdftrace_exr.h as C++)"; \
 	        $$cxx $(WARN_CXXFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c examples/cpp_check.cpp -o $(BUILD)/cpp_check-exr-$$cxx.o; \
 	    done; \
 	else \
@@ -309,6 +309,18 @@ check-warnings: | $(BUILD)
 	else \
 	    echo "SKIP the PDFTRACE_EMBREE variants: no $(EMBREE_HEADER) (apt-get install libembree-dev)"; \
 	fi; \
+	echo "the family headers' implementations in files of their own, linked with the core's:"; \
+	for cc in $(WARN_CC); do \
+	    printf '#define PDFTRACE_SCENE_IMPLEMENTATION\n#include "pdftrace_scene.h"\n' | \
+	        $$cc $(WARN_CFLAGS) -I. -x c -c - -o $(BUILD)/warn-$$cc-scene-alone.o; \
+	    $$cc $(WARN_CFLAGS) -I. $(PT_THREADS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-core-alone.o; \
+	    $$cc $(PT_THREADS) -o $(BUILD)/warn-$$cc-family $(BUILD)/warn-$$cc-core-alone.o $(BUILD)/warn-$$cc-scene-alone.o -lm; \
+	    if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
+	        printf '#define PDFTRACE_EXR_IMPLEMENTATION\n#include "pdftrace_exr.h"\n' | \
+	            $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) -x c -c - -o $(BUILD)/warn-$$cc-exr-alone.o; \
+	    fi; \
+	    echo "  $$cc: pdftrace_scene.h and pdftrace_exr.h alone: clean; linked with the core: no duplicate symbols"; \
+	done; \
 	echo "the default build includes no Embree header:"; \
 	for cc in $(WARN_CC); do \
 	    if $$cc -M -I. $(PT_THREADS) examples/cornell.c tests/test_main.c | grep -i embree; then \
@@ -347,7 +359,7 @@ FUZZ_DICT_exr   :=
 
 .PHONY: fuzz fuzz-build fuzz-merge fptrap-test
 
-$(BUILD)/fuzz_%: tests/fuzz/fuzz_target.c $(FUZZ_SRCS) pdftrace.h | $(BUILD)
+$(BUILD)/fuzz_%: tests/fuzz/fuzz_target.c $(FUZZ_SRCS) $(PT_HEADERS) | $(BUILD)
 	$(FUZZ_CC) $(FUZZ_FLAGS) -I. -Itests/fuzz $(if $(FUZZ_HAVE_EXR),$(EXR_FLAGS)) -DPT_FUZZ_ENTRY=pt_fuzz_$* \
 	    -o $@ tests/fuzz/harness.c tests/fuzz/fuzz_target.c $(if $(FUZZ_HAVE_EXR),$(EXR_LIBS)) -lm -pthread
 
@@ -375,16 +387,16 @@ fuzz-merge: fuzz-build
 
 # Corpus replay: the harnesses on every committed input, normal compiler / ASan+UBSan / EXR.
 FUZZ_REPLAY_SRCS := tests/fuzz/replay.c tests/fuzz/harness.c
-$(BUILD)/fuzz_replay: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+$(BUILD)/fuzz_replay: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) -Itests/fuzz $(CPPFLAGS) $(CFLAGS) $(FPTRAP_FLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(PT_LDLIBS)
-$(BUILD)/fuzz_replay_asan: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+$(BUILD)/fuzz_replay_asan: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) -Itests/fuzz $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(PT_LDLIBS)
-$(BUILD)/fuzz_replay_exr: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) pdftrace.h | $(BUILD)
+$(BUILD)/fuzz_replay_exr: $(FUZZ_REPLAY_SRCS) $(FUZZ_SRCS) $(PT_HEADERS) | $(BUILD)
 	$(CC) -I. -Itests/fuzz $(EXR_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(FUZZ_REPLAY_SRCS) $(LDLIBS) $(EXR_LIBS) -lm
 
 # FP-trap test (issue 7 item 6): scene files and built-in scenes with FE_INVALID|FE_DIVBYZERO
 # trapping. Built with the normal compiler and flags (what users run).
-$(BUILD)/fptrap: tests/fptrap/fptrap.c pdftrace.h | $(BUILD)
+$(BUILD)/fptrap: tests/fptrap/fptrap.c $(PT_HEADERS) | $(BUILD)
 	$(CC) -I. $(CPPFLAGS) $(CFLAGS) $(FPTRAP_FLAGS) -g $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) -lm
 
 fptrap-test: $(BUILD)/fptrap

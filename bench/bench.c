@@ -39,9 +39,13 @@
 #include <time.h>
 #include <unistd.h>
 
-#define PDFTRACE_SCENE_FILES
 #define PDFTRACE_IMPLEMENTATION
-#include "pdftrace.h"
+#define PDFTRACE_SCENE_IMPLEMENTATION
+#include "pdftrace_scene.h"
+#ifdef PTV_HAVE_EXR
+#define PDFTRACE_EXR_IMPLEMENTATION
+#include "pdftrace_exr.h"
+#endif
 
 #define PTV_PROG "bench"
 #include "validation/ptv_common.h"
@@ -208,7 +212,7 @@ static int file_hash(const char *path, uint64_t *hash)
 }
 
 typedef struct loaded {
-    pt_scene_desc sd;
+    pt_scenefile sd;
     pt_scene *scene;
     pt_render_desc rd;         /* from the scene file, size BENCH_SIZE */
     pt_image ref;              /* the stored reference */
@@ -225,13 +229,13 @@ static int load_scene(const bench_scene *bs, loaded *L)
                 strerror(errno));
         return 0;
     }
-    if (pt_scene_desc_load(bs->file, &L->sd, err, sizeof err) != PT_OK) {
+    if (pt_scenefile_load(bs->file, &L->sd, err, sizeof err) != PT_OK) {
         fprintf(stderr, "bench: %s\n", err);
         return 0;
     }
-    if (pt_scene_desc_build(&L->sd, &L->scene, &L->rd, err, sizeof err) != PT_OK) {
+    if (pt_scenefile_build(&L->sd, &L->scene, &L->rd, err, sizeof err) != PT_OK) {
         fprintf(stderr, "bench: %s\n", err);
-        pt_scene_desc_free(&L->sd);
+        pt_scenefile_free(&L->sd);
         return 0;
     }
     L->rd.width = L->rd.height = BENCH_SIZE;
@@ -241,7 +245,7 @@ static int load_scene(const bench_scene *bs, loaded *L)
 static void free_scene(loaded *L)
 {
     pt_scene_destroy(L->scene);
-    pt_scene_desc_free(&L->sd);
+    pt_scenefile_free(&L->sd);
     pt_image_free(&L->ref);
     memset(L, 0, sizeof *L);
 }
@@ -786,7 +790,7 @@ static int run_pov(const config *cfg, results *R, pov_results *P)
             o.radiosity = pl->radiosity;
             o.light_grid = pl->grid;
             o.width = o.height = BENCH_SIZE;
-            if (pt_scene_desc_write_pov(&R->L[i].sd, pov, &o, err, sizeof err) != PT_OK) {
+            if (pt_scenefile_write_pov(&R->L[i].sd, pov, &o, err, sizeof err) != PT_OK) {
                 fprintf(stderr, "bench: POV-Ray export of %s: %s\n", scenes[i].name, err);
                 return 0;
             }

@@ -39,9 +39,9 @@
 #include <sys/stat.h>
 #include <dirent.h>
 
-#define PDFTRACE_SCENE_FILES
 #define PDFTRACE_IMPLEMENTATION
-#include "pdftrace.h"
+#define PDFTRACE_SCENE_IMPLEMENTATION
+#include "pdftrace_scene.h"
 
 #ifndef PDFTRACE_EMBREE
 #error "bench/bvh.c compares the built-in BVH with Embree: build it with make bench-bvh (needs libembree-dev)"
@@ -164,13 +164,13 @@ static pt_scene *terrain_scene(const terrain *t, pt_backend backend, pt_render_d
 /* A scene file (scenes/cornell.scene is the scene of `make run`), committed with the given backend. */
 static pt_scene *file_scene(const char *path, pt_backend backend, pt_render_desc *rd)
 {
-    pt_scene_desc sd;
+    pt_scenefile sd;
     pt_scene *s = NULL;
     char err[1024];
-    int rc = pt_scene_desc_load(path, &sd, err, sizeof err);
+    int rc = pt_scenefile_load(path, &sd, err, sizeof err);
     if (rc == PT_OK) {
-        rc = pt_scene_desc_build(&sd, &s, rd, err, sizeof err);
-        pt_scene_desc_free(&sd);
+        rc = pt_scenefile_build(&sd, &s, rd, err, sizeof err);
+        pt_scenefile_free(&sd);
     }
     if (rc != PT_OK) { fprintf(stderr, "bench_bvh: %s: %s\n", path, err); exit(1); }
     /* the loader commits with the default backend: choose ours and commit again */

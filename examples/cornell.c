@@ -15,9 +15,13 @@
 #include <string.h>
 #include <unistd.h>
 
-#define PDFTRACE_SCENE_FILES /* --scene: the optional scene-file loader (pdftrace.h section 10) */
 #define PDFTRACE_IMPLEMENTATION
-#include "pdftrace.h"
+#define PDFTRACE_SCENE_IMPLEMENTATION /* --scene: the scene-file loader */
+#include "pdftrace_scene.h"
+#ifdef PDFTRACE_OPENEXR /* make OPENEXR=1: the EXR header of the family */
+#define PDFTRACE_EXR_IMPLEMENTATION
+#include "pdftrace_exr.h"
+#endif
 
 #define MAX_OUTPUTS 8
 
@@ -136,7 +140,7 @@ static void usage(FILE *f)
         "      --ppm PATH        same as -o PATH, PATH must end in .ppm\n"
         "      --pfm PATH        same as -o PATH, PATH must end in .pfm\n"
         "  -q, --quiet           no progress line\n"
-        "      --scene PATH      render a scene file (format: pdftrace.h, section 10) instead of\n"
+        "      --scene PATH      render a scene file (format: pdftrace_scene.h) instead of\n"
         "                        the built-in box; its size, spp, depth, strategy, sampler, indirect\n"
         "                        paths and seed are the defaults, options given here override them\n"
         "      --adaptive T      adaptive sampling toward an image RMS relative error T (e.g. 0.05):\n"
@@ -537,13 +541,13 @@ int main(int argc, char **argv)
 
     if (opt.scene) {
         /* A scene file: its settings are the defaults; options given on the command line win. */
-        pt_scene_desc sd;
+        pt_scenefile sd;
         pt_render_desc from_file;
         char err[1024];
-        rc = pt_scene_desc_load(opt.scene, &sd, err, sizeof err);
+        rc = pt_scenefile_load(opt.scene, &sd, err, sizeof err);
         if (rc == PT_OK) {
-            rc = pt_scene_desc_build(&sd, &scene, &from_file, err, sizeof err);
-            pt_scene_desc_free(&sd);
+            rc = pt_scenefile_build(&sd, &scene, &from_file, err, sizeof err);
+            pt_scenefile_free(&sd);
         }
         if (rc != PT_OK) {
             fprintf(stderr, "%s: %s\n", prog, err);

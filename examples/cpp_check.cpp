@@ -1,7 +1,12 @@
-// cpp_check.cpp - compiles pdftrace.h, implementation included, as C++ (used by
-// `make check-warnings`) and runs a tiny scene through the public API.
+// cpp_check.cpp - compiles the header family, implementations included, as C++ (used by
+// `make check-warnings`) and runs a tiny scene, built from scene-file text, through the API.
 #define PDFTRACE_IMPLEMENTATION
-#include "pdftrace.h"
+#define PDFTRACE_SCENE_IMPLEMENTATION
+#include "pdftrace_scene.h"
+#ifdef PDFTRACE_OPENEXR
+#define PDFTRACE_EXR_IMPLEMENTATION
+#include "pdftrace_exr.h"
+#endif
 
 #include <cstdio>
 
@@ -29,6 +34,15 @@ int main()
         rc = pt_render_image(s, &d, &img, NULL);
     }
     if (rc != PT_OK) std::fprintf(stderr, "cpp_check: %s\n", pt_result_string(rc));
+    static const char text[] = "camera look_from 0 0 -5 look_at 0 0 0\nmaterial w lambertian 0.5 0.5 0.5\n"
+                               "sphere 0 0 0 1 w\n";
+    pt_scenefile sf;
+    char err[256];
+    if (rc == PT_OK) {
+        rc = pt_scenefile_parse(text, sizeof text - 1, "cpp_check", NULL, &sf, err, sizeof err);
+        if (rc == PT_OK) pt_scenefile_free(&sf);
+        else std::fprintf(stderr, "cpp_check: %s\n", err);
+    }
     pt_image_free(&img);
     pt_scene_destroy(s);
     return rc == PT_OK ? 0 : 1;

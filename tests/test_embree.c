@@ -10,14 +10,13 @@
      shared edge or vertex, or coincident surfaces) or a graze (one backend's hit lies within
      rounding of its primitive's boundary: an edge or a sphere's silhouette). Anything else
      fails. The counts are printed.
-   - scenes: every scene of scenes/ (section 10, pt_scene_desc_build) rendered with both
+   - scenes: every scene of scenes/ (pdftrace_scene.h, pt_scenefile_build) rendered with both
      backends from independent seeds; per-region z-tests of the means, one Sidak family at
      alpha = 0.01 over all regions, channels and scenes.
    - auto / rebuild / ftz: AUTO's threshold, re-commits after a change, and the floating-point
      state (flush-to-zero inside Embree tiles only, the host's state restored). */
 #define _GNU_SOURCE /* feenableexcept (glibc) for embree_fp_traps */
-#define PDFTRACE_SCENE_FILES
-#include "pdftrace.h"
+#include "pdftrace_scene.h"
 
 #include <fenv.h>
 
@@ -779,7 +778,7 @@ static void embree_scene_images(test_ctx *t)
     }
     for (k = 0; k < ns; k++) {
         char path[512], err[512];
-        pt_scene_desc desc;
+        pt_scenefile desc;
         pt_scene *s = NULL;
         pt_render_desc rd;
         pt_film film[2];
@@ -789,10 +788,10 @@ static void embree_scene_images(test_ctx *t)
         pt_scene_info info;
         memset(film, 0, sizeof film);
         snprintf(path, sizeof path, "%s/%s.scene", TE_SCENE_DIR, names[k]);
-        rc = pt_scene_desc_load(path, &desc, err, sizeof err);
+        rc = pt_scenefile_load(path, &desc, err, sizeof err);
         if (!CHECK(t, rc == PT_OK, "%s: %s", path, err)) continue;
-        rc = pt_scene_desc_build(&desc, &s, &rd, err, sizeof err);
-        pt_scene_desc_free(&desc);
+        rc = pt_scenefile_build(&desc, &s, &rd, err, sizeof err);
+        pt_scenefile_free(&desc);
         if (!CHECK(t, rc == PT_OK, "%s: build: %s", path, err)) continue;
         /* small and quick: 48 pixels on the long side, 24 samples per pixel */
         w = rd.width >= rd.height ? 48 : (48 * rd.width + rd.height / 2) / rd.height;

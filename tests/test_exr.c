@@ -1,5 +1,5 @@
 #define _POSIX_C_SOURCE 200809L
-/* test_exr.c - section 11 of pdftrace.h: OpenEXR output and input (only with PDFTRACE_OPENEXR;
+/* test_exr.c - pdftrace_exr.h: OpenEXR output and input (only with PDFTRACE_OPENEXR;
    built by `make OPENEXR=1`, run alone by `make exr-test`). Without it the section has one test
    that passes and says the EXR code is not compiled in.
    References: IEEE 754-2008 binary16 (round to nearest, ties to even; subnormals in steps of
@@ -24,6 +24,7 @@ const test_case test_exr_cases[] = {
 
 #else /* PDFTRACE_OPENEXR */
 
+#include "pdftrace_exr.h"
 #include <openexr.h>
 #include <dirent.h>
 #include <stdlib.h>

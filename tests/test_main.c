@@ -8,8 +8,12 @@
 
    This file compiles the library implementation (PDFTRACE_IMPLEMENTATION). */
 #define PDFTRACE_IMPLEMENTATION
-#define PDFTRACE_SCENE_FILES /* section 10: the embree section renders the scenes of scenes/ */
-#include "pdftrace.h"
+#define PDFTRACE_SCENE_IMPLEMENTATION /* the embree and sampler sections load the scenes of scenes/ */
+#include "pdftrace_scene.h"
+#ifdef PDFTRACE_OPENEXR /* make OPENEXR=1: the EXR header of the family */
+#define PDFTRACE_EXR_IMPLEMENTATION
+#include "pdftrace_exr.h"
+#endif
 
 #include <stdarg.h>
 #include <stdio.h>

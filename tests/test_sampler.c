@@ -48,8 +48,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PDFTRACE_SCENE_FILES /* the cornell.scene comparison and the `sampler` statement */
-#include "pdftrace.h"
+#include "pdftrace_scene.h" /* the cornell.scene comparison and the `sampler` statement */
 #include "test.h"
 #include "test_util.h"
 
@@ -563,18 +562,18 @@ static void render_unbiased(test_ctx *t)
     /* 5-9: Sobol against independent renders of scenes/cornell.scene (glass: the Fresnel slot) */
     {
         static const char *const names[] = {"mis", "mixture", "material", "light", "mis+guide"};
-        pt_scene_desc sd;
+        pt_scenefile sd;
         pt_scene *s = NULL;
         pt_render_desc base;
         char err[512];
         int k;
-        if (!CHECK(t, pt_scene_desc_load("scenes/cornell.scene", &sd, err, sizeof err) == PT_OK, "cornell.scene: %s", err))
+        if (!CHECK(t, pt_scenefile_load("scenes/cornell.scene", &sd, err, sizeof err) == PT_OK, "cornell.scene: %s", err))
             return;
-        if (!CHECK(t, pt_scene_desc_build(&sd, &s, &base, err, sizeof err) == PT_OK, "cornell.scene: %s", err)) {
-            pt_scene_desc_free(&sd);
+        if (!CHECK(t, pt_scenefile_build(&sd, &s, &base, err, sizeof err) == PT_OK, "cornell.scene: %s", err)) {
+            pt_scenefile_free(&sd);
             return;
         }
-        pt_scene_desc_free(&sd);
+        pt_scenefile_free(&sd);
         for (k = 0; k < 5; ++k) {
             pt_render_desc a = base, b;
             pt_film fa, fb;
@@ -750,22 +749,22 @@ static void render_deterministic(test_ctx *t)
         static const char text[] = "size 8 8\nsampler sobol\nindirect_paths 2\ncamera look_from 0 0 -3 look_at 0 0 0\n"
                                    "material w lambertian 0.5 0.5 0.5\nsphere 0 0 0 1 w\n";
         static const char bad[] = "size 8 8\nsampler halton\n";
-        pt_scene_desc sd;
+        pt_scenefile sd;
         pt_scene *s = NULL;
         pt_render_desc rd;
         char err[256];
-        if (CHECK(t, pt_scene_desc_parse(text, sizeof text - 1, "t.scene", NULL, &sd, err, sizeof err) == PT_OK, "%s", err)) {
+        if (CHECK(t, pt_scenefile_parse(text, sizeof text - 1, "t.scene", NULL, &sd, err, sizeof err) == PT_OK, "%s", err)) {
             CHECK(t, sd.sampler == PT_SAMPLER_SOBOL, "sampler sobol read as %d", (int)sd.sampler);
             CHECK(t, sd.indirect_paths == 2, "indirect_paths 2 read as %d", sd.indirect_paths);
-            if (CHECK(t, pt_scene_desc_build(&sd, &s, &rd, err, sizeof err) == PT_OK, "%s", err)) {
+            if (CHECK(t, pt_scenefile_build(&sd, &s, &rd, err, sizeof err) == PT_OK, "%s", err)) {
                 CHECK(t, rd.sampler == PT_SAMPLER_SOBOL && rd.indirect_paths == 2, "build: sampler %d, indirect_paths %d",
                       (int)rd.sampler, rd.indirect_paths);
                 pt_scene_destroy(s);
             }
-            pt_scene_desc_free(&sd);
+            pt_scenefile_free(&sd);
         }
         err[0] = '\0';
-        CHECK(t, pt_scene_desc_parse(bad, sizeof bad - 1, "t.scene", NULL, &sd, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT,
+        CHECK(t, pt_scenefile_parse(bad, sizeof bad - 1, "t.scene", NULL, &sd, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT,
               "sampler halton accepted");
         CHECK(t, strstr(err, "t.scene:2:") && strstr(err, "independent or sobol"), "message: '%s'", err);
     }

@@ -28,9 +28,13 @@
 #include <string.h>
 #include <unistd.h>
 
-#define PDFTRACE_SCENE_FILES
 #define PDFTRACE_IMPLEMENTATION
-#include "pdftrace.h"
+#define PDFTRACE_SCENE_IMPLEMENTATION
+#include "pdftrace_scene.h"
+#ifdef PTV_HAVE_EXR
+#define PDFTRACE_EXR_IMPLEMENTATION
+#include "pdftrace_exr.h"
+#endif
 
 #include "ptv_common.h"
 
@@ -120,23 +124,23 @@ PTV_MAYBE_UNUSED static void print_metrics(const char *name, const metrics *m)
 
 /* ---- commands ------------------------------------------------------------------------- */
 
-static int load(const char *path, pt_scene_desc *sd)
+static int load(const char *path, pt_scenefile *sd)
 {
     char err[1024];
-    if (pt_scene_desc_load(path, sd, err, sizeof err) != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 0; }
+    if (pt_scenefile_load(path, sd, err, sizeof err) != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 0; }
     return 1;
 }
 
 static int cmd_render(int argc, char **argv)
 {
-    pt_scene_desc sd;
+    pt_scenefile sd;
     pt_image mean = {0, 0, NULL}, var = {0, 0, NULL};
     int ok, w = 0, h = 0, spp = 0;
     if (argc != 5 && argc != 8) { fprintf(stderr, "usage: ptv render SCENE MEAN.pfm VAR.pfm [W H SPP]\n"); return 2; }
     if (argc == 8) { w = atoi(argv[5]); h = atoi(argv[6]); spp = atoi(argv[7]); }
     if (!load(argv[2], &sd)) return 1;
     ok = render_desc(&sd, w, h, spp, &mean, &var);
-    pt_scene_desc_free(&sd);
+    pt_scenefile_free(&sd);
     if (ok) ok = pt_write_pfm(argv[3], &mean) == PT_OK && pt_write_pfm(argv[4], &var) == PT_OK;
     pt_image_free(&mean);
     pt_image_free(&var);
@@ -151,7 +155,7 @@ static int radiosity_level(const char *s)
 
 static int cmd_pov(int argc, char **argv)
 {
-    pt_scene_desc sd;
+    pt_scenefile sd;
     pt_pov_options o;
     char err[1024];
     int rc;
@@ -161,8 +165,8 @@ static int cmd_pov(int argc, char **argv)
     if (argc >= 5 && o.radiosity < 0) { fprintf(stderr, "ptv: bad radiosity level '%s'\n", argv[4]); return 2; }
     if (argc == 7) { o.width = atoi(argv[5]); o.height = atoi(argv[6]); }
     if (!load(argv[2], &sd)) return 1;
-    rc = pt_scene_desc_write_pov(&sd, argv[3], &o, err, sizeof err);
-    pt_scene_desc_free(&sd);
+    rc = pt_scenefile_write_pov(&sd, argv[3], &o, err, sizeof err);
+    pt_scenefile_free(&sd);
     if (rc != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 1; }
     return 0;
 }
@@ -374,7 +378,7 @@ static void test_malformed(const char *work)
 {
     size_t i;
     char text[8192], err[1024], line[1400];
-    pt_scene_desc sd;
+    pt_scenefile sd;
     write_text(work, "bad-index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
     write_text(work, "bad-zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
     write_text(work, "bad-normal.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n");
@@ -387,26 +391,26 @@ static void test_malformed(const char *work)
         int rc;
         expand(text, sizeof text, b->text);
         memset(&sd, 0x5a, sizeof sd);
-        rc = pt_scene_desc_parse(text, strlen(text), "bad.scene", work, &sd, err, sizeof err);
+        rc = pt_scenefile_parse(text, strlen(text), "bad.scene", work, &sd, err, sizeof err);
         snprintf(line, sizeof line, "%s -> %s", b->what, err);
         result(rc != PT_OK && strstr(err, b->expect) != NULL && sd.shapes == NULL && sd.shape_count == 0,
                "malformed scene", line);
-        if (rc == PT_OK) pt_scene_desc_free(&sd);
+        if (rc == PT_OK) pt_scenefile_free(&sd);
     }
     /* Inputs that cannot be written as a short string. */
     {
         static const char nul_text[] = "camera look_from 0 1 -5 look_at 0 0 0\nsph\0ere 0 0 0 1 m\n";
-        int rc = pt_scene_desc_parse(nul_text, sizeof nul_text - 1, "bad.scene", work, &sd, err, sizeof err);
+        int rc = pt_scenefile_parse(nul_text, sizeof nul_text - 1, "bad.scene", work, &sd, err, sizeof err);
         snprintf(line, sizeof line, "NUL byte -> %s", err);
         result(rc != PT_OK && strstr(err, "bad.scene:2: NUL byte") != NULL, "malformed scene", line);
     }
     {
-        static char longline[PT__SD_MAX_LINE + 100];
+        static char longline[PT__SF_MAX_LINE + 100];
         int rc;
         memset(longline, ' ', sizeof longline - 1);
         memcpy(longline, "sphere", 6);
         longline[sizeof longline - 1] = '\0';
-        rc = pt_scene_desc_parse(longline, strlen(longline), "bad.scene", work, &sd, err, sizeof err);
+        rc = pt_scenefile_parse(longline, strlen(longline), "bad.scene", work, &sd, err, sizeof err);
         snprintf(line, sizeof line, "line of %d characters -> %s", (int)strlen(longline), err);
         result(rc != PT_OK && strstr(err, "bad.scene:1: line longer than") != NULL, "malformed scene", line);
     }
@@ -414,11 +418,11 @@ static void test_malformed(const char *work)
         char path[2048];
         int rc;
         snprintf(path, sizeof path, "%s/no-such.scene", work);
-        rc = pt_scene_desc_load(path, &sd, err, sizeof err);
+        rc = pt_scenefile_load(path, &sd, err, sizeof err);
         snprintf(line, sizeof line, "missing scene file -> %s", err);
         result(rc == PT_ERROR_IO && strstr(err, "cannot read the scene") != NULL, "malformed scene", line);
         /* a directory: fopen works on Linux, reading fails */
-        rc = pt_scene_desc_load(work, &sd, err, sizeof err);
+        rc = pt_scenefile_load(work, &sd, err, sizeof err);
         snprintf(line, sizeof line, "a directory as scene file -> %s", err);
         result(rc != PT_OK && strstr(err, work) == err, "malformed scene", line);
     }
@@ -428,10 +432,10 @@ static void test_malformed(const char *work)
         pt_render_desc rd;
         int rc;
         expand(text, sizeof text, "%Hscale 1 2 1\nsphere 0 0 0 1 m\n");
-        rc = pt_scene_desc_parse(text, strlen(text), "bad.scene", work, &sd, err, sizeof err);
+        rc = pt_scenefile_parse(text, strlen(text), "bad.scene", work, &sd, err, sizeof err);
         if (rc == PT_OK) {
-            rc = pt_scene_desc_build(&sd, &s, &rd, err, sizeof err);
-            pt_scene_desc_free(&sd);
+            rc = pt_scenefile_build(&sd, &s, &rd, err, sizeof err);
+            pt_scenefile_free(&sd);
         }
         snprintf(line, sizeof line, "sphere under non-uniform scale (build) -> %s", err);
         result(rc == PT_ERROR_UNSUPPORTED && s == NULL && strstr(err, "bad.scene:4:") != NULL, "malformed scene", line);
@@ -443,10 +447,10 @@ static void test_malformed(const char *work)
         snprintf(pov, sizeof pov, "%s/fuzzy.pov", work);
         remove(pov);
         expand(text, sizeof text, "%Hmaterial f metal 1 1 1 fuzz 0.3\nsphere 0 0 0 1 f\n");
-        rc = pt_scene_desc_parse(text, strlen(text), "bad.scene", work, &sd, err, sizeof err);
+        rc = pt_scenefile_parse(text, strlen(text), "bad.scene", work, &sd, err, sizeof err);
         if (rc == PT_OK) {
-            rc = pt_scene_desc_write_pov(&sd, pov, NULL, err, sizeof err);
-            pt_scene_desc_free(&sd);
+            rc = pt_scenefile_write_pov(&sd, pov, NULL, err, sizeof err);
+            pt_scenefile_free(&sd);
         }
         snprintf(line, sizeof line, "fuzzy metal (POV export) -> %s", err);
         result(rc == PT_ERROR_UNSUPPORTED && access(pov, F_OK) != 0 && strstr(err, "bad.scene:4:") != NULL,
@@ -460,16 +464,16 @@ static void test_scenes_load(const char *dir)
     size_t i;
     for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
         char path[2048], err[1024] = "";
-        pt_scene_desc sd;
+        pt_scenefile sd;
         pt_scene *s = NULL;
         pt_render_desc rd;
         int rc;
         snprintf(path, sizeof path, "%s/%s.scene", dir, names[i]);
-        rc = pt_scene_desc_load(path, &sd, err, sizeof err);
+        rc = pt_scenefile_load(path, &sd, err, sizeof err);
         if (rc == PT_OK) {
-            rc = pt_scene_desc_build(&sd, &s, &rd, err, sizeof err);
+            rc = pt_scenefile_build(&sd, &s, &rd, err, sizeof err);
             pt_scene_destroy(s);
-            pt_scene_desc_free(&sd);
+            pt_scenefile_free(&sd);
         }
         result(rc == PT_OK, "scene loads and builds", rc == PT_OK ? path : err);
     }
@@ -479,7 +483,7 @@ static void test_scenes_load(const char *dir)
 static void test_compare(const char *dir, const char *work, const char *name, int size, int spp, int grid, double pov_err)
 {
     char path[2048], pov[2048], exr[2048], log[2048], err[1024], what[256];
-    pt_scene_desc sd;
+    pt_scenefile sd;
     pt_pov_options o;
     pt_image x = {0, 0, NULL}, v = {0, 0, NULL}, r = {0, 0, NULL};
     metrics m;
@@ -489,22 +493,22 @@ static void test_compare(const char *dir, const char *work, const char *name, in
     snprintf(path, sizeof path, "%s/%s.scene", dir, name);
     snprintf(pov, sizeof pov, "%s/%s.pov", work, name);
     snprintf(exr, sizeof exr, "%s/%s.exr", work, name);
-    if (pt_scene_desc_load(path, &sd, err, sizeof err) != PT_OK) { result(0, what, err); return; }
+    if (pt_scenefile_load(path, &sd, err, sizeof err) != PT_OK) { result(0, what, err); return; }
     memset(&o, 0, sizeof o);
     o.radiosity = -1;
     o.light_grid = grid;
     o.width = o.height = size;
-    ok = pt_scene_desc_write_pov(&sd, pov, &o, err, sizeof err) == PT_OK;
-    if (!ok) { pt_scene_desc_free(&sd); result(0, what, err); return; }
+    ok = pt_scenefile_write_pov(&sd, pov, &o, err, sizeof err) == PT_OK;
+    if (!ok) { pt_scenefile_free(&sd); result(0, what, err); return; }
     snprintf(log, sizeof log, "%s/%s.log", work, name);
     if (!run_povray(pov, exr, size, size, NULL, log, NULL)) {
-        pt_scene_desc_free(&sd);
+        pt_scenefile_free(&sd);
         snprintf(err, sizeof err, "povray failed: see %s/%s.log", work, name);
         result(0, what, err);
         return;
     }
     ok = render_desc(&sd, size, size, spp, &x, &v);
-    pt_scene_desc_free(&sd);
+    pt_scenefile_free(&sd);
     memset(&m, 0, sizeof m);
     m.bias_tol = 0.01;
     m.pov_err = pov_err;
@@ -548,7 +552,7 @@ static void test_fuzz(const char *dir, const char *work, int rounds)
         FILE *f;
         size_t len = 0, n, i;
         int m, muts = 1 + (int)fuzz_rand(4), rc;
-        pt_scene_desc sd;
+        pt_scenefile sd;
         snprintf(path, sizeof path, "%s/%s.scene", dir, names[r % (int)(sizeof names / sizeof names[0])]);
         f = fopen(path, "rb");
         if (!f) { bad = 1; break; }
@@ -592,7 +596,7 @@ static void test_fuzz(const char *dir, const char *work, int rounds)
             }
         }
         n = len;
-        rc = pt_scene_desc_parse(text, n, "fuzz.scene", dir, &sd, err, sizeof err);
+        rc = pt_scenefile_parse(text, n, "fuzz.scene", dir, &sd, err, sizeof err);
         if (rc != PT_OK) {
             ++err_count;
             if (strncmp(err, "fuzz.scene", 10) != 0 && strstr(err, ".obj") == NULL) bad = 1;
@@ -602,7 +606,7 @@ static void test_fuzz(const char *dir, const char *work, int rounds)
             pt_scene *s = NULL;
             pt_render_desc rd;
             ++ok_count;
-            rc = pt_scene_desc_build(&sd, &s, &rd, err, sizeof err);
+            rc = pt_scenefile_build(&sd, &s, &rd, err, sizeof err);
             if (rc == PT_OK) {
                 pt_hit hit;
                 pt_ray ray;
@@ -612,9 +616,9 @@ static void test_fuzz(const char *dir, const char *work, int rounds)
                 pt_scene_destroy(s);
             } else if (s != NULL || strncmp(err, "fuzz.scene", 10) != 0)
                 bad = 1;
-            rc = pt_scene_desc_write_pov(&sd, pov, NULL, err, sizeof err);
+            rc = pt_scenefile_write_pov(&sd, pov, NULL, err, sizeof err);
             if (rc != PT_OK && strncmp(err, "fuzz.scene", 10) != 0 && strstr(err, "fuzz.pov") == NULL) bad = 1;
-            pt_scene_desc_free(&sd);
+            pt_scenefile_free(&sd);
         }
         if (bad) snprintf(detail, sizeof detail, "round %d: unexpected result, message '%s'", r, err);
     }

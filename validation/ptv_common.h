@@ -1,8 +1,8 @@
 /* ptv_common.h - what validation/ptv.c and bench/bench.c share: PFM and EXR readers, PNG
    writers, rendering a scene description into per-pixel means and variances of the mean, and
    running POV-Ray 3.7 on an exported scene. Static functions, included once by each program
-   after pdftrace.h (with PDFTRACE_SCENE_FILES). The programs are built with -DPTV_HAVE_EXR
-   (OpenEXR Core C API: reading POV-Ray's +FE output) and -DPTV_HAVE_PNG (libpng) when those
+   after pdftrace_scene.h. The programs are built with -DPTV_HAVE_EXR (pdftrace_exr.h: reading
+   POV-Ray's +FE output) and -DPTV_HAVE_PNG (libpng) when those
    libraries are present. */
 #ifndef PTV_COMMON_H
 #define PTV_COMMON_H
@@ -20,7 +20,7 @@
 #endif
 
 #ifdef PTV_HAVE_EXR
-#include <openexr.h>
+#include "pdftrace_exr.h" /* the program defines PDFTRACE_EXR_IMPLEMENTATION */
 #endif
 /* A program need not use every helper (without OpenEXR nothing compares images). */
 #if defined(__GNUC__) || defined(__clang__)
@@ -66,53 +66,13 @@ PTV_MAYBE_UNUSED static int read_pfm(const char *path, pt_image *img)
 }
 
 #ifdef PTV_HAVE_EXR
-/* Scanline EXR (what POV-Ray's +FE writes), channels R, G, B decoded to float. */
+/* An EXR (what POV-Ray's +FE writes) through pdftrace_exr.h, with the reason on stderr. */
 PTV_MAYBE_UNUSED static int read_exr(const char *path, pt_image *img)
 {
-    exr_context_t ctx = NULL;
-    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    exr_attr_box2i_t dw;
-    exr_storage_t storage;
-    int32_t spc = 0;
-    int w, h, y, ok = 0;
-    exr_result_t rv = exr_start_read(&ctx, path, &init);
-    if (rv != EXR_ERR_SUCCESS) { fprintf(stderr, PTV_PROG ": %s: %s\n", path, exr_get_error_code_as_string(rv)); return 0; }
-    if (exr_get_storage(ctx, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
-        exr_get_data_window(ctx, 0, &dw) != EXR_ERR_SUCCESS || exr_get_scanlines_per_chunk(ctx, 0, &spc) != EXR_ERR_SUCCESS) {
-        fprintf(stderr, PTV_PROG ": %s: not a scanline EXR\n", path);
-        exr_finish(&ctx);
-        return 0;
-    }
-    w = dw.max.x - dw.min.x + 1;
-    h = dw.max.y - dw.min.y + 1;
-    if (w <= 0 || h <= 0 || w > 16384 || h > 16384 || pt_image_init(img, w, h) != PT_OK) { exr_finish(&ctx); return 0; }
-    memset(img->rgb, 0, sizeof(float) * 3u * (size_t)w * (size_t)h);
-    for (y = dw.min.y; y <= dw.max.y; y += spc) {
-        exr_chunk_info_t ci;
-        exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
-        int c;
-        if ((rv = exr_read_scanline_chunk_info(ctx, 0, y, &ci)) != EXR_ERR_SUCCESS) break;
-        if ((rv = exr_decoding_initialize(ctx, 0, &ci, &dec)) != EXR_ERR_SUCCESS) break;
-        for (c = 0; c < dec.channel_count; ++c) {
-            exr_coding_channel_info_t *ch = &dec.channels[c];
-            int k = !strcmp(ch->channel_name, "R") ? 0 : !strcmp(ch->channel_name, "G") ? 1 : !strcmp(ch->channel_name, "B") ? 2 : -1;
-            if (k < 0) { ch->decode_to_ptr = NULL; continue; }
-            ch->decode_to_ptr = (uint8_t *)(img->rgb + 3 * ((size_t)(ci.start_y - dw.min.y) * (size_t)w) + k);
-            ch->user_pixel_stride = 12;
-            ch->user_line_stride = 12 * w;
-            ch->user_bytes_per_element = 4;
-            ch->user_data_type = EXR_PIXEL_FLOAT;
-        }
-        rv = exr_decoding_choose_default_routines(ctx, 0, &dec);
-        if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_run(ctx, 0, &dec);
-        exr_decoding_destroy(ctx, &dec);
-        if (rv != EXR_ERR_SUCCESS) break;
-    }
-    if (rv == EXR_ERR_SUCCESS) ok = 1;
-    else fprintf(stderr, PTV_PROG ": %s: %s\n", path, exr_get_error_code_as_string(rv));
-    exr_finish(&ctx);
-    if (!ok) pt_image_free(img);
-    return ok;
+    char err[4096]; /* room for a long path and the library's message */
+    if (pt_read_exr(path, img, err, sizeof err) == PT_OK) return 1;
+    fprintf(stderr, PTV_PROG ": %s\n", err);
+    return 0;
 }
 #endif
 
@@ -150,13 +110,13 @@ PTV_MAYBE_UNUSED static int png_tonemapped(const char *path, const pt_image *img
 
 /* ---- rendering ------------------------------------------------------------------------ */
 
-PTV_MAYBE_UNUSED static int render_desc(const pt_scene_desc *sd, int w, int h, int spp, pt_image *mean, pt_image *var)
+PTV_MAYBE_UNUSED static int render_desc(const pt_scenefile *sd, int w, int h, int spp, pt_image *mean, pt_image *var)
 {
     pt_scene *scene = NULL;
     pt_render_desc rd;
     pt_film film;
     char err[1024];
-    int rc = pt_scene_desc_build(sd, &scene, &rd, err, sizeof err), x, y;
+    int rc = pt_scenefile_build(sd, &scene, &rd, err, sizeof err), x, y;
     if (rc != PT_OK) { fprintf(stderr, PTV_PROG ": %s\n", err); return 0; }
     if (w > 0) { rd.width = w; rd.height = h; }
     if (spp > 0) rd.samples_per_pixel = spp;

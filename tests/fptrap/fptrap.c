@@ -14,8 +14,8 @@
    Usage: fptrap SCENE_FILE...   (make fptrap-test passes every .scene file of scenes/) */
 #define _GNU_SOURCE 1
 #define PDFTRACE_IMPLEMENTATION
-#define PDFTRACE_SCENE_FILES
-#include "pdftrace.h"
+#define PDFTRACE_SCENE_IMPLEMENTATION
+#include "pdftrace_scene.h"
 
 #include <fenv.h>
 #include <signal.h>
@@ -79,18 +79,18 @@ static const char *strategy_name(int k)
 
 static void scene_file(const char *path)
 {
-    pt_scene_desc d;
+    pt_scenefile d;
     pt_scene *s = NULL;
     pt_render_desc r;
     char err[512], name[600];
     int k, rc;
     current_case = path;
-    rc = pt_scene_desc_load(path, &d, err, sizeof err);
-    if (rc == PT_OK) rc = pt_scene_desc_build(&d, &s, &r, err, sizeof err);
+    rc = pt_scenefile_load(path, &d, err, sizeof err);
+    if (rc == PT_OK) rc = pt_scenefile_build(&d, &s, &r, err, sizeof err);
     if (rc != PT_OK) {
         printf("FAIL fptrap: %s\n", err);
         ++failures;
-        pt_scene_desc_free(&d);
+        pt_scenefile_free(&d);
         return;
     }
     r.width = 32;
@@ -103,7 +103,7 @@ static void scene_file(const char *path)
         render_case(name, s, r);
     }
     pt_scene_destroy(s);
-    pt_scene_desc_free(&d);
+    pt_scenefile_free(&d);
 }
 
 static pt_render_desc base_desc(pt_vec3 from, pt_vec3 at)

@@ -6,11 +6,15 @@
    render that fails or yields a non-finite or negative pixel, or a BVH that disagrees with
    the brute-force intersection (hit or miss; t within 1e-5 relative, as tests/test_bvh.c). */
 #define PDFTRACE_IMPLEMENTATION
-#define PDFTRACE_SCENE_FILES
+#define PDFTRACE_SCENE_IMPLEMENTATION
 /* Hostile EXR headers may ask for any image size; the harness refuses more than 2^20 pixels
    (12 MB of floats) so that libFuzzer's malloc limit is never the finding. */
 #define PDFTRACE_EXR_MAX_PIXELS (1u << 20)
-#include "pdftrace.h"
+#include "pdftrace_scene.h"
+#ifdef PDFTRACE_OPENEXR /* make OPENEXR=1: the EXR header of the family */
+#define PDFTRACE_EXR_IMPLEMENTATION
+#include "pdftrace_exr.h"
+#endif
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -168,7 +172,7 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
 {
     static const char *T = "scene";
     const char *text = (const char *)data;
-    pt_scene_desc d;
+    pt_scenefile d;
     pt_scene *s = NULL;
     pt_render_desc r;
     pt_image img;
@@ -179,7 +183,7 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
     size_t k;
 
     if (size > 65536 || fz_unsafe_mesh_path(text, size)) return 0;
-    rc = pt_scene_desc_parse(text, size, "fuzz.scene", PT_FUZZ_SCENE_DIR, &d, err, sizeof err);
+    rc = pt_scenefile_parse(text, size, "fuzz.scene", PT_FUZZ_SCENE_DIR, &d, err, sizeof err);
     FZ_CHECK(T, pt_fuzz_expect == 0 || (pt_fuzz_expect > 0) == (rc == PT_OK),
              rc == PT_OK ? "an input named reject-* was accepted" : err);
     if (rc != PT_OK) {
@@ -200,31 +204,31 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
     for (i = 0; i < d.material_count; ++i)
         FZ_CHECK(T, d.materials[i].checker >= -1 && d.materials[i].checker < d.checker_count, NULL);
     for (i = 0; i < d.mesh_count; ++i) {
-        const pt_sd_mesh *m = &d.meshes[i];
+        const pt_obj_mesh *m = &d.meshes[i];
         FZ_CHECK(T, m->triangle_count > 0 && m->vertex_count > 0 && m->positions && m->indices, NULL);
         for (k = 0; k < 3u * (size_t)m->triangle_count; ++k) FZ_CHECK(T, m->indices[k] < m->vertex_count, NULL);
         tris += m->triangle_count;
     }
     for (i = 0; i < d.shape_count; ++i) {
-        const pt_sd_shape *sh = &d.shapes[i];
+        const pt_scenefile_shape *sh = &d.shapes[i];
         FZ_CHECK(T, sh->material >= 0 && sh->material < d.material_count, NULL);
         FZ_CHECK(T, sh->line >= 1, NULL);
-        FZ_CHECK(T, (sh->type == PT_SD_MESH) == (sh->mesh >= 0), NULL);
-        FZ_CHECK(T, sh->type != PT_SD_MESH || sh->mesh < d.mesh_count, NULL);
+        FZ_CHECK(T, (sh->type == PT_SCENEFILE_MESH) == (sh->mesh >= 0), NULL);
+        FZ_CHECK(T, sh->type != PT_SCENEFILE_MESH || sh->mesh < d.mesh_count, NULL);
     }
     /* Bound the work: the scene's own size and spp are replaced below; the geometry is
        bounded by the input length except for meshes (each a file of the scene directory). */
     if (tris > 200000 || d.shape_count > 20000) {
         fz_note(T, "parsed; too large to build in the harness", NULL);
-        pt_scene_desc_free(&d);
+        pt_scenefile_free(&d);
         return 0;
     }
-    rc = pt_scene_desc_build(&d, &s, &r, err, sizeof err);
+    rc = pt_scenefile_build(&d, &s, &r, err, sizeof err);
     if (rc != PT_OK) {
         FZ_CHECK(T, rc < 0 && s == NULL, err);
         FZ_CHECK(T, strncmp(err, "fuzz.scene:", 11) == 0 && strlen(err) > 12, err);
         fz_note(T, "build error", err);
-        pt_scene_desc_free(&d);
+        pt_scenefile_free(&d);
         return 0;
     }
     FZ_CHECK(T, s != NULL, NULL);
@@ -266,7 +270,7 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
     pt_image_free(&img);
     fz_check_rays(T, s, d.camera.look_from, 24);
     pt_scene_destroy(s);
-    pt_scene_desc_free(&d);
+    pt_scenefile_free(&d);
     return 0;
 }
 
@@ -275,7 +279,7 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
 int pt_fuzz_obj(const uint8_t *data, size_t size)
 {
     static const char *T = "obj";
-    pt_sd_mesh m;
+    pt_obj_mesh m;
     pt_mesh_desc md;
     pt_scene *s;
     pt_scene_info info;
@@ -284,7 +288,7 @@ int pt_fuzz_obj(const uint8_t *data, size_t size)
     int rc, mat;
 
     if (size > 1u << 20) return 0;
-    rc = pt_scene_desc_parse_obj((const char *)data, size, "fuzz.obj", &m, err, sizeof err);
+    rc = pt_obj_parse((const char *)data, size, "fuzz.obj", &m, err, sizeof err);
     FZ_CHECK(T, pt_fuzz_expect == 0 || (pt_fuzz_expect > 0) == (rc == PT_OK),
              rc == PT_OK ? "an input named reject-* was accepted" : err);
     if (rc != PT_OK) {
@@ -326,8 +330,8 @@ int pt_fuzz_obj(const uint8_t *data, size_t size)
         fz_check_rays(T, s, pt_madd(c, pt_v3(1.3f, 0.7f, -2.1f), pt_max_component(e) + 1.0f), 16);
     }
     pt_scene_destroy(s);
-    pt_sd_mesh_free(&m);
-    FZ_CHECK(T, fz_all_zero(&m, sizeof m), "pt_sd_mesh_free left the mesh non-empty");
+    pt_obj_mesh_free(&m);
+    FZ_CHECK(T, fz_all_zero(&m, sizeof m), "pt_obj_mesh_free left the mesh non-empty");
     return 0;
 }
 

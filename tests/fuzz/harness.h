@@ -7,12 +7,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Scene text -> pt_scene_desc_parse -> pt_scene_desc_build -> a tiny render (at most 8x8
+/* Scene text -> pt_scenefile_parse -> pt_scenefile_build -> a tiny render (at most 8x8
    pixels, 1 spp, depth <= 6, one thread) plus BVH-versus-brute-force rays. Meshes are read
    from PT_FUZZ_SCENE_DIR (default "scenes", relative to the repository root); mesh paths
    with '/' are skipped so fuzzed input cannot read other files (/dev/stdin would hang). */
 int pt_fuzz_scene(const uint8_t *data, size_t size);
-/* OBJ text -> pt_scene_desc_parse_obj -> a committed scene with the mesh -> rays. */
+/* OBJ text -> pt_obj_parse -> a committed scene with the mesh -> rays. */
 int pt_fuzz_obj(const uint8_t *data, size_t size);
 #ifdef PDFTRACE_OPENEXR
 /* EXR bytes -> pt_read_exr_memory (images above 2^20 pixels refused by the harness build). */

@@ -1,0 +1,491 @@
+/* pdftrace_exr.h - OpenEXR output and input for pdftrace.h images.
+   Part of the pdftrace header family; licence at the end of this comment.
+
+   ABOUT
+   =====
+   Writes and reads linear HDR images (pt_image) through OpenEXRCore, the C library of
+   OpenEXR 3.x. Written files are single-part scanline images with channels B, G, R (the EXR spec stores
+   channels sorted by name), data window = display window = (0,0)-(W-1,H-1), increasing-Y
+   line order. Reference: the OpenEXR file layout and OpenEXRCore API docs,
+   https://openexr.com/en/latest/OpenEXRFileLayout.html and
+   https://openexr.com/en/latest/API.html#openexrcore (and the headers openexr_*.h).
+   Both functions return PT_OK or a pt_result code (PT_ERROR_INVALID_ARGUMENT,
+   PT_ERROR_OUT_OF_MEMORY, PT_ERROR_IO, PT_ERROR_UNSUPPORTED) and, when err is not NULL,
+   write a one-line message into err[0 .. err_size-1] (empty on success). No global state:
+   safe to call from several threads at once.
+
+   BUILDING
+   ========
+   In exactly one C or C++ file (it may be the file that implements pdftrace.h, or another):
+       #define PDFTRACE_EXR_IMPLEMENTATION
+       #include "pdftrace_exr.h"
+   This header includes pdftrace.h and <openexr.h>. Compile with -isystem /usr/include/OpenEXR
+   -isystem /usr/include/Imath (or the include dirs of `pkg-config --cflags OpenEXR`) and link
+   -lOpenEXRCore-3_1 only; the C++ libraries the .pc file lists are not needed. `make OPENEXR=1`
+   builds the project's programs this way.
+
+   USAGE
+   =====
+       char err[512];
+       if (pt_write_exr("out.exr", &img, NULL, err, sizeof err) != PT_OK) puts(err);  (half, ZIP)
+       pt_image in = {0};
+       if (pt_read_exr("in.exr", &in, err, sizeof err) == PT_OK) { ...; pt_image_free(&in); }
+
+   OPTIONS
+   =======
+   PDFTRACE_EXR_MAX_PIXELS   the readers refuse larger images before allocating (default 2^28)
+
+   LICENSE
+   =======
+   MIT or public domain (the Unlicense), at your choice: see the end of pdftrace.h or LICENSE.
+*/
+#ifndef PDFTRACE_EXR_H
+#define PDFTRACE_EXR_H
+
+#include "pdftrace.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum pt_exr_pixel_type { PT_EXR_HALF = 0, PT_EXR_FLOAT = 1 } pt_exr_pixel_type;
+typedef enum pt_exr_compression {
+    PT_EXR_ZIP = 0, /* zlib, 16 scanlines per chunk (lossless) */
+    PT_EXR_PIZ = 1, /* wavelet + Huffman, 32 scanlines per chunk (lossless) */
+    PT_EXR_NONE = 2
+} pt_exr_compression;
+typedef struct pt_exr_options {
+    pt_exr_pixel_type pixel_type;   /* default (0): half */
+    pt_exr_compression compression; /* default (0): ZIP */
+} pt_exr_options;
+
+/* Writes img as an RGB EXR through "<path>.ptmp" renamed into place: a failed write leaves no
+   file (and no temporary). opt may be NULL (half, ZIP). Half values are rounded to nearest
+   even (IEEE 754-2008 binary16); values beyond the half range become +-infinity, NaN stays
+   NaN. Float values are stored bit-exactly. */
+PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_options *opt, char *err, size_t err_size);
+/* Reads the first part of a scanline EXR with channels R, G and B (any others, e.g. A,
+   are ignored; half, float or uint, converted to float) into *out, which is overwritten (not
+   freed: pass an empty or freed image). On failure *out is left empty ({0, 0, NULL}). Missing
+   file, not an EXR, corrupt or truncated data: PT_ERROR_IO; no R/G/B channel, subsampled
+   channels, tiled or deep parts: PT_ERROR_UNSUPPORTED. */
+PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_size);
+/* The same from a whole EXR file held in memory (size bytes at data, read in place, not
+   copied); `name` is used in messages (NULL: "<memory>"). */
+PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt_image *out, char *err,
+                             size_t err_size);
+/* Both readers refuse images of more than this many pixels (PT_ERROR_UNSUPPORTED) before
+   allocating them: a damaged or hostile header cannot make them allocate gigabytes. */
+#ifndef PDFTRACE_EXR_MAX_PIXELS
+#define PDFTRACE_EXR_MAX_PIXELS (1u << 28)
+#endif
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PDFTRACE_EXR_H */
+
+/* ==========================================================================================
+   IMPLEMENTATION
+   The OpenEXRCore C API: https://openexr.com/en/latest/API.html#openexrcore and the headers
+   openexr_context.h, openexr_part.h, openexr_chunkio.h, openexr_encode.h, openexr_decode.h.
+   How: a write context is
+   started on "<path>.ptmp"; the header (one scanline part, required attributes, channels)
+   is written, then each chunk (16 lines for ZIP, 32 for PIZ: exr_get_scanlines_per_chunk)
+   is encoded with an exr_encode_pipeline_t whose channels point at the caller's pixels;
+   exr_finish writes the chunk offset table; the file is then renamed into place. Reading
+   decodes each chunk with an exr_decode_pipeline_t straight into the float image (the
+   library converts half and uint to float). Library messages arrive through the context's
+   error_handler_fn and are copied into the caller's buffer (no global state).
+   ========================================================================================== */
+#ifdef PDFTRACE_EXR_IMPLEMENTATION
+#ifndef PDFTRACE_EXR_IMPLEMENTATION_DONE
+#define PDFTRACE_EXR_IMPLEMENTATION_DONE
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <openexr.h>
+
+#if defined(PT_MALLOC) && defined(PT_FREE) && defined(PT_REALLOC)
+/* all three given (or defined by pdftrace.h's implementation in this file) */
+#elif !defined(PT_MALLOC) && !defined(PT_FREE) && !defined(PT_REALLOC)
+#define PT_MALLOC(sz) malloc(sz)
+#define PT_REALLOC(p, sz) realloc(p, sz)
+#define PT_FREE(p) free(p)
+#else
+#error "pdftrace_exr.h: define all of PT_MALLOC, PT_REALLOC and PT_FREE, or none"
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* w x h pixels, with room for 64 bytes each in a size_t and at most 2^32 pixels (as pdftrace.h). */
+static int pt__exr_pixels(int w, int h, size_t *n)
+{
+    if (w <= 0 || h <= 0 || (size_t)w > ((size_t)-1) / 64u / (size_t)h || (uint64_t)w * (uint64_t)h > 0xffffffffu)
+        return 0;
+    *n = (size_t)w * (size_t)h;
+    return 1;
+}
+
+typedef struct pt__exr_msg {
+    char text[256]; /* the library's first message for this context */
+} pt__exr_msg;
+
+static void pt__exr_error_cb(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    void *ud = NULL;
+    pt__exr_msg *m;
+    (void)code;
+    if (exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud || !msg) return;
+    m = (pt__exr_msg *)ud;
+    if (!m->text[0]) snprintf(m->text, sizeof m->text, "%s", msg);
+}
+
+/* Formats "path: what[: detail]" into err and returns code. */
+static int pt__exr_fail(char *err, size_t err_size, int code, const char *path, const char *what, const char *detail)
+{
+    if (err && err_size) {
+        if (detail && *detail) snprintf(err, err_size, "%s: %s: %s", path ? path : "(null)", what, detail);
+        else snprintf(err, err_size, "%s: %s", path ? path : "(null)", what);
+    }
+    return code;
+}
+/* A library failure: the message it reported, else the text for its code. */
+static int pt__exr_lib_fail(char *err, size_t err_size, int code, const char *path, const char *what,
+                            exr_result_t rv, const pt__exr_msg *m)
+{
+    if (rv == EXR_ERR_OUT_OF_MEMORY) code = PT_ERROR_OUT_OF_MEMORY;
+    else if (rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED) code = PT_ERROR_UNSUPPORTED;
+    return pt__exr_fail(err, err_size, code, path, what, m->text[0] ? m->text : exr_get_default_error_message(rv));
+}
+
+/* float -> IEEE 754-2008 binary16, round to nearest, ties to even (section 4.3.1). Beyond the
+   largest half (65504) values from 65520 (the midpoint to 2^16) on round to infinity; results
+   below 2^-14 are half subnormals (steps of 2^-24); NaNs stay NaN (quiet bit set). */
+static uint16_t pt__float_to_half(float f)
+{
+    uint32_t u, mag, sign, h, rem, halfway;
+    memcpy(&u, &f, 4);
+    sign = (u >> 16) & 0x8000u;
+    mag = u & 0x7fffffffu;
+    if (mag >= 0x7f800000u) /* inf or NaN */
+        return (uint16_t)(sign | 0x7c00u | (mag > 0x7f800000u ? 0x200u | ((mag >> 13) & 0x3ffu) : 0u));
+    if (mag >= 0x477ff000u) return (uint16_t)(sign | 0x7c00u); /* >= 65520 */
+    if (mag >= 0x38800000u) {                                  /* normal half: >= 2^-14 */
+        uint32_t t = mag - 0x38000000u;                        /* exponent bias 127 -> 15 */
+        h = t >> 13;
+        rem = t & 0x1fffu;
+        if (rem > 0x1000u || (rem == 0x1000u && (h & 1u))) h++; /* a carry moves into the exponent */
+        return (uint16_t)(sign | h);
+    }
+    if (mag <= 0x33000000u) return (uint16_t)sign; /* <= 2^-25: ties to even gives zero */
+    {                                              /* subnormal half: mag * 2^24, rounded */
+        uint32_t e = mag >> 23, m = (mag & 0x7fffffu) | 0x800000u, shift = 126u - e; /* 14..24 */
+        h = m >> shift;
+        rem = m & ((1u << shift) - 1u);
+        halfway = 1u << (shift - 1u);
+        if (rem > halfway || (rem == halfway && (h & 1u))) h++;
+        return (uint16_t)(sign | h);
+    }
+}
+
+static int pt__exr_channel_index(const char *name)
+{
+    if (!name || !name[0] || name[1]) return -1;
+    return name[0] == 'R' ? 0 : name[0] == 'G' ? 1 : name[0] == 'B' ? 2 : -1;
+}
+
+PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_options *opt, char *err, size_t err_size)
+{
+    static const char *const names[3] = { "R", "G", "B" };
+    pt_exr_options o;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    exr_context_t ctx = NULL;
+    exr_encode_pipeline_t enc; /* zeroed below, as EXR_ENCODE_PIPELINE_INITIALIZER ({0}) does */
+    exr_compression_t ctype;
+    exr_pixel_type_t ptype;
+    pt__exr_msg m;
+    const char *what = "starting the file";
+    uint16_t *half = NULL;
+    char *tmp = NULL;
+    size_t n, len;
+    int part = 0, c, enc_ready = 0, rc = PT_OK;
+    int32_t spc = 0;
+    exr_result_t rv;
+    int64_t y;
+
+    if (err && err_size) err[0] = '\0';
+    memset(&m, 0, sizeof m);
+    memset(&enc, 0, sizeof enc);
+    if (!path || !*path || !img || !img->rgb || !pt__exr_pixels(img->width, img->height, &n))
+        return pt__exr_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "writing EXR", "no path or an empty image");
+    if (img->width > INT32_MAX / 12) /* the library's line strides are int32 */
+        return pt__exr_fail(err, err_size, PT_ERROR_UNSUPPORTED, path, "writing EXR", "image too wide");
+    o.pixel_type = PT_EXR_HALF;
+    o.compression = PT_EXR_ZIP;
+    if (opt) o = *opt;
+    if ((o.pixel_type != PT_EXR_HALF && o.pixel_type != PT_EXR_FLOAT) ||
+        (o.compression != PT_EXR_ZIP && o.compression != PT_EXR_PIZ && o.compression != PT_EXR_NONE))
+        return pt__exr_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "writing EXR", "unknown pixel type or compression");
+    ctype = o.compression == PT_EXR_ZIP ? EXR_COMPRESSION_ZIP : o.compression == PT_EXR_PIZ ? EXR_COMPRESSION_PIZ : EXR_COMPRESSION_NONE;
+    ptype = o.pixel_type == PT_EXR_HALF ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+
+    len = strlen(path);
+    tmp = (char *)PT_MALLOC(len + 6u);
+    if (!tmp) return pt__exr_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "writing EXR", "out of memory");
+    memcpy(tmp, path, len);
+    memcpy(tmp + len, ".ptmp", 6u);
+
+    init.error_handler_fn = pt__exr_error_cb;
+    init.user_data = &m;
+    rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (rv == EXR_ERR_SUCCESS) { what = "adding the part"; rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part); }
+    if (rv == EXR_ERR_SUCCESS) {
+        what = "setting the header";
+        rv = exr_initialize_required_attr_simple(ctx, part, img->width, img->height, ctype);
+    }
+    for (c = 0; c < 3 && rv == EXR_ERR_SUCCESS; ++c)
+        rv = exr_add_channel(ctx, part, names[c], ptype, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    if (rv == EXR_ERR_SUCCESS) { what = "writing the header"; rv = exr_write_header(ctx); }
+    if (rv == EXR_ERR_SUCCESS) rv = exr_get_scanlines_per_chunk(ctx, part, &spc);
+    if (rv == EXR_ERR_SUCCESS && spc < 1) rv = EXR_ERR_INVALID_ARGUMENT;
+    if (rv == EXR_ERR_SUCCESS && ptype == EXR_PIXEL_HALF) {
+        half = (uint16_t *)PT_MALLOC(sizeof(uint16_t) * 3u * (size_t)img->width * (size_t)spc);
+        if (!half) rv = EXR_ERR_OUT_OF_MEMORY;
+    }
+    if (rv == EXR_ERR_SUCCESS) what = "writing pixels";
+    for (y = 0; rv == EXR_ERR_SUCCESS && y < img->height; y += spc) {
+        exr_chunk_info_t ci;
+        const float *src;
+        size_t i, count;
+        rv = exr_write_scanline_chunk_info(ctx, part, (int)y, &ci);
+        if (rv != EXR_ERR_SUCCESS) break;
+        if (ci.start_y < 0 || ci.height < 1 || (int64_t)ci.start_y + ci.height > img->height) { rv = EXR_ERR_INCORRECT_CHUNK; break; }
+        src = img->rgb + 3u * (size_t)ci.start_y * (size_t)img->width;
+        count = 3u * (size_t)ci.height * (size_t)img->width;
+        if (half)
+            for (i = 0; i < count; ++i) half[i] = pt__float_to_half(src[i]);
+        rv = enc_ready ? exr_encoding_update(ctx, part, &ci, &enc) : exr_encoding_initialize(ctx, part, &ci, &enc);
+        if (rv != EXR_ERR_SUCCESS) break;
+        enc_ready = 1;
+        for (c = 0; c < enc.channel_count; ++c) {
+            exr_coding_channel_info_t *ch = &enc.channels[c];
+            int k = pt__exr_channel_index(ch->channel_name);
+            if (k < 0) { rv = EXR_ERR_INVALID_ARGUMENT; break; }
+            if (half) {
+                ch->encode_from_ptr = (const uint8_t *)(half + k);
+                ch->user_pixel_stride = 6;
+                ch->user_line_stride = 6 * img->width;
+                ch->user_bytes_per_element = 2;
+                ch->user_data_type = EXR_PIXEL_HALF;
+            } else {
+                ch->encode_from_ptr = (const uint8_t *)(src + k);
+                ch->user_pixel_stride = 12;
+                ch->user_line_stride = 12 * img->width;
+                ch->user_bytes_per_element = 4;
+                ch->user_data_type = EXR_PIXEL_FLOAT;
+            }
+        }
+        if (rv == EXR_ERR_SUCCESS && y == 0) rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+        if (rv == EXR_ERR_SUCCESS) rv = exr_encoding_run(ctx, part, &enc);
+    }
+    if (enc_ready) exr_encoding_destroy(ctx, &enc);
+    PT_FREE(half);
+    if (ctx) {
+        exr_result_t fr = exr_finish(&ctx); /* writes the chunk offset table and closes the file */
+        if (rv == EXR_ERR_SUCCESS && fr != EXR_ERR_SUCCESS) { rv = fr; what = "finishing the file"; }
+    }
+    if (rv != EXR_ERR_SUCCESS) {
+        int code = (rv == EXR_ERR_INVALID_ARGUMENT || rv == EXR_ERR_ARGUMENT_OUT_OF_RANGE) &&
+                           strcmp(what, "setting the header") == 0
+                       ? PT_ERROR_INVALID_ARGUMENT
+                       : PT_ERROR_IO;
+        remove(tmp);
+        rc = pt__exr_lib_fail(err, err_size, code, path, what, rv, &m);
+    } else {
+#ifdef _WIN32
+        remove(path);
+#endif
+        if (rename(tmp, path) != 0) {
+            remove(tmp);
+            rc = pt__exr_fail(err, err_size, PT_ERROR_IO, path, "renaming the temporary file into place", NULL);
+        }
+    }
+    PT_FREE(tmp);
+    return rc;
+}
+
+/* The source of pt_read_exr_memory. The message comes first: the error callback reads the
+   context's user data as a pt__exr_msg. */
+typedef struct pt__exr_src {
+    pt__exr_msg msg;
+    const unsigned char *data; /* NULL: read the file named path */
+    size_t size;
+} pt__exr_src;
+
+/* pread semantics on the memory buffer: a short count at the end, 0 past it. */
+static int64_t pt__exr_mem_read(exr_const_context_t ctxt, void *user, void *buffer, uint64_t sz, uint64_t offset,
+                                exr_stream_error_func_ptr_t error_cb)
+{
+    const pt__exr_src *src = (const pt__exr_src *)user;
+    uint64_t avail;
+    (void)ctxt;
+    (void)error_cb;
+    if (!src || !buffer) return -1;
+    if (offset >= (uint64_t)src->size) return 0;
+    avail = (uint64_t)src->size - offset;
+    if (sz > avail) sz = avail;
+    if (sz > (uint64_t)INT64_MAX) sz = (uint64_t)INT64_MAX;
+    memcpy(buffer, src->data + offset, (size_t)sz);
+    return (int64_t)sz;
+}
+static int64_t pt__exr_mem_size(exr_const_context_t ctxt, void *user)
+{
+    const pt__exr_src *src = (const pt__exr_src *)user;
+    (void)ctxt;
+    return src && (uint64_t)src->size <= (uint64_t)INT64_MAX ? (int64_t)src->size : -1;
+}
+
+static int pt__exr_read(const char *path, pt__exr_src *src, pt_image *out, char *err, size_t err_size)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    exr_context_t ctx = NULL;
+    const exr_attr_chlist_t *chl = NULL;
+    exr_attr_box2i_t dw;
+    exr_storage_t storage;
+    pt__exr_msg *mp = &src->msg;
+    pt_image img;
+    int32_t spc = 0;
+    int64_t w, h, y;
+    size_t n;
+    int found[3] = { 0, 0, 0 }, c, rc;
+    exr_result_t rv;
+
+    memset(&img, 0, sizeof img);
+    init.error_handler_fn = pt__exr_error_cb;
+    init.user_data = src;
+    if (src->data) {
+        init.read_fn = pt__exr_mem_read;
+        init.size_fn = pt__exr_mem_size;
+    }
+    /* The header is parsed here: a missing file, a non-EXR file or a damaged header fail. */
+    rv = exr_start_read(&ctx, path, &init);
+    if (rv != EXR_ERR_SUCCESS) {
+        if (ctx) exr_finish(&ctx);
+        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "cannot read as EXR", rv, mp);
+    }
+    rv = exr_get_storage(ctx, 0, &storage);
+    if (rv == EXR_ERR_SUCCESS && storage != EXR_STORAGE_SCANLINE) {
+        exr_finish(&ctx);
+        return pt__exr_fail(err, err_size, PT_ERROR_UNSUPPORTED, path, "reading EXR",
+                            "only scanline images are supported (tiled or deep part)");
+    }
+    if (rv == EXR_ERR_SUCCESS) rv = exr_get_data_window(ctx, 0, &dw);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_get_channels(ctx, 0, &chl);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_get_scanlines_per_chunk(ctx, 0, &spc);
+    if (rv != EXR_ERR_SUCCESS) {
+        exr_finish(&ctx);
+        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "reading the header", rv, mp);
+    }
+    for (c = 0; chl && c < chl->num_channels; ++c) {
+        int k = pt__exr_channel_index(chl->entries[c].name.str);
+        if (k < 0) continue; /* A, Z, layers ...: ignored */
+        if (chl->entries[c].x_sampling != 1 || chl->entries[c].y_sampling != 1) {
+            exr_finish(&ctx);
+            return pt__exr_fail(err, err_size, PT_ERROR_UNSUPPORTED, path, "reading EXR", "subsampled R, G or B channel");
+        }
+        found[k] = 1;
+    }
+    if (!found[0] || !found[1] || !found[2]) {
+        exr_finish(&ctx);
+        return pt__exr_fail(err, err_size, PT_ERROR_UNSUPPORTED, path, "reading EXR", "the image has no R, G and B channels");
+    }
+    w = (int64_t)dw.max.x - (int64_t)dw.min.x + 1;
+    h = (int64_t)dw.max.y - (int64_t)dw.min.y + 1;
+    if (w < 1 || h < 1 || w > INT32_MAX / 12 || h > INT32_MAX || spc < 1 || !pt__exr_pixels((int)w, (int)h, &n)) {
+        exr_finish(&ctx);
+        return pt__exr_fail(err, err_size, PT_ERROR_IO, path, "reading EXR", "bad data window");
+    }
+    if ((uint64_t)n > (uint64_t)(PDFTRACE_EXR_MAX_PIXELS)) {
+        exr_finish(&ctx);
+        return pt__exr_fail(err, err_size, PT_ERROR_UNSUPPORTED, path, "reading EXR",
+                            "image larger than PDFTRACE_EXR_MAX_PIXELS pixels");
+    }
+    rc = pt_image_init(&img, (int)w, (int)h);
+    if (rc != PT_OK) {
+        exr_finish(&ctx);
+        return pt__exr_fail(err, err_size, rc, path, "reading EXR", "cannot allocate the image");
+    }
+    for (y = dw.min.y; rv == EXR_ERR_SUCCESS && y <= dw.max.y; y += spc) {
+        exr_chunk_info_t ci;
+        exr_decode_pipeline_t dec; /* zeroed, as EXR_DECODE_PIPELINE_INITIALIZER ({0}) does */
+        memset(&dec, 0, sizeof dec);
+        rv = exr_read_scanline_chunk_info(ctx, 0, (int)y, &ci);
+        if (rv != EXR_ERR_SUCCESS) break;
+        if (ci.start_y < dw.min.y || ci.height < 1 || (int64_t)ci.start_y + ci.height - 1 > dw.max.y) {
+            rv = EXR_ERR_CORRUPT_CHUNK;
+            break;
+        }
+        rv = exr_decoding_initialize(ctx, 0, &ci, &dec);
+        if (rv == EXR_ERR_SUCCESS) {
+            float *row = img.rgb + 3u * (size_t)((int64_t)ci.start_y - dw.min.y) * (size_t)w;
+            for (c = 0; c < dec.channel_count; ++c) {
+                exr_coding_channel_info_t *ch = &dec.channels[c];
+                int k = pt__exr_channel_index(ch->channel_name);
+                if (k < 0) { ch->decode_to_ptr = NULL; continue; } /* NULL: the decoder skips it */
+                ch->decode_to_ptr = (uint8_t *)(row + k);
+                ch->user_pixel_stride = 12;
+                ch->user_line_stride = (int32_t)(12 * w);
+                ch->user_bytes_per_element = 4;
+                ch->user_data_type = EXR_PIXEL_FLOAT;
+            }
+            rv = exr_decoding_choose_default_routines(ctx, 0, &dec);
+            if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_run(ctx, 0, &dec);
+        }
+        exr_decoding_destroy(ctx, &dec);
+    }
+    exr_finish(&ctx);
+    if (rv != EXR_ERR_SUCCESS) {
+        pt_image_free(&img);
+        return pt__exr_lib_fail(err, err_size, PT_ERROR_IO, path, "reading pixels (corrupt or truncated file)", rv, mp);
+    }
+    *out = img;
+    return PT_OK;
+}
+
+PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_size)
+{
+    pt__exr_src src;
+    if (err && err_size) err[0] = '\0';
+    if (out) memset(out, 0, sizeof *out);
+    if (!path || !*path || !out)
+        return pt__exr_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "reading EXR", "no path or no output image");
+    memset(&src, 0, sizeof src);
+    return pt__exr_read(path, &src, out, err, err_size);
+}
+
+PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt_image *out, char *err,
+                             size_t err_size)
+{
+    pt__exr_src src;
+    if (err && err_size) err[0] = '\0';
+    if (!name || !*name) name = "<memory>";
+    if (out) memset(out, 0, sizeof *out);
+    if (!data || !out)
+        return pt__exr_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, name, "reading EXR", "no data or no output image");
+    memset(&src, 0, sizeof src);
+    src.data = (const unsigned char *)data;
+    src.size = size;
+    return pt__exr_read(name, &src, out, err, err_size);
+}
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PDFTRACE_EXR_IMPLEMENTATION_DONE */
+#endif /* PDFTRACE_EXR_IMPLEMENTATION */

@@ -1,0 +1,1415 @@
+/* pdftrace_scene.h - scene files, Wavefront OBJ meshes and POV-Ray export for pdftrace.h.
+   Part of the pdftrace header family; licence at the end of this comment.
+
+   ABOUT
+   =====
+   Reads pdftrace's plain-text scene format (below) and Wavefront OBJ meshes, builds a
+   committed pt_scene from them through pdftrace.h's public API, and writes the same scene
+   for POV-Ray 3.7, which renders the project's reference images. Nothing here reaches into
+   the core's internals: a parsed scene file (pt_scenefile) is plain data a program may
+   inspect, edit or build itself.
+
+   BUILDING
+   ========
+   In exactly one C or C++ file (it may be the file that implements pdftrace.h, or another):
+       #define PDFTRACE_SCENE_IMPLEMENTATION
+       #include "pdftrace_scene.h"
+   This header includes pdftrace.h; define PDFTRACE_IMPLEMENTATION before it in the same file
+   to implement both there. No extra libraries.
+
+   USAGE
+   =====
+       pt_scenefile sf; pt_scene *scene; pt_render_desc rd; char err[512];
+       if (pt_scenefile_load("scenes/cornell.scene", &sf, err, sizeof err) != PT_OK) { puts(err); ... }
+       if (pt_scenefile_build(&sf, &scene, &rd, err, sizeof err) != PT_OK) { puts(err); ... }
+       ... pt_render_image(scene, &rd, &img, NULL) ...
+       pt_scene_destroy(scene); pt_scenefile_free(&sf);
+   A mesh in one call, under the scene's current transform:
+       int first = pt_scene_add_obj(scene, "bunny.obj", material, err, sizeof err);
+
+   SCENE FILES
+   ===========
+   A scene file is plain text, one statement per line, `#` starts a comment; tokens are
+   separated by blanks. The format, in full:
+   per line, `#` starts a comment; tokens are separated by blanks. The format, in full:
+
+     size W H                         image size (default 256 256; 1..16384)
+     spp N                            samples per pixel (default 64)
+     max_depth N                      scattering events per path (default 50; 1 = direct only)
+     strategy mis|material|light|mixture
+     sampler independent|sobol        where random numbers come from (default independent;
+                                      sobol: scrambled Sobol points, pdftrace.h section 2)
+     indirect_paths N                 paths each camera sample continues as from its first
+                                      non-delta vertex (1..8; default 3 with sobol, else 1)
+     seed N                           random seed (default 0)
+     background R G B                 radiance of rays leaving the scene (default 0 0 0)
+     camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES]      (required, once)
+     checker NAME R G B R G B SCALE   a texture: the second colour where
+                                      floor(x/s)+floor(y/s)+floor(z/s) is odd
+     material NAME lambertian R G B | lambertian texture CHECKER
+     material NAME metal R G B [fuzz F]
+     material NAME dielectric IOR
+     material NAME emitter R G B [two_sided]
+     sphere CX CY CZ RADIUS MATERIAL
+     quad QX QY QZ UX UY UZ VX VY VZ MATERIAL      Q + a*u + b*v; normal (emitting side) u x v
+     triangle AX AY AZ BX BY BZ CX CY CZ MATERIAL
+     box LOX LOY LOZ HIX HIY HIZ MATERIAL
+     mesh PATH MATERIAL               Wavefront OBJ (v, vn, f; faces fanned into triangles),
+                                      PATH relative to the scene file's directory
+     translate X Y Z | rotate AX AY AZ DEGREES | scale SX SY SZ | identity
+                                      transforms for the shapes that follow; each one is
+                                      applied after those before it (as in POV-Ray);
+                                      identity starts again
+     pov_light_grid N                 POV-Ray export: N x N spotlights per quad emitter (16)
+     pov_radiosity none|default|medium|high       POV-Ray export: indirect light (none)
+
+   Numbers must be finite with magnitude <= 1e7; colours >= 0; names are [A-Za-z_][A-Za-z0-9_-]*
+   up to 31 characters and must be defined before use. Every error is reported as
+   "file:line: message" and the load fails as a whole (nothing is left allocated).
+
+   POV-RAY EXPORT
+   ==============
+   The POV-Ray 3.7 exporter follows the recipe in docs/povray.md (with its measured tolerances):
+   camera `angle` from the vertical FOV with `right -x*W/H` and `sky`;
+   fade-trick lights (attenuation 2/(1+(d/fd)^2) so colour = I/(2 pi fd^2)); an N x N
+   spotlight grid per quad emitter (tightness 1, radius = falloff = 90 gives the cosine
+   profile) a hair in front of it, the visible emitter as `emission 1` plus a black twin; a
+   sphere emitter as one point light of intensity L*pi*r^2 (exact for a Lambertian sphere
+   above the horizon); glass as rgbf 1 + fresnel reflection + conserve_energy, no_shadow,
+   with an opaque twin; mirrors as `reflection`; checker as POV's checker (same parity);
+   meshes as mesh2 with normal_vectors; `assumed_gamma 1.0`, `ambient_light 0`, ambient 0.
+   Not exportable (PT_ERROR_UNSUPPORTED with file:line): fuzzy metal, emitting triangles,
+   boxes or meshes.
+
+   LICENSE
+   =======
+   MIT or public domain (the Unlicense), at your choice: see the end of pdftrace.h or LICENSE.
+*/
+#ifndef PDFTRACE_SCENE_H
+#define PDFTRACE_SCENE_H
+
+#include "pdftrace.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PT_SCENEFILE_NAME_MAX 32
+
+typedef enum pt_scenefile_shape_type {
+    PT_SCENEFILE_SPHERE = 0, PT_SCENEFILE_QUAD, PT_SCENEFILE_TRIANGLE, PT_SCENEFILE_BOX, PT_SCENEFILE_MESH
+} pt_scenefile_shape_type;
+
+typedef struct pt_scenefile_checker {
+    char name[PT_SCENEFILE_NAME_MAX];
+    pt_color even, odd;
+    float scale;
+} pt_scenefile_checker;
+
+typedef struct pt_scenefile_material {
+    char name[PT_SCENEFILE_NAME_MAX];
+    pt_material_type type;
+    pt_color albedo;             /* lambertian, metal */
+    int checker;                 /* -1, or an index into pt_scenefile.checkers (lambertian) */
+    float fuzz, ior;
+    pt_color emission;           /* emitter */
+    int two_sided;
+} pt_scenefile_material;
+
+typedef struct pt_obj_mesh {
+    float *positions;            /* 3 per vertex, object space */
+    float *normals;              /* 3 per vertex, or NULL */
+    uint32_t *indices;           /* 3 per triangle */
+    uint32_t vertex_count, triangle_count;
+} pt_obj_mesh;
+
+typedef struct pt_scenefile_shape {
+    pt_scenefile_shape_type type;
+    int material;                /* index into pt_scenefile.materials */
+    pt_vec3 p[3];                /* sphere: centre; quad: q u v; triangle: a b c; box: lo hi */
+    float radius;                /* sphere */
+    int mesh;                    /* PT_SCENEFILE_MESH: index into pt_scenefile.meshes */
+    pt_transform transform;      /* object to world, in effect when the shape was read */
+    int line;                    /* line of the statement, for messages */
+} pt_scenefile_shape;
+
+typedef struct pt_scenefile {
+    char file[256];              /* the name used in messages */
+    int width, height, samples_per_pixel, max_depth;
+    pt_strategy strategy;
+    pt_sampler sampler;
+    int indirect_paths;          /* 0: pt_render_desc's default */
+    uint64_t seed;
+    pt_color background;
+    pt_camera_desc camera;
+    int pov_light_grid;          /* N: N x N spotlights per quad emitter */
+    int pov_radiosity;           /* 0 none, 1 POV defaults, 2 medium, 3 high (docs/povray.md) */
+    pt_scenefile_checker *checkers; int checker_count;
+    pt_scenefile_material *materials; int material_count;
+    pt_scenefile_shape *shapes; int shape_count;
+    pt_obj_mesh *meshes; int mesh_count;
+} pt_scenefile;
+
+/* Loads a scene file. On failure returns an error code, writes "file:line: message" to
+   err (err_size bytes, may be 0) and leaves *out empty (nothing to free). */
+PTDEF int pt_scenefile_load(const char *path, pt_scenefile *out, char *err, size_t err_size);
+/* The same from text in memory; `name` is used in messages, meshes are read relative to
+   base_dir (NULL: the current directory). */
+PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, const char *base_dir,
+                             pt_scenefile *out, char *err, size_t err_size);
+PTDEF void pt_scenefile_free(pt_scenefile *desc);
+/* Parses a Wavefront OBJ file held in memory (the subset the `mesh` statement reads) into
+   *out; `name` is used in messages ("name:line: message"). On failure *out is left empty.
+   Free the result with pt_obj_mesh_free. */
+PTDEF int pt_obj_parse(const char *text, size_t length, const char *name, pt_obj_mesh *out, char *err,
+                       size_t err_size);
+PTDEF void pt_obj_mesh_free(pt_obj_mesh *mesh);
+/* Reads and parses the OBJ file at path (messages "path:line: message"). */
+PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_size);
+/* Loads the OBJ file at path and adds its triangles to the scene with the given material,
+   under the scene's current transform (pt_scene_set_transform), as pt_scene_add_mesh does.
+   Returns the first primitive's id, or an error code with a message in err. */
+PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char *err, size_t err_size);
+/* Builds a committed scene and fills *render (size, spp, depth, strategy, sampler, seed,
+   camera, background; other fields zero) with the public API. On failure *scene is NULL. */
+PTDEF int pt_scenefile_build(const pt_scenefile *desc, pt_scene **scene, pt_render_desc *render, char *err,
+                             size_t err_size);
+
+typedef struct pt_pov_options {
+    int radiosity;               /* -1: the scene's pov_radiosity; else 0..3 as there */
+    int light_grid;              /* 0: the scene's pov_light_grid */
+    int width, height;           /* 0: the scene's size (used for the camera's aspect ratio) */
+} pt_pov_options;
+/* Writes the POV-Ray 3.7 scene (through a temporary file renamed into place). opt may be
+   NULL. The first comment lines give the command line that renders it. */
+PTDEF int pt_scenefile_write_pov(const pt_scenefile *desc, const char *path, const pt_pov_options *opt, char *err,
+                                 size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PDFTRACE_SCENE_H */
+
+/* ==========================================================================================
+   IMPLEMENTATION
+   The parser reads the whole file, then one line at a time into a pt_scenefile; nothing is
+   kept on failure. The builder and the exporter use only the public API and the description.
+   ========================================================================================== */
+#ifdef PDFTRACE_SCENE_IMPLEMENTATION
+#ifndef PDFTRACE_SCENE_IMPLEMENTATION_DONE
+#define PDFTRACE_SCENE_IMPLEMENTATION_DONE
+
+#include <errno.h>
+#include <float.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(PT_MALLOC) && defined(PT_FREE) && defined(PT_REALLOC)
+/* all three given (or defined by pdftrace.h's implementation in this file) */
+#elif !defined(PT_MALLOC) && !defined(PT_FREE) && !defined(PT_REALLOC)
+#define PT_MALLOC(sz) malloc(sz)
+#define PT_REALLOC(p, sz) realloc(p, sz)
+#define PT_FREE(p) free(p)
+#else
+#error "pdftrace_scene.h: define all of PT_MALLOC, PT_REALLOC and PT_FREE, or none"
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Finite by bit pattern (immune to -ffast-math), as in pdftrace.h. */
+static int pt__sf_isfinite(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return (u & 0x7f800000u) != 0x7f800000u;
+}
+
+#define PT__SF_MAX_LINE 4096
+#define PT__SF_MAX_TOKENS 40
+#define PT__SF_MAX_VALUE 1e7
+#define PT__SF_MAX_SHAPES 1000000
+#define PT__SF_MAX_FILE (256u * 1024u * 1024u)
+#define PT__SF_MAX_MESH_VERTICES 8000000u
+
+typedef struct pt__sf_parser {
+    pt_scenefile *d;
+    const char *name;    /* file name in messages */
+    const char *base_dir;
+    int line;
+    char *err;
+    size_t err_size;
+    char *tok[PT__SF_MAX_TOKENS];
+    int ntok, pos;
+    pt_transform xf;
+    int have_camera;
+} pt__sf_parser;
+
+static void pt__sf_msg(char *err, size_t size, const char *file, int line, const char *fmt, va_list ap)
+{
+    int n;
+    if (!err || size == 0) return;
+    if (line > 0) n = snprintf(err, size, "%s:%d: ", file, line);
+    else n = snprintf(err, size, "%s: ", file);
+    if (n < 0) n = 0;
+    if ((size_t)n < size) vsnprintf(err + n, size - (size_t)n, fmt, ap);
+}
+static int pt__sf_fail(pt__sf_parser *p, int code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    pt__sf_msg(p->err, p->err_size, p->name, p->line, fmt, ap);
+    va_end(ap);
+    return code;
+}
+static int pt__sf_failf(char *err, size_t size, const char *file, int line, int code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    pt__sf_msg(err, size, file, line, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+static int pt__sf_grow(void **arr, int *count_cap, int count, size_t elem)
+{
+    int cap = *count_cap;
+    void *n;
+    if (count < cap) return 1;
+    cap = cap ? cap * 2 : 16;
+    n = PT_REALLOC(*arr, (size_t)cap * elem);
+    if (!n) return 0;
+    *arr = n;
+    *count_cap = cap;
+    return 1;
+}
+
+PTDEF void pt_scenefile_free(pt_scenefile *d)
+{
+    int i;
+    if (!d) return;
+    for (i = 0; i < d->mesh_count; ++i) {
+        PT_FREE(d->meshes[i].positions);
+        PT_FREE(d->meshes[i].normals);
+        PT_FREE(d->meshes[i].indices);
+    }
+    PT_FREE(d->meshes);
+    PT_FREE(d->shapes);
+    PT_FREE(d->materials);
+    PT_FREE(d->checkers);
+    memset(d, 0, sizeof *d);
+}
+
+/* Reads a whole file (at most max bytes) into a NUL-terminated buffer. */
+static int pt__sf_read_file(const char *path, char **out, size_t *len, size_t max)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf = NULL, *nb;
+    size_t n = 0, cap = 0, got;
+    *out = NULL;
+    *len = 0;
+    if (!f) return PT_ERROR_IO;
+    for (;;) {
+        if (cap - n < 65536u) {
+            size_t ncap = cap ? cap * 2u : 65536u;
+            if (ncap > max + 65537u) ncap = max + 65537u;
+            if (ncap <= cap) { PT_FREE(buf); fclose(f); return PT_ERROR_UNSUPPORTED; } /* too large */
+            nb = (char *)PT_REALLOC(buf, ncap);
+            if (!nb) { PT_FREE(buf); fclose(f); return PT_ERROR_OUT_OF_MEMORY; }
+            buf = nb;
+            cap = ncap;
+        }
+        got = fread(buf + n, 1, cap - n - 1u, f);
+        n += got;
+        if (n > max) { PT_FREE(buf); fclose(f); return PT_ERROR_UNSUPPORTED; }
+        if (got == 0) break;
+    }
+    if (ferror(f)) { PT_FREE(buf); fclose(f); return PT_ERROR_IO; }
+    fclose(f);
+    buf[n] = '\0';
+    *out = buf;
+    *len = n;
+    return PT_OK;
+}
+
+/* Splits text[0..len) into lines; calls fn for each with the line number. A line longer than
+   PT__SF_MAX_LINE or containing a NUL byte is an error. */
+typedef int (*pt__sf_line_fn)(void *ctx, char *line, int number);
+static int pt__sf_lines(const char *text, size_t len, void *ctx, pt__sf_line_fn fn, char *err, size_t err_size,
+                        const char *file)
+{
+    char buf[PT__SF_MAX_LINE + 2];
+    size_t i = 0;
+    int number = 0, rc;
+    while (i < len) {
+        size_t j = i, n;
+        while (j < len && text[j] != '\n') {
+            if (text[j] == '\0')
+                return pt__sf_failf(err, err_size, file, number + 1, PT_ERROR_INVALID_ARGUMENT, "NUL byte in the text");
+            ++j;
+        }
+        ++number;
+        n = j - i;
+        if (n > PT__SF_MAX_LINE)
+            return pt__sf_failf(err, err_size, file, number, PT_ERROR_INVALID_ARGUMENT, "line longer than %d characters",
+                                PT__SF_MAX_LINE);
+        memcpy(buf, text + i, n);
+        buf[n] = '\0';
+        if (n > 0 && buf[n - 1] == '\r') buf[n - 1] = '\0';
+        rc = fn(ctx, buf, number);
+        if (rc != PT_OK) return rc;
+        i = j + 1;
+    }
+    return PT_OK;
+}
+
+/* Cuts a comment and splits on blanks. */
+static int pt__sf_tokenize(char *line, char **tok, int max)
+{
+    int n = 0;
+    char *c = strchr(line, '#');
+    if (c) *c = '\0';
+    for (;;) {
+        while (*line == ' ' || *line == '\t' || *line == '\v' || *line == '\f' || *line == '\r') ++line;
+        if (!*line) break;
+        if (n == max) return -1;
+        tok[n++] = line;
+        while (*line && *line != ' ' && *line != '\t' && *line != '\v' && *line != '\f' && *line != '\r') ++line;
+        if (*line) *line++ = '\0';
+    }
+    return n;
+}
+
+static const char *pt__sf_next(pt__sf_parser *p) { return p->pos < p->ntok ? p->tok[p->pos++] : NULL; }
+
+static int pt__sf_parse_double(const char *t, double *v)
+{
+    char *end;
+    if (!t || !*t) return 0;
+    *v = strtod(t, &end);
+    return *end == '\0';
+}
+
+/* Without arithmetic on the value (Inf - Inf would raise FE_INVALID): != and the comparison
+   of a non-NaN with DBL_MAX are quiet. */
+static int pt__sf_finite(double v) { return v == v && fabs(v) <= DBL_MAX; }
+
+static int pt__sf_num(pt__sf_parser *p, const char *what, float *out)
+{
+    const char *t = pt__sf_next(p);
+    double v;
+    if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: missing number (line ends early)", what);
+    if (!pt__sf_parse_double(t, &v)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: '%s' is not a number", what, t);
+    if (!pt__sf_finite(v)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: '%s' is not finite", what, t);
+    if (fabs(v) > PT__SF_MAX_VALUE)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: %s is out of range (magnitude at most 1e7)", what, t);
+    *out = (float)v;
+    return PT_OK;
+}
+static int pt__sf_vec(pt__sf_parser *p, const char *what, pt_vec3 *out)
+{
+    int rc;
+    if ((rc = pt__sf_num(p, what, &out->x)) != PT_OK) return rc;
+    if ((rc = pt__sf_num(p, what, &out->y)) != PT_OK) return rc;
+    return pt__sf_num(p, what, &out->z);
+}
+static int pt__sf_color(pt__sf_parser *p, const char *what, pt_color *out)
+{
+    int rc = pt__sf_vec(p, what, out);
+    if (rc != PT_OK) return rc;
+    if (out->x < 0 || out->y < 0 || out->z < 0)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: colour components must be >= 0", what);
+    return PT_OK;
+}
+static int pt__sf_int(pt__sf_parser *p, const char *what, long lo, long hi, long *out)
+{
+    const char *t = pt__sf_next(p);
+    char *end;
+    long v;
+    if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: missing integer (line ends early)", what);
+    errno = 0;
+    v = strtol(t, &end, 10);
+    if (*end != '\0' || errno == ERANGE || v < lo || v > hi)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: expected an integer in [%ld, %ld], got '%s'", what, lo, hi, t);
+    *out = v;
+    return PT_OK;
+}
+static int pt__sf_end(pt__sf_parser *p)
+{
+    if (p->pos < p->ntok)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "unexpected '%s' after the end of the '%s' statement",
+                           p->tok[p->pos], p->tok[0]);
+    return PT_OK;
+}
+static int pt__sf_name_ok(const char *s)
+{
+    size_t i, n = strlen(s);
+    if (n == 0 || n >= PT_SCENEFILE_NAME_MAX) return 0;
+    for (i = 0; i < n; ++i) {
+        char c = s[i];
+        int alpha = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
+        if (!(alpha || (i > 0 && ((c >= '0' && c <= '9') || c == '-')))) return 0;
+    }
+    return 1;
+}
+static int pt__sf_find_material(const pt_scenefile *d, const char *name)
+{
+    int i;
+    for (i = 0; i < d->material_count; ++i)
+        if (strcmp(d->materials[i].name, name) == 0) return i;
+    return -1;
+}
+static int pt__sf_find_checker(const pt_scenefile *d, const char *name)
+{
+    int i;
+    for (i = 0; i < d->checker_count; ++i)
+        if (strcmp(d->checkers[i].name, name) == 0) return i;
+    return -1;
+}
+static int pt__sf_new_name(pt__sf_parser *p, const char *kind, const char **out)
+{
+    const char *t = pt__sf_next(p);
+    if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: missing name", kind);
+    if (!pt__sf_name_ok(t))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT,
+                           "%s: bad name '%s' (letters, digits, _ and -, at most %d characters, not starting with a digit)",
+                           kind, t, PT_SCENEFILE_NAME_MAX - 1);
+    if (pt__sf_find_material(p->d, t) >= 0 || pt__sf_find_checker(p->d, t) >= 0)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: name '%s' is already defined", kind, t);
+    *out = t;
+    return PT_OK;
+}
+static int pt__sf_material_ref(pt__sf_parser *p, int *out)
+{
+    const char *t = pt__sf_next(p);
+    if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: missing material name", p->tok[0]);
+    *out = pt__sf_find_material(p->d, t);
+    if (*out < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: material '%s' is not defined", p->tok[0], t);
+    return PT_OK;
+}
+
+/* ---- Wavefront OBJ: v, vn, f (v, v/vt, v//vn, v/vt/vn; negative = relative); vt, o, g, s,
+   usemtl, mtllib ignored. Every face corner becomes its own vertex (positions and normals in
+   OBJ have separate indices); polygons are fanned from their first corner. */
+typedef struct pt__obj {
+    float *v; int nv, cv;       /* 3 floats per position */
+    float *vn; int nn, cn;
+    pt_obj_mesh *m;
+    uint32_t cap_vert, cap_tri;
+    int with_normals;           /* -1 unknown, 0, 1 */
+    const char *file;
+    char *err; size_t err_size;
+} pt__obj;
+
+static int pt__obj_fail(pt__obj *o, int line, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    pt__sf_msg(o->err, o->err_size, o->file, line, fmt, ap);
+    va_end(ap);
+    return PT_ERROR_INVALID_ARGUMENT;
+}
+static int pt__obj_floats(pt__obj *o, char **tok, int n, int line, float *out)
+{
+    int i;
+    for (i = 0; i < 3; ++i) {
+        double v;
+        if (i + 1 >= n) return pt__obj_fail(o, line, "'%s' needs 3 numbers", tok[0]);
+        if (!pt__sf_parse_double(tok[i + 1], &v) || !pt__sf_finite(v) || fabs(v) > PT__SF_MAX_VALUE)
+            return pt__obj_fail(o, line, "'%s' is not a finite number of magnitude <= 1e7", tok[i + 1]);
+        out[i] = (float)v;
+    }
+    return PT_OK;
+}
+/* Resolves an OBJ index (1-based, or negative from the end) against count; -1 if bad. */
+static long pt__obj_index(const char *t, size_t len, int count)
+{
+    char buf[24];
+    char *end;
+    long v;
+    if (len == 0 || len >= sizeof buf) return -1;
+    memcpy(buf, t, len);
+    buf[len] = '\0';
+    errno = 0;
+    v = strtol(buf, &end, 10);
+    if (*end != '\0' || errno == ERANGE) return -1;
+    if (v > 0 && v <= count) return v - 1;
+    if (v < 0 && -v <= count) return count + v;
+    return -1;
+}
+static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm)
+{
+    pt_obj_mesh *m = o->m;
+    if (m->vertex_count == o->cap_vert) {
+        uint32_t nc = o->cap_vert ? o->cap_vert * 2u : 1024u;
+        float *np = (float *)PT_REALLOC(m->positions, (size_t)nc * 3u * sizeof(float));
+        if (!np) return PT_ERROR_OUT_OF_MEMORY;
+        m->positions = np;
+        if (nrm) {
+            float *nn = (float *)PT_REALLOC(m->normals, (size_t)nc * 3u * sizeof(float));
+            if (!nn) return PT_ERROR_OUT_OF_MEMORY;
+            m->normals = nn;
+        }
+        o->cap_vert = nc;
+    }
+    memcpy(m->positions + 3u * m->vertex_count, pos, 3u * sizeof(float));
+    if (nrm) memcpy(m->normals + 3u * m->vertex_count, nrm, 3u * sizeof(float));
+    m->vertex_count++;
+    return PT_OK;
+}
+static int pt__obj_line(void *ctx, char *line, int number)
+{
+    pt__obj *o = (pt__obj *)ctx;
+    char *tok[260];
+    int n = pt__sf_tokenize(line, tok, 260), i;
+    if (n < 0) return pt__obj_fail(o, number, "too many items on one line (at most 259 face corners)");
+    if (n == 0) return PT_OK;
+    if (strcmp(tok[0], "v") == 0 || strcmp(tok[0], "vn") == 0) {
+        int is_v = tok[0][1] == '\0';
+        float xyz[3];
+        int rc = pt__obj_floats(o, tok, n, number, xyz);
+        if (rc != PT_OK) return rc;
+        if (n > (is_v ? 5 : 4)) return pt__obj_fail(o, number, "'%s' has too many numbers", tok[0]);
+        if (is_v) {
+            if ((uint32_t)o->nv >= PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many vertices");
+            if (!pt__sf_grow((void **)&o->v, &o->cv, o->nv, 3u * sizeof(float))) return PT_ERROR_OUT_OF_MEMORY;
+            memcpy(o->v + 3 * o->nv++, xyz, sizeof xyz);
+        } else {
+            if ((uint32_t)o->nn >= PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many normals");
+            if (!(xyz[0] * xyz[0] + xyz[1] * xyz[1] + xyz[2] * xyz[2] > 1e-20f))
+                return pt__obj_fail(o, number, "normal has zero length");
+            if (!pt__sf_grow((void **)&o->vn, &o->cn, o->nn, 3u * sizeof(float))) return PT_ERROR_OUT_OF_MEMORY;
+            memcpy(o->vn + 3 * o->nn++, xyz, sizeof xyz);
+        }
+        return PT_OK;
+    }
+    if (strcmp(tok[0], "f") == 0) {
+        uint32_t first = o->m->vertex_count, k;
+        int corners = n - 1;
+        if (corners < 3) return pt__obj_fail(o, number, "a face needs at least 3 vertices, got %d", corners);
+        if (o->m->vertex_count + (uint32_t)corners > PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many face vertices");
+        for (i = 1; i < n; ++i) {
+            const char *t = tok[i], *s1 = strchr(t, '/'), *s2 = s1 ? strchr(s1 + 1, '/') : NULL;
+            long vi = pt__obj_index(t, s1 ? (size_t)(s1 - t) : strlen(t), o->nv), ni = -1;
+            int has_n = s2 && s2[1] != '\0';
+            int rc;
+            if (vi < 0) return pt__obj_fail(o, number, "face vertex '%s': position index out of range (%d positions so far)", t, o->nv);
+            if (s2 && !has_n) return pt__obj_fail(o, number, "face vertex '%s': empty normal index", t);
+            if (has_n) {
+                ni = pt__obj_index(s2 + 1, strlen(s2 + 1), o->nn);
+                if (ni < 0) return pt__obj_fail(o, number, "face vertex '%s': normal index out of range (%d normals so far)", t, o->nn);
+            }
+            if (o->with_normals < 0) o->with_normals = has_n;
+            if (o->with_normals != has_n)
+                return pt__obj_fail(o, number, "face vertex '%s': some face vertices have normals and some do not", t);
+            rc = pt__obj_push_vertex(o, o->v + 3 * vi, has_n ? o->vn + 3 * ni : NULL);
+            if (rc != PT_OK) return rc;
+        }
+        for (k = 1; k + 1 < (uint32_t)corners; ++k) {
+            pt_obj_mesh *m = o->m;
+            if (m->triangle_count == o->cap_tri) {
+                uint32_t nc = o->cap_tri ? o->cap_tri * 2u : 1024u;
+                uint32_t *ni2 = (uint32_t *)PT_REALLOC(m->indices, (size_t)nc * 3u * sizeof(uint32_t));
+                if (!ni2) return PT_ERROR_OUT_OF_MEMORY;
+                m->indices = ni2;
+                o->cap_tri = nc;
+            }
+            m->indices[3u * m->triangle_count + 0] = first;
+            m->indices[3u * m->triangle_count + 1] = first + k;
+            m->indices[3u * m->triangle_count + 2] = first + k + 1u;
+            m->triangle_count++;
+        }
+        return PT_OK;
+    }
+    if (!strcmp(tok[0], "vt") || !strcmp(tok[0], "o") || !strcmp(tok[0], "g") || !strcmp(tok[0], "s") ||
+        !strcmp(tok[0], "usemtl") || !strcmp(tok[0], "mtllib"))
+        return PT_OK;
+    return pt__obj_fail(o, number, "unsupported OBJ statement '%s' (v, vn, f, vt, o, g, s, usemtl, mtllib)", tok[0]);
+}
+PTDEF void pt_obj_mesh_free(pt_obj_mesh *m)
+{
+    if (!m) return;
+    PT_FREE(m->positions);
+    PT_FREE(m->normals);
+    PT_FREE(m->indices);
+    memset(m, 0, sizeof *m);
+}
+
+PTDEF int pt_obj_parse(const char *text, size_t length, const char *name, pt_obj_mesh *out, char *err,
+                       size_t err_size)
+{
+    pt__obj o;
+    int rc;
+    if (err && err_size) err[0] = '\0';
+    if (!out) return PT_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!name) name = "<obj>";
+    if (!text) return pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no text");
+    memset(&o, 0, sizeof o);
+    o.m = out;
+    o.with_normals = -1;
+    o.file = name;
+    o.err = err;
+    o.err_size = err_size;
+    rc = pt__sf_lines(text, length, &o, pt__obj_line, err, err_size, name);
+    if (rc == PT_OK && out->triangle_count == 0) rc = pt__obj_fail(&o, 0, "no faces");
+    if (rc == PT_ERROR_OUT_OF_MEMORY) pt__sf_failf(err, err_size, name, 0, rc, "out of memory");
+    PT_FREE(o.v);
+    PT_FREE(o.vn);
+    if (rc != PT_OK) pt_obj_mesh_free(out);
+    return rc;
+}
+
+static const char *pt__sf_read_reason(int rc)
+{
+    return rc == PT_ERROR_IO ? strerror(errno) : rc == PT_ERROR_UNSUPPORTED ? "file too large" : "out of memory";
+}
+
+PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_size)
+{
+    char *text = NULL;
+    size_t len = 0;
+    int rc;
+    if (err && err_size) err[0] = '\0';
+    if (out) memset(out, 0, sizeof *out);
+    if (!path || !*path) return pt__sf_failf(err, err_size, "pt_obj_load", 0, PT_ERROR_INVALID_ARGUMENT, "path is NULL or empty");
+    if (!out) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "pt_obj_load: out is NULL");
+    rc = pt__sf_read_file(path, &text, &len, PT__SF_MAX_FILE);
+    if (rc != PT_OK) return pt__sf_failf(err, err_size, path, 0, rc, "cannot read: %s", pt__sf_read_reason(rc));
+    rc = pt_obj_parse(text, len, path, out, err, err_size);
+    PT_FREE(text);
+    return rc;
+}
+
+PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char *err, size_t err_size)
+{
+    pt_obj_mesh m;
+    pt_mesh_desc md;
+    int rc;
+    if (!scene) return pt__sf_failf(err, err_size, "pt_scene_add_obj", 0, PT_ERROR_INVALID_ARGUMENT, "scene is NULL");
+    rc = pt_obj_load(path, &m, err, err_size);
+    if (rc != PT_OK) return rc;
+    md.positions = m.positions;
+    md.vertex_count = m.vertex_count;
+    md.indices = m.indices;
+    md.triangle_count = m.triangle_count;
+    md.normals = m.normals;
+    md.material = material;
+    rc = pt_scene_add_mesh(scene, &md);
+    if (rc < 0) pt__sf_failf(err, err_size, path, 0, rc, "%s", pt_scene_error_message(scene));
+    pt_obj_mesh_free(&m);
+    return rc;
+}
+
+static int pt__sf_load_obj(pt__sf_parser *p, const char *rel, pt_obj_mesh *m)
+{
+    char path[1024];
+    char *text = NULL;
+    size_t len = 0;
+    int rc, n;
+    memset(m, 0, sizeof *m);
+    if (rel[0] == '/' || !p->base_dir || !*p->base_dir) n = snprintf(path, sizeof path, "%s", rel);
+    else n = snprintf(path, sizeof path, "%s/%s", p->base_dir, rel);
+    if (n < 0 || (size_t)n >= sizeof path) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: path too long");
+    rc = pt__sf_read_file(path, &text, &len, PT__SF_MAX_FILE);
+    if (rc != PT_OK)
+        return pt__sf_fail(p, rc, "mesh: cannot read '%s': %s", path, pt__sf_read_reason(rc));
+    rc = pt_obj_parse(text, len, path, m, p->err, p->err_size);
+    PT_FREE(text);
+    return rc;
+}
+
+static int pt__sf_add_shape(pt__sf_parser *p, pt_scenefile_shape_type type, pt_scenefile_shape **out)
+{
+    pt_scenefile *d = p->d;
+    int n = d->shape_count;
+    pt_scenefile_shape *s;
+    if (n >= PT__SF_MAX_SHAPES) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many shapes (at most %d)", PT__SF_MAX_SHAPES);
+    /* Capacity: 16, then doubled whenever the count reaches a power of two >= 16. */
+    if (n == 0 || (n >= 16 && (n & (n - 1)) == 0)) {
+        size_t ncap = n ? (size_t)n * 2u : 16u;
+        pt_scenefile_shape *ns = (pt_scenefile_shape *)PT_REALLOC(d->shapes, ncap * sizeof *ns);
+        if (!ns) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+        d->shapes = ns;
+    }
+    s = &d->shapes[d->shape_count++];
+    memset(s, 0, sizeof *s);
+    s->type = type;
+    s->transform = p->xf;
+    s->line = p->line;
+    s->mesh = -1;
+    *out = s;
+    return PT_OK;
+}
+
+static int pt__sf_statement(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    const char *kw = p->tok[0];
+    int rc = PT_OK;
+    long v;
+    p->pos = 1;
+    if (!strcmp(kw, "size")) {
+        if ((rc = pt__sf_int(p, "size: width", 1, 16384, &v)) != PT_OK) return rc;
+        d->width = (int)v;
+        if ((rc = pt__sf_int(p, "size: height", 1, 16384, &v)) != PT_OK) return rc;
+        d->height = (int)v;
+    } else if (!strcmp(kw, "spp")) {
+        if ((rc = pt__sf_int(p, "spp", 1, 1L << 20, &v)) != PT_OK) return rc;
+        d->samples_per_pixel = (int)v;
+    } else if (!strcmp(kw, "max_depth")) {
+        if ((rc = pt__sf_int(p, "max_depth", 1, 100000, &v)) != PT_OK) return rc;
+        d->max_depth = (int)v;
+    } else if (!strcmp(kw, "indirect_paths")) {
+        if ((rc = pt__sf_int(p, "indirect_paths", 1, PT__INDIRECT_PATHS_LIMIT, &v)) != PT_OK) return rc;
+        d->indirect_paths = (int)v;
+    } else if (!strcmp(kw, "seed")) {
+        if ((rc = pt__sf_int(p, "seed", 0, 2147483647L, &v)) != PT_OK) return rc;
+        d->seed = (uint64_t)v;
+    } else if (!strcmp(kw, "pov_light_grid")) {
+        if ((rc = pt__sf_int(p, "pov_light_grid", 1, 64, &v)) != PT_OK) return rc;
+        d->pov_light_grid = (int)v;
+    } else if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity")) {
+        static const char *const strategies[] = {"mis", "material", "light", "mixture"};
+        static const char *const radiosity[] = {"none", "default", "medium", "high"};
+        const char *const *names = kw[0] == 's' ? strategies : radiosity;
+        const char *t = pt__sf_next(p);
+        int i, found = -1;
+        for (i = 0; t && i < 4; ++i)
+            if (!strcmp(t, names[i])) found = i;
+        if (found < 0)
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: expected %s, %s, %s or %s, got '%s'", kw, names[0],
+                               names[1], names[2], names[3], t ? t : "nothing");
+        if (kw[0] == 's') d->strategy = (pt_strategy)found;
+        else d->pov_radiosity = found;
+    } else if (!strcmp(kw, "sampler")) {
+        const char *t = pt__sf_next(p);
+        if (t && !strcmp(t, "independent")) d->sampler = PT_SAMPLER_INDEPENDENT;
+        else if (t && !strcmp(t, "sobol")) d->sampler = PT_SAMPLER_SOBOL;
+        else
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "sampler: expected independent or sobol, got '%s'",
+                               t ? t : "nothing");
+    } else if (!strcmp(kw, "background")) {
+        rc = pt__sf_color(p, "background", &d->background);
+    } else if (!strcmp(kw, "camera")) {
+        int have_from = 0, have_at = 0;
+        pt_camera cam;
+        if (p->have_camera) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: defined twice");
+        while (rc == PT_OK && p->pos < p->ntok) {
+            const char *key = pt__sf_next(p);
+            if (!strcmp(key, "look_from")) { rc = pt__sf_vec(p, "camera look_from", &d->camera.look_from); have_from = 1; }
+            else if (!strcmp(key, "look_at")) { rc = pt__sf_vec(p, "camera look_at", &d->camera.look_at); have_at = 1; }
+            else if (!strcmp(key, "up")) rc = pt__sf_vec(p, "camera up", &d->camera.up);
+            else if (!strcmp(key, "vfov")) {
+                rc = pt__sf_num(p, "camera vfov", &d->camera.vfov_degrees);
+                if (rc == PT_OK && !(d->camera.vfov_degrees > 0.0f && d->camera.vfov_degrees < 180.0f))
+                    rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera vfov: must be in (0, 180) degrees");
+            } else
+                rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: unknown key '%s' (look_from, look_at, up, vfov)", key);
+        }
+        if (rc != PT_OK) return rc;
+        if (!have_from || !have_at) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: needs look_from and look_at");
+        if (pt_camera_init(&cam, &d->camera, 1, 1) != PT_OK)
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: look_from equals look_at, or up is parallel to the view");
+        p->have_camera = p->line;
+    } else if (!strcmp(kw, "checker")) {
+        const char *name = NULL;
+        pt_scenefile_checker c;
+        if ((rc = pt__sf_new_name(p, "checker", &name)) != PT_OK) return rc;
+        memset(&c, 0, sizeof c);
+        strcpy(c.name, name);
+        if ((rc = pt__sf_color(p, "checker: first colour", &c.even)) != PT_OK) return rc;
+        if ((rc = pt__sf_color(p, "checker: second colour", &c.odd)) != PT_OK) return rc;
+        if ((rc = pt__sf_num(p, "checker: scale", &c.scale)) != PT_OK) return rc;
+        if (!(c.scale >= 1e-6f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "checker: scale must be >= 1e-6");
+        if (d->checker_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many checkers");
+        {
+            pt_scenefile_checker *nc = (pt_scenefile_checker *)PT_REALLOC(d->checkers, (size_t)(d->checker_count + 1) * sizeof *nc);
+            if (!nc) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+            d->checkers = nc;
+            d->checkers[d->checker_count++] = c;
+        }
+    } else if (!strcmp(kw, "material")) {
+        const char *name = NULL, *type;
+        pt_scenefile_material m;
+        if ((rc = pt__sf_new_name(p, "material", &name)) != PT_OK) return rc;
+        memset(&m, 0, sizeof m);
+        strcpy(m.name, name);
+        m.checker = -1;
+        type = pt__sf_next(p);
+        if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, dielectric, emitter)", name);
+        if (!strcmp(type, "lambertian")) {
+            m.type = PT_MATERIAL_LAMBERTIAN;
+            if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "texture")) {
+                const char *t;
+                p->pos++;
+                t = pt__sf_next(p);
+                if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing checker name after 'texture'", name);
+                m.checker = pt__sf_find_checker(d, t);
+                if (m.checker < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: checker '%s' is not defined", name, t);
+            } else if ((rc = pt__sf_color(p, "lambertian albedo", &m.albedo)) != PT_OK) return rc;
+        } else if (!strcmp(type, "metal")) {
+            m.type = PT_MATERIAL_METAL;
+            if ((rc = pt__sf_color(p, "metal albedo", &m.albedo)) != PT_OK) return rc;
+            if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "fuzz")) {
+                p->pos++;
+                if ((rc = pt__sf_num(p, "metal fuzz", &m.fuzz)) != PT_OK) return rc;
+                if (m.fuzz < 0 || m.fuzz > 1) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "metal fuzz: must be in [0, 1]");
+            }
+        } else if (!strcmp(type, "dielectric")) {
+            m.type = PT_MATERIAL_DIELECTRIC;
+            if ((rc = pt__sf_num(p, "dielectric ior", &m.ior)) != PT_OK) return rc;
+            if (!(m.ior >= 1.0f && m.ior <= 10.0f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "dielectric ior: must be in [1, 10]");
+        } else if (!strcmp(type, "emitter")) {
+            m.type = PT_MATERIAL_EMITTER;
+            if ((rc = pt__sf_color(p, "emitter radiance", &m.emission)) != PT_OK) return rc;
+            if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "two_sided")) { p->pos++; m.two_sided = 1; }
+        } else
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, dielectric, emitter)", name, type);
+        if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+        if (d->material_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many materials");
+        {
+            pt_scenefile_material *nm = (pt_scenefile_material *)PT_REALLOC(d->materials, (size_t)(d->material_count + 1) * sizeof *nm);
+            if (!nm) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+            d->materials = nm;
+            d->materials[d->material_count++] = m;
+        }
+    } else if (!strcmp(kw, "sphere") || !strcmp(kw, "quad") || !strcmp(kw, "triangle") || !strcmp(kw, "box")) {
+        pt_scenefile_shape tmp;
+        pt_scenefile_shape *s;
+        int i, npts = kw[0] == 's' ? 1 : kw[0] == 'b' ? 2 : 3;
+        memset(&tmp, 0, sizeof tmp);
+        for (i = 0; i < npts; ++i)
+            if ((rc = pt__sf_vec(p, kw, &tmp.p[i])) != PT_OK) return rc;
+        if (kw[0] == 's') {
+            if ((rc = pt__sf_num(p, "sphere radius", &tmp.radius)) != PT_OK) return rc;
+            if (!(tmp.radius > 0)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "sphere: radius must be > 0");
+        }
+        if ((rc = pt__sf_material_ref(p, &tmp.material)) != PT_OK) return rc;
+        if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+        if (kw[0] == 'q' && !(pt_length2(pt_cross(tmp.p[1], tmp.p[2])) > 0))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "quad: u and v are parallel or zero (no area)");
+        if (kw[0] == 'b' && !(tmp.p[0].x < tmp.p[1].x && tmp.p[0].y < tmp.p[1].y && tmp.p[0].z < tmp.p[1].z))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "box: the first corner must be below the second on every axis");
+        if ((rc = pt__sf_add_shape(p, kw[0] == 's' ? PT_SCENEFILE_SPHERE : kw[0] == 'q' ? PT_SCENEFILE_QUAD : kw[0] == 't' ? PT_SCENEFILE_TRIANGLE : PT_SCENEFILE_BOX, &s)) != PT_OK)
+            return rc;
+        memcpy(s->p, tmp.p, sizeof tmp.p);
+        s->radius = tmp.radius;
+        s->material = tmp.material;
+    } else if (!strcmp(kw, "mesh")) {
+        const char *file = pt__sf_next(p);
+        int mat;
+        pt_obj_mesh m;
+        pt_scenefile_shape *s;
+        if (!file) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: missing OBJ file name");
+        if ((rc = pt__sf_material_ref(p, &mat)) != PT_OK) return rc;
+        if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+        if (d->mesh_count >= 1024) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many meshes (at most 1024)");
+        if ((rc = pt__sf_load_obj(p, file, &m)) != PT_OK) return rc;
+        {
+            pt_obj_mesh *nm = (pt_obj_mesh *)PT_REALLOC(d->meshes, (size_t)(d->mesh_count + 1) * sizeof *nm);
+            if (!nm) {
+                PT_FREE(m.positions); PT_FREE(m.normals); PT_FREE(m.indices);
+                return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+            }
+            d->meshes = nm;
+            d->meshes[d->mesh_count++] = m;
+        }
+        if ((rc = pt__sf_add_shape(p, PT_SCENEFILE_MESH, &s)) != PT_OK) return rc;
+        s->mesh = d->mesh_count - 1;
+        s->material = mat;
+    } else if (!strcmp(kw, "identity")) {
+        p->xf = pt_transform_identity();
+    } else if (!strcmp(kw, "translate") || !strcmp(kw, "scale") || !strcmp(kw, "rotate")) {
+        pt_vec3 a;
+        pt_transform t;
+        float det;
+        if ((rc = pt__sf_vec(p, kw, &a)) != PT_OK) return rc;
+        if (kw[0] == 'r') {
+            float deg;
+            if ((rc = pt__sf_num(p, "rotate angle", &deg)) != PT_OK) return rc;
+            if (!(pt_length2(a) > 1e-20f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "rotate: the axis has zero length");
+            t = pt_transform_rotate(pt_normalize(a), deg);
+        } else if (kw[0] == 's') {
+            if (!(fabsf(a.x) >= 1e-6f && fabsf(a.y) >= 1e-6f && fabsf(a.z) >= 1e-6f))
+                return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "scale: every factor must have magnitude >= 1e-6");
+            t = pt_transform_scale(a);
+        } else
+            t = pt_transform_translate(a);
+        p->xf = pt_transform_mul(t, p->xf); /* applied after the transforms before it */
+        det = p->xf.m[0][0] * (p->xf.m[1][1] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][1]) -
+              p->xf.m[0][1] * (p->xf.m[1][0] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][0]) +
+              p->xf.m[0][2] * (p->xf.m[1][0] * p->xf.m[2][1] - p->xf.m[1][1] * p->xf.m[2][0]);
+        if (!(fabsf(det) > 1e-30f) || !pt__sf_isfinite(det) || !pt__sf_isfinite(p->xf.m[0][3]) ||
+            !pt__sf_isfinite(p->xf.m[1][3]) || !pt__sf_isfinite(p->xf.m[2][3]))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: the combined transform is singular or not finite", kw);
+    } else {
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "unknown statement '%s'", kw);
+    }
+    return pt__sf_end(p);
+}
+
+static int pt__sf_line(void *ctx, char *line, int number)
+{
+    pt__sf_parser *p = (pt__sf_parser *)ctx;
+    p->line = number;
+    p->ntok = pt__sf_tokenize(line, p->tok, PT__SF_MAX_TOKENS);
+    if (p->ntok < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "too many items on one line (at most %d)", PT__SF_MAX_TOKENS);
+    if (p->ntok == 0) return PT_OK;
+    return pt__sf_statement(p);
+}
+
+PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, const char *base_dir,
+                             pt_scenefile *out, char *err, size_t err_size)
+{
+    pt__sf_parser p;
+    int rc;
+    if (err && err_size) err[0] = '\0';
+    if (!out) return PT_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!name) name = "<scene>";
+    if (!text) return pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no text");
+    memset(&p, 0, sizeof p);
+    p.d = out;
+    p.name = name;
+    p.base_dir = base_dir;
+    p.err = err;
+    p.err_size = err_size;
+    p.xf = pt_transform_identity();
+    snprintf(out->file, sizeof out->file, "%s", name);
+    out->width = 256;
+    out->height = 256;
+    out->samples_per_pixel = 64;
+    out->max_depth = 50;
+    out->pov_light_grid = 16;
+    rc = pt__sf_lines(text, length, &p, pt__sf_line, err, err_size, name);
+    if (rc == PT_OK && !p.have_camera)
+        rc = pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no 'camera' statement");
+    if (rc == PT_OK && out->shape_count == 0)
+        rc = pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no shapes");
+    if (rc != PT_OK) pt_scenefile_free(out);
+    return rc;
+}
+
+PTDEF int pt_scenefile_load(const char *path, pt_scenefile *out, char *err, size_t err_size)
+{
+    char *text = NULL, dir[1024];
+    const char *slash;
+    size_t len = 0;
+    int rc;
+    if (err && err_size) err[0] = '\0';
+    if (!out) return PT_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!path) return PT_ERROR_INVALID_ARGUMENT;
+    rc = pt__sf_read_file(path, &text, &len, 64u * 1024u * 1024u);
+    if (rc != PT_OK)
+        return pt__sf_failf(err, err_size, path, 0, rc, "cannot read the scene: %s",
+                            rc == PT_ERROR_IO ? strerror(errno) : rc == PT_ERROR_UNSUPPORTED ? "file too large" : "out of memory");
+    slash = strrchr(path, '/');
+    if (slash && (size_t)(slash - path) < sizeof dir) {
+        memcpy(dir, path, (size_t)(slash - path));
+        dir[slash - path] = '\0';
+        if (slash == path) strcpy(dir, "/");
+    } else
+        strcpy(dir, ".");
+    rc = pt_scenefile_parse(text, len, path, dir, out, err, err_size);
+    PT_FREE(text);
+    return rc;
+}
+
+PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_desc *r, char *err, size_t err_size)
+{
+    pt_scene *s;
+    int *tex = NULL, *mat = NULL, i, rc = PT_OK;
+    if (err && err_size) err[0] = '\0';
+    if (scene) *scene = NULL;
+    if (!d || !scene || !r) return PT_ERROR_INVALID_ARGUMENT;
+    s = pt_scene_create();
+    tex = (int *)PT_MALLOC(((size_t)d->checker_count + 1u) * sizeof(int));
+    mat = (int *)PT_MALLOC(((size_t)d->material_count + 1u) * sizeof(int));
+    if (!s || !tex || !mat) {
+        rc = pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+        goto done;
+    }
+    for (i = 0; i < d->checker_count && rc == PT_OK; ++i) {
+        const pt_scenefile_checker *c = &d->checkers[i];
+        tex[i] = pt_scene_add_checker(s, c->even, c->odd, c->scale);
+        if (tex[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, tex[i], "checker %s: %s", c->name, pt_scene_error_message(s));
+    }
+    for (i = 0; i < d->material_count && rc == PT_OK; ++i) {
+        const pt_scenefile_material *m = &d->materials[i];
+        pt_material_desc md;
+        memset(&md, 0, sizeof md);
+        md.type = m->type;
+        md.albedo = m->albedo;
+        md.albedo_texture = m->checker >= 0 ? tex[m->checker] : 0;
+        md.fuzz = m->fuzz;
+        md.ior = m->ior;
+        md.emission = m->emission;
+        md.two_sided_emission = m->two_sided;
+        mat[i] = pt_scene_add_material(s, &md);
+        if (mat[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, mat[i], "material %s: %s", m->name, pt_scene_error_message(s));
+    }
+    for (i = 0; i < d->shape_count && rc == PT_OK; ++i) {
+        const pt_scenefile_shape *sh = &d->shapes[i];
+        int m = mat[sh->material], id;
+        if ((rc = pt_scene_set_transform(s, &sh->transform)) != PT_OK) {
+            rc = pt__sf_failf(err, err_size, d->file, sh->line, rc, "%s", pt_scene_error_message(s));
+            break;
+        }
+        switch (sh->type) {
+        case PT_SCENEFILE_SPHERE: id = pt_scene_add_sphere(s, sh->p[0], sh->radius, m); break;
+        case PT_SCENEFILE_QUAD: id = pt_scene_add_quad(s, sh->p[0], sh->p[1], sh->p[2], m); break;
+        case PT_SCENEFILE_TRIANGLE: id = pt_scene_add_triangle(s, sh->p[0], sh->p[1], sh->p[2], m); break;
+        case PT_SCENEFILE_BOX: id = pt_scene_add_box(s, sh->p[0], sh->p[1], m); break;
+        default: {
+            const pt_obj_mesh *me = &d->meshes[sh->mesh];
+            pt_mesh_desc md;
+            md.positions = me->positions;
+            md.vertex_count = me->vertex_count;
+            md.indices = me->indices;
+            md.triangle_count = me->triangle_count;
+            md.normals = me->normals;
+            md.material = m;
+            id = pt_scene_add_mesh(s, &md);
+        }
+        }
+        if (id < 0) rc = pt__sf_failf(err, err_size, d->file, sh->line, id, "%s", pt_scene_error_message(s));
+    }
+    if (rc == PT_OK) pt_scene_set_transform(s, NULL);
+    if (rc == PT_OK && (rc = pt_scene_commit(s)) != PT_OK)
+        rc = pt__sf_failf(err, err_size, d->file, 0, rc, "%s", pt_scene_error_message(s));
+done:
+    PT_FREE(tex);
+    PT_FREE(mat);
+    if (rc != PT_OK) {
+        pt_scene_destroy(s);
+        return rc;
+    }
+    memset(r, 0, sizeof *r);
+    r->width = d->width;
+    r->height = d->height;
+    r->samples_per_pixel = d->samples_per_pixel;
+    r->max_depth = d->max_depth;
+    r->strategy = d->strategy;
+    r->sampler = d->sampler;
+    r->indirect_paths = d->indirect_paths;
+    r->seed = d->seed;
+    r->background = d->background;
+    r->camera = d->camera;
+    *scene = s;
+    return PT_OK;
+}
+
+/* ---- POV-Ray 3.7 export (the recipe: docs/povray.md). */
+typedef struct pt__pov {
+    FILE *f;
+    const pt_scenefile *d;
+    double fd, hair;          /* fade distance, light offset */
+    int grid;
+} pt__pov;
+
+static void pt__pov_v(FILE *f, pt_vec3 v) { fprintf(f, "<%.9g, %.9g, %.9g>", (double)v.x, (double)v.y, (double)v.z); }
+
+static void pt__sf_bounds_add(pt_vec3 *lo, pt_vec3 *hi, pt_vec3 p)
+{
+    if (p.x < lo->x) lo->x = p.x;
+    if (p.y < lo->y) lo->y = p.y;
+    if (p.z < lo->z) lo->z = p.z;
+    if (p.x > hi->x) hi->x = p.x;
+    if (p.y > hi->y) hi->y = p.y;
+    if (p.z > hi->z) hi->z = p.z;
+}
+/* Uniform scale of a similarity transform (length of the image of a unit x vector). */
+static float pt__sf_xf_scale(const pt_transform *t) { return pt_length(pt_transform_vector(t, pt_v3(1, 0, 0))); }
+
+static void pt__pov_texture(pt__pov *w, int material)
+{
+    const pt_scenefile_material *m = &w->d->materials[material];
+    FILE *f = w->f;
+    switch (m->type) {
+    case PT_MATERIAL_LAMBERTIAN:
+        if (m->checker >= 0) {
+            const pt_scenefile_checker *c = &w->d->checkers[m->checker];
+            /* Both renderers: second colour where floor(x/s)+floor(y/s)+floor(z/s) is odd. */
+            fprintf(f, "texture { pigment { checker rgb ");
+            pt__pov_v(f, c->even);
+            fprintf(f, ", rgb ");
+            pt__pov_v(f, c->odd);
+            fprintf(f, " scale %.9g } finish { diffuse 1 } }", (double)c->scale);
+        } else {
+            fprintf(f, "texture { pigment { rgb ");
+            pt__pov_v(f, m->albedo);
+            fprintf(f, " } finish { diffuse 1 } }");
+        }
+        break;
+    case PT_MATERIAL_METAL:
+        fprintf(f, "texture { pigment { rgb 0 } finish { diffuse 0 reflection { rgb ");
+        pt__pov_v(f, m->albedo);
+        fprintf(f, " } } }");
+        break;
+    case PT_MATERIAL_DIELECTRIC:
+        fprintf(f, "texture { pigment { rgbf 1 } finish { diffuse 0 reflection { 0, 1 fresnel on } conserve_energy } } "
+                   "interior { ior %.9g }", (double)(m->ior > 0 ? m->ior : 1.5f));
+        break;
+    default: /* emitter: the visible surface, pixel = pigment x emission */
+        fprintf(f, "texture { pigment { rgb ");
+        pt__pov_v(f, m->emission);
+        fprintf(f, " } finish { emission 1 diffuse 0 } }");
+        break;
+    }
+}
+
+/* The geometry of a shape in world space, without its closing brace. */
+static void pt__pov_geometry(pt__pov *w, const pt_scenefile_shape *s)
+{
+    FILE *f = w->f;
+    const pt_transform *t = &s->transform;
+    uint32_t i;
+    switch (s->type) {
+    case PT_SCENEFILE_SPHERE:
+        fprintf(f, "sphere { ");
+        pt__pov_v(f, pt_transform_point(t, s->p[0]));
+        fprintf(f, ", %.9g ", (double)(s->radius * pt__sf_xf_scale(t)));
+        break;
+    case PT_SCENEFILE_QUAD: {
+        pt_vec3 q = pt_transform_point(t, s->p[0]), u = pt_transform_vector(t, s->p[1]), v = pt_transform_vector(t, s->p[2]);
+        fprintf(f, "mesh { triangle { ");
+        pt__pov_v(f, q); fprintf(f, ", "); pt__pov_v(f, pt_add(q, u)); fprintf(f, ", "); pt__pov_v(f, pt_add(pt_add(q, u), v));
+        fprintf(f, " } triangle { ");
+        pt__pov_v(f, q); fprintf(f, ", "); pt__pov_v(f, pt_add(pt_add(q, u), v)); fprintf(f, ", "); pt__pov_v(f, pt_add(q, v));
+        fprintf(f, " } ");
+        break;
+    }
+    case PT_SCENEFILE_TRIANGLE:
+        fprintf(f, "triangle { ");
+        pt__pov_v(f, pt_transform_point(t, s->p[0])); fprintf(f, ", ");
+        pt__pov_v(f, pt_transform_point(t, s->p[1])); fprintf(f, ", ");
+        pt__pov_v(f, pt_transform_point(t, s->p[2])); fprintf(f, " ");
+        break;
+    case PT_SCENEFILE_BOX:
+        /* POV's matrix: p' = p * M with rows x, y, z, translation, i.e. the transpose of ours. */
+        fprintf(f, "box { ");
+        pt__pov_v(f, s->p[0]); fprintf(f, ", "); pt__pov_v(f, s->p[1]);
+        fprintf(f, " matrix <%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g> ",
+                (double)t->m[0][0], (double)t->m[1][0], (double)t->m[2][0], (double)t->m[0][1], (double)t->m[1][1],
+                (double)t->m[2][1], (double)t->m[0][2], (double)t->m[1][2], (double)t->m[2][2], (double)t->m[0][3],
+                (double)t->m[1][3], (double)t->m[2][3]);
+        break;
+    case PT_SCENEFILE_MESH: {
+        const pt_obj_mesh *m = &w->d->meshes[s->mesh];
+        fprintf(f, "mesh2 {\n  vertex_vectors { %u", (unsigned)m->vertex_count);
+        for (i = 0; i < m->vertex_count; ++i) {
+            fprintf(f, ",\n    ");
+            pt__pov_v(f, pt_transform_point(t, pt_v3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2])));
+        }
+        fprintf(f, " }\n");
+        if (m->normals) {
+            fprintf(f, "  normal_vectors { %u", (unsigned)m->vertex_count);
+            for (i = 0; i < m->vertex_count; ++i) {
+                pt_vec3 n;
+                if (pt_transform_normal(t, pt_v3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2]), &n) != PT_OK)
+                    n = pt_v3(0, 1, 0);
+                fprintf(f, ",\n    ");
+                pt__pov_v(f, pt_normalize(n));
+            }
+            fprintf(f, " }\n");
+        }
+        fprintf(f, "  face_indices { %u", (unsigned)m->triangle_count);
+        for (i = 0; i < m->triangle_count; ++i)
+            fprintf(f, ",\n    <%u, %u, %u>", (unsigned)m->indices[3 * i], (unsigned)m->indices[3 * i + 1],
+                    (unsigned)m->indices[3 * i + 2]);
+        fprintf(f, " }\n  ");
+        break;
+    }
+    }
+}
+
+static void pt__pov_quad_lights(pt__pov *w, pt_vec3 q, pt_vec3 u, pt_vec3 v, pt_vec3 n, pt_color le)
+{
+    /* N x N spotlights at the cell centres, a hair in front; colour Le*A/(N^2*2*pi*fd^2). */
+    FILE *f = w->f;
+    int i, j, N = w->grid;
+    double area = (double)pt_length(pt_cross(u, v));
+    double k = area / ((double)N * N * 2.0 * 3.14159265358979323846 * w->fd * w->fd);
+    pt_vec3 c = pt_madd(q, n, (float)w->hair);
+    for (i = 0; i < N; ++i)
+        for (j = 0; j < N; ++j) {
+            pt_vec3 pos = pt_add(pt_madd(c, u, (float)((i + 0.5) / N)), pt_scale(v, (float)((j + 0.5) / N)));
+            fprintf(f, "light_source { ");
+            pt__pov_v(f, pos);
+            fprintf(f, ", rgb <%.9g, %.9g, %.9g> spotlight point_at ", (double)le.x * k, (double)le.y * k, (double)le.z * k);
+            pt__pov_v(f, pt_add(pos, n));
+            fprintf(f, " radius 90 falloff 90 tightness 1 fade_distance %.9g fade_power 2 }\n", w->fd);
+        }
+}
+
+static int pt__pov_body(pt__pov *w, const pt_pov_options *o, int width, int height)
+{
+    const pt_scenefile *d = w->d;
+    FILE *f = w->f;
+    int i, radiosity = o && o->radiosity >= 0 ? o->radiosity : d->pov_radiosity;
+    double vfov = d->camera.vfov_degrees > 0 ? (double)d->camera.vfov_degrees : 40.0;
+    double aspect = (double)width / (double)height;
+    double angle = 2.0 * atan(aspect * tan(vfov * 3.14159265358979323846 / 360.0)) * 180.0 / 3.14159265358979323846;
+    pt_vec3 up = pt_length2(d->camera.up) > 0 ? d->camera.up : pt_v3(0, 1, 0);
+
+    fprintf(f, "// POV-Ray 3.7 scene written by pdftrace %d.%d.%d from %s\n", PDFTRACE_VERSION_MAJOR,
+            PDFTRACE_VERSION_MINOR, PDFTRACE_VERSION_PATCH, d->file);
+    fprintf(f, "// render: povray +I<this file> +O<out>.exr +FE +W%d +H%d +A0.0 +AM2 +R4 -D\n", width, height);
+    fprintf(f, "// (+FE: linear half-float OpenEXR; +A0.0 +AM2 +R4 approximates pdftrace's box-filtered pixels)\n");
+    fprintf(f, "#version 3.7;\n#default { finish { ambient 0 emission 0 diffuse 1 } }\n");
+    fprintf(f, "global_settings {\n  assumed_gamma 1.0\n  ambient_light 0\n  max_trace_level 64\n  adc_bailout 1e-6\n");
+    if (radiosity == 1) fprintf(f, "  radiosity { brightness 1 gray_threshold 0 }\n");
+    if (radiosity == 2)
+        fprintf(f, "  radiosity { count 200 error_bound 0.5 recursion_limit 4 nearest_count 10 brightness 1 gray_threshold 0 }\n");
+    if (radiosity == 3)
+        fprintf(f, "  radiosity { count 800,1600 error_bound 0.15 recursion_limit 8 nearest_count 20 pretrace_start 0.08\n"
+                   "    pretrace_end 0.005 minimum_reuse 0.005 maximum_reuse 0.1 low_error_factor 0.5 adc_bailout 0.001\n"
+                   "    brightness 1 gray_threshold 0 }\n");
+    fprintf(f, "}\nbackground { rgb ");
+    pt__pov_v(f, d->background);
+    fprintf(f, " }\n// right-handed pinhole: angle is the horizontal field of view\n");
+    fprintf(f, "camera { perspective location ");
+    pt__pov_v(f, d->camera.look_from);
+    fprintf(f, " right -x*%.9g up y direction z angle %.9g sky ", aspect, angle);
+    pt__pov_v(f, up);
+    fprintf(f, " look_at ");
+    pt__pov_v(f, d->camera.look_at);
+    fprintf(f, " }\n\n");
+
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        const pt_scenefile_material *m = &d->materials[s->material];
+        fprintf(f, "// %s:%d\n", d->file, s->line);
+        if (m->type == PT_MATERIAL_EMITTER) {
+            if (s->type == PT_SCENEFILE_QUAD) {
+                const pt_transform *t = &s->transform;
+                pt_vec3 q = pt_transform_point(t, s->p[0]), u = pt_transform_vector(t, s->p[1]), v = pt_transform_vector(t, s->p[2]);
+                pt_vec3 n = pt_normalize(pt_cross(u, v));
+                pt__pov_quad_lights(w, q, u, v, n, m->emission);
+                if (m->two_sided) pt__pov_quad_lights(w, q, u, v, pt_neg(n), m->emission);
+            } else if (s->type == PT_SCENEFILE_SPHERE) {
+                /* A Lambertian sphere of radiance L has intensity L*pi*r^2 in every direction;
+                   colour I/(2*pi*fd^2) = L*r^2/(2*fd^2). */
+                float r = s->radius * pt__sf_xf_scale(&s->transform);
+                double k = (double)r * r / (2.0 * w->fd * w->fd);
+                fprintf(f, "light_source { ");
+                pt__pov_v(f, pt_transform_point(&s->transform, s->p[0]));
+                fprintf(f, ", rgb <%.9g, %.9g, %.9g> fade_distance %.9g fade_power 2 }\n", (double)m->emission.x * k,
+                        (double)m->emission.y * k, (double)m->emission.z * k, w->fd);
+            }
+            pt__pov_geometry(w, s);
+            pt__pov_texture(w, s->material);
+            fprintf(f, " no_shadow no_radiosity }\n");
+            pt__pov_geometry(w, s);
+            fprintf(f, "texture { pigment { rgb 0 } finish { diffuse 0 } } no_image no_reflection no_shadow }\n");
+        } else {
+            pt__pov_geometry(w, s);
+            pt__pov_texture(w, s->material);
+            if (m->type == PT_MATERIAL_DIELECTRIC) {
+                fprintf(f, " no_shadow }\n");
+                pt__pov_geometry(w, s); /* the opaque twin casts the shadow */
+                fprintf(f, "texture { pigment { rgb 0 } finish { diffuse 0 } } no_image no_reflection no_radiosity }\n");
+            } else
+                fprintf(f, " }\n");
+        }
+    }
+    return 1;
+}
+
+PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const pt_pov_options *o, char *err,
+                                  size_t err_size)
+{
+    pt__pov w;
+    pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_v3(-FLT_MAX, -FLT_MAX, -FLT_MAX);
+    double diag;
+    int i, width, height, ok;
+    size_t len;
+    char *tmp;
+    if (err && err_size) err[0] = '\0';
+    if (!d || !path || !*path) return PT_ERROR_INVALID_ARGUMENT;
+    width = o && o->width > 0 ? o->width : d->width;
+    height = o && o->height > 0 ? o->height : d->height;
+    /* What POV-Ray cannot match is refused before anything is written. */
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        const pt_scenefile_material *m = &d->materials[s->material];
+        const pt_transform *t = &s->transform;
+        uint32_t k;
+        if (m->type == PT_MATERIAL_METAL && m->fuzz > 0)
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: fuzzy metal (material %s) has no POV-Ray equivalent", m->name);
+        if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
+        switch (s->type) {
+        case PT_SCENEFILE_SPHERE: {
+            pt_vec3 c = pt_transform_point(t, s->p[0]);
+            float r = s->radius * pt__sf_xf_scale(t);
+            pt__sf_bounds_add(&lo, &hi, pt_sub(c, pt_v3(r, r, r)));
+            pt__sf_bounds_add(&lo, &hi, pt_add(c, pt_v3(r, r, r)));
+            break;
+        }
+        case PT_SCENEFILE_MESH: {
+            const pt_obj_mesh *m2 = &d->meshes[s->mesh];
+            for (k = 0; k < m2->vertex_count; ++k)
+                pt__sf_bounds_add(&lo, &hi, pt_transform_point(t, pt_v3(m2->positions[3 * k], m2->positions[3 * k + 1], m2->positions[3 * k + 2])));
+            break;
+        }
+        case PT_SCENEFILE_BOX:
+            for (k = 0; k < 8; ++k)
+                pt__sf_bounds_add(&lo, &hi, pt_transform_point(t, pt_v3((k & 1) ? s->p[1].x : s->p[0].x,
+                                                                       (k & 2) ? s->p[1].y : s->p[0].y,
+                                                                       (k & 4) ? s->p[1].z : s->p[0].z)));
+            break;
+        case PT_SCENEFILE_QUAD:
+            pt__sf_bounds_add(&lo, &hi, pt_transform_point(t, s->p[0]));
+            pt__sf_bounds_add(&lo, &hi, pt_transform_point(t, pt_add(s->p[0], pt_add(s->p[1], s->p[2]))));
+            pt__sf_bounds_add(&lo, &hi, pt_transform_point(t, pt_add(s->p[0], s->p[1])));
+            pt__sf_bounds_add(&lo, &hi, pt_transform_point(t, pt_add(s->p[0], s->p[2])));
+            break;
+        default:
+            for (k = 0; k < 3; ++k) pt__sf_bounds_add(&lo, &hi, pt_transform_point(t, s->p[k]));
+        }
+    }
+    diag = d->shape_count ? (double)pt_length(pt_sub(hi, lo)) : 1.0;
+    if (!(diag > 0) || diag != diag) diag = 1.0;
+    memset(&w, 0, sizeof w);
+    w.d = d;
+    w.grid = o && o->light_grid > 0 ? o->light_grid : d->pov_light_grid > 0 ? d->pov_light_grid : 16;
+    if (w.grid > 64) w.grid = 64;
+    w.fd = 1e-4 * diag;   /* relative error (fd/d)^2 */
+    w.hair = 1e-5 * diag; /* the grid sits this far in front of its emitter (emitter and twin are no_shadow) */
+
+    len = strlen(path);
+    tmp = (char *)PT_MALLOC(len + 6u);
+    if (!tmp) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+    memcpy(tmp, path, len);
+    memcpy(tmp + len, ".ptmp", 6u);
+    w.f = fopen(tmp, "w");
+    if (!w.f) {
+        int e = errno;
+        PT_FREE(tmp);
+        return pt__sf_failf(err, err_size, path, 0, PT_ERROR_IO, "cannot write: %s", strerror(e));
+    }
+    ok = pt__pov_body(&w, o, width, height);
+    ok = (fflush(w.f) == 0) && ok && !ferror(w.f);
+    ok = (fclose(w.f) == 0) && ok;
+    if (ok) ok = rename(tmp, path) == 0;
+    if (!ok) remove(tmp);
+    PT_FREE(tmp);
+    if (!ok) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_IO, "writing failed");
+    return PT_OK;
+}
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PDFTRACE_SCENE_IMPLEMENTATION_DONE */
+#endif /* PDFTRACE_SCENE_IMPLEMENTATION */
