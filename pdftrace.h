@@ -1,5 +1,6 @@
 /* pdftrace.h - a Monte Carlo path tracer built around probability density functions.
-   Single-file C99 library. No warranty implied; use at your own risk.
+   Single-file C99 library. LICENSE: MIT or public domain, your choice (full text at the end of
+   this file). No warranty implied; use at your own risk.
 
    ABOUT
    =====
@@ -762,6 +763,9 @@ typedef int (*pt_progress_fn)(void *user, const pt_progress *progress);
    threads, and return when all calls have returned. */
 typedef void (*pt_job_fn)(void *job_data, int index);
 typedef void (*pt_parallel_for_fn)(void *user, int count, pt_job_fn job, void *job_data);
+
+/* The most copies pt_render_desc.indirect_paths may ask for. */
+#define PT_INDIRECT_PATHS_MAX 8
 
 typedef struct pt_render_desc {
     int width, height;           /* required, > 0 */
@@ -4871,7 +4875,7 @@ typedef struct pt__settings {
 #define PT__SKIP(cfg, bit) (((cfg)->general & (bit)) == 0u)
 
 #define PT__MAX_SPLITS_LIMIT 65536 /* pt_render_desc.max_splits above this: invalid */
-#define PT__INDIRECT_PATHS_LIMIT 8  /* pt_render_desc.indirect_paths above this: invalid (= PT__SPLIT_MAX_COPIES) */
+#define PT__INDIRECT_PATHS_LIMIT PT_INDIRECT_PATHS_MAX /* above this: invalid (= PT__SPLIT_MAX_COPIES) */
 #define PT__INDIRECT_PATHS_SOBOL 3 /* its default with PT_SAMPLER_SOBOL (1 with INDEPENDENT) */
 
 static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c)
@@ -6210,3 +6214,44 @@ PTDEF int pt_write_ppm(const char *path, const pt_image *img) { return pt__write
 /* PDFTRACE_IMPLEMENTATION_COMPLETE */
 #endif /* PDFTRACE_IMPLEMENTATION_DONE */
 #endif /* PDFTRACE_IMPLEMENTATION */
+
+/*
+This software is available under 2 licenses -- choose whichever you prefer.
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT License
+Copyright (c) 2026 the pdftrace authors
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+In jurisdictions that recognize copyright laws, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication for the benefit of the public at large and to
+the detriment of our heirs and successors. We intend this dedication to be an
+overt act of relinquishment in perpetuity of all present and future rights to
+this software under copyright law.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER LIABILITY, WHETHER IN AN
+ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM, OUT OF OR IN CONNECTION
+WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE SOFTWARE.
+------------------------------------------------------------------------------
+*/

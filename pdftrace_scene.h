@@ -1,5 +1,6 @@
 /* pdftrace_scene.h - scene files, Wavefront OBJ meshes and POV-Ray export for pdftrace.h.
-   Part of the pdftrace header family; licence at the end of this comment.
+   Part of the pdftrace header family. LICENSE: MIT or public domain, your choice (full text at
+   the end of this file).
 
    ABOUT
    =====
@@ -80,10 +81,6 @@
    meshes as mesh2 with normal_vectors; `assumed_gamma 1.0`, `ambient_light 0`, ambient 0.
    Not exportable (PT_ERROR_UNSUPPORTED with file:line): fuzzy metal, emitting triangles,
    boxes or meshes.
-
-   LICENSE
-   =======
-   MIT or public domain (the Unlicense), at your choice: see the end of pdftrace.h or LICENSE.
 */
 #ifndef PDFTRACE_SCENE_H
 #define PDFTRACE_SCENE_H
@@ -765,7 +762,7 @@ static int pt__sf_statement(pt__sf_parser *p)
         if ((rc = pt__sf_int(p, "max_depth", 1, 100000, &v)) != PT_OK) return rc;
         d->max_depth = (int)v;
     } else if (!strcmp(kw, "indirect_paths")) {
-        if ((rc = pt__sf_int(p, "indirect_paths", 1, PT__INDIRECT_PATHS_LIMIT, &v)) != PT_OK) return rc;
+        if ((rc = pt__sf_int(p, "indirect_paths", 1, PT_INDIRECT_PATHS_MAX, &v)) != PT_OK) return rc;
         d->indirect_paths = (int)v;
     } else if (!strcmp(kw, "seed")) {
         if ((rc = pt__sf_int(p, "seed", 0, 2147483647L, &v)) != PT_OK) return rc;
@@ -1413,3 +1410,44 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
 
 #endif /* PDFTRACE_SCENE_IMPLEMENTATION_DONE */
 #endif /* PDFTRACE_SCENE_IMPLEMENTATION */
+
+/*
+This software is available under 2 licenses -- choose whichever you prefer.
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT License
+Copyright (c) 2026 the pdftrace authors
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+In jurisdictions that recognize copyright laws, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication for the benefit of the public at large and to
+the detriment of our heirs and successors. We intend this dedication to be an
+overt act of relinquishment in perpetuity of all present and future rights to
+this software under copyright law.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER LIABILITY, WHETHER IN AN
+ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM, OUT OF OR IN CONNECTION
+WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE SOFTWARE.
+------------------------------------------------------------------------------
+*/
