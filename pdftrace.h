@@ -548,12 +548,14 @@ typedef struct pt_material_desc {
     pt_color albedo;            /* Lambertian, metal (ignored by dielectric, which is clear) */
     int albedo_texture;         /* 0: use albedo; else an id from pt_scene_add_checker */
     float fuzz;                 /* metal, clamped to [0, 1] */
-    float ior;                  /* dielectric index of refraction; 0 means 1.5 */
+    float ior;                  /* dielectric index of refraction; 0 means 1.5; else finite, >= 0.001 */
     pt_color emission;          /* emitted radiance */
     int two_sided_emission;
 } pt_material_desc;
 
 PTDEF int pt_scene_add_material(pt_scene *scene, const pt_material_desc *desc); /* id >= 0 */
+/* Shorthands for pt_scene_add_material with the other fields zero: the same checks and
+   defaults (pt_scene_add_dielectric(s, 0) is glass of ior 1.5). */
 PTDEF int pt_scene_add_lambertian(pt_scene *scene, pt_color albedo);
 PTDEF int pt_scene_add_metal(pt_scene *scene, pt_color albedo, float fuzz);
 PTDEF int pt_scene_add_dielectric(pt_scene *scene, float ior);
@@ -3180,7 +3182,8 @@ PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
     if (!pt__isfinite(d->fuzz) || d->fuzz < 0.0f)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: fuzz must be finite and >= 0");
     if (!pt__isfinite(d->ior) || d->ior < 0.0f || (d->ior > 0.0f && d->ior < 1e-3f))
-        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: ior must be finite and > 0");
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "material: ior = %g: must be 0 (meaning 1.5) or finite and >= 0.001", (double)d->ior);
     m.type = d->type;
     m.albedo = d->albedo;
     m.texture = d->albedo_texture;
@@ -3219,8 +3222,7 @@ PTDEF int pt_scene_add_dielectric(pt_scene *s, float ior)
     pt_material_desc d;
     memset(&d, 0, sizeof d);
     d.type = PT_MATERIAL_DIELECTRIC;
-    d.ior = ior;
-    if (!(ior > 0.0f)) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "dielectric: ior must be > 0");
+    d.ior = ior; /* pt_scene_add_material checks it: 0 means 1.5, as in pt_material_desc */
     return pt_scene_add_material(s, &d);
 }
 PTDEF int pt_scene_add_emitter(pt_scene *s, pt_color radiance, int two_sided)
