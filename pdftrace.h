@@ -464,8 +464,9 @@ typedef struct pt_scene_info {
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
 PTDEF void pt_scene_destroy(pt_scene *scene);
-/* The last error a scene function reported, with detail ("quad 3: u and v are parallel").
-   Never NULL; "" when there was none. */
+/* Why the last call that changes the scene (pt_scene_set_*, pt_scene_add_*, pt_scene_commit)
+   failed, with detail ("quad: no area in float ..."); such a call that succeeds clears it: ""
+   then. Never NULL. */
 PTDEF const char *pt_scene_error_message(const pt_scene *scene);
 
 /* Applies to every shape added afterwards; NULL resets to the identity. Spheres need a
@@ -1512,6 +1513,13 @@ static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
         va_end(ap);
     }
     return code;
+}
+/* Every public call that changes a scene starts here, so its message describes that call alone
+   ("" once it succeeds). Returns scene (NULL: the caller fails with PT_ERROR_INVALID_ARGUMENT). */
+static pt_scene *pt__enter(pt_scene *scene)
+{
+    if (scene) scene->error[0] = '\0';
+    return scene;
 }
 
 /* ------------------------------------------------------------------------------------------
@@ -2896,7 +2904,7 @@ static int pt__grow(void **arr, uint32_t *cap, uint32_t need, size_t elem)
 PTDEF int pt_scene_set_transform(pt_scene *s, const pt_transform *t)
 {
     int i, j;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!t) {
         s->xf = pt_transform_identity();
         s->xf_identity = 1;
@@ -2947,7 +2955,7 @@ PTDEF int pt_scene_add_sphere(pt_scene *s, pt_vec3 center, float radius, int mat
     pt__prim *p;
     float r = radius;
     int rc;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "sphere")) != PT_OK) return rc;
     if (!pt__vfinite(center) || !pt__isfinite(radius) || !(radius > 0.0f))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "sphere: centre must be finite and radius > 0 (radius %g)",
@@ -3005,7 +3013,7 @@ PTDEF int pt_scene_add_quad(pt_scene *s, pt_vec3 q, pt_vec3 u, pt_vec3 v, int ma
 {
     pt__prim *p;
     int rc;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "quad")) != PT_OK) return rc;
     if (!pt__vfinite(q) || !pt__vfinite(u) || !pt__vfinite(v))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "quad: Q, u and v must be finite");
@@ -3036,7 +3044,7 @@ PTDEF int pt_scene_add_triangle(pt_scene *s, pt_vec3 a, pt_vec3 b, pt_vec3 c, in
 {
     pt__prim *p;
     int rc;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "triangle")) != PT_OK) return rc;
     if (!pt__vfinite(a) || !pt__vfinite(b) || !pt__vfinite(c))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "triangle: vertices must be finite");
@@ -3063,7 +3071,7 @@ PTDEF int pt_scene_add_box(pt_scene *s, pt_vec3 lo, pt_vec3 hi, int material)
     pt_vec3 q[6], u[6], v[6];
     pt_vec3 dx, dy, dz;
     int i, rc, first = -1;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "box")) != PT_OK) return rc;
     if (!pt__vfinite(lo) || !pt__vfinite(hi) || !(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "box: corners must be finite with max > min on every axis");
@@ -3095,7 +3103,7 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
     uint32_t i, good = 0, first = 0;
     int rc, have_first = 0;
     float det;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!m) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: desc is NULL");
     if ((rc = pt__check_material(s, m->material, "mesh")) != PT_OK) return rc;
     if (!m->positions || !m->indices || m->vertex_count == 0 || m->triangle_count == 0)
@@ -3168,7 +3176,7 @@ static int pt__color_ok(pt_color c) { return pt__vfinite(c) && c.x >= 0.0f && c.
 PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
 {
     pt__material m;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!d) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: desc is NULL");
     memset(&m, 0, sizeof m);
     if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_EMITTER)
@@ -3237,7 +3245,7 @@ PTDEF int pt_scene_add_emitter(pt_scene *s, pt_color radiance, int two_sided)
 PTDEF int pt_scene_add_checker(pt_scene *s, pt_color even, pt_color odd, float scale)
 {
     pt__texture t;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!pt__color_ok(even) || !pt__color_ok(odd) || !pt__isfinite(scale) || !(scale > 0.0f))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "checker: colours must be finite and >= 0, scale > 0");
     t.even = even;
@@ -4643,7 +4651,7 @@ static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float 
 
 PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
 {
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((int)backend < (int)PT_BACKEND_AUTO || (int)backend > (int)PT_BACKEND_EMBREE)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "set_backend: %d is not a backend (0 auto, 1 built-in, 2 Embree)",
                         (int)backend);
@@ -4660,7 +4668,7 @@ PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
 PTDEF int pt_scene_set_embree_config(pt_scene *s, const char *config)
 {
     size_t n = config ? strlen(config) : 0u;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
 #ifndef PDFTRACE_EMBREE
     (void)n;
     return pt__fail(s, PT_ERROR_UNSUPPORTED, "set_embree_config: Embree is not compiled in (define PDFTRACE_EMBREE)");
@@ -4730,8 +4738,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
     int rc;
     double total = 0.0, acc = 0.0;
     unsigned f;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
-    s->error[0] = '\0';
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__accel_build(s)) != PT_OK) return rc;
     /* light table: every emitting primitive is a light, picked in proportion to its power */
     PT_FREE(s->lights);
