@@ -891,11 +891,18 @@ PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_
 PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, pt_ray ray, pt_rng *rng,
                              pt_path_stats *stats);
 
-/* Writers. Each writes to a temporary file beside the target and renames it into place, so
-   a failed write leaves no partial file. PFM: linear float RGB (little-endian, bottom row
-   first as the format requires). PPM: binary P6, sRGB-encoded, clamped to [0, 1]. */
+/* Writers. Each writes to a temporary file "<path>.ptmp" beside the target and renames it into
+   place, so a failed write leaves no partial file (and no temporary). PFM: linear float RGB
+   (little-endian, bottom row first as the format requires). PPM: binary P6, sRGB-encoded,
+   clamped to [0, 1]. They return PT_OK, PT_ERROR_INVALID_ARGUMENT (no path, an empty image),
+   PT_ERROR_OUT_OF_MEMORY or PT_ERROR_IO. The _ex forms also write a one-line message into
+   err[0 .. err_size-1] when err is not NULL ("" on success), as pt_write_exr does (section 11):
+   "dir/x.ppm: writing PPM: cannot create 'dir/x.ppm.ptmp': No such file or directory" (the path
+   and the system's reason). No global state: safe to call from several threads at once. */
 PTDEF int pt_write_pfm(const char *path, const pt_image *image);
 PTDEF int pt_write_ppm(const char *path, const pt_image *image);
+PTDEF int pt_write_pfm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
+PTDEF int pt_write_ppm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
 PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, clamped */
 
 /* ==========================================================================================
@@ -1115,6 +1122,7 @@ PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt
 #include <stdarg.h>
 #include <float.h>
 #include <time.h>
+#include <errno.h>
 #ifndef PDFTRACE_NO_THREADS
 #include <pthread.h>
 #include <unistd.h>
@@ -1520,6 +1528,17 @@ static pt_scene *pt__enter(pt_scene *scene)
 {
     if (scene) scene->error[0] = '\0';
     return scene;
+}
+/* A per-call message (no shared state): formats into err[0 .. size-1] when err is not NULL. */
+static int pt__msg(char *err, size_t size, int code, const char *fmt, ...)
+{
+    if (err && size) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, size, fmt, ap);
+        va_end(ap);
+    }
+    return code;
 }
 
 /* ------------------------------------------------------------------------------------------
@@ -6335,32 +6354,56 @@ PTDEF float pt_srgb_encode(float x)
     return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
 }
 
-/* Writes through "<path>.ptmp" and renames it into place; no partial file is left behind. */
+/* Writes through "<path>.ptmp" and renames it into place; no partial file is left behind. A failure
+   is described in err as "path: writing <what>: <step>: strerror(errno)" (the format of
+   pt_write_exr's messages). errno is read right after the step that failed, before cleanup. */
 typedef int (*pt__writer_fn)(FILE *f, const pt_image *img);
-static int pt__write_atomic(const char *path, const pt_image *img, pt__writer_fn fn)
+static int pt__write_atomic(const char *path, const pt_image *img, pt__writer_fn fn, const char *what, char *err,
+                            size_t err_size)
 {
     size_t len, n;
     char *tmp;
     FILE *f;
-    int ok;
-    if (!path || !*path || !img || !img->rgb || !pt__pixels(img->width, img->height, &n)) return PT_ERROR_INVALID_ARGUMENT;
+    int ok, e = 0, rc = PT_OK;
+    if (err && err_size) err[0] = '\0';
+    if (!path || !*path) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "writing %s: no path", what);
+    if (!img) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "%s: writing %s: image is NULL", path, what);
+    if (!img->rgb || !pt__pixels(img->width, img->height, &n))
+        return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "%s: writing %s: the image has no pixels (%d x %d%s)",
+                       path, what, img->width, img->height, img->rgb ? "" : ", rgb NULL");
     len = strlen(path);
     tmp = (char *)PT_MALLOC(len + 6u);
-    if (!tmp) return PT_ERROR_OUT_OF_MEMORY;
+    if (!tmp) return pt__msg(err, err_size, PT_ERROR_OUT_OF_MEMORY, "%s: writing %s: out of memory", path, what);
     memcpy(tmp, path, len);
     memcpy(tmp + len, ".ptmp", 6u);
+    errno = 0;
     f = fopen(tmp, "wb");
-    if (!f) { PT_FREE(tmp); return PT_ERROR_IO; }
+    if (!f) {
+        e = errno;
+        rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot create '%s': %s", path, what, tmp,
+                     e ? strerror(e) : "fopen failed");
+        PT_FREE(tmp);
+        return rc;
+    }
+    errno = 0; /* a successful fopen may leave any value */
     ok = fn(f, img);
-    ok = (fflush(f) == 0) && ok && !ferror(f);
-    ok = (fclose(f) == 0) && ok;
+    if (!ok) e = errno;
+    if (fflush(f) != 0 || ferror(f)) { if (ok) e = errno; ok = 0; }
+    if (fclose(f) != 0) { if (ok) e = errno; ok = 0; }
+    if (!ok) rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot write '%s': %s", path, what, tmp,
+                          e ? strerror(e) : "write error");
 #ifdef _WIN32
     if (ok) remove(path);
 #endif
-    if (ok) ok = rename(tmp, path) == 0;
+    if (ok && rename(tmp, path) != 0) {
+        e = errno;
+        ok = 0;
+        rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot rename '%s' to '%s': %s", path, what, tmp,
+                     path, e ? strerror(e) : "rename failed");
+    }
     if (!ok) remove(tmp);
     PT_FREE(tmp);
-    return ok ? PT_OK : PT_ERROR_IO;
+    return rc;
 }
 static int pt__pfm_body(FILE *f, const pt_image *img)
 {
@@ -6399,8 +6442,16 @@ static int pt__ppm_body(FILE *f, const pt_image *img)
     }
     return 1;
 }
-PTDEF int pt_write_pfm(const char *path, const pt_image *img) { return pt__write_atomic(path, img, pt__pfm_body); }
-PTDEF int pt_write_ppm(const char *path, const pt_image *img) { return pt__write_atomic(path, img, pt__ppm_body); }
+PTDEF int pt_write_pfm_ex(const char *path, const pt_image *img, char *err, size_t err_size)
+{
+    return pt__write_atomic(path, img, pt__pfm_body, "PFM", err, err_size);
+}
+PTDEF int pt_write_ppm_ex(const char *path, const pt_image *img, char *err, size_t err_size)
+{
+    return pt__write_atomic(path, img, pt__ppm_body, "PPM", err, err_size);
+}
+PTDEF int pt_write_pfm(const char *path, const pt_image *img) { return pt_write_pfm_ex(path, img, NULL, 0); }
+PTDEF int pt_write_ppm(const char *path, const pt_image *img) { return pt_write_ppm_ex(path, img, NULL, 0); }
 
 /* ------------------------------------------------------------------------------------------
    10. Scene files and POV-Ray export (PDFTRACE_SCENE_FILES). Format: see section 10 of the
