@@ -760,6 +760,111 @@ static void render_desc_validation(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+/* Sets field k of the 25 render_errors_name_the_field cases to an invalid value; returns the
+   message's expected start ("pt_render_desc.<field> = <value>"). */
+static const char *break_field(pt_render_desc *d, int k)
+{
+    switch (k) {
+    case 0: d->width = 0; return "pt_render_desc.width = 0:";
+    case 1: d->height = -3; return "pt_render_desc.height = -3:";
+    case 2: d->samples_per_pixel = -1; return "pt_render_desc.samples_per_pixel = -1:";
+    case 3: d->samples_per_pass = -2; return "pt_render_desc.samples_per_pass = -2:";
+    case 4: d->threads = -1; return "pt_render_desc.threads = -1:";
+    case 5: d->tile_size = -4; return "pt_render_desc.tile_size = -4:";
+    case 6: d->strategy = (pt_strategy)7; return "pt_render_desc.strategy = 7:";
+    case 7: d->light_weight = 1.5f; return "pt_render_desc.light_weight = 1.5:";
+    case 8: d->max_depth = -1; return "pt_render_desc.max_depth = -1:";
+    case 9: d->max_splits = 65537; return "pt_render_desc.max_splits = 65537:";
+    case 10: d->indirect_paths = 9; return "pt_render_desc.indirect_paths = 9:";
+    case 11: d->background = pt_v3(0, -1, 0); return "pt_render_desc.background = (0, -1, 0):";
+    case 12: d->guide = quad_guide; d->guide_weight = 1.0f; return "pt_render_desc.guide_weight = 1:";
+    case 13: d->disable_skips = 1u << 1; return "pt_render_desc.disable_skips = 0x2:";
+    case 14: d->sampler = (pt_sampler)2; return "pt_render_desc.sampler = 2:";
+    case 15: d->adaptive_threshold = -0.5f; return "pt_render_desc.adaptive_threshold = -0.5:";
+    case 16: d->adaptive_min_spp = 1; return "pt_render_desc.adaptive_min_spp = 1:";
+    case 17: d->adaptive_check_passes = -1; return "pt_render_desc.adaptive_check_passes = -1:";
+    case 18: d->adaptive_neighbours_only = 2; return "pt_render_desc.adaptive_neighbours_only = 2:";
+    case 19: d->camera.vfov_degrees = 180; return "pt_render_desc.camera.vfov_degrees = 180:";
+    case 20: d->camera.lens_radius = -1; return "pt_render_desc.camera.lens_radius = -1:";
+    case 21: d->camera.focus_distance = -2; return "pt_render_desc.camera.focus_distance = -2:";
+    case 22: d->camera.look_from = pt_v3(INFINITY, 0, 0); return "pt_render_desc.camera.look_from = (inf, 0, 0):";
+    case 23: d->camera.look_at = d->camera.look_from; return "pt_render_desc.camera.look_at = (278, 278, -800):";
+    default: d->camera.up = pt_v3(0, 0, 2); return "pt_render_desc.camera.up = (0, 0, 2):"; /* along the view */
+    }
+}
+
+static int count_of(const char *text, const char *word)
+{
+    int n = 0;
+    const char *p = text;
+    while ((p = strstr(p, word)) != NULL) { n++; p += strlen(word); }
+    return n;
+}
+
+static void render_errors_name_the_field(test_ctx *t)
+{
+    /* Every invalid pt_render_desc setting is refused by pt_render and by pt_render_image with a
+       message in pt_render_stats.error that names that one field and its value; other misuse (NULL
+       arguments, an uncommitted scene, a film of another size, cancellation) is described too, and
+       a call that succeeds leaves "" there. */
+    pt_render_desc d = tu_base_desc(8, 8, 1, 4242);
+    pt_scene *s = cornell(0, &d), *open_scene = pt_scene_create();
+    pt_film f, g;
+    pt_image img;
+    pt_render_stats st;
+    volatile int stop = 1;
+    int k, rc, fn;
+    if (!CHECK(t, s != NULL && open_scene != NULL, "scenes")) { pt_scene_destroy(s); pt_scene_destroy(open_scene); return; }
+    if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); pt_scene_destroy(open_scene); return; }
+    memset(&img, 0, sizeof img);
+    for (k = 0; k < 25; k++)
+        for (fn = 0; fn < 2; fn++) {
+            pt_render_desc e = d;
+            const char *want = break_field(&e, k);
+            memset(st.error, 'x', sizeof st.error - 1);
+            st.error[sizeof st.error - 1] = '\0';
+            rc = fn == 0 ? pt_render(s, &e, &f, &st) : pt_render_image(s, &e, &img, &st);
+            CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "%s: %s returned %d", want, fn ? "pt_render_image" : "pt_render", rc);
+            CHECK(t, strncmp(st.error, want, strlen(want)) == 0 && count_of(st.error, "pt_render_desc.") == 1,
+                  "%s: message '%.120s', want '%s ...' naming that field alone", fn ? "pt_render_image" : "pt_render", st.error,
+                  want);
+            pt_image_free(&img);
+        }
+    for (k = 0; k < 64; k++) CHECK(t, f.count[k] == 0, "a refused render took samples");
+    rc = pt_render(s, &d, NULL, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "film is NULL"), "NULL film: %d '%s'", rc, st.error);
+    rc = pt_render(NULL, &d, &f, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "scene is NULL"), "NULL scene: %d '%s'", rc, st.error);
+    rc = pt_render_image(s, NULL, &img, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "desc is NULL"), "NULL desc: %d '%s'", rc, st.error);
+    rc = pt_render_image(s, &d, NULL, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "image is NULL"), "NULL image: %d '%s'", rc, st.error);
+    rc = pt_render_image(open_scene, &d, &img, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_STATE && strstr(st.error, "not committed"), "uncommitted scene: %d '%s'", rc, st.error);
+    if (pt_film_init(&g, 9, 8) == PT_OK) {
+        rc = pt_render(s, &d, &g, &st);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "pt_render_desc.width x height = 8 x 8: the film is 9 x 8"),
+              "film of 9 x 8: %d '%s'", rc, st.error);
+        pt_film_free(&g);
+    }
+    {
+        pt_render_desc e = d;
+        e.cancel = &stop;
+        rc = pt_render(s, &e, &f, &st);
+        CHECK(t, rc == PT_ERROR_CANCELLED && strstr(st.error, "cancelled"), "cancelled: %d '%s'", rc, st.error);
+    }
+    rc = pt_render(s, &d, &f, &st);
+    CHECK(t, rc == PT_OK && st.error[0] == '\0', "a valid render after the failures: %d, message '%s'", rc, st.error);
+    rc = pt_render_image(s, &d, &img, &st);
+    CHECK(t, rc == PT_OK && st.error[0] == '\0', "a valid pt_render_image: %d, message '%s'", rc, st.error);
+    pt_image_free(&img);
+    CHECK(t, pt_scene_error_message(s)[0] == '\0', "renders wrote into the scene's message: '%s'", pt_scene_error_message(s));
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+    pt_scene_destroy(open_scene);
+    test_note(t, "25 fields x 2 functions");
+}
+
 const test_case test_render_cases[] = {
     TEST_CASE(camera_conventions),
     TEST_CASE(threads_bit_identical),
@@ -767,6 +872,7 @@ const test_case test_render_cases[] = {
     TEST_CASE(cancellation_and_progress),
     TEST_CASE(render_image_matches_film),
     TEST_CASE(render_desc_validation),
+    TEST_CASE(render_errors_name_the_field),
     TEST_CASE(furnace_closed_sphere),
     TEST_CASE(furnace_one_bounce),
     TEST_CASE(strategies_agree_cornell),
