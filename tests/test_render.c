@@ -865,6 +865,106 @@ static void render_errors_name_the_field(test_ctx *t)
     test_note(t, "25 fields x 2 functions");
 }
 
+/* One of the threads of concurrent_renders: `rounds` times a render that fails in its own way (a
+   bad field, or cancelled), then a valid render of the shared scene into its own film. */
+typedef struct conc_job {
+    const pt_scene *s;
+    pt_render_desc d;
+    int fail_kind;      /* 0: width 0; 1: max_depth -1; 2: cancelled before it starts */
+    int rounds;
+    pt_film film;       /* the last valid render */
+    int render_rc;      /* the first valid render's failure, else PT_OK */
+    int wrong;          /* failing renders whose code or message was not this thread's */
+    char seen[300];     /* the first wrong message */
+} conc_job;
+
+static void *conc_run(void *arg)
+{
+    static const char *const want[3] = { "pt_render_desc.width = 0:", "pt_render_desc.max_depth = -1:", "cancelled" };
+    static const int want_rc[3] = { PT_ERROR_INVALID_ARGUMENT, PT_ERROR_INVALID_ARGUMENT, PT_ERROR_CANCELLED };
+    conc_job *j = (conc_job *)arg;
+    volatile int stop = 1;
+    int r, rc;
+    j->render_rc = PT_OK;
+    for (r = 0; r < j->rounds; r++) {
+        pt_render_desc e = j->d;
+        pt_render_stats st;
+        pt_image img;
+        memset(&img, 0, sizeof img);
+        if (j->fail_kind == 0) e.width = 0;
+        else if (j->fail_kind == 1) e.max_depth = -1;
+        else e.cancel = &stop;
+        rc = pt_render_image(j->s, &e, &img, &st);
+        pt_image_free(&img);
+        if (rc != want_rc[j->fail_kind] || !strstr(st.error, want[j->fail_kind])) {
+            if (!j->wrong++) snprintf(j->seen, sizeof j->seen, "%d '%s'", rc, st.error);
+        }
+        pt_film_free(&j->film);
+        rc = pt_film_init(&j->film, j->d.width, j->d.height);
+        if (rc == PT_OK) rc = pt_render(j->s, &j->d, &j->film, &st);
+        if (rc != PT_OK && j->render_rc == PT_OK) j->render_rc = rc;
+    }
+    return NULL;
+}
+
+static void concurrent_renders(test_ctx *t)
+{
+    /* A committed scene rendered from three threads at once (each also with its own render threads
+       or none): every film equals the same desc rendered alone, bit for bit, and each thread's failed
+       renders are described in its own pt_render_stats, never in another's. Run under
+       ThreadSanitizer by make tsan-test. */
+    pt_render_desc d = tu_base_desc(32, 24, 8, 4242);
+    pt_scene *s = cornell(1, &d);
+    conc_job job[3];
+    pt_film ref[3];
+    int k, started[3] = { 0, 0, 0 };
+#ifndef PDFTRACE_NO_THREADS
+    pthread_t th[3];
+#endif
+    if (!CHECK(t, s != NULL, "Cornell scene")) return;
+    d.max_depth = 8;
+    memset(job, 0, sizeof job);
+    memset(ref, 0, sizeof ref);
+    for (k = 0; k < 3; k++) {
+        job[k].s = s;
+        job[k].d = d;
+        job[k].d.seed = d.seed + (uint64_t)k;
+        job[k].d.threads = k == 1 ? 2 : 1;
+        job[k].d.strategy = k == 2 ? PT_STRATEGY_MIXTURE : PT_STRATEGY_MIS;
+        job[k].d.sampler = k == 1 ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
+        job[k].fail_kind = k;
+        job[k].rounds = 4;
+        if (!tu_render_into(t, s, &job[k].d, &ref[k], NULL, "alone")) goto done;
+    }
+#ifndef PDFTRACE_NO_THREADS
+    for (k = 0; k < 3; k++) started[k] = pthread_create(&th[k], NULL, conc_run, &job[k]) == 0;
+    for (k = 0; k < 3; k++)
+        if (started[k]) pthread_join(th[k], NULL);
+#endif
+    for (k = 0; k < 3; k++)
+        if (!started[k]) conc_run(&job[k]); /* no threads (in this build): one after the other */
+    for (k = 0; k < 3; k++) {
+        CHECK(t, job[k].render_rc == PT_OK, "thread %d: a valid render failed: %d", k, job[k].render_rc);
+        CHECK(t, job[k].render_rc != PT_OK || tu_film_equal(&ref[k], &job[k].film),
+              "thread %d: its film differs from the same desc rendered alone", k);
+        CHECK(t, job[k].wrong == 0, "thread %d: %d of %d failed renders got the wrong code or message, first %s", k,
+              job[k].wrong, job[k].rounds, job[k].seen);
+    }
+    CHECK(t, pt_scene_error_message(s)[0] == '\0', "the renders wrote into the scene's message: '%s'",
+          pt_scene_error_message(s));
+#ifndef PDFTRACE_NO_THREADS
+    test_note(t, "3 threads x 4 rounds (a failing and a valid render each), %d started", started[0] + started[1] + started[2]);
+#else
+    test_note(t, "no threads in this build: the three jobs ran one after the other");
+#endif
+done:
+    for (k = 0; k < 3; k++) {
+        pt_film_free(&ref[k]);
+        pt_film_free(&job[k].film);
+    }
+    pt_scene_destroy(s);
+}
+
 const test_case test_render_cases[] = {
     TEST_CASE(camera_conventions),
     TEST_CASE(threads_bit_identical),
@@ -873,6 +973,7 @@ const test_case test_render_cases[] = {
     TEST_CASE(render_image_matches_film),
     TEST_CASE(render_desc_validation),
     TEST_CASE(render_errors_name_the_field),
+    TEST_CASE(concurrent_renders),
     TEST_CASE(furnace_closed_sphere),
     TEST_CASE(furnace_one_bounce),
     TEST_CASE(strategies_agree_cornell),
