@@ -6,6 +6,8 @@
 #   make test             build and run the test runner, then again without threads and
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS (and -DPDFTRACE_NO_SIMD)
+#   make tsan-test        the tests that render one scene from several threads at once, built with
+#                         ThreadSanitizer (build/test_runner_tsan; not part of make test)
 #   make exr-test         build the test runner with OpenEXR (build/test_runner_exr) and run
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
@@ -62,6 +64,9 @@ PT_LDLIBS   := -lm
 
 # The sanitizer build of the tests (added after CFLAGS, so its -O1 wins).
 SANFLAGS ?= -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all
+# make tsan-test: ThreadSanitizer, and the runner's filter for the tests it runs.
+TSANFLAGS ?= -O1 -g -fsanitize=thread
+TSAN_TESTS ?= concurrent
 
 # check-warnings: the compilers and flags it uses.
 WARN_CC      ?= gcc clang
@@ -102,7 +107,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
 
-.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress FORCE
+.PHONY: all run run-all test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress FORCE
 
 all: $(EXAMPLE_BINS)
 
@@ -233,6 +238,14 @@ stress: $(BUILD)/stress
 
 nothreads-test: $(BUILD)/test_runner_nothreads
 	./$(BUILD)/test_runner_nothreads
+
+$(BUILD)/test_runner_tsan: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+	$(need_tests)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(TSANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+
+# A reported race fails the run (exit code 66).
+tsan-test: $(BUILD)/test_runner_tsan
+	TSAN_OPTIONS=halt_on_error=1 ./$(BUILD)/test_runner_tsan $(TSAN_TESTS)
 
 # ---- make bench-bvh (bench/bvh.c): always built with Embree, whatever EMBREE says.
 BENCH_BVH_ARGS ?=

@@ -64,7 +64,7 @@
        d.sampler = PT_SAMPLER_SOBOL;           (optional: scrambled Sobol points, lower error per
                                                sample than the default independent numbers; section 2)
        pt_image img = {0}; pt_render_stats st;
-       pt_render_image(s, &d, &img, &st);
+       if (pt_render_image(s, &d, &img, &st) != PT_OK) puts(st.error);
        pt_write_ppm("out.ppm", &img);
        pt_image_free(&img); pt_scene_destroy(s);
 
@@ -75,6 +75,10 @@
    A triangle's normal is (b-a) x (c-a). A sphere's normal points outwards.
    Radiance values are linear RGB. Public functions return PT_OK (0) or a negative
    pt_result code; functions that create something return its id (>= 0) or an error code.
+   A failure's one-line message goes where the call's own data is: into the scene for calls
+   that build it (pt_scene_error_message), into pt_render_stats.error for a render, into the
+   caller's err[err_size] for the file writers and readers (pt_write_*_ex, sections 10, 11).
+   There is no global or per-thread error state.
 
    SECTIONS (in the order data flows)
    ========
@@ -417,6 +421,10 @@ PTDEF void pt_sobol_scrambled4(uint32_t index, uint64_t seed, float u[4]);
    added: an instanced emitter is an emitter in world space and is sampled exactly. Add
    everything, then pt_scene_commit (builds the BVH and the light table); change the scene
    and it must be committed again before it is rendered.
+   Threads: a committed scene may be rendered from several threads at once (pt_render,
+   pt_render_image, pt_trace_path; also pt_scene_intersect, pt_scene_occluded, the light and
+   material PDFs): those calls only read it and write no message into it. Adding to, changing
+   or committing a scene while another call uses it is not allowed.
    ========================================================================================== */
 
 typedef struct pt_scene pt_scene;
@@ -470,8 +478,10 @@ typedef struct pt_scene_info {
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
 PTDEF void pt_scene_destroy(pt_scene *scene);
-/* The last error a scene function reported, with detail ("quad 3: u and v are parallel").
-   Never NULL; "" when there was none. */
+/* Why the last call that changes the scene (pt_scene_set_*, pt_scene_add_*, pt_scene_commit)
+   failed, with detail ("quad: no area in float ..."); such a call that succeeds clears it: ""
+   then. Never NULL. Calls that only read the scene (pt_scene_get_info, the queries, pt_render and
+   pt_render_image, whose message is in pt_render_stats.error) leave it unchanged. */
 PTDEF const char *pt_scene_error_message(const pt_scene *scene);
 
 /* Applies to every shape added afterwards; NULL resets to the identity. Spheres need a
@@ -519,7 +529,8 @@ typedef struct pt_hit {
 } pt_hit;
 
 /* Closest hit with 0 < t < tmax. Returns 1 on a hit, 0 on a miss, an error code on misuse
-   (NULL pointers, uncommitted scene). */
+   (PT_ERROR_INVALID_ARGUMENT: NULL pointers, a non-finite ray; PT_ERROR_INVALID_STATE: an
+   uncommitted scene), with no message (queries never write the scene). */
 PTDEF int pt_scene_intersect(const pt_scene *scene, pt_ray ray, float tmax, pt_hit *hit);
 /* 1 when anything is hit with 0 < t < tmax (any hit, early exit). */
 PTDEF int pt_scene_occluded(const pt_scene *scene, pt_ray ray, float tmax);
@@ -554,12 +565,14 @@ typedef struct pt_material_desc {
     pt_color albedo;            /* Lambertian, metal (ignored by dielectric, which is clear) */
     int albedo_texture;         /* 0: use albedo; else an id from pt_scene_add_checker */
     float fuzz;                 /* metal, clamped to [0, 1] */
-    float ior;                  /* dielectric index of refraction; 0 means 1.5 */
+    float ior;                  /* dielectric index of refraction; 0 means 1.5; else finite, >= 0.001 */
     pt_color emission;          /* emitted radiance */
     int two_sided_emission;
 } pt_material_desc;
 
 PTDEF int pt_scene_add_material(pt_scene *scene, const pt_material_desc *desc); /* id >= 0 */
+/* Shorthands for pt_scene_add_material with the other fields zero: the same checks and
+   defaults (pt_scene_add_dielectric(s, 0) is glass of ior 1.5). */
 PTDEF int pt_scene_add_lambertian(pt_scene *scene, pt_color albedo);
 PTDEF int pt_scene_add_metal(pt_scene *scene, pt_color albedo, float fuzz);
 PTDEF int pt_scene_add_dielectric(pt_scene *scene, float ior);
@@ -840,6 +853,9 @@ typedef struct pt_render_stats {
     double estimated_error;      /* the film's estimated RMS relative error at the end, the square
                                     root of pt_film_error over the whole image; -1 if unknown (a
                                     pixel with fewer than 2 samples) */
+    char error[256];             /* "" on success; else why the call failed or stopped, naming the one
+                                    argument or pt_render_desc field at fault with its value, e.g.
+                                    "pt_render_desc.width = 0: must be > 0" */
 } pt_render_stats;
 
 /* ==========================================================================================
@@ -884,7 +900,8 @@ PTDEF void pt_image_free(pt_image *image);
 
 /* Renders desc->samples_per_pixel more samples into every pixel of the film, which the caller
    initialised with pt_film_init(film, desc->width, desc->height). Returns PT_OK, PT_ERROR_CANCELLED (the film holds what was done) or an
-   error. stats may be NULL. */
+   error. stats may be NULL; if not, stats->error says why a call failed (the scene's message is
+   not written: see section 3 on threads). */
 PTDEF int pt_render(const pt_scene *scene, const pt_render_desc *desc, pt_film *film, pt_render_stats *stats);
 /* Convenience: a fresh film, rendered and resolved into *image. */
 PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_image *image, pt_render_stats *stats);
@@ -897,11 +914,18 @@ PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_
 PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, pt_ray ray, pt_rng *rng,
                              pt_path_stats *stats);
 
-/* Writers. Each writes to a temporary file beside the target and renames it into place, so
-   a failed write leaves no partial file. PFM: linear float RGB (little-endian, bottom row
-   first as the format requires). PPM: binary P6, sRGB-encoded, clamped to [0, 1]. */
+/* Writers. Each writes to a temporary file "<path>.ptmp" beside the target and renames it into
+   place, so a failed write leaves no partial file (and no temporary). PFM: linear float RGB
+   (little-endian, bottom row first as the format requires). PPM: binary P6, sRGB-encoded,
+   clamped to [0, 1]. They return PT_OK, PT_ERROR_INVALID_ARGUMENT (no path, an empty image),
+   PT_ERROR_OUT_OF_MEMORY or PT_ERROR_IO. The _ex forms also write a one-line message into
+   err[0 .. err_size-1] when err is not NULL ("" on success), as pt_write_exr does (section 11):
+   "dir/x.ppm: writing PPM: cannot create 'dir/x.ppm.ptmp': No such file or directory" (the path
+   and the system's reason). No global state: safe to call from several threads at once. */
 PTDEF int pt_write_pfm(const char *path, const pt_image *image);
 PTDEF int pt_write_ppm(const char *path, const pt_image *image);
+PTDEF int pt_write_pfm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
+PTDEF int pt_write_ppm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
 PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, clamped */
 
 #ifdef __cplusplus
@@ -927,6 +951,7 @@ PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, cl
 #include <stdarg.h>
 #include <float.h>
 #include <time.h>
+#include <errno.h>
 #ifndef PDFTRACE_NO_THREADS
 #include <pthread.h>
 #include <unistd.h>
@@ -1315,13 +1340,32 @@ struct pt_scene {
     char error[256];
 };
 
-static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
+/* A failed call that changes the scene records why. Not const: calls that only read a scene
+   (queries, renders) cannot write it, so they may run on several threads at once. */
+static int pt__fail(pt_scene *scene, int code, const char *fmt, ...)
 {
-    pt_scene *scene = (pt_scene *)cscene;
     if (scene) {
         va_list ap;
         va_start(ap, fmt);
         vsnprintf(scene->error, sizeof scene->error, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+/* Every public call that changes a scene starts here, so its message describes that call alone
+   ("" once it succeeds). Returns scene (NULL: the caller fails with PT_ERROR_INVALID_ARGUMENT). */
+static pt_scene *pt__enter(pt_scene *scene)
+{
+    if (scene) scene->error[0] = '\0';
+    return scene;
+}
+/* A per-call message (no shared state): formats into err[0 .. size-1] when err is not NULL. */
+static int pt__msg(char *err, size_t size, int code, const char *fmt, ...)
+{
+    if (err && size) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, size, fmt, ap);
         va_end(ap);
     }
     return code;
@@ -2709,7 +2753,7 @@ static int pt__grow(void **arr, uint32_t *cap, uint32_t need, size_t elem)
 PTDEF int pt_scene_set_transform(pt_scene *s, const pt_transform *t)
 {
     int i, j;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!t) {
         s->xf = pt_transform_identity();
         s->xf_identity = 1;
@@ -2760,7 +2804,7 @@ PTDEF int pt_scene_add_sphere(pt_scene *s, pt_vec3 center, float radius, int mat
     pt__prim *p;
     float r = radius;
     int rc;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "sphere")) != PT_OK) return rc;
     if (!pt__vfinite(center) || !pt__isfinite(radius) || !(radius > 0.0f))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "sphere: centre must be finite and radius > 0 (radius %g)",
@@ -2818,7 +2862,7 @@ PTDEF int pt_scene_add_quad(pt_scene *s, pt_vec3 q, pt_vec3 u, pt_vec3 v, int ma
 {
     pt__prim *p;
     int rc;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "quad")) != PT_OK) return rc;
     if (!pt__vfinite(q) || !pt__vfinite(u) || !pt__vfinite(v))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "quad: Q, u and v must be finite");
@@ -2849,7 +2893,7 @@ PTDEF int pt_scene_add_triangle(pt_scene *s, pt_vec3 a, pt_vec3 b, pt_vec3 c, in
 {
     pt__prim *p;
     int rc;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "triangle")) != PT_OK) return rc;
     if (!pt__vfinite(a) || !pt__vfinite(b) || !pt__vfinite(c))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "triangle: vertices must be finite");
@@ -2876,7 +2920,7 @@ PTDEF int pt_scene_add_box(pt_scene *s, pt_vec3 lo, pt_vec3 hi, int material)
     pt_vec3 q[6], u[6], v[6];
     pt_vec3 dx, dy, dz;
     int i, rc, first = -1;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__check_material(s, material, "box")) != PT_OK) return rc;
     if (!pt__vfinite(lo) || !pt__vfinite(hi) || !(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "box: corners must be finite with max > min on every axis");
@@ -2908,7 +2952,7 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
     uint32_t i, good = 0, first = 0;
     int rc, have_first = 0;
     float det;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!m) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: desc is NULL");
     if ((rc = pt__check_material(s, m->material, "mesh")) != PT_OK) return rc;
     if (!m->positions || !m->indices || m->vertex_count == 0 || m->triangle_count == 0)
@@ -2981,7 +3025,7 @@ static int pt__color_ok(pt_color c) { return pt__vfinite(c) && c.x >= 0.0f && c.
 PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
 {
     pt__material m;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!d) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: desc is NULL");
     memset(&m, 0, sizeof m);
     if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_EMITTER)
@@ -2995,7 +3039,8 @@ PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
     if (!pt__isfinite(d->fuzz) || d->fuzz < 0.0f)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: fuzz must be finite and >= 0");
     if (!pt__isfinite(d->ior) || d->ior < 0.0f || (d->ior > 0.0f && d->ior < 1e-3f))
-        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: ior must be finite and > 0");
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "material: ior = %g: must be 0 (meaning 1.5) or finite and >= 0.001", (double)d->ior);
     m.type = d->type;
     m.albedo = d->albedo;
     m.texture = d->albedo_texture;
@@ -3034,8 +3079,7 @@ PTDEF int pt_scene_add_dielectric(pt_scene *s, float ior)
     pt_material_desc d;
     memset(&d, 0, sizeof d);
     d.type = PT_MATERIAL_DIELECTRIC;
-    d.ior = ior;
-    if (!(ior > 0.0f)) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "dielectric: ior must be > 0");
+    d.ior = ior; /* pt_scene_add_material checks it: 0 means 1.5, as in pt_material_desc */
     return pt_scene_add_material(s, &d);
 }
 PTDEF int pt_scene_add_emitter(pt_scene *s, pt_color radiance, int two_sided)
@@ -3050,7 +3094,7 @@ PTDEF int pt_scene_add_emitter(pt_scene *s, pt_color radiance, int two_sided)
 PTDEF int pt_scene_add_checker(pt_scene *s, pt_color even, pt_color odd, float scale)
 {
     pt__texture t;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!pt__color_ok(even) || !pt__color_ok(odd) || !pt__isfinite(scale) || !(scale > 0.0f))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "checker: colours must be finite and >= 0, scale > 0");
     t.even = even;
@@ -4456,7 +4500,7 @@ static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float 
 
 PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
 {
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((int)backend < (int)PT_BACKEND_AUTO || (int)backend > (int)PT_BACKEND_EMBREE)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "set_backend: %d is not a backend (0 auto, 1 built-in, 2 Embree)",
                         (int)backend);
@@ -4473,7 +4517,7 @@ PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
 PTDEF int pt_scene_set_embree_config(pt_scene *s, const char *config)
 {
     size_t n = config ? strlen(config) : 0u;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
 #ifndef PDFTRACE_EMBREE
     (void)n;
     return pt__fail(s, PT_ERROR_UNSUPPORTED, "set_embree_config: Embree is not compiled in (define PDFTRACE_EMBREE)");
@@ -4543,8 +4587,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
     int rc;
     double total = 0.0, acc = 0.0;
     unsigned f;
-    if (!s) return PT_ERROR_INVALID_ARGUMENT;
-    s->error[0] = '\0';
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if ((rc = pt__accel_build(s)) != PT_OK) return rc;
     /* light table: every emitting primitive is a light, picked in proportion to its power */
     PT_FREE(s->lights);
@@ -4706,7 +4749,7 @@ static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w)
 static int pt__query_ok(const pt_scene *s, pt_ray ray, float tmax)
 {
     if (!s) return PT_ERROR_INVALID_ARGUMENT;
-    if (!s->committed) return pt__fail(s, PT_ERROR_INVALID_STATE, "query: the scene is not committed");
+    if (!s->committed) return PT_ERROR_INVALID_STATE; /* no message: queries never write the scene */
     if (!pt__vfinite(ray.origin) || !pt__vfinite(ray.dir) || tmax != tmax) return PT_ERROR_INVALID_ARGUMENT;
     return PT_OK;
 }
@@ -4757,22 +4800,44 @@ PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tm
    6. Camera: pinhole or thin lens; screen right = forward x up (right-handed).
    ------------------------------------------------------------------------------------------ */
 
-PTDEF int pt_camera_init(pt_camera *cam, const pt_camera_desc *d, int width, int height)
+/* pt_camera_init, naming the pt_render_desc.camera field at fault in err (may be NULL). */
+static int pt__camera_init(pt_camera *cam, const pt_camera_desc *d, int width, int height, char *err, size_t n)
 {
+    const int bad = PT_ERROR_INVALID_ARGUMENT;
     pt_vec3 fwd, up, right, tup;
     float vfov, focus, h, vh, vw;
-    if (!cam || !d || width <= 0 || height <= 0) return PT_ERROR_INVALID_ARGUMENT;
-    if (!pt__vfinite(d->look_from) || !pt__vfinite(d->look_at) || !pt__vfinite(d->up)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!cam || !d || width <= 0 || height <= 0) return pt__msg(err, n, bad, "camera: NULL or an empty image");
+    if (!pt__vfinite(d->look_from))
+        return pt__msg(err, n, bad, "pt_render_desc.camera.look_from = (%g, %g, %g): must be finite",
+                       (double)d->look_from.x, (double)d->look_from.y, (double)d->look_from.z);
+    if (!pt__vfinite(d->look_at))
+        return pt__msg(err, n, bad, "pt_render_desc.camera.look_at = (%g, %g, %g): must be finite",
+                       (double)d->look_at.x, (double)d->look_at.y, (double)d->look_at.z);
+    if (!pt__vfinite(d->up))
+        return pt__msg(err, n, bad, "pt_render_desc.camera.up = (%g, %g, %g): must be finite", (double)d->up.x,
+                       (double)d->up.y, (double)d->up.z);
     vfov = d->vfov_degrees == 0.0f ? 40.0f : d->vfov_degrees;
-    if (!pt__isfinite(vfov) || !(vfov > 0.0f && vfov < 180.0f)) return PT_ERROR_INVALID_ARGUMENT;
-    if (!pt__isfinite(d->lens_radius) || d->lens_radius < 0.0f) return PT_ERROR_INVALID_ARGUMENT;
-    if (!pt__isfinite(d->focus_distance) || d->focus_distance < 0.0f) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__isfinite(vfov) || !(vfov > 0.0f && vfov < 180.0f))
+        return pt__msg(err, n, bad, "pt_render_desc.camera.vfov_degrees = %g: must be in (0, 180) (0: 40)",
+                       (double)d->vfov_degrees);
+    if (!pt__isfinite(d->lens_radius) || d->lens_radius < 0.0f)
+        return pt__msg(err, n, bad, "pt_render_desc.camera.lens_radius = %g: must be finite and >= 0",
+                       (double)d->lens_radius);
+    if (!pt__isfinite(d->focus_distance) || d->focus_distance < 0.0f)
+        return pt__msg(err, n, bad, "pt_render_desc.camera.focus_distance = %g: must be finite and >= 0",
+                       (double)d->focus_distance);
     fwd = pt_sub(d->look_at, d->look_from);
-    if (!(pt_length2(fwd) > 0.0f)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!(pt_length2(fwd) > 0.0f))
+        return pt__msg(err, n, bad,
+                       "pt_render_desc.camera.look_at = (%g, %g, %g): equals look_from (no view direction)",
+                       (double)d->look_at.x, (double)d->look_at.y, (double)d->look_at.z);
     fwd = pt_normalize(fwd);
     up = pt_length2(d->up) > 0.0f ? pt_normalize(d->up) : pt_v3(0, 1, 0);
     right = pt_cross(fwd, up);
-    if (!(pt_length2(right) > 1e-12f)) return PT_ERROR_INVALID_ARGUMENT; /* up parallel to the view */
+    if (!(pt_length2(right) > 1e-12f))
+        return pt__msg(err, n, bad, "pt_render_desc.camera.up = (%g, %g, %g)%s: parallel to look_at - look_from",
+                       (double)d->up.x, (double)d->up.y, (double)d->up.z,
+                       pt_length2(d->up) > 0.0f ? "" : " (the default (0, 1, 0))");
     right = pt_normalize(right);
     tup = pt_cross(right, fwd);
     focus = d->focus_distance > 0.0f ? d->focus_distance : pt_length(pt_sub(d->look_at, d->look_from));
@@ -4790,6 +4855,10 @@ PTDEF int pt_camera_init(pt_camera *cam, const pt_camera_desc *d, int width, int
     cam->width = width;
     cam->height = height;
     return PT_OK;
+}
+PTDEF int pt_camera_init(pt_camera *cam, const pt_camera_desc *d, int width, int height)
+{
+    return pt__camera_init(cam, d, width, height, NULL, 0);
 }
 static PT__HOT pt_ray pt__camera_ray(const pt_camera *cam, float x, float y, float u1, float u2)
 {
@@ -4878,32 +4947,50 @@ typedef struct pt__settings {
 #define PT__INDIRECT_PATHS_LIMIT PT_INDIRECT_PATHS_MAX /* above this: invalid (= PT__SPLIT_MAX_COPIES) */
 #define PT__INDIRECT_PATHS_SOBOL 3 /* its default with PT_SAMPLER_SOBOL (1 with INDEPENDENT) */
 
-static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c)
+/* Each rejection names the one pt_render_desc field at fault, with its value, in err (may be NULL). */
+static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c, char *err, size_t n)
 {
+    const int bad = PT_ERROR_INVALID_ARGUMENT;
     memset(c, 0, sizeof *c);
     if ((int)d->strategy < (int)PT_STRATEGY_MIS || (int)d->strategy > (int)PT_STRATEGY_MIXTURE)
-        return PT_ERROR_INVALID_ARGUMENT;
+        return pt__msg(err, n, bad,
+                       "pt_render_desc.strategy = %d: must be PT_STRATEGY_MIS (0) .. PT_STRATEGY_MIXTURE (3)",
+                       (int)d->strategy);
     c->strategy = d->strategy;
     c->light_weight = d->light_weight == 0.0f ? 0.5f : d->light_weight;
     if (!pt__isfinite(c->light_weight) || !(c->light_weight > 0.0f && c->light_weight <= 1.0f))
-        return PT_ERROR_INVALID_ARGUMENT;
-    if (d->max_depth < 0) return PT_ERROR_INVALID_ARGUMENT;
+        return pt__msg(err, n, bad, "pt_render_desc.light_weight = %g: must be in (0, 1] (0: 0.5)",
+                       (double)d->light_weight);
+    if (d->max_depth < 0)
+        return pt__msg(err, n, bad, "pt_render_desc.max_depth = %d: must be >= 0 (0: 50)", d->max_depth);
     c->max_depth = d->max_depth == 0 ? 50 : d->max_depth;
     c->rr_start = d->rr_start_depth == 0 ? 3 : (d->rr_start_depth < 0 ? 0x7fffffff : d->rr_start_depth);
-    if (d->max_splits > PT__MAX_SPLITS_LIMIT) return PT_ERROR_INVALID_ARGUMENT;
+    if (d->max_splits > PT__MAX_SPLITS_LIMIT)
+        return pt__msg(err, n, bad, "pt_render_desc.max_splits = %d: must be at most %d (0: 64; < 0: no splitting)",
+                       d->max_splits, PT__MAX_SPLITS_LIMIT);
     c->max_splits = d->max_splits == 0 ? 64 : (d->max_splits < 0 ? 0 : d->max_splits);
-    if (d->indirect_paths < 0 || d->indirect_paths > PT__INDIRECT_PATHS_LIMIT) return PT_ERROR_INVALID_ARGUMENT;
-    if (!pt__color_ok(d->background)) return PT_ERROR_INVALID_ARGUMENT;
+    if (d->indirect_paths < 0 || d->indirect_paths > PT__INDIRECT_PATHS_LIMIT)
+        return pt__msg(err, n, bad, "pt_render_desc.indirect_paths = %d: must be in 0 .. %d (0: the sampler's default)",
+                       d->indirect_paths, PT__INDIRECT_PATHS_LIMIT);
+    if (!pt__color_ok(d->background))
+        return pt__msg(err, n, bad, "pt_render_desc.background = (%g, %g, %g): must be finite and >= 0",
+                       (double)d->background.x, (double)d->background.y, (double)d->background.z);
     c->background = d->background;
     c->guide = d->guide;
     c->guide_user = d->guide_user;
     c->guide_weight = d->guide ? (d->guide_weight == 0.0f ? 0.5f : d->guide_weight) : 0.0f;
     if (!pt__isfinite(c->guide_weight) || c->guide_weight < 0.0f || c->guide_weight >= 1.0f)
-        return PT_ERROR_INVALID_ARGUMENT;
-    if (d->disable_skips & ~PT_SKIP_ALL) return PT_ERROR_INVALID_ARGUMENT;
+        return pt__msg(err, n, bad, "pt_render_desc.guide_weight = %g: must be in [0, 1) (0 with a guide: 0.5)",
+                       (double)d->guide_weight);
+    if (d->disable_skips & ~PT_SKIP_ALL)
+        return pt__msg(err, n, bad,
+                       "pt_render_desc.disable_skips = 0x%x: bits 0x%x are not PT_SKIP_* bits (PT_SKIP_ALL = 0x%x)",
+                       d->disable_skips, d->disable_skips & ~PT_SKIP_ALL, PT_SKIP_ALL);
     c->general = d->disable_skips;
     if ((int)d->sampler < (int)PT_SAMPLER_INDEPENDENT || (int)d->sampler > (int)PT_SAMPLER_SOBOL)
-        return PT_ERROR_INVALID_ARGUMENT;
+        return pt__msg(err, n, bad,
+                       "pt_render_desc.sampler = %d: must be PT_SAMPLER_INDEPENDENT (0) or PT_SAMPLER_SOBOL (1)",
+                       (int)d->sampler);
     c->sampler = d->sampler;
     c->rr_gain = c->sampler == PT_SAMPLER_SOBOL ? PT__RR_GAIN_SOBOL : 1.0f;
     c->indirect_paths = d->indirect_paths != 0 ? d->indirect_paths
@@ -5333,8 +5420,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
     pt_path_stats local;
     pt__sampler smp;
     pt_color L;
-    if (!s || !d || !rng || !s->committed || pt__settings_from_desc(d, &cfg) != PT_OK || !pt__vfinite(ray.origin) ||
-        !pt__vfinite(ray.dir) || !(pt_length2(ray.dir) > 0.0f))
+    if (!s || !d || !rng || !s->committed || pt__settings_from_desc(d, &cfg, NULL, 0) != PT_OK ||
+        !pt__vfinite(ray.origin) || !pt__vfinite(ray.dir) || !(pt_length2(ray.dir) > 0.0f))
         return pt_v3(0, 0, 0);
     if (!(fabsf(pt_length2(ray.dir) - 1.0f) <= 1e-6f)) ray.dir = pt_normalize(ray.dir); /* unit: as given */
     memset(&local, 0, sizeof local);
@@ -5790,6 +5877,52 @@ static int pt__adaptive_plan(pt__adaptive *a, pt__pass *ps, int *job_list)
     return jobs;
 }
 
+/* Everything pt_render checks before it renders, in order, each rejection naming the one argument
+   or pt_render_desc field at fault with its value (err may be NULL). film NULL: not checked
+   (pt_render_image makes its own). Fills *cfg and *cam. */
+static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt_film *film, int need_film,
+                            pt__settings *cfg, pt_camera *cam, char *err, size_t n)
+{
+    const int bad = PT_ERROR_INVALID_ARGUMENT;
+    int rc;
+    if (!s) return pt__msg(err, n, bad, "pt_render: scene is NULL");
+    if (!d) return pt__msg(err, n, bad, "pt_render: desc is NULL");
+    if (need_film && !film) return pt__msg(err, n, bad, "pt_render: film is NULL");
+    if (!s->committed)
+        return pt__msg(err, n, PT_ERROR_INVALID_STATE, "pt_render: the scene is not committed (or changed since)");
+    if (d->width <= 0) return pt__msg(err, n, bad, "pt_render_desc.width = %d: must be > 0", d->width);
+    if (d->height <= 0) return pt__msg(err, n, bad, "pt_render_desc.height = %d: must be > 0", d->height);
+    if (d->samples_per_pixel < 0)
+        return pt__msg(err, n, bad, "pt_render_desc.samples_per_pixel = %d: must be >= 0 (0: 16)",
+                       d->samples_per_pixel);
+    if (d->samples_per_pass < 0)
+        return pt__msg(err, n, bad, "pt_render_desc.samples_per_pass = %d: must be >= 0 (0: a default)",
+                       d->samples_per_pass);
+    if (d->threads < 0)
+        return pt__msg(err, n, bad, "pt_render_desc.threads = %d: must be >= 0 (0: all cores)", d->threads);
+    if (d->tile_size < 0)
+        return pt__msg(err, n, bad, "pt_render_desc.tile_size = %d: must be >= 0 (0: a default)", d->tile_size);
+    if (film && (!film->sum || !film->sum_sq || !film->count || !film->sum_odd))
+        return pt__msg(err, n, bad, "pt_render: the film is not initialised (pt_film_init)");
+    if (film && (film->width != d->width || film->height != d->height))
+        return pt__msg(err, n, bad, "pt_render_desc.width x height = %d x %d: the film is %d x %d", d->width, d->height,
+                       film->width, film->height);
+    if ((rc = pt__settings_from_desc(d, cfg, err, n)) != PT_OK) return rc;
+    if (!pt__isfinite(d->adaptive_threshold) || d->adaptive_threshold < 0.0f)
+        return pt__msg(err, n, bad, "pt_render_desc.adaptive_threshold = %g: must be finite and >= 0 (0: off)",
+                       (double)d->adaptive_threshold);
+    if (d->adaptive_min_spp < 0 || d->adaptive_min_spp == 1)
+        return pt__msg(err, n, bad, "pt_render_desc.adaptive_min_spp = %d: must be 0 (a default) or >= 2",
+                       d->adaptive_min_spp);
+    if (d->adaptive_check_passes < 0)
+        return pt__msg(err, n, bad, "pt_render_desc.adaptive_check_passes = %d: must be >= 0 (0: 1)",
+                       d->adaptive_check_passes);
+    if (d->adaptive_neighbours_only != 0 && d->adaptive_neighbours_only != 1)
+        return pt__msg(err, n, bad, "pt_render_desc.adaptive_neighbours_only = %d: must be 0 or 1",
+                       d->adaptive_neighbours_only);
+    return pt__camera_init(cam, &d->camera, d->width, d->height, err, n);
+}
+
 PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
 {
     pt__settings cfg;
@@ -5801,34 +5934,13 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     uint64_t done = 0;
     uint32_t added = 0;
     double t0 = pt__now();
+    char *err = stats ? stats->error : NULL; /* per call: several threads may render one scene */
+    size_t en = stats ? sizeof stats->error : 0u;
     pt_render_stats total;
     memset(&total, 0, sizeof total);
     memset(&ad, 0, sizeof ad);
     if (stats) memset(stats, 0, sizeof *stats);
-    if (!s || !d || !film) return PT_ERROR_INVALID_ARGUMENT;
-    if (!s->committed)
-        return pt__fail(s, PT_ERROR_INVALID_STATE, "render: the scene is not committed (or changed since)");
-    if (d->width <= 0 || d->height <= 0 || d->samples_per_pixel < 0 || d->samples_per_pass < 0 || d->threads < 0 ||
-        d->tile_size < 0)
-        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "render: width %d, height %d, samples %d: sizes must be > 0",
-                        d->width, d->height, d->samples_per_pixel);
-    if (!film->sum || !film->sum_sq || !film->count || !film->sum_odd || film->width != d->width ||
-        film->height != d->height)
-        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "render: the film is not initialised to %dx%d", d->width,
-                        d->height);
-    if ((rc = pt__settings_from_desc(d, &cfg)) != PT_OK)
-        return pt__fail(s, rc, "render: invalid settings (strategy, light_weight, max_depth, max_splits, indirect_paths, background, "
-                               "guide, disable_skips or sampler)");
-    if (!pt__isfinite(d->adaptive_threshold) || d->adaptive_threshold < 0.0f || d->adaptive_min_spp < 0 ||
-        d->adaptive_min_spp == 1 || d->adaptive_check_passes < 0 ||
-        (d->adaptive_neighbours_only != 0 && d->adaptive_neighbours_only != 1))
-        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
-                        "render: adaptive_threshold %g (finite, >= 0), adaptive_min_spp %d (0 or >= 2), "
-                        "adaptive_check_passes %d (>= 0), adaptive_neighbours_only %d (0 or 1)",
-                        (double)d->adaptive_threshold, d->adaptive_min_spp, d->adaptive_check_passes,
-                        d->adaptive_neighbours_only);
-    if ((rc = pt_camera_init(&cam, &d->camera, d->width, d->height)) != PT_OK)
-        return pt__fail(s, rc, "render: invalid camera (look_from == look_at, up parallel to the view, fov ...)");
+    if ((rc = pt__render_check(s, d, film, 1, &cfg, &cam, err, en)) != PT_OK) return rc;
     spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
     per_pass = d->samples_per_pass ? d->samples_per_pass : (spp / (adaptive ? 64 : 16) > 0 ? spp / (adaptive ? 64 : 16) : 1);
     if (per_pass > spp) per_pass = spp;
@@ -5892,7 +6004,8 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     }
     if (!ps.tile_stats || !ps.tile_samples || !ps.tile_done || !job_list ||
         (adaptive && (!ad.start || !ad.want || !ad.step || !ad.rays || !ad.noise || !ad.cost || !ad.var || !ad.lo || !ad.hi || !ad.cpp || !ad.mean || !ad.mbox || !ad.tmp || !ad.chunk_first))) {
-        result = pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "render: out of memory");
+        result = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory (%d x %d pixels)", d->width,
+                         d->height);
         goto cleanup;
     }
     for (tile = 0; tile < tiles; ++tile) job_list[tile] = tile;
@@ -5900,7 +6013,7 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     ps.jobs = job_list;
 #ifndef PDFTRACE_NO_THREADS
     if (pthread_mutex_init(&ps.lock, NULL) != 0) {
-        result = pt__fail(s, PT_ERROR_THREAD, "render: pthread_mutex_init failed");
+        result = pt__msg(err, en, PT_ERROR_THREAD, "pt_render: pthread_mutex_init failed");
         goto cleanup;
     }
 #endif
@@ -5980,21 +6093,35 @@ cleanup:
     total.seconds = pt__now() - t0;
     total.threads = used;
     if (stats) *stats = total;
-    if (result == PT_ERROR_CANCELLED) pt__fail(s, result, "render: cancelled after %d passes", total.passes);
+    if (result == PT_ERROR_CANCELLED) pt__msg(err, en, result, "pt_render: cancelled after %d passes", total.passes);
     return result;
 }
 
 PTDEF int pt_render_image(const pt_scene *s, const pt_render_desc *d, pt_image *image, pt_render_stats *stats)
 {
     pt_film film;
+    pt__settings cfg;
+    pt_camera cam;
+    char *err = stats ? stats->error : NULL;
+    size_t en = stats ? sizeof stats->error : 0u;
     int rc, rr;
-    if (!s || !d || !image) return PT_ERROR_INVALID_ARGUMENT;
+    if (stats) memset(stats, 0, sizeof *stats);
+    if (!image) return pt__msg(err, en, PT_ERROR_INVALID_ARGUMENT, "pt_render_image: image is NULL");
+    /* the desc first, so that a bad width is named as such rather than as a failed film */
+    if ((rc = pt__render_check(s, d, NULL, 0, &cfg, &cam, err, en)) != PT_OK) return rc;
     memset(&film, 0, sizeof film);
-    if ((rc = pt_film_init(&film, d->width, d->height)) != PT_OK) return rc;
+    if ((rc = pt_film_init(&film, d->width, d->height)) != PT_OK)
+        return rc == PT_ERROR_OUT_OF_MEMORY
+                   ? pt__msg(err, en, rc, "pt_render_image: out of memory for a film of %d x %d pixels", d->width,
+                             d->height)
+                   : pt__msg(err, en, rc, "pt_render_desc.width x height = %d x %d: too many pixels", d->width,
+                             d->height);
     rc = pt_render(s, d, &film, stats);
     if (rc == PT_OK || rc == PT_ERROR_CANCELLED) {
         rr = pt_film_resolve(&film, image);
-        if (rr != PT_OK) rc = rr;
+        if (rr != PT_OK)
+            rc = pt__msg(err, en, rr, "pt_render_image: out of memory for an image of %d x %d pixels", d->width,
+                         d->height);
     }
     pt_film_free(&film);
     return rc;
@@ -6140,32 +6267,56 @@ PTDEF float pt_srgb_encode(float x)
     return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
 }
 
-/* Writes through "<path>.ptmp" and renames it into place; no partial file is left behind. */
+/* Writes through "<path>.ptmp" and renames it into place; no partial file is left behind. A failure
+   is described in err as "path: writing <what>: <step>: strerror(errno)" (the format of
+   pt_write_exr's messages). errno is read right after the step that failed, before cleanup. */
 typedef int (*pt__writer_fn)(FILE *f, const pt_image *img);
-static int pt__write_atomic(const char *path, const pt_image *img, pt__writer_fn fn)
+static int pt__write_atomic(const char *path, const pt_image *img, pt__writer_fn fn, const char *what, char *err,
+                            size_t err_size)
 {
     size_t len, n;
     char *tmp;
     FILE *f;
-    int ok;
-    if (!path || !*path || !img || !img->rgb || !pt__pixels(img->width, img->height, &n)) return PT_ERROR_INVALID_ARGUMENT;
+    int ok, e = 0, rc = PT_OK;
+    if (err && err_size) err[0] = '\0';
+    if (!path || !*path) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "writing %s: no path", what);
+    if (!img) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "%s: writing %s: image is NULL", path, what);
+    if (!img->rgb || !pt__pixels(img->width, img->height, &n))
+        return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "%s: writing %s: the image has no pixels (%d x %d%s)",
+                       path, what, img->width, img->height, img->rgb ? "" : ", rgb NULL");
     len = strlen(path);
     tmp = (char *)PT_MALLOC(len + 6u);
-    if (!tmp) return PT_ERROR_OUT_OF_MEMORY;
+    if (!tmp) return pt__msg(err, err_size, PT_ERROR_OUT_OF_MEMORY, "%s: writing %s: out of memory", path, what);
     memcpy(tmp, path, len);
     memcpy(tmp + len, ".ptmp", 6u);
+    errno = 0;
     f = fopen(tmp, "wb");
-    if (!f) { PT_FREE(tmp); return PT_ERROR_IO; }
+    if (!f) {
+        e = errno;
+        rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot create '%s': %s", path, what, tmp,
+                     e ? strerror(e) : "fopen failed");
+        PT_FREE(tmp);
+        return rc;
+    }
+    errno = 0; /* a successful fopen may leave any value */
     ok = fn(f, img);
-    ok = (fflush(f) == 0) && ok && !ferror(f);
-    ok = (fclose(f) == 0) && ok;
+    if (!ok) e = errno;
+    if (fflush(f) != 0 || ferror(f)) { if (ok) e = errno; ok = 0; }
+    if (fclose(f) != 0) { if (ok) e = errno; ok = 0; }
+    if (!ok) rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot write '%s': %s", path, what, tmp,
+                          e ? strerror(e) : "write error");
 #ifdef _WIN32
     if (ok) remove(path);
 #endif
-    if (ok) ok = rename(tmp, path) == 0;
+    if (ok && rename(tmp, path) != 0) {
+        e = errno;
+        ok = 0;
+        rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot rename '%s' to '%s': %s", path, what, tmp,
+                     path, e ? strerror(e) : "rename failed");
+    }
     if (!ok) remove(tmp);
     PT_FREE(tmp);
-    return ok ? PT_OK : PT_ERROR_IO;
+    return rc;
 }
 static int pt__pfm_body(FILE *f, const pt_image *img)
 {
@@ -6204,8 +6355,16 @@ static int pt__ppm_body(FILE *f, const pt_image *img)
     }
     return 1;
 }
-PTDEF int pt_write_pfm(const char *path, const pt_image *img) { return pt__write_atomic(path, img, pt__pfm_body); }
-PTDEF int pt_write_ppm(const char *path, const pt_image *img) { return pt__write_atomic(path, img, pt__ppm_body); }
+PTDEF int pt_write_pfm_ex(const char *path, const pt_image *img, char *err, size_t err_size)
+{
+    return pt__write_atomic(path, img, pt__pfm_body, "PFM", err, err_size);
+}
+PTDEF int pt_write_ppm_ex(const char *path, const pt_image *img, char *err, size_t err_size)
+{
+    return pt__write_atomic(path, img, pt__ppm_body, "PPM", err, err_size);
+}
+PTDEF int pt_write_pfm(const char *path, const pt_image *img) { return pt_write_pfm_ex(path, img, NULL, 0); }
+PTDEF int pt_write_ppm(const char *path, const pt_image *img) { return pt_write_ppm_ex(path, img, NULL, 0); }
 
 #ifdef __cplusplus
 }

@@ -398,7 +398,7 @@ static void own_samples_dilute_fireflies(test_ctx *t)
             d.adaptive_min_spp = 2;
             d.adaptive_neighbours_only = mode;
             d.seed += 1;
-            if (CHECK(t, pt_render(s, &d, &f, &st) == PT_OK, "adaptive render: %s", pt_scene_error_message(s))) {
+            if (CHECK(t, pt_render(s, &d, &f, &st) == PT_OK, "adaptive render: %s", st.error)) {
                 double fire = f.sum[3 * p + 1] / (double)f.count[p];
                 for (y = 0; y < 16; y++)
                     for (x = 0; x < 28; x++) {
@@ -551,18 +551,18 @@ static void invalid_settings(test_ctx *t)
         for (i = 0; i < 64; i++) touched += f.count[i] != 0;
         CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "%s: pt_render returned %d", names[k], rc);
         CHECK(t, touched == 0 && st.samples == 0, "%s: %d pixels rendered", names[k], touched);
-        CHECK(t, strstr(pt_scene_error_message(s), k >= 9 ? "adaptive_neighbours_only" : k >= 6 ? "disable_skips" : "adaptive")
-                     != NULL, "%s: message '%s'",
-              names[k], pt_scene_error_message(s));
+        CHECK(t, strstr(st.error, k >= 9 ? "adaptive_neighbours_only" : k >= 6 ? "disable_skips" : "adaptive") != NULL,
+              "%s: message '%s'", names[k], st.error);
     }
     {   /* the valid extremes work: every skip disabled, min_spp 2, check every pass, neighbours only */
         pt_render_desc e = d;
+        pt_render_stats st;
         e.adaptive_threshold = 0.1f;
         e.adaptive_min_spp = 2;
         e.adaptive_check_passes = 1;
         e.adaptive_neighbours_only = 1;
         e.disable_skips = PT_SKIP_ALL;
-        CHECK(t, pt_render(s, &e, &f, NULL) == PT_OK, "valid extreme settings rejected: %s", pt_scene_error_message(s));
+        CHECK(t, pt_render(s, &e, &f, &st) == PT_OK, "valid extreme settings rejected: %s", st.error);
     }
     pt_film_free(&f);
     pt_scene_destroy(s);

@@ -864,6 +864,83 @@ static void scene_info_counts(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+static void error_message_cleared(test_ctx *t)
+{
+    /* pt_scene_error_message describes the last call that changes the scene: after a failure, each
+       such call that succeeds leaves "" (every one of them is tried); calls that only read the
+       scene (info, queries, renders) leave the message as it was. */
+    pt_scene *s = pt_scene_create();
+    pt_transform tr = pt_transform_translate(pt_v3(0, 0, 1));
+    pt_material_desc md;
+    pt_mesh_desc mesh;
+    pt_scene_info info;
+    pt_render_desc rd;
+    pt_image img;
+    pt_hit h;
+    pt_ray r;
+    static const float pos[] = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
+    static const uint32_t idx[] = { 0, 1, 2 };
+    const char *names[13] = { "set_transform", "set_transform(NULL)", "add_lambertian", "add_metal", "add_dielectric",
+                              "add_emitter", "add_material", "add_checker", "add_sphere", "add_quad", "add_triangle",
+                              "add_box", "add_mesh" };
+    int m, k, rc = 0;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_METAL;
+    md.albedo = pt_v3(0.9f, 0.9f, 0.9f);
+    memset(&mesh, 0, sizeof mesh);
+    mesh.positions = pos;
+    mesh.vertex_count = 3;
+    mesh.indices = idx;
+    mesh.triangle_count = 1;
+    mesh.material = m;
+    for (k = 0; k < 13; k++) {
+        rc = pt_scene_add_sphere(s, pt_v3(0, 0, 0), -1, m); /* fails: negative radius */
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && pt_scene_error_message(s)[0] != '\0', "the failure before %s: %d '%s'",
+              names[k], rc, pt_scene_error_message(s));
+        switch (k) {
+        case 0: rc = pt_scene_set_transform(s, &tr); break;
+        case 1: rc = pt_scene_set_transform(s, NULL); break;
+        case 2: rc = pt_scene_add_lambertian(s, pt_v3(0.2f, 0.2f, 0.2f)); break;
+        case 3: rc = pt_scene_add_metal(s, pt_v3(0.8f, 0.8f, 0.8f), 0.1f); break;
+        case 4: rc = pt_scene_add_dielectric(s, 1.5f); break;
+        case 5: rc = pt_scene_add_emitter(s, pt_v3(4, 4, 4), 0); break;
+        case 6: rc = pt_scene_add_material(s, &md); break;
+        case 7: rc = pt_scene_add_checker(s, pt_v3(0, 0, 0), pt_v3(1, 1, 1), 1.0f); break;
+        case 8: rc = pt_scene_add_sphere(s, pt_v3(0, 0, -5), 1, m); break;
+        case 9: rc = pt_scene_add_quad(s, pt_v3(-1, -1, -8), pt_v3(2, 0, 0), pt_v3(0, 2, 0), m); break;
+        case 10: rc = pt_scene_add_triangle(s, pt_v3(0, 0, -9), pt_v3(1, 0, -9), pt_v3(0, 1, -9), m); break;
+        case 11: rc = pt_scene_add_box(s, pt_v3(3, 3, 3), pt_v3(4, 4, 4), m); break;
+        default: rc = pt_scene_add_mesh(s, &mesh); break;
+        }
+        CHECK(t, rc >= 0 && pt_scene_error_message(s)[0] == '\0', "%s succeeded (%d) but the message is still '%s'",
+              names[k], rc, pt_scene_error_message(s));
+    }
+    rc = pt_scene_set_backend(s, (pt_backend)7);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && pt_scene_error_message(s)[0] != '\0', "backend 7: %d", rc);
+    rc = pt_scene_set_backend(s, PT_BACKEND_BUILTIN);
+    CHECK(t, rc == PT_OK && pt_scene_error_message(s)[0] == '\0', "set_backend succeeded (%d) but the message is '%s'", rc,
+          pt_scene_error_message(s));
+    pt_scene_add_sphere(s, pt_v3(0, 0, 0), -1, m);
+    rc = pt_scene_commit(s);
+    CHECK(t, rc == PT_OK && pt_scene_error_message(s)[0] == '\0', "commit succeeded (%d) but the message is '%s'", rc,
+          pt_scene_error_message(s));
+    /* read-only calls neither clear nor write it */
+    pt_scene_add_sphere(s, pt_v3(0, 0, 0), -1, m);
+    r.origin = pt_v3(0, 0, 0);
+    r.dir = pt_v3(0, 0, -1);
+    memset(&rd, 0, sizeof rd);
+    rd.width = 4; rd.height = 4; rd.samples_per_pixel = 1; rd.threads = 1;
+    rd.camera.look_from = pt_v3(0, 0, 0); rd.camera.look_at = pt_v3(0, 0, -1);
+    memset(&img, 0, sizeof img);
+    CHECK(t, pt_scene_get_info(s, &info) == PT_OK && pt_scene_intersect(s, r, INFINITY, &h) == 1 &&
+                 pt_render_image(s, &rd, &img, NULL) == PT_OK && strstr(pt_scene_error_message(s), "sphere") != NULL,
+          "read-only calls changed the message to '%s'", pt_scene_error_message(s));
+    pt_image_free(&img);
+    pt_scene_destroy(s);
+}
+
 const test_case test_geometry_cases[] = {
     TEST_CASE(intersect_sphere),
     TEST_CASE(intersect_sphere_far_tiny),
@@ -874,6 +951,7 @@ const test_case test_geometry_cases[] = {
     TEST_CASE(box_helper),
     TEST_CASE(mesh_with_normals),
     TEST_CASE(scene_errors),
+    TEST_CASE(error_message_cleared),
     TEST_CASE(scene_info_counts),
     TEST_END
 };

@@ -390,12 +390,84 @@ static void emission_sides(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+/* A glass ball in front of a checkered wall under one light, the glass made by `how`: 0
+   pt_scene_add_dielectric(s, 1.5), 1 pt_scene_add_dielectric(s, 0), 2 pt_material_desc with ior 0.
+   Returns the render's code; the image in *img. */
+static int glass_render(int how, pt_image *img, char *msg, size_t msg_size)
+{
+    pt_scene *s = pt_scene_create();
+    pt_render_desc d = tu_base_desc(12, 12, 8, 77);
+    pt_material_desc md;
+    int glass, wall, light, rc;
+    if (!s) return PT_ERROR_OUT_OF_MEMORY;
+    memset(&md, 0, sizeof md);
+    md.type = PT_MATERIAL_DIELECTRIC;
+    glass = how == 0 ? pt_scene_add_dielectric(s, 1.5f) : how == 1 ? pt_scene_add_dielectric(s, 0.0f)
+                                                                    : pt_scene_add_material(s, &md);
+    wall = pt_scene_add_lambertian(s, pt_v3(0.7f, 0.6f, 0.5f));
+    light = pt_scene_add_emitter(s, pt_v3(6, 6, 6), 0);
+    rc = glass < 0 ? glass : pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, glass);
+    rc = rc >= 0 ? pt_scene_add_quad(s, pt_v3(-4, -4, -3), pt_v3(8, 0, 0), pt_v3(0, 8, 0), wall) : rc;
+    rc = rc >= 0 ? pt_scene_add_quad(s, pt_v3(-1, 3, -1), pt_v3(0, 0, 2), pt_v3(2, 0, 0), light) : rc; /* faces -y */
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    snprintf(msg, msg_size, "%s", pt_scene_error_message(s));
+    if (rc == PT_OK) {
+        d.camera.look_from = pt_v3(0, 0.5f, 5);
+        d.camera.look_at = pt_v3(0, 0, 0);
+        d.threads = 1;
+        rc = pt_render_image(s, &d, img, NULL);
+    }
+    pt_scene_destroy(s);
+    return rc;
+}
+
+static void dielectric_ior_zero(test_ctx *t)
+{
+    /* ior 0 means 1.5 (pt_material_desc's documented default) for pt_scene_add_dielectric too: all
+       three ways of making the glass render the same image bit for bit. Invalid iors are refused
+       by both, with a message that gives the value. */
+    pt_image img[3];
+    char msg[256];
+    const float bad[4] = { -1.0f, 1e-4f, (float)NAN, (float)INFINITY };
+    int k, rc;
+    size_t i, differ = 0;
+    memset(img, 0, sizeof img);
+    for (k = 0; k < 3; k++) {
+        rc = glass_render(k, &img[k], msg, sizeof msg);
+        CHECK(t, rc == PT_OK, "%s: %d '%s'", k == 0 ? "add_dielectric(1.5)" : k == 1 ? "add_dielectric(0)" : "desc ior 0",
+              rc, msg);
+    }
+    if (img[0].rgb && img[1].rgb && img[2].rgb) {
+        for (i = 0; i < 3u * 12u * 12u; i++) differ += img[0].rgb[i] != img[1].rgb[i] || img[0].rgb[i] != img[2].rgb[i];
+        CHECK(t, differ == 0, "%lu of %d values differ from ior 1.5's image", (unsigned long)differ, 3 * 12 * 12);
+    }
+    for (k = 0; k < 3; k++) pt_image_free(&img[k]);
+    for (k = 0; k < 4; k++) {
+        pt_scene *s = pt_scene_create();
+        pt_material_desc md;
+        int a, b;
+        char ma[256];
+        if (!CHECK(t, s != NULL, "scene")) return;
+        memset(&md, 0, sizeof md);
+        md.type = PT_MATERIAL_DIELECTRIC;
+        md.ior = bad[k];
+        a = pt_scene_add_dielectric(s, bad[k]);
+        snprintf(ma, sizeof ma, "%s", pt_scene_error_message(s));
+        b = pt_scene_add_material(s, &md);
+        CHECK(t, a == PT_ERROR_INVALID_ARGUMENT && b == PT_ERROR_INVALID_ARGUMENT && strstr(ma, "ior") &&
+                     strstr(pt_scene_error_message(s), "ior"),
+              "ior %g: add_dielectric %d '%s', add_material %d '%s'", (double)bad[k], a, ma, b, pt_scene_error_message(s));
+        pt_scene_destroy(s);
+    }
+}
+
 const test_case test_materials_cases[] = {
     TEST_CASE(checker_parity),
     TEST_CASE(checker_in_render),
     TEST_CASE(delta_flags),
     TEST_CASE(furnace_spheres),
     TEST_CASE(dielectric_slab_fresnel),
+    TEST_CASE(dielectric_ior_zero),
     TEST_CASE(mirror_reflection),
     TEST_CASE(emission_sides),
     TEST_END

@@ -6,6 +6,7 @@
 #include "test_util.h"
 
 #include <dirent.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -325,11 +326,87 @@ static void film_accumulates_render(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+static void write_error_messages(test_ctx *t)
+{
+    /* pt_write_pfm_ex and pt_write_ppm_ex describe each failure in err: the path, the step and the
+       system's reason (strerror of the errno the failing call set), and leave no file behind; a
+       write that succeeds leaves "" there; err may be NULL, and a short err is truncated, not
+       overrun. */
+    char dir[64], path[160], want[800], list[256], err[1024], tiny[16];
+    pt_image img;
+    int rc, k, c;
+    FILE *f;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    memset(&img, 0, sizeof img);
+    if (!CHECK(t, pt_image_init(&img, 3, 2) == PT_OK, "pt_image_init")) { tu_remove_tree(dir); return; }
+    for (k = 0; k < 2; k++) {
+        int (*writer)(const char *, const pt_image *, char *, size_t) = k == 0 ? pt_write_pfm_ex : pt_write_ppm_ex;
+        const char *name = k == 0 ? "pt_write_pfm_ex" : "pt_write_ppm_ex", *what = k == 0 ? "PFM" : "PPM";
+        /* cases: a missing directory (ENOENT), a directory as the target (EISDIR, at the rename), a
+           path through a regular file (ENOTDIR) */
+        for (c = 0; c < 3; c++) {
+            const int code[3] = { ENOENT, EISDIR, ENOTDIR };
+            if (c == 0) snprintf(path, sizeof path, "%s/missing/out.img", dir);
+            if (c == 1) {
+                snprintf(path, sizeof path, "%s/target", dir);
+                mkdir(path, 0700);
+            }
+            if (c == 2) {
+                snprintf(path, sizeof path, "%s/file", dir);
+                f = fopen(path, "wb");
+                if (f) fclose(f);
+                snprintf(path, sizeof path, "%s/file/out.img", dir);
+            }
+            err[0] = '\0';
+            rc = writer(path, &img, err, sizeof err);
+            if (c == 1) snprintf(want, sizeof want, "%s: writing %s: cannot rename '%s.ptmp' to '%s': %s", path, what, path,
+                                 path, strerror(code[c]));
+            else snprintf(want, sizeof want, "%s: writing %s: cannot create '%s.ptmp': %s", path, what, path, strerror(code[c]));
+            CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "%s case %d: %d, message '%s', want '%s'", name, c, rc, err,
+                  want);
+            if (c == 1) {
+                CHECK(t, tu_dir_entries(path, NULL, 0) == 0, "%s onto a directory wrote into it", name);
+                rmdir(path);
+            }
+            if (c == 2) {
+                snprintf(path, sizeof path, "%s/file", dir);
+                unlink(path);
+            }
+            CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "%s case %d left files behind: %s", name, c, list);
+        }
+        /* invalid arguments */
+        rc = writer(NULL, &img, err, sizeof err);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(err, "no path") && strstr(err, what), "%s(NULL path): %d '%s'",
+              name, rc, err);
+        snprintf(path, sizeof path, "%s/x.img", dir);
+        rc = writer(path, NULL, err, sizeof err);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(err, path) && strstr(err, "image is NULL"),
+              "%s(NULL image): %d '%s'", name, rc, err);
+        /* a short buffer: truncated, terminated, nothing written past err_size */
+        memset(tiny, '#', sizeof tiny);
+        snprintf(path, sizeof path, "%s/missing/out.img", dir);
+        rc = writer(path, &img, tiny, 8);
+        CHECK(t, rc == PT_ERROR_IO && strlen(tiny) == 7 && tiny[8] == '#' && tiny[15] == '#', "%s with err_size 8: '%.8s'",
+              name, tiny);
+        CHECK(t, writer(path, &img, NULL, 0) == PT_ERROR_IO, "%s with err NULL", name);
+        /* success clears err */
+        snprintf(path, sizeof path, "%s/ok.img", dir);
+        memset(err, 'x', sizeof err - 1);
+        err[sizeof err - 1] = '\0';
+        rc = writer(path, &img, err, sizeof err);
+        CHECK(t, rc == PT_OK && err[0] == '\0', "%s success: %d, message '%.40s'", name, rc, err);
+        unlink(path);
+    }
+    pt_image_free(&img);
+    tu_remove_tree(dir);
+}
+
 const test_case test_output_cases[] = {
     TEST_CASE(pfm_layout),
     TEST_CASE(ppm_srgb),
     TEST_CASE(srgb_encode_function),
     TEST_CASE(write_errors),
+    TEST_CASE(write_error_messages),
     TEST_CASE(film_math),
     TEST_CASE(film_accumulates_render),
     TEST_END

@@ -760,6 +760,211 @@ static void render_desc_validation(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+/* Sets field k of the 25 render_errors_name_the_field cases to an invalid value; returns the
+   message's expected start ("pt_render_desc.<field> = <value>"). */
+static const char *break_field(pt_render_desc *d, int k)
+{
+    switch (k) {
+    case 0: d->width = 0; return "pt_render_desc.width = 0:";
+    case 1: d->height = -3; return "pt_render_desc.height = -3:";
+    case 2: d->samples_per_pixel = -1; return "pt_render_desc.samples_per_pixel = -1:";
+    case 3: d->samples_per_pass = -2; return "pt_render_desc.samples_per_pass = -2:";
+    case 4: d->threads = -1; return "pt_render_desc.threads = -1:";
+    case 5: d->tile_size = -4; return "pt_render_desc.tile_size = -4:";
+    case 6: d->strategy = (pt_strategy)7; return "pt_render_desc.strategy = 7:";
+    case 7: d->light_weight = 1.5f; return "pt_render_desc.light_weight = 1.5:";
+    case 8: d->max_depth = -1; return "pt_render_desc.max_depth = -1:";
+    case 9: d->max_splits = 65537; return "pt_render_desc.max_splits = 65537:";
+    case 10: d->indirect_paths = 9; return "pt_render_desc.indirect_paths = 9:";
+    case 11: d->background = pt_v3(0, -1, 0); return "pt_render_desc.background = (0, -1, 0):";
+    case 12: d->guide = quad_guide; d->guide_weight = 1.0f; return "pt_render_desc.guide_weight = 1:";
+    case 13: d->disable_skips = 1u << 1; return "pt_render_desc.disable_skips = 0x2:";
+    case 14: d->sampler = (pt_sampler)2; return "pt_render_desc.sampler = 2:";
+    case 15: d->adaptive_threshold = -0.5f; return "pt_render_desc.adaptive_threshold = -0.5:";
+    case 16: d->adaptive_min_spp = 1; return "pt_render_desc.adaptive_min_spp = 1:";
+    case 17: d->adaptive_check_passes = -1; return "pt_render_desc.adaptive_check_passes = -1:";
+    case 18: d->adaptive_neighbours_only = 2; return "pt_render_desc.adaptive_neighbours_only = 2:";
+    case 19: d->camera.vfov_degrees = 180; return "pt_render_desc.camera.vfov_degrees = 180:";
+    case 20: d->camera.lens_radius = -1; return "pt_render_desc.camera.lens_radius = -1:";
+    case 21: d->camera.focus_distance = -2; return "pt_render_desc.camera.focus_distance = -2:";
+    case 22: d->camera.look_from = pt_v3(INFINITY, 0, 0); return "pt_render_desc.camera.look_from = (inf, 0, 0):";
+    case 23: d->camera.look_at = d->camera.look_from; return "pt_render_desc.camera.look_at = (278, 278, -800):";
+    default: d->camera.up = pt_v3(0, 0, 2); return "pt_render_desc.camera.up = (0, 0, 2):"; /* along the view */
+    }
+}
+
+static int count_of(const char *text, const char *word)
+{
+    int n = 0;
+    const char *p = text;
+    while ((p = strstr(p, word)) != NULL) { n++; p += strlen(word); }
+    return n;
+}
+
+static void render_errors_name_the_field(test_ctx *t)
+{
+    /* Every invalid pt_render_desc setting is refused by pt_render and by pt_render_image with a
+       message in pt_render_stats.error that names that one field and its value; other misuse (NULL
+       arguments, an uncommitted scene, a film of another size, cancellation) is described too, and
+       a call that succeeds leaves "" there. */
+    pt_render_desc d = tu_base_desc(8, 8, 1, 4242);
+    pt_scene *s = cornell(0, &d), *open_scene = pt_scene_create();
+    pt_film f, g;
+    pt_image img;
+    pt_render_stats st;
+    volatile int stop = 1;
+    int k, rc, fn;
+    if (!CHECK(t, s != NULL && open_scene != NULL, "scenes")) { pt_scene_destroy(s); pt_scene_destroy(open_scene); return; }
+    if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); pt_scene_destroy(open_scene); return; }
+    memset(&img, 0, sizeof img);
+    for (k = 0; k < 25; k++)
+        for (fn = 0; fn < 2; fn++) {
+            pt_render_desc e = d;
+            const char *want = break_field(&e, k);
+            memset(st.error, 'x', sizeof st.error - 1);
+            st.error[sizeof st.error - 1] = '\0';
+            rc = fn == 0 ? pt_render(s, &e, &f, &st) : pt_render_image(s, &e, &img, &st);
+            CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "%s: %s returned %d", want, fn ? "pt_render_image" : "pt_render", rc);
+            CHECK(t, strncmp(st.error, want, strlen(want)) == 0 && count_of(st.error, "pt_render_desc.") == 1,
+                  "%s: message '%.120s', want '%s ...' naming that field alone", fn ? "pt_render_image" : "pt_render", st.error,
+                  want);
+            pt_image_free(&img);
+        }
+    for (k = 0; k < 64; k++) CHECK(t, f.count[k] == 0, "a refused render took samples");
+    rc = pt_render(s, &d, NULL, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "film is NULL"), "NULL film: %d '%s'", rc, st.error);
+    rc = pt_render(NULL, &d, &f, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "scene is NULL"), "NULL scene: %d '%s'", rc, st.error);
+    rc = pt_render_image(s, NULL, &img, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "desc is NULL"), "NULL desc: %d '%s'", rc, st.error);
+    rc = pt_render_image(s, &d, NULL, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "image is NULL"), "NULL image: %d '%s'", rc, st.error);
+    rc = pt_render_image(open_scene, &d, &img, &st);
+    CHECK(t, rc == PT_ERROR_INVALID_STATE && strstr(st.error, "not committed"), "uncommitted scene: %d '%s'", rc, st.error);
+    if (pt_film_init(&g, 9, 8) == PT_OK) {
+        rc = pt_render(s, &d, &g, &st);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "pt_render_desc.width x height = 8 x 8: the film is 9 x 8"),
+              "film of 9 x 8: %d '%s'", rc, st.error);
+        pt_film_free(&g);
+    }
+    {
+        pt_render_desc e = d;
+        e.cancel = &stop;
+        rc = pt_render(s, &e, &f, &st);
+        CHECK(t, rc == PT_ERROR_CANCELLED && strstr(st.error, "cancelled"), "cancelled: %d '%s'", rc, st.error);
+    }
+    rc = pt_render(s, &d, &f, &st);
+    CHECK(t, rc == PT_OK && st.error[0] == '\0', "a valid render after the failures: %d, message '%s'", rc, st.error);
+    rc = pt_render_image(s, &d, &img, &st);
+    CHECK(t, rc == PT_OK && st.error[0] == '\0', "a valid pt_render_image: %d, message '%s'", rc, st.error);
+    pt_image_free(&img);
+    CHECK(t, pt_scene_error_message(s)[0] == '\0', "renders wrote into the scene's message: '%s'", pt_scene_error_message(s));
+    pt_film_free(&f);
+    pt_scene_destroy(s);
+    pt_scene_destroy(open_scene);
+    test_note(t, "25 fields x 2 functions");
+}
+
+/* One of the threads of concurrent_renders: `rounds` times a render that fails in its own way (a
+   bad field, or cancelled), then a valid render of the shared scene into its own film. */
+typedef struct conc_job {
+    const pt_scene *s;
+    pt_render_desc d;
+    int fail_kind;      /* 0: width 0; 1: max_depth -1; 2: cancelled before it starts */
+    int rounds;
+    pt_film film;       /* the last valid render */
+    int render_rc;      /* the first valid render's failure, else PT_OK */
+    int wrong;          /* failing renders whose code or message was not this thread's */
+    char seen[300];     /* the first wrong message */
+} conc_job;
+
+static void *conc_run(void *arg)
+{
+    static const char *const want[3] = { "pt_render_desc.width = 0:", "pt_render_desc.max_depth = -1:", "cancelled" };
+    static const int want_rc[3] = { PT_ERROR_INVALID_ARGUMENT, PT_ERROR_INVALID_ARGUMENT, PT_ERROR_CANCELLED };
+    conc_job *j = (conc_job *)arg;
+    volatile int stop = 1;
+    int r, rc;
+    j->render_rc = PT_OK;
+    for (r = 0; r < j->rounds; r++) {
+        pt_render_desc e = j->d;
+        pt_render_stats st;
+        pt_image img;
+        memset(&img, 0, sizeof img);
+        if (j->fail_kind == 0) e.width = 0;
+        else if (j->fail_kind == 1) e.max_depth = -1;
+        else e.cancel = &stop;
+        rc = pt_render_image(j->s, &e, &img, &st);
+        pt_image_free(&img);
+        if (rc != want_rc[j->fail_kind] || !strstr(st.error, want[j->fail_kind])) {
+            if (!j->wrong++) snprintf(j->seen, sizeof j->seen, "%d '%s'", rc, st.error);
+        }
+        pt_film_free(&j->film);
+        rc = pt_film_init(&j->film, j->d.width, j->d.height);
+        if (rc == PT_OK) rc = pt_render(j->s, &j->d, &j->film, &st);
+        if (rc != PT_OK && j->render_rc == PT_OK) j->render_rc = rc;
+    }
+    return NULL;
+}
+
+static void concurrent_renders(test_ctx *t)
+{
+    /* A committed scene rendered from three threads at once (each also with its own render threads
+       or none): every film equals the same desc rendered alone, bit for bit, and each thread's failed
+       renders are described in its own pt_render_stats, never in another's. Run under
+       ThreadSanitizer by make tsan-test. */
+    pt_render_desc d = tu_base_desc(32, 24, 8, 4242);
+    pt_scene *s = cornell(1, &d);
+    conc_job job[3];
+    pt_film ref[3];
+    int k, started[3] = { 0, 0, 0 };
+#ifndef PDFTRACE_NO_THREADS
+    pthread_t th[3];
+#endif
+    if (!CHECK(t, s != NULL, "Cornell scene")) return;
+    d.max_depth = 8;
+    memset(job, 0, sizeof job);
+    memset(ref, 0, sizeof ref);
+    for (k = 0; k < 3; k++) {
+        job[k].s = s;
+        job[k].d = d;
+        job[k].d.seed = d.seed + (uint64_t)k;
+        job[k].d.threads = k == 1 ? 2 : 1;
+        job[k].d.strategy = k == 2 ? PT_STRATEGY_MIXTURE : PT_STRATEGY_MIS;
+        job[k].d.sampler = k == 1 ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
+        job[k].fail_kind = k;
+        job[k].rounds = 4;
+        if (!tu_render_into(t, s, &job[k].d, &ref[k], NULL, "alone")) goto done;
+    }
+#ifndef PDFTRACE_NO_THREADS
+    for (k = 0; k < 3; k++) started[k] = pthread_create(&th[k], NULL, conc_run, &job[k]) == 0;
+    for (k = 0; k < 3; k++)
+        if (started[k]) pthread_join(th[k], NULL);
+#endif
+    for (k = 0; k < 3; k++)
+        if (!started[k]) conc_run(&job[k]); /* no threads (in this build): one after the other */
+    for (k = 0; k < 3; k++) {
+        CHECK(t, job[k].render_rc == PT_OK, "thread %d: a valid render failed: %d", k, job[k].render_rc);
+        CHECK(t, job[k].render_rc != PT_OK || tu_film_equal(&ref[k], &job[k].film),
+              "thread %d: its film differs from the same desc rendered alone", k);
+        CHECK(t, job[k].wrong == 0, "thread %d: %d of %d failed renders got the wrong code or message, first %s", k,
+              job[k].wrong, job[k].rounds, job[k].seen);
+    }
+    CHECK(t, pt_scene_error_message(s)[0] == '\0', "the renders wrote into the scene's message: '%s'",
+          pt_scene_error_message(s));
+#ifndef PDFTRACE_NO_THREADS
+    test_note(t, "3 threads x 4 rounds (a failing and a valid render each), %d started", started[0] + started[1] + started[2]);
+#else
+    test_note(t, "no threads in this build: the three jobs ran one after the other");
+#endif
+done:
+    for (k = 0; k < 3; k++) {
+        pt_film_free(&ref[k]);
+        pt_film_free(&job[k].film);
+    }
+    pt_scene_destroy(s);
+}
+
 const test_case test_render_cases[] = {
     TEST_CASE(camera_conventions),
     TEST_CASE(threads_bit_identical),
@@ -767,6 +972,8 @@ const test_case test_render_cases[] = {
     TEST_CASE(cancellation_and_progress),
     TEST_CASE(render_image_matches_film),
     TEST_CASE(render_desc_validation),
+    TEST_CASE(render_errors_name_the_field),
+    TEST_CASE(concurrent_renders),
     TEST_CASE(furnace_closed_sphere),
     TEST_CASE(furnace_one_bounce),
     TEST_CASE(strategies_agree_cornell),

@@ -955,7 +955,7 @@ int tu_render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_f
     if (!st) st = &local;
     if (!CHECK(t, pt_film_init(film, d->width, d->height) == PT_OK, "%s: film", what)) return 0;
     rc = pt_render(s, d, film, st);
-    CHECK(t, rc == PT_OK, "%s: pt_render returned %d (%s)", what, rc, pt_result_string(rc));
+    CHECK(t, rc == PT_OK, "%s: pt_render returned %d (%s: %s)", what, rc, pt_result_string(rc), st->error);
     CHECK(t, st->nonfinite_samples == 0, "%s: %llu non-finite samples", what, (unsigned long long)st->nonfinite_samples);
     return rc == PT_OK;
 }

@@ -1064,9 +1064,9 @@ void st_degenerate(st_ctx *c)
         st_row(c, ok, "degenerate: camera inside geometry", "inside a closed sphere / a two-sided sphere light",
                "black / finite > 0", "%s", ok ? "black / finite" : "different");
         d.camera.look_at = d.camera.look_from;
-        rc1 = pt_render_image(g, &d, &img, NULL);
+        rc1 = pt_render_image(g, &d, &img, &st);
         pt_image_free(&img);
-        ok = rc1 == PT_ERROR_INVALID_ARGUMENT && strstr(pt_scene_error_message(g), "camera") != NULL;
+        ok = rc1 == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "camera") != NULL;
         d.camera.look_at = pt_v3(6, 0, 0);
         d.camera.up = pt_v3(0, 0, 0);
         rc2 = pt_render_image(g, &d, &img, NULL);   /* documented: zero up means (0,1,0) */
