@@ -342,7 +342,7 @@ static int make_reference(const config *cfg, const bench_scene *bs, int spp_over
     rc = pt_render(L.scene, &L.rd, &film, &st);
     fprintf(stderr, "\n");
     if (rc != PT_OK || pt_film_resolve(&film, &mean) != PT_OK) {
-        fprintf(stderr, "bench: reference render of %s failed: %s\n", bs->name, pt_scene_error_message(L.scene));
+        fprintf(stderr, "bench: reference render of %s failed: %s\n", bs->name, st.error);
         ok = 0;
     }
     if (ok && st.nonfinite_samples) {
@@ -452,7 +452,7 @@ static int run_series(const loaded *L, const bench_strategy *bst, uint64_t seed,
         rc = pt_render(L->scene, &d, &film, &st);
         t += ptv_now() - t0;
         if (rc != PT_OK) {
-            fprintf(stderr, "bench: render failed: %s\n", pt_scene_error_message(L->scene));
+            fprintf(stderr, "bench: render failed: %s\n", st.error);
             ok = 0;
             break;
         }
@@ -1055,7 +1055,7 @@ static int run_adaptive(const config *cfg, results *R, adaptive_results *A, int 
             if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
             t0 = ptv_now();
             if (pt_render(L->scene, &d, &film, &st) != PT_OK) {
-                fprintf(stderr, "bench: adaptive render failed: %s\n", pt_scene_error_message(L->scene));
+                fprintf(stderr, "bench: adaptive render failed: %s\n", st.error);
                 pt_film_free(&film);
                 pt_image_free(&keep);
                 return 0;
@@ -1275,6 +1275,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         bench_scene bs;
         loaded L;
         pt_render_desc d;
+        pt_render_stats fst;
         pt_film film;
         pt_image first = {0, 0, NULL}, img = {0, 0, NULL};
         double t_on[SKIP_REPS_MAX], t_off[SKIP_REPS_MAX], pr[SKIP_REPS_MAX], v_on[SKIP_REPS_MAX],
@@ -1283,6 +1284,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         uint64_t rs = 0x5c1b5ULL + (uint64_t)c;
         size_t p;
         memset(&bs, 0, sizeof bs);
+        memset(&fst, 0, sizeof fst);
         bs.name = sk->scene_name;
         bs.file = sk->scene_file;
         if (!load_scene(&bs, &L)) return 0;
@@ -1299,7 +1301,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
             d.samples_per_pixel = spp;
             d.samples_per_pass = spp;
             pt_film_clear(&film);
-            if (pt_render(L.scene, &d, &film, NULL) != PT_OK) goto fail;
+            if (pt_render(L.scene, &d, &film, &fst) != PT_OK) goto fail;
             if (cpu_now() - t0 >= target / 2 || spp >= 1 << 16) break;
             spp *= 2;
         }
@@ -1313,7 +1315,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
                 d.disable_skips = general ? sk->bit : 0u;
                 pt_film_clear(&film);
                 t0 = cpu_now();
-                if (pt_render(L.scene, &d, &film, NULL) != PT_OK) goto fail;
+                if (pt_render(L.scene, &d, &film, &fst) != PT_OK) goto fail;
                 (general ? t_off : t_on)[r] = cpu_now() - t0;
                 for (p = 0; p < npix; ++p) {
                     pt_color m, v;
@@ -1399,7 +1401,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         free_scene(&L);
         continue;
     fail:
-        fprintf(stderr, "bench: render failed: %s\n", pt_scene_error_message(L.scene));
+        fprintf(stderr, "bench: render failed: %s\n", fst.error);
         pt_image_free(&first);
         pt_image_free(&img);
         pt_film_free(&film);

@@ -116,15 +116,16 @@ PTV_MAYBE_UNUSED static int render_desc(const pt_scenefile *sd, int w, int h, in
     pt_render_desc rd;
     pt_film film;
     char err[1024];
+    pt_render_stats st;
     int rc = pt_scenefile_build(sd, &scene, &rd, err, sizeof err), x, y;
     if (rc != PT_OK) { fprintf(stderr, PTV_PROG ": %s\n", err); return 0; }
     if (w > 0) { rd.width = w; rd.height = h; }
     if (spp > 0) rd.samples_per_pixel = spp;
     if (pt_film_init(&film, rd.width, rd.height) != PT_OK) { pt_scene_destroy(scene); return 0; }
-    rc = pt_render(scene, &rd, &film, NULL);
+    rc = pt_render(scene, &rd, &film, &st);
     pt_scene_destroy(scene);
     if (rc != PT_OK || pt_image_init(mean, rd.width, rd.height) != PT_OK || pt_image_init(var, rd.width, rd.height) != PT_OK) {
-        fprintf(stderr, PTV_PROG ": render failed: %s\n", pt_result_string(rc));
+        fprintf(stderr, PTV_PROG ": render failed: %s\n", rc != PT_OK ? st.error : "out of memory");
         pt_film_free(&film);
         return 0;
     }
