@@ -4,7 +4,8 @@
 #   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm
 #   make run-all          also render the other examples into out/
 #   make test             build and run the test runner, then again without threads and
-#                         under AddressSanitizer + UndefinedBehaviorSanitizer
+#                         under AddressSanitizer + UndefinedBehaviorSanitizer; every runner ends
+#                         with "N passed, M failed, K skipped" (a skipped test is not a pass)
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS (and -DPDFTRACE_NO_SIMD)
 #   make exr-test         build the test runner with OpenEXR (build/test_runner_exr) and run
 #                         its exr section (needs libopenexr-dev)
@@ -200,7 +201,7 @@ bench-quick: $(BUILD)/bench
 bench-refs: $(BUILD)/bench
 	./$(BUILD)/bench refs
 
-# The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed".
+# The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed, K skipped".
 # First the scene-file runner (malformed inputs, scenes/ loading, --scene = built-in box, and
 # the fast POV-Ray comparisons when povray is installed).
 # Then the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
