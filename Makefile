@@ -4,7 +4,8 @@
 #   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm
 #   make run-all          also render the other examples into out/
 #   make test             build and run the test runner, then again without threads and
-#                         under AddressSanitizer + UndefinedBehaviorSanitizer
+#                         under AddressSanitizer + UndefinedBehaviorSanitizer; every runner ends
+#                         with "N passed, M failed, K skipped" (a skipped test is not a pass)
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS (and -DPDFTRACE_NO_SIMD)
 #   make tsan-test        the tests that render one scene from several threads at once, built with
 #                         ThreadSanitizer (build/test_runner_tsan; not part of make test)
@@ -40,6 +41,12 @@
 #   make bench-refs       re-render the benchmark's reference images in bench/ref/ (~30 min)
 #   make stress          the numerical stress cases at full size (~1-2 min CPU): a table
 #                         case | metric | bound | result, non-zero exit on any failing row
+#   make install          install pdftrace*.h into $(PREFIX)/include, build/pdftrace into
+#                         $(PREFIX)/bin and a generated pdftrace.pc into $(PREFIX)/lib/pkgconfig
+#                         (PREFIX=/usr/local by default; DESTDIR=... stages the files below it)
+#   make uninstall        remove what make install wrote (same PREFIX and DESTDIR)
+#   make install-check    make install into a temporary prefix, then build and run a program
+#                         with cc $(pkg-config --cflags pdftrace) ... $(pkg-config --libs pdftrace)
 #   make clean            remove build/ and out/
 #   make help             this text
 #
@@ -107,7 +114,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
 
-.PHONY: all run run-all test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress FORCE
+.PHONY: all run run-all test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress install uninstall install-check FORCE
 
 all: $(EXAMPLE_BINS)
 
@@ -207,7 +214,7 @@ bench-quick: $(BUILD)/bench
 bench-refs: $(BUILD)/bench
 	./$(BUILD)/bench refs
 
-# The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed".
+# The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed, K skipped".
 # First the scene-file runner (malformed inputs, scenes/ loading, --scene = built-in box, and
 # the fast POV-Ray comparisons when povray is installed).
 # Then the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
@@ -342,6 +349,41 @@ check-warnings: | $(BUILD)
 	done; \
 	echo "  no embree in the dependencies of examples/cornell.c and tests/test_main.c"; \
 	echo "check-warnings: all clean"
+
+# ---- make install: the headers, the pdftrace command and a pkg-config file. The library is
+# header-only, so the .pc file has no library to link, only what the implementation needs.
+PREFIX  ?= /usr/local
+DESTDIR ?=
+INSTALL ?= install
+INSTALL_HEADERS := $(wildcard pdftrace*.h)
+# every header install may have written, for uninstall (also those not in this tree)
+UNINSTALL_HEADERS := $(sort $(notdir $(INSTALL_HEADERS)) pdftrace.h pdftrace_scene.h pdftrace_exr.h)
+# The command is installed once its source exists; $(BUILD)/pdftrace is built from tools/pdftrace.c.
+INSTALL_BIN := $(if $(wildcard tools/pdftrace.c),$(BUILD)/pdftrace)
+pt_version_part = $(shell awk '$$1 ~ /define$$/ && $$2 == "PDFTRACE_VERSION_$(1)" { print $$3 }' pdftrace.h)
+PT_VERSION := $(call pt_version_part,MAJOR).$(call pt_version_part,MINOR).$(call pt_version_part,PATCH)
+
+install: $(INSTALL_BIN) | $(BUILD)
+	@test -n "$(INSTALL_HEADERS)" || { echo "make install: no pdftrace*.h here" >&2; exit 1; }
+	printf '%s\n' 'prefix=$(PREFIX)' 'exec_prefix=$${prefix}' 'includedir=$${prefix}/include' \
+	    'bindir=$${exec_prefix}/bin' '' 'Name: pdftrace' \
+	    'Description: Monte Carlo path tracer built around probability density functions (header-only C99)' \
+	    'Version: $(PT_VERSION)' 'Cflags: -I$${includedir}' \
+	    'Libs: -lm -pthread' > $(BUILD)/pdftrace.pc
+	$(INSTALL) -d '$(DESTDIR)$(PREFIX)/include' '$(DESTDIR)$(PREFIX)/lib/pkgconfig'
+	$(INSTALL) -m 644 $(INSTALL_HEADERS) '$(DESTDIR)$(PREFIX)/include/'
+	$(INSTALL) -m 644 $(BUILD)/pdftrace.pc '$(DESTDIR)$(PREFIX)/lib/pkgconfig/pdftrace.pc'
+ifneq ($(INSTALL_BIN),)
+	$(INSTALL) -d '$(DESTDIR)$(PREFIX)/bin'
+	$(INSTALL) -m 755 $(INSTALL_BIN) '$(DESTDIR)$(PREFIX)/bin/pdftrace'
+endif
+
+uninstall:
+	rm -f $(UNINSTALL_HEADERS:%='$(DESTDIR)$(PREFIX)/include/%') '$(DESTDIR)$(PREFIX)/bin/pdftrace' \
+	    '$(DESTDIR)$(PREFIX)/lib/pkgconfig/pdftrace.pc'
+
+install-check:
+	MAKE='$(MAKE)' CC='$(CC)' BUILD='$(BUILD)' tests/install/check.sh
 
 clean:
 	rm -rf $(BUILD) $(OUT)

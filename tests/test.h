@@ -3,8 +3,11 @@
    A test is a function void name(test_ctx *t). It records failures with CHECK(t, cond, fmt, ...),
    which returns the truth of cond (so a test can stop early with `if (!CHECK(...)) goto done;`)
    and keeps the first failure's reason and location. test_note appends free text to the line
-   printed for a passing test. Each section file exports a table of test_case terminated by
-   {NULL, NULL}; test_main.c lists the sections. */
+   printed for a passing test. test_skip marks the test skipped (it could not run here: a
+   library not compiled in, a missing platform feature): it prints `SKIP name: reason` and is
+   counted as skipped, never as passed; a skipped test whose CHECKs failed still fails. Each
+   section file exports a table of test_case terminated by {NULL, NULL}; test_main.c lists the
+   sections. */
 #ifndef PDFTRACE_TEST_H
 #define PDFTRACE_TEST_H
 
@@ -24,6 +27,8 @@ typedef struct test_ctx {
     int line;
     char notes[1024];      /* details printed with PASS (and with FAIL, after the reason) */
     char more[5][320];     /* the next few failures, printed below the FAIL line */
+    int skipped;           /* test_skip was called */
+    char skip_reason[256]; /* its reason (the first call's) */
 } test_ctx;
 
 typedef void (*test_fn)(test_ctx *t);
@@ -40,6 +45,8 @@ typedef struct test_case {
 int test_check_(test_ctx *t, int ok, const char *file, int line, const char *fmt, ...) TEST_PRINTF(5, 6);
 /* Appends "; text" (or "text" first) to the notes. */
 void test_note(test_ctx *t, const char *fmt, ...) TEST_PRINTF(2, 3);
+/* Marks the test skipped; fmt says why. The test should return after it. */
+void test_skip(test_ctx *t, const char *fmt, ...) TEST_PRINTF(2, 3);
 
 #define CHECK(t, cond, ...) test_check_((t), (cond) ? 1 : 0, __FILE__, __LINE__, __VA_ARGS__)
 /* The same, for helpers that report at their caller's location. */
@@ -56,7 +63,7 @@ extern const test_case test_render_cases[];
 extern const test_case test_adaptive_cases[]; /* adaptive sampling and PT_SKIP_* switches */
 extern const test_case test_sampler_cases[];  /* pt_render_desc.sampler: PT_SAMPLER_SOBOL */
 extern const test_case test_output_cases[];
-extern const test_case test_exr_cases[];    /* OpenEXR (a SKIP line without PDFTRACE_OPENEXR) */
+extern const test_case test_exr_cases[];    /* OpenEXR (one skipped test without PDFTRACE_OPENEXR) */
 extern const test_case test_embree_cases[]; /* backends; Embree's tests with PDFTRACE_EMBREE */
 extern const test_case test_analytic_cases[];
 extern const test_case test_regress_cases[];

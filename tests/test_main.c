@@ -3,8 +3,10 @@
 
    Usage: test_runner [filter]
    Runs every test whose "section.name" contains filter (all tests without one). Prints one line
-   per test, "PASS name (details)" or "FAIL name: reason (file:line)", a summary per section,
-   and as its last line "N passed, M failed". Exit code 0 iff no test failed.
+   per test, "PASS name (details)", "SKIP name: reason (details)" or "FAIL name: reason
+   (file:line)", a summary per section, and as its last line "N passed, M failed, K skipped".
+   A skipped test is not a pass; one with failed checks is a failure. Exit code 0 iff no test
+   failed.
 
    This file compiles the library implementation (PDFTRACE_IMPLEMENTATION). */
 #define PDFTRACE_IMPLEMENTATION
@@ -59,6 +61,16 @@ void test_note(test_ctx *t, const char *fmt, ...)
     va_end(ap);
 }
 
+void test_skip(test_ctx *t, const char *fmt, ...)
+{
+    va_list ap;
+    if (t->skipped) return;
+    t->skipped = 1;
+    va_start(ap, fmt);
+    vsnprintf(t->skip_reason, sizeof t->skip_reason, fmt, ap);
+    va_end(ap);
+}
+
 static double now_seconds(void)
 {
     struct timespec ts;
@@ -93,14 +105,14 @@ int main(int argc, char **argv)
         { "suite", test_suite_cases },
     };
     const char *filter = argc > 1 ? argv[1] : NULL;
-    int passed = 0, failed = 0;
+    int passed = 0, failed = 0, skipped = 0;
     size_t s;
     double start = now_seconds();
 
     setvbuf(stdout, NULL, _IOLBF, 0);
     for (s = 0; s < sizeof sections / sizeof sections[0]; s++) {
         const test_case *c;
-        int sp = 0, sf = 0;
+        int sp = 0, sf = 0, ss = 0;
         double s0 = now_seconds();
         for (c = sections[s].cases; c->name != NULL; c++) {
             char full[256];
@@ -112,7 +124,10 @@ int main(int argc, char **argv)
             t0 = now_seconds();
             c->fn(&t);
             dt = now_seconds() - t0;
-            if (t.failures == 0) {
+            if (t.failures == 0 && t.skipped) {
+                printf("SKIP %s: %s (%s%s%.2f s)\n", full, t.skip_reason, t.notes, t.notes[0] ? "; " : "", dt);
+                ss++;
+            } else if (t.failures == 0) {
                 printf("PASS %s (%s%s%.2f s)\n", full, t.notes, t.notes[0] ? "; " : "", dt);
                 sp++;
             } else {
@@ -124,13 +139,14 @@ int main(int argc, char **argv)
                 sf++;
             }
         }
-        if (sp + sf > 0)
-            printf("-- section %s: %d passed, %d failed (%.2f s)\n", sections[s].name, sp, sf,
+        if (sp + sf + ss > 0)
+            printf("-- section %s: %d passed, %d failed, %d skipped (%.2f s)\n", sections[s].name, sp, sf, ss,
                    now_seconds() - s0);
         passed += sp;
         failed += sf;
+        skipped += ss;
     }
     printf("-- total time %.2f s\n", now_seconds() - start);
-    printf("%d passed, %d failed\n", passed, failed);
+    printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);
     return failed == 0 ? 0 : 1;
 }
