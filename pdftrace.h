@@ -995,6 +995,146 @@ PTDEF const char *pt_result_string(int code)
 }
 
 /* ------------------------------------------------------------------------------------------
+   0. Internal types: the private representation of a scene, shared by every section below.
+   Shapes become pt__prim records (one per sphere, quad or triangle, geometry baked into world
+   space when added); materials, textures and lights are flat arrays indexed by id. The BVH's
+   node and leaf layouts (section 5) and the Embree handles (section 5b) are declared here too,
+   because struct pt_scene holds them. Types used inside one section only are declared there.
+   pt__fail records a scene function's error message (pt_scene_error_message).
+   ------------------------------------------------------------------------------------------ */
+
+enum { PT__PRIM_SPHERE = 0, PT__PRIM_QUAD = 1, PT__PRIM_TRIANGLE = 2 };
+
+typedef struct pt__prim {
+    pt_vec3 p0;       /* sphere: centre | quad: Q | triangle: a */
+    pt_vec3 p1;       /* sphere: (radius, 0, 0) | quad: u | triangle: b */
+    pt_vec3 p2;       /* quad: v | triangle: c */
+    pt_vec3 n;        /* quad, triangle: unit geometric normal */
+    pt_vec3 w;        /* quad: v x w0 and ... */
+    pt_vec3 w2;       /* ... w0 x u, with w0 = n'/(n'.n'), n' = u x v: a = h.w, b = h.w2 */
+    pt_vec3 mag;      /* set at commit (pt__prim_cache): per-axis magnitude (pt__prim_magnitude) */
+    float inset[2];   /* set at commit, quad: how far inside [0, 1] pt__fill_hit keeps a and b */
+    uint32_t id;      /* public primitive index */
+    int32_t material;
+    int32_t light;    /* index into scene->lights, or -1 */
+    int32_t normals;  /* first of 3 shading normals in scene->normals, or -1 */
+    int32_t type;     /* PT__PRIM_* */
+} pt__prim;
+
+/* Per-ray data computed once per traversal. */
+typedef struct pt__rayctx {
+    pt_vec3 o, d;
+    int kx, ky, kz;       /* watertight triangle test: axis permutation */
+    float sx, sy, sz;     /* and shear */
+    int triangles;        /* whether the permutation and shear were set up */
+} pt__rayctx;
+
+typedef struct pt__material {
+    pt_material_type type;
+    pt_color albedo;
+    int texture;      /* 0 or texture id */
+    float fuzz, ior;
+    pt_color emission;
+    int two_sided, emits, delta, scatters;
+} pt__material;
+
+typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
+
+typedef struct pt__light {
+    uint32_t prim;    /* index into scene->prims (after BVH ordering) */
+    double power;     /* in double: radiance near FLT_MAX or near denormal still has a power */
+    float select_pdf, cdf;
+    float area;
+} pt__light;
+
+#ifdef PDFTRACE_EMBREE
+/* The user data of an Embree user geometry: the scene and its primID -> prims index map. */
+typedef struct pt__rtc_geom { const pt_scene *scene; const uint32_t *map; float pad; } pt__rtc_geom;
+/* The Embree side of a committed scene (section 5b). Geometry ids are the primitive types
+   (PT__PRIM_*): one Embree geometry per type present. */
+typedef struct pt__rtc {
+    RTCDevice device;
+    RTCScene scene;
+    uint32_t *map[3];          /* per geometry: Embree primID -> index into scene->prims */
+    uint32_t count[3];
+    pt__rtc_geom user[3];
+    long long device_bytes;    /* the device's memory, from its memory monitor */
+    int error_code;            /* first RTCError reported by the error callback (0: none) */
+    char error_text[160];
+} pt__rtc;
+#endif
+
+/* The BVH (section 5): 4-wide nodes; leaves in a pool of 16-byte units, each a header (block
+   counts) followed by blocks of four triangles, of four quads and of four other primitives. */
+typedef struct pt__node4 {
+    float box[6][4];  /* lo x, hi x, lo y, hi y, lo z, hi z of the four children (empty: lo > hi) */
+    uint32_t child[4];/* node index, or PT__BVH_LEAF | offset of the leaf in the pool */
+    uint32_t pad[4];  /* 128 bytes: two cache lines */
+} pt__node4;
+typedef struct pt__leaf16 {
+    uint32_t u[4];    /* leaf header: triangle, quad, sphere blocks, 0 */
+} pt__leaf16;
+typedef struct pt__tri4 {
+    float v[9][4];    /* v[3 * vertex + axis][lane] */
+    uint32_t prim[4]; /* index into scene->prims */
+} pt__tri4;
+typedef struct pt__quad4 {
+    float v[14][4];   /* Q, unit normal, w, w2 (pt__prim fields), by axis, then lane; then the
+                         largest a and b margins pt__hit_quad can accept (pt__quad_edge_caps) */
+    uint32_t prim[4];
+} pt__quad4;
+typedef struct pt__sphere4 {
+    float v[4][4];    /* centre x, y, z, radius, then lane */
+    uint32_t prim[4];
+} pt__sphere4;
+
+struct pt_scene {
+    pt__prim *prims;
+    uint32_t prim_count, prim_cap;
+    pt__material *mats;
+    uint32_t mat_count, mat_cap;
+    pt__texture *texs;
+    uint32_t tex_count, tex_cap;
+    pt_vec3 *normals;
+    uint32_t normal_count, normal_cap;
+    void *bvh_mem;    /* one allocation: nodes then the leaf pool, aligned to 64 bytes */
+    pt__node4 *nodes;
+    pt__leaf16 *pool;
+    uint32_t node_count, bvh_depth;
+    size_t bvh_bytes;
+    pt__light *lights;
+    uint32_t light_count;
+    double total_power;
+    pt_transform xf;
+    int xf_identity;
+    int committed;
+    unsigned features;
+    uint32_t sphere_count, quad_count, triangle_count, mesh_count, degenerate_skipped;
+    pt_vec3 lo, hi;
+    int backend_request;       /* pt_backend from pt_scene_set_backend */
+    char embree_config[128];   /* pt_scene_set_embree_config */
+    int backend;               /* what the last commit built: PT_BACKEND_BUILTIN or _EMBREE */
+    double build_seconds;
+    size_t accel_bytes;
+#ifdef PDFTRACE_EMBREE
+    pt__rtc rtc;
+#endif
+    char error[256];
+};
+
+static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
+{
+    pt_scene *scene = (pt_scene *)cscene;
+    if (scene) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(scene->error, sizeof scene->error, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+/* ------------------------------------------------------------------------------------------
    1. Math
    ------------------------------------------------------------------------------------------ */
 
@@ -1189,138 +1329,6 @@ PTDEF pt_rng pt_rng_for_sample(uint64_t seed, uint32_t pixel, uint32_t sample)
     uint64_t h3 = pt__mix64(h2 + 0x9e3779b97f4a7c15ULL);
     pt_rng_seed(&r, h2, h3);
     return r;
-}
-
-/* Internal representation of a scene (shared by the sections below). */
-enum { PT__PRIM_SPHERE = 0, PT__PRIM_QUAD = 1, PT__PRIM_TRIANGLE = 2 };
-
-typedef struct pt__prim {
-    pt_vec3 p0;       /* sphere: centre | quad: Q | triangle: a */
-    pt_vec3 p1;       /* sphere: (radius, 0, 0) | quad: u | triangle: b */
-    pt_vec3 p2;       /* quad: v | triangle: c */
-    pt_vec3 n;        /* quad, triangle: unit geometric normal */
-    pt_vec3 w;        /* quad: v x w0 and ... */
-    pt_vec3 w2;       /* ... w0 x u, with w0 = n'/(n'.n'), n' = u x v: a = h.w, b = h.w2 */
-    pt_vec3 mag;      /* set at commit (pt__prim_cache): per-axis magnitude (pt__prim_magnitude) */
-    float inset[2];   /* set at commit, quad: how far inside [0, 1] pt__fill_hit keeps a and b */
-    uint32_t id;      /* public primitive index */
-    int32_t material;
-    int32_t light;    /* index into scene->lights, or -1 */
-    int32_t normals;  /* first of 3 shading normals in scene->normals, or -1 */
-    int32_t type;     /* PT__PRIM_* */
-} pt__prim;
-
-/* Per-ray data computed once per traversal. */
-typedef struct pt__rayctx {
-    pt_vec3 o, d;
-    int kx, ky, kz;       /* watertight triangle test: axis permutation */
-    float sx, sy, sz;     /* and shear */
-    int triangles;        /* whether the permutation and shear were set up */
-} pt__rayctx;
-
-typedef struct pt__material {
-    pt_material_type type;
-    pt_color albedo;
-    int texture;      /* 0 or texture id */
-    float fuzz, ior;
-    pt_color emission;
-    int two_sided, emits, delta, scatters;
-} pt__material;
-
-typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
-
-typedef struct pt__light {
-    uint32_t prim;    /* index into scene->prims (after BVH ordering) */
-    double power;     /* in double: radiance near FLT_MAX or near denormal still has a power */
-    float select_pdf, cdf;
-    float area;
-} pt__light;
-
-#ifdef PDFTRACE_EMBREE
-/* The user data of an Embree user geometry: the scene and its primID -> prims index map. */
-typedef struct pt__rtc_geom { const pt_scene *scene; const uint32_t *map; float pad; } pt__rtc_geom;
-/* The Embree side of a committed scene (section 5b). Geometry ids are the primitive types
-   (PT__PRIM_*): one Embree geometry per type present. */
-typedef struct pt__rtc {
-    RTCDevice device;
-    RTCScene scene;
-    uint32_t *map[3];          /* per geometry: Embree primID -> index into scene->prims */
-    uint32_t count[3];
-    pt__rtc_geom user[3];
-    long long device_bytes;    /* the device's memory, from its memory monitor */
-    int error_code;            /* first RTCError reported by the error callback (0: none) */
-    char error_text[160];
-} pt__rtc;
-#endif
-
-/* The BVH (section 5): 4-wide nodes; leaves in a pool of 16-byte units, each a header (block
-   counts) followed by blocks of four triangles, of four quads and of four other primitives. */
-typedef struct pt__node4 {
-    float box[6][4];  /* lo x, hi x, lo y, hi y, lo z, hi z of the four children (empty: lo > hi) */
-    uint32_t child[4];/* node index, or PT__BVH_LEAF | offset of the leaf in the pool */
-    uint32_t pad[4];  /* 128 bytes: two cache lines */
-} pt__node4;
-typedef struct pt__leaf16 {
-    uint32_t u[4];    /* leaf header: triangle, quad, sphere blocks, 0 */
-} pt__leaf16;
-typedef struct pt__tri4 {
-    float v[9][4];    /* v[3 * vertex + axis][lane] */
-    uint32_t prim[4]; /* index into scene->prims */
-} pt__tri4;
-typedef struct pt__quad4 {
-    float v[14][4];   /* Q, unit normal, w, w2 (pt__prim fields), by axis, then lane; then the
-                         largest a and b margins pt__hit_quad can accept (pt__quad_edge_caps) */
-    uint32_t prim[4];
-} pt__quad4;
-typedef struct pt__sphere4 {
-    float v[4][4];    /* centre x, y, z, radius, then lane */
-    uint32_t prim[4];
-} pt__sphere4;
-
-struct pt_scene {
-    pt__prim *prims;
-    uint32_t prim_count, prim_cap;
-    pt__material *mats;
-    uint32_t mat_count, mat_cap;
-    pt__texture *texs;
-    uint32_t tex_count, tex_cap;
-    pt_vec3 *normals;
-    uint32_t normal_count, normal_cap;
-    void *bvh_mem;    /* one allocation: nodes then the leaf pool, aligned to 64 bytes */
-    pt__node4 *nodes;
-    pt__leaf16 *pool;
-    uint32_t node_count, bvh_depth;
-    size_t bvh_bytes;
-    pt__light *lights;
-    uint32_t light_count;
-    double total_power;
-    pt_transform xf;
-    int xf_identity;
-    int committed;
-    unsigned features;
-    uint32_t sphere_count, quad_count, triangle_count, mesh_count, degenerate_skipped;
-    pt_vec3 lo, hi;
-    int backend_request;       /* pt_backend from pt_scene_set_backend */
-    char embree_config[128];   /* pt_scene_set_embree_config */
-    int backend;               /* what the last commit built: PT_BACKEND_BUILTIN or _EMBREE */
-    double build_seconds;
-    size_t accel_bytes;
-#ifdef PDFTRACE_EMBREE
-    pt__rtc rtc;
-#endif
-    char error[256];
-};
-
-static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
-{
-    pt_scene *scene = (pt_scene *)cscene;
-    if (scene) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(scene->error, sizeof scene->error, fmt, ap);
-        va_end(ap);
-    }
-    return code;
 }
 
 /* ------------------------------------------------------------------------------------------
