@@ -2058,6 +2058,59 @@ static int pt__pdf_planar(const pt_pdf *pdf, pt__prim *p, float *area, int *two_
     return pt__planar_make(p, PT__PRIM_TRIANGLE, pdf->as.triangle.a, pdf->as.triangle.b, pdf->as.triangle.c, area);
 }
 
+/* --- lights of a scene (used by the integrator and by pt_pdf_scene_lights) --- */
+static PT__HOT int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
+                                 pt__light_sample *ls)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_sample(o, p->p0, p->p1.x, two, u1, u2, ls);
+    return pt__planar_light_sample(p, s->lights[p->light].area, two, o, u1, u2, ls);
+}
+static float pt__light_prim_value(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
+    return pt__planar_light_value(p, s->lights[p->light].area, two, o, w);
+}
+/* Density of w for one light that a ray from o along w reaches at distance t (no ray cast). */
+static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w, float t)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
+    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
+    return pt__planar_density(p->n, s->lights[p->light].area, t, w);
+}
+static uint32_t pt__pick_light(const pt_scene *s, float u)
+{
+    uint32_t lo = 0, hi = s->light_count - 1u;
+    while (lo < hi) { /* first light whose cdf exceeds u */
+        uint32_t mid = (lo + hi) / 2u;
+        if (s->lights[mid].cdf > u) hi = mid;
+        else lo = mid + 1u;
+    }
+    return lo;
+}
+/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
+static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
+                             uint32_t *light_index)
+{
+    uint32_t li;
+    if (!s->light_count) return 0;
+    li = pt__pick_light(s, u0);
+    if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls)) return 0;
+    ls->pdf *= s->lights[li].select_pdf;
+    *light_index = li;
+    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
+}
+static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w)
+{
+    uint32_t i;
+    float v = 0.0f;
+    for (i = 0; i < s->light_count; ++i)
+        v += s->lights[i].select_pdf * pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w);
+    return v;
+}
+
 /* --- fuzzy metal lobe: the direction of r + f s, with r the unit mirror direction and s
    uniform in the unit ball (Shirley, "Ray Tracing in One Weekend" v3, sec. 10.6). Its
    density follows in closed form: along direction w at angle theta from r the ball covers
@@ -2079,10 +2132,7 @@ static pt_vec3 pt__fuzz_sample(pt_vec3 r, float f, float u1, float u2, float u3)
 }
 static pt_vec3 pt__reflect(pt_vec3 wo, pt_vec3 n) { return pt_sub(pt_scale(n, 2.0f * pt_dot(wo, n)), wo); }
 
-/* Forward declarations of scene-side helpers used by the public PDFs. */
-static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index);
-static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w);
+/* Forward declarations of the material helpers (section 4) used by the public PDFs. */
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
                                    float u3, pt_vec3 *dir, float *pdf);
 static float pt__material_pdf_value(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, pt_vec3 w);
@@ -4651,59 +4701,6 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     info->build_seconds = s->build_seconds;
     info->accel_bytes = s->accel_bytes;
     return PT_OK;
-}
-
-/* --- lights of a scene (used by the integrator and by pt_pdf_scene_lights) --- */
-static PT__HOT int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
-                                 pt__light_sample *ls)
-{
-    int two = s->mats[p->material].two_sided;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_sample(o, p->p0, p->p1.x, two, u1, u2, ls);
-    return pt__planar_light_sample(p, s->lights[p->light].area, two, o, u1, u2, ls);
-}
-static float pt__light_prim_value(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w)
-{
-    int two = s->mats[p->material].two_sided;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
-    return pt__planar_light_value(p, s->lights[p->light].area, two, o, w);
-}
-/* Density of w for one light that a ray from o along w reaches at distance t (no ray cast). */
-static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w, float t)
-{
-    int two = s->mats[p->material].two_sided;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
-    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
-    return pt__planar_density(p->n, s->lights[p->light].area, t, w);
-}
-static uint32_t pt__pick_light(const pt_scene *s, float u)
-{
-    uint32_t lo = 0, hi = s->light_count - 1u;
-    while (lo < hi) { /* first light whose cdf exceeds u */
-        uint32_t mid = (lo + hi) / 2u;
-        if (s->lights[mid].cdf > u) hi = mid;
-        else lo = mid + 1u;
-    }
-    return lo;
-}
-/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
-static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index)
-{
-    uint32_t li;
-    if (!s->light_count) return 0;
-    li = pt__pick_light(s, u0);
-    if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls)) return 0;
-    ls->pdf *= s->lights[li].select_pdf;
-    *light_index = li;
-    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
-}
-static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w)
-{
-    uint32_t i;
-    float v = 0.0f;
-    for (i = 0; i < s->light_count; ++i)
-        v += s->lights[i].select_pdf * pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w);
-    return v;
 }
 
 /* --- public queries --- */
