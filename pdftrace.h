@@ -2658,6 +2658,14 @@ static void pt__prim_cache(pt__prim *p)
     }
 }
 
+/* Surface area (light powers, area sampling). */
+static float pt__prim_area(const pt__prim *p)
+{
+    if (p->type == PT__PRIM_SPHERE) return 4.0f * PT__PI * p->p1.x * p->p1.x;
+    if (p->type == PT__PRIM_QUAD) return pt_length(pt_cross(p->p1, p->p2));
+    return 0.5f * pt_length(pt_cross(pt_sub(p->p1, p->p0), pt_sub(p->p2, p->p0)));
+}
+
 /* Fills a public hit record for primitive p hit at t. */
 static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float t, const float *bary, pt_hit *h)
 {
@@ -4491,22 +4499,14 @@ static void pt__ftz_end(unsigned old)
 }
 #endif /* PDFTRACE_EMBREE */
 
-/* --- the traversal dispatch: every closest-hit and any-hit query goes through these --- */
-static PT__HOT int pt__scene_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
-                                     float *bary)
-{
-#ifdef PDFTRACE_EMBREE
-    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_closest(s, rc, tmax, prim, t_out, bary);
-#endif
-    return pt__bvh_closest(s, rc, tmax, prim, t_out, bary);
-}
-static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
-{
-#ifdef PDFTRACE_EMBREE
-    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_any(s, rc, tmax); /* tests `skip` too */
-#endif
-    return pt__bvh_any(s, rc, tmax, skip);
-}
+/* ------------------------------------------------------------------------------------------
+   5c. Commit and ray queries. pt_scene_commit turns the shapes added so far into something that
+   can be rendered: it builds the acceleration structure of the chosen backend (the built-in BVH
+   of section 5, or Embree, section 5b), the light table (every emitting primitive is a light,
+   picked with probability proportional to its power; sampled in section 2) and the scene's
+   feature bits (the skips at the top of this file). Every closest-hit and any-hit query, the
+   integrator's and the public ones, goes through one dispatch to the backend the commit chose.
+   ------------------------------------------------------------------------------------------ */
 
 PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
 {
@@ -4581,14 +4581,6 @@ static int pt__accel_build(pt_scene *s)
     s->build_seconds = pt__now() - t0;
     s->accel_bytes = s->bvh_bytes;
     return PT_OK;
-}
-
-/* --- commit, scene info, lights and the public queries (sections 3, 5 and 5b) --- */
-static float pt__prim_area(const pt__prim *p)
-{
-    if (p->type == PT__PRIM_SPHERE) return 4.0f * PT__PI * p->p1.x * p->p1.x;
-    if (p->type == PT__PRIM_QUAD) return pt_length(pt_cross(p->p1, p->p2));
-    return 0.5f * pt_length(pt_cross(pt_sub(p->p1, p->p0), pt_sub(p->p2, p->p0)));
 }
 
 PTDEF int pt_scene_commit(pt_scene *s)
@@ -4701,6 +4693,23 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     info->build_seconds = s->build_seconds;
     info->accel_bytes = s->accel_bytes;
     return PT_OK;
+}
+
+/* --- the traversal dispatch: every closest-hit and any-hit query goes through these --- */
+static PT__HOT int pt__scene_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
+                                     float *bary)
+{
+#ifdef PDFTRACE_EMBREE
+    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_closest(s, rc, tmax, prim, t_out, bary);
+#endif
+    return pt__bvh_closest(s, rc, tmax, prim, t_out, bary);
+}
+static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
+{
+#ifdef PDFTRACE_EMBREE
+    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_any(s, rc, tmax); /* tests `skip` too */
+#endif
+    return pt__bvh_any(s, rc, tmax, skip);
 }
 
 /* --- public queries --- */
