@@ -838,15 +838,11 @@ typedef struct pt_render_stats {
                                     pixel with fewer than 2 samples) */
 } pt_render_stats;
 
-/* ==========================================================================================
-   9. OUTPUT: framebuffer (film), images, writers
-   The film accumulates per pixel, in double precision, the sum and the sum of squares of the
+/* The film accumulates per pixel, in double precision, the sum and the sum of squares of the
    samples and their count, and the sum of the odd-numbered samples alone (the "B" half-buffer;
    the even-numbered "A" half is sum - sum_odd): 76 bytes per pixel. Rendering into a film that
    already holds samples continues with new sample indices, so renders can be resumed and
-   refined.
-   ========================================================================================== */
-
+   refined. */
 typedef struct pt_film {
     int width, height;
     double *sum;      /* 3 per pixel, row 0 at the top */
@@ -855,6 +851,7 @@ typedef struct pt_film {
     double *sum_odd;  /* 3 per pixel: the samples with an odd sample index k */
 } pt_film;
 
+/* An image: linear RGB, as pt_film_resolve makes it and the writers (section 9) take it. */
 typedef struct pt_image {
     int width, height;
     float *rgb;       /* 3 floats per pixel, row 0 at the top, linear radiance */
@@ -892,6 +889,10 @@ PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_
    here equals the one pt_render takes). */
 PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, pt_ray ray, pt_rng *rng,
                              pt_path_stats *stats);
+
+/* ==========================================================================================
+   9. OUTPUT: image writers
+   ========================================================================================== */
 
 /* Writers. Each writes to a temporary file beside the target and renames it into place, so
    a failed write leaves no partial file. PFM: linear float RGB (little-endian, bottom row
