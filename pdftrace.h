@@ -6011,10 +6011,7 @@ PTDEF int pt_render_image(const pt_scene *s, const pt_render_desc *d, pt_image *
     return rc;
 }
 
-/* ------------------------------------------------------------------------------------------
-   9. Output: film, images, PFM and PPM writers
-   ------------------------------------------------------------------------------------------ */
-
+/* --- the film (sums per pixel), its resolve into an image, its error estimate --- */
 static int pt__pixels(int w, int h, size_t *n)
 {
     if (w <= 0 || h <= 0 || (size_t)w > ((size_t)-1) / 64u / (size_t)h || (uint64_t)w * (uint64_t)h > 0xffffffffu)
@@ -6143,6 +6140,10 @@ PTDEF int pt_film_error(const pt_film *f, int x0, int y0, int x1, int y1, double
     if (!(*rel_mse < HUGE_VAL)) *rel_mse = HUGE_VAL; /* NaN from overflowing sums counts as unknown */
     return PT_OK;
 }
+
+/* ------------------------------------------------------------------------------------------
+   9. Output: the sRGB transfer function and the PFM and PPM writers
+   ------------------------------------------------------------------------------------------ */
 
 PTDEF float pt_srgb_encode(float x)
 {
