@@ -5801,19 +5801,202 @@ static int pt__adaptive_plan(pt__adaptive *a, pt__pass *ps, int *job_list)
     return jobs;
 }
 
+/* The schedule and running totals of one pt_render call: set by pt__render_setup, advanced by
+   pt__render_passes, summed up by pt__render_end_stats. */
+typedef struct pt__render_run {
+    int spp, per_pass, passes;  /* samples per pixel in all and per pass (the last takes the rest) */
+    int adaptive;               /* adaptive_threshold != 0 */
+    int threads, used;          /* threads asked for; threads the last pass ran on */
+    int jobs, *job_list;        /* the next pass's jobs: tiles, or the adaptive plan's chunks */
+    uint64_t done;              /* camera samples taken */
+    uint32_t added;             /* samples every pixel has been given by the passes so far */
+    double t0;                  /* pt__now() when pt_render began */
+    pt_render_stats total;
+} pt__render_run;
+
+/* Adaptive sampling's state for one render: its settings with their defaults, and its
+   per-pixel arrays (the film's counts at the start copied). Returns 0 when out of memory
+   (pt__adaptive_free releases what was allocated). */
+static int pt__adaptive_init(pt__adaptive *ad, const pt_render_desc *d, const pt_film *film, int spp, int per_pass)
+{
+    size_t np = (size_t)d->width * (size_t)d->height;
+    ad->target = (double)d->adaptive_threshold * (double)d->adaptive_threshold;
+    ad->min_spp = d->adaptive_min_spp ? d->adaptive_min_spp : (spp / 16 > 16 ? spp / 16 : 16);
+    ad->check_passes = d->adaptive_check_passes ? d->adaptive_check_passes : 1;
+    ad->self = !d->adaptive_neighbours_only;
+    ad->per_pass = per_pass;
+    ad->cap = spp;
+    ad->width = d->width;
+    ad->height = d->height;
+    ad->start = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    ad->want = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    ad->step = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    ad->rays = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->noise = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->cost = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->var = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->lo = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->hi = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->mean = (double *)PT_MALLOC(sizeof(double) * 3 * np);
+    ad->mbox = (double *)PT_MALLOC(sizeof(double) * 3 * np);
+    ad->cpp = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->tmp = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->chunk_first = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * (size_t)(ad->chunks + 1));
+    if (ad->start) memcpy(ad->start, film->count, sizeof(uint32_t) * np);
+    if (ad->rays) memset(ad->rays, 0, sizeof(double) * np);
+    return ad->start && ad->want && ad->step && ad->rays && ad->noise && ad->cost && ad->var && ad->lo && ad->hi &&
+           ad->cpp && ad->mean && ad->mbox && ad->tmp && ad->chunk_first;
+}
+static void pt__adaptive_free(pt__adaptive *ad)
+{
+    PT_FREE(ad->start);
+    PT_FREE(ad->want);
+    PT_FREE(ad->step);
+    PT_FREE(ad->rays);
+    PT_FREE(ad->noise);
+    PT_FREE(ad->cost);
+    PT_FREE(ad->var);
+    PT_FREE(ad->lo);
+    PT_FREE(ad->hi);
+    PT_FREE(ad->mean);
+    PT_FREE(ad->mbox);
+    PT_FREE(ad->cpp);
+    PT_FREE(ad->tmp);
+    PT_FREE(ad->chunk_first);
+}
+
+/* The set-up of a validated render: the pass schedule, the tiles and the thread count, the
+   per-job counters, adaptive sampling's state, the job list of the first pass and the pass's
+   lock. On failure the error is the scene's message; what was allocated is freed by the caller. */
+static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film *film, const pt__settings *cfg,
+                            const pt_camera *cam, pt__pass *ps, pt__adaptive *ad, pt__render_run *r)
+{
+    int tiles, tiles_x, tiles_y, tile, slots, adaptive_ok;
+    r->spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
+    r->per_pass = d->samples_per_pass ? d->samples_per_pass
+                                      : (r->spp / (r->adaptive ? 64 : 16) > 0 ? r->spp / (r->adaptive ? 64 : 16) : 1);
+    if (r->per_pass > r->spp) r->per_pass = r->spp;
+    r->passes = (r->spp + r->per_pass - 1) / r->per_pass;
+    memset(ps, 0, sizeof *ps);
+    /* default tiles: 8 x 8 pixels once a pass takes >= 8 samples per pixel (a job then holds >= 512
+       samples), else 16 x 16: the smaller the jobs, the closer together the threads finish a pass
+       (on the benchmark's tiny-light-pure at 32 spp, 2 threads: the last job left one thread idle
+       for ~1.1 % of the pass with 16 x 16 tiles, ~0.3 % with 8 x 8, from per-job CPU times) */
+    ps->tile_size = d->tile_size ? d->tile_size : (r->per_pass >= 8 ? 8 : 16);
+    tiles_x = (d->width + ps->tile_size - 1) / ps->tile_size;
+    tiles_y = (d->height + ps->tile_size - 1) / ps->tile_size;
+    tiles = tiles_x * tiles_y;
+    r->threads = d->threads ? d->threads : pt__cpu_count();
+#ifdef PDFTRACE_NO_THREADS
+    if (!d->parallel_for) r->threads = 1;
+#endif
+    ps->scene = s;
+    ps->cfg = cfg;
+    ps->cam = cam;
+    ps->film = film;
+    ps->seed = d->seed;
+    ps->tiles_x = tiles_x;
+    ps->cancel = d->cancel;
+    /* jobs: tiles, or in adaptive passes up to ad.chunks chunks of pixels: 32 per thread, since at
+       the end of a pass a thread waits for at most the other threads' last job (with 2 threads
+       and 8 per thread that was ~1/16 of a pass; uniform passes have 64 tiles at 128 x 128) */
+    ad->chunks = 32 * r->threads < 4096 ? 32 * r->threads : 4096;
+    slots = r->adaptive && ad->chunks > tiles ? ad->chunks : tiles;
+    ps->tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
+    ps->tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
+    ps->tile_done = (unsigned char *)PT_MALLOC((size_t)slots);
+    r->job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)slots);
+    adaptive_ok = !r->adaptive || pt__adaptive_init(ad, d, film, r->spp, r->per_pass);
+    ps->pixel_rays = ad->rays;
+    if (!ps->tile_stats || !ps->tile_samples || !ps->tile_done || !r->job_list || !adaptive_ok)
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "render: out of memory");
+    for (tile = 0; tile < tiles; ++tile) r->job_list[tile] = tile;
+    r->jobs = tiles;
+    ps->jobs = r->job_list;
+#ifndef PDFTRACE_NO_THREADS
+    if (pthread_mutex_init(&ps->lock, NULL) != 0)
+        return pt__fail(s, PT_ERROR_THREAD, "render: pthread_mutex_init failed");
+#endif
+    return PT_OK;
+}
+
+/* The passes: each renders its jobs (every tile, or the adaptive plan's chunks), adds their
+   counters to the totals and reports progress; with adaptive sampling the next pass is planned
+   from the film. Returns PT_OK, or PT_ERROR_CANCELLED (the film holds the passes done). */
+static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_desc *d, pt__render_run *r)
+{
+    int pass;
+    for (pass = 0; pass < r->passes && r->jobs > 0; ++pass) {
+        int all_done = 1, j;
+        ps->spp = (pass == r->passes - 1) ? r->spp - r->per_pass * (r->passes - 1) : r->per_pass;
+        for (j = 0; j < r->jobs; ++j) ps->tile_done[r->job_list[j]] = 0;
+        r->used = pt__run_pass(ps, r->jobs, r->threads, d);
+        for (j = 0; j < r->jobs; ++j) {
+            const pt_path_stats *ts = &ps->tile_stats[r->job_list[j]];
+            if (!ps->tile_done[r->job_list[j]]) { all_done = 0; continue; }
+            r->total.camera_rays += ts->camera_rays;
+            r->total.bounce_rays += ts->bounce_rays;
+            r->total.shadow_rays += ts->shadow_rays;
+            r->total.nonfinite_samples += ts->nonfinite_samples;
+            r->total.split_paths += ts->split_paths;
+            r->done += ps->tile_samples[r->job_list[j]];
+        }
+        r->added += (uint32_t)ps->spp;
+        r->total.passes = pass + 1;
+        if (!all_done || (d->cancel && *d->cancel)) return PT_ERROR_CANCELLED;
+        if (d->progress) {
+            pt_progress pr;
+            pr.pass = pass + 1;
+            pr.pass_count = r->passes;
+            pr.samples_done = r->done;
+            pr.samples_total = (uint64_t)d->width * (uint64_t)d->height * (uint64_t)r->spp;
+            pr.seconds = pt__now() - r->t0;
+            if (d->progress(d->progress_user, &pr)) return PT_ERROR_CANCELLED;
+        }
+        if (r->adaptive && pass + 1 < r->passes && r->added >= (uint32_t)ad->min_spp) {
+            if (!ps->pixel_spp || (pass + 1) % ad->check_passes == 0) pt__adaptive_check(ad, ps->film);
+            r->jobs = pt__adaptive_plan(ad, ps, r->job_list);
+        }
+    }
+    return PT_OK;
+}
+
+/* The film's statistics after the passes: the fewest and most samples this render gave a pixel,
+   the pixels adaptive sampling stopped early, and the estimated RMS relative error. */
+static void pt__render_end_stats(const pt__adaptive *ad, const pt_render_desc *d, const pt_film *film,
+                                 pt__render_run *r)
+{
+    r->total.min_spp = r->total.max_spp = r->added;
+    {
+        double e = HUGE_VAL;
+        (void)pt_film_error(film, 0, 0, film->width, film->height, &e);
+        r->total.estimated_error = e < HUGE_VAL ? sqrt(e) : -1.0;
+    }
+    if (r->adaptive) {
+        size_t i, np = (size_t)d->width * (size_t)d->height;
+        r->total.min_spp = (uint32_t)r->spp;
+        r->total.max_spp = 0;
+        for (i = 0; i < np; ++i) {
+            uint32_t n = film->count[i] - ad->start[i];
+            if (n < (uint32_t)r->spp) r->total.pixels_converged++;
+            if (n < r->total.min_spp) r->total.min_spp = n;
+            if (n > r->total.max_spp) r->total.max_spp = n;
+        }
+    }
+}
+
 PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
 {
     pt__settings cfg;
     pt_camera cam;
     pt__pass ps;
     pt__adaptive ad;
-    int rc, spp, per_pass, passes, pass, tiles, tiles_x, tiles_y, tile, threads, used = 1, result = PT_OK, slots;
-    int jobs, *job_list = NULL, adaptive = d ? d->adaptive_threshold != 0.0f : 0;
-    uint64_t done = 0;
-    uint32_t added = 0;
-    double t0 = pt__now();
-    pt_render_stats total;
-    memset(&total, 0, sizeof total);
+    pt__render_run run;
+    int rc, result;
+    memset(&run, 0, sizeof run);
+    run.t0 = pt__now();
+    run.used = 1;
+    run.adaptive = d ? d->adaptive_threshold != 0.0f : 0;
     memset(&ad, 0, sizeof ad);
     if (stats) memset(stats, 0, sizeof *stats);
     if (!s || !d || !film) return PT_ERROR_INVALID_ARGUMENT;
@@ -5840,158 +6023,25 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
                         d->adaptive_neighbours_only);
     if ((rc = pt_camera_init(&cam, &d->camera, d->width, d->height)) != PT_OK)
         return pt__fail(s, rc, "render: invalid camera (look_from == look_at, up parallel to the view, fov ...)");
-    spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
-    per_pass = d->samples_per_pass ? d->samples_per_pass : (spp / (adaptive ? 64 : 16) > 0 ? spp / (adaptive ? 64 : 16) : 1);
-    if (per_pass > spp) per_pass = spp;
-    passes = (spp + per_pass - 1) / per_pass;
-    memset(&ps, 0, sizeof ps);
-    /* default tiles: 8 x 8 pixels once a pass takes >= 8 samples per pixel (a job then holds >= 512
-       samples), else 16 x 16: the smaller the jobs, the closer together the threads finish a pass
-       (on the benchmark's tiny-light-pure at 32 spp, 2 threads: the last job left one thread idle
-       for ~1.1 % of the pass with 16 x 16 tiles, ~0.3 % with 8 x 8, from per-job CPU times) */
-    ps.tile_size = d->tile_size ? d->tile_size : (per_pass >= 8 ? 8 : 16);
-    tiles_x = (d->width + ps.tile_size - 1) / ps.tile_size;
-    tiles_y = (d->height + ps.tile_size - 1) / ps.tile_size;
-    tiles = tiles_x * tiles_y;
-    threads = d->threads ? d->threads : pt__cpu_count();
-#ifdef PDFTRACE_NO_THREADS
-    if (!d->parallel_for) threads = 1;
-#endif
-    ps.scene = s;
-    ps.cfg = &cfg;
-    ps.cam = &cam;
-    ps.film = film;
-    ps.seed = d->seed;
-    ps.tiles_x = tiles_x;
-    ps.cancel = d->cancel;
-    /* jobs: tiles, or in adaptive passes up to ad.chunks chunks of pixels: 32 per thread, since at
-       the end of a pass a thread waits for at most the other threads' last job (with 2 threads
-       and 8 per thread that was ~1/16 of a pass; uniform passes have 64 tiles at 128 x 128) */
-    ad.chunks = 32 * threads < 4096 ? 32 * threads : 4096;
-    slots = adaptive && ad.chunks > tiles ? ad.chunks : tiles;
-    ps.tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
-    ps.tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
-    ps.tile_done = (unsigned char *)PT_MALLOC((size_t)slots);
-    job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)slots);
-    if (adaptive) {
-        size_t np = (size_t)d->width * (size_t)d->height;
-        ad.target = (double)d->adaptive_threshold * (double)d->adaptive_threshold;
-        ad.min_spp = d->adaptive_min_spp ? d->adaptive_min_spp : (spp / 16 > 16 ? spp / 16 : 16);
-        ad.check_passes = d->adaptive_check_passes ? d->adaptive_check_passes : 1;
-        ad.self = !d->adaptive_neighbours_only;
-        ad.per_pass = per_pass;
-        ad.cap = spp;
-        ad.width = d->width;
-        ad.height = d->height;
-        ad.start = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
-        ad.want = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
-        ad.step = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
-        ad.rays = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.noise = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.cost = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.var = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.lo = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.hi = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.mean = (double *)PT_MALLOC(sizeof(double) * 3 * np);
-        ad.mbox = (double *)PT_MALLOC(sizeof(double) * 3 * np);
-        ad.cpp = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.tmp = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.chunk_first = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * (size_t)(ad.chunks + 1));
-        if (ad.start) memcpy(ad.start, film->count, sizeof(uint32_t) * np);
-        if (ad.rays) memset(ad.rays, 0, sizeof(double) * np);
-        ps.pixel_rays = ad.rays;
-    }
-    if (!ps.tile_stats || !ps.tile_samples || !ps.tile_done || !job_list ||
-        (adaptive && (!ad.start || !ad.want || !ad.step || !ad.rays || !ad.noise || !ad.cost || !ad.var || !ad.lo || !ad.hi || !ad.cpp || !ad.mean || !ad.mbox || !ad.tmp || !ad.chunk_first))) {
-        result = pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "render: out of memory");
-        goto cleanup;
-    }
-    for (tile = 0; tile < tiles; ++tile) job_list[tile] = tile;
-    jobs = tiles;
-    ps.jobs = job_list;
+    result = pt__render_setup(s, d, film, &cfg, &cam, &ps, &ad, &run);
+    if (result == PT_OK) {
+        result = pt__render_passes(&ps, &ad, d, &run);
+        pt__render_end_stats(&ad, d, film, &run);
 #ifndef PDFTRACE_NO_THREADS
-    if (pthread_mutex_init(&ps.lock, NULL) != 0) {
-        result = pt__fail(s, PT_ERROR_THREAD, "render: pthread_mutex_init failed");
-        goto cleanup;
-    }
+        pthread_mutex_destroy(&ps.lock);
 #endif
-    for (pass = 0; pass < passes && jobs > 0; ++pass) {
-        int all_done = 1, j;
-        ps.spp = (pass == passes - 1) ? spp - per_pass * (passes - 1) : per_pass;
-        for (j = 0; j < jobs; ++j) ps.tile_done[job_list[j]] = 0;
-        used = pt__run_pass(&ps, jobs, threads, d);
-        for (j = 0; j < jobs; ++j) {
-            const pt_path_stats *ts = &ps.tile_stats[job_list[j]];
-            if (!ps.tile_done[job_list[j]]) { all_done = 0; continue; }
-            total.camera_rays += ts->camera_rays;
-            total.bounce_rays += ts->bounce_rays;
-            total.shadow_rays += ts->shadow_rays;
-            total.nonfinite_samples += ts->nonfinite_samples;
-            total.split_paths += ts->split_paths;
-            done += ps.tile_samples[job_list[j]];
-        }
-        added += (uint32_t)ps.spp;
-        total.passes = pass + 1;
-        if (!all_done || (d->cancel && *d->cancel)) { result = PT_ERROR_CANCELLED; break; }
-        if (d->progress) {
-            pt_progress pr;
-            pr.pass = pass + 1;
-            pr.pass_count = passes;
-            pr.samples_done = done;
-            pr.samples_total = (uint64_t)d->width * (uint64_t)d->height * (uint64_t)spp;
-            pr.seconds = pt__now() - t0;
-            if (d->progress(d->progress_user, &pr)) { result = PT_ERROR_CANCELLED; break; }
-        }
-        if (adaptive && pass + 1 < passes && added >= (uint32_t)ad.min_spp) {
-            if (!ps.pixel_spp || (pass + 1) % ad.check_passes == 0) pt__adaptive_check(&ad, film);
-            jobs = pt__adaptive_plan(&ad, &ps, job_list);
-        }
     }
-    total.min_spp = total.max_spp = added;
-    {
-        double e = HUGE_VAL;
-        (void)pt_film_error(film, 0, 0, film->width, film->height, &e);
-        total.estimated_error = e < HUGE_VAL ? sqrt(e) : -1.0;
-    }
-    if (adaptive) {
-        size_t i, np = (size_t)d->width * (size_t)d->height;
-        total.min_spp = (uint32_t)spp;
-        total.max_spp = 0;
-        for (i = 0; i < np; ++i) {
-            uint32_t n = film->count[i] - ad.start[i];
-            if (n < (uint32_t)spp) total.pixels_converged++;
-            if (n < total.min_spp) total.min_spp = n;
-            if (n > total.max_spp) total.max_spp = n;
-        }
-    }
-#ifndef PDFTRACE_NO_THREADS
-    pthread_mutex_destroy(&ps.lock);
-#endif
-cleanup:
     PT_FREE(ps.tile_stats);
     PT_FREE(ps.tile_samples);
     PT_FREE(ps.tile_done);
-    PT_FREE(job_list);
-    PT_FREE(ad.start);
-    PT_FREE(ad.want);
-    PT_FREE(ad.step);
-    PT_FREE(ad.rays);
-    PT_FREE(ad.noise);
-    PT_FREE(ad.cost);
-    PT_FREE(ad.var);
-    PT_FREE(ad.lo);
-    PT_FREE(ad.hi);
-    PT_FREE(ad.mean);
-    PT_FREE(ad.mbox);
-    PT_FREE(ad.cpp);
-    PT_FREE(ad.tmp);
-    PT_FREE(ad.chunk_first);
+    PT_FREE(run.job_list);
+    pt__adaptive_free(&ad);
     if (result != PT_OK && result != PT_ERROR_CANCELLED) return result;
-    total.samples = done;
-    total.seconds = pt__now() - t0;
-    total.threads = used;
-    if (stats) *stats = total;
-    if (result == PT_ERROR_CANCELLED) pt__fail(s, result, "render: cancelled after %d passes", total.passes);
+    run.total.samples = run.done;
+    run.total.seconds = pt__now() - run.t0;
+    run.total.threads = run.used;
+    if (stats) *stats = run.total;
+    if (result == PT_ERROR_CANCELLED) pt__fail(s, result, "render: cancelled after %d passes", run.total.passes);
     return result;
 }
 
