@@ -93,9 +93,10 @@
    pt_scene_commit records what a scene contains (pt_scene_info.features). The integrator
    then skips work that cannot change the estimate. Each skip has a bit in
    pt_render_desc.disable_skips that forces the general path instead (for benchmarks; the
-   image keeps its expectation, and "exact" skips give it bit for bit). Each is kept because
-   `make bench` shows it pays (bench/out/summary.md, "Scene-feature skips": the 95 % interval
-   of its time ratio, or of its time ratio at equal error, lies below 1):
+   image keeps its expectation, and "exact" skips give it bit for bit). A skip stays only while
+   `make bench` shows that it pays: the 95 % interval of its time ratio (for a skip that changes
+   the estimator, of its time ratio at equal error) lies below 1 (bench/README.md, "Skips"; the
+   figures: docs/internals.md, "Scene-feature skips"):
    - no emitters: no light selection, no light sampling, no shadow rays; the mixture
      strategy samples the material PDF alone (the light component has no mass).
      PT_SKIP_NO_EMITTERS.
@@ -108,22 +109,16 @@
    - no texture on a material: albedo is read directly from it. PT_SKIP_NO_TEXTURES, exact.
    - a light sample the material does not reflect (below the surface): no shadow ray.
      PT_SKIP_ZERO_BSDF_SHADOW, exact.
-   Removed because the benchmark did not show a gain (their bits, 1u << 1 and 1u << 5, are
-   now rejected): PT_SKIP_LIGHT_SELECTION (no CDF search with one emitter: the binary search
-   over a one-entry CDF does not even compare; time ratio 0.998 [0.992, 1.002]), and
-   PT_SKIP_NO_TRIANGLES (no watertight-triangle set-up of rays in scenes without triangles:
-   time ratios 0.976 [0.971, 0.988] in one full run, 0.992 [0.987, 1.002] in the next,
-   0.988 to 1.003 in quick runs: a gain of 1-2 % that does not show reliably). Rays in scenes
-   without triangles still skip that set-up, as the only path: callgrind counts 2.5 % fewer
-   instructions with it (Cornell box) and no run measured it slower; it is just no longer a
-   switchable, benchmarked skip.
+   Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
+   PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
+   watertight-triangle set-up, as the only path.
    Adaptive sampling (pt_render_desc.adaptive_threshold) skips pixels whose estimate has
    converged: see section 8. By default a pixel's own samples count in its noise estimate, which
    lowers the image's error and biases it dark: pixels that have not yet drawn a rare bright
-   sample stop sooner, so caustics and fireflies lose ~1 % of the image mean at moderate
-   thresholds, several % in some regions and at the image border (section 8), less as samples
-   grow; adaptive_neighbours_only = 1 plans each pixel from its neighbours only (a bias ~3x
-   smaller, at up to ~2x the samples). For a reference image, render uniformly.
+   sample stop sooner, so caustics and fireflies come out a little dark, more in some regions and
+   at the image border, less as samples grow; adaptive_neighbours_only = 1 plans each pixel from
+   its neighbours only (a smaller bias, more samples for the same error). The measured bias of
+   both: docs/internals.md, "Adaptive sampling". For a reference image, render uniformly.
 */
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
@@ -384,9 +379,9 @@ PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y); /*
    (seed, pixel, k), as with INDEPENDENT, so progressive passes and resumed renders give the
    same image as one pass. A pixel's samples are not independent, so the film's per-pixel
    variance (adaptive sampling) and the half-buffer error estimate (pt_film_error) assume what
-   is not true: they overestimate a SOBOL image's error (about 3x in relMSE at 64 spp on the
-   benchmark's tiny-light scene), which makes adaptive sampling conservative, not wrong.
-   Use independent seeds to measure a SOBOL render's error. */
+   is not true: they overestimate a SOBOL image's error (by how much: docs/internals.md, "The
+   error estimate under the Sobol sampler"), which makes adaptive sampling conservative, not
+   wrong. Use independent seeds to measure a SOBOL render's error. */
 typedef enum pt_sampler {
     PT_SAMPLER_INDEPENDENT = 0,
     PT_SAMPLER_SOBOL = 1
@@ -630,25 +625,11 @@ PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
    primitives, and the built-in BVH below. PDFTRACE_EMBREE_SMALL_PRIMS (default 0: off) also
    sends scenes of fewer primitives than it, made mostly of quads and spheres (triangles less
    than half the primitives), to Embree.
-   Measured by make bench-bvh (bench/bvh.c: one batch of camera, bounce and shadow rays traced
-   by both backends through pt_scene_intersect/occluded on one thread, interleaved, medians of
-   paired ratios; shared 2-core AMD EPYC, Embree 3.13.5, gcc 12 -O3; bench/out/bvh.md).
-   - Triangles (terrains of 8 to 1M triangles lit by one sphere). Built-in/Embree rays/s in
-     three runs: 1.5 at 9 primitives, 1.2-1.3 at 513, 1.0-1.2 at 1059, 0.98-1.38 from 2179 to
-     3201, 1.00-1.10 at 4419, then Embree ahead: 0.90-0.95 at 6499, 0.88-0.99 at 8979,
-     0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M; two runs on 2026-11-23 (the second with
-     other jobs on the machine): 1.11-1.12 at 9, 1.23-1.55 from 33 to 513, 1.06-1.12 from 1059
-     to 4419, 0.98 and 1.06 at 6499, 0.98-1.02 from 8979 to 25089, 0.86-0.99 from 36451 to 1M.
-     The threshold sits above the last size where the built-in BVH led in every run (4419);
-     Embree was within 3 % or ahead in every run from 8979 on, and at 6499 in four of five.
-   - Quads and spheres (the scene files in scenes/). Before the built-in BVH gave scenes of at
-     most 32 primitives one primitive per leaf (PT__BVH_SMALL_SCENE), Embree was ahead on every
-     scene of 3 to 13 quads and spheres (built-in/Embree 0.64-0.84: the built-in BVH tested the
-     big walls together in one leaf block), so PDFTRACE_EMBREE_SMALL_PRIMS was 32. Since then
-     the built-in BVH is ahead on all of them (2026-11-23, two runs: 1.04-1.06 on the Cornell
-     boxes of 13 primitives, 1.48-1.61 on the scenes of 3; full 2-thread renders of the Cornell
-     box 1.04 and 1.21), and on 81 (glass, 1.41-1.43): so the small-scene rule is off by
-     default. */
+   The threshold sits above the largest triangle scene on which the built-in BVH was faster in
+   every run of make bench-bvh; from there on Embree is about as fast or faster, and the further
+   the larger the scene. On small scenes of quads and spheres the built-in BVH is faster (one
+   primitive per leaf, section 5), so the small-scene rule is off. The figures:
+   docs/internals.md, "Embree or the built-in BVH". */
 #ifndef PDFTRACE_EMBREE_SMALL_PRIMS
 #define PDFTRACE_EMBREE_SMALL_PRIMS 0
 #endif
@@ -810,14 +791,12 @@ typedef struct pt_render_desc {
     int adaptive_neighbours_only; /* 0: a pixel's noise estimate counts its own samples (as 1 of the
                                     25 pixels of its 5x5 neighbourhood), so a pixel that drew a rare
                                     bright sample (a firefly) samples on and dilutes it: the lowest
-                                    error, but biased dark (pixels that drew none stop sooner): the
-                                    image mean -0.25 % to -0.7 % on the benchmark's Cornell box,
-                                    -1.2 % in the tests' room scene and up to several % in some
-                                    regions; less as samples grow. 1: only the 24 other pixels, so
-                                    that a pixel's stopping does not depend on its own samples
-                                    directly: a bias ~3x smaller (-0.4 % in the room scene), at
-                                    1.35x-1.9x the samples for the same error on the Cornell box.
-                                    For reference images render uniformly (section 8) */
+                                    error, but biased dark (pixels that drew none stop sooner; less
+                                    as samples grow). 1: only the 24 other pixels, so that a pixel's
+                                    stopping does not depend on its own samples directly: a smaller
+                                    bias, at more samples for the same error (both measured:
+                                    docs/internals.md, "Adaptive sampling"). For reference images
+                                    render uniformly (section 8) */
     unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on; bits
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
@@ -864,20 +843,23 @@ PTDEF void pt_film_clear(pt_film *film);
 PTDEF int pt_film_resolve(const pt_film *film, pt_image *image);
 /* Mean of pixel (x, y) and the variance of that mean (sample variance / count). */
 PTDEF int pt_film_pixel(const pt_film *film, int x, int y, pt_color *mean, pt_color *variance_of_mean);
-/* The error estimate adaptive sampling uses, for the pixels x0 <= x < x1, y0 <= y < y1: the mean
-   over pixels and channels of (A - B)^2 nA nB / n^2 / (I^2 + 0.01), where A and B are the means
-   of the even- and odd-numbered samples (nA, nB of them), I the pixel mean and n = nA + nB.
+/* The half-buffer error estimate for the pixels x0 <= x < x1, y0 <= y < y1: the mean over
+   pixels and channels of (A - B)^2 nA nB / n^2 / (I^2 + 0.01), where A and B are the means of
+   the even- and odd-numbered samples (nA, nB of them), I the pixel mean and n = nA + nB.
    (A - B)^2 nA nB / n^2 is an unbiased estimate of the variance of I, so *rel_mse estimates
    the region's relMSE mean((I - r)^2 / (r^2 + 0.01)). Pixels with fewer than 2 samples count
-   as unknown: *rel_mse is then +Inf. */
+   as unknown: *rel_mse is then +Inf. pt_render reports its square root over the whole image as
+   pt_render_stats.estimated_error; adaptive sampling does not use it (it plans from each
+   pixel's sample variance, section 8). */
 PTDEF int pt_film_error(const pt_film *film, int x0, int y0, int x1, int y1, double *rel_mse);
 
 PTDEF int pt_image_init(pt_image *image, int width, int height);
 PTDEF void pt_image_free(pt_image *image);
 
-/* Renders desc->samples_per_pixel more samples into every pixel of the film, which the caller
-   initialised with pt_film_init(film, desc->width, desc->height). Returns PT_OK, PT_ERROR_CANCELLED (the film holds what was done) or an
-   error. stats may be NULL. */
+/* Renders desc->samples_per_pixel more samples into every pixel of the film (with adaptive
+   sampling at most that many), which the caller initialised with pt_film_init(film,
+   desc->width, desc->height). Returns PT_OK, PT_ERROR_CANCELLED (the film holds what was done)
+   or an error. stats may be NULL. */
 PTDEF int pt_render(const pt_scene *scene, const pt_render_desc *desc, pt_film *film, pt_render_stats *stats);
 /* Convenience: a fresh film, rendered and resolved into *image. */
 PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_image *image, pt_render_stats *stats);
