@@ -1315,17 +1315,21 @@ PTDEF pt_rng pt_rng_for_sample(uint64_t seed, uint32_t pixel, uint32_t sample)
 }
 
 /* ------------------------------------------------------------------------------------------
-   2. Sampling and PDFs
+   2. Sampling and PDFs: where the integrator's random numbers come from, and the densities it
+   samples. The integrator draws through a pt__sampler: in INDEPENDENT mode every draw is the
+   next number of the sample's PCG stream, in the order the integrator asks; in SOBOL mode a
+   draw names its set (PT__SET_*: pixel, lens, and per bounce light choice, light point, scatter
+   direction, ...), whose value is a function of (seed, pixel, sample index, set) alone, so a
+   set keeps its dimensions whatever branches a path took before it (Burley, "Practical
+   Hash-based Owen Scrambling", JCGT 9(4), 2020). Then the warps from the unit square (Shirley &
+   Chiu's concentric disk, Malley's method), the light densities (a sphere's cone, area sampling
+   of quads and triangles, the scene's lights picked by power), the fuzzy metal lobe, and the
+   public pt_pdf, whose sampling and density agree by construction: a mixture's density is
+   sum_k w_k p_k, never the density of the component that was chosen.
    ------------------------------------------------------------------------------------------ */
 
-/* ---- Samplers (pt_sampler). The integrator draws its random numbers through a pt__sampler:
-   in INDEPENDENT mode every draw is the next number of the sample's PCG stream, in the order the
-   integrator asks (the images of before samplers existed, bit for bit); in SOBOL mode a draw
-   names its set (PT__SET_*: pixel, lens, and per bounce light choice, light point, scatter
-   direction, ...), whose value is a function of (seed, pixel, sample index, set) alone, so a
-   set keeps its dimensions whatever branches a path took before it.
-
-   A set's point (pt_sobol_scrambled), for sample index k and a 64-bit set seed:
+/* ---- Samplers (pt_sampler). A set's point (pt_sobol_scrambled), for sample index k and a
+   64-bit set seed:
    1. Shuffle: k' = a nested uniform scramble of k's low 16 bits (a random permutation in which
       bit b of k' depends only on bits >= b of k, so each aligned block of 2^m indices maps onto
       an aligned block of 2^m: the first 2^m samples are still a whole block of the sequence;
@@ -1790,8 +1794,8 @@ static PT__HOT void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b
    SOBOL: the directions of depths 2i and 2i + 1 are one four-dimensional point (dimensions 0, 1
    and 2, 3 of set PT__SET_BOUNCE(2i, PT__SLOT_SCATTER_DIR)), so the two-bounce integral of a
    path's first indirect bounces is stratified jointly, not only in each direction (Burley 2020,
-   sec. 5, pads with sets of four dimensions; variance per sample 8-10 % lower on the benchmark's
-   tiny-light-pure and tiny-light scenes than with two separately shuffled 2D sets). Both depths
+   sec. 5, pads with sets of four dimensions; it lowers the variance against two separately
+   shuffled 2D sets: docs/internals.md, "Four-dimensional sets for two bounces"). Both depths
    use the set's one shuffled index, whichever of them drew. */
 static PT__HOT void pt__draw_scatter(pt__sampler *smp, int depth, float *a, float *b)
 {
@@ -1840,8 +1844,8 @@ typedef struct pt__light_sample {
 
 /* --- sphere light. Outside: uniform in the cone of directions that meet the sphere, with
    1 - cos(theta_max) = s^2 / (1 + cos(theta_max)), s = sin(theta_max), which stays exact for
-   tiny and distant spheres where 1 - sqrt(1 - s^2) rounds to zero (shared/docs
-   accuracy-references; Shirley RTRL sec. 12 for the cone; pbrt-v4 sec. 6.2.4). Inside or on the
+   tiny and distant spheres where 1 - sqrt(1 - s^2) rounds to zero (docs/accuracy.md, "Robust
+   numerics"; Shirley RTRL sec. 12 for the cone; pbrt-v4 sec. 6.2.4). Inside or on the
    sphere (two-sided only; a one-sided sphere emits outwards and cannot light its inside):
    uniform area sampling converted to solid angle, density dist^2 / (|cos| * area). */
 /* Inside or on the surface. A point on a sphere rounds to either side of it; within 1e-5
@@ -2447,9 +2451,9 @@ static PT__HOT int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, floa
     if (!(a > 0.0f)) return 0;
     if (r * r < 1e-6f * pt_dot(f, f)) {
         /* Tiny or distant (r < 1e-3 |o - c|): the float o - c alone is off by 2^-24 |o - c|,
-           6% of a sphere 1e-6 away as far (tiny sphere lights lost 2% of their light where
-           rays from the mixture had to hit them). In double, from the exact o - c, with the
-           perpendicular distance by the cross product as in pt__in_cone. */
+           6% of a sphere 1e-6 away as far, enough for rays aimed at a tiny sphere light to
+           miss it (docs/internals.md, "Tiny and distant spheres"). In double, from the exact
+           o - c, with the perpendicular distance by the cross product as in pt__in_cone. */
         double fx = (double)rc->o.x - c.x, fy = (double)rc->o.y - c.y, fz = (double)rc->o.z - c.z;
         double dx = rc->d.x, dy = rc->d.y, dz = rc->d.z, dd = dx * dx + dy * dy + dz * dz;
         double xx = dy * fz - dz * fy, yy = dz * fx - dx * fz, zz = dx * fy - dy * fx;
@@ -2658,8 +2662,8 @@ static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ra
     if (p->type == PT__PRIM_SPHERE) {
         /* re-project onto the sphere to remove the error of o + t d (pbrt-v4 sec. 6.8.5); the
            direction from the centre in double, from the exact o - c: in float it is off by
-           2^-24 |o - c|, which turned the normals of tiny far spheres (a light 1e-6 wide seen
-           from 1 away) by up to ~4 degrees and made rim hits back faces */
+           2^-24 |o - c|, which turns the normals of tiny far spheres (a light 1e-6 wide seen
+           from 1 away) by degrees and makes rim hits back faces */
         double ex = (double)ray.origin.x - p->p0.x + (double)t * ray.dir.x;
         double ey = (double)ray.origin.y - p->p0.y + (double)t * ray.dir.y;
         double ez = (double)ray.origin.z - p->p0.z + (double)t * ray.dir.z;
@@ -2696,8 +2700,8 @@ static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ra
     h->front_face = pt_dot(ray.dir, h->geometric_normal) < 0.0f;
     if (p->type == PT__PRIM_SPHERE) {
         /* a ray from outside meets the outside: decided by the exact origin, not by a normal
-           that is a few degrees off at the rim of a tiny far sphere (0.2% of the rays aimed at
-           a light 1e-6 wide hit its "back" and found no emission) */
+           that is a few degrees off at the rim of a tiny far sphere (where rays aimed at a light
+           1e-6 wide would hit its "back" and find no emission) */
         double ox = (double)ray.origin.x - p->p0.x, oy = (double)ray.origin.y - p->p0.y;
         double oz = (double)ray.origin.z - p->p0.z, d2 = ox * ox + oy * oy + oz * oz, r2 = (double)p->p1.x * p->p1.x;
         if (d2 != r2) h->front_face = d2 > r2;
@@ -3234,13 +3238,10 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
 /* Scenes of at most this many primitives get one primitive per leaf. The SAH keeps the few
    large quads of a room (floor, walls, box faces) together in leaves of up to four, whose
    boxes span the room, so every ray tests a whole block of four; one primitive per leaf
-   gives each quad its own (flat) box in the 4-wide node, where a box test (~60 instructions)
-   culls the quads a ray does not cross before any block test (~145). Measured (64x64, MIS,
-   one thread): instructions per sample (callgrind) -11% on bench/scenes/tiny-light-pure.scene,
-   -11% tiny-light, -9.5% many-lights, -8% metal-glass, -1.4% cornell and cornell-diffuse; CPU
-   time (paired medians) -10%, -8%, 0 to -2%, -9%, -2%; but +3% instructions on
-   scenes/glass.scene (81 coplanar tiles) and +9% on scenes/mesh.scene (triangles), so only
-   for small scenes. */
+   gives each quad its own (flat) box in the 4-wide node, where a box test, much cheaper than
+   a block test, culls the quads a ray does not cross. That pays on small scenes of large quads
+   and spheres and costs on larger ones (many coplanar tiles, meshes), hence the limit
+   (docs/internals.md, "One primitive per leaf in small scenes"). */
 #ifndef PT__BVH_SMALL_SCENE
 #define PT__BVH_SMALL_SCENE 32
 #endif
@@ -3248,11 +3249,8 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
 #define PT__BVH_STACK 256         /* > 3 x the deepest tree (40 SAH + 32 median levels) */
 #define PT__BVH_LEAF 0x80000000u  /* child reference: PT__BVH_LEAF | offset of the leaf in the pool (16-byte units) */
 #define PT__BVH_OFFSET_MASK 0x7fffffffu
-/* SAH costs relative to one block test (four triangles). Measured with callgrind on the
-   1M-triangle benchmark mesh: a node visit costs ~60 instructions (slab test ~30 + stack), a
-   block test ~140, so a node is about half a block. Cost 0.5 instead of 1 cut the
-   instructions per ray by ~6% there (13.6 nodes + 1.8 blocks per closest-hit ray instead of
-   13.2 + 2.7). */
+/* SAH costs relative to one block test (four triangles): a node visit costs about half a
+   block test in instructions, so 0.5 (docs/internals.md, "SAH costs"). */
 #ifndef PT__BVH_COST_NODE
 #define PT__BVH_COST_NODE 0.5f
 #endif
@@ -4114,7 +4112,9 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
    ------------------------------------------------------------------------------------------ */
 #ifdef PDFTRACE_EMBREE
 
-/* Scene flags and build quality; measured choices, see the test section embree. */
+/* Scene flags and build quality (overridable): ROBUST for Embree's watertight triangle test
+   (the embree test section compares 10^6 first hits with the built-in BVH's); MEDIUM, Embree's
+   default quality for a static scene. */
 #ifndef PDFTRACE_EMBREE_SCENE_FLAGS
 #define PDFTRACE_EMBREE_SCENE_FLAGS RTC_SCENE_FLAG_ROBUST
 #endif
@@ -4804,7 +4804,7 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
 }
 
 /* ------------------------------------------------------------------------------------------
-   7. Integrator
+   7. Integrator: one path per camera sample, its vertices shaded by one of four strategies.
    At every non-delta vertex the "scatter" density is the material's PDF, mixed with the
    user's guide PDF when there is one: p_s = (1 - g) p_material + g p_guide. The strategies:
    - MATERIAL: w_i ~ p_s; weight A pScatter / p_s; emission counted where rays land.
@@ -4819,35 +4819,26 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
    - MIS: both of LIGHT's and MATERIAL's estimates of direct light, weighted by the power
      heuristic w_a = p_a^2 / (p_a^2 + p_b^2) (Veach & Guibas, "Optimally Combining Sampling
      Techniques for Monte Carlo Rendering", SIGGRAPH 1995).
-   Russian roulette from rr_start_depth continues with probability q = min(0.95, sqrt(g max(beta_in)))
-   (g = 1; 2 with the Sobol sampler, below) and divides beta by q (Arvo & Kirk 1990), where beta_in is the throughput that reached this
-   vertex, before its scatter weight f/p. Why the square root: roulette trades the variance it
-   adds, b^2 E[Y^2] (1/q - 1) for a continuation b Y, against the time (1 - q) C it saves; the
-   q that minimises variance x time is proportional to b (so q = b/b_ref), with b_ref set by
-   the rest of the pixel's variance and cost, which a path does not know. q = b (b_ref = 1,
-   pbrt's choice) cut paths too early on every benchmark scene: with q = sqrt(b), which keeps
-   more paths of throughput 0.1-1, variance x CPU time per sample fell by 7.0 / 5.6 / 5.7 /
-   6.7 / 11 % with the Sobol sampler and 1.5 / 0.4 / 0.5 / 6.7 / 7.7 % with independent
-   numbers (tiny-light-pure / tiny-light / many-lights / cornell / metal-glass, MIS, 64 spp,
-   4 pairs of seeds, one thread; starting roulette at depth 2 or 5 instead of 3, or q = b,
-   was worse on at least one of them). With the Sobol sampler q = min(0.95, sqrt(2 b)), that is
-   b_ref = 1/2 (PT__RR_GAIN_SOBOL): b_ref grows with the square root of the rest of the pixel's
-   variance per sample, which Sobol's stratification makes smaller, so roulette should cut later
-   there. Measured with Sobol (and indirect_paths 3), b_ref 1/2 against 1, MIS, one thread,
-   variance x CPU time per sample: tiny-light-pure 0.94 (256 spp, 3 seed pairs; b_ref 1/4: 0.96),
-   cornell 0.81, metal-glass 0.91, tiny-light 0.99 (64 spp, 3 pairs), many-lights 1.00 (64 spp,
-   6 pairs; b_ref 0.7: 0.99). The machine was loaded: rays per sample x variance gave 0.97 / 0.82
-   / 0.91 / 1.01 / 1.01.
-   Independent numbers keep b_ref = 1. Any q chosen before the coin is flipped keeps the
-   estimator unbiased; taking it from the throughput after the scatter weight (the textbook
-   choice) turns a well-sampled direction into a firefly: when f/p is tiny because p is large
-   (a light-sampled direction towards a small bright light under MIXTURE), the path survived
-   with q ~ f/p and was rescaled by 1/q, so the light it then hit counted at full strength in
-   a few rare paths instead of at weight f/p in all of them (measured on bench/scenes/many-
-   lights.scene, mixture 0.5, 64 spp: relMSE 1.3-1.9 with that q, 0.03 without roulette).
+   Paths end by Russian roulette and, where their throughput grows, split (both below).
    Depth counts scattering events: max_depth 1 is direct light only.
    ------------------------------------------------------------------------------------------ */
 
+/* Russian roulette (Arvo & Kirk 1990) from rr_start_depth continues with probability
+   q = min(0.95, sqrt(g max(beta_in))) and divides beta by q, where beta_in is the throughput
+   that reached this vertex, before its scatter weight f/p, and g = 1 (2 with the Sobol sampler).
+   Why the square root: roulette trades the variance it adds, b^2 E[Y^2] (1/q - 1) for a
+   continuation b Y, against the time (1 - q) C it saves; the q that minimises variance x time
+   is proportional to b (so q = b/b_ref), with b_ref set by the rest of the pixel's variance and
+   cost, which a path does not know. q = b (b_ref = 1, pbrt's choice) cuts paths too early;
+   q = sqrt(b) keeps more paths of throughput 0.1-1. b_ref grows with the square root of the
+   rest of the pixel's variance per sample, which Sobol's stratification makes smaller, so
+   roulette cuts later there: b_ref = 1/2, q = min(0.95, sqrt(2 b)). Any q chosen before the
+   coin is flipped keeps the estimator unbiased; taking it from the throughput after the scatter
+   weight (the textbook choice) turns a well-sampled direction into a firefly: when f/p is tiny
+   because p is large (a light-sampled direction towards a small bright light under MIXTURE),
+   the path survives with q ~ f/p and is rescaled by 1/q, so the light it then hits counts at
+   full strength in a few rare paths instead of at weight f/p in all of them. The measurements
+   behind each of these choices: docs/internals.md, "Russian roulette". */
 #define PT__RR_GAIN_SOBOL 2.0f /* b_ref = 1/2 with the Sobol sampler (above) */
 
 typedef struct pt__settings {
@@ -4996,25 +4987,28 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    own: MIXTURE gives every direction that misses the lights the weight f / ((1 - w) p_s), and
    with light_weight 0.75 over white walls (albedo 0.73) that is 4 x 0.73 per bounce. Such a path
    has probability 0.25^d of reaching depth d and weight 2.9^d there, so its second moment grows
-   as 0.25 x 2.9^2 = 2.1 per bounce and the variance is dominated by paths too rare to be seen:
-   on the Cornell box, mixture 0.75, the relative variance per sample was 0.6 at max_depth 2,
-   8 at 6, 14 at 8, and pairs of 16-spp renders at max_depth 50 ranged over 10-73, while relMSE
-   fell as N^-0.77 instead of N^-1 from 1 to 1024 spp (bench/out). So where a non-delta vertex
-   is reached with max(beta_in) >= 2, the path continues as k = min(8, floor(max(beta_in)))
-   independent copies, each with beta_in / k, each sampling its own direction (and its own
-   roulette): the expectation is unchanged, every copy's throughput stays below 2, and the
-   second moment a bounce multiplies in becomes (E[w^2] + (k - 1) E[w]^2) / k instead of E[w^2],
-   w = f/p (E[w] <= albedo < 1), so it no longer grows without bound.
+   as 0.25 x 2.9^2 = 2.1 per bounce and the variance is dominated by paths too rare to be seen.
+   So where a non-delta vertex is reached with max(beta_in) >= 2, the path continues as
+   k = min(8, floor(max(beta_in))) independent copies, each with beta_in / k, each sampling its
+   own direction (and its own roulette): the expectation is unchanged, every copy's throughput
+   stays below 2, and the second moment a bounce multiplies in becomes (E[w^2] + (k - 1) E[w]^2)
+   / k instead of E[w^2], w = f/p (E[w] <= albedo < 1), so it no longer grows without bound.
    The extra copies run after the path that split, depth first, on the same sampler stream
    (INDEPENDENT) or on Sobol sets scrambled with their own key (SOBOL); at most max_splits extra
    copies per camera sample (default 64), after which paths go on unsplit. The next-event
    estimate of the vertex is taken once, before the split. With MATERIAL, LIGHT and MIS and the
    built-in materials, throughputs stay near or below 1 (cosine-sampled Lambertian: f/p = albedo;
    glass: 1), so paths split only after a dozen or more bounces through glass and mirrors, whose
-   weight 1 roulette divides by 0.95 each time (measured on bench/scenes/metal-glass.scene: one
-   split in ~65,000 samples); with a guide, or MIXTURE, they split often. Measured on the Cornell
-   box (bench, mixture 0.75, 5 seeds): 0.33 extra paths per sample, the slope -0.99 instead of
-   -0.77, and efficiency relative to MIS 0.53 instead of 0.10. */
+   weight 1 roulette divides by 0.95 each time; with a guide, or MIXTURE, they split often. What
+   it does to the error: docs/internals.md, "Splitting (the weight window)". */
+#define PT__SPLIT_BETA 2.0f
+#if defined(__GNUC__)
+#define PT__UNLIKELY(x) __builtin_expect(!!(x), 0)
+#else
+#define PT__UNLIKELY(x) (x)
+#endif
+#define PT__SPLIT_MAX_COPIES 8
+
 /* indirect_paths (pt_render_desc): a camera sample's path also splits at its first non-delta
    vertex, into k copies that continue independently after that vertex's one next-event
    estimate. A camera sample's error is the sum of what it estimates once (where in the pixel,
@@ -5024,25 +5018,10 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    splitting (Arvo & Kirk 1990), as in production renderers' "indirect samples per camera
    sample". The Sobol sampler stratifies the first vertex's dimensions over a pixel's samples, so
    V_c is small and k* large; with independent numbers V_c holds e.g. the choice among many
-   lights. Measured (before Sobol's roulette gain of 2, below, which was then tuned with k = 3):
-   variance x CPU time per camera sample relative to k = 1, MIS, 64 spp, 4 seed pairs, one
-   thread, on tiny-light-pure / tiny-light / many-lights / cornell / metal-glass:
-     Sobol        k = 2: 0.81 0.95 0.96 0.90 0.91   k = 3: 0.75 0.99 0.92 0.86 0.88
-                  k = 4: 0.68 1.09 0.94 0.84 0.88
-     independent  k = 2: 0.84 0.99 1.11 0.91 0.93   k = 3: 0.78 1.08 1.23 0.90 0.90
-   (tiny-light-pure with Sobol at 256 spp, 3 pairs: k = 2 0.83, 3 0.81, 4 0.74.) So the default
-   is 3 with Sobol, and 1 (no split: images as before) with independent numbers. Copies carrying
-   throughput 1/k instead (so roulette's q = sqrt(b) cut them early) made it worse than no split
-   on the Cornell box (variance x time 1.36-1.50, helper rr3's measurement this session).
-   The path starts with throughput k and its sum is divided by k, so each copy carries
-   throughput ~1 like an unsplit path, and roulette and the weight window below treat it so. */
-#define PT__SPLIT_BETA 2.0f
-#if defined(__GNUC__)
-#define PT__UNLIKELY(x) __builtin_expect(!!(x), 0)
-#else
-#define PT__UNLIKELY(x) (x)
-#endif
-#define PT__SPLIT_MAX_COPIES 8
+   lights. So the default is 3 with Sobol, and 1 (no split) with independent numbers (the
+   measurements: docs/internals.md, "Indirect paths"). The path starts with throughput k and its
+   sum is divided by k, so each copy carries throughput ~1 like an unsplit path, and roulette and
+   the weight window treat it so. */
 
 /* A camera sample's splitting budget: `left` extra copies may still start (max_splits), and
    `first` is the split of the first non-delta vertex still to come (indirect_paths; 1 once it
@@ -5153,7 +5132,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
 
 /* Copies 1 .. k-1 of a split at vertex v, each with throughput beta_share (copy 0 is the path
    that split, which goes on in pt__trace_from). Kept out of line: it runs rarely, and inlined
-   it cost the unsplit path ~7 % more instructions (callgrind). */
+   it slows the unsplit path (docs/internals.md, "Splitting (the weight window)"). */
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
@@ -5297,9 +5276,8 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     /* indirect_paths k: the path starts with throughput k and the sum is divided by k, so each of
        the k copies the first non-delta vertex splits into has throughput ~1, as an unsplit path
        would: roulette (q from the throughput) and the weight window treat a copy as they treat
-       a whole path. (With throughput 1/k, q = sqrt(1/k) would kill the copies early, and raised
-       the furnace's standard deviation per sample from 0.26 to 0.34 at k = 8.) k = 1 is exact:
-       throughput 1, and x * 1.0f == x. */
+       a whole path. (With throughput 1/k, q = sqrt(1/k) would kill the copies early:
+       docs/internals.md, "Indirect paths".) k = 1 is exact: throughput 1, and x * 1.0f == x. */
     const float k = (float)cfg->indirect_paths;
     pt__splits sp;
     sp.left = cfg->max_splits;
