@@ -5327,87 +5327,15 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    8. Rendering: the image is cut into tiles; each pass adds samples_per_pass samples to every
    pixel of every tile. Tiles are handed out by a pthreads pool (or the host's parallel-for).
    A pixel's k-th sample draws from the stream pt_rng_for_sample(seed, pixel, k) (with
-   PT_SAMPLER_SOBOL: from the scrambled Sobol sets keyed by (seed, pixel, k), section 2) and is added
-   to the pixel in sample order by the one job that owns the tile, so the image does not
+   PT_SAMPLER_SOBOL: from the scrambled Sobol sets keyed by (seed, pixel, k), section 2) and is
+   added to the pixel in sample order by the one job that owns the tile, so the image does not
    depend on the thread count or the order in which tiles run. Even-numbered samples also go to
    half-buffer A, odd-numbered ones to B (the film keeps sum and sum_odd; A = sum - sum_odd).
-
-   Adaptive sampling (adaptive_threshold = T > 0), planned per pixel from the film alone.
-   Goal: the image's relMSE, mean_i v_i / n_i over pixels i with v_i = Var(one sample) / (r_i^2 +
-   0.01) averaged over the channels (the regularised relative error of rendering benchmarks; r_i
-   the pixel's true value) and n_i its samples, should reach T^2 for the least time. With c_i the
-   cost of one of its samples that is n_i = L sqrt(v_i / c_i) (Lagrange; Neyman's allocation for
-   stratified sampling, "On the Two Different Aspects of the Representative Method", 1934, with
-   costs as in Cochran, "Sampling Techniques", 3rd ed., 1977, sec. 5.5), L fixed by the target.
-   (Stopping each pixel at error T^2 instead, n_i proportional to v_i, costs as many samples as
-   uniform sampling for the same mean error.) How well v_i can be known bounds the gain. On the
-   benchmark's Cornell box ~85 % of the variance comes from rare samples above 16x the pixel's
-   reference value (paths through the glass ball to the light), so even 2048 samples leave a
-   per-pixel variance that is mostly noise: an allocation planned from one 2048-spp map and
-   judged on another, independent one needs 1.03x the uniform samples for the same expected
-   error; planned from its 3x3 means 0.73x, 5x5 0.71x, 7x7 0.72x. (Judged on the map it was
-   planned from, per pixel looks like 0.54x; the 0.40x once quoted here was such a figure.)
-   Estimates, every adaptive_check_passes passes once this render has given every pixel
-   adaptive_min_spp samples: s_i^2, the sample variance of pixel i per channel (sum_sq, n - 1
-   degrees of freedom), divided by m^2 + 0.01 with m the 3x3 mean of the pixel means (the pixel's
-   own mean is a poor stand-in for r: a pixel that caught a firefly would divide it away);
-   c_i = the rays pixel i traced per sample in this render (a count, never a clock, so the image
-   does not depend on timing). v_i used for pixel i is the mean over the 25 pixels of its 5x5
-   neighbourhood, the pixel itself included (adaptive_neighbours_only = 1: the other 24 only);
-   c_i the mean over the other 24.
-   Own samples or not. The allocation above minimises the expected error; the error of the one
-   image rendered is what is judged, and with rare bright samples they differ: a pixel that drew
-   a firefly has a large error now, and more samples there dilute it. With its own variance in
-   its estimate (1/25 of it, so a firefly raises the pixel's share, and its neighbours', by
-   1/25 of its size), that pixel samples on; a pixel that drew none stops at its share. That is
-   the classic stopping bias of adaptive sampling (Kirk & Arvo, "Unbiased sampling techniques
-   for image synthesis", SIGGRAPH 1991): pixels that stop early are the ones that missed the
-   rare bright samples, so the image is biased dark, and the bias shrinks as the samples grow
-   (each draw moves a pixel's mean by less). At the image border the own weight stays 1/25 (a
-   clipped box mean would make it 1/15 at an edge and 1/9 at a corner). Benchmark's Cornell box
-   (MIS, samples to reach the uniform render's error; 8 seeds at 128 spp, 4 at 512): own samples
-   0.36x at 128 spp with the image mean 0.70 % below the uniform render's, 0.54x at 512 spp with
-   0.25 %; neighbours only ~0.7x and 0.73x, the mean up to 0.35 % below at 128 spp and
-   within 0.05 % at 512. The squared bias is 0.3 % of the relMSE at 128 spp and 0.15 % at 512;
-   the gain shrinks with the samples too (in the benchmark's adaptive plot the two modes meet
-   near 2000 spp). The tests' room scene (threshold 0.18, minimum 16 spp, ~40 % of the uniform
-   samples; seeds 7-46): own samples -1.17 % of the image mean (standard error 0.14 %), -0.2 %
-   to -3.3 % in 4x4 regions (another 40 seeds), -0.71 % against the neighbours-only image
-   inside and -2.3 % in the outer 2 pixels; neighbours only -0.38 % (0.14 %): a pixel's own
-   samples still enter L below and its neighbours' normalisation m, so that mode is not exactly
-   unbiased either. The default counts the own samples: the error, bias included, is what
-   adaptive sampling is for; a reference image should be rendered uniformly. 3x3 with the pixel
-   (1/9 of its variance) needed 0.28x at 128 spp and 0.42x at 512 with about twice the bias;
-   7x7 (1/49) 0.43x at 128 spp.
-   Measurements of the neighbours-only estimate: 5x5 rather than 3x3 (8 neighbours) or 7x7: the
-   benchmark's Cornell box reached the uniform render's error at 128 spp with 0.69x its samples (3x3: 0.73x, 7x7:
-   0.71x, 4 seeds); at 512 spp 0.74x (3x3: 0.70x; separate runs of 5 seeds: within noise);
-   dropping the largest neighbour (against isolated fireflies) needed more samples than
-   uniform sampling (rare bright samples are the noise). Later measurements (6 seeds, samples
-   to reach the uniform render's error, thresholds 1.1-1.2x apart): neighbours only needs 0.65x
-   at 128 spp and 0.73x at 512 spp. Not better at 128 spp: 3x3 (0.69x at 1.3x the error, the
-   closest it came), 7x7 0.71x, minimum spp N/8 0.68x or N/2 0.75x (default N/4), n_i
-   proportional to (v_i / c_i)^0.4 or ^0.65 0.69x and 0.70x, v_i shrunk towards the image mean
-   (+ 0.2 mean) 0.75x, neighbours weighted by the similarity of their 3x3 means (7x7,
-   edge-aware) 0.68x. Not better at 512 spp: 3x3 once
-   the neighbours hold >= 96 samples 0.72x, minimum spp 32 or 64 0.73x, 16 spp per pass 0.73x,
-   re-planning every 4 passes 0.74x, the edge-aware mean 0.75x. The neighbourhood also
-   spreads noise a little beyond where it was seen: a zero-variance pixel near noisy ones keeps
-   sampling, so there is no seam where the noise starts. Plan: L solves mean_i v_i / n_i(L) = T^2 with
-   n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + samples_per_pixel) (the samples already
-   taken stay; the mean is convex and decreasing in L: Newton's method safeguarded by bisection);
-   L = 0 (every pixel stops) when the target is reached, every pixel with v_i > 0 samples to the
-   cap when it is out of reach. Each pass gives pixel i min(step, what its plan still wants),
-   step = samples_per_pass x (pixels / pixels that still sample), at most the cap (so that the
-   last passes are not a long tail of nearly empty ones); the pass's jobs are chunks of pixels in raster order
-   holding about equal work (samples x rays per sample), so the threads finish together. Every
-   decision is taken between passes on the calling thread from the film and the rays counted per
-   pixel, so the image stays independent of the thread count and job order.
-   Memory: 124 bytes per pixel during an adaptive render, besides the film.
-   Threads: the workers are created per pass. Thread creation and joining cost ~0.1 ms per pass
-   on a loaded 2-core machine, against >= 10 ms of work in a pass of any image worth adapting
-   (adaptive passes are kept about as long as uniform ones, above), so a persistent pool would
-   not pay (README).
+   With adaptive sampling (adaptive_threshold > 0) the samples each pixel still takes are
+   re-planned between passes from the film alone (Neyman's allocation, below), and a pass's
+   jobs are chunks of pixels of about equal work instead of tiles. pt_render validates the
+   desc, sets the render up, runs the passes and sums up their statistics; the film's own
+   functions (init, resolve, error estimate) close the section.
    ------------------------------------------------------------------------------------------ */
 
 static double pt__now(void)
@@ -5553,7 +5481,9 @@ static void *pt__worker(void *data)
 }
 #endif
 
-/* Runs `jobs` tiles (ps->jobs) of a pass; returns the number of threads used. */
+/* Runs `jobs` tiles (ps->jobs) of a pass; returns the number of threads used. The workers are
+   created per pass: creating and joining them costs far less than a pass's work, so a
+   persistent pool would not pay (docs/internals.md, "Tiles, chunks and threads"). */
 static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_desc *d)
 {
     int i;
@@ -5582,11 +5512,49 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
     return 1;
 }
 
-/* The neighbourhood v_i and c_i are averaged over: (2 R + 1)^2 pixels, R = 2 (section 8). */
+/* Adaptive sampling (adaptive_threshold = T > 0), planned per pixel from the film alone.
+   Goal: the image's relMSE, mean_i v_i / n_i over pixels i with v_i = Var(one sample) / (r_i^2 +
+   0.01) averaged over the channels (the regularised relative error of rendering benchmarks; r_i
+   the pixel's true value) and n_i its samples, should reach T^2 for the least time. With c_i the
+   cost of one of its samples that is n_i = L sqrt(v_i / c_i) (Lagrange; Neyman's allocation for
+   stratified sampling, "On the Two Different Aspects of the Representative Method", 1934, with
+   costs as in Cochran, "Sampling Techniques", 3rd ed., 1977, sec. 5.5), L fixed by the target.
+   (Stopping each pixel at error T^2 instead, n_i proportional to v_i, costs as many samples as
+   uniform sampling for the same mean error.) How well v_i can be known bounds the gain: where
+   rare bright samples (caustics) make most of the variance, a pixel's own variance is mostly
+   noise even after thousands of samples, so v_i is averaged over a neighbourhood.
+   Estimates, every adaptive_check_passes passes once this render has given every pixel
+   adaptive_min_spp samples (default max(16, samples_per_pixel / 16)): s_i^2, the sample
+   variance of pixel i per channel (sum_sq, n - 1 degrees of freedom), divided by m^2 + 0.01
+   with m the 3x3 mean of the pixel means (the pixel's own mean is a poor stand-in for r: a
+   pixel that caught a firefly would divide it away); c_i = the rays pixel i traced per sample
+   in this render (a count, never a clock, so the image does not depend on timing). v_i used
+   for pixel i is the mean over the 25 pixels of its 5x5 neighbourhood, the pixel itself
+   included (adaptive_neighbours_only = 1: the other 24 only); c_i the mean over the other 24.
+   The neighbourhood also spreads noise a little beyond where it was seen: a zero-variance pixel
+   near noisy ones keeps sampling, so there is no seam where the noise starts. Why 5x5, and the
+   variants that did no better: docs/internals.md, "Adaptive sampling". */
+/* The neighbourhood v_i and c_i are averaged over: (2 R + 1)^2 pixels, R = 2. */
 #define PT__ADAPTIVE_R 2
 #define PT__ADAPTIVE_BOX ((2 * PT__ADAPTIVE_R + 1) * (2 * PT__ADAPTIVE_R + 1))
 
-/* Adaptive sampling state of one pt_render call (see the comment at the top of section 8). */
+/* Own samples or not. The allocation above minimises the expected error; the error of the one
+   image rendered is what is judged, and with rare bright samples they differ: a pixel that drew
+   a firefly has a large error now, and more samples there dilute it. With its own variance in
+   its estimate (1/25 of it, so a firefly raises the pixel's share, and its neighbours', by
+   1/25 of its size), that pixel samples on; a pixel that drew none stops at its share. That is
+   the classic stopping bias of adaptive sampling (Kirk & Arvo, "Unbiased sampling techniques
+   for image synthesis", SIGGRAPH 1991): pixels that stop early are the ones that missed the
+   rare bright samples, so the image is biased dark, and the bias shrinks as the samples grow
+   (each draw moves a pixel's mean by less). Leaving the pixel out (adaptive_neighbours_only)
+   makes the bias smaller but not zero: a pixel's own samples still enter L and its neighbours'
+   normalisation m. The default counts the own samples: the error, bias included, is what
+   adaptive sampling is for; a reference image should be rendered uniformly. The measured bias
+   and gain of both modes: docs/internals.md, "Adaptive sampling".
+   Every decision is taken between passes on the calling thread from the film and the rays
+   counted per pixel, so the image stays independent of the thread count and job order.
+   Memory: 124 bytes per pixel during an adaptive render, besides the film. */
+/* Adaptive sampling state of one pt_render call. */
 typedef struct pt__adaptive {
     double target;             /* threshold^2: the relMSE the image should reach */
     int min_spp, check_passes, per_pass, cap, width, height;
@@ -5630,13 +5598,15 @@ static void pt__box_mean(const double *v, double *out, double *tmp, int w, int h
         }
 }
 
-/* Re-plans the samples (see the comment at the top of section 8): per pixel i, v_i from the
-   film's sample variance averaged over its 5x5 neighbourhood (itself as 1 of 25 when a->self,
-   else the other pixels only), c_i = rays per sample averaged over the other pixels of that
+/* Re-plans the samples (see the comments above pt__adaptive): per pixel i, v_i from the film's
+   sample variance averaged over its 5x5 neighbourhood (itself as 1 of 25 when a->self, else the
+   other pixels only), c_i = rays per sample averaged over the other pixels of that
    neighbourhood; then the Lagrange multiplier L with mean_i v_i / n_i(L) = threshold^2,
-   n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + cap), found by Newton's method
-   safeguarded by bisection (the mean is convex and decreasing in L); want_i = round(n_i -
-   count_i), the samples pixel i should still take (pt__adaptive_plan hands them out). */
+   n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + cap) (the samples already taken stay),
+   found by Newton's method safeguarded by bisection (the mean is convex and decreasing in L);
+   L = 0 (every pixel stops) when the target is already reached, and every pixel with v_i > 0
+   samples to its cap when the target is out of reach. want_i = round(n_i - count_i), the
+   samples pixel i should still take (pt__adaptive_plan hands them out). */
 static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
 {
     size_t i, np = (size_t)a->width * (size_t)a->height;
@@ -5722,10 +5692,12 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
         }
 }
 
-/* The next pass: pixel i takes min(per_pass, want_i) samples. The jobs are chunks of pixels in
-   raster order, cut so that each holds about the same work (samples x smoothed rays per sample):
-   a few pixels far apart that still sample split evenly over the threads, which tiles would not
-   do. Returns the number of jobs (at most a->chunks). */
+/* The next pass: pixel i takes min(want_i, step) samples, step = per_pass x (pixels / pixels
+   that still sample), at most the cap, so that the last passes are not a long tail of nearly
+   empty ones. The jobs are chunks of pixels in raster order, cut so that each holds about the
+   same work (samples x smoothed rays per sample): a few pixels far apart that still sample split
+   evenly over the threads, which tiles would not do. Returns the number of jobs (at most
+   a->chunks). */
 static int pt__adaptive_plan(pt__adaptive *a, pt__pass *ps, int *job_list)
 {
     size_t i, np = (size_t)a->width * (size_t)a->height;
@@ -5840,8 +5812,7 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
     memset(ps, 0, sizeof *ps);
     /* default tiles: 8 x 8 pixels once a pass takes >= 8 samples per pixel (a job then holds >= 512
        samples), else 16 x 16: the smaller the jobs, the closer together the threads finish a pass
-       (on the benchmark's tiny-light-pure at 32 spp, 2 threads: the last job left one thread idle
-       for ~1.1 % of the pass with 16 x 16 tiles, ~0.3 % with 8 x 8, from per-job CPU times) */
+       (docs/internals.md, "Tiles, chunks and threads") */
     ps->tile_size = d->tile_size ? d->tile_size : (r->per_pass >= 8 ? 8 : 16);
     tiles_x = (d->width + ps->tile_size - 1) / ps->tile_size;
     tiles_y = (d->height + ps->tile_size - 1) / ps->tile_size;
@@ -5858,8 +5829,9 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
     ps->tiles_x = tiles_x;
     ps->cancel = d->cancel;
     /* jobs: tiles, or in adaptive passes up to ad.chunks chunks of pixels: 32 per thread, since at
-       the end of a pass a thread waits for at most the other threads' last job (with 2 threads
-       and 8 per thread that was ~1/16 of a pass; uniform passes have 64 tiles at 128 x 128) */
+       the end of a pass a thread waits for at most the other threads' last job (fewer chunks
+       left threads idle: docs/internals.md, "Tiles, chunks and threads"; uniform passes have 64
+       tiles at 128 x 128) */
     ad->chunks = 32 * r->threads < 4096 ? 32 * r->threads : 4096;
     slots = r->adaptive && ad->chunks > tiles ? ad->chunks : tiles;
     ps->tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
