@@ -77,16 +77,21 @@
 
    SECTIONS (in the order data flows)
    ========
+   The declarations and the implementation below share these numbers and this order; each
+   section opens with what it does and why. Sections 0 and 5c are in the implementation only.
+   0. Internal types: the scene's private representation (implementation only)
    1. Math: vectors, rays, transforms, orthonormal basis, random numbers
-   2. Sampling and PDFs
-   3. Geometry and scenes
+   2. Sampling and PDFs: samplers (independent, Sobol), warps, light and material densities
+   3. Geometry and scenes: primitives, intersections, building a scene
    4. Materials and textures
-   5. BVH
+   5. BVH (the built-in traversal)
    5b. Embree traversal (optional: define PDFTRACE_EMBREE; links embree3)
+   5c. Commit and ray queries (implementation only; declared in section 3)
    6. Camera
-   7. Integrator (strategies)
-   8. Rendering (tiles, threads, passes, adaptive sampling, statistics)
-   9. Output (framebuffer, PFM and PPM writers)
+   7. Integrator (strategies, Russian roulette, splitting)
+   8. Rendering (tiles, threads, passes, adaptive sampling, statistics; the film and images)
+   9. Output (sRGB, PFM and PPM writers)
+   The measurements behind the implementation's tuned choices: docs/internals.md.
 
    SKIPPING WORK A SCENE DOES NOT NEED
    ===================================
@@ -171,6 +176,8 @@ PTDEF const char *pt_result_string(int code);
 
 /* ==========================================================================================
    1. MATH: vectors and colours, rays, affine transforms, orthonormal basis, random numbers
+   Small value types passed by value, with inline helpers for the vector algebra a caller
+   needs; the random numbers are PCG32 streams, one per camera sample.
    ========================================================================================== */
 
 typedef struct pt_vec3 { float x, y, z; } pt_vec3;
@@ -409,8 +416,9 @@ PTDEF void pt_sobol_scrambled4(uint32_t index, uint64_t seed, float u[4]);
    A scene owns materials, textures and shapes. Shapes are added under the scene's current
    transform (pt_scene_set_transform), which is applied to their geometry when they are
    added: an instanced emitter is an emitter in world space and is sampled exactly. Add
-   everything, then pt_scene_commit (builds the BVH and the light table); change the scene
-   and it must be committed again before it is rendered.
+   everything, then pt_scene_commit (builds the acceleration structure, section 5 or 5b, and
+   the light table; implemented in section 5c); change the scene and it must be committed
+   again before it is rendered.
    ========================================================================================== */
 
 typedef struct pt_scene pt_scene;
@@ -575,7 +583,8 @@ typedef struct pt_shading_point {
 } pt_shading_point;
 
 /* ==========================================================================================
-   5. BVH: built by pt_scene_commit (binned SAH; see the implementation for details).
+   5. BVH: built by pt_scene_commit (binned SAH; see the implementation for details). It has no
+   API of its own: pt_scene_intersect and pt_scene_occluded (section 3) query it.
    ========================================================================================== */
 
 /* ==========================================================================================
@@ -638,7 +647,8 @@ PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
 #endif
 
 /* ==========================================================================================
-   6. CAMERA
+   6. CAMERA: a pinhole or thin-lens camera from look-at parameters. pt_render builds one from
+   pt_render_desc.camera; pt_camera_ray gives the same rays to a caller.
    ========================================================================================== */
 
 typedef struct pt_camera_desc {
@@ -663,6 +673,8 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
 
 /* ==========================================================================================
    7. INTEGRATOR: direction-sampling strategies
+   How a path chooses its directions (pt_strategy), an optional user PDF mixed into it (a
+   guide), the counters of a path, and the scene-feature skips that can be switched off.
    ========================================================================================== */
 
 typedef enum pt_strategy {
@@ -729,6 +741,9 @@ typedef struct pt_path_stats {
 
 /* ==========================================================================================
    8. RENDERING: tiles, threads, progressive passes, adaptive sampling, statistics
+   A render is described by a pt_render_desc (zero means "default" for every field but the
+   image size) and adds samples to a film, which is resolved into an image; pt_render_image
+   does all three.
    ========================================================================================== */
 
 typedef struct pt_progress {
@@ -873,7 +888,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, 
                              pt_path_stats *stats);
 
 /* ==========================================================================================
-   9. OUTPUT: image writers
+   9. OUTPUT: image writers (OpenEXR: pdftrace_exr.h)
    ========================================================================================== */
 
 /* Writers. Each writes to a temporary file beside the target and renames it into place, so
@@ -1118,7 +1133,13 @@ static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
 }
 
 /* ------------------------------------------------------------------------------------------
-   1. Math
+   1. Math: what the inline vector helpers of the header do not cover. Finite tests on the bit
+   pattern (so that -ffast-math builds still catch NaN and Inf); the offset of a ray origin off
+   a surface (Waechter & Binder, Ray Tracing Gems ch. 6, 2019, scaled to the scene, below);
+   affine transforms (Rodrigues' rotation) and normals by the cofactor matrix; the orthonormal
+   basis of Duff et al. (JCGT 6(1), 2017); PCG32 seeding (O'Neill 2014) and the per-sample
+   streams, hashed with SplitMix64 (Steele, Lea & Flood 2014) so that a sample's numbers depend
+   only on (seed, pixel, sample index).
    ------------------------------------------------------------------------------------------ */
 
 /* isfinite on the bit pattern, so that -ffast-math builds still catch NaN and Inf. */
@@ -2414,7 +2435,15 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
 }
 
 /* ------------------------------------------------------------------------------------------
-   3. Geometry and scenes
+   3. Geometry and scenes: ray/primitive intersections, hit records and building a scene.
+   Spheres after Haines et al. (Ray Tracing Gems ch. 7, 2019), with a double-precision path for
+   tiny or distant ones; parallelograms by their plane coordinates (Shirley, "Ray Tracing: The
+   Next Week") with a rounding margin at the edges so that boxes stay closed; triangles by the
+   watertight test of Woop, Benthin & Wald (JCGT 2(1), 2013). A hit point is re-computed on the
+   primitive (not o + t d, whose error grows with the distance) and carries the magnitude of its
+   rounding error for the ray offset of section 1. Shapes are added under the scene's current
+   transform, baked into their world-space coordinates, and validated so that every later
+   product of coordinates stays finite.
    ------------------------------------------------------------------------------------------ */
 
 /* need_triangles = 0 skips the shear set-up in scenes without triangles. */
@@ -3022,7 +3051,11 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
 }
 
 /* ------------------------------------------------------------------------------------------
-   4. Materials and textures
+   4. Materials and textures: the material table (Lambertian, metal with an optional fuzz lobe,
+   clear dielectric, emitter), the 3D checker, and what the integrator asks of a material: its
+   A * pScatter for a direction (BRDF times cosine), the density with which it samples a
+   direction, a sampled direction, and the exact unpolarised Fresnel reflectance of a dielectric
+   interface. Delta materials (mirror, glass) have no density and are followed by the integrator.
    ------------------------------------------------------------------------------------------ */
 
 static int pt__color_ok(pt_color c) { return pt__vfinite(c) && c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f; }
@@ -4035,9 +4068,10 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
     }
 }
 
-/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. Blocks that hold
-   only primitive `skip` (one-primitive leaves, PT__BVH_SMALL_SCENE) are not tested: the shadow
-   ray towards a point sampled on a light passes its own light (0xffffffff: none). */
+/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. Quad and sphere
+   blocks that hold only primitive `skip` (one-primitive leaves, PT__BVH_SMALL_SCENE) are not
+   tested: the shadow ray towards a point sampled on a light passes its own light (0xffffffff:
+   none). */
 static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
 {
     uint32_t stack_ref[PT__BVH_STACK];
@@ -4533,7 +4567,7 @@ static int pt__accel_build(pt_scene *s)
     int rc;
 #ifdef PDFTRACE_EMBREE
     int want = s->backend_request;
-    if (want == PT_BACKEND_AUTO) { /* the rule measured at PDFTRACE_EMBREE_MIN_PRIMS */
+    if (want == PT_BACKEND_AUTO) { /* the rule of section 5b (PDFTRACE_EMBREE_MIN_PRIMS) */
         want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN;
 #if PDFTRACE_EMBREE_SMALL_PRIMS > 0
         if (2u * (uint64_t)s->triangle_count < s->prim_count && s->prim_count < (uint32_t)(PDFTRACE_EMBREE_SMALL_PRIMS))
@@ -4747,7 +4781,10 @@ PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tm
 }
 
 /* ------------------------------------------------------------------------------------------
-   6. Camera: pinhole or thin lens; screen right = forward x up (right-handed).
+   6. Camera: pinhole or thin lens from look-at parameters; screen right = forward x up
+   (right-handed). The image plane lies at the focus distance, so a thin lens (a point on the
+   lens from the concentric disk map, section 2) keeps that plane sharp (Shirley, "Ray Tracing
+   in One Weekend", defocus blur).
    ------------------------------------------------------------------------------------------ */
 
 PTDEF int pt_camera_init(pt_camera *cam, const pt_camera_desc *d, int width, int height)
@@ -6124,7 +6161,9 @@ PTDEF int pt_film_error(const pt_film *f, int x0, int y0, int x1, int y1, double
 }
 
 /* ------------------------------------------------------------------------------------------
-   9. Output: the sRGB transfer function and the PFM and PPM writers
+   9. Output: the sRGB transfer function (IEC 61966-2-1) and the PFM (linear float, bottom row
+   first) and PPM (8-bit sRGB) writers. Each writer writes a temporary file beside the target
+   and renames it into place, so that a failed write never leaves a partial image.
    ------------------------------------------------------------------------------------------ */
 
 PTDEF float pt_srgb_encode(float x)
