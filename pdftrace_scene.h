@@ -31,7 +31,6 @@
    ===========
    A scene file is plain text, one statement per line, `#` starts a comment; tokens are
    separated by blanks. The format, in full:
-   per line, `#` starts a comment; tokens are separated by blanks. The format, in full:
 
      size W H                         image size (default 256 256; 1..16384)
      spp N                            samples per pixel (default 64)
@@ -193,8 +192,10 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *desc, const char *path, con
 
 /* ==========================================================================================
    IMPLEMENTATION
-   The parser reads the whole file, then one line at a time into a pt_scenefile; nothing is
-   kept on failure. The builder and the exporter use only the public API and the description.
+   The parser reads the whole file, then one line at a time into a pt_scenefile
+   (pt__sf_statement hands each statement to the reader of its kind); nothing is kept on
+   failure. The OBJ reader fans polygons into triangles. The builder and the exporter use only
+   the public API and the description.
    ========================================================================================== */
 #ifdef PDFTRACE_SCENE_IMPLEMENTATION
 #ifndef PDFTRACE_SCENE_IMPLEMENTATION_DONE
