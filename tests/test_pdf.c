@@ -64,7 +64,7 @@ static tu_pdf_check base_check(const char *label, const pt_pdf *pdf, uint64_t se
    at light weight 0.1, 0.5, 0.9, the non-delta materials, user callbacks) run with 10^6 draws (as
    Mitsuba 3's ChiSquareTest), a grid of ~3000 cells (~300 expected draws per cell; an odd phi
    count keeps cell edges off symmetry planes) and E[1/p] within 3 standard errors
-   (accuracy-references.md). The other cases keep 10^5 draws. */
+   (docs/accuracy.md). The other cases keep 10^5 draws. */
 #define ISSUE3_N 1000000L
 static void issue3(tu_pdf_check *c, int ns, int nphi)
 {
@@ -230,7 +230,7 @@ enum {
     LC_SMALL,      /* 10^5 draws; a sphere in the cone containing it, a planar light in its (a, b) */
     LC_CONE,       /* an issue-3 case in cone-local coordinates ((1 - cos)/omc, phi): for a sphere the
                       exact cone of directions that meet it (where a correct sampler is uniform, per
-                      accuracy-references.md), for a planar light the cone containing it */
+                      docs/accuracy.md), for a planar light the cone containing it */
     LC_PLANAR      /* an issue-3 case in the light's own (a, b) coordinates: grazing and far views,
                       whose support is a thin sliver of any cone (no cell straddles its edge here) */
 };
@@ -867,7 +867,7 @@ static double ref_cone_user(const void *ctx, dv3 w, int *near)
 
 static void pdf_mixture(test_ctx *t)
 {
-    /* Known failure 1 (accuracy-references.md): the density of a mixture is sum_k w_k p_k, never the
+    /* Known failure 1 (docs/accuracy.md): the density of a mixture is sum_k w_k p_k, never the
        chosen component's. Checked exactly against the components' own values, and by the full
        checker; a mixture whose light component has no density (light seen from behind) has mass
        equal to the other weight; nested mixtures and callbacks compose. */

@@ -1,5 +1,5 @@
 /* test_regress.c - one regression test per known failure of small PDF tracers, numbered as in
-   shared/docs/accuracy-references.md ("Known failures of small PDF tracers"). Where another section
+   docs/accuracy.md ("Known failures of small PDF tracers"). Where another section
    already tests the mechanism in depth, the test here is thin: it names the failure, reproduces its
    symptom in the smallest scene that shows it and points to the deeper test.
 

@@ -569,7 +569,7 @@ static void direct_sphere_light_formula(test_ctx *t)
 {
     /* A spherical light of radiance L and angular radius a seen at angle theta from the normal of a
        Lambertian floor (rho = 0.5), theta + a < pi/2: outgoing radiance rho L sin^2(a) cos(theta)
-       (accuracy-references.md). One path per sample with pt_trace_path, max_depth 1. sin^2(a) = 0.05
+       (docs/accuracy.md). One path per sample with pt_trace_path, max_depth 1. sin^2(a) = 0.05
        with every strategy; sin^2(a) = 1e-6 and 1e-8 (radiance scaled to keep the result ~0.05) with
        the strategies that sample lights. Comparisons: 3 points x (4 + 3 + 3) = 30, alpha 0.01 Sidak. */
     const double s2[3] = { 0.05, 1e-6, 1e-8 };

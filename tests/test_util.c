@@ -175,7 +175,7 @@ double tu_fresnel_dielectric(double cos_i, double eta_i, double eta_t)
 }
 
 /* One minus the cosine of the half-angle of the cone a sphere subtends; the form
-   s^2 / (1 + sqrt(1 - s^2)) stays exact for tiny s (accuracy-references.md). */
+   s^2 / (1 + sqrt(1 - s^2)) stays exact for tiny s (docs/accuracy.md). */
 static double sphere_omc(double s2) { return s2 / (1.0 + sqrt(fmax(0.0, 1.0 - s2))); }
 
 double tu_light_area(const tu_light *L)
@@ -705,7 +705,7 @@ int tu_check_pdf_(test_ctx *t, const tu_pdf_check *c, tu_pdf_result *res, const 
         }
     }
 
-    /* hard failures (accuracy-references.md): no sample outside the domain, no negative or
+    /* hard failures (docs/accuracy.md): no sample outside the domain, no negative or
        non-finite density, ... (the two grid-based ones follow with the chi-square) */
     ok &= CHECK_AT(t, file, line, bad_rc == 0, "%s: pt_pdf_sample returned neither 0 nor 1 (%ld times)", c->label, bad_rc);
     ok &= CHECK_AT(t, file, line, bad_fail_out == 0, "%s: a failed draw left non-zero dir/pdf (%ld times)", c->label,
@@ -761,7 +761,7 @@ int tu_check_pdf_(test_ctx *t, const tu_pdf_check *c, tu_pdf_result *res, const 
         comparisons++;
     }
     if (c->support > 0.0 && inv.n > 1) {
-        /* E[1/p] over samples = the measure of the support (accuracy-references.md: within 3 sigma
+        /* E[1/p] over samples = the measure of the support (docs/accuracy.md: within 3 sigma
            when inv_z = 3; else at the suite's level alpha) */
         double se = tu_acc_se(&inv), lim = c->inv_z > 0.0 ? c->inv_z : z;
         ok &= CHECK_AT(t, file, line, fabs(inv.mean - c->support) <= lim * se + 1e-5 * c->support,

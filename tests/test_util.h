@@ -150,7 +150,7 @@ typedef struct tu_pdf_check {
    success fraction, E[1/p]. */
 #define TU_PDF_COMPARISONS 7
 /* Relative agreement required between the density returned with a sample and pt_pdf_value of the
-   sampled direction (accuracy-references.md: 1e-5 or better). */
+   sampled direction (docs/accuracy.md: 1e-5 or better). */
 #define TU_SAMPLE_VALUE_REL 1e-5
 /* Hard failure when pt_pdf_value integrates over the histogram's domain to more than 1 + this (the
    adaptive quadrature is accurate to ~1e-4 on every case of the suite). */
@@ -212,7 +212,7 @@ int tu_render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_f
    the emitter (so no camera ray meets it). With max_depth 1 the exact outgoing radiance at a plane
    point is rho E / pi (Lambertian receiver), E from Lambert's polygon formula (planar lights) or
    E = pi L sin^2(alpha) cos(theta) (a sphere wholly above the tangent plane, so theta + alpha <= pi/2
-   holds everywhere: accuracy-references.md). A pixel's expectation is the mean of rho E / pi over its
+   holds everywhere: docs/accuracy.md). A pixel's expectation is the mean of rho E / pi over its
    footprint (the renderer jitters the camera ray uniformly over the pixel): computed by the midpoint
    rule on 8 x 8 camera rays per pixel, hit with the plane in double precision; its error is
    estimated by Richardson's rule from the 4 x 4 rule, |I_8 - I_4| / 3 (midpoint error ~ h^2). */

@@ -461,7 +461,7 @@ void st_spawn(st_ctx *c)
 /* A Lambertian plane y = 0 (albedo rho) under a sphere light of radius R at height 1 with
    radiance L = I / (pi R^2): intensity I = L pi R^2 in every direction. The irradiance at
    horizontal distance x is E = pi L sin^2(alpha) cos(theta) = I cos(theta) / d^2 (d^2 = 1 + x^2),
-   exact for every R while theta + alpha <= pi/2 (accuracy-references.md), i.e. the point-light
+   exact for every R while theta + alpha <= pi/2 (docs/accuracy.md), i.e. the point-light
    value; the plane's radiance is rho E / pi. Direct light only (max_depth 1), one path per
    sample through pt_trace_path from above the point. */
 void st_tiny_light(st_ctx *c)
