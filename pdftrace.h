@@ -4140,9 +4140,9 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
      price of a callback per candidate; scenes large enough for Embree to pay are meshes.
    Rays are traced from pdftrace's offset origins (no epsilon of Embree's own) with
    tnear = FLT_MIN and tfar just below tmax: the built-in accepts 0 < t < tmax, Embree
-   tnear <= t <= tfar. The callbacks
-   find pdftrace's per-ray data (pt__rayctx) in an extended intersect context (Embree 3
-   docs, rtcInitIntersectContext: "the context can be extended by the application").
+   tnear <= t <= tfar. The callbacks find pdftrace's per-ray data (pt__rayctx) in an extended
+   intersect context (Embree 3 docs, rtcInitIntersectContext: "the context can be extended by
+   the application").
    ------------------------------------------------------------------------------------------ */
 #ifdef PDFTRACE_EMBREE
 
@@ -4245,10 +4245,9 @@ static void pt__rtc_bounds(const struct RTCBoundsFunctionArguments *a)
     pt_vec3 lo, hi;
     float e = ((const pt__rtc_geom *)a->geometryUserPtr)->pad;
     pt__prim_bounds(p, &lo, &hi);
-    /* Padded like the built-in nodes, plus 2^-24 of the scene's extent: Embree culled rays
-       running exactly in the plane of an axis-aligned quad when the bounds were padded by less
-       than ~1e-12 absolute at coordinate 0 (141 of 20000 in-plane rays over integer boxes;
-       none with this pad). */
+    /* Padded like the built-in nodes, plus 2^-24 of the scene's extent: with less padding at
+       coordinate 0 Embree culls some rays that run exactly in the plane of an axis-aligned quad
+       (docs/internals.md, "Embree user-geometry bounds"). */
     a->bounds_o->lower_x = pt__pad_down(lo.x) - e; a->bounds_o->lower_y = pt__pad_down(lo.y) - e;
     a->bounds_o->lower_z = pt__pad_down(lo.z) - e;
     a->bounds_o->upper_x = pt__pad_up(hi.x) + e; a->bounds_o->upper_y = pt__pad_up(hi.y) + e;
