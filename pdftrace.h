@@ -176,7 +176,7 @@ PTDEF const char *pt_result_string(int code);
 
 /* ==========================================================================================
    1. MATH: vectors and colours, rays, affine transforms, orthonormal basis, random numbers
-   Small value types passed by value, with inline helpers for the vector algebra a caller
+   Small value types passed by value, with inline functions for the vector algebra a caller
    needs; the random numbers are PCG32 streams, one per camera sample.
    ========================================================================================== */
 
@@ -1133,7 +1133,7 @@ static int pt__fail(const pt_scene *cscene, int code, const char *fmt, ...)
 }
 
 /* ------------------------------------------------------------------------------------------
-   1. Math: what the inline vector helpers of the header do not cover. Finite tests on the bit
+   1. Math: what the inline vector functions of the header do not cover. Finite tests on the bit
    pattern (so that -ffast-math builds still catch NaN and Inf); the offset of a ray origin off
    a surface (Waechter & Binder, Ray Tracing Gems ch. 6, 2019, scaled to the scene, below);
    affine transforms (Rodrigues' rotation) and normals by the cofactor matrix; the orthonormal
@@ -2140,7 +2140,7 @@ static pt_vec3 pt__fuzz_sample(pt_vec3 r, float f, float u1, float u2, float u3)
 }
 static pt_vec3 pt__reflect(pt_vec3 wo, pt_vec3 n) { return pt_sub(pt_scale(n, 2.0f * pt_dot(wo, n)), wo); }
 
-/* Forward declarations of the material helpers (section 4) used by the public PDFs. */
+/* Forward declarations of the material functions (section 4) used by the public PDFs. */
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
                                    float u3, pt_vec3 *dir, float *pdf);
 static float pt__material_pdf_value(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, pt_vec3 w);
@@ -5772,7 +5772,7 @@ static int pt__adaptive_plan(pt__adaptive *a, pt__pass *ps, int *job_list)
 /* The schedule and running totals of one pt_render call: set by pt__render_setup, advanced by
    pt__render_passes, summed up by pt__render_end_stats. */
 typedef struct pt__render_run {
-    int spp, per_pass, passes;  /* samples per pixel in all and per pass (the last takes the rest) */
+    int spp, per_pass, passes;  /* samples per pixel and per pass (the last pass takes the rest) */
     int adaptive;               /* adaptive_threshold != 0 */
     int threads, used;          /* threads asked for; threads the last pass ran on */
     int jobs, *job_list;        /* the next pass's jobs: tiles, or the adaptive plan's chunks */
