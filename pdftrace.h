@@ -78,7 +78,7 @@
    SECTIONS (in the order data flows)
    ========
    The declarations and the implementation below share these numbers and this order; each
-   section opens with what it does and why. Sections 0 and 5c are in the implementation only.
+   section opens with what it does and why.
    0. Internal types: the scene's private representation (implementation only)
    1. Math: vectors, rays, transforms, orthonormal basis, random numbers
    2. Sampling and PDFs: samplers (independent, Sobol), warps, light and material densities
