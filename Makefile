@@ -30,7 +30,9 @@
 #                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
 #                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
-#                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
+#                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++;
+#                         first tests/lint_headers.sh: no comment over 25 lines in a header's
+#                         implementation, no function over 150 lines
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
 #                         write validation/out/index.html (needs povray, libopenexr-dev, libpng-dev)
 #   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
@@ -268,6 +270,8 @@ bench-bvh: $(BUILD)/bench_bvh
 # so a file need not call every one).
 
 check-warnings: | $(BUILD)
+	@echo "tests/lint_headers.sh $(PT_HEADERS) (comments <= 25 lines after IMPLEMENTATION, functions <= 150 lines)"
+	@sh tests/lint_headers.sh $(PT_HEADERS)
 	@set -e; for cc in $(WARN_CC); do \
 	    for ex in $(EXAMPLES); do \
 	        echo "$$cc $(WARN_CFLAGS) examples/$$ex.c"; \

@@ -82,25 +82,31 @@
 
    SECTIONS (in the order data flows)
    ========
+   The declarations and the implementation below share these numbers and this order; each
+   section opens with what it does and why.
+   0. Internal types: the scene's private representation (implementation only)
    1. Math: vectors, rays, transforms, orthonormal basis, random numbers
-   2. Sampling and PDFs
-   3. Geometry and scenes
+   2. Sampling and PDFs: samplers (independent, Sobol), warps, light and material densities
+   3. Geometry and scenes: primitives, intersections, building a scene
    4. Materials and textures
-   5. BVH
+   5. BVH (the built-in traversal)
    5b. Embree traversal (optional: define PDFTRACE_EMBREE; links embree3)
+   5c. Commit and ray queries (implementation only; declared in section 3)
    6. Camera
-   7. Integrator (strategies)
-   8. Rendering (tiles, threads, passes, adaptive sampling, statistics)
-   9. Output (framebuffer, PFM and PPM writers)
+   7. Integrator (strategies, Russian roulette, splitting)
+   8. Rendering (tiles, threads, passes, adaptive sampling, statistics; the film and images)
+   9. Output (sRGB, PFM and PPM writers)
+   The measurements behind the implementation's tuned choices: docs/internals.md.
 
    SKIPPING WORK A SCENE DOES NOT NEED
    ===================================
    pt_scene_commit records what a scene contains (pt_scene_info.features). The integrator
    then skips work that cannot change the estimate. Each skip has a bit in
    pt_render_desc.disable_skips that forces the general path instead (for benchmarks; the
-   image keeps its expectation, and "exact" skips give it bit for bit). Each is kept because
-   `make bench` shows it pays (bench/out/summary.md, "Scene-feature skips": the 95 % interval
-   of its time ratio, or of its time ratio at equal error, lies below 1):
+   image keeps its expectation, and "exact" skips give it bit for bit). A skip stays only while
+   `make bench` shows that it pays: the 95 % interval of its time ratio (for a skip that changes
+   the estimator, of its time ratio at equal error) lies below 1 (bench/README.md, "Skips"; the
+   figures: docs/internals.md, "Scene-feature skips"):
    - no emitters: no light selection, no light sampling, no shadow rays; the mixture
      strategy samples the material PDF alone (the light component has no mass).
      PT_SKIP_NO_EMITTERS.
@@ -113,22 +119,16 @@
    - no texture on a material: albedo is read directly from it. PT_SKIP_NO_TEXTURES, exact.
    - a light sample the material does not reflect (below the surface): no shadow ray.
      PT_SKIP_ZERO_BSDF_SHADOW, exact.
-   Removed because the benchmark did not show a gain (their bits, 1u << 1 and 1u << 5, are
-   now rejected): PT_SKIP_LIGHT_SELECTION (no CDF search with one emitter: the binary search
-   over a one-entry CDF does not even compare; time ratio 0.998 [0.992, 1.002]), and
-   PT_SKIP_NO_TRIANGLES (no watertight-triangle set-up of rays in scenes without triangles:
-   time ratios 0.976 [0.971, 0.988] in one full run, 0.992 [0.987, 1.002] in the next,
-   0.988 to 1.003 in quick runs: a gain of 1-2 % that does not show reliably). Rays in scenes
-   without triangles still skip that set-up, as the only path: callgrind counts 2.5 % fewer
-   instructions with it (Cornell box) and no run measured it slower; it is just no longer a
-   switchable, benchmarked skip.
+   Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
+   PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
+   watertight-triangle set-up, as the only path.
    Adaptive sampling (pt_render_desc.adaptive_threshold) skips pixels whose estimate has
    converged: see section 8. By default a pixel's own samples count in its noise estimate, which
    lowers the image's error and biases it dark: pixels that have not yet drawn a rare bright
-   sample stop sooner, so caustics and fireflies lose ~1 % of the image mean at moderate
-   thresholds, several % in some regions and at the image border (section 8), less as samples
-   grow; adaptive_neighbours_only = 1 plans each pixel from its neighbours only (a bias ~3x
-   smaller, at up to ~2x the samples). For a reference image, render uniformly.
+   sample stop sooner, so caustics and fireflies come out a little dark, more in some regions and
+   at the image border, less as samples grow; adaptive_neighbours_only = 1 plans each pixel from
+   its neighbours only (a smaller bias, more samples for the same error). The measured bias of
+   both: docs/internals.md, "Adaptive sampling". For a reference image, render uniformly.
 */
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
@@ -181,6 +181,8 @@ PTDEF const char *pt_result_string(int code);
 
 /* ==========================================================================================
    1. MATH: vectors and colours, rays, affine transforms, orthonormal basis, random numbers
+   Small value types passed by value, with inline functions for the vector algebra a caller
+   needs; the random numbers are PCG32 streams, one per camera sample.
    ========================================================================================== */
 
 typedef struct pt_vec3 { float x, y, z; } pt_vec3;
@@ -389,9 +391,9 @@ PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y); /*
    (seed, pixel, k), as with INDEPENDENT, so progressive passes and resumed renders give the
    same image as one pass. A pixel's samples are not independent, so the film's per-pixel
    variance (adaptive sampling) and the half-buffer error estimate (pt_film_error) assume what
-   is not true: they overestimate a SOBOL image's error (about 3x in relMSE at 64 spp on the
-   benchmark's tiny-light scene), which makes adaptive sampling conservative, not wrong.
-   Use independent seeds to measure a SOBOL render's error. */
+   is not true: they overestimate a SOBOL image's error (by how much: docs/internals.md, "The
+   error estimate under the Sobol sampler"), which makes adaptive sampling conservative, not
+   wrong. Use independent seeds to measure a SOBOL render's error. */
 typedef enum pt_sampler {
     PT_SAMPLER_INDEPENDENT = 0,
     PT_SAMPLER_SOBOL = 1
@@ -419,8 +421,9 @@ PTDEF void pt_sobol_scrambled4(uint32_t index, uint64_t seed, float u[4]);
    A scene owns materials, textures and shapes. Shapes are added under the scene's current
    transform (pt_scene_set_transform), which is applied to their geometry when they are
    added: an instanced emitter is an emitter in world space and is sampled exactly. Add
-   everything, then pt_scene_commit (builds the BVH and the light table); change the scene
-   and it must be committed again before it is rendered.
+   everything, then pt_scene_commit (builds the acceleration structure, section 5 or 5b, and
+   the light table; implemented in section 5c); change the scene and it must be committed
+   again before it is rendered.
    Threads: a committed scene may be rendered from several threads at once (pt_render,
    pt_render_image, pt_trace_path; also pt_scene_intersect, pt_scene_occluded, the light and
    material PDFs): those calls only read it and write no message into it. Adding to, changing
@@ -594,7 +597,8 @@ typedef struct pt_shading_point {
 } pt_shading_point;
 
 /* ==========================================================================================
-   5. BVH: built by pt_scene_commit (binned SAH; see the implementation for details).
+   5. BVH: built by pt_scene_commit (binned SAH; see the implementation for details). It has no
+   API of its own: pt_scene_intersect and pt_scene_occluded (section 3) query it.
    ========================================================================================== */
 
 /* ==========================================================================================
@@ -644,25 +648,11 @@ PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
    primitives, and the built-in BVH below. PDFTRACE_EMBREE_SMALL_PRIMS (default 0: off) also
    sends scenes of fewer primitives than it, made mostly of quads and spheres (triangles less
    than half the primitives), to Embree.
-   Measured by make bench-bvh (bench/bvh.c: one batch of camera, bounce and shadow rays traced
-   by both backends through pt_scene_intersect/occluded on one thread, interleaved, medians of
-   paired ratios; shared 2-core AMD EPYC, Embree 3.13.5, gcc 12 -O3; bench/out/bvh.md).
-   - Triangles (terrains of 8 to 1M triangles lit by one sphere). Built-in/Embree rays/s in
-     three runs: 1.5 at 9 primitives, 1.2-1.3 at 513, 1.0-1.2 at 1059, 0.98-1.38 from 2179 to
-     3201, 1.00-1.10 at 4419, then Embree ahead: 0.90-0.95 at 6499, 0.88-0.99 at 8979,
-     0.76-0.94 at 18051, 0.81-0.89 from 73k to 1M; two runs on 2026-11-23 (the second with
-     other jobs on the machine): 1.11-1.12 at 9, 1.23-1.55 from 33 to 513, 1.06-1.12 from 1059
-     to 4419, 0.98 and 1.06 at 6499, 0.98-1.02 from 8979 to 25089, 0.86-0.99 from 36451 to 1M.
-     The threshold sits above the last size where the built-in BVH led in every run (4419);
-     Embree was within 3 % or ahead in every run from 8979 on, and at 6499 in four of five.
-   - Quads and spheres (the scene files in scenes/). Before the built-in BVH gave scenes of at
-     most 32 primitives one primitive per leaf (PT__BVH_SMALL_SCENE), Embree was ahead on every
-     scene of 3 to 13 quads and spheres (built-in/Embree 0.64-0.84: the built-in BVH tested the
-     big walls together in one leaf block), so PDFTRACE_EMBREE_SMALL_PRIMS was 32. Since then
-     the built-in BVH is ahead on all of them (2026-11-23, two runs: 1.04-1.06 on the Cornell
-     boxes of 13 primitives, 1.48-1.61 on the scenes of 3; full 2-thread renders of the Cornell
-     box 1.04 and 1.21), and on 81 (glass, 1.41-1.43): so the small-scene rule is off by
-     default. */
+   The threshold sits above the largest triangle scene on which the built-in BVH was faster in
+   every run of make bench-bvh; from there on Embree is about as fast or faster, and the further
+   the larger the scene. On small scenes of quads and spheres the built-in BVH is faster (one
+   primitive per leaf, section 5), so the small-scene rule is off. The figures:
+   docs/internals.md, "Embree or the built-in BVH". */
 #ifndef PDFTRACE_EMBREE_SMALL_PRIMS
 #define PDFTRACE_EMBREE_SMALL_PRIMS 0
 #endif
@@ -671,7 +661,8 @@ PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
 #endif
 
 /* ==========================================================================================
-   6. CAMERA
+   6. CAMERA: a pinhole or thin-lens camera from look-at parameters. pt_render builds one from
+   pt_render_desc.camera; pt_camera_ray gives the same rays to a caller.
    ========================================================================================== */
 
 typedef struct pt_camera_desc {
@@ -696,6 +687,8 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
 
 /* ==========================================================================================
    7. INTEGRATOR: direction-sampling strategies
+   How a path chooses its directions (pt_strategy), an optional user PDF mixed into it (a
+   guide), the counters of a path, and the scene-feature skips that can be switched off.
    ========================================================================================== */
 
 typedef enum pt_strategy {
@@ -762,6 +755,9 @@ typedef struct pt_path_stats {
 
 /* ==========================================================================================
    8. RENDERING: tiles, threads, progressive passes, adaptive sampling, statistics
+   A render is described by a pt_render_desc (zero means "default" for every field but the
+   image size) and adds samples to a film, which is resolved into an image; pt_render_image
+   does all three.
    ========================================================================================== */
 
 typedef struct pt_progress {
@@ -827,14 +823,12 @@ typedef struct pt_render_desc {
     int adaptive_neighbours_only; /* 0: a pixel's noise estimate counts its own samples (as 1 of the
                                     25 pixels of its 5x5 neighbourhood), so a pixel that drew a rare
                                     bright sample (a firefly) samples on and dilutes it: the lowest
-                                    error, but biased dark (pixels that drew none stop sooner): the
-                                    image mean -0.25 % to -0.7 % on the benchmark's Cornell box,
-                                    -1.2 % in the tests' room scene and up to several % in some
-                                    regions; less as samples grow. 1: only the 24 other pixels, so
-                                    that a pixel's stopping does not depend on its own samples
-                                    directly: a bias ~3x smaller (-0.4 % in the room scene), at
-                                    1.35x-1.9x the samples for the same error on the Cornell box.
-                                    For reference images render uniformly (section 8) */
+                                    error, but biased dark (pixels that drew none stop sooner; less
+                                    as samples grow). 1: only the 24 other pixels, so that a pixel's
+                                    stopping does not depend on its own samples directly: a smaller
+                                    bias, at more samples for the same error (both measured:
+                                    docs/internals.md, "Adaptive sampling"). For reference images
+                                    render uniformly (section 8) */
     unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on; bits
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
@@ -858,15 +852,11 @@ typedef struct pt_render_stats {
                                     "pt_render_desc.width = 0: must be > 0" */
 } pt_render_stats;
 
-/* ==========================================================================================
-   9. OUTPUT: framebuffer (film), images, writers
-   The film accumulates per pixel, in double precision, the sum and the sum of squares of the
+/* The film accumulates per pixel, in double precision, the sum and the sum of squares of the
    samples and their count, and the sum of the odd-numbered samples alone (the "B" half-buffer;
    the even-numbered "A" half is sum - sum_odd): 76 bytes per pixel. Rendering into a film that
    already holds samples continues with new sample indices, so renders can be resumed and
-   refined.
-   ========================================================================================== */
-
+   refined. */
 typedef struct pt_film {
     int width, height;
     double *sum;      /* 3 per pixel, row 0 at the top */
@@ -875,6 +865,7 @@ typedef struct pt_film {
     double *sum_odd;  /* 3 per pixel: the samples with an odd sample index k */
 } pt_film;
 
+/* An image: linear RGB, as pt_film_resolve makes it and the writers (section 9) take it. */
 typedef struct pt_image {
     int width, height;
     float *rgb;       /* 3 floats per pixel, row 0 at the top, linear radiance */
@@ -887,21 +878,24 @@ PTDEF void pt_film_clear(pt_film *film);
 PTDEF int pt_film_resolve(const pt_film *film, pt_image *image);
 /* Mean of pixel (x, y) and the variance of that mean (sample variance / count). */
 PTDEF int pt_film_pixel(const pt_film *film, int x, int y, pt_color *mean, pt_color *variance_of_mean);
-/* The error estimate adaptive sampling uses, for the pixels x0 <= x < x1, y0 <= y < y1: the mean
-   over pixels and channels of (A - B)^2 nA nB / n^2 / (I^2 + 0.01), where A and B are the means
-   of the even- and odd-numbered samples (nA, nB of them), I the pixel mean and n = nA + nB.
+/* The half-buffer error estimate for the pixels x0 <= x < x1, y0 <= y < y1: the mean over
+   pixels and channels of (A - B)^2 nA nB / n^2 / (I^2 + 0.01), where A and B are the means of
+   the even- and odd-numbered samples (nA, nB of them), I the pixel mean and n = nA + nB.
    (A - B)^2 nA nB / n^2 is an unbiased estimate of the variance of I, so *rel_mse estimates
    the region's relMSE mean((I - r)^2 / (r^2 + 0.01)). Pixels with fewer than 2 samples count
-   as unknown: *rel_mse is then +Inf. */
+   as unknown: *rel_mse is then +Inf. pt_render reports its square root over the whole image as
+   pt_render_stats.estimated_error; adaptive sampling does not use it (it plans from each
+   pixel's sample variance, section 8). */
 PTDEF int pt_film_error(const pt_film *film, int x0, int y0, int x1, int y1, double *rel_mse);
 
 PTDEF int pt_image_init(pt_image *image, int width, int height);
 PTDEF void pt_image_free(pt_image *image);
 
-/* Renders desc->samples_per_pixel more samples into every pixel of the film, which the caller
-   initialised with pt_film_init(film, desc->width, desc->height). Returns PT_OK, PT_ERROR_CANCELLED (the film holds what was done) or an
-   error. stats may be NULL; if not, stats->error says why a call failed (the scene's message is
-   not written: see section 3 on threads). */
+/* Renders desc->samples_per_pixel more samples into every pixel of the film (with adaptive
+   sampling at most that many), which the caller initialised with pt_film_init(film,
+   desc->width, desc->height). Returns PT_OK, PT_ERROR_CANCELLED (the film holds what was done)
+   or an error. stats may be NULL; if not, stats->error says why a call failed (the scene's
+   message is not written: see section 3 on threads). */
 PTDEF int pt_render(const pt_scene *scene, const pt_render_desc *desc, pt_film *film, pt_render_stats *stats);
 /* Convenience: a fresh film, rendered and resolved into *image. */
 PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_image *image, pt_render_stats *stats);
@@ -914,14 +908,19 @@ PTDEF int pt_render_image(const pt_scene *scene, const pt_render_desc *desc, pt_
 PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, pt_ray ray, pt_rng *rng,
                              pt_path_stats *stats);
 
+/* ==========================================================================================
+   9. OUTPUT: image writers (OpenEXR: pdftrace_exr.h)
+   ========================================================================================== */
+
 /* Writers. Each writes to a temporary file "<path>.ptmp" beside the target and renames it into
    place, so a failed write leaves no partial file (and no temporary). PFM: linear float RGB
    (little-endian, bottom row first as the format requires). PPM: binary P6, sRGB-encoded,
    clamped to [0, 1]. They return PT_OK, PT_ERROR_INVALID_ARGUMENT (no path, an empty image),
    PT_ERROR_OUT_OF_MEMORY or PT_ERROR_IO. The _ex forms also write a one-line message into
-   err[0 .. err_size-1] when err is not NULL ("" on success), as pt_write_exr does (section 11):
-   "dir/x.ppm: writing PPM: cannot create 'dir/x.ppm.ptmp': No such file or directory" (the path
-   and the system's reason). No global state: safe to call from several threads at once. */
+   err[0 .. err_size-1] when err is not NULL ("" on success), as pt_write_exr does
+   (pdftrace_exr.h): "dir/x.ppm: writing PPM: cannot create 'dir/x.ppm.ptmp': No such file or
+   directory" (the path and the system's reason). No global state: safe to call from several
+   threads at once. */
 PTDEF int pt_write_pfm(const char *path, const pt_image *image);
 PTDEF int pt_write_ppm(const char *path, const pt_image *image);
 PTDEF int pt_write_pfm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
@@ -1024,7 +1023,172 @@ PTDEF const char *pt_result_string(int code)
 }
 
 /* ------------------------------------------------------------------------------------------
-   1. Math
+   0. Internal types: the private representation of a scene, shared by every section below.
+   Shapes become pt__prim records (one per sphere, quad or triangle, geometry baked into world
+   space when added); materials, textures and lights are flat arrays indexed by id. The BVH's
+   node and leaf layouts (section 5) and the Embree handles (section 5b) are declared here too,
+   because struct pt_scene holds them. Types used inside one section only are declared there.
+   pt__fail records a scene function's error message (pt_scene_error_message).
+   ------------------------------------------------------------------------------------------ */
+
+enum { PT__PRIM_SPHERE = 0, PT__PRIM_QUAD = 1, PT__PRIM_TRIANGLE = 2 };
+
+typedef struct pt__prim {
+    pt_vec3 p0;       /* sphere: centre | quad: Q | triangle: a */
+    pt_vec3 p1;       /* sphere: (radius, 0, 0) | quad: u | triangle: b */
+    pt_vec3 p2;       /* quad: v | triangle: c */
+    pt_vec3 n;        /* quad, triangle: unit geometric normal */
+    pt_vec3 w;        /* quad: v x w0 and ... */
+    pt_vec3 w2;       /* ... w0 x u, with w0 = n'/(n'.n'), n' = u x v: a = h.w, b = h.w2 */
+    pt_vec3 mag;      /* set at commit (pt__prim_cache): per-axis magnitude (pt__prim_magnitude) */
+    float inset[2];   /* set at commit, quad: how far inside [0, 1] pt__fill_hit keeps a and b */
+    uint32_t id;      /* public primitive index */
+    int32_t material;
+    int32_t light;    /* index into scene->lights, or -1 */
+    int32_t normals;  /* first of 3 shading normals in scene->normals, or -1 */
+    int32_t type;     /* PT__PRIM_* */
+} pt__prim;
+
+/* Per-ray data computed once per traversal. */
+typedef struct pt__rayctx {
+    pt_vec3 o, d;
+    int kx, ky, kz;       /* watertight triangle test: axis permutation */
+    float sx, sy, sz;     /* and shear */
+    int triangles;        /* whether the permutation and shear were set up */
+} pt__rayctx;
+
+typedef struct pt__material {
+    pt_material_type type;
+    pt_color albedo;
+    int texture;      /* 0 or texture id */
+    float fuzz, ior;
+    pt_color emission;
+    int two_sided, emits, delta, scatters;
+} pt__material;
+
+typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
+
+typedef struct pt__light {
+    uint32_t prim;    /* index into scene->prims (after BVH ordering) */
+    double power;     /* in double: radiance near FLT_MAX or near denormal still has a power */
+    float select_pdf, cdf;
+    float area;
+} pt__light;
+
+#ifdef PDFTRACE_EMBREE
+/* The user data of an Embree user geometry: the scene and its primID -> prims index map. */
+typedef struct pt__rtc_geom { const pt_scene *scene; const uint32_t *map; float pad; } pt__rtc_geom;
+/* The Embree side of a committed scene (section 5b). Geometry ids are the primitive types
+   (PT__PRIM_*): one Embree geometry per type present. */
+typedef struct pt__rtc {
+    RTCDevice device;
+    RTCScene scene;
+    uint32_t *map[3];          /* per geometry: Embree primID -> index into scene->prims */
+    uint32_t count[3];
+    pt__rtc_geom user[3];
+    long long device_bytes;    /* the device's memory, from its memory monitor */
+    int error_code;            /* first RTCError reported by the error callback (0: none) */
+    char error_text[160];
+} pt__rtc;
+#endif
+
+/* The BVH (section 5): 4-wide nodes; leaves in a pool of 16-byte units, each a header (block
+   counts) followed by blocks of four triangles, of four quads and of four other primitives. */
+typedef struct pt__node4 {
+    float box[6][4];  /* lo x, hi x, lo y, hi y, lo z, hi z of the four children (empty: lo > hi) */
+    uint32_t child[4];/* node index, or PT__BVH_LEAF | offset of the leaf in the pool */
+    uint32_t pad[4];  /* 128 bytes: two cache lines */
+} pt__node4;
+typedef struct pt__leaf16 {
+    uint32_t u[4];    /* leaf header: triangle, quad, sphere blocks, 0 */
+} pt__leaf16;
+typedef struct pt__tri4 {
+    float v[9][4];    /* v[3 * vertex + axis][lane] */
+    uint32_t prim[4]; /* index into scene->prims */
+} pt__tri4;
+typedef struct pt__quad4 {
+    float v[14][4];   /* Q, unit normal, w, w2 (pt__prim fields), by axis, then lane; then the
+                         largest a and b margins pt__hit_quad can accept (pt__quad_edge_caps) */
+    uint32_t prim[4];
+} pt__quad4;
+typedef struct pt__sphere4 {
+    float v[4][4];    /* centre x, y, z, radius, then lane */
+    uint32_t prim[4];
+} pt__sphere4;
+
+struct pt_scene {
+    pt__prim *prims;
+    uint32_t prim_count, prim_cap;
+    pt__material *mats;
+    uint32_t mat_count, mat_cap;
+    pt__texture *texs;
+    uint32_t tex_count, tex_cap;
+    pt_vec3 *normals;
+    uint32_t normal_count, normal_cap;
+    void *bvh_mem;    /* one allocation: nodes then the leaf pool, aligned to 64 bytes */
+    pt__node4 *nodes;
+    pt__leaf16 *pool;
+    uint32_t node_count, bvh_depth;
+    size_t bvh_bytes;
+    pt__light *lights;
+    uint32_t light_count;
+    double total_power;
+    pt_transform xf;
+    int xf_identity;
+    int committed;
+    unsigned features;
+    uint32_t sphere_count, quad_count, triangle_count, mesh_count, degenerate_skipped;
+    pt_vec3 lo, hi;
+    int backend_request;       /* pt_backend from pt_scene_set_backend */
+    char embree_config[128];   /* pt_scene_set_embree_config */
+    int backend;               /* what the last commit built: PT_BACKEND_BUILTIN or _EMBREE */
+    double build_seconds;
+    size_t accel_bytes;
+#ifdef PDFTRACE_EMBREE
+    pt__rtc rtc;
+#endif
+    char error[256];
+};
+
+/* A failed call that changes the scene records why. Not const: calls that only read a scene
+   (queries, renders) cannot write it, so they may run on several threads at once. */
+static int pt__fail(pt_scene *scene, int code, const char *fmt, ...)
+{
+    if (scene) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(scene->error, sizeof scene->error, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+/* Every public call that changes a scene starts here, so its message describes that call alone
+   ("" once it succeeds). Returns scene (NULL: the caller fails with PT_ERROR_INVALID_ARGUMENT). */
+static pt_scene *pt__enter(pt_scene *scene)
+{
+    if (scene) scene->error[0] = '\0';
+    return scene;
+}
+/* A per-call message (no shared state): formats into err[0 .. size-1] when err is not NULL. */
+static int pt__msg(char *err, size_t size, int code, const char *fmt, ...)
+{
+    if (err && size) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, size, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+/* ------------------------------------------------------------------------------------------
+   1. Math: what the inline vector functions of the header do not cover. Finite tests on the bit
+   pattern (so that -ffast-math builds still catch NaN and Inf); the offset of a ray origin off
+   a surface (Waechter & Binder, Ray Tracing Gems ch. 6, 2019, scaled to the scene, below);
+   affine transforms (Rodrigues' rotation) and normals by the cofactor matrix; the orthonormal
+   basis of Duff et al. (JCGT 6(1), 2017); PCG32 seeding (O'Neill 2014) and the per-sample
+   streams, hashed with SplitMix64 (Steele, Lea & Flood 2014) so that a sample's numbers depend
+   only on (seed, pixel, sample index).
    ------------------------------------------------------------------------------------------ */
 
 /* isfinite on the bit pattern, so that -ffast-math builds still catch NaN and Inf. */
@@ -1220,169 +1384,22 @@ PTDEF pt_rng pt_rng_for_sample(uint64_t seed, uint32_t pixel, uint32_t sample)
     return r;
 }
 
-/* Internal representation of a scene (shared by the sections below). */
-enum { PT__PRIM_SPHERE = 0, PT__PRIM_QUAD = 1, PT__PRIM_TRIANGLE = 2 };
-
-typedef struct pt__prim {
-    pt_vec3 p0;       /* sphere: centre | quad: Q | triangle: a */
-    pt_vec3 p1;       /* sphere: (radius, 0, 0) | quad: u | triangle: b */
-    pt_vec3 p2;       /* quad: v | triangle: c */
-    pt_vec3 n;        /* quad, triangle: unit geometric normal */
-    pt_vec3 w;        /* quad: v x w0 and ... */
-    pt_vec3 w2;       /* ... w0 x u, with w0 = n'/(n'.n'), n' = u x v: a = h.w, b = h.w2 */
-    pt_vec3 mag;      /* set at commit (pt__prim_cache): per-axis magnitude (pt__prim_magnitude) */
-    float inset[2];   /* set at commit, quad: how far inside [0, 1] pt__fill_hit keeps a and b */
-    uint32_t id;      /* public primitive index */
-    int32_t material;
-    int32_t light;    /* index into scene->lights, or -1 */
-    int32_t normals;  /* first of 3 shading normals in scene->normals, or -1 */
-    int32_t type;     /* PT__PRIM_* */
-} pt__prim;
-
-/* Per-ray data computed once per traversal. */
-typedef struct pt__rayctx {
-    pt_vec3 o, d;
-    int kx, ky, kz;       /* watertight triangle test: axis permutation */
-    float sx, sy, sz;     /* and shear */
-    int triangles;        /* whether the permutation and shear were set up */
-} pt__rayctx;
-
-typedef struct pt__material {
-    pt_material_type type;
-    pt_color albedo;
-    int texture;      /* 0 or texture id */
-    float fuzz, ior;
-    pt_color emission;
-    int two_sided, emits, delta, scatters;
-} pt__material;
-
-typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
-
-typedef struct pt__light {
-    uint32_t prim;    /* index into scene->prims (after BVH ordering) */
-    double power;     /* in double: radiance near FLT_MAX or near denormal still has a power */
-    float select_pdf, cdf;
-    float area;
-} pt__light;
-
-#ifdef PDFTRACE_EMBREE
-/* The user data of an Embree user geometry: the scene and its primID -> prims index map. */
-typedef struct pt__rtc_geom { const pt_scene *scene; const uint32_t *map; float pad; } pt__rtc_geom;
-/* The Embree side of a committed scene (section 5b). Geometry ids are the primitive types
-   (PT__PRIM_*): one Embree geometry per type present. */
-typedef struct pt__rtc {
-    RTCDevice device;
-    RTCScene scene;
-    uint32_t *map[3];          /* per geometry: Embree primID -> index into scene->prims */
-    uint32_t count[3];
-    pt__rtc_geom user[3];
-    long long device_bytes;    /* the device's memory, from its memory monitor */
-    int error_code;            /* first RTCError reported by the error callback (0: none) */
-    char error_text[160];
-} pt__rtc;
-#endif
-
-/* The BVH (section 5): 4-wide nodes; leaves in a pool of 16-byte units, each a header (block
-   counts) followed by blocks of four triangles, of four quads and of four other primitives. */
-typedef struct pt__node4 {
-    float box[6][4];  /* lo x, hi x, lo y, hi y, lo z, hi z of the four children (empty: lo > hi) */
-    uint32_t child[4];/* node index, or PT__BVH_LEAF | offset of the leaf in the pool */
-    uint32_t pad[4];  /* 128 bytes: two cache lines */
-} pt__node4;
-typedef struct pt__leaf16 {
-    uint32_t u[4];    /* leaf header: triangle, quad, sphere blocks, 0 */
-} pt__leaf16;
-typedef struct pt__tri4 {
-    float v[9][4];    /* v[3 * vertex + axis][lane] */
-    uint32_t prim[4]; /* index into scene->prims */
-} pt__tri4;
-typedef struct pt__quad4 {
-    float v[14][4];   /* Q, unit normal, w, w2 (pt__prim fields), by axis, then lane; then the
-                         largest a and b margins pt__hit_quad can accept (pt__quad_edge_caps) */
-    uint32_t prim[4];
-} pt__quad4;
-typedef struct pt__sphere4 {
-    float v[4][4];    /* centre x, y, z, radius, then lane */
-    uint32_t prim[4];
-} pt__sphere4;
-
-struct pt_scene {
-    pt__prim *prims;
-    uint32_t prim_count, prim_cap;
-    pt__material *mats;
-    uint32_t mat_count, mat_cap;
-    pt__texture *texs;
-    uint32_t tex_count, tex_cap;
-    pt_vec3 *normals;
-    uint32_t normal_count, normal_cap;
-    void *bvh_mem;    /* one allocation: nodes then the leaf pool, aligned to 64 bytes */
-    pt__node4 *nodes;
-    pt__leaf16 *pool;
-    uint32_t node_count, bvh_depth;
-    size_t bvh_bytes;
-    pt__light *lights;
-    uint32_t light_count;
-    double total_power;
-    pt_transform xf;
-    int xf_identity;
-    int committed;
-    unsigned features;
-    uint32_t sphere_count, quad_count, triangle_count, mesh_count, degenerate_skipped;
-    pt_vec3 lo, hi;
-    int backend_request;       /* pt_backend from pt_scene_set_backend */
-    char embree_config[128];   /* pt_scene_set_embree_config */
-    int backend;               /* what the last commit built: PT_BACKEND_BUILTIN or _EMBREE */
-    double build_seconds;
-    size_t accel_bytes;
-#ifdef PDFTRACE_EMBREE
-    pt__rtc rtc;
-#endif
-    char error[256];
-};
-
-/* A failed call that changes the scene records why. Not const: calls that only read a scene
-   (queries, renders) cannot write it, so they may run on several threads at once. */
-static int pt__fail(pt_scene *scene, int code, const char *fmt, ...)
-{
-    if (scene) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(scene->error, sizeof scene->error, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-/* Every public call that changes a scene starts here, so its message describes that call alone
-   ("" once it succeeds). Returns scene (NULL: the caller fails with PT_ERROR_INVALID_ARGUMENT). */
-static pt_scene *pt__enter(pt_scene *scene)
-{
-    if (scene) scene->error[0] = '\0';
-    return scene;
-}
-/* A per-call message (no shared state): formats into err[0 .. size-1] when err is not NULL. */
-static int pt__msg(char *err, size_t size, int code, const char *fmt, ...)
-{
-    if (err && size) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, size, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-
 /* ------------------------------------------------------------------------------------------
-   2. Sampling and PDFs
+   2. Sampling and PDFs: where the integrator's random numbers come from, and the densities it
+   samples. The integrator draws through a pt__sampler: in INDEPENDENT mode every draw is the
+   next number of the sample's PCG stream, in the order the integrator asks; in SOBOL mode a
+   draw names its set (PT__SET_*: pixel, lens, and per bounce light choice, light point, scatter
+   direction, ...), whose value is a function of (seed, pixel, sample index, set) alone, so a
+   set keeps its dimensions whatever branches a path took before it (Burley, "Practical
+   Hash-based Owen Scrambling", JCGT 9(4), 2020). Then the warps from the unit square (Shirley &
+   Chiu's concentric disk, Malley's method), the light densities (a sphere's cone, area sampling
+   of quads and triangles, the scene's lights picked by power), the fuzzy metal lobe, and the
+   public pt_pdf, whose sampling and density agree by construction: a mixture's density is
+   sum_k w_k p_k, never the density of the component that was chosen.
    ------------------------------------------------------------------------------------------ */
 
-/* ---- Samplers (pt_sampler). The integrator draws its random numbers through a pt__sampler:
-   in INDEPENDENT mode every draw is the next number of the sample's PCG stream, in the order the
-   integrator asks (the images of before samplers existed, bit for bit); in SOBOL mode a draw
-   names its set (PT__SET_*: pixel, lens, and per bounce light choice, light point, scatter
-   direction, ...), whose value is a function of (seed, pixel, sample index, set) alone, so a
-   set keeps its dimensions whatever branches a path took before it.
-
-   A set's point (pt_sobol_scrambled), for sample index k and a 64-bit set seed:
+/* ---- Samplers (pt_sampler). A set's point (pt_sobol_scrambled), for sample index k and a
+   64-bit set seed:
    1. Shuffle: k' = a nested uniform scramble of k's low 16 bits (a random permutation in which
       bit b of k' depends only on bits >= b of k, so each aligned block of 2^m indices maps onto
       an aligned block of 2^m: the first 2^m samples are still a whole block of the sequence;
@@ -1847,8 +1864,8 @@ static PT__HOT void pt__draw2(pt__sampler *smp, uint32_t set, float *a, float *b
    SOBOL: the directions of depths 2i and 2i + 1 are one four-dimensional point (dimensions 0, 1
    and 2, 3 of set PT__SET_BOUNCE(2i, PT__SLOT_SCATTER_DIR)), so the two-bounce integral of a
    path's first indirect bounces is stratified jointly, not only in each direction (Burley 2020,
-   sec. 5, pads with sets of four dimensions; variance per sample 8-10 % lower on the benchmark's
-   tiny-light-pure and tiny-light scenes than with two separately shuffled 2D sets). Both depths
+   sec. 5, pads with sets of four dimensions; it lowers the variance against two separately
+   shuffled 2D sets: docs/internals.md, "Four-dimensional sets for two bounces"). Both depths
    use the set's one shuffled index, whichever of them drew. */
 static PT__HOT void pt__draw_scatter(pt__sampler *smp, int depth, float *a, float *b)
 {
@@ -1897,8 +1914,8 @@ typedef struct pt__light_sample {
 
 /* --- sphere light. Outside: uniform in the cone of directions that meet the sphere, with
    1 - cos(theta_max) = s^2 / (1 + cos(theta_max)), s = sin(theta_max), which stays exact for
-   tiny and distant spheres where 1 - sqrt(1 - s^2) rounds to zero (shared/docs
-   accuracy-references; Shirley RTRL sec. 12 for the cone; pbrt-v4 sec. 6.2.4). Inside or on the
+   tiny and distant spheres where 1 - sqrt(1 - s^2) rounds to zero (docs/accuracy.md, "Robust
+   numerics"; Shirley RTRL sec. 12 for the cone; pbrt-v4 sec. 6.2.4). Inside or on the
    sphere (two-sided only; a one-sided sphere emits outwards and cannot light its inside):
    uniform area sampling converted to solid angle, density dist^2 / (|cos| * area). */
 /* Inside or on the surface. A point on a sphere rounds to either side of it; within 1e-5
@@ -2098,6 +2115,59 @@ static int pt__pdf_planar(const pt_pdf *pdf, pt__prim *p, float *area, int *two_
     return pt__planar_make(p, PT__PRIM_TRIANGLE, pdf->as.triangle.a, pdf->as.triangle.b, pdf->as.triangle.c, area);
 }
 
+/* --- lights of a scene (used by the integrator and by pt_pdf_scene_lights) --- */
+static PT__HOT int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
+                                 pt__light_sample *ls)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_sample(o, p->p0, p->p1.x, two, u1, u2, ls);
+    return pt__planar_light_sample(p, s->lights[p->light].area, two, o, u1, u2, ls);
+}
+static float pt__light_prim_value(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
+    return pt__planar_light_value(p, s->lights[p->light].area, two, o, w);
+}
+/* Density of w for one light that a ray from o along w reaches at distance t (no ray cast). */
+static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w, float t)
+{
+    int two = s->mats[p->material].two_sided;
+    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
+    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
+    return pt__planar_density(p->n, s->lights[p->light].area, t, w);
+}
+static uint32_t pt__pick_light(const pt_scene *s, float u)
+{
+    uint32_t lo = 0, hi = s->light_count - 1u;
+    while (lo < hi) { /* first light whose cdf exceeds u */
+        uint32_t mid = (lo + hi) / 2u;
+        if (s->lights[mid].cdf > u) hi = mid;
+        else lo = mid + 1u;
+    }
+    return lo;
+}
+/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
+static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
+                             uint32_t *light_index)
+{
+    uint32_t li;
+    if (!s->light_count) return 0;
+    li = pt__pick_light(s, u0);
+    if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls)) return 0;
+    ls->pdf *= s->lights[li].select_pdf;
+    *light_index = li;
+    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
+}
+static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w)
+{
+    uint32_t i;
+    float v = 0.0f;
+    for (i = 0; i < s->light_count; ++i)
+        v += s->lights[i].select_pdf * pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w);
+    return v;
+}
+
 /* --- fuzzy metal lobe: the direction of r + f s, with r the unit mirror direction and s
    uniform in the unit ball (Shirley, "Ray Tracing in One Weekend" v3, sec. 10.6). Its
    density follows in closed form: along direction w at angle theta from r the ball covers
@@ -2119,10 +2189,7 @@ static pt_vec3 pt__fuzz_sample(pt_vec3 r, float f, float u1, float u2, float u3)
 }
 static pt_vec3 pt__reflect(pt_vec3 wo, pt_vec3 n) { return pt_sub(pt_scale(n, 2.0f * pt_dot(wo, n)), wo); }
 
-/* Forward declarations of scene-side helpers used by the public PDFs. */
-static int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index);
-static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w);
+/* Forward declarations of the material functions (section 4) used by the public PDFs. */
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
                                    float u3, pt_vec3 *dir, float *pdf);
 static float pt__material_pdf_value(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, pt_vec3 w);
@@ -2417,7 +2484,15 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
 }
 
 /* ------------------------------------------------------------------------------------------
-   3. Geometry and scenes
+   3. Geometry and scenes: ray/primitive intersections, hit records and building a scene.
+   Spheres after Haines et al. (Ray Tracing Gems ch. 7, 2019), with a double-precision path for
+   tiny or distant ones; parallelograms by their plane coordinates (Shirley, "Ray Tracing: The
+   Next Week") with a rounding margin at the edges so that boxes stay closed; triangles by the
+   watertight test of Woop, Benthin & Wald (JCGT 2(1), 2013). A hit point is re-computed on the
+   primitive (not o + t d, whose error grows with the distance) and carries the magnitude of its
+   rounding error for the ray offset of section 1. Shapes are added under the scene's current
+   transform, baked into their world-space coordinates, and validated so that every later
+   product of coordinates stays finite.
    ------------------------------------------------------------------------------------------ */
 
 /* need_triangles = 0 skips the shear set-up in scenes without triangles. */
@@ -2454,9 +2529,9 @@ static PT__HOT int pt__hit_sphere(const pt__rayctx *rc, pt_vec3 c, float r, floa
     if (!(a > 0.0f)) return 0;
     if (r * r < 1e-6f * pt_dot(f, f)) {
         /* Tiny or distant (r < 1e-3 |o - c|): the float o - c alone is off by 2^-24 |o - c|,
-           6% of a sphere 1e-6 away as far (tiny sphere lights lost 2% of their light where
-           rays from the mixture had to hit them). In double, from the exact o - c, with the
-           perpendicular distance by the cross product as in pt__in_cone. */
+           6% of a sphere 1e-6 away as far, enough for rays aimed at a tiny sphere light to
+           miss it (docs/internals.md, "Tiny and distant spheres"). In double, from the exact
+           o - c, with the perpendicular distance by the cross product as in pt__in_cone. */
         double fx = (double)rc->o.x - c.x, fy = (double)rc->o.y - c.y, fz = (double)rc->o.z - c.z;
         double dx = rc->d.x, dy = rc->d.y, dz = rc->d.z, dd = dx * dx + dy * dy + dz * dz;
         double xx = dy * fz - dz * fy, yy = dz * fx - dx * fz, zz = dx * fy - dy * fx;
@@ -2648,6 +2723,14 @@ static void pt__prim_cache(pt__prim *p)
     }
 }
 
+/* Surface area (light powers, area sampling). */
+static float pt__prim_area(const pt__prim *p)
+{
+    if (p->type == PT__PRIM_SPHERE) return 4.0f * PT__PI * p->p1.x * p->p1.x;
+    if (p->type == PT__PRIM_QUAD) return pt_length(pt_cross(p->p1, p->p2));
+    return 0.5f * pt_length(pt_cross(pt_sub(p->p1, p->p0), pt_sub(p->p2, p->p0)));
+}
+
 /* Fills a public hit record for primitive p hit at t. */
 static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ray, float t, const float *bary, pt_hit *h)
 {
@@ -2657,8 +2740,8 @@ static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ra
     if (p->type == PT__PRIM_SPHERE) {
         /* re-project onto the sphere to remove the error of o + t d (pbrt-v4 sec. 6.8.5); the
            direction from the centre in double, from the exact o - c: in float it is off by
-           2^-24 |o - c|, which turned the normals of tiny far spheres (a light 1e-6 wide seen
-           from 1 away) by up to ~4 degrees and made rim hits back faces */
+           2^-24 |o - c|, which turns the normals of tiny far spheres (a light 1e-6 wide seen
+           from 1 away) by degrees and makes rim hits back faces */
         double ex = (double)ray.origin.x - p->p0.x + (double)t * ray.dir.x;
         double ey = (double)ray.origin.y - p->p0.y + (double)t * ray.dir.y;
         double ez = (double)ray.origin.z - p->p0.z + (double)t * ray.dir.z;
@@ -2695,8 +2778,8 @@ static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ra
     h->front_face = pt_dot(ray.dir, h->geometric_normal) < 0.0f;
     if (p->type == PT__PRIM_SPHERE) {
         /* a ray from outside meets the outside: decided by the exact origin, not by a normal
-           that is a few degrees off at the rim of a tiny far sphere (0.2% of the rays aimed at
-           a light 1e-6 wide hit its "back" and found no emission) */
+           that is a few degrees off at the rim of a tiny far sphere (where rays aimed at a light
+           1e-6 wide would hit its "back" and find no emission) */
         double ox = (double)ray.origin.x - p->p0.x, oy = (double)ray.origin.y - p->p0.y;
         double oz = (double)ray.origin.z - p->p0.z, d2 = ox * ox + oy * oy + oz * oz, r2 = (double)p->p1.x * p->p1.x;
         if (d2 != r2) h->front_face = d2 > r2;
@@ -3017,7 +3100,11 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
 }
 
 /* ------------------------------------------------------------------------------------------
-   4. Materials and textures
+   4. Materials and textures: the material table (Lambertian, metal with an optional fuzz lobe,
+   clear dielectric, emitter), the 3D checker, and what the integrator asks of a material: its
+   A * pScatter for a direction (BRDF times cosine), the density with which it samples a
+   direction, a sampled direction, and the exact unpolarised Fresnel reflectance of a dielectric
+   interface. Delta materials (mirror, glass) have no density and are followed by the integrator.
    ------------------------------------------------------------------------------------------ */
 
 static int pt__color_ok(pt_color c) { return pt__vfinite(c) && c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f; }
@@ -3233,13 +3320,10 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
 /* Scenes of at most this many primitives get one primitive per leaf. The SAH keeps the few
    large quads of a room (floor, walls, box faces) together in leaves of up to four, whose
    boxes span the room, so every ray tests a whole block of four; one primitive per leaf
-   gives each quad its own (flat) box in the 4-wide node, where a box test (~60 instructions)
-   culls the quads a ray does not cross before any block test (~145). Measured (64x64, MIS,
-   one thread): instructions per sample (callgrind) -11% on bench/scenes/tiny-light-pure.scene,
-   -11% tiny-light, -9.5% many-lights, -8% metal-glass, -1.4% cornell and cornell-diffuse; CPU
-   time (paired medians) -10%, -8%, 0 to -2%, -9%, -2%; but +3% instructions on
-   scenes/glass.scene (81 coplanar tiles) and +9% on scenes/mesh.scene (triangles), so only
-   for small scenes. */
+   gives each quad its own (flat) box in the 4-wide node, where a box test, much cheaper than
+   a block test, culls the quads a ray does not cross. That pays on small scenes of large quads
+   and spheres and costs on larger ones (many coplanar tiles, meshes), hence the limit
+   (docs/internals.md, "One primitive per leaf in small scenes"). */
 #ifndef PT__BVH_SMALL_SCENE
 #define PT__BVH_SMALL_SCENE 32
 #endif
@@ -3247,11 +3331,8 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
 #define PT__BVH_STACK 256         /* > 3 x the deepest tree (40 SAH + 32 median levels) */
 #define PT__BVH_LEAF 0x80000000u  /* child reference: PT__BVH_LEAF | offset of the leaf in the pool (16-byte units) */
 #define PT__BVH_OFFSET_MASK 0x7fffffffu
-/* SAH costs relative to one block test (four triangles). Measured with callgrind on the
-   1M-triangle benchmark mesh: a node visit costs ~60 instructions (slab test ~30 + stack), a
-   block test ~140, so a node is about half a block. Cost 0.5 instead of 1 cut the
-   instructions per ray by ~6% there (13.6 nodes + 1.8 blocks per closest-hit ray instead of
-   13.2 + 2.7). */
+/* SAH costs relative to one block test (four triangles): a node visit costs about half a
+   block test in instructions, so 0.5 (docs/internals.md, "SAH costs"). */
 #ifndef PT__BVH_COST_NODE
 #define PT__BVH_COST_NODE 0.5f
 #endif
@@ -4036,9 +4117,10 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
     }
 }
 
-/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. Blocks that hold
-   only primitive `skip` (one-primitive leaves, PT__BVH_SMALL_SCENE) are not tested: the shadow
-   ray towards a point sampled on a light passes its own light (0xffffffff: none). */
+/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. Quad and sphere
+   blocks that hold only primitive `skip` (one-primitive leaves, PT__BVH_SMALL_SCENE) are not
+   tested: the shadow ray towards a point sampled on a light passes its own light (0xffffffff:
+   none). */
 static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
 {
     uint32_t stack_ref[PT__BVH_STACK];
@@ -4107,13 +4189,15 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
      price of a callback per candidate; scenes large enough for Embree to pay are meshes.
    Rays are traced from pdftrace's offset origins (no epsilon of Embree's own) with
    tnear = FLT_MIN and tfar just below tmax: the built-in accepts 0 < t < tmax, Embree
-   tnear <= t <= tfar. The callbacks
-   find pdftrace's per-ray data (pt__rayctx) in an extended intersect context (Embree 3
-   docs, rtcInitIntersectContext: "the context can be extended by the application").
+   tnear <= t <= tfar. The callbacks find pdftrace's per-ray data (pt__rayctx) in an extended
+   intersect context (Embree 3 docs, rtcInitIntersectContext: "the context can be extended by
+   the application").
    ------------------------------------------------------------------------------------------ */
 #ifdef PDFTRACE_EMBREE
 
-/* Scene flags and build quality; measured choices, see the test section embree. */
+/* Scene flags and build quality (overridable): ROBUST for Embree's watertight triangle test
+   (the embree test section compares 10^6 first hits with the built-in BVH's); MEDIUM, Embree's
+   default quality for a static scene. */
 #ifndef PDFTRACE_EMBREE_SCENE_FLAGS
 #define PDFTRACE_EMBREE_SCENE_FLAGS RTC_SCENE_FLAG_ROBUST
 #endif
@@ -4210,10 +4294,9 @@ static void pt__rtc_bounds(const struct RTCBoundsFunctionArguments *a)
     pt_vec3 lo, hi;
     float e = ((const pt__rtc_geom *)a->geometryUserPtr)->pad;
     pt__prim_bounds(p, &lo, &hi);
-    /* Padded like the built-in nodes, plus 2^-24 of the scene's extent: Embree culled rays
-       running exactly in the plane of an axis-aligned quad when the bounds were padded by less
-       than ~1e-12 absolute at coordinate 0 (141 of 20000 in-plane rays over integer boxes;
-       none with this pad). */
+    /* Padded like the built-in nodes, plus 2^-24 of the scene's extent: with less padding at
+       coordinate 0 Embree culls some rays that run exactly in the plane of an axis-aligned quad
+       (docs/internals.md, "Embree user-geometry bounds"). */
     a->bounds_o->lower_x = pt__pad_down(lo.x) - e; a->bounds_o->lower_y = pt__pad_down(lo.y) - e;
     a->bounds_o->lower_z = pt__pad_down(lo.z) - e;
     a->bounds_o->upper_x = pt__pad_up(hi.x) + e; a->bounds_o->upper_y = pt__pad_up(hi.y) + e;
@@ -4481,22 +4564,14 @@ static void pt__ftz_end(unsigned old)
 }
 #endif /* PDFTRACE_EMBREE */
 
-/* --- the traversal dispatch: every closest-hit and any-hit query goes through these --- */
-static PT__HOT int pt__scene_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
-                                     float *bary)
-{
-#ifdef PDFTRACE_EMBREE
-    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_closest(s, rc, tmax, prim, t_out, bary);
-#endif
-    return pt__bvh_closest(s, rc, tmax, prim, t_out, bary);
-}
-static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
-{
-#ifdef PDFTRACE_EMBREE
-    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_any(s, rc, tmax); /* tests `skip` too */
-#endif
-    return pt__bvh_any(s, rc, tmax, skip);
-}
+/* ------------------------------------------------------------------------------------------
+   5c. Commit and ray queries. pt_scene_commit turns the shapes added so far into something that
+   can be rendered: it builds the acceleration structure of the chosen backend (the built-in BVH
+   of section 5, or Embree, section 5b), the light table (every emitting primitive is a light,
+   picked with probability proportional to its power; sampled in section 2) and the scene's
+   feature bits (the skips at the top of this file). Every closest-hit and any-hit query, the
+   integrator's and the public ones, goes through one dispatch to the backend the commit chose.
+   ------------------------------------------------------------------------------------------ */
 
 PTDEF int pt_scene_set_backend(pt_scene *s, pt_backend backend)
 {
@@ -4540,7 +4615,7 @@ static int pt__accel_build(pt_scene *s)
     int rc;
 #ifdef PDFTRACE_EMBREE
     int want = s->backend_request;
-    if (want == PT_BACKEND_AUTO) { /* the rule measured at PDFTRACE_EMBREE_MIN_PRIMS */
+    if (want == PT_BACKEND_AUTO) { /* the rule of section 5b (PDFTRACE_EMBREE_MIN_PRIMS) */
         want = s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS) ? PT_BACKEND_EMBREE : PT_BACKEND_BUILTIN;
 #if PDFTRACE_EMBREE_SMALL_PRIMS > 0
         if (2u * (uint64_t)s->triangle_count < s->prim_count && s->prim_count < (uint32_t)(PDFTRACE_EMBREE_SMALL_PRIMS))
@@ -4571,14 +4646,6 @@ static int pt__accel_build(pt_scene *s)
     s->build_seconds = pt__now() - t0;
     s->accel_bytes = s->bvh_bytes;
     return PT_OK;
-}
-
-/* --- commit, scene info, lights and the public queries (sections 3, 5 and 5b) --- */
-static float pt__prim_area(const pt__prim *p)
-{
-    if (p->type == PT__PRIM_SPHERE) return 4.0f * PT__PI * p->p1.x * p->p1.x;
-    if (p->type == PT__PRIM_QUAD) return pt_length(pt_cross(p->p1, p->p2));
-    return 0.5f * pt_length(pt_cross(pt_sub(p->p1, p->p0), pt_sub(p->p2, p->p0)));
 }
 
 PTDEF int pt_scene_commit(pt_scene *s)
@@ -4692,57 +4759,21 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     return PT_OK;
 }
 
-/* --- lights of a scene (used by the integrator and by pt_pdf_scene_lights) --- */
-static PT__HOT int pt__light_prim_sample(const pt_scene *s, const pt__prim *p, pt_vec3 o, float u1, float u2,
-                                 pt__light_sample *ls)
+/* --- the traversal dispatch: every closest-hit and any-hit query goes through these --- */
+static PT__HOT int pt__scene_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
+                                     float *bary)
 {
-    int two = s->mats[p->material].two_sided;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_sample(o, p->p0, p->p1.x, two, u1, u2, ls);
-    return pt__planar_light_sample(p, s->lights[p->light].area, two, o, u1, u2, ls);
+#ifdef PDFTRACE_EMBREE
+    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_closest(s, rc, tmax, prim, t_out, bary);
+#endif
+    return pt__bvh_closest(s, rc, tmax, prim, t_out, bary);
 }
-static float pt__light_prim_value(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w)
+static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
 {
-    int two = s->mats[p->material].two_sided;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
-    return pt__planar_light_value(p, s->lights[p->light].area, two, o, w);
-}
-/* Density of w for one light that a ray from o along w reaches at distance t (no ray cast). */
-static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_vec3 o, pt_vec3 w, float t)
-{
-    int two = s->mats[p->material].two_sided;
-    if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
-    if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
-    return pt__planar_density(p->n, s->lights[p->light].area, t, w);
-}
-static uint32_t pt__pick_light(const pt_scene *s, float u)
-{
-    uint32_t lo = 0, hi = s->light_count - 1u;
-    while (lo < hi) { /* first light whose cdf exceeds u */
-        uint32_t mid = (lo + hi) / 2u;
-        if (s->lights[mid].cdf > u) hi = mid;
-        else lo = mid + 1u;
-    }
-    return lo;
-}
-/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
-static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index)
-{
-    uint32_t li;
-    if (!s->light_count) return 0;
-    li = pt__pick_light(s, u0);
-    if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls)) return 0;
-    ls->pdf *= s->lights[li].select_pdf;
-    *light_index = li;
-    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
-}
-static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w)
-{
-    uint32_t i;
-    float v = 0.0f;
-    for (i = 0; i < s->light_count; ++i)
-        v += s->lights[i].select_pdf * pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w);
-    return v;
+#ifdef PDFTRACE_EMBREE
+    if (s->backend == PT_BACKEND_EMBREE) return pt__rtc_any(s, rc, tmax); /* tests `skip` too */
+#endif
+    return pt__bvh_any(s, rc, tmax, skip);
 }
 
 /* --- public queries --- */
@@ -4797,7 +4828,10 @@ PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tm
 }
 
 /* ------------------------------------------------------------------------------------------
-   6. Camera: pinhole or thin lens; screen right = forward x up (right-handed).
+   6. Camera: pinhole or thin lens from look-at parameters; screen right = forward x up
+   (right-handed). The image plane lies at the focus distance, so a thin lens (a point on the
+   lens from the concentric disk map, section 2) keeps that plane sharp (Shirley, "Ray Tracing
+   in One Weekend", defocus blur).
    ------------------------------------------------------------------------------------------ */
 
 /* pt_camera_init, naming the pt_render_desc.camera field at fault in err (may be NULL). */
@@ -4880,7 +4914,7 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
 }
 
 /* ------------------------------------------------------------------------------------------
-   7. Integrator
+   7. Integrator: one path per camera sample, its vertices shaded by one of four strategies.
    At every non-delta vertex the "scatter" density is the material's PDF, mixed with the
    user's guide PDF when there is one: p_s = (1 - g) p_material + g p_guide. The strategies:
    - MATERIAL: w_i ~ p_s; weight A pScatter / p_s; emission counted where rays land.
@@ -4895,35 +4929,26 @@ PTDEF pt_ray pt_camera_ray(const pt_camera *cam, float x, float y, float u1, flo
    - MIS: both of LIGHT's and MATERIAL's estimates of direct light, weighted by the power
      heuristic w_a = p_a^2 / (p_a^2 + p_b^2) (Veach & Guibas, "Optimally Combining Sampling
      Techniques for Monte Carlo Rendering", SIGGRAPH 1995).
-   Russian roulette from rr_start_depth continues with probability q = min(0.95, sqrt(g max(beta_in)))
-   (g = 1; 2 with the Sobol sampler, below) and divides beta by q (Arvo & Kirk 1990), where beta_in is the throughput that reached this
-   vertex, before its scatter weight f/p. Why the square root: roulette trades the variance it
-   adds, b^2 E[Y^2] (1/q - 1) for a continuation b Y, against the time (1 - q) C it saves; the
-   q that minimises variance x time is proportional to b (so q = b/b_ref), with b_ref set by
-   the rest of the pixel's variance and cost, which a path does not know. q = b (b_ref = 1,
-   pbrt's choice) cut paths too early on every benchmark scene: with q = sqrt(b), which keeps
-   more paths of throughput 0.1-1, variance x CPU time per sample fell by 7.0 / 5.6 / 5.7 /
-   6.7 / 11 % with the Sobol sampler and 1.5 / 0.4 / 0.5 / 6.7 / 7.7 % with independent
-   numbers (tiny-light-pure / tiny-light / many-lights / cornell / metal-glass, MIS, 64 spp,
-   4 pairs of seeds, one thread; starting roulette at depth 2 or 5 instead of 3, or q = b,
-   was worse on at least one of them). With the Sobol sampler q = min(0.95, sqrt(2 b)), that is
-   b_ref = 1/2 (PT__RR_GAIN_SOBOL): b_ref grows with the square root of the rest of the pixel's
-   variance per sample, which Sobol's stratification makes smaller, so roulette should cut later
-   there. Measured with Sobol (and indirect_paths 3), b_ref 1/2 against 1, MIS, one thread,
-   variance x CPU time per sample: tiny-light-pure 0.94 (256 spp, 3 seed pairs; b_ref 1/4: 0.96),
-   cornell 0.81, metal-glass 0.91, tiny-light 0.99 (64 spp, 3 pairs), many-lights 1.00 (64 spp,
-   6 pairs; b_ref 0.7: 0.99). The machine was loaded: rays per sample x variance gave 0.97 / 0.82
-   / 0.91 / 1.01 / 1.01.
-   Independent numbers keep b_ref = 1. Any q chosen before the coin is flipped keeps the
-   estimator unbiased; taking it from the throughput after the scatter weight (the textbook
-   choice) turns a well-sampled direction into a firefly: when f/p is tiny because p is large
-   (a light-sampled direction towards a small bright light under MIXTURE), the path survived
-   with q ~ f/p and was rescaled by 1/q, so the light it then hit counted at full strength in
-   a few rare paths instead of at weight f/p in all of them (measured on bench/scenes/many-
-   lights.scene, mixture 0.5, 64 spp: relMSE 1.3-1.9 with that q, 0.03 without roulette).
+   Paths end by Russian roulette and, where their throughput grows, split (both below).
    Depth counts scattering events: max_depth 1 is direct light only.
    ------------------------------------------------------------------------------------------ */
 
+/* Russian roulette (Arvo & Kirk 1990) from rr_start_depth continues with probability
+   q = min(0.95, sqrt(g max(beta_in))) and divides beta by q, where beta_in is the throughput
+   that reached this vertex, before its scatter weight f/p, and g = 1 (2 with the Sobol sampler).
+   Why the square root: roulette trades the variance it adds, b^2 E[Y^2] (1/q - 1) for a
+   continuation b Y, against the time (1 - q) C it saves; the q that minimises variance x time
+   is proportional to b (so q = b/b_ref), with b_ref set by the rest of the pixel's variance and
+   cost, which a path does not know. q = b (b_ref = 1, pbrt's choice) cuts paths too early;
+   q = sqrt(b) keeps more paths of throughput 0.1-1. b_ref grows with the square root of the
+   rest of the pixel's variance per sample, which Sobol's stratification makes smaller, so
+   roulette cuts later there: b_ref = 1/2, q = min(0.95, sqrt(2 b)). Any q chosen before the
+   coin is flipped keeps the estimator unbiased; taking it from the throughput after the scatter
+   weight (the textbook choice) turns a well-sampled direction into a firefly: when f/p is tiny
+   because p is large (a light-sampled direction towards a small bright light under MIXTURE),
+   the path survives with q ~ f/p and is rescaled by 1/q, so the light it then hits counts at
+   full strength in a few rare paths instead of at weight f/p in all of them. The measurements
+   behind each of these choices: docs/internals.md, "Russian roulette". */
 #define PT__RR_GAIN_SOBOL 2.0f /* b_ref = 1/2 with the Sobol sampler (above) */
 
 typedef struct pt__settings {
@@ -5090,25 +5115,28 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    own: MIXTURE gives every direction that misses the lights the weight f / ((1 - w) p_s), and
    with light_weight 0.75 over white walls (albedo 0.73) that is 4 x 0.73 per bounce. Such a path
    has probability 0.25^d of reaching depth d and weight 2.9^d there, so its second moment grows
-   as 0.25 x 2.9^2 = 2.1 per bounce and the variance is dominated by paths too rare to be seen:
-   on the Cornell box, mixture 0.75, the relative variance per sample was 0.6 at max_depth 2,
-   8 at 6, 14 at 8, and pairs of 16-spp renders at max_depth 50 ranged over 10-73, while relMSE
-   fell as N^-0.77 instead of N^-1 from 1 to 1024 spp (bench/out). So where a non-delta vertex
-   is reached with max(beta_in) >= 2, the path continues as k = min(8, floor(max(beta_in)))
-   independent copies, each with beta_in / k, each sampling its own direction (and its own
-   roulette): the expectation is unchanged, every copy's throughput stays below 2, and the
-   second moment a bounce multiplies in becomes (E[w^2] + (k - 1) E[w]^2) / k instead of E[w^2],
-   w = f/p (E[w] <= albedo < 1), so it no longer grows without bound.
+   as 0.25 x 2.9^2 = 2.1 per bounce and the variance is dominated by paths too rare to be seen.
+   So where a non-delta vertex is reached with max(beta_in) >= 2, the path continues as
+   k = min(8, floor(max(beta_in))) independent copies, each with beta_in / k, each sampling its
+   own direction (and its own roulette): the expectation is unchanged, every copy's throughput
+   stays below 2, and the second moment a bounce multiplies in becomes (E[w^2] + (k - 1) E[w]^2)
+   / k instead of E[w^2], w = f/p (E[w] <= albedo < 1), so it no longer grows without bound.
    The extra copies run after the path that split, depth first, on the same sampler stream
    (INDEPENDENT) or on Sobol sets scrambled with their own key (SOBOL); at most max_splits extra
    copies per camera sample (default 64), after which paths go on unsplit. The next-event
    estimate of the vertex is taken once, before the split. With MATERIAL, LIGHT and MIS and the
    built-in materials, throughputs stay near or below 1 (cosine-sampled Lambertian: f/p = albedo;
    glass: 1), so paths split only after a dozen or more bounces through glass and mirrors, whose
-   weight 1 roulette divides by 0.95 each time (measured on bench/scenes/metal-glass.scene: one
-   split in ~65,000 samples); with a guide, or MIXTURE, they split often. Measured on the Cornell
-   box (bench, mixture 0.75, 5 seeds): 0.33 extra paths per sample, the slope -0.99 instead of
-   -0.77, and efficiency relative to MIS 0.53 instead of 0.10. */
+   weight 1 roulette divides by 0.95 each time; with a guide, or MIXTURE, they split often. What
+   it does to the error: docs/internals.md, "Splitting (the weight window)". */
+#define PT__SPLIT_BETA 2.0f
+#if defined(__GNUC__)
+#define PT__UNLIKELY(x) __builtin_expect(!!(x), 0)
+#else
+#define PT__UNLIKELY(x) (x)
+#endif
+#define PT__SPLIT_MAX_COPIES 8
+
 /* indirect_paths (pt_render_desc): a camera sample's path also splits at its first non-delta
    vertex, into k copies that continue independently after that vertex's one next-event
    estimate. A camera sample's error is the sum of what it estimates once (where in the pixel,
@@ -5118,25 +5146,10 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    splitting (Arvo & Kirk 1990), as in production renderers' "indirect samples per camera
    sample". The Sobol sampler stratifies the first vertex's dimensions over a pixel's samples, so
    V_c is small and k* large; with independent numbers V_c holds e.g. the choice among many
-   lights. Measured (before Sobol's roulette gain of 2, below, which was then tuned with k = 3):
-   variance x CPU time per camera sample relative to k = 1, MIS, 64 spp, 4 seed pairs, one
-   thread, on tiny-light-pure / tiny-light / many-lights / cornell / metal-glass:
-     Sobol        k = 2: 0.81 0.95 0.96 0.90 0.91   k = 3: 0.75 0.99 0.92 0.86 0.88
-                  k = 4: 0.68 1.09 0.94 0.84 0.88
-     independent  k = 2: 0.84 0.99 1.11 0.91 0.93   k = 3: 0.78 1.08 1.23 0.90 0.90
-   (tiny-light-pure with Sobol at 256 spp, 3 pairs: k = 2 0.83, 3 0.81, 4 0.74.) So the default
-   is 3 with Sobol, and 1 (no split: images as before) with independent numbers. Copies carrying
-   throughput 1/k instead (so roulette's q = sqrt(b) cut them early) made it worse than no split
-   on the Cornell box (variance x time 1.36-1.50, helper rr3's measurement this session).
-   The path starts with throughput k and its sum is divided by k, so each copy carries
-   throughput ~1 like an unsplit path, and roulette and the weight window below treat it so. */
-#define PT__SPLIT_BETA 2.0f
-#if defined(__GNUC__)
-#define PT__UNLIKELY(x) __builtin_expect(!!(x), 0)
-#else
-#define PT__UNLIKELY(x) (x)
-#endif
-#define PT__SPLIT_MAX_COPIES 8
+   lights. So the default is 3 with Sobol, and 1 (no split) with independent numbers (the
+   measurements: docs/internals.md, "Indirect paths"). The path starts with throughput k and its
+   sum is divided by k, so each copy carries throughput ~1 like an unsplit path, and roulette and
+   the weight window treat it so. */
 
 /* A camera sample's splitting budget: `left` extra copies may still start (max_splits), and
    `first` is the split of the first non-delta vertex still to come (indirect_paths; 1 once it
@@ -5247,7 +5260,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
 
 /* Copies 1 .. k-1 of a split at vertex v, each with throughput beta_share (copy 0 is the path
    that split, which goes on in pt__trace_from). Kept out of line: it runs rarely, and inlined
-   it cost the unsplit path ~7 % more instructions (callgrind). */
+   it slows the unsplit path (docs/internals.md, "Splitting (the weight window)"). */
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
@@ -5391,9 +5404,8 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     /* indirect_paths k: the path starts with throughput k and the sum is divided by k, so each of
        the k copies the first non-delta vertex splits into has throughput ~1, as an unsplit path
        would: roulette (q from the throughput) and the weight window treat a copy as they treat
-       a whole path. (With throughput 1/k, q = sqrt(1/k) would kill the copies early, and raised
-       the furnace's standard deviation per sample from 0.26 to 0.34 at k = 8.) k = 1 is exact:
-       throughput 1, and x * 1.0f == x. */
+       a whole path. (With throughput 1/k, q = sqrt(1/k) would kill the copies early:
+       docs/internals.md, "Indirect paths".) k = 1 is exact: throughput 1, and x * 1.0f == x. */
     const float k = (float)cfg->indirect_paths;
     pt__splits sp;
     sp.left = cfg->max_splits;
@@ -5443,87 +5455,15 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    8. Rendering: the image is cut into tiles; each pass adds samples_per_pass samples to every
    pixel of every tile. Tiles are handed out by a pthreads pool (or the host's parallel-for).
    A pixel's k-th sample draws from the stream pt_rng_for_sample(seed, pixel, k) (with
-   PT_SAMPLER_SOBOL: from the scrambled Sobol sets keyed by (seed, pixel, k), section 2) and is added
-   to the pixel in sample order by the one job that owns the tile, so the image does not
+   PT_SAMPLER_SOBOL: from the scrambled Sobol sets keyed by (seed, pixel, k), section 2) and is
+   added to the pixel in sample order by the one job that owns the tile, so the image does not
    depend on the thread count or the order in which tiles run. Even-numbered samples also go to
    half-buffer A, odd-numbered ones to B (the film keeps sum and sum_odd; A = sum - sum_odd).
-
-   Adaptive sampling (adaptive_threshold = T > 0), planned per pixel from the film alone.
-   Goal: the image's relMSE, mean_i v_i / n_i over pixels i with v_i = Var(one sample) / (r_i^2 +
-   0.01) averaged over the channels (the regularised relative error of rendering benchmarks; r_i
-   the pixel's true value) and n_i its samples, should reach T^2 for the least time. With c_i the
-   cost of one of its samples that is n_i = L sqrt(v_i / c_i) (Lagrange; Neyman's allocation for
-   stratified sampling, "On the Two Different Aspects of the Representative Method", 1934, with
-   costs as in Cochran, "Sampling Techniques", 3rd ed., 1977, sec. 5.5), L fixed by the target.
-   (Stopping each pixel at error T^2 instead, n_i proportional to v_i, costs as many samples as
-   uniform sampling for the same mean error.) How well v_i can be known bounds the gain. On the
-   benchmark's Cornell box ~85 % of the variance comes from rare samples above 16x the pixel's
-   reference value (paths through the glass ball to the light), so even 2048 samples leave a
-   per-pixel variance that is mostly noise: an allocation planned from one 2048-spp map and
-   judged on another, independent one needs 1.03x the uniform samples for the same expected
-   error; planned from its 3x3 means 0.73x, 5x5 0.71x, 7x7 0.72x. (Judged on the map it was
-   planned from, per pixel looks like 0.54x; the 0.40x once quoted here was such a figure.)
-   Estimates, every adaptive_check_passes passes once this render has given every pixel
-   adaptive_min_spp samples: s_i^2, the sample variance of pixel i per channel (sum_sq, n - 1
-   degrees of freedom), divided by m^2 + 0.01 with m the 3x3 mean of the pixel means (the pixel's
-   own mean is a poor stand-in for r: a pixel that caught a firefly would divide it away);
-   c_i = the rays pixel i traced per sample in this render (a count, never a clock, so the image
-   does not depend on timing). v_i used for pixel i is the mean over the 25 pixels of its 5x5
-   neighbourhood, the pixel itself included (adaptive_neighbours_only = 1: the other 24 only);
-   c_i the mean over the other 24.
-   Own samples or not. The allocation above minimises the expected error; the error of the one
-   image rendered is what is judged, and with rare bright samples they differ: a pixel that drew
-   a firefly has a large error now, and more samples there dilute it. With its own variance in
-   its estimate (1/25 of it, so a firefly raises the pixel's share, and its neighbours', by
-   1/25 of its size), that pixel samples on; a pixel that drew none stops at its share. That is
-   the classic stopping bias of adaptive sampling (Kirk & Arvo, "Unbiased sampling techniques
-   for image synthesis", SIGGRAPH 1991): pixels that stop early are the ones that missed the
-   rare bright samples, so the image is biased dark, and the bias shrinks as the samples grow
-   (each draw moves a pixel's mean by less). At the image border the own weight stays 1/25 (a
-   clipped box mean would make it 1/15 at an edge and 1/9 at a corner). Benchmark's Cornell box
-   (MIS, samples to reach the uniform render's error; 8 seeds at 128 spp, 4 at 512): own samples
-   0.36x at 128 spp with the image mean 0.70 % below the uniform render's, 0.54x at 512 spp with
-   0.25 %; neighbours only ~0.7x and 0.73x, the mean up to 0.35 % below at 128 spp and
-   within 0.05 % at 512. The squared bias is 0.3 % of the relMSE at 128 spp and 0.15 % at 512;
-   the gain shrinks with the samples too (in the benchmark's adaptive plot the two modes meet
-   near 2000 spp). The tests' room scene (threshold 0.18, minimum 16 spp, ~40 % of the uniform
-   samples; seeds 7-46): own samples -1.17 % of the image mean (standard error 0.14 %), -0.2 %
-   to -3.3 % in 4x4 regions (another 40 seeds), -0.71 % against the neighbours-only image
-   inside and -2.3 % in the outer 2 pixels; neighbours only -0.38 % (0.14 %): a pixel's own
-   samples still enter L below and its neighbours' normalisation m, so that mode is not exactly
-   unbiased either. The default counts the own samples: the error, bias included, is what
-   adaptive sampling is for; a reference image should be rendered uniformly. 3x3 with the pixel
-   (1/9 of its variance) needed 0.28x at 128 spp and 0.42x at 512 with about twice the bias;
-   7x7 (1/49) 0.43x at 128 spp.
-   Measurements of the neighbours-only estimate: 5x5 rather than 3x3 (8 neighbours) or 7x7: the
-   benchmark's Cornell box reached the uniform render's error at 128 spp with 0.69x its samples (3x3: 0.73x, 7x7:
-   0.71x, 4 seeds); at 512 spp 0.74x (3x3: 0.70x; separate runs of 5 seeds: within noise);
-   dropping the largest neighbour (against isolated fireflies) needed more samples than
-   uniform sampling (rare bright samples are the noise). Later measurements (6 seeds, samples
-   to reach the uniform render's error, thresholds 1.1-1.2x apart): neighbours only needs 0.65x
-   at 128 spp and 0.73x at 512 spp. Not better at 128 spp: 3x3 (0.69x at 1.3x the error, the
-   closest it came), 7x7 0.71x, minimum spp N/8 0.68x or N/2 0.75x (default N/4), n_i
-   proportional to (v_i / c_i)^0.4 or ^0.65 0.69x and 0.70x, v_i shrunk towards the image mean
-   (+ 0.2 mean) 0.75x, neighbours weighted by the similarity of their 3x3 means (7x7,
-   edge-aware) 0.68x. Not better at 512 spp: 3x3 once
-   the neighbours hold >= 96 samples 0.72x, minimum spp 32 or 64 0.73x, 16 spp per pass 0.73x,
-   re-planning every 4 passes 0.74x, the edge-aware mean 0.75x. The neighbourhood also
-   spreads noise a little beyond where it was seen: a zero-variance pixel near noisy ones keeps
-   sampling, so there is no seam where the noise starts. Plan: L solves mean_i v_i / n_i(L) = T^2 with
-   n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + samples_per_pixel) (the samples already
-   taken stay; the mean is convex and decreasing in L: Newton's method safeguarded by bisection);
-   L = 0 (every pixel stops) when the target is reached, every pixel with v_i > 0 samples to the
-   cap when it is out of reach. Each pass gives pixel i min(step, what its plan still wants),
-   step = samples_per_pass x (pixels / pixels that still sample), at most the cap (so that the
-   last passes are not a long tail of nearly empty ones); the pass's jobs are chunks of pixels in raster order
-   holding about equal work (samples x rays per sample), so the threads finish together. Every
-   decision is taken between passes on the calling thread from the film and the rays counted per
-   pixel, so the image stays independent of the thread count and job order.
-   Memory: 124 bytes per pixel during an adaptive render, besides the film.
-   Threads: the workers are created per pass. Thread creation and joining cost ~0.1 ms per pass
-   on a loaded 2-core machine, against >= 10 ms of work in a pass of any image worth adapting
-   (adaptive passes are kept about as long as uniform ones, above), so a persistent pool would
-   not pay (README).
+   With adaptive sampling (adaptive_threshold > 0) the samples each pixel still takes are
+   re-planned between passes from the film alone (Neyman's allocation, below), and a pass's
+   jobs are chunks of pixels of about equal work instead of tiles. pt_render validates the
+   desc, sets the render up, runs the passes and sums up their statistics; the film's own
+   functions (init, resolve, error estimate) close the section.
    ------------------------------------------------------------------------------------------ */
 
 static double pt__now(void)
@@ -5669,7 +5609,9 @@ static void *pt__worker(void *data)
 }
 #endif
 
-/* Runs `jobs` tiles (ps->jobs) of a pass; returns the number of threads used. */
+/* Runs `jobs` tiles (ps->jobs) of a pass; returns the number of threads used. The workers are
+   created per pass: creating and joining them costs far less than a pass's work, so a
+   persistent pool would not pay (docs/internals.md, "Tiles, chunks and threads"). */
 static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_desc *d)
 {
     int i;
@@ -5698,11 +5640,49 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
     return 1;
 }
 
-/* The neighbourhood v_i and c_i are averaged over: (2 R + 1)^2 pixels, R = 2 (section 8). */
+/* Adaptive sampling (adaptive_threshold = T > 0), planned per pixel from the film alone.
+   Goal: the image's relMSE, mean_i v_i / n_i over pixels i with v_i = Var(one sample) / (r_i^2 +
+   0.01) averaged over the channels (the regularised relative error of rendering benchmarks; r_i
+   the pixel's true value) and n_i its samples, should reach T^2 for the least time. With c_i the
+   cost of one of its samples that is n_i = L sqrt(v_i / c_i) (Lagrange; Neyman's allocation for
+   stratified sampling, "On the Two Different Aspects of the Representative Method", 1934, with
+   costs as in Cochran, "Sampling Techniques", 3rd ed., 1977, sec. 5.5), L fixed by the target.
+   (Stopping each pixel at error T^2 instead, n_i proportional to v_i, costs as many samples as
+   uniform sampling for the same mean error.) How well v_i can be known bounds the gain: where
+   rare bright samples (caustics) make most of the variance, a pixel's own variance is mostly
+   noise even after thousands of samples, so v_i is averaged over a neighbourhood.
+   Estimates, every adaptive_check_passes passes once this render has given every pixel
+   adaptive_min_spp samples (default max(16, samples_per_pixel / 16)): s_i^2, the sample
+   variance of pixel i per channel (sum_sq, n - 1 degrees of freedom), divided by m^2 + 0.01
+   with m the 3x3 mean of the pixel means (the pixel's own mean is a poor stand-in for r: a
+   pixel that caught a firefly would divide it away); c_i = the rays pixel i traced per sample
+   in this render (a count, never a clock, so the image does not depend on timing). v_i used
+   for pixel i is the mean over the 25 pixels of its 5x5 neighbourhood, the pixel itself
+   included (adaptive_neighbours_only = 1: the other 24 only); c_i the mean over the other 24.
+   The neighbourhood also spreads noise a little beyond where it was seen: a zero-variance pixel
+   near noisy ones keeps sampling, so there is no seam where the noise starts. Why 5x5, and the
+   variants that did no better: docs/internals.md, "Adaptive sampling". */
+/* The neighbourhood v_i and c_i are averaged over: (2 R + 1)^2 pixels, R = 2. */
 #define PT__ADAPTIVE_R 2
 #define PT__ADAPTIVE_BOX ((2 * PT__ADAPTIVE_R + 1) * (2 * PT__ADAPTIVE_R + 1))
 
-/* Adaptive sampling state of one pt_render call (see the comment at the top of section 8). */
+/* Own samples or not. The allocation above minimises the expected error; the error of the one
+   image rendered is what is judged, and with rare bright samples they differ: a pixel that drew
+   a firefly has a large error now, and more samples there dilute it. With its own variance in
+   its estimate (1/25 of it, so a firefly raises the pixel's share, and its neighbours', by
+   1/25 of its size), that pixel samples on; a pixel that drew none stops at its share. That is
+   the classic stopping bias of adaptive sampling (Kirk & Arvo, "Unbiased sampling techniques
+   for image synthesis", SIGGRAPH 1991): pixels that stop early are the ones that missed the
+   rare bright samples, so the image is biased dark, and the bias shrinks as the samples grow
+   (each draw moves a pixel's mean by less). Leaving the pixel out (adaptive_neighbours_only)
+   makes the bias smaller but not zero: a pixel's own samples still enter L and its neighbours'
+   normalisation m. The default counts the own samples: the error, bias included, is what
+   adaptive sampling is for; a reference image should be rendered uniformly. The measured bias
+   and gain of both modes: docs/internals.md, "Adaptive sampling".
+   Every decision is taken between passes on the calling thread from the film and the rays
+   counted per pixel, so the image stays independent of the thread count and job order.
+   Memory: 124 bytes per pixel during an adaptive render, besides the film. */
+/* Adaptive sampling state of one pt_render call. */
 typedef struct pt__adaptive {
     double target;             /* threshold^2: the relMSE the image should reach */
     int min_spp, check_passes, per_pass, cap, width, height;
@@ -5746,13 +5726,15 @@ static void pt__box_mean(const double *v, double *out, double *tmp, int w, int h
         }
 }
 
-/* Re-plans the samples (see the comment at the top of section 8): per pixel i, v_i from the
-   film's sample variance averaged over its 5x5 neighbourhood (itself as 1 of 25 when a->self,
-   else the other pixels only), c_i = rays per sample averaged over the other pixels of that
+/* Re-plans the samples (see the comments above pt__adaptive): per pixel i, v_i from the film's
+   sample variance averaged over its 5x5 neighbourhood (itself as 1 of 25 when a->self, else the
+   other pixels only), c_i = rays per sample averaged over the other pixels of that
    neighbourhood; then the Lagrange multiplier L with mean_i v_i / n_i(L) = threshold^2,
-   n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + cap), found by Newton's method
-   safeguarded by bisection (the mean is convex and decreasing in L); want_i = round(n_i -
-   count_i), the samples pixel i should still take (pt__adaptive_plan hands them out). */
+   n_i(L) = clamp(L sqrt(v_i / c_i), count_i, start_i + cap) (the samples already taken stay),
+   found by Newton's method safeguarded by bisection (the mean is convex and decreasing in L);
+   L = 0 (every pixel stops) when the target is already reached, and every pixel with v_i > 0
+   samples to its cap when the target is out of reach. want_i = round(n_i - count_i), the
+   samples pixel i should still take (pt__adaptive_plan hands them out). */
 static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
 {
     size_t i, np = (size_t)a->width * (size_t)a->height;
@@ -5838,10 +5820,12 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
         }
 }
 
-/* The next pass: pixel i takes min(per_pass, want_i) samples. The jobs are chunks of pixels in
-   raster order, cut so that each holds about the same work (samples x smoothed rays per sample):
-   a few pixels far apart that still sample split evenly over the threads, which tiles would not
-   do. Returns the number of jobs (at most a->chunks). */
+/* The next pass: pixel i takes min(want_i, step) samples, step = per_pass x (pixels / pixels
+   that still sample), at most the cap, so that the last passes are not a long tail of nearly
+   empty ones. The jobs are chunks of pixels in raster order, cut so that each holds about the
+   same work (samples x smoothed rays per sample): a few pixels far apart that still sample split
+   evenly over the threads, which tiles would not do. Returns the number of jobs (at most
+   a->chunks). */
 static int pt__adaptive_plan(pt__adaptive *a, pt__pass *ps, int *job_list)
 {
     size_t i, np = (size_t)a->width * (size_t)a->height;
@@ -5923,177 +5907,228 @@ static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt
     return pt__camera_init(cam, &d->camera, d->width, d->height, err, n);
 }
 
+/* The schedule and running totals of one pt_render call: set by pt__render_setup, advanced by
+   pt__render_passes, summed up by pt__render_end_stats. */
+typedef struct pt__render_run {
+    int spp, per_pass, passes;  /* samples per pixel and per pass (the last pass takes the rest) */
+    int adaptive;               /* adaptive_threshold != 0 */
+    int threads, used;          /* threads asked for; threads the last pass ran on */
+    int jobs, *job_list;        /* the next pass's jobs: tiles, or the adaptive plan's chunks */
+    uint64_t done;              /* camera samples taken */
+    uint32_t added;             /* samples every pixel has been given by the passes so far */
+    double t0;                  /* pt__now() when pt_render began */
+    pt_render_stats total;
+} pt__render_run;
+
+/* Adaptive sampling's state for one render: its settings with their defaults, and its
+   per-pixel arrays (the film's counts at the start copied). Returns 0 when out of memory
+   (pt__adaptive_free releases what was allocated). */
+static int pt__adaptive_init(pt__adaptive *ad, const pt_render_desc *d, const pt_film *film, int spp, int per_pass)
+{
+    size_t np = (size_t)d->width * (size_t)d->height;
+    ad->target = (double)d->adaptive_threshold * (double)d->adaptive_threshold;
+    ad->min_spp = d->adaptive_min_spp ? d->adaptive_min_spp : (spp / 16 > 16 ? spp / 16 : 16);
+    ad->check_passes = d->adaptive_check_passes ? d->adaptive_check_passes : 1;
+    ad->self = !d->adaptive_neighbours_only;
+    ad->per_pass = per_pass;
+    ad->cap = spp;
+    ad->width = d->width;
+    ad->height = d->height;
+    ad->start = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    ad->want = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    ad->step = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    ad->rays = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->noise = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->cost = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->var = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->lo = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->hi = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->mean = (double *)PT_MALLOC(sizeof(double) * 3 * np);
+    ad->mbox = (double *)PT_MALLOC(sizeof(double) * 3 * np);
+    ad->cpp = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->tmp = (double *)PT_MALLOC(sizeof(double) * np);
+    ad->chunk_first = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * (size_t)(ad->chunks + 1));
+    if (ad->start) memcpy(ad->start, film->count, sizeof(uint32_t) * np);
+    if (ad->rays) memset(ad->rays, 0, sizeof(double) * np);
+    return ad->start && ad->want && ad->step && ad->rays && ad->noise && ad->cost && ad->var && ad->lo && ad->hi &&
+           ad->cpp && ad->mean && ad->mbox && ad->tmp && ad->chunk_first;
+}
+static void pt__adaptive_free(pt__adaptive *ad)
+{
+    PT_FREE(ad->start);
+    PT_FREE(ad->want);
+    PT_FREE(ad->step);
+    PT_FREE(ad->rays);
+    PT_FREE(ad->noise);
+    PT_FREE(ad->cost);
+    PT_FREE(ad->var);
+    PT_FREE(ad->lo);
+    PT_FREE(ad->hi);
+    PT_FREE(ad->mean);
+    PT_FREE(ad->mbox);
+    PT_FREE(ad->cpp);
+    PT_FREE(ad->tmp);
+    PT_FREE(ad->chunk_first);
+}
+
+/* The set-up of a validated render: the pass schedule, the tiles and the thread count, the
+   per-job counters, adaptive sampling's state, the job list of the first pass and the pass's
+   lock. On failure err (per call) says why; what was allocated is freed by the caller. */
+static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film *film, const pt__settings *cfg,
+                            const pt_camera *cam, pt__pass *ps, pt__adaptive *ad, pt__render_run *r, char *err,
+                            size_t en)
+{
+    int tiles, tiles_x, tiles_y, tile, slots, adaptive_ok;
+    r->spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
+    r->per_pass = d->samples_per_pass ? d->samples_per_pass
+                                      : (r->spp / (r->adaptive ? 64 : 16) > 0 ? r->spp / (r->adaptive ? 64 : 16) : 1);
+    if (r->per_pass > r->spp) r->per_pass = r->spp;
+    r->passes = (r->spp + r->per_pass - 1) / r->per_pass;
+    memset(ps, 0, sizeof *ps);
+    /* default tiles: 8 x 8 pixels once a pass takes >= 8 samples per pixel (a job then holds >= 512
+       samples), else 16 x 16: the smaller the jobs, the closer together the threads finish a pass
+       (docs/internals.md, "Tiles, chunks and threads") */
+    ps->tile_size = d->tile_size ? d->tile_size : (r->per_pass >= 8 ? 8 : 16);
+    tiles_x = (d->width + ps->tile_size - 1) / ps->tile_size;
+    tiles_y = (d->height + ps->tile_size - 1) / ps->tile_size;
+    tiles = tiles_x * tiles_y;
+    r->threads = d->threads ? d->threads : pt__cpu_count();
+#ifdef PDFTRACE_NO_THREADS
+    if (!d->parallel_for) r->threads = 1;
+#endif
+    ps->scene = s;
+    ps->cfg = cfg;
+    ps->cam = cam;
+    ps->film = film;
+    ps->seed = d->seed;
+    ps->tiles_x = tiles_x;
+    ps->cancel = d->cancel;
+    /* jobs: tiles, or in adaptive passes up to ad.chunks chunks of pixels: 32 per thread, since at
+       the end of a pass a thread waits for at most the other threads' last job (fewer chunks
+       left threads idle: docs/internals.md, "Tiles, chunks and threads"; uniform passes have 64
+       tiles at 128 x 128) */
+    ad->chunks = 32 * r->threads < 4096 ? 32 * r->threads : 4096;
+    slots = r->adaptive && ad->chunks > tiles ? ad->chunks : tiles;
+    ps->tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
+    ps->tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
+    ps->tile_done = (unsigned char *)PT_MALLOC((size_t)slots);
+    r->job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)slots);
+    adaptive_ok = !r->adaptive || pt__adaptive_init(ad, d, film, r->spp, r->per_pass);
+    ps->pixel_rays = ad->rays;
+    if (!ps->tile_stats || !ps->tile_samples || !ps->tile_done || !r->job_list || !adaptive_ok)
+        return pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory (%d x %d pixels)", d->width,
+                       d->height);
+    for (tile = 0; tile < tiles; ++tile) r->job_list[tile] = tile;
+    r->jobs = tiles;
+    ps->jobs = r->job_list;
+#ifndef PDFTRACE_NO_THREADS
+    if (pthread_mutex_init(&ps->lock, NULL) != 0)
+        return pt__msg(err, en, PT_ERROR_THREAD, "pt_render: pthread_mutex_init failed");
+#endif
+    return PT_OK;
+}
+
+/* The passes: each renders its jobs (every tile, or the adaptive plan's chunks), adds their
+   counters to the totals and reports progress; with adaptive sampling the next pass is planned
+   from the film. Returns PT_OK, or PT_ERROR_CANCELLED (the film holds the passes done). */
+static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_desc *d, pt__render_run *r)
+{
+    int pass;
+    for (pass = 0; pass < r->passes && r->jobs > 0; ++pass) {
+        int all_done = 1, j;
+        ps->spp = (pass == r->passes - 1) ? r->spp - r->per_pass * (r->passes - 1) : r->per_pass;
+        for (j = 0; j < r->jobs; ++j) ps->tile_done[r->job_list[j]] = 0;
+        r->used = pt__run_pass(ps, r->jobs, r->threads, d);
+        for (j = 0; j < r->jobs; ++j) {
+            const pt_path_stats *ts = &ps->tile_stats[r->job_list[j]];
+            if (!ps->tile_done[r->job_list[j]]) { all_done = 0; continue; }
+            r->total.camera_rays += ts->camera_rays;
+            r->total.bounce_rays += ts->bounce_rays;
+            r->total.shadow_rays += ts->shadow_rays;
+            r->total.nonfinite_samples += ts->nonfinite_samples;
+            r->total.split_paths += ts->split_paths;
+            r->done += ps->tile_samples[r->job_list[j]];
+        }
+        r->added += (uint32_t)ps->spp;
+        r->total.passes = pass + 1;
+        if (!all_done || (d->cancel && *d->cancel)) return PT_ERROR_CANCELLED;
+        if (d->progress) {
+            pt_progress pr;
+            pr.pass = pass + 1;
+            pr.pass_count = r->passes;
+            pr.samples_done = r->done;
+            pr.samples_total = (uint64_t)d->width * (uint64_t)d->height * (uint64_t)r->spp;
+            pr.seconds = pt__now() - r->t0;
+            if (d->progress(d->progress_user, &pr)) return PT_ERROR_CANCELLED;
+        }
+        if (r->adaptive && pass + 1 < r->passes && r->added >= (uint32_t)ad->min_spp) {
+            if (!ps->pixel_spp || (pass + 1) % ad->check_passes == 0) pt__adaptive_check(ad, ps->film);
+            r->jobs = pt__adaptive_plan(ad, ps, r->job_list);
+        }
+    }
+    return PT_OK;
+}
+
+/* The film's statistics after the passes: the fewest and most samples this render gave a pixel,
+   the pixels adaptive sampling stopped early, and the estimated RMS relative error. */
+static void pt__render_end_stats(const pt__adaptive *ad, const pt_render_desc *d, const pt_film *film,
+                                 pt__render_run *r)
+{
+    r->total.min_spp = r->total.max_spp = r->added;
+    {
+        double e = HUGE_VAL;
+        (void)pt_film_error(film, 0, 0, film->width, film->height, &e);
+        r->total.estimated_error = e < HUGE_VAL ? sqrt(e) : -1.0;
+    }
+    if (r->adaptive) {
+        size_t i, np = (size_t)d->width * (size_t)d->height;
+        r->total.min_spp = (uint32_t)r->spp;
+        r->total.max_spp = 0;
+        for (i = 0; i < np; ++i) {
+            uint32_t n = film->count[i] - ad->start[i];
+            if (n < (uint32_t)r->spp) r->total.pixels_converged++;
+            if (n < r->total.min_spp) r->total.min_spp = n;
+            if (n > r->total.max_spp) r->total.max_spp = n;
+        }
+    }
+}
+
 PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
 {
     pt__settings cfg;
     pt_camera cam;
     pt__pass ps;
     pt__adaptive ad;
-    int rc, spp, per_pass, passes, pass, tiles, tiles_x, tiles_y, tile, threads, used = 1, result = PT_OK, slots;
-    int jobs, *job_list = NULL, adaptive = d ? d->adaptive_threshold != 0.0f : 0;
-    uint64_t done = 0;
-    uint32_t added = 0;
-    double t0 = pt__now();
+    pt__render_run run;
+    int rc, result;
     char *err = stats ? stats->error : NULL; /* per call: several threads may render one scene */
     size_t en = stats ? sizeof stats->error : 0u;
-    pt_render_stats total;
-    memset(&total, 0, sizeof total);
+    memset(&run, 0, sizeof run);
+    run.t0 = pt__now();
+    run.used = 1;
+    run.adaptive = d ? d->adaptive_threshold != 0.0f : 0;
     memset(&ad, 0, sizeof ad);
     if (stats) memset(stats, 0, sizeof *stats);
     if ((rc = pt__render_check(s, d, film, 1, &cfg, &cam, err, en)) != PT_OK) return rc;
-    spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
-    per_pass = d->samples_per_pass ? d->samples_per_pass : (spp / (adaptive ? 64 : 16) > 0 ? spp / (adaptive ? 64 : 16) : 1);
-    if (per_pass > spp) per_pass = spp;
-    passes = (spp + per_pass - 1) / per_pass;
-    memset(&ps, 0, sizeof ps);
-    /* default tiles: 8 x 8 pixels once a pass takes >= 8 samples per pixel (a job then holds >= 512
-       samples), else 16 x 16: the smaller the jobs, the closer together the threads finish a pass
-       (on the benchmark's tiny-light-pure at 32 spp, 2 threads: the last job left one thread idle
-       for ~1.1 % of the pass with 16 x 16 tiles, ~0.3 % with 8 x 8, from per-job CPU times) */
-    ps.tile_size = d->tile_size ? d->tile_size : (per_pass >= 8 ? 8 : 16);
-    tiles_x = (d->width + ps.tile_size - 1) / ps.tile_size;
-    tiles_y = (d->height + ps.tile_size - 1) / ps.tile_size;
-    tiles = tiles_x * tiles_y;
-    threads = d->threads ? d->threads : pt__cpu_count();
-#ifdef PDFTRACE_NO_THREADS
-    if (!d->parallel_for) threads = 1;
-#endif
-    ps.scene = s;
-    ps.cfg = &cfg;
-    ps.cam = &cam;
-    ps.film = film;
-    ps.seed = d->seed;
-    ps.tiles_x = tiles_x;
-    ps.cancel = d->cancel;
-    /* jobs: tiles, or in adaptive passes up to ad.chunks chunks of pixels: 32 per thread, since at
-       the end of a pass a thread waits for at most the other threads' last job (with 2 threads
-       and 8 per thread that was ~1/16 of a pass; uniform passes have 64 tiles at 128 x 128) */
-    ad.chunks = 32 * threads < 4096 ? 32 * threads : 4096;
-    slots = adaptive && ad.chunks > tiles ? ad.chunks : tiles;
-    ps.tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
-    ps.tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
-    ps.tile_done = (unsigned char *)PT_MALLOC((size_t)slots);
-    job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)slots);
-    if (adaptive) {
-        size_t np = (size_t)d->width * (size_t)d->height;
-        ad.target = (double)d->adaptive_threshold * (double)d->adaptive_threshold;
-        ad.min_spp = d->adaptive_min_spp ? d->adaptive_min_spp : (spp / 16 > 16 ? spp / 16 : 16);
-        ad.check_passes = d->adaptive_check_passes ? d->adaptive_check_passes : 1;
-        ad.self = !d->adaptive_neighbours_only;
-        ad.per_pass = per_pass;
-        ad.cap = spp;
-        ad.width = d->width;
-        ad.height = d->height;
-        ad.start = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
-        ad.want = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
-        ad.step = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
-        ad.rays = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.noise = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.cost = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.var = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.lo = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.hi = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.mean = (double *)PT_MALLOC(sizeof(double) * 3 * np);
-        ad.mbox = (double *)PT_MALLOC(sizeof(double) * 3 * np);
-        ad.cpp = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.tmp = (double *)PT_MALLOC(sizeof(double) * np);
-        ad.chunk_first = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * (size_t)(ad.chunks + 1));
-        if (ad.start) memcpy(ad.start, film->count, sizeof(uint32_t) * np);
-        if (ad.rays) memset(ad.rays, 0, sizeof(double) * np);
-        ps.pixel_rays = ad.rays;
-    }
-    if (!ps.tile_stats || !ps.tile_samples || !ps.tile_done || !job_list ||
-        (adaptive && (!ad.start || !ad.want || !ad.step || !ad.rays || !ad.noise || !ad.cost || !ad.var || !ad.lo || !ad.hi || !ad.cpp || !ad.mean || !ad.mbox || !ad.tmp || !ad.chunk_first))) {
-        result = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory (%d x %d pixels)", d->width,
-                         d->height);
-        goto cleanup;
-    }
-    for (tile = 0; tile < tiles; ++tile) job_list[tile] = tile;
-    jobs = tiles;
-    ps.jobs = job_list;
+    result = pt__render_setup(s, d, film, &cfg, &cam, &ps, &ad, &run, err, en);
+    if (result == PT_OK) {
+        result = pt__render_passes(&ps, &ad, d, &run);
+        pt__render_end_stats(&ad, d, film, &run);
 #ifndef PDFTRACE_NO_THREADS
-    if (pthread_mutex_init(&ps.lock, NULL) != 0) {
-        result = pt__msg(err, en, PT_ERROR_THREAD, "pt_render: pthread_mutex_init failed");
-        goto cleanup;
-    }
+        pthread_mutex_destroy(&ps.lock);
 #endif
-    for (pass = 0; pass < passes && jobs > 0; ++pass) {
-        int all_done = 1, j;
-        ps.spp = (pass == passes - 1) ? spp - per_pass * (passes - 1) : per_pass;
-        for (j = 0; j < jobs; ++j) ps.tile_done[job_list[j]] = 0;
-        used = pt__run_pass(&ps, jobs, threads, d);
-        for (j = 0; j < jobs; ++j) {
-            const pt_path_stats *ts = &ps.tile_stats[job_list[j]];
-            if (!ps.tile_done[job_list[j]]) { all_done = 0; continue; }
-            total.camera_rays += ts->camera_rays;
-            total.bounce_rays += ts->bounce_rays;
-            total.shadow_rays += ts->shadow_rays;
-            total.nonfinite_samples += ts->nonfinite_samples;
-            total.split_paths += ts->split_paths;
-            done += ps.tile_samples[job_list[j]];
-        }
-        added += (uint32_t)ps.spp;
-        total.passes = pass + 1;
-        if (!all_done || (d->cancel && *d->cancel)) { result = PT_ERROR_CANCELLED; break; }
-        if (d->progress) {
-            pt_progress pr;
-            pr.pass = pass + 1;
-            pr.pass_count = passes;
-            pr.samples_done = done;
-            pr.samples_total = (uint64_t)d->width * (uint64_t)d->height * (uint64_t)spp;
-            pr.seconds = pt__now() - t0;
-            if (d->progress(d->progress_user, &pr)) { result = PT_ERROR_CANCELLED; break; }
-        }
-        if (adaptive && pass + 1 < passes && added >= (uint32_t)ad.min_spp) {
-            if (!ps.pixel_spp || (pass + 1) % ad.check_passes == 0) pt__adaptive_check(&ad, film);
-            jobs = pt__adaptive_plan(&ad, &ps, job_list);
-        }
     }
-    total.min_spp = total.max_spp = added;
-    {
-        double e = HUGE_VAL;
-        (void)pt_film_error(film, 0, 0, film->width, film->height, &e);
-        total.estimated_error = e < HUGE_VAL ? sqrt(e) : -1.0;
-    }
-    if (adaptive) {
-        size_t i, np = (size_t)d->width * (size_t)d->height;
-        total.min_spp = (uint32_t)spp;
-        total.max_spp = 0;
-        for (i = 0; i < np; ++i) {
-            uint32_t n = film->count[i] - ad.start[i];
-            if (n < (uint32_t)spp) total.pixels_converged++;
-            if (n < total.min_spp) total.min_spp = n;
-            if (n > total.max_spp) total.max_spp = n;
-        }
-    }
-#ifndef PDFTRACE_NO_THREADS
-    pthread_mutex_destroy(&ps.lock);
-#endif
-cleanup:
     PT_FREE(ps.tile_stats);
     PT_FREE(ps.tile_samples);
     PT_FREE(ps.tile_done);
-    PT_FREE(job_list);
-    PT_FREE(ad.start);
-    PT_FREE(ad.want);
-    PT_FREE(ad.step);
-    PT_FREE(ad.rays);
-    PT_FREE(ad.noise);
-    PT_FREE(ad.cost);
-    PT_FREE(ad.var);
-    PT_FREE(ad.lo);
-    PT_FREE(ad.hi);
-    PT_FREE(ad.mean);
-    PT_FREE(ad.mbox);
-    PT_FREE(ad.cpp);
-    PT_FREE(ad.tmp);
-    PT_FREE(ad.chunk_first);
+    PT_FREE(run.job_list);
+    pt__adaptive_free(&ad);
     if (result != PT_OK && result != PT_ERROR_CANCELLED) return result;
-    total.samples = done;
-    total.seconds = pt__now() - t0;
-    total.threads = used;
-    if (stats) *stats = total;
-    if (result == PT_ERROR_CANCELLED) pt__msg(err, en, result, "pt_render: cancelled after %d passes", total.passes);
+    run.total.samples = run.done;
+    run.total.seconds = pt__now() - run.t0;
+    run.total.threads = run.used;
+    if (stats) *stats = run.total;
+    if (result == PT_ERROR_CANCELLED) pt__msg(err, en, result, "pt_render: cancelled after %d passes", run.total.passes);
     return result;
 }
 
@@ -6127,10 +6162,7 @@ PTDEF int pt_render_image(const pt_scene *s, const pt_render_desc *d, pt_image *
     return rc;
 }
 
-/* ------------------------------------------------------------------------------------------
-   9. Output: film, images, PFM and PPM writers
-   ------------------------------------------------------------------------------------------ */
-
+/* --- the film (sums per pixel), its resolve into an image, its error estimate --- */
 static int pt__pixels(int w, int h, size_t *n)
 {
     if (w <= 0 || h <= 0 || (size_t)w > ((size_t)-1) / 64u / (size_t)h || (uint64_t)w * (uint64_t)h > 0xffffffffu)
@@ -6259,6 +6291,12 @@ PTDEF int pt_film_error(const pt_film *f, int x0, int y0, int x1, int y1, double
     if (!(*rel_mse < HUGE_VAL)) *rel_mse = HUGE_VAL; /* NaN from overflowing sums counts as unknown */
     return PT_OK;
 }
+
+/* ------------------------------------------------------------------------------------------
+   9. Output: the sRGB transfer function (IEC 61966-2-1) and the PFM (linear float, bottom row
+   first) and PPM (8-bit sRGB) writers. Each writer writes a temporary file beside the target
+   and renames it into place, so that a failed write never leaves a partial image.
+   ------------------------------------------------------------------------------------------ */
 
 PTDEF float pt_srgb_encode(float x)
 {

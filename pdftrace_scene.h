@@ -32,7 +32,6 @@
    ===========
    A scene file is plain text, one statement per line, `#` starts a comment; tokens are
    separated by blanks. The format, in full:
-   per line, `#` starts a comment; tokens are separated by blanks. The format, in full:
 
      size W H                         image size (default 256 256; 1..16384)
      spp N                            samples per pixel (default 64)
@@ -190,8 +189,10 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *desc, const char *path, con
 
 /* ==========================================================================================
    IMPLEMENTATION
-   The parser reads the whole file, then one line at a time into a pt_scenefile; nothing is
-   kept on failure. The builder and the exporter use only the public API and the description.
+   The parser reads the whole file, then one line at a time into a pt_scenefile
+   (pt__sf_statement hands each statement to the reader of its kind); nothing is kept on
+   failure. The OBJ reader fans polygons into triangles. The builder and the exporter use only
+   the public API and the description.
    ========================================================================================== */
 #ifdef PDFTRACE_SCENE_IMPLEMENTATION
 #ifndef PDFTRACE_SCENE_IMPLEMENTATION_DONE
@@ -743,13 +744,12 @@ static int pt__sf_add_shape(pt__sf_parser *p, pt_scenefile_shape_type type, pt_s
     return PT_OK;
 }
 
-static int pt__sf_statement(pt__sf_parser *p)
+/* size, spp, max_depth, indirect_paths, seed, pov_light_grid: integers in their ranges. */
+static int pt__sf_int_setting(pt__sf_parser *p, const char *kw)
 {
     pt_scenefile *d = p->d;
-    const char *kw = p->tok[0];
     int rc = PT_OK;
     long v;
-    p->pos = 1;
     if (!strcmp(kw, "size")) {
         if ((rc = pt__sf_int(p, "size: width", 1, 16384, &v)) != PT_OK) return rc;
         d->width = (int)v;
@@ -770,7 +770,15 @@ static int pt__sf_statement(pt__sf_parser *p)
     } else if (!strcmp(kw, "pov_light_grid")) {
         if ((rc = pt__sf_int(p, "pov_light_grid", 1, 64, &v)) != PT_OK) return rc;
         d->pov_light_grid = (int)v;
-    } else if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity")) {
+    }
+    return PT_OK;
+}
+
+/* strategy, pov_radiosity, sampler: one of a few names. */
+static int pt__sf_choice(pt__sf_parser *p, const char *kw)
+{
+    pt_scenefile *d = p->d;
+    if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity")) {
         static const char *const strategies[] = {"mis", "material", "light", "mixture"};
         static const char *const radiosity[] = {"none", "default", "medium", "high"};
         const char *const *names = kw[0] == 's' ? strategies : radiosity;
@@ -790,160 +798,229 @@ static int pt__sf_statement(pt__sf_parser *p)
         else
             return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "sampler: expected independent or sobol, got '%s'",
                                t ? t : "nothing");
+    }
+    return PT_OK;
+}
+
+/* camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES], once. */
+static int pt__sf_camera(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    int rc = PT_OK;
+    int have_from = 0, have_at = 0;
+    pt_camera cam;
+    if (p->have_camera) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: defined twice");
+    while (rc == PT_OK && p->pos < p->ntok) {
+        const char *key = pt__sf_next(p);
+        if (!strcmp(key, "look_from")) { rc = pt__sf_vec(p, "camera look_from", &d->camera.look_from); have_from = 1; }
+        else if (!strcmp(key, "look_at")) { rc = pt__sf_vec(p, "camera look_at", &d->camera.look_at); have_at = 1; }
+        else if (!strcmp(key, "up")) rc = pt__sf_vec(p, "camera up", &d->camera.up);
+        else if (!strcmp(key, "vfov")) {
+            rc = pt__sf_num(p, "camera vfov", &d->camera.vfov_degrees);
+            if (rc == PT_OK && !(d->camera.vfov_degrees > 0.0f && d->camera.vfov_degrees < 180.0f))
+                rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera vfov: must be in (0, 180) degrees");
+        } else
+            rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: unknown key '%s' (look_from, look_at, up, vfov)", key);
+    }
+    if (rc != PT_OK) return rc;
+    if (!have_from || !have_at) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: needs look_from and look_at");
+    if (pt_camera_init(&cam, &d->camera, 1, 1) != PT_OK)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: look_from equals look_at, or up is parallel to the view");
+    p->have_camera = p->line;
+    return PT_OK;
+}
+
+/* checker NAME R G B R G B SCALE */
+static int pt__sf_checker(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    int rc = PT_OK;
+    const char *name = NULL;
+    pt_scenefile_checker c;
+    if ((rc = pt__sf_new_name(p, "checker", &name)) != PT_OK) return rc;
+    memset(&c, 0, sizeof c);
+    strcpy(c.name, name);
+    if ((rc = pt__sf_color(p, "checker: first colour", &c.even)) != PT_OK) return rc;
+    if ((rc = pt__sf_color(p, "checker: second colour", &c.odd)) != PT_OK) return rc;
+    if ((rc = pt__sf_num(p, "checker: scale", &c.scale)) != PT_OK) return rc;
+    if (!(c.scale >= 1e-6f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "checker: scale must be >= 1e-6");
+    if (d->checker_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many checkers");
+    {
+        pt_scenefile_checker *nc = (pt_scenefile_checker *)PT_REALLOC(d->checkers, (size_t)(d->checker_count + 1) * sizeof *nc);
+        if (!nc) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+        d->checkers = nc;
+        d->checkers[d->checker_count++] = c;
+    }
+    return PT_OK;
+}
+
+/* material NAME TYPE ...: lambertian, metal, dielectric or emitter. */
+static int pt__sf_material(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    int rc = PT_OK;
+    const char *name = NULL, *type;
+    pt_scenefile_material m;
+    if ((rc = pt__sf_new_name(p, "material", &name)) != PT_OK) return rc;
+    memset(&m, 0, sizeof m);
+    strcpy(m.name, name);
+    m.checker = -1;
+    type = pt__sf_next(p);
+    if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, dielectric, emitter)", name);
+    if (!strcmp(type, "lambertian")) {
+        m.type = PT_MATERIAL_LAMBERTIAN;
+        if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "texture")) {
+            const char *t;
+            p->pos++;
+            t = pt__sf_next(p);
+            if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing checker name after 'texture'", name);
+            m.checker = pt__sf_find_checker(d, t);
+            if (m.checker < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: checker '%s' is not defined", name, t);
+        } else if ((rc = pt__sf_color(p, "lambertian albedo", &m.albedo)) != PT_OK) return rc;
+    } else if (!strcmp(type, "metal")) {
+        m.type = PT_MATERIAL_METAL;
+        if ((rc = pt__sf_color(p, "metal albedo", &m.albedo)) != PT_OK) return rc;
+        if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "fuzz")) {
+            p->pos++;
+            if ((rc = pt__sf_num(p, "metal fuzz", &m.fuzz)) != PT_OK) return rc;
+            if (m.fuzz < 0 || m.fuzz > 1) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "metal fuzz: must be in [0, 1]");
+        }
+    } else if (!strcmp(type, "dielectric")) {
+        m.type = PT_MATERIAL_DIELECTRIC;
+        if ((rc = pt__sf_num(p, "dielectric ior", &m.ior)) != PT_OK) return rc;
+        if (!(m.ior >= 1.0f && m.ior <= 10.0f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "dielectric ior: must be in [1, 10]");
+    } else if (!strcmp(type, "emitter")) {
+        m.type = PT_MATERIAL_EMITTER;
+        if ((rc = pt__sf_color(p, "emitter radiance", &m.emission)) != PT_OK) return rc;
+        if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "two_sided")) { p->pos++; m.two_sided = 1; }
+    } else
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, dielectric, emitter)", name, type);
+    if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+    if (d->material_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many materials");
+    {
+        pt_scenefile_material *nm = (pt_scenefile_material *)PT_REALLOC(d->materials, (size_t)(d->material_count + 1) * sizeof *nm);
+        if (!nm) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+        d->materials = nm;
+        d->materials[d->material_count++] = m;
+    }
+    return PT_OK;
+}
+
+/* sphere, quad, triangle, box: points, then a radius (sphere) and the material. */
+static int pt__sf_shape(pt__sf_parser *p, const char *kw)
+{
+    int rc = PT_OK;
+    pt_scenefile_shape tmp;
+    pt_scenefile_shape *s;
+    int i, npts = kw[0] == 's' ? 1 : kw[0] == 'b' ? 2 : 3;
+    memset(&tmp, 0, sizeof tmp);
+    for (i = 0; i < npts; ++i)
+        if ((rc = pt__sf_vec(p, kw, &tmp.p[i])) != PT_OK) return rc;
+    if (kw[0] == 's') {
+        if ((rc = pt__sf_num(p, "sphere radius", &tmp.radius)) != PT_OK) return rc;
+        if (!(tmp.radius > 0)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "sphere: radius must be > 0");
+    }
+    if ((rc = pt__sf_material_ref(p, &tmp.material)) != PT_OK) return rc;
+    if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+    if (kw[0] == 'q' && !(pt_length2(pt_cross(tmp.p[1], tmp.p[2])) > 0))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "quad: u and v are parallel or zero (no area)");
+    if (kw[0] == 'b' && !(tmp.p[0].x < tmp.p[1].x && tmp.p[0].y < tmp.p[1].y && tmp.p[0].z < tmp.p[1].z))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "box: the first corner must be below the second on every axis");
+    if ((rc = pt__sf_add_shape(p, kw[0] == 's' ? PT_SCENEFILE_SPHERE : kw[0] == 'q' ? PT_SCENEFILE_QUAD : kw[0] == 't' ? PT_SCENEFILE_TRIANGLE : PT_SCENEFILE_BOX, &s)) != PT_OK)
+        return rc;
+    memcpy(s->p, tmp.p, sizeof tmp.p);
+    s->radius = tmp.radius;
+    s->material = tmp.material;
+    return PT_OK;
+}
+
+/* mesh PATH MATERIAL: the OBJ file is read now, relative to the scene file. */
+static int pt__sf_mesh(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    int rc = PT_OK;
+    const char *file = pt__sf_next(p);
+    int mat;
+    pt_obj_mesh m;
+    pt_scenefile_shape *s;
+    if (!file) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: missing OBJ file name");
+    if ((rc = pt__sf_material_ref(p, &mat)) != PT_OK) return rc;
+    if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+    if (d->mesh_count >= 1024) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many meshes (at most 1024)");
+    if ((rc = pt__sf_load_obj(p, file, &m)) != PT_OK) return rc;
+    {
+        pt_obj_mesh *nm = (pt_obj_mesh *)PT_REALLOC(d->meshes, (size_t)(d->mesh_count + 1) * sizeof *nm);
+        if (!nm) {
+            PT_FREE(m.positions); PT_FREE(m.normals); PT_FREE(m.indices);
+            return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+        }
+        d->meshes = nm;
+        d->meshes[d->mesh_count++] = m;
+    }
+    if ((rc = pt__sf_add_shape(p, PT_SCENEFILE_MESH, &s)) != PT_OK) return rc;
+    s->mesh = d->mesh_count - 1;
+    s->material = mat;
+    return PT_OK;
+}
+
+/* translate, scale, rotate: composed after the transform in effect (identity resets it). */
+static int pt__sf_transform(pt__sf_parser *p, const char *kw)
+{
+    int rc = PT_OK;
+    pt_vec3 a;
+    pt_transform t;
+    float det;
+    if ((rc = pt__sf_vec(p, kw, &a)) != PT_OK) return rc;
+    if (kw[0] == 'r') {
+        float deg;
+        if ((rc = pt__sf_num(p, "rotate angle", &deg)) != PT_OK) return rc;
+        if (!(pt_length2(a) > 1e-20f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "rotate: the axis has zero length");
+        t = pt_transform_rotate(pt_normalize(a), deg);
+    } else if (kw[0] == 's') {
+        if (!(fabsf(a.x) >= 1e-6f && fabsf(a.y) >= 1e-6f && fabsf(a.z) >= 1e-6f))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "scale: every factor must have magnitude >= 1e-6");
+        t = pt_transform_scale(a);
+    } else
+        t = pt_transform_translate(a);
+    p->xf = pt_transform_mul(t, p->xf); /* applied after the transforms before it */
+    det = p->xf.m[0][0] * (p->xf.m[1][1] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][1]) -
+          p->xf.m[0][1] * (p->xf.m[1][0] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][0]) +
+          p->xf.m[0][2] * (p->xf.m[1][0] * p->xf.m[2][1] - p->xf.m[1][1] * p->xf.m[2][0]);
+    if (!(fabsf(det) > 1e-30f) || !pt__sf_isfinite(det) || !pt__sf_isfinite(p->xf.m[0][3]) ||
+        !pt__sf_isfinite(p->xf.m[1][3]) || !pt__sf_isfinite(p->xf.m[2][3]))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: the combined transform is singular or not finite", kw);
+    return PT_OK;
+}
+
+/* One statement (p->tok, at least one token): the handlers above read its arguments; each
+   statement must use all of its tokens (pt__sf_end). */
+static int pt__sf_statement(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    const char *kw = p->tok[0];
+    int rc = PT_OK;
+    p->pos = 1;
+    if (!strcmp(kw, "size") || !strcmp(kw, "spp") || !strcmp(kw, "max_depth") || !strcmp(kw, "indirect_paths") ||
+        !strcmp(kw, "seed") || !strcmp(kw, "pov_light_grid")) {
+        if ((rc = pt__sf_int_setting(p, kw)) != PT_OK) return rc;
+    } else if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity") || !strcmp(kw, "sampler")) {
+        if ((rc = pt__sf_choice(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "background")) {
         rc = pt__sf_color(p, "background", &d->background);
     } else if (!strcmp(kw, "camera")) {
-        int have_from = 0, have_at = 0;
-        pt_camera cam;
-        if (p->have_camera) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: defined twice");
-        while (rc == PT_OK && p->pos < p->ntok) {
-            const char *key = pt__sf_next(p);
-            if (!strcmp(key, "look_from")) { rc = pt__sf_vec(p, "camera look_from", &d->camera.look_from); have_from = 1; }
-            else if (!strcmp(key, "look_at")) { rc = pt__sf_vec(p, "camera look_at", &d->camera.look_at); have_at = 1; }
-            else if (!strcmp(key, "up")) rc = pt__sf_vec(p, "camera up", &d->camera.up);
-            else if (!strcmp(key, "vfov")) {
-                rc = pt__sf_num(p, "camera vfov", &d->camera.vfov_degrees);
-                if (rc == PT_OK && !(d->camera.vfov_degrees > 0.0f && d->camera.vfov_degrees < 180.0f))
-                    rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera vfov: must be in (0, 180) degrees");
-            } else
-                rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: unknown key '%s' (look_from, look_at, up, vfov)", key);
-        }
-        if (rc != PT_OK) return rc;
-        if (!have_from || !have_at) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: needs look_from and look_at");
-        if (pt_camera_init(&cam, &d->camera, 1, 1) != PT_OK)
-            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: look_from equals look_at, or up is parallel to the view");
-        p->have_camera = p->line;
+        if ((rc = pt__sf_camera(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "checker")) {
-        const char *name = NULL;
-        pt_scenefile_checker c;
-        if ((rc = pt__sf_new_name(p, "checker", &name)) != PT_OK) return rc;
-        memset(&c, 0, sizeof c);
-        strcpy(c.name, name);
-        if ((rc = pt__sf_color(p, "checker: first colour", &c.even)) != PT_OK) return rc;
-        if ((rc = pt__sf_color(p, "checker: second colour", &c.odd)) != PT_OK) return rc;
-        if ((rc = pt__sf_num(p, "checker: scale", &c.scale)) != PT_OK) return rc;
-        if (!(c.scale >= 1e-6f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "checker: scale must be >= 1e-6");
-        if (d->checker_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many checkers");
-        {
-            pt_scenefile_checker *nc = (pt_scenefile_checker *)PT_REALLOC(d->checkers, (size_t)(d->checker_count + 1) * sizeof *nc);
-            if (!nc) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
-            d->checkers = nc;
-            d->checkers[d->checker_count++] = c;
-        }
+        if ((rc = pt__sf_checker(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "material")) {
-        const char *name = NULL, *type;
-        pt_scenefile_material m;
-        if ((rc = pt__sf_new_name(p, "material", &name)) != PT_OK) return rc;
-        memset(&m, 0, sizeof m);
-        strcpy(m.name, name);
-        m.checker = -1;
-        type = pt__sf_next(p);
-        if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, dielectric, emitter)", name);
-        if (!strcmp(type, "lambertian")) {
-            m.type = PT_MATERIAL_LAMBERTIAN;
-            if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "texture")) {
-                const char *t;
-                p->pos++;
-                t = pt__sf_next(p);
-                if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing checker name after 'texture'", name);
-                m.checker = pt__sf_find_checker(d, t);
-                if (m.checker < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: checker '%s' is not defined", name, t);
-            } else if ((rc = pt__sf_color(p, "lambertian albedo", &m.albedo)) != PT_OK) return rc;
-        } else if (!strcmp(type, "metal")) {
-            m.type = PT_MATERIAL_METAL;
-            if ((rc = pt__sf_color(p, "metal albedo", &m.albedo)) != PT_OK) return rc;
-            if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "fuzz")) {
-                p->pos++;
-                if ((rc = pt__sf_num(p, "metal fuzz", &m.fuzz)) != PT_OK) return rc;
-                if (m.fuzz < 0 || m.fuzz > 1) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "metal fuzz: must be in [0, 1]");
-            }
-        } else if (!strcmp(type, "dielectric")) {
-            m.type = PT_MATERIAL_DIELECTRIC;
-            if ((rc = pt__sf_num(p, "dielectric ior", &m.ior)) != PT_OK) return rc;
-            if (!(m.ior >= 1.0f && m.ior <= 10.0f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "dielectric ior: must be in [1, 10]");
-        } else if (!strcmp(type, "emitter")) {
-            m.type = PT_MATERIAL_EMITTER;
-            if ((rc = pt__sf_color(p, "emitter radiance", &m.emission)) != PT_OK) return rc;
-            if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "two_sided")) { p->pos++; m.two_sided = 1; }
-        } else
-            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, dielectric, emitter)", name, type);
-        if ((rc = pt__sf_end(p)) != PT_OK) return rc;
-        if (d->material_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many materials");
-        {
-            pt_scenefile_material *nm = (pt_scenefile_material *)PT_REALLOC(d->materials, (size_t)(d->material_count + 1) * sizeof *nm);
-            if (!nm) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
-            d->materials = nm;
-            d->materials[d->material_count++] = m;
-        }
+        if ((rc = pt__sf_material(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "sphere") || !strcmp(kw, "quad") || !strcmp(kw, "triangle") || !strcmp(kw, "box")) {
-        pt_scenefile_shape tmp;
-        pt_scenefile_shape *s;
-        int i, npts = kw[0] == 's' ? 1 : kw[0] == 'b' ? 2 : 3;
-        memset(&tmp, 0, sizeof tmp);
-        for (i = 0; i < npts; ++i)
-            if ((rc = pt__sf_vec(p, kw, &tmp.p[i])) != PT_OK) return rc;
-        if (kw[0] == 's') {
-            if ((rc = pt__sf_num(p, "sphere radius", &tmp.radius)) != PT_OK) return rc;
-            if (!(tmp.radius > 0)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "sphere: radius must be > 0");
-        }
-        if ((rc = pt__sf_material_ref(p, &tmp.material)) != PT_OK) return rc;
-        if ((rc = pt__sf_end(p)) != PT_OK) return rc;
-        if (kw[0] == 'q' && !(pt_length2(pt_cross(tmp.p[1], tmp.p[2])) > 0))
-            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "quad: u and v are parallel or zero (no area)");
-        if (kw[0] == 'b' && !(tmp.p[0].x < tmp.p[1].x && tmp.p[0].y < tmp.p[1].y && tmp.p[0].z < tmp.p[1].z))
-            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "box: the first corner must be below the second on every axis");
-        if ((rc = pt__sf_add_shape(p, kw[0] == 's' ? PT_SCENEFILE_SPHERE : kw[0] == 'q' ? PT_SCENEFILE_QUAD : kw[0] == 't' ? PT_SCENEFILE_TRIANGLE : PT_SCENEFILE_BOX, &s)) != PT_OK)
-            return rc;
-        memcpy(s->p, tmp.p, sizeof tmp.p);
-        s->radius = tmp.radius;
-        s->material = tmp.material;
+        if ((rc = pt__sf_shape(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "mesh")) {
-        const char *file = pt__sf_next(p);
-        int mat;
-        pt_obj_mesh m;
-        pt_scenefile_shape *s;
-        if (!file) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: missing OBJ file name");
-        if ((rc = pt__sf_material_ref(p, &mat)) != PT_OK) return rc;
-        if ((rc = pt__sf_end(p)) != PT_OK) return rc;
-        if (d->mesh_count >= 1024) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many meshes (at most 1024)");
-        if ((rc = pt__sf_load_obj(p, file, &m)) != PT_OK) return rc;
-        {
-            pt_obj_mesh *nm = (pt_obj_mesh *)PT_REALLOC(d->meshes, (size_t)(d->mesh_count + 1) * sizeof *nm);
-            if (!nm) {
-                PT_FREE(m.positions); PT_FREE(m.normals); PT_FREE(m.indices);
-                return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
-            }
-            d->meshes = nm;
-            d->meshes[d->mesh_count++] = m;
-        }
-        if ((rc = pt__sf_add_shape(p, PT_SCENEFILE_MESH, &s)) != PT_OK) return rc;
-        s->mesh = d->mesh_count - 1;
-        s->material = mat;
+        if ((rc = pt__sf_mesh(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "identity")) {
         p->xf = pt_transform_identity();
     } else if (!strcmp(kw, "translate") || !strcmp(kw, "scale") || !strcmp(kw, "rotate")) {
-        pt_vec3 a;
-        pt_transform t;
-        float det;
-        if ((rc = pt__sf_vec(p, kw, &a)) != PT_OK) return rc;
-        if (kw[0] == 'r') {
-            float deg;
-            if ((rc = pt__sf_num(p, "rotate angle", &deg)) != PT_OK) return rc;
-            if (!(pt_length2(a) > 1e-20f)) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "rotate: the axis has zero length");
-            t = pt_transform_rotate(pt_normalize(a), deg);
-        } else if (kw[0] == 's') {
-            if (!(fabsf(a.x) >= 1e-6f && fabsf(a.y) >= 1e-6f && fabsf(a.z) >= 1e-6f))
-                return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "scale: every factor must have magnitude >= 1e-6");
-            t = pt_transform_scale(a);
-        } else
-            t = pt_transform_translate(a);
-        p->xf = pt_transform_mul(t, p->xf); /* applied after the transforms before it */
-        det = p->xf.m[0][0] * (p->xf.m[1][1] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][1]) -
-              p->xf.m[0][1] * (p->xf.m[1][0] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][0]) +
-              p->xf.m[0][2] * (p->xf.m[1][0] * p->xf.m[2][1] - p->xf.m[1][1] * p->xf.m[2][0]);
-        if (!(fabsf(det) > 1e-30f) || !pt__sf_isfinite(det) || !pt__sf_isfinite(p->xf.m[0][3]) ||
-            !pt__sf_isfinite(p->xf.m[1][3]) || !pt__sf_isfinite(p->xf.m[2][3]))
-            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: the combined transform is singular or not finite", kw);
+        if ((rc = pt__sf_transform(p, kw)) != PT_OK) return rc;
     } else {
         return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "unknown statement '%s'", kw);
     }
