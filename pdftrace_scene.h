@@ -44,6 +44,9 @@
      seed N                           random seed (default 0)
      background R G B                 radiance of rays leaving the scene (default 0 0 0)
      camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES]      (required, once)
+            [lens_radius R] [focus_distance D]   depth of field: a thin lens of radius R >= 0 (0,
+                                      the default: a pinhole) focused at distance D > 0
+                                      (default |look_at - look_from|)
      checker NAME R G B R G B SCALE   a texture: the second colour where
                                       floor(x/s)+floor(y/s)+floor(z/s) is odd
      material NAME lambertian R G B | lambertian texture CHECKER
@@ -78,8 +81,9 @@
    above the horizon); glass as rgbf 1 + fresnel reflection + conserve_energy, no_shadow,
    with an opaque twin; mirrors as `reflection`; checker as POV's checker (same parity);
    meshes as mesh2 with normal_vectors; `assumed_gamma 1.0`, `ambient_light 0`, ambient 0.
-   Not exportable (PT_ERROR_UNSUPPORTED with file:line): fuzzy metal, emitting triangles,
-   boxes or meshes.
+   Not exportable (PT_ERROR_UNSUPPORTED with file:line): a thin-lens camera (POV-Ray's focal
+   blur stops adaptively after a few aperture samples: no exact twin), fuzzy metal, emitting
+   triangles, boxes or meshes.
 */
 #ifndef PDFTRACE_SCENE_H
 #define PDFTRACE_SCENE_H
@@ -138,6 +142,7 @@ typedef struct pt_scenefile {
     uint64_t seed;
     pt_color background;
     pt_camera_desc camera;
+    int camera_line;             /* line of the camera statement, for messages */
     int pov_light_grid;          /* N: N x N spotlights per quad emitter */
     int pov_radiosity;           /* 0 none, 1 POV defaults, 2 medium, 3 high (docs/povray.md) */
     pt_scenefile_checker *checkers; int checker_count;
@@ -802,7 +807,8 @@ static int pt__sf_choice(pt__sf_parser *p, const char *kw)
     return PT_OK;
 }
 
-/* camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES], once. */
+/* camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES] [lens_radius R]
+   [focus_distance D], once. */
 static int pt__sf_camera(pt__sf_parser *p)
 {
     pt_scenefile *d = p->d;
@@ -819,14 +825,24 @@ static int pt__sf_camera(pt__sf_parser *p)
             rc = pt__sf_num(p, "camera vfov", &d->camera.vfov_degrees);
             if (rc == PT_OK && !(d->camera.vfov_degrees > 0.0f && d->camera.vfov_degrees < 180.0f))
                 rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera vfov: must be in (0, 180) degrees");
+        } else if (!strcmp(key, "lens_radius")) {
+            rc = pt__sf_num(p, "camera lens_radius", &d->camera.lens_radius);
+            if (rc == PT_OK && !(d->camera.lens_radius >= 0.0f))
+                rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera lens_radius: must be >= 0 (0: a pinhole)");
+        } else if (!strcmp(key, "focus_distance")) {
+            rc = pt__sf_num(p, "camera focus_distance", &d->camera.focus_distance);
+            if (rc == PT_OK && !(d->camera.focus_distance > 0.0f))
+                rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera focus_distance: must be > 0");
         } else
-            rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: unknown key '%s' (look_from, look_at, up, vfov)", key);
+            rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT,
+                             "camera: unknown key '%s' (look_from, look_at, up, vfov, lens_radius, focus_distance)", key);
     }
     if (rc != PT_OK) return rc;
     if (!have_from || !have_at) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: needs look_from and look_at");
     if (pt_camera_init(&cam, &d->camera, 1, 1) != PT_OK)
         return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "camera: look_from equals look_at, or up is parallel to the view");
     p->have_camera = p->line;
+    d->camera_line = p->line;
     return PT_OK;
 }
 
@@ -1409,7 +1425,13 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
     if (!d || !path || !*path) return PT_ERROR_INVALID_ARGUMENT;
     width = o && o->width > 0 ? o->width : d->width;
     height = o && o->height > 0 ? o->height : d->height;
-    /* What POV-Ray cannot match is refused before anything is written. */
+    /* What POV-Ray cannot match is refused before anything is written. POV-Ray's focal blur
+       draws a few aperture samples per pixel and stops adaptively (blur_samples, confidence,
+       variance) rather than integrating over the lens disk, so a thin lens has no exact twin. */
+    if (d->camera.lens_radius > 0.0f)
+        return pt__sf_failf(err, err_size, d->file, d->camera_line, PT_ERROR_UNSUPPORTED,
+                            "POV-Ray export: a thin-lens camera (lens_radius %g) has no exact POV-Ray equivalent; "
+                            "export with lens_radius 0", (double)d->camera.lens_radius);
     for (i = 0; i < d->shape_count; ++i) {
         const pt_scenefile_shape *s = &d->shapes[i];
         const pt_scenefile_material *m = &d->materials[s->material];

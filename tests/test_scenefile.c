@@ -1,6 +1,6 @@
-/* test_scenefile.c - pdftrace_scene.h's C API for meshes: pt_obj_load and pt_scene_add_obj
-   against the two-step path they replace (read the file, pt_obj_parse, pt_scene_add_mesh).
-   Scene-file statements themselves are tested by validation/ptv.c's runner and the fuzz corpus. */
+/* test_scenefile.c - pdftrace_scene.h: pt_obj_load and pt_scene_add_obj against the two-step path
+   they replace (read the file, pt_obj_parse, pt_scene_add_mesh), and the camera statement's
+   depth of field. The other statements are tested by validation/ptv.c's runner and the fuzz corpus. */
 #include "test_util.h"
 #include "pdftrace_scene.h"
 
@@ -140,9 +140,112 @@ static void add_obj_errors(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+#define DOF_SCENE(lens)                                                                               \
+    "size 24 16\nspp 4\nmax_depth 3\n"                                                                \
+    "camera look_from 0 1 -6 look_at 0 1 0 vfov 40" lens "\n"                                          \
+    "material white lambertian 0.7 0.7 0.7\nmaterial lamp emitter 8 8 8\n"                            \
+    "quad -5 0 -5 0 0 10 10 0 0 white\nsphere 0 1 0 1 white\nsphere -2 3 4 0.5 lamp\nsphere 1.5 0.5 -3 0.5 white\n"
+
+/* Renders the scene text; returns 1 and fills *img, or records why not. */
+static int render_text(test_ctx *t, const char *text, pt_render_desc *rd_out, pt_image *img)
+{
+    pt_scenefile sf;
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_render_stats st;
+    char err[512];
+    int rc = pt_scenefile_parse(text, strlen(text), "dof.scene", NULL, &sf, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "parse: %s", err)) return 0;
+    rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+    pt_scenefile_free(&sf);
+    if (!CHECK(t, rc == PT_OK, "build: %s", err)) return 0;
+    rd.threads = 1;
+    if (rd_out) {
+        rd.camera.lens_radius = rd_out->camera.lens_radius;
+        rd.camera.focus_distance = rd_out->camera.focus_distance;
+    }
+    rc = pt_render_image(scene, &rd, img, &st);
+    pt_scene_destroy(scene);
+    return CHECK(t, rc == PT_OK, "render: %s", st.error);
+}
+
+/* The camera statement's lens_radius and focus_distance reach pt_render_desc.camera: the image
+   equals one rendered from a pinhole file with the two fields set through the API, and differs
+   from the pinhole image. */
+static void camera_depth_of_field(test_ctx *t)
+{
+    pt_scenefile sf;
+    pt_render_desc api;
+    pt_image lens = {0, 0, NULL}, via_api = {0, 0, NULL}, pinhole = {0, 0, NULL};
+    char err[512];
+    const char *text = DOF_SCENE(" lens_radius 0.25 focus_distance 4.5");
+    int rc = pt_scenefile_parse(text, strlen(text), "dof.scene", NULL, &sf, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "parse: %s", err)) return;
+    CHECK(t, sf.camera.lens_radius == 0.25f && sf.camera.focus_distance == 4.5f && sf.camera_line == 4,
+          "lens_radius %g, focus_distance %g, line %d", (double)sf.camera.lens_radius,
+          (double)sf.camera.focus_distance, sf.camera_line);
+    pt_scenefile_free(&sf);
+    memset(&api, 0, sizeof api);
+    api.camera.lens_radius = 0.25f;
+    api.camera.focus_distance = 4.5f;
+    if (render_text(t, text, NULL, &lens) && render_text(t, DOF_SCENE(""), &api, &via_api) &&
+        render_text(t, DOF_SCENE(""), NULL, &pinhole)) {
+        size_t n = 3u * (size_t)lens.width * (size_t)lens.height;
+        CHECK(t, !memcmp(lens.rgb, via_api.rgb, n * sizeof(float)), "the file's lens differs from the API's");
+        CHECK(t, memcmp(lens.rgb, pinhole.rgb, n * sizeof(float)) != 0, "the lens changed nothing");
+    }
+    pt_image_free(&lens);
+    pt_image_free(&via_api);
+    pt_image_free(&pinhole);
+}
+
+/* Bad lens values are file:line errors; a thin lens is refused by the POV-Ray export, which then
+   writes no file. */
+static void camera_depth_of_field_errors(test_ctx *t)
+{
+    static const struct { const char *lens, *want; } bad[] = {
+        {" lens_radius -1", "dof.scene:4: camera lens_radius: must be >= 0"},
+        {" focus_distance 0", "dof.scene:4: camera focus_distance: must be > 0"},
+        {" focus_distance -2", "dof.scene:4: camera focus_distance: must be > 0"},
+        {" lens_radius nan", "dof.scene:4:"},
+        {" lens_radius", "dof.scene:4:"},
+    };
+    char text[1024], err[512];
+    const char *pov = "build/test-scenefile-dof.pov";
+    pt_scenefile sf;
+    size_t i;
+    int rc;
+    for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        snprintf(text, sizeof text, "size 24 16\nspp 4\nmax_depth 3\ncamera look_from 0 1 -6 look_at 0 1 0%s\n", bad[i].lens);
+        rc = pt_scenefile_parse(text, strlen(text), "dof.scene", NULL, &sf, err, sizeof err);
+        CHECK(t, rc != PT_OK && strncmp(err, bad[i].want, strlen(bad[i].want)) == 0, "'%s': %d '%s'", bad[i].lens,
+              rc, err);
+        if (rc == PT_OK) pt_scenefile_free(&sf);
+    }
+    rc = pt_scenefile_parse(DOF_SCENE(" lens_radius 0.25"), strlen(DOF_SCENE(" lens_radius 0.25")), "dof.scene", NULL,
+                            &sf, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "parse: %s", err)) return;
+    remove(pov);
+    rc = pt_scenefile_write_pov(&sf, pov, NULL, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strstr(err, "dof.scene:4:") && strstr(err, "lens_radius"),
+          "POV-Ray export of a thin lens: %d '%s'", rc, err);
+    {
+        FILE *f = fopen(pov, "r");
+        CHECK(t, f == NULL, "the refused export left %s", pov);
+        if (f) fclose(f);
+    }
+    sf.camera.lens_radius = 0.0f;
+    rc = pt_scenefile_write_pov(&sf, pov, NULL, err, sizeof err);
+    CHECK(t, rc == PT_OK, "POV-Ray export of the pinhole twin: %d '%s'", rc, err);
+    remove(pov);
+    pt_scenefile_free(&sf);
+}
+
 const test_case test_scenefile_cases[] = {
     TEST_CASE(obj_load_matches_parse),
     TEST_CASE(add_obj_one_call),
     TEST_CASE(add_obj_errors),
+    TEST_CASE(camera_depth_of_field),
+    TEST_CASE(camera_depth_of_field_errors),
     TEST_END
 };
