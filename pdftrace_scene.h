@@ -165,6 +165,8 @@ PTDEF void pt_scenefile_free(pt_scenefile *desc);
 PTDEF int pt_obj_parse(const char *text, size_t length, const char *name, pt_obj_mesh *out, char *err,
                        size_t err_size);
 PTDEF void pt_obj_mesh_free(pt_obj_mesh *mesh);
+/* The pt_mesh_desc that adds a parsed mesh with the given material (the arrays are not copied). */
+PTDEF pt_mesh_desc pt_obj_mesh_desc(const pt_obj_mesh *mesh, int material);
 /* Reads and parses the OBJ file at path (messages "path:line: message"). */
 PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_size);
 /* Loads the OBJ file at path and adds its triangles to the scene with the given material,
@@ -672,6 +674,20 @@ static const char *pt__sf_read_reason(int rc)
     return rc == PT_ERROR_IO ? strerror(errno) : rc == PT_ERROR_UNSUPPORTED ? "file too large" : "out of memory";
 }
 
+PTDEF pt_mesh_desc pt_obj_mesh_desc(const pt_obj_mesh *m, int material)
+{
+    pt_mesh_desc md;
+    memset(&md, 0, sizeof md);
+    md.material = material;
+    if (!m) return md;
+    md.positions = m->positions;
+    md.vertex_count = m->vertex_count;
+    md.indices = m->indices;
+    md.triangle_count = m->triangle_count;
+    md.normals = m->normals;
+    return md;
+}
+
 PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_size)
 {
     char *text = NULL;
@@ -696,12 +712,7 @@ PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char
     if (!scene) return pt__sf_failf(err, err_size, "pt_scene_add_obj", 0, PT_ERROR_INVALID_ARGUMENT, "scene is NULL");
     rc = pt_obj_load(path, &m, err, err_size);
     if (rc != PT_OK) return rc;
-    md.positions = m.positions;
-    md.vertex_count = m.vertex_count;
-    md.indices = m.indices;
-    md.triangle_count = m.triangle_count;
-    md.normals = m.normals;
-    md.material = material;
+    md = pt_obj_mesh_desc(&m, material);
     rc = pt_scene_add_mesh(scene, &md);
     if (rc < 0) pt__sf_failf(err, err_size, path, 0, rc, "%s", pt_scene_error_message(scene));
     pt_obj_mesh_free(&m);
@@ -1157,14 +1168,7 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         case PT_SCENEFILE_TRIANGLE: id = pt_scene_add_triangle(s, sh->p[0], sh->p[1], sh->p[2], m); break;
         case PT_SCENEFILE_BOX: id = pt_scene_add_box(s, sh->p[0], sh->p[1], m); break;
         default: {
-            const pt_obj_mesh *me = &d->meshes[sh->mesh];
-            pt_mesh_desc md;
-            md.positions = me->positions;
-            md.vertex_count = me->vertex_count;
-            md.indices = me->indices;
-            md.triangle_count = me->triangle_count;
-            md.normals = me->normals;
-            md.material = m;
+            pt_mesh_desc md = pt_obj_mesh_desc(&d->meshes[sh->mesh], m);
             id = pt_scene_add_mesh(s, &md);
         }
         }

@@ -309,12 +309,7 @@ int pt_fuzz_obj(const uint8_t *data, size_t size)
     FZ_CHECK(T, s != NULL, NULL);
     mat = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
     FZ_CHECK(T, mat >= 0, NULL);
-    md.positions = m.positions;
-    md.vertex_count = m.vertex_count;
-    md.indices = m.indices;
-    md.triangle_count = m.triangle_count;
-    md.normals = m.normals;
-    md.material = mat;
+    md = pt_obj_mesh_desc(&m, mat);
     rc = pt_scene_add_mesh(s, &md);
     if (rc >= 0) rc = pt_scene_commit(s);
     if (rc < 0) {
