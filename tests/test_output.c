@@ -325,6 +325,182 @@ static void film_accumulates_render(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+/* ---- display transform (pt_image_apply_display) ---- */
+
+/* The operators in double precision, written from their sources (Reinhard et al. 2002 eq. 3;
+   Narkowicz 2016), with the clamp to [0, 1] and 0 for negative values and NaN. */
+static double display_ref(double x, pt_tonemap op)
+{
+    double v;
+    if (!(x > 0)) return 0;
+    if (isinf(x)) return 1;
+    v = op == PT_TONEMAP_REINHARD ? x / (1 + x)
+        : op == PT_TONEMAP_ACES   ? (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)
+                                  : x;
+    return v < 1 ? v : 1;
+}
+
+/* One pixel per value, run through d; returns the number of channels more than 1 float ulp
+   from display_ref(x * 2^exposure), noting the first. */
+static int display_mismatches(test_ctx *t, const float *vals, int n, const pt_display_desc *d, const char *what)
+{
+    pt_image src, dst;
+    int i, bad = 0, rc;
+    memset(&src, 0, sizeof src);
+    memset(&dst, 0, sizeof dst);
+    if (!CHECK(t, pt_image_init(&src, n, 1) == PT_OK, "pt_image_init")) return 1;
+    for (i = 0; i < 3 * n; i++) src.rgb[i] = vals[i / 3];
+    rc = pt_image_apply_display(&src, d, &dst);
+    if (CHECK(t, rc == PT_OK && dst.rgb && dst.width == n && dst.height == 1, "%s: pt_image_apply_display: %d", what, rc))
+        for (i = 0; i < 3 * n; i++) {
+            double want = display_ref((double)src.rgb[i] * pow(2.0, d->exposure), d->tonemap);
+            if (!(fabs(dst.rgb[i] - want) <= 1.2e-7 * fmax(want, 1e-30))) {
+                if (bad++ == 0) test_note(t, "%s: %g -> %.9g, want %.9g", what, src.rgb[i], dst.rgb[i], want);
+            }
+        }
+    else
+        bad++;
+    pt_image_free(&src);
+    pt_image_free(&dst);
+    return bad;
+}
+
+static void display_operators(test_ctx *t)
+{
+    /* Each operator against its formula over a range of values (to float rounding), and values
+       known exactly: clamp keeps [0, 1] unchanged; Reinhard 1 -> 1/2, 3 -> 3/4; ACES 0 -> 0,
+       1 -> 2.54 / 3.16, and 1 from x = 7.24 on (the root of 0.08 x^2 - 0.56 x - 0.14). */
+    static const float vals[] = { -2.0f, 0.0f, 1e-6f, 0.01f, 0.18f, 0.5f, 1.0f, 3.0f, 7.0f, 7.5f, 100.0f, 1e30f };
+    static const pt_tonemap ops[3] = { PT_TONEMAP_CLAMP, PT_TONEMAP_REINHARD, PT_TONEMAP_ACES };
+    static const char *const names[3] = { "clamp", "reinhard", "aces" };
+    const int n = (int)(sizeof vals / sizeof vals[0]);
+    pt_display_desc d;
+    pt_image img;
+    int k, i;
+    for (k = 0; k < 3; k++) {
+        d.exposure = 0.0f;
+        d.tonemap = ops[k];
+        CHECK(t, display_mismatches(t, vals, n, &d, names[k]) == 0, "%s differs from its formula", names[k]);
+    }
+    memset(&img, 0, sizeof img);
+    if (!CHECK(t, pt_image_init(&img, 4, 1) == PT_OK, "pt_image_init")) return;
+    for (i = 0; i < 12; i++) img.rgb[i] = (float)i / 11.0f;
+    d.exposure = 0.0f;
+    d.tonemap = PT_TONEMAP_CLAMP;
+    {
+        pt_image out;
+        memset(&out, 0, sizeof out);
+        if (CHECK(t, pt_image_apply_display(&img, &d, &out) == PT_OK, "clamp")) {
+            CHECK(t, memcmp(out.rgb, img.rgb, 12 * sizeof(float)) == 0, "clamp changed values inside [0, 1]");
+            CHECK(t, pt_image_apply_display(&img, NULL, &out) == PT_OK && memcmp(out.rgb, img.rgb, 12 * sizeof(float)) == 0,
+                  "d = NULL is not exposure 0, clamp");
+        }
+        pt_image_free(&out);
+    }
+    img.rgb[0] = 1.0f; img.rgb[1] = 3.0f; img.rgb[2] = -1.0f;
+    img.rgb[3] = 0.0f; img.rgb[4] = 1.0f; img.rgb[5] = 8.0f;
+    img.rgb[6] = (float)NAN; img.rgb[7] = (float)INFINITY; img.rgb[8] = 1e-3f;
+    d.tonemap = PT_TONEMAP_REINHARD;
+    if (CHECK(t, pt_image_apply_display(&img, &d, &img) == PT_OK, "reinhard in place"))
+        CHECK(t, img.rgb[0] == 0.5f && img.rgb[1] == 0.75f && img.rgb[2] == 0.0f && img.rgb[6] == 0.0f && img.rgb[7] == 1.0f,
+              "reinhard: 1 -> %g, 3 -> %g, -1 -> %g, NaN -> %g, inf -> %g (want 0.5 0.75 0 0 1)", img.rgb[0], img.rgb[1],
+              img.rgb[2], img.rgb[6], img.rgb[7]);
+    img.rgb[3] = 0.0f; img.rgb[4] = 1.0f; img.rgb[5] = 8.0f;
+    d.tonemap = PT_TONEMAP_ACES;
+    if (CHECK(t, pt_image_apply_display(&img, &d, &img) == PT_OK, "aces in place"))
+        CHECK(t, img.rgb[3] == 0.0f && img.rgb[4] == (float)(2.54 / 3.16) && img.rgb[5] == 1.0f,
+              "aces: 0 -> %g, 1 -> %.9g (want %.9g), 8 -> %g (want 1)", img.rgb[3], img.rgb[4], (float)(2.54 / 3.16),
+              img.rgb[5]);
+    pt_image_free(&img);
+}
+
+static void display_exposure(test_ctx *t)
+{
+    /* 2^EV multiplies before the operator: EV +1 doubles, EV -2 quarters (exact in float), so
+       Reinhard at EV +1 maps 0.5 to 1/2 and 1.5 to 3/4; a fractional EV follows 2^EV too. A dst of
+       another size is reallocated to src's. */
+    static const float vals[] = { 0.0f, 0.05f, 0.25f, 0.5f, 1.0f, 1.5f, 4.0f, 300.0f };
+    static const float evs[] = { 1.0f, -2.0f, 0.5f, -7.25f, 3.0f };
+    const int n = (int)(sizeof vals / sizeof vals[0]);
+    pt_display_desc d;
+    pt_image src, dst;
+    int k, op;
+    for (op = 0; op < 3; op++)
+        for (k = 0; k < (int)(sizeof evs / sizeof evs[0]); k++) {
+            char what[64];
+            d.exposure = evs[k];
+            d.tonemap = (pt_tonemap)op;
+            snprintf(what, sizeof what, "operator %d, EV %g", op, (double)evs[k]);
+            CHECK(t, display_mismatches(t, vals, n, &d, what) == 0, "%s differs from x * 2^EV then the operator", what);
+        }
+    memset(&src, 0, sizeof src);
+    memset(&dst, 0, sizeof dst);
+    if (!CHECK(t, pt_image_init(&src, 2, 1) == PT_OK && pt_image_init(&dst, 5, 7) == PT_OK, "pt_image_init")) {
+        pt_image_free(&src);
+        return;
+    }
+    src.rgb[0] = 0.25f; src.rgb[1] = 0.5f; src.rgb[2] = 0.75f;
+    src.rgb[3] = 0.5f; src.rgb[4] = 1.5f; src.rgb[5] = 0.125f;
+    d.exposure = 1.0f;
+    d.tonemap = PT_TONEMAP_CLAMP;
+    if (CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_OK && dst.width == 2 && dst.height == 1, "EV +1 clamp"))
+        CHECK(t, dst.rgb[0] == 0.5f && dst.rgb[1] == 1.0f && dst.rgb[2] == 1.0f && dst.rgb[5] == 0.25f,
+              "EV +1: 0.25 -> %g, 0.5 -> %g, 0.75 -> %g, 0.125 -> %g", dst.rgb[0], dst.rgb[1], dst.rgb[2], dst.rgb[5]);
+    d.exposure = -2.0f;
+    if (CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_OK, "EV -2 clamp"))
+        CHECK(t, dst.rgb[0] == 0.0625f && dst.rgb[4] == 0.375f, "EV -2: 0.25 -> %g, 1.5 -> %g", dst.rgb[0], dst.rgb[4]);
+    d.exposure = 1.0f;
+    d.tonemap = PT_TONEMAP_REINHARD;
+    if (CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_OK, "EV +1 reinhard"))
+        CHECK(t, dst.rgb[1] == 0.5f && dst.rgb[4] == 0.75f, "EV +1 reinhard: 0.5 -> %g, 1.5 -> %g", dst.rgb[1], dst.rgb[4]);
+    pt_image_free(&src);
+    pt_image_free(&dst);
+}
+
+static void display_bad_arguments(test_ctx *t)
+{
+    /* Non-finite exposure, an unknown tonemap, NULL or empty images: PT_ERROR_INVALID_ARGUMENT,
+       and dst keeps its size and values. */
+    pt_display_desc d;
+    pt_image src, dst, empty;
+    int k;
+    memset(&src, 0, sizeof src);
+    memset(&dst, 0, sizeof dst);
+    memset(&empty, 0, sizeof empty);
+    if (!CHECK(t, pt_image_init(&src, 2, 2) == PT_OK && pt_image_init(&dst, 2, 2) == PT_OK, "pt_image_init")) {
+        pt_image_free(&src);
+        return;
+    }
+    for (k = 0; k < 12; k++) {
+        src.rgb[k] = 0.5f;
+        dst.rgb[k] = 0.25f;
+    }
+    d.tonemap = PT_TONEMAP_CLAMP;
+    d.exposure = (float)NAN;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "NaN exposure accepted");
+    d.exposure = (float)INFINITY;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "+inf exposure accepted");
+    d.exposure = -(float)INFINITY;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "-inf exposure accepted");
+    d.exposure = 0.0f;
+    d.tonemap = (pt_tonemap)3;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "tonemap 3 accepted");
+    d.tonemap = (pt_tonemap)-1;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "tonemap -1 accepted");
+    d.tonemap = PT_TONEMAP_ACES;
+    CHECK(t, pt_image_apply_display(NULL, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "src NULL accepted");
+    CHECK(t, pt_image_apply_display(&src, &d, NULL) == PT_ERROR_INVALID_ARGUMENT, "dst NULL accepted");
+    CHECK(t, pt_image_apply_display(&empty, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "an empty src accepted");
+    empty.width = 2;
+    empty.height = 2;
+    CHECK(t, pt_image_apply_display(&empty, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "src with rgb NULL accepted");
+    for (k = 0; k < 12; k++)
+        if (dst.rgb[k] != 0.25f) break;
+    CHECK(t, k == 12 && dst.width == 2 && dst.height == 2, "a refused call changed dst (value %d)", k);
+    pt_image_free(&src);
+    pt_image_free(&dst);
+}
+
 const test_case test_output_cases[] = {
     TEST_CASE(pfm_layout),
     TEST_CASE(ppm_srgb),
@@ -332,5 +508,8 @@ const test_case test_output_cases[] = {
     TEST_CASE(write_errors),
     TEST_CASE(film_math),
     TEST_CASE(film_accumulates_render),
+    TEST_CASE(display_operators),
+    TEST_CASE(display_exposure),
+    TEST_CASE(display_bad_arguments),
     TEST_END
 };
