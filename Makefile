@@ -10,6 +10,9 @@
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
 #                         and input through OpenEXRCore; needs libopenexr-dev). Default 0.
+#   make PNG=0|1 ...      PNG output (pdftrace_png.h, libpng) in the test runners: auto
+#                         (default) when pkg-config finds libpng, 0 off, 1 on (an error without
+#                         libpng)
 #   make EMBREE=1 ...     build the examples and test runners with PDFTRACE_EMBREE (Embree 3
 #                         traversal, pdftrace.h section 5b; needs libembree-dev). Default 0.
 #                         Either or both: make OPENEXR=1 EMBREE=1 test (use a separate BUILD=
@@ -27,7 +30,8 @@
 #                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
 #                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
 #   make check-warnings   compile the examples (and so the implementation) with gcc and clang
-#                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++
+#                         at -std=c99 -Wall -Wextra -pedantic -Werror, with and without libpng,
+#                         and the headers as C++
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
 #                         write validation/out/index.html (needs povray, libopenexr-dev, libpng-dev)
 #   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
@@ -93,9 +97,27 @@ ifeq ($(EMBREE),1)
 PT_CPPFLAGS += $(EMBREE_FLAGS)
 PT_LDLIBS   := $(EMBREE_LIBS) $(PT_LDLIBS)
 endif
-# Rebuild the examples and runners when OPENEXR or EMBREE changes (the file is rewritten only then).
+# PNG output (pdftrace_png.h; -DPDFTRACE_PNG makes the programs include it) through libpng, for
+# the test runners: auto = when pkg-config finds libpng.
+PNG       ?= auto
+PNG_FOUND := $(shell pkg-config --exists libpng 2>/dev/null && echo 1)
+ifeq ($(PNG),auto)
+PNG_ON := $(if $(PNG_FOUND),1,0)
+else ifeq ($(PNG),1)
+PNG_ON := 1
+$(if $(PNG_FOUND),,$(error PNG=1: pkg-config finds no libpng (apt-get install libpng-dev pkg-config)))
+else ifeq ($(PNG),0)
+PNG_ON := 0
+else
+$(error PNG must be auto, 0 or 1, not '$(PNG)')
+endif
+PNG_FLAGS := $(if $(PNG_FOUND),-DPDFTRACE_PNG $(shell pkg-config --cflags libpng))
+PNG_LIBS  := $(if $(PNG_FOUND),$(shell pkg-config --libs libpng))
+PNG_CPPFLAGS := $(if $(filter 1,$(PNG_ON)),$(PNG_FLAGS))
+PNG_LDLIBS   := $(if $(filter 1,$(PNG_ON)),$(PNG_LIBS))
+# Rebuild the examples and runners when an option changes (the file is rewritten only then).
 OPT_STAMP := $(BUILD)/options
-OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE)
+OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON)
 
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
@@ -128,19 +150,20 @@ define need_tests
 	@test -n "$(TEST_SRCS)" || { echo "error: no tests/*.c found" >&2; exit 1; }
 endef
 
+# The runners test PNG output when PNG is on (output.png_round_trip; a SKIP note otherwise).
 $(BUILD)/test_runner: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
-	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
 $(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
-	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
 # Without threads: no -pthread at all, to show the library does not need it. Also without SIMD
 # (PDFTRACE_NO_SIMD), so that the scalar BVH code other architectures get is tested too.
 $(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
-	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
 # Always with OpenEXR, whatever OPENEXR says; `make exr-test` runs only its exr section.
 $(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) | $(BUILD)
@@ -309,6 +332,20 @@ check-warnings: | $(BUILD)
 	else \
 	    echo "SKIP the PDFTRACE_EMBREE variants: no $(EMBREE_HEADER) (apt-get install libembree-dev)"; \
 	fi; \
+	echo "the PDFTRACE_PNG variants (pdftrace_png.h):"; \
+	if [ -n "$(PNG_FOUND)" ]; then \
+	    for cc in $(WARN_CC); do \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_PNG tests/test_output.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) -c tests/test_output.c -o $(BUILD)/warn-$$cc-test-output-png.o; \
+	    done; \
+	    for cxx in $(WARN_CXX); do \
+	        echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_PNG examples/cpp_check.cpp (pdftrace_png.h as C++; then run it)"; \
+	        $$cxx $(WARN_CXXFLAGS) -I. $(PNG_FLAGS) $(PT_THREADS) examples/cpp_check.cpp -o $(BUILD)/cpp_check-png-$$cxx $(PNG_LIBS) -lm; \
+	        ./$(BUILD)/cpp_check-png-$$cxx; \
+	    done; \
+	else \
+	    echo "SKIP the PDFTRACE_PNG variants: pkg-config finds no libpng (apt-get install libpng-dev)"; \
+	fi; \
 	echo "the family headers' implementations in files of their own, linked with the core's:"; \
 	for cc in $(WARN_CC); do \
 	    printf '#define PDFTRACE_SCENE_IMPLEMENTATION\n#include "pdftrace_scene.h"\n' | \
@@ -319,7 +356,13 @@ check-warnings: | $(BUILD)
 	        printf '#define PDFTRACE_EXR_IMPLEMENTATION\n#include "pdftrace_exr.h"\n' | \
 	            $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) -x c -c - -o $(BUILD)/warn-$$cc-exr-alone.o; \
 	    fi; \
-	    echo "  $$cc: pdftrace_scene.h and pdftrace_exr.h alone: clean; linked with the core: no duplicate symbols"; \
+	    if [ -n "$(PNG_FOUND)" ]; then \
+	        printf '#define PDFTRACE_PNG_IMPLEMENTATION\n#include "pdftrace_png.h"\n' | \
+	            $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) -x c -c - -o $(BUILD)/warn-$$cc-png-alone.o; \
+	        $$cc $(PT_THREADS) -o $(BUILD)/warn-$$cc-family-png $(BUILD)/warn-$$cc-core-alone.o $(BUILD)/warn-$$cc-scene-alone.o \
+	            $(BUILD)/warn-$$cc-png-alone.o $(PNG_LIBS) -lm; \
+	    fi; \
+	    echo "  $$cc: pdftrace_scene.h, pdftrace_exr.h and pdftrace_png.h alone: clean; linked with the core: no duplicate symbols"; \
 	done; \
 	echo "the default build includes no Embree header:"; \
 	for cc in $(WARN_CC); do \

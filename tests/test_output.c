@@ -12,6 +12,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#ifdef PDFTRACE_PNG /* built with libpng (make PNG=auto|1): pdftrace_png.h is implemented here */
+#define PDFTRACE_PNG_IMPLEMENTATION
+#include "pdftrace_png.h"
+#include <png.h> /* png_round_trip reads the file back with libpng */
+#endif
+
 
 
 
@@ -325,7 +331,7 @@ static void film_accumulates_render(test_ctx *t)
     pt_scene_destroy(s);
 }
 
-/* ---- display transform (pt_image_apply_display) ---- */
+/* ---- display transform (pt_image_apply_display) and PNG output ---- */
 
 /* The operators in double precision, written from their sources (Reinhard et al. 2002 eq. 3;
    Narkowicz 2016), with the clamp to [0, 1] and 0 for negative values and NaN. */
@@ -501,6 +507,81 @@ static void display_bad_arguments(test_ctx *t)
     pt_image_free(&dst);
 }
 
+#ifdef PDFTRACE_PNG
+/* Reads an 8-bit RGB PNG with libpng's simplified API into a malloc'd buffer. */
+static unsigned char *read_png_rgb(const char *path, int *w, int *h)
+{
+    png_image im;
+    unsigned char *buf;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&im, path)) return NULL;
+    im.format = PNG_FORMAT_RGB;
+    buf = (unsigned char *)malloc(PNG_IMAGE_SIZE(im));
+    if (!buf || !png_image_finish_read(&im, NULL, buf, 0, NULL)) {
+        png_image_free(&im);
+        free(buf);
+        return NULL;
+    }
+    *w = (int)im.width;
+    *h = (int)im.height;
+    return buf;
+}
+
+static void png_round_trip(test_ctx *t)
+{
+    /* pt_write_png then libpng's reader: the size, and every byte equal to what pt_write_ppm
+       writes, (unsigned char)(255 pt_srgb_encode(x) + 0.5); the PNG signature and an sRGB chunk;
+       pt_write_png_rgb8 keeps bytes as given; no temporary file is left; a missing directory is
+       PT_ERROR_IO with the path in the message. */
+    static const float vals[] = { -1.0f, 0.0f, 0.001f, 0.0031308f, 0.01f, 0.05f, 0.18f, 0.2140411f, 0.5f, 0.9f, 0.999f, 1.0f, 1.5f, 100.0f, 0.73f };
+    static const unsigned char sig[8] = { 137, 80, 78, 71, 13, 10, 26, 10 };
+    const int w = 5, h = 3;
+    char dir[64], path[128], err[512], list[256];
+    pt_image img;
+    unsigned char *px, *file, raw[6] = { 0, 1, 127, 128, 254, 255 };
+    long n = 0;
+    int i, rw = 0, rh = 0, bad = 0, rc;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(path, sizeof path, "%s/a.png", dir);
+    memset(&img, 0, sizeof img);
+    if (!CHECK(t, pt_image_init(&img, w, h) == PT_OK, "pt_image_init")) { tu_remove_tree(dir); return; }
+    for (i = 0; i < 3 * w * h; i++) img.rgb[i] = vals[(i % 3 * 5 + i / 3) % 15];
+    rc = pt_write_png(path, &img, err, sizeof err);
+    CHECK(t, rc == PT_OK && err[0] == '\0', "pt_write_png: %d '%s'", rc, err);
+    px = read_png_rgb(path, &rw, &rh);
+    if (CHECK(t, px != NULL && rw == w && rh == h, "read back: %s, %d x %d", px ? "ok" : "failed", rw, rh)) {
+        for (i = 0; i < 3 * w * h; i++)
+            if (px[i] != (unsigned char)(pt_srgb_encode(img.rgb[i]) * 255.0f + 0.5f)) {
+                if (bad++ == 0) test_note(t, "value %g -> byte %d", img.rgb[i], px[i]);
+            }
+        CHECK(t, bad == 0, "%d bytes differ from 255 pt_srgb_encode(x) + 0.5", bad);
+    }
+    free(px);
+    file = tu_read_file(path, &n);
+    CHECK(t, file && n > 41 && memcmp(file, sig, 8) == 0 && memcmp(file + 12, "IHDR", 4) == 0 && memcmp(file + 37, "sRGB", 4) == 0,
+          "no PNG signature, IHDR and sRGB chunk at the start of the file");
+    free(file);
+    rc = pt_write_png_rgb8(path, 2, 1, raw, err, sizeof err);
+    px = read_png_rgb(path, &rw, &rh);
+    CHECK(t, rc == PT_OK && px && rw == 2 && rh == 1 && memcmp(px, raw, 6) == 0, "pt_write_png_rgb8 did not keep its bytes");
+    free(px);
+    CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1, "the writer left extra files: %s", list);
+    snprintf(path, sizeof path, "%s/missing/b.png", dir);
+    rc = pt_write_png(path, &img, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && strstr(err, path) && strstr(err, "No such file"), "missing directory: %d '%s'", rc, err);
+    CHECK(t, pt_write_png(path, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT && err[0], "NULL image accepted");
+    CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1, "failed writes left files: %s", list);
+    pt_image_free(&img);
+    tu_remove_tree(dir);
+}
+#else
+static void png_round_trip(test_ctx *t)
+{
+    test_note(t, "SKIP: built without libpng (pdftrace_png.h needs PNG=1 or libpng-dev with PNG=auto)");
+}
+#endif
+
 const test_case test_output_cases[] = {
     TEST_CASE(pfm_layout),
     TEST_CASE(ppm_srgb),
@@ -511,5 +592,6 @@ const test_case test_output_cases[] = {
     TEST_CASE(display_operators),
     TEST_CASE(display_exposure),
     TEST_CASE(display_bad_arguments),
+    TEST_CASE(png_round_trip),
     TEST_END
 };

@@ -35,6 +35,10 @@
 #define PDFTRACE_EXR_IMPLEMENTATION
 #include "pdftrace_exr.h"
 #endif
+#ifdef PTV_HAVE_PNG
+#define PDFTRACE_PNG_IMPLEMENTATION
+#include "pdftrace_png.h"
+#endif
 
 #include "ptv_common.h"
 
