@@ -1,6 +1,7 @@
 # pdftrace - examples, tests and checks.
 #
-#   make                  build the examples into build/
+#   make                  build build/pdftrace (tools/pdftrace.c, the command-line renderer) and
+#                         the examples into build/
 #   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm
 #   make run-all          also render the other examples into out/
 #   make test             build and run the test runner, then again without threads and
@@ -10,9 +11,11 @@
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
 #                         and input through OpenEXRCore; needs libopenexr-dev). Default 0.
-#   make PNG=0|1 ...      PNG output (pdftrace_png.h, libpng) in the test runners: auto
-#                         (default) when pkg-config finds libpng, 0 off, 1 on (an error without
-#                         libpng)
+#   make PNG=0|1 ...      PNG output (pdftrace_png.h, libpng) in build/pdftrace and the test
+#                         runners: auto (default) when pkg-config finds libpng, 0 off,
+#                         1 on (an error without libpng)
+#   make TOOL_EXR=0|1 ... OpenEXR output in build/pdftrace: auto (default) when pkg-config finds
+#                         OpenEXR, unless OPENEXR=0 is given on the command line; 0 off, 1 on
 #   make EMBREE=1 ...     build the examples and test runners with PDFTRACE_EMBREE (Embree 3
 #                         traversal, pdftrace.h section 5b; needs libembree-dev). Default 0.
 #                         Either or both: make OPENEXR=1 EMBREE=1 test (use a separate BUILD=
@@ -29,9 +32,9 @@
 #                         generated 1M-triangle terrain), build time, memory, the AUTO crossover:
 #                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
 #                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
-#   make check-warnings   compile the examples (and so the implementation) with gcc and clang
-#                         at -std=c99 -Wall -Wextra -pedantic -Werror, with and without libpng,
-#                         and the headers as C++
+#   make check-warnings   compile the examples and tools/pdftrace.c (and so the implementation)
+#                         with gcc and clang at -std=c99 -Wall -Wextra -pedantic -Werror, with
+#                         and without libpng and OpenEXR, and the headers as C++
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
 #                         write validation/out/index.html (needs povray, libopenexr-dev, libpng-dev)
 #   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
@@ -98,7 +101,7 @@ PT_CPPFLAGS += $(EMBREE_FLAGS)
 PT_LDLIBS   := $(EMBREE_LIBS) $(PT_LDLIBS)
 endif
 # PNG output (pdftrace_png.h; -DPDFTRACE_PNG makes the programs include it) through libpng, for
-# the test runners: auto = when pkg-config finds libpng.
+# build/pdftrace and the test runners: auto = when pkg-config finds libpng.
 PNG       ?= auto
 PNG_FOUND := $(shell pkg-config --exists libpng 2>/dev/null && echo 1)
 ifeq ($(PNG),auto)
@@ -115,9 +118,25 @@ PNG_FLAGS := $(if $(PNG_FOUND),-DPDFTRACE_PNG $(shell pkg-config --cflags libpng
 PNG_LIBS  := $(if $(PNG_FOUND),$(shell pkg-config --libs libpng))
 PNG_CPPFLAGS := $(if $(filter 1,$(PNG_ON)),$(PNG_FLAGS))
 PNG_LDLIBS   := $(if $(filter 1,$(PNG_ON)),$(PNG_LIBS))
+# build/pdftrace's OpenEXR output: auto = when pkg-config finds OpenEXR, unless OPENEXR=0 is
+# given on the command line (OPENEXR's own default, 0, is for the test runners and examples).
+TOOL_EXR  ?= $(if $(filter command line,$(origin OPENEXR)),$(OPENEXR),auto)
+EXR_FOUND := $(shell pkg-config --exists OpenEXR 2>/dev/null && echo 1)
+ifeq ($(TOOL_EXR),auto)
+TOOL_EXR_ON := $(if $(EXR_FOUND),1,0)
+else ifeq ($(TOOL_EXR),1)
+TOOL_EXR_ON := 1
+else ifeq ($(TOOL_EXR),0)
+TOOL_EXR_ON := 0
+else
+$(error TOOL_EXR must be auto, 0 or 1, not '$(TOOL_EXR)')
+endif
+# (with OPENEXR=1 the EXR flags are in PT_CPPFLAGS already)
+TOOL_CPPFLAGS := $(PNG_CPPFLAGS) $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_FLAGS)))
+TOOL_LDLIBS   := $(PNG_LDLIBS) $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_LIBS)))
 # Rebuild the examples and runners when an option changes (the file is rewritten only then).
 OPT_STAMP := $(BUILD)/options
-OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON)
+OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON) TOOL_EXR=$(TOOL_EXR_ON)
 
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
@@ -126,7 +145,7 @@ TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
 
 .PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress FORCE
 
-all: $(EXAMPLE_BINS)
+all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
 $(BUILD) $(OUT):
 	mkdir -p $@
@@ -136,6 +155,10 @@ $(OPT_STAMP): FORCE | $(BUILD)
 
 $(BUILD)/%: examples/%.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PT_LDLIBS)
+
+# The command-line renderer: PNG per PNG, OpenEXR per TOOL_EXR, Embree per EMBREE.
+$(BUILD)/pdftrace: tools/pdftrace.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) $(TOOL_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(TOOL_LDLIBS) $(PT_LDLIBS)
 
 run: $(BUILD)/cornell | $(OUT)
 	$(BUILD)/cornell --spp $(RUN_SPP) $(RUN_ARGS) -o $(OUT)/cornell.ppm -o $(OUT)/cornell.pfm
@@ -302,8 +325,8 @@ check-warnings: | $(BUILD)
 	done; \
 	if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
 	    for cc in $(WARN_CC); do \
-	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_OPENEXR examples/cornell.c tests/test_exr.c"; \
-	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c examples/cornell.c -o $(BUILD)/warn-$$cc-exr.o; \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_OPENEXR tools/pdftrace.c tests/test_exr.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-exr.o; \
 	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) -c tests/test_exr.c -o $(BUILD)/warn-$$cc-test-exr.o; \
 	        $$cc $(WARN_CFLAGS) -I. -Itests/fuzz $(EXR_FLAGS) $(PT_THREADS) -c tests/fuzz/harness.c -o $(BUILD)/warn-$$cc-fuzz-harness-exr.o; \
 	    done; \
@@ -332,10 +355,18 @@ check-warnings: | $(BUILD)
 	else \
 	    echo "SKIP the PDFTRACE_EMBREE variants: no $(EMBREE_HEADER) (apt-get install libembree-dev)"; \
 	fi; \
-	echo "the PDFTRACE_PNG variants (pdftrace_png.h):"; \
+	echo "tools/pdftrace.c without PNG and OpenEXR, and the PDFTRACE_PNG variants (pdftrace_png.h):"; \
+	for cc in $(WARN_CC); do \
+	    echo "$$cc $(WARN_CFLAGS) tools/pdftrace.c"; \
+	    $$cc $(WARN_CFLAGS) -I. $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool.o; \
+	done; \
 	if [ -n "$(PNG_FOUND)" ]; then \
 	    for cc in $(WARN_CC); do \
-	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_PNG tests/test_output.c"; \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_PNG tools/pdftrace.c (and with OpenEXR) tests/test_output.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-png.o; \
+	        if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
+	            $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(EXR_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-png-exr.o; \
+	        fi; \
 	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) -c tests/test_output.c -o $(BUILD)/warn-$$cc-test-output-png.o; \
 	    done; \
 	    for cxx in $(WARN_CXX); do \
@@ -366,11 +397,11 @@ check-warnings: | $(BUILD)
 	done; \
 	echo "the default build includes no Embree header:"; \
 	for cc in $(WARN_CC); do \
-	    if $$cc -M -I. $(PT_THREADS) examples/cornell.c tests/test_main.c | grep -i embree; then \
+	    if $$cc -M -I. $(PT_THREADS) examples/cornell.c tools/pdftrace.c tests/test_main.c | grep -i embree; then \
 	        echo "FAILED: $$cc's default build of pdftrace.h includes an Embree header" >&2; exit 1; \
 	    fi; \
 	done; \
-	echo "  no embree in the dependencies of examples/cornell.c and tests/test_main.c"; \
+	echo "  no embree in the dependencies of examples/cornell.c, tools/pdftrace.c and tests/test_main.c"; \
 	echo "check-warnings: all clean"
 
 clean:
