@@ -7,6 +7,7 @@
 #   make test             build and run the test runner, then again without threads and
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS (and -DPDFTRACE_NO_SIMD)
+#   make cli-test         only the pdftrace command's tests (tests/cli/pdftrace.sh; part of make test)
 #   make exr-test         build the test runner with OpenEXR (build/test_runner_exr) and run
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
@@ -143,7 +144,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
 
-.PHONY: all run run-all test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress FORCE
+.PHONY: all run run-all test cli-test nothreads-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress FORCE
 
 all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
@@ -249,14 +250,17 @@ bench-refs: $(BUILD)/bench
 	./$(BUILD)/bench refs
 
 # The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed".
-# First the scene-file runner (malformed inputs, scenes/ loading, --scene = built-in box, and
-# the fast POV-Ray comparisons when povray is installed).
+# First the scene-file runner (malformed inputs, scenes/ loading, scenes/cornell.scene through
+# build/pdftrace = build/cornell's built-in box, and the fast POV-Ray comparisons when povray is
+# installed), then the pdftrace command's tests (tests/cli/pdftrace.sh: outputs, errors, help,
+# --export-pov, --preview-every, overrides).
 # Then the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
 # ASan+UBSan) and the FP-trap renders of the scene suite.
-test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads $(BUILD)/test_runner_asan \
-      $(BUILD)/fuzz_replay $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
+test: $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads \
+      $(BUILD)/test_runner_asan $(BUILD)/fuzz_replay $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
 	mkdir -p $(BUILD)/ptv-work
-	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/cornell
+	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/pdftrace $(BUILD)/cornell
+	tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/ptv-work/cli
 	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus
 	./$(BUILD)/fptrap scenes/*.scene
@@ -279,6 +283,10 @@ stress: $(BUILD)/stress
 
 nothreads-test: $(BUILD)/test_runner_nothreads
 	./$(BUILD)/test_runner_nothreads
+
+# Only the pdftrace command's tests (part of make test).
+cli-test: $(BUILD)/pdftrace
+	tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/cli-work
 
 # ---- make bench-bvh (bench/bvh.c): always built with Embree, whatever EMBREE says.
 BENCH_BVH_ARGS ?=
