@@ -2,7 +2,8 @@
 #
 #   make                  build build/pdftrace (tools/pdftrace.c, the command-line renderer) and
 #                         the examples into build/
-#   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm
+#   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm,
+#                         and out/cornell.png when built with libpng
 #   make run-all          also render the other examples into out/
 #   make test             build and run the test runner, then again without threads and
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer
@@ -12,8 +13,8 @@
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
 #                         and input through OpenEXRCore; needs libopenexr-dev). Default 0.
-#   make PNG=0|1 ...      PNG output (pdftrace_png.h, libpng) in build/pdftrace and the test
-#                         runners: auto (default) when pkg-config finds libpng, 0 off,
+#   make PNG=0|1 ...      PNG output (pdftrace_png.h, libpng) in build/pdftrace, build/cornell and
+#                         the test runners: auto (default) when pkg-config finds libpng, 0 off,
 #                         1 on (an error without libpng)
 #   make TOOL_EXR=0|1 ... OpenEXR output in build/pdftrace: auto (default) when pkg-config finds
 #                         OpenEXR, unless OPENEXR=0 is given on the command line; 0 off, 1 on
@@ -102,7 +103,7 @@ PT_CPPFLAGS += $(EMBREE_FLAGS)
 PT_LDLIBS   := $(EMBREE_LIBS) $(PT_LDLIBS)
 endif
 # PNG output (pdftrace_png.h; -DPDFTRACE_PNG makes the programs include it) through libpng, for
-# build/pdftrace and the test runners: auto = when pkg-config finds libpng.
+# build/pdftrace, build/cornell and the test runners: auto = when pkg-config finds libpng.
 PNG       ?= auto
 PNG_FOUND := $(shell pkg-config --exists libpng 2>/dev/null && echo 1)
 ifeq ($(PNG),auto)
@@ -157,12 +158,20 @@ $(OPT_STAMP): FORCE | $(BUILD)
 $(BUILD)/%: examples/%.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PT_LDLIBS)
 
+# build/cornell writes PNG too when PNG is on.
+$(BUILD)/cornell: PT_CPPFLAGS += $(PNG_CPPFLAGS)
+$(BUILD)/cornell: PT_LDLIBS := $(PNG_LDLIBS) $(PT_LDLIBS)
+
 # The command-line renderer: PNG per PNG, OpenEXR per TOOL_EXR, Embree per EMBREE.
 $(BUILD)/pdftrace: tools/pdftrace.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(TOOL_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(TOOL_LDLIBS) $(PT_LDLIBS)
 
+RUN_PNG := $(if $(filter 1,$(PNG_ON)),-o $(OUT)/cornell.png)
 run: $(BUILD)/cornell | $(OUT)
-	$(BUILD)/cornell --spp $(RUN_SPP) $(RUN_ARGS) -o $(OUT)/cornell.ppm -o $(OUT)/cornell.pfm
+	$(BUILD)/cornell --spp $(RUN_SPP) $(RUN_ARGS) -o $(OUT)/cornell.ppm -o $(OUT)/cornell.pfm $(RUN_PNG)
+ifneq ($(PNG_ON),1)
+	@echo "$(if $(filter 0,$(PNG)),PNG=0: skipping $(OUT)/cornell.png,no libpng: skipping $(OUT)/cornell.png (apt-get install libpng-dev))"
+endif
 
 run-all: run $(EXAMPLE_BINS) | $(OUT)
 	$(BUILD)/minimal $(OUT)/minimal.ppm
@@ -370,11 +379,12 @@ check-warnings: | $(BUILD)
 	done; \
 	if [ -n "$(PNG_FOUND)" ]; then \
 	    for cc in $(WARN_CC); do \
-	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_PNG tools/pdftrace.c (and with OpenEXR) tests/test_output.c"; \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_PNG tools/pdftrace.c (and with OpenEXR) examples/cornell.c tests/test_output.c"; \
 	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-png.o; \
 	        if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
 	            $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(EXR_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-png-exr.o; \
 	        fi; \
+	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(PT_THREADS) -c examples/cornell.c -o $(BUILD)/warn-$$cc-cornell-png.o; \
 	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) -c tests/test_output.c -o $(BUILD)/warn-$$cc-test-output-png.o; \
 	    done; \
 	    for cxx in $(WARN_CXX); do \
