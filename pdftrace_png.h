@@ -14,8 +14,10 @@
    Both write to "<path>.ptmp" beside the target and rename it into place: a failed write
    leaves no file (and no temporary). They return PT_OK or a pt_result code
    (PT_ERROR_INVALID_ARGUMENT, PT_ERROR_OUT_OF_MEMORY, PT_ERROR_IO) and, when err is not NULL,
-   write a one-line message "path: what failed: reason" into err[0 .. err_size-1] (empty on
-   success). No global state: safe to call from several threads at once.
+   write a one-line message into err[0 .. err_size-1] (empty on success): "PATH: writing PNG:
+   cannot create 'PATH.ptmp': REASON", "... cannot rename 'PATH.ptmp' to 'PATH': REASON" (the
+   system's strerror) or libpng's own message. No global state: safe to call from several
+   threads at once.
 
    BUILDING
    ========
@@ -68,6 +70,7 @@ PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsig
 #define PDFTRACE_PNG_IMPLEMENTATION_DONE
 
 #include <errno.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -87,10 +90,19 @@ PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsig
 extern "C" {
 #endif
 
-/* Formats "path: what: detail" into err and returns code. */
-static int pt__png_fail(char *err, size_t err_size, int code, const char *path, const char *what, const char *detail)
+/* Formats "path: writing PNG: <fmt ...>" into err and returns code. */
+static int pt__png_fail(char *err, size_t err_size, int code, const char *path, const char *fmt, ...)
 {
-    if (err && err_size) snprintf(err, err_size, "%s: %s: %s", path ? path : "(null)", what, detail);
+    va_list ap;
+    int n;
+    if (!err || !err_size) return code;
+    n = snprintf(err, err_size, "%s: writing PNG: ", path ? path : "(null)");
+    if (n < 0) n = 0;
+    if ((size_t)n < err_size) {
+        va_start(ap, fmt);
+        vsnprintf(err + n, err_size - (size_t)n, fmt, ap);
+        va_end(ap);
+    }
     return code;
 }
 
@@ -135,24 +147,24 @@ PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsig
     int rc = PT_OK;
     if (err && err_size) err[0] = '\0';
     if (!path || !*path || !rgb || !pt__png_pixels(width, height, &n))
-        return pt__png_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "writing PNG", "no path or an empty image");
+        return pt__png_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "no path or an empty image");
     len = strlen(path);
     tmp = (char *)PT_MALLOC(len + 6u);
-    if (!tmp) return pt__png_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "writing PNG", "out of memory");
+    if (!tmp) return pt__png_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "out of memory");
     memcpy(tmp, path, len);
     memcpy(tmp + len, ".ptmp", 6u);
     f = fopen(tmp, "wb");
     if (!f) {
-        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "creating the temporary file", strerror(errno));
+        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "cannot create '%s': %s", tmp, strerror(errno));
     } else if (!pt__png_write_file(f, width, height, rgb, &im, &detail)) {
         remove(tmp);
-        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "writing PNG", detail);
+        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "%s", detail);
     } else {
 #ifdef _WIN32
         remove(path);
 #endif
         if (rename(tmp, path) != 0) {
-            rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "renaming the temporary file into place",
+            rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "cannot rename '%s' to '%s': %s", tmp, path,
                               strerror(errno));
             remove(tmp);
         }
@@ -168,9 +180,9 @@ PTDEF int pt_write_png(const char *path, const pt_image *img, char *err, size_t 
     int rc;
     if (err && err_size) err[0] = '\0';
     if (!path || !*path || !img || !img->rgb || !pt__png_pixels(img->width, img->height, &n))
-        return pt__png_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "writing PNG", "no path or an empty image");
+        return pt__png_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "no path or an empty image");
     rgb = (unsigned char *)PT_MALLOC(3u * n);
-    if (!rgb) return pt__png_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "writing PNG", "out of memory");
+    if (!rgb) return pt__png_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "out of memory");
     for (i = 0; i < 3u * n; ++i) rgb[i] = (unsigned char)(pt_srgb_encode(img->rgb[i]) * 255.0f + 0.5f); /* as pt_write_ppm */
     rc = pt_write_png_rgb8(path, img->width, img->height, rgb, err, err_size);
     PT_FREE(rgb);

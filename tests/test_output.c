@@ -6,6 +6,7 @@
 #include "test_util.h"
 
 #include <dirent.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -532,8 +533,8 @@ static void png_round_trip(test_ctx *t)
 {
     /* pt_write_png then libpng's reader: the size, and every byte equal to what pt_write_ppm
        writes, (unsigned char)(255 pt_srgb_encode(x) + 0.5); the PNG signature and an sRGB chunk;
-       pt_write_png_rgb8 keeps bytes as given; no temporary file is left; a missing directory is
-       PT_ERROR_IO with the path in the message. */
+       pt_write_png_rgb8 keeps bytes as given; no temporary file is left; a missing directory and a
+       directory as the target are PT_ERROR_IO with the path, the step and strerror in the message. */
     static const float vals[] = { -1.0f, 0.0f, 0.001f, 0.0031308f, 0.01f, 0.05f, 0.18f, 0.2140411f, 0.5f, 0.9f, 0.999f, 1.0f, 1.5f, 100.0f, 0.73f };
     static const unsigned char sig[8] = { 137, 80, 78, 71, 13, 10, 26, 10 };
     const int w = 5, h = 3;
@@ -569,7 +570,20 @@ static void png_round_trip(test_ctx *t)
     CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1, "the writer left extra files: %s", list);
     snprintf(path, sizeof path, "%s/missing/b.png", dir);
     rc = pt_write_png(path, &img, err, sizeof err);
-    CHECK(t, rc == PT_ERROR_IO && strstr(err, path) && strstr(err, "No such file"), "missing directory: %d '%s'", rc, err);
+    {
+        char want[512];
+        snprintf(want, sizeof want, "%s: writing PNG: cannot create '%s.ptmp': %s", path, path, strerror(ENOENT));
+        CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "missing directory: %d '%s', want '%s'", rc, err, want);
+    }
+    snprintf(path, sizeof path, "%s/target.png", dir);
+    mkdir(path, 0700);
+    rc = pt_write_png(path, &img, err, sizeof err);
+    {
+        char want[512];
+        snprintf(want, sizeof want, "%s: writing PNG: cannot rename '%s.ptmp' to '%s': %s", path, path, path, strerror(EISDIR));
+        CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "a directory as the target: %d '%s', want '%s'", rc, err, want);
+    }
+    rmdir(path);
     CHECK(t, pt_write_png(path, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT && err[0], "NULL image accepted");
     CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1, "failed writes left files: %s", list);
     pt_image_free(&img);
