@@ -625,7 +625,7 @@ typedef struct progress_state {
     pt_image preview;            /* the film resolved for --preview-every */
     int tty;                     /* stderr is a terminal: one bar, redrawn */
     int shown;                   /* something is on the bar's line */
-    int last_tenth;              /* plain lines: the last 10 % step printed */
+    int last_tenth;              /* plain lines: the 10 % step of the last line printed */
     double last_line, last_preview; /* render seconds */
     int preview_failed;
 } progress_state;
@@ -667,8 +667,10 @@ static int on_pass(void *user, const pt_progress *p)
 {
     progress_state *ps = (progress_state *)user;
     if (!ps->o->quiet) {
+        /* plain lines: at a new 10 % step at most once a second, else every 10 s */
         int tenth = p->samples_total ? (int)(10 * p->samples_done / p->samples_total) : 10;
-        if (ps->tty || tenth > ps->last_tenth || p->seconds - ps->last_line >= 5.0) {
+        double since = p->seconds - ps->last_line;
+        if (ps->tty || (tenth > ps->last_tenth && since >= 1.0) || since >= 10.0) {
             if (p->pass < p->pass_count) show_progress(ps, p->samples_done, p->samples_total, p->seconds, 0);
             ps->last_tenth = tenth;
             ps->last_line = p->seconds;
