@@ -1,7 +1,9 @@
 # pdftrace - examples, tests and checks.
 #
-#   make                  build the examples into build/
-#   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm
+#   make                  build build/pdftrace (tools/pdftrace.c, the command-line renderer) and
+#                         the examples into build/
+#   make run              render the default Cornell box to out/cornell.ppm and out/cornell.pfm,
+#                         and out/cornell.png when built with libpng
 #   make run-all          also render the other examples into out/
 #   make test             build and run the test runner, then again without threads and
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer; every runner ends
@@ -9,10 +11,16 @@
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS (and -DPDFTRACE_NO_SIMD)
 #   make tsan-test        the tests that render one scene from several threads at once, built with
 #                         ThreadSanitizer (build/test_runner_tsan; not part of make test)
+#   make cli-test         only the pdftrace command's tests (tests/cli/pdftrace.sh; part of make test)
 #   make exr-test         build the test runner with OpenEXR (build/test_runner_exr) and run
 #                         its exr section (needs libopenexr-dev)
 #   make OPENEXR=1 ...    build the examples and test runners with PDFTRACE_OPENEXR (EXR output
 #                         and input through OpenEXRCore; needs libopenexr-dev). Default 0.
+#   make PNG=0|1 ...      PNG output (pdftrace_png.h, libpng) in build/pdftrace, build/cornell and
+#                         the test runners: auto (default) when pkg-config finds libpng, 0 off,
+#                         1 on (an error without libpng)
+#   make TOOL_EXR=0|1 ... OpenEXR output in build/pdftrace: auto (default) when pkg-config finds
+#                         OpenEXR, unless OPENEXR=0 is given on the command line; 0 off, 1 on
 #   make EMBREE=1 ...     build the examples and test runners with PDFTRACE_EMBREE (Embree 3
 #                         traversal, pdftrace.h section 5b; needs libembree-dev). Default 0.
 #                         Either or both: make OPENEXR=1 EMBREE=1 test (use a separate BUILD=
@@ -29,9 +37,10 @@
 #                         generated 1M-triangle terrain), build time, memory, the AUTO crossover:
 #                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
 #                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
-#   make check-warnings   compile the examples (and so the implementation) with gcc and clang
-#                         at -std=c99 -Wall -Wextra -pedantic -Werror, and the header as C++;
-#                         first tests/lint_headers.sh: no comment over 25 lines in a header's
+#   make check-warnings   compile the examples and tools/pdftrace.c (and so the implementation)
+#                         with gcc and clang at -std=c99 -Wall -Wextra -pedantic -Werror, with
+#                         and without libpng and OpenEXR, and the headers as C++; first
+#                         tests/lint_headers.sh: no comment over 25 lines in a header's
 #                         implementation, no function over 150 lines
 #   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
 #                         write validation/out/index.html (needs povray, libopenexr-dev, libpng-dev)
@@ -107,18 +116,52 @@ ifeq ($(EMBREE),1)
 PT_CPPFLAGS += $(EMBREE_FLAGS)
 PT_LDLIBS   := $(EMBREE_LIBS) $(PT_LDLIBS)
 endif
-# Rebuild the examples and runners when OPENEXR or EMBREE changes (the file is rewritten only then).
+# PNG output (pdftrace_png.h; -DPDFTRACE_PNG makes the programs include it) through libpng, for
+# build/pdftrace, build/cornell and the test runners: auto = when pkg-config finds libpng.
+PNG       ?= auto
+PNG_FOUND := $(shell pkg-config --exists libpng 2>/dev/null && echo 1)
+ifeq ($(PNG),auto)
+PNG_ON := $(if $(PNG_FOUND),1,0)
+else ifeq ($(PNG),1)
+PNG_ON := 1
+$(if $(PNG_FOUND),,$(error PNG=1: pkg-config finds no libpng (apt-get install libpng-dev pkg-config)))
+else ifeq ($(PNG),0)
+PNG_ON := 0
+else
+$(error PNG must be auto, 0 or 1, not '$(PNG)')
+endif
+PNG_FLAGS := $(if $(PNG_FOUND),-DPDFTRACE_PNG $(shell pkg-config --cflags libpng))
+PNG_LIBS  := $(if $(PNG_FOUND),$(shell pkg-config --libs libpng))
+PNG_CPPFLAGS := $(if $(filter 1,$(PNG_ON)),$(PNG_FLAGS))
+PNG_LDLIBS   := $(if $(filter 1,$(PNG_ON)),$(PNG_LIBS))
+# build/pdftrace's OpenEXR output: auto = when pkg-config finds OpenEXR, unless OPENEXR=0 is
+# given on the command line (OPENEXR's own default, 0, is for the test runners and examples).
+TOOL_EXR  ?= $(if $(filter command line,$(origin OPENEXR)),$(OPENEXR),auto)
+EXR_FOUND := $(shell pkg-config --exists OpenEXR 2>/dev/null && echo 1)
+ifeq ($(TOOL_EXR),auto)
+TOOL_EXR_ON := $(if $(EXR_FOUND),1,0)
+else ifeq ($(TOOL_EXR),1)
+TOOL_EXR_ON := 1
+else ifeq ($(TOOL_EXR),0)
+TOOL_EXR_ON := 0
+else
+$(error TOOL_EXR must be auto, 0 or 1, not '$(TOOL_EXR)')
+endif
+# (with OPENEXR=1 the EXR flags are in PT_CPPFLAGS already)
+TOOL_CPPFLAGS := $(PNG_CPPFLAGS) $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_FLAGS)))
+TOOL_LDLIBS   := $(PNG_LDLIBS) $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_LIBS)))
+# Rebuild the examples and runners when an option changes (the file is rewritten only then).
 OPT_STAMP := $(BUILD)/options
-OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE)
+OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON) TOOL_EXR=$(TOOL_EXR_ON)
 
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
 
-.PHONY: all run run-all test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress install uninstall install-check FORCE
+.PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress install uninstall install-check FORCE
 
-all: $(EXAMPLE_BINS)
+all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
 $(BUILD) $(OUT):
 	mkdir -p $@
@@ -129,8 +172,20 @@ $(OPT_STAMP): FORCE | $(BUILD)
 $(BUILD)/%: examples/%.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PT_LDLIBS)
 
+# build/cornell writes PNG too when PNG is on.
+$(BUILD)/cornell: PT_CPPFLAGS += $(PNG_CPPFLAGS)
+$(BUILD)/cornell: PT_LDLIBS := $(PNG_LDLIBS) $(PT_LDLIBS)
+
+# The command-line renderer: PNG per PNG, OpenEXR per TOOL_EXR, Embree per EMBREE.
+$(BUILD)/pdftrace: tools/pdftrace.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) $(TOOL_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(TOOL_LDLIBS) $(PT_LDLIBS)
+
+RUN_PNG := $(if $(filter 1,$(PNG_ON)),-o $(OUT)/cornell.png)
 run: $(BUILD)/cornell | $(OUT)
-	$(BUILD)/cornell --spp $(RUN_SPP) $(RUN_ARGS) -o $(OUT)/cornell.ppm -o $(OUT)/cornell.pfm
+	$(BUILD)/cornell --spp $(RUN_SPP) $(RUN_ARGS) -o $(OUT)/cornell.ppm -o $(OUT)/cornell.pfm $(RUN_PNG)
+ifneq ($(PNG_ON),1)
+	@echo "$(if $(filter 0,$(PNG)),PNG=0: skipping $(OUT)/cornell.png,no libpng: skipping $(OUT)/cornell.png (apt-get install libpng-dev))"
+endif
 
 run-all: run $(EXAMPLE_BINS) | $(OUT)
 	$(BUILD)/minimal $(OUT)/minimal.ppm
@@ -142,19 +197,20 @@ define need_tests
 	@test -n "$(TEST_SRCS)" || { echo "error: no tests/*.c found" >&2; exit 1; }
 endef
 
+# The runners test PNG output when PNG is on (output.png_round_trip; a SKIP note otherwise).
 $(BUILD)/test_runner: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
-	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
 $(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
-	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
 # Without threads: no -pthread at all, to show the library does not need it. Also without SIMD
 # (PDFTRACE_NO_SIMD), so that the scalar BVH code other architectures get is tested too.
 $(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
-	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
 # Always with OpenEXR, whatever OPENEXR says; `make exr-test` runs only its exr section.
 $(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) | $(BUILD)
@@ -217,14 +273,17 @@ bench-refs: $(BUILD)/bench
 	./$(BUILD)/bench refs
 
 # The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed, K skipped".
-# First the scene-file runner (malformed inputs, scenes/ loading, --scene = built-in box, and
-# the fast POV-Ray comparisons when povray is installed).
+# First the scene-file runner (malformed inputs, scenes/ loading, scenes/cornell.scene through
+# build/pdftrace = build/cornell's built-in box, and the fast POV-Ray comparisons when povray is
+# installed), then the pdftrace command's tests (tests/cli/pdftrace.sh: outputs, errors, help,
+# --export-pov, --preview-every, overrides).
 # Then the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
 # ASan+UBSan) and the FP-trap renders of the scene suite.
-test: $(BUILD)/ptv $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads $(BUILD)/test_runner_asan \
-      $(BUILD)/fuzz_replay $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
+test: $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads \
+      $(BUILD)/test_runner_asan $(BUILD)/fuzz_replay $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
 	mkdir -p $(BUILD)/ptv-work
-	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/cornell
+	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/pdftrace $(BUILD)/cornell
+	tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/ptv-work/cli
 	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus
 	./$(BUILD)/fptrap scenes/*.scene
@@ -248,13 +307,17 @@ stress: $(BUILD)/stress
 nothreads-test: $(BUILD)/test_runner_nothreads
 	./$(BUILD)/test_runner_nothreads
 
-$(BUILD)/test_runner_tsan: $(TEST_SRCS) $(TEST_HDRS) pdftrace.h $(OPT_STAMP) | $(BUILD)
+$(BUILD)/test_runner_tsan: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(TSANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
 
 # A reported race fails the run (exit code 66).
 tsan-test: $(BUILD)/test_runner_tsan
 	TSAN_OPTIONS=halt_on_error=1 ./$(BUILD)/test_runner_tsan $(TSAN_TESTS)
+
+# Only the pdftrace command's tests (part of make test).
+cli-test: $(BUILD)/pdftrace
+	tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/cli-work
 
 # ---- make bench-bvh (bench/bvh.c): always built with Embree, whatever EMBREE says.
 BENCH_BVH_ARGS ?=
@@ -303,8 +366,8 @@ check-warnings: | $(BUILD)
 	done; \
 	if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
 	    for cc in $(WARN_CC); do \
-	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_OPENEXR examples/cornell.c tests/test_exr.c"; \
-	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c examples/cornell.c -o $(BUILD)/warn-$$cc-exr.o; \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_OPENEXR tools/pdftrace.c tests/test_exr.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-exr.o; \
 	        $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) -c tests/test_exr.c -o $(BUILD)/warn-$$cc-test-exr.o; \
 	        $$cc $(WARN_CFLAGS) -I. -Itests/fuzz $(EXR_FLAGS) $(PT_THREADS) -c tests/fuzz/harness.c -o $(BUILD)/warn-$$cc-fuzz-harness-exr.o; \
 	    done; \
@@ -333,6 +396,29 @@ check-warnings: | $(BUILD)
 	else \
 	    echo "SKIP the PDFTRACE_EMBREE variants: no $(EMBREE_HEADER) (apt-get install libembree-dev)"; \
 	fi; \
+	echo "tools/pdftrace.c without PNG and OpenEXR, and the PDFTRACE_PNG variants (pdftrace_png.h):"; \
+	for cc in $(WARN_CC); do \
+	    echo "$$cc $(WARN_CFLAGS) tools/pdftrace.c"; \
+	    $$cc $(WARN_CFLAGS) -I. $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool.o; \
+	done; \
+	if [ -n "$(PNG_FOUND)" ]; then \
+	    for cc in $(WARN_CC); do \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_PNG tools/pdftrace.c (and with OpenEXR) examples/cornell.c tests/test_output.c"; \
+	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-png.o; \
+	        if [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ]; then \
+	            $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(EXR_FLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-png-exr.o; \
+	        fi; \
+	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) $(PT_THREADS) -c examples/cornell.c -o $(BUILD)/warn-$$cc-cornell-png.o; \
+	        $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) -c tests/test_output.c -o $(BUILD)/warn-$$cc-test-output-png.o; \
+	    done; \
+	    for cxx in $(WARN_CXX); do \
+	        echo "$$cxx $(WARN_CXXFLAGS) -DPDFTRACE_PNG examples/cpp_check.cpp (pdftrace_png.h as C++; then run it)"; \
+	        $$cxx $(WARN_CXXFLAGS) -I. $(PNG_FLAGS) $(PT_THREADS) examples/cpp_check.cpp -o $(BUILD)/cpp_check-png-$$cxx $(PNG_LIBS) -lm; \
+	        ./$(BUILD)/cpp_check-png-$$cxx; \
+	    done; \
+	else \
+	    echo "SKIP the PDFTRACE_PNG variants: pkg-config finds no libpng (apt-get install libpng-dev)"; \
+	fi; \
 	echo "the family headers' implementations in files of their own, linked with the core's:"; \
 	for cc in $(WARN_CC); do \
 	    printf '#define PDFTRACE_SCENE_IMPLEMENTATION\n#include "pdftrace_scene.h"\n' | \
@@ -343,15 +429,21 @@ check-warnings: | $(BUILD)
 	        printf '#define PDFTRACE_EXR_IMPLEMENTATION\n#include "pdftrace_exr.h"\n' | \
 	            $$cc $(WARN_CFLAGS) -I. $(EXR_FLAGS) -x c -c - -o $(BUILD)/warn-$$cc-exr-alone.o; \
 	    fi; \
-	    echo "  $$cc: pdftrace_scene.h and pdftrace_exr.h alone: clean; linked with the core: no duplicate symbols"; \
+	    if [ -n "$(PNG_FOUND)" ]; then \
+	        printf '#define PDFTRACE_PNG_IMPLEMENTATION\n#include "pdftrace_png.h"\n' | \
+	            $$cc $(WARN_CFLAGS) -I. $(PNG_FLAGS) -x c -c - -o $(BUILD)/warn-$$cc-png-alone.o; \
+	        $$cc $(PT_THREADS) -o $(BUILD)/warn-$$cc-family-png $(BUILD)/warn-$$cc-core-alone.o $(BUILD)/warn-$$cc-scene-alone.o \
+	            $(BUILD)/warn-$$cc-png-alone.o $(PNG_LIBS) -lm; \
+	    fi; \
+	    echo "  $$cc: pdftrace_scene.h, pdftrace_exr.h and pdftrace_png.h alone: clean; linked with the core: no duplicate symbols"; \
 	done; \
 	echo "the default build includes no Embree header:"; \
 	for cc in $(WARN_CC); do \
-	    if $$cc -M -I. $(PT_THREADS) examples/cornell.c tests/test_main.c | grep -i embree; then \
+	    if $$cc -M -I. $(PT_THREADS) examples/cornell.c tools/pdftrace.c tests/test_main.c | grep -i embree; then \
 	        echo "FAILED: $$cc's default build of pdftrace.h includes an Embree header" >&2; exit 1; \
 	    fi; \
 	done; \
-	echo "  no embree in the dependencies of examples/cornell.c and tests/test_main.c"; \
+	echo "  no embree in the dependencies of examples/cornell.c, tools/pdftrace.c and tests/test_main.c"; \
 	echo "check-warnings: all clean"
 
 # ---- make install: the headers, the pdftrace command and a pkg-config file. The library is

@@ -927,6 +927,28 @@ PTDEF int pt_write_pfm_ex(const char *path, const pt_image *image, char *err, si
 PTDEF int pt_write_ppm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
 PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, clamped */
 
+/* Display transform for the 8-bit outputs: each channel is multiplied by 2^exposure and mapped
+   to display-linear [0, 1], which pt_write_ppm (and pdftrace_png.h's pt_write_png) then
+   sRGB-encode. The operators, on each channel x >= 0 (negative values and NaN become 0):
+     CLAMP     min(x, 1).
+     REINHARD  x / (1 + x): the global operator, eq. 3 of Reinhard, Stark, Shirley, Ferwerda,
+               "Photographic Tone Reproduction for Digital Images", SIGGRAPH 2002. The paper
+               applies it to luminance; here it maps each channel, so that every channel stays
+               below 1 without a second clip (very bright saturated colours go toward white).
+     ACES      x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), clamped to 1: K. Narkowicz's fit of
+               the ACES RRT + ODT, "ACES Filmic Tone Mapping Curve" (2016),
+               https://knarkowicz.wordpress.com/2016/01/06/aces-filmic-tone-mapping-curve/ (per
+               channel, as there; its input is pre-exposed: 1 maps to 0.80). */
+typedef enum pt_tonemap { PT_TONEMAP_CLAMP = 0, PT_TONEMAP_REINHARD, PT_TONEMAP_ACES } pt_tonemap;
+typedef struct pt_display_desc {
+    float exposure;              /* EV: multiply by 2^exposure; 0: none. Must be finite */
+    pt_tonemap tonemap;          /* 0: PT_TONEMAP_CLAMP */
+} pt_display_desc;
+/* Writes the display transform of src into *dst, which is allocated or reallocated to src's
+   size as by pt_film_resolve; dst may be src (in place). d may be NULL (exposure 0, clamp).
+   A non-finite exposure or an unknown tonemap: PT_ERROR_INVALID_ARGUMENT, dst unchanged. */
+PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, pt_image *dst);
+
 #ifdef __cplusplus
 }
 #endif
@@ -6403,6 +6425,37 @@ PTDEF int pt_write_ppm_ex(const char *path, const pt_image *img, char *err, size
 }
 PTDEF int pt_write_pfm(const char *path, const pt_image *img) { return pt_write_pfm_ex(path, img, NULL, 0); }
 PTDEF int pt_write_ppm(const char *path, const pt_image *img) { return pt_write_ppm_ex(path, img, NULL, 0); }
+
+/* Display transform (formulas and sources at the declaration of pt_image_apply_display). */
+static float pt__display_channel(double v, pt_tonemap op)
+{
+    if (!(v > 0.0)) return 0.0f; /* negative values and NaN */
+    if (v > 1e100) return 1.0f;  /* every operator gives 1 in float here (and ACES's products would overflow) */
+    if (op == PT_TONEMAP_REINHARD) v = v / (1.0 + v);
+    else if (op == PT_TONEMAP_ACES) v = v * (2.51 * v + 0.03) / (v * (2.43 * v + 0.59) + 0.14);
+    return v < 1.0 ? (float)v : 1.0f;
+}
+PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, pt_image *dst)
+{
+    pt_display_desc dd;
+    size_t n, i;
+    double scale;
+    dd.exposure = 0.0f;
+    dd.tonemap = PT_TONEMAP_CLAMP;
+    if (d) dd = *d;
+    if (!src || !dst || !src->rgb || !pt__pixels(src->width, src->height, &n)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!pt__isfinite(dd.exposure) ||
+        (dd.tonemap != PT_TONEMAP_CLAMP && dd.tonemap != PT_TONEMAP_REINHARD && dd.tonemap != PT_TONEMAP_ACES))
+        return PT_ERROR_INVALID_ARGUMENT;
+    if (dst != src && (!dst->rgb || dst->width != src->width || dst->height != src->height)) {
+        int rc;
+        pt_image_free(dst);
+        if ((rc = pt_image_init(dst, src->width, src->height)) != PT_OK) return rc;
+    }
+    scale = pow(2.0, (double)dd.exposure); /* exact for whole EVs; 0: 1, so CLAMP alone is min(max(x, 0), 1) */
+    for (i = 0; i < 3u * n; ++i) dst->rgb[i] = pt__display_channel((double)src->rgb[i] * scale, dd.tonemap);
+    return PT_OK;
+}
 
 #ifdef __cplusplus
 }

@@ -46,6 +46,10 @@
 #define PDFTRACE_EXR_IMPLEMENTATION
 #include "pdftrace_exr.h"
 #endif
+#ifdef PTV_HAVE_PNG
+#define PDFTRACE_PNG_IMPLEMENTATION
+#include "pdftrace_png.h"
+#endif
 
 #define PTV_PROG "bench"
 #include "validation/ptv_common.h"

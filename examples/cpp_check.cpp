@@ -7,6 +7,10 @@
 #define PDFTRACE_EXR_IMPLEMENTATION
 #include "pdftrace_exr.h"
 #endif
+#ifdef PDFTRACE_PNG
+#define PDFTRACE_PNG_IMPLEMENTATION
+#include "pdftrace_png.h"
+#endif
 
 #include <cstdio>
 
@@ -36,6 +40,12 @@ int main()
     if (rc != PT_OK) std::fprintf(stderr, "cpp_check: %s\n", pt_result_string(rc));
     static const char text[] = "camera look_from 0 0 -5 look_at 0 0 0\nmaterial w lambertian 0.5 0.5 0.5\n"
                                "sphere 0 0 0 1 w\n";
+    pt_display_desc shown = {1.0f, PT_TONEMAP_ACES};
+    if (rc == PT_OK) rc = pt_image_apply_display(&img, &shown, &img);
+#ifdef PDFTRACE_PNG
+    char png_err[256];
+    if (rc == PT_OK && pt_write_png(NULL, &img, png_err, sizeof png_err) != PT_ERROR_INVALID_ARGUMENT) rc = PT_ERROR_INVALID_STATE;
+#endif
     pt_scenefile sf;
     char err[256];
     if (rc == PT_OK) {

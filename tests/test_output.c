@@ -13,6 +13,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#ifdef PDFTRACE_PNG /* built with libpng (make PNG=auto|1): pdftrace_png.h is implemented here */
+#define PDFTRACE_PNG_IMPLEMENTATION
+#include "pdftrace_png.h"
+#include <png.h> /* png_round_trip reads the file back with libpng */
+#endif
+
 
 
 
@@ -400,6 +406,269 @@ static void write_error_messages(test_ctx *t)
     pt_image_free(&img);
     tu_remove_tree(dir);
 }
+/* ---- display transform (pt_image_apply_display) and PNG output ---- */
+
+/* The operators in double precision, written from their sources (Reinhard et al. 2002 eq. 3;
+   Narkowicz 2016), with the clamp to [0, 1] and 0 for negative values and NaN. */
+static double display_ref(double x, pt_tonemap op)
+{
+    double v;
+    if (!(x > 0)) return 0;
+    if (isinf(x)) return 1;
+    v = op == PT_TONEMAP_REINHARD ? x / (1 + x)
+        : op == PT_TONEMAP_ACES   ? (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)
+                                  : x;
+    return v < 1 ? v : 1;
+}
+
+/* One pixel per value, run through d; returns the number of channels more than 1 float ulp
+   from display_ref(x * 2^exposure), noting the first. */
+static int display_mismatches(test_ctx *t, const float *vals, int n, const pt_display_desc *d, const char *what)
+{
+    pt_image src, dst;
+    int i, bad = 0, rc;
+    memset(&src, 0, sizeof src);
+    memset(&dst, 0, sizeof dst);
+    if (!CHECK(t, pt_image_init(&src, n, 1) == PT_OK, "pt_image_init")) return 1;
+    for (i = 0; i < 3 * n; i++) src.rgb[i] = vals[i / 3];
+    rc = pt_image_apply_display(&src, d, &dst);
+    if (CHECK(t, rc == PT_OK && dst.rgb && dst.width == n && dst.height == 1, "%s: pt_image_apply_display: %d", what, rc))
+        for (i = 0; i < 3 * n; i++) {
+            double want = display_ref((double)src.rgb[i] * pow(2.0, d->exposure), d->tonemap);
+            if (!(fabs(dst.rgb[i] - want) <= 1.2e-7 * fmax(want, 1e-30))) {
+                if (bad++ == 0) test_note(t, "%s: %g -> %.9g, want %.9g", what, src.rgb[i], dst.rgb[i], want);
+            }
+        }
+    else
+        bad++;
+    pt_image_free(&src);
+    pt_image_free(&dst);
+    return bad;
+}
+
+static void display_operators(test_ctx *t)
+{
+    /* Each operator against its formula over a range of values (to float rounding), and values
+       known exactly: clamp keeps [0, 1] unchanged; Reinhard 1 -> 1/2, 3 -> 3/4; ACES 0 -> 0,
+       1 -> 2.54 / 3.16, and 1 from x = 7.24 on (the root of 0.08 x^2 - 0.56 x - 0.14). */
+    static const float vals[] = { -2.0f, 0.0f, 1e-6f, 0.01f, 0.18f, 0.5f, 1.0f, 3.0f, 7.0f, 7.5f, 100.0f, 1e30f };
+    static const pt_tonemap ops[3] = { PT_TONEMAP_CLAMP, PT_TONEMAP_REINHARD, PT_TONEMAP_ACES };
+    static const char *const names[3] = { "clamp", "reinhard", "aces" };
+    const int n = (int)(sizeof vals / sizeof vals[0]);
+    pt_display_desc d;
+    pt_image img;
+    int k, i;
+    for (k = 0; k < 3; k++) {
+        d.exposure = 0.0f;
+        d.tonemap = ops[k];
+        CHECK(t, display_mismatches(t, vals, n, &d, names[k]) == 0, "%s differs from its formula", names[k]);
+    }
+    memset(&img, 0, sizeof img);
+    if (!CHECK(t, pt_image_init(&img, 4, 1) == PT_OK, "pt_image_init")) return;
+    for (i = 0; i < 12; i++) img.rgb[i] = (float)i / 11.0f;
+    d.exposure = 0.0f;
+    d.tonemap = PT_TONEMAP_CLAMP;
+    {
+        pt_image out;
+        memset(&out, 0, sizeof out);
+        if (CHECK(t, pt_image_apply_display(&img, &d, &out) == PT_OK, "clamp")) {
+            CHECK(t, memcmp(out.rgb, img.rgb, 12 * sizeof(float)) == 0, "clamp changed values inside [0, 1]");
+            CHECK(t, pt_image_apply_display(&img, NULL, &out) == PT_OK && memcmp(out.rgb, img.rgb, 12 * sizeof(float)) == 0,
+                  "d = NULL is not exposure 0, clamp");
+        }
+        pt_image_free(&out);
+    }
+    img.rgb[0] = 1.0f; img.rgb[1] = 3.0f; img.rgb[2] = -1.0f;
+    img.rgb[3] = 0.0f; img.rgb[4] = 1.0f; img.rgb[5] = 8.0f;
+    img.rgb[6] = (float)NAN; img.rgb[7] = (float)INFINITY; img.rgb[8] = 1e-3f;
+    d.tonemap = PT_TONEMAP_REINHARD;
+    if (CHECK(t, pt_image_apply_display(&img, &d, &img) == PT_OK, "reinhard in place"))
+        CHECK(t, img.rgb[0] == 0.5f && img.rgb[1] == 0.75f && img.rgb[2] == 0.0f && img.rgb[6] == 0.0f && img.rgb[7] == 1.0f,
+              "reinhard: 1 -> %g, 3 -> %g, -1 -> %g, NaN -> %g, inf -> %g (want 0.5 0.75 0 0 1)", img.rgb[0], img.rgb[1],
+              img.rgb[2], img.rgb[6], img.rgb[7]);
+    img.rgb[3] = 0.0f; img.rgb[4] = 1.0f; img.rgb[5] = 8.0f;
+    d.tonemap = PT_TONEMAP_ACES;
+    if (CHECK(t, pt_image_apply_display(&img, &d, &img) == PT_OK, "aces in place"))
+        CHECK(t, img.rgb[3] == 0.0f && img.rgb[4] == (float)(2.54 / 3.16) && img.rgb[5] == 1.0f,
+              "aces: 0 -> %g, 1 -> %.9g (want %.9g), 8 -> %g (want 1)", img.rgb[3], img.rgb[4], (float)(2.54 / 3.16),
+              img.rgb[5]);
+    pt_image_free(&img);
+}
+
+static void display_exposure(test_ctx *t)
+{
+    /* 2^EV multiplies before the operator: EV +1 doubles, EV -2 quarters (exact in float), so
+       Reinhard at EV +1 maps 0.5 to 1/2 and 1.5 to 3/4; a fractional EV follows 2^EV too. A dst of
+       another size is reallocated to src's. */
+    static const float vals[] = { 0.0f, 0.05f, 0.25f, 0.5f, 1.0f, 1.5f, 4.0f, 300.0f };
+    static const float evs[] = { 1.0f, -2.0f, 0.5f, -7.25f, 3.0f };
+    const int n = (int)(sizeof vals / sizeof vals[0]);
+    pt_display_desc d;
+    pt_image src, dst;
+    int k, op;
+    for (op = 0; op < 3; op++)
+        for (k = 0; k < (int)(sizeof evs / sizeof evs[0]); k++) {
+            char what[64];
+            d.exposure = evs[k];
+            d.tonemap = (pt_tonemap)op;
+            snprintf(what, sizeof what, "operator %d, EV %g", op, (double)evs[k]);
+            CHECK(t, display_mismatches(t, vals, n, &d, what) == 0, "%s differs from x * 2^EV then the operator", what);
+        }
+    memset(&src, 0, sizeof src);
+    memset(&dst, 0, sizeof dst);
+    if (!CHECK(t, pt_image_init(&src, 2, 1) == PT_OK && pt_image_init(&dst, 5, 7) == PT_OK, "pt_image_init")) {
+        pt_image_free(&src);
+        return;
+    }
+    src.rgb[0] = 0.25f; src.rgb[1] = 0.5f; src.rgb[2] = 0.75f;
+    src.rgb[3] = 0.5f; src.rgb[4] = 1.5f; src.rgb[5] = 0.125f;
+    d.exposure = 1.0f;
+    d.tonemap = PT_TONEMAP_CLAMP;
+    if (CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_OK && dst.width == 2 && dst.height == 1, "EV +1 clamp"))
+        CHECK(t, dst.rgb[0] == 0.5f && dst.rgb[1] == 1.0f && dst.rgb[2] == 1.0f && dst.rgb[5] == 0.25f,
+              "EV +1: 0.25 -> %g, 0.5 -> %g, 0.75 -> %g, 0.125 -> %g", dst.rgb[0], dst.rgb[1], dst.rgb[2], dst.rgb[5]);
+    d.exposure = -2.0f;
+    if (CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_OK, "EV -2 clamp"))
+        CHECK(t, dst.rgb[0] == 0.0625f && dst.rgb[4] == 0.375f, "EV -2: 0.25 -> %g, 1.5 -> %g", dst.rgb[0], dst.rgb[4]);
+    d.exposure = 1.0f;
+    d.tonemap = PT_TONEMAP_REINHARD;
+    if (CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_OK, "EV +1 reinhard"))
+        CHECK(t, dst.rgb[1] == 0.5f && dst.rgb[4] == 0.75f, "EV +1 reinhard: 0.5 -> %g, 1.5 -> %g", dst.rgb[1], dst.rgb[4]);
+    pt_image_free(&src);
+    pt_image_free(&dst);
+}
+
+static void display_bad_arguments(test_ctx *t)
+{
+    /* Non-finite exposure, an unknown tonemap, NULL or empty images: PT_ERROR_INVALID_ARGUMENT,
+       and dst keeps its size and values. */
+    pt_display_desc d;
+    pt_image src, dst, empty;
+    int k;
+    memset(&src, 0, sizeof src);
+    memset(&dst, 0, sizeof dst);
+    memset(&empty, 0, sizeof empty);
+    if (!CHECK(t, pt_image_init(&src, 2, 2) == PT_OK && pt_image_init(&dst, 2, 2) == PT_OK, "pt_image_init")) {
+        pt_image_free(&src);
+        return;
+    }
+    for (k = 0; k < 12; k++) {
+        src.rgb[k] = 0.5f;
+        dst.rgb[k] = 0.25f;
+    }
+    d.tonemap = PT_TONEMAP_CLAMP;
+    d.exposure = (float)NAN;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "NaN exposure accepted");
+    d.exposure = (float)INFINITY;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "+inf exposure accepted");
+    d.exposure = -(float)INFINITY;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "-inf exposure accepted");
+    d.exposure = 0.0f;
+    d.tonemap = (pt_tonemap)3;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "tonemap 3 accepted");
+    d.tonemap = (pt_tonemap)-1;
+    CHECK(t, pt_image_apply_display(&src, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "tonemap -1 accepted");
+    d.tonemap = PT_TONEMAP_ACES;
+    CHECK(t, pt_image_apply_display(NULL, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "src NULL accepted");
+    CHECK(t, pt_image_apply_display(&src, &d, NULL) == PT_ERROR_INVALID_ARGUMENT, "dst NULL accepted");
+    CHECK(t, pt_image_apply_display(&empty, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "an empty src accepted");
+    empty.width = 2;
+    empty.height = 2;
+    CHECK(t, pt_image_apply_display(&empty, &d, &dst) == PT_ERROR_INVALID_ARGUMENT, "src with rgb NULL accepted");
+    for (k = 0; k < 12; k++)
+        if (dst.rgb[k] != 0.25f) break;
+    CHECK(t, k == 12 && dst.width == 2 && dst.height == 2, "a refused call changed dst (value %d)", k);
+    pt_image_free(&src);
+    pt_image_free(&dst);
+}
+
+#ifdef PDFTRACE_PNG
+/* Reads an 8-bit RGB PNG with libpng's simplified API into a malloc'd buffer. */
+static unsigned char *read_png_rgb(const char *path, int *w, int *h)
+{
+    png_image im;
+    unsigned char *buf;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&im, path)) return NULL;
+    im.format = PNG_FORMAT_RGB;
+    buf = (unsigned char *)malloc(PNG_IMAGE_SIZE(im));
+    if (!buf || !png_image_finish_read(&im, NULL, buf, 0, NULL)) {
+        png_image_free(&im);
+        free(buf);
+        return NULL;
+    }
+    *w = (int)im.width;
+    *h = (int)im.height;
+    return buf;
+}
+
+static void png_round_trip(test_ctx *t)
+{
+    /* pt_write_png then libpng's reader: the size, and every byte equal to what pt_write_ppm
+       writes, (unsigned char)(255 pt_srgb_encode(x) + 0.5); the PNG signature and an sRGB chunk;
+       pt_write_png_rgb8 keeps bytes as given; no temporary file is left; a missing directory and a
+       directory as the target are PT_ERROR_IO with the path, the step and strerror in the message. */
+    static const float vals[] = { -1.0f, 0.0f, 0.001f, 0.0031308f, 0.01f, 0.05f, 0.18f, 0.2140411f, 0.5f, 0.9f, 0.999f, 1.0f, 1.5f, 100.0f, 0.73f };
+    static const unsigned char sig[8] = { 137, 80, 78, 71, 13, 10, 26, 10 };
+    const int w = 5, h = 3;
+    char dir[64], path[128], err[512], list[256];
+    pt_image img;
+    unsigned char *px, *file, raw[6] = { 0, 1, 127, 128, 254, 255 };
+    long n = 0;
+    int i, rw = 0, rh = 0, bad = 0, rc;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(path, sizeof path, "%s/a.png", dir);
+    memset(&img, 0, sizeof img);
+    if (!CHECK(t, pt_image_init(&img, w, h) == PT_OK, "pt_image_init")) { tu_remove_tree(dir); return; }
+    for (i = 0; i < 3 * w * h; i++) img.rgb[i] = vals[(i % 3 * 5 + i / 3) % 15];
+    rc = pt_write_png(path, &img, err, sizeof err);
+    CHECK(t, rc == PT_OK && err[0] == '\0', "pt_write_png: %d '%s'", rc, err);
+    px = read_png_rgb(path, &rw, &rh);
+    if (CHECK(t, px != NULL && rw == w && rh == h, "read back: %s, %d x %d", px ? "ok" : "failed", rw, rh)) {
+        for (i = 0; i < 3 * w * h; i++)
+            if (px[i] != (unsigned char)(pt_srgb_encode(img.rgb[i]) * 255.0f + 0.5f)) {
+                if (bad++ == 0) test_note(t, "value %g -> byte %d", img.rgb[i], px[i]);
+            }
+        CHECK(t, bad == 0, "%d bytes differ from 255 pt_srgb_encode(x) + 0.5", bad);
+    }
+    free(px);
+    file = tu_read_file(path, &n);
+    CHECK(t, file && n > 41 && memcmp(file, sig, 8) == 0 && memcmp(file + 12, "IHDR", 4) == 0 && memcmp(file + 37, "sRGB", 4) == 0,
+          "no PNG signature, IHDR and sRGB chunk at the start of the file");
+    free(file);
+    rc = pt_write_png_rgb8(path, 2, 1, raw, err, sizeof err);
+    px = read_png_rgb(path, &rw, &rh);
+    CHECK(t, rc == PT_OK && px && rw == 2 && rh == 1 && memcmp(px, raw, 6) == 0, "pt_write_png_rgb8 did not keep its bytes");
+    free(px);
+    CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1, "the writer left extra files: %s", list);
+    snprintf(path, sizeof path, "%s/missing/b.png", dir);
+    rc = pt_write_png(path, &img, err, sizeof err);
+    {
+        char want[512];
+        snprintf(want, sizeof want, "%s: writing PNG: cannot create '%s.ptmp': %s", path, path, strerror(ENOENT));
+        CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "missing directory: %d '%s', want '%s'", rc, err, want);
+    }
+    snprintf(path, sizeof path, "%s/target.png", dir);
+    mkdir(path, 0700);
+    rc = pt_write_png(path, &img, err, sizeof err);
+    {
+        char want[512];
+        snprintf(want, sizeof want, "%s: writing PNG: cannot rename '%s.ptmp' to '%s': %s", path, path, path, strerror(EISDIR));
+        CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "a directory as the target: %d '%s', want '%s'", rc, err, want);
+    }
+    rmdir(path);
+    CHECK(t, pt_write_png(path, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT && err[0], "NULL image accepted");
+    CHECK(t, tu_dir_entries(dir, list, sizeof list) == 1, "failed writes left files: %s", list);
+    pt_image_free(&img);
+    tu_remove_tree(dir);
+}
+#else
+static void png_round_trip(test_ctx *t)
+{
+    test_skip(t, "built without libpng (pdftrace_png.h needs PNG=1 or libpng-dev with PNG=auto)");
+}
+#endif
 
 const test_case test_output_cases[] = {
     TEST_CASE(pfm_layout),
@@ -409,5 +678,9 @@ const test_case test_output_cases[] = {
     TEST_CASE(write_error_messages),
     TEST_CASE(film_math),
     TEST_CASE(film_accumulates_render),
+    TEST_CASE(display_operators),
+    TEST_CASE(display_exposure),
+    TEST_CASE(display_bad_arguments),
+    TEST_CASE(png_round_trip),
     TEST_END
 };

@@ -7,7 +7,9 @@
      ptv pov SCENE OUT.pov [none|default|medium|high] [W H]
      ptv compare NAME MEAN.pfm VAR.pfm REF.exr OUTDIR BIAS_TOL POV_ERR ACCEPT [NOTE...]
      ptv report OUTDIR NAME...                       OUTDIR/index.html from OUTDIR/NAME.result
-     ptv test SCENEDIR WORKDIR                       the fast runner ("N passed, M failed, K skipped")
+     ptv test SCENEDIR WORKDIR [PDFTRACE CORNELL]    the fast runner ("N passed, M failed, K skipped");
+                                                     with build/pdftrace and build/cornell, also the
+                                                     scene-file renders through the command
 
    Metrics (compare), over all pixels p and channels c, x = pdftrace, r = POV-Ray:
      bias_c   = sum_p x / sum_p r - 1                (mean relative bias per channel)
@@ -34,6 +36,10 @@
 #ifdef PTV_HAVE_EXR
 #define PDFTRACE_EXR_IMPLEMENTATION
 #include "pdftrace_exr.h"
+#endif
+#ifdef PTV_HAVE_PNG
+#define PDFTRACE_PNG_IMPLEMENTATION
+#include "pdftrace_png.h"
 #endif
 
 #include "ptv_common.h"
@@ -654,8 +660,9 @@ static int same_bytes(const char *a, const char *b)
     return same;
 }
 
-/* scenes/cornell.scene must be exactly the built-in box of examples/cornell.c: same image bytes. */
-static void test_cornell_identical(const char *cornell, const char *dir, const char *work)
+/* scenes/cornell.scene through the pdftrace command must be exactly the built-in box of
+   examples/cornell.c (build/cornell, 600 x 600): same image bytes. */
+static void test_cornell_identical(const char *pdftrace, const char *cornell, const char *dir, const char *work)
 {
     char cmd[8192], a[2048], b[2048];
     int same = 0;
@@ -663,20 +670,20 @@ static void test_cornell_identical(const char *cornell, const char *dir, const c
     snprintf(b, sizeof b, "%s/from-file.pfm", work);
     remove(a);
     remove(b);
-    snprintf(cmd, sizeof cmd, "'%s' -q --spp 8 -w 48 -h 48 -o '%s' >/dev/null && '%s' -q --scene '%s/cornell.scene' --spp 8 "
-             "-w 48 -h 48 --max-depth 50 -o '%s' >/dev/null", cornell, a, cornell, dir, b);
+    snprintf(cmd, sizeof cmd, "'%s' -q --spp 2 -o '%s' >/dev/null && '%s' '%s/cornell.scene' -q --spp 2 --size 600x600 "
+             "--max-depth 50 -o '%s' >/dev/null", cornell, a, pdftrace, dir, b);
     if (system(cmd) == 0) same = same_bytes(a, b);
-    result(same, "scenes/cornell.scene renders bit-identical to the built-in box of examples/cornell.c", "48x48, 8 spp");
+    result(same, "pdftrace scenes/cornell.scene renders bit-identical to build/cornell's built-in box", "600x600, 2 spp");
 }
 
-/* build/cornell --scene takes a scene file's sampler and indirect_paths as its defaults, and
-   --indirect-paths overrides them: cornell.scene plus "sampler sobol" and "indirect_paths 2"
-   renders as cornell.scene with --sampler sobol --indirect-paths 2 (same bytes), and with
+/* pdftrace takes a scene file's sampler and indirect_paths as its defaults, and the command
+   line overrides them: cornell.scene plus "sampler sobol" and "indirect_paths 2" renders as
+   cornell.scene with --sampler sobol --indirect-paths 2 (same bytes), and with
    --indirect-paths 1 as --indirect-paths 1 (and not as 2). */
-static void test_cornell_scene_settings(const char *cornell, const char *dir, const char *work)
+static void test_scene_settings(const char *pdftrace, const char *dir, const char *work)
 {
     char cmd[24576], scene[2048], from_file[2048], given[2048], over[2048], one[2048], src[2048];
-    const char *common = "-q --spp 4 -w 32 -h 32";
+    const char *common = "-q --spp 4 --size 32x32";
     int ok, n, same2 = 0, same1 = 0, differs = 0;
     snprintf(src, sizeof src, "%s/cornell.scene", dir);
     snprintf(scene, sizeof scene, "%s/cornell-sobol2.scene", work);
@@ -690,11 +697,11 @@ static void test_cornell_scene_settings(const char *cornell, const char *dir, co
     remove(one);
     n = snprintf(cmd, sizeof cmd,
              "cat '%s' > '%s' && printf '\\nsampler sobol\\nindirect_paths 2\\n' >> '%s' && "
-             "'%s' %s --scene '%s' -o '%s' >/dev/null && '%s' %s --scene '%s' --sampler sobol --indirect-paths 2 -o '%s' "
-             ">/dev/null && '%s' %s --scene '%s' --indirect-paths 1 -o '%s' >/dev/null && '%s' %s --scene '%s' "
+             "'%s' '%s' %s -o '%s' >/dev/null && '%s' '%s' %s --sampler sobol --indirect-paths 2 -o '%s' "
+             ">/dev/null && '%s' '%s' %s --indirect-paths 1 -o '%s' >/dev/null && '%s' '%s' %s "
              "--sampler sobol --indirect-paths 1 -o '%s' >/dev/null",
-             src, scene, scene, cornell, common, scene, from_file, cornell, common, src, given, cornell, common, scene, over,
-             cornell, common, src, one);
+             src, scene, scene, pdftrace, scene, common, from_file, pdftrace, src, common, given, pdftrace, scene, common,
+             over, pdftrace, src, common, one);
     ok = n > 0 && (size_t)n < sizeof cmd && system(cmd) == 0; /* (a truncated command is a failure) */
     if (ok) {
         same2 = same_bytes(from_file, given);
@@ -702,7 +709,7 @@ static void test_cornell_scene_settings(const char *cornell, const char *dir, co
         differs = !same_bytes(from_file, one);
     }
     result(ok && same2 && same1 && differs,
-           "build/cornell --scene: the file's sampler and indirect_paths are defaults, --indirect-paths overrides",
+           "pdftrace: the file's sampler and indirect_paths are defaults, --indirect-paths overrides",
            !ok ? "a render failed (or the paths are too long)" : !same2 ? "file's indirect_paths 2 != --indirect-paths 2"
            : !same1 ? "--indirect-paths 1 over the file != --indirect-paths 1" : !differs ? "indirect_paths 1 and 2 gave "
            "the same image" : "32x32, 4 spp, sobol");
@@ -722,13 +729,16 @@ static void skip_compare(const char *reason)
 
 static int cmd_test(int argc, char **argv)
 {
-    if (argc != 4 && argc != 5) { fprintf(stderr, "usage: ptv test SCENEDIR WORKDIR [build/cornell]\n"); return 2; }
+    if (argc != 4 && argc != 6) {
+        fprintf(stderr, "usage: ptv test SCENEDIR WORKDIR [build/pdftrace build/cornell]\n");
+        return 2;
+    }
     test_malformed(argv[3]);
     test_scenes_load(argv[2]);
     test_fuzz(argv[2], argv[3], 3000);
-    if (argc == 5) {
-        test_cornell_identical(argv[4], argv[2], argv[3]);
-        test_cornell_scene_settings(argv[4], argv[2], argv[3]);
+    if (argc == 6) {
+        test_cornell_identical(argv[4], argv[5], argv[2], argv[3]);
+        test_scene_settings(argv[4], argv[2], argv[3]);
     }
 #ifdef PTV_HAVE_EXR
     if (have_povray()) {

@@ -2,7 +2,7 @@
    writers, rendering a scene description into per-pixel means and variances of the mean, and
    running POV-Ray 3.7 on an exported scene. Static functions, included once by each program
    after pdftrace_scene.h. The programs are built with -DPTV_HAVE_EXR (pdftrace_exr.h: reading
-   POV-Ray's +FE output) and -DPTV_HAVE_PNG (libpng) when those
+   POV-Ray's +FE output) and -DPTV_HAVE_PNG (pdftrace_png.h: the report's images) when those
    libraries are present. */
 #ifndef PTV_COMMON_H
 #define PTV_COMMON_H
@@ -29,7 +29,7 @@
 #define PTV_MAYBE_UNUSED
 #endif
 #ifdef PTV_HAVE_PNG
-#include <png.h>
+#include "pdftrace_png.h" /* the program defines PDFTRACE_PNG_IMPLEMENTATION */
 #endif
 
 /* ---- images ------------------------------------------------------------------------- */
@@ -76,36 +76,32 @@ PTV_MAYBE_UNUSED static int read_exr(const char *path, pt_image *img)
 }
 #endif
 
+/* An 8-bit RGB image (3 bytes per pixel, top row first) through pdftrace_png.h. */
 PTV_MAYBE_UNUSED static int write_png(const char *path, int w, int h, const unsigned char *rgb)
 {
 #ifdef PTV_HAVE_PNG
-    png_image im;
-    memset(&im, 0, sizeof im);
-    im.version = PNG_IMAGE_VERSION;
-    im.width = (png_uint_32)w;
-    im.height = (png_uint_32)h;
-    im.format = PNG_FORMAT_RGB;
-    if (!png_image_write_to_file(&im, path, 0, rgb, 0, NULL)) {
-        fprintf(stderr, PTV_PROG ": writing %s: %s\n", path, im.message);
-        return 0;
-    }
-    return 1;
+    char err[4096];
+    if (pt_write_png_rgb8(path, w, h, rgb, err, sizeof err) == PT_OK) return 1;
+    fprintf(stderr, PTV_PROG ": %s\n", err);
+    return 0;
 #else
     (void)path; (void)w; (void)h; (void)rgb;
     return 1; /* no libpng: the report shows no images */
 #endif
 }
 
+/* A linear image, sRGB-encoded as pt_write_ppm does. */
 PTV_MAYBE_UNUSED static int png_tonemapped(const char *path, const pt_image *img)
 {
-    size_t n = (size_t)img->width * (size_t)img->height * 3u, i;
-    unsigned char *b = (unsigned char *)malloc(n);
-    int ok;
-    if (!b) return 0;
-    for (i = 0; i < n; ++i) b[i] = (unsigned char)(pt_srgb_encode(img->rgb[i]) * 255.0f + 0.5f);
-    ok = write_png(path, img->width, img->height, b);
-    free(b);
-    return ok;
+#ifdef PTV_HAVE_PNG
+    char err[4096];
+    if (pt_write_png(path, img, err, sizeof err) == PT_OK) return 1;
+    fprintf(stderr, PTV_PROG ": %s\n", err);
+    return 0;
+#else
+    (void)path; (void)img;
+    return 1;
+#endif
 }
 
 /* ---- rendering ------------------------------------------------------------------------ */

@@ -1,0 +1,238 @@
+/* pdftrace_png.h - PNG output for pdftrace.h images, through libpng.
+   Part of the pdftrace header family. LICENSE: MIT or public domain, your choice (full text at
+   the end of this file).
+
+   ABOUT
+   =====
+   Writes 8-bit RGB PNG files through libpng's simplified API (png_image_write_to_stdio,
+   libpng 1.6 or later; the libpng manual, http://www.libpng.org/pub/png/libpng-manual.txt,
+   section V, "Simplified API"). pt_write_png encodes every channel as pt_write_ppm does:
+   clamped to [0, 1], the sRGB transfer function (pt_srgb_encode), times 255, plus 0.5,
+   truncated; for exposure and tone mapping apply pt_image_apply_display first. libpng marks
+   8-bit files as sRGB (an sRGB chunk, perceptual intent). pt_write_png_rgb8 writes bytes the
+   caller has already encoded (3 per pixel, row 0 at the top).
+   Both write to "<path>.ptmp" beside the target and rename it into place: a failed write
+   leaves no file (and no temporary). They return PT_OK or a pt_result code
+   (PT_ERROR_INVALID_ARGUMENT, PT_ERROR_OUT_OF_MEMORY, PT_ERROR_IO) and, when err is not NULL,
+   write a one-line message into err[0 .. err_size-1] (empty on success): "PATH: writing PNG:
+   cannot create 'PATH.ptmp': REASON", "... cannot rename 'PATH.ptmp' to 'PATH': REASON" (the
+   system's strerror) or libpng's own message. No global state: safe to call from several
+   threads at once.
+
+   BUILDING
+   ========
+   In exactly one C or C++ file (it may be the file that implements pdftrace.h, or another):
+       #define PDFTRACE_PNG_IMPLEMENTATION
+       #include "pdftrace_png.h"
+   This header includes pdftrace.h and <png.h>. Compile with `pkg-config --cflags libpng` and
+   link `pkg-config --libs libpng` (-lpng16). The Makefile's PNG=auto|0|1 builds the project's
+   programs this way when libpng is found (Debian: apt-get install libpng-dev).
+
+   USAGE
+   =====
+       char err[512];
+       if (pt_write_png("out.png", &img, err, sizeof err) != PT_OK) puts(err);
+       pt_display_desc d = {1.0f, PT_TONEMAP_ACES};     (one stop brighter, filmic curve)
+       pt_image shown = {0};
+       if (pt_image_apply_display(&img, &d, &shown) == PT_OK)
+           pt_write_png("shown.png", &shown, err, sizeof err);
+       pt_image_free(&shown);
+*/
+#ifndef PDFTRACE_PNG_H
+#define PDFTRACE_PNG_H
+
+#include "pdftrace.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* img as an 8-bit sRGB PNG (see above). */
+PTDEF int pt_write_png(const char *path, const pt_image *img, char *err, size_t err_size);
+/* width x height pixels of 3 bytes (R, G, B) each, rows top first, written as they are. */
+PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsigned char *rgb, char *err,
+                            size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PDFTRACE_PNG_H */
+
+/* ==========================================================================================
+   IMPLEMENTATION
+   The simplified API writes a whole image from one buffer: a png_image names its size and
+   format (PNG_FORMAT_RGB), png_image_write_to_stdio writes it to an open FILE and reports
+   failure in png_image.message. The file is then flushed, closed and renamed into place.
+   ========================================================================================== */
+#ifdef PDFTRACE_PNG_IMPLEMENTATION
+#ifndef PDFTRACE_PNG_IMPLEMENTATION_DONE
+#define PDFTRACE_PNG_IMPLEMENTATION_DONE
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <png.h>
+
+#if defined(PT_MALLOC) && defined(PT_FREE) && defined(PT_REALLOC)
+/* all three given (or defined by pdftrace.h's implementation in this file) */
+#elif !defined(PT_MALLOC) && !defined(PT_FREE) && !defined(PT_REALLOC)
+#define PT_MALLOC(sz) malloc(sz)
+#define PT_REALLOC(p, sz) realloc(p, sz)
+#define PT_FREE(p) free(p)
+#else
+#error "pdftrace_png.h: define all of PT_MALLOC, PT_REALLOC and PT_FREE, or none"
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Formats "path: writing PNG: <fmt ...>" into err and returns code. */
+static int pt__png_fail(char *err, size_t err_size, int code, const char *path, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+    if (!err || !err_size) return code;
+    n = snprintf(err, err_size, "%s: writing PNG: ", path ? path : "(null)");
+    if (n < 0) n = 0;
+    if ((size_t)n < err_size) {
+        va_start(ap, fmt);
+        vsnprintf(err + n, err_size - (size_t)n, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+/* w x h pixels of 3 bytes, with at most 2^32 pixels and a size that fits a size_t (as pdftrace.h). */
+static int pt__png_pixels(int w, int h, size_t *n)
+{
+    if (w <= 0 || h <= 0 || (size_t)w > ((size_t)-1) / 64u / (size_t)h || (uint64_t)w * (uint64_t)h > 0xffffffffu)
+        return 0;
+    *n = (size_t)w * (size_t)h;
+    return 1;
+}
+
+/* Writes the open file f, then flushes and closes it; on failure *detail says why. */
+static int pt__png_write_file(FILE *f, int w, int h, const unsigned char *rgb, png_image *im, const char **detail)
+{
+    int ok, closed;
+    memset(im, 0, sizeof *im);
+    im->version = PNG_IMAGE_VERSION;
+    im->width = (png_uint_32)w;
+    im->height = (png_uint_32)h;
+    im->format = PNG_FORMAT_RGB;
+    ok = png_image_write_to_stdio(im, f, 0, rgb, 0, NULL) != 0;
+    if (!ok) *detail = im->message[0] ? im->message : "libpng failed";
+    errno = 0;
+    if (fflush(f) != 0 || ferror(f)) {
+        if (ok) *detail = errno ? strerror(errno) : "write error";
+        ok = 0;
+    }
+    closed = fclose(f) == 0;
+    if (ok && !closed) *detail = strerror(errno);
+    return ok && closed;
+}
+
+PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsigned char *rgb, char *err,
+                            size_t err_size)
+{
+    png_image im;
+    const char *detail = "";
+    char *tmp;
+    size_t len, n;
+    FILE *f;
+    int rc = PT_OK;
+    if (err && err_size) err[0] = '\0';
+    if (!path || !*path || !rgb || !pt__png_pixels(width, height, &n))
+        return pt__png_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "no path or an empty image");
+    len = strlen(path);
+    tmp = (char *)PT_MALLOC(len + 6u);
+    if (!tmp) return pt__png_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "out of memory");
+    memcpy(tmp, path, len);
+    memcpy(tmp + len, ".ptmp", 6u);
+    f = fopen(tmp, "wb");
+    if (!f) {
+        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "cannot create '%s': %s", tmp, strerror(errno));
+    } else if (!pt__png_write_file(f, width, height, rgb, &im, &detail)) {
+        remove(tmp);
+        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "%s", detail);
+    } else {
+#ifdef _WIN32
+        remove(path);
+#endif
+        if (rename(tmp, path) != 0) {
+            rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "cannot rename '%s' to '%s': %s", tmp, path,
+                              strerror(errno));
+            remove(tmp);
+        }
+    }
+    PT_FREE(tmp);
+    return rc;
+}
+
+PTDEF int pt_write_png(const char *path, const pt_image *img, char *err, size_t err_size)
+{
+    unsigned char *rgb;
+    size_t n, i;
+    int rc;
+    if (err && err_size) err[0] = '\0';
+    if (!path || !*path || !img || !img->rgb || !pt__png_pixels(img->width, img->height, &n))
+        return pt__png_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "no path or an empty image");
+    rgb = (unsigned char *)PT_MALLOC(3u * n);
+    if (!rgb) return pt__png_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "out of memory");
+    for (i = 0; i < 3u * n; ++i) rgb[i] = (unsigned char)(pt_srgb_encode(img->rgb[i]) * 255.0f + 0.5f); /* as pt_write_ppm */
+    rc = pt_write_png_rgb8(path, img->width, img->height, rgb, err, err_size);
+    PT_FREE(rgb);
+    return rc;
+}
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PDFTRACE_PNG_IMPLEMENTATION_DONE */
+#endif /* PDFTRACE_PNG_IMPLEMENTATION */
+
+/*
+This software is available under 2 licenses -- choose whichever you prefer.
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT License
+Copyright (c) 2026 the pdftrace authors
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+In jurisdictions that recognize copyright laws, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication for the benefit of the public at large and to
+the detriment of our heirs and successors. We intend this dedication to be an
+overt act of relinquishment in perpetuity of all present and future rights to
+this software under copyright law.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER LIABILITY, WHETHER IN AN
+ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM, OUT OF OR IN CONNECTION
+WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE SOFTWARE.
+------------------------------------------------------------------------------
+*/

@@ -1,0 +1,248 @@
+#!/usr/bin/env bash
+# pdftrace.sh - tests of the pdftrace command (tools/pdftrace.c), run by `make test` and
+# `make cli-test`:
+#     tests/cli/pdftrace.sh build/pdftrace scenes WORKDIR
+# Prints "PASS name (details)", "FAIL name: reason" or "SKIP name: reason" per test and as its
+# last line "N passed, M failed, K skipped"; exit status 0 iff nothing failed.
+# Checked: PNG and EXR files are valid (PNG signature and IHDR, the EXR magic number and, with
+# exrheader, the data window); --help fits in 40 lines; bad options, values, scene files and
+# outputs exit with status 2, one line on stderr and no file written; --export-pov; the
+# default output name; --preview-every rewrites the output while rendering and leaves the
+# final image as without it; the command line overrides a scene file's settings; --exposure
+# changes the 8-bit outputs only; -q prints nothing.
+set -u
+
+if [ $# -ne 3 ]; then
+    echo "usage: $0 PDFTRACE SCENEDIR WORKDIR" >&2
+    exit 2
+fi
+abspath() { case $1 in /*) printf '%s\n' "$1" ;; *) printf '%s/%s\n' "$PWD" "$1" ;; esac; }
+P=$(abspath "$1")
+S=$(abspath "$2")
+W=$(abspath "$3")
+rm -rf "$W"
+mkdir -p "$W" || exit 2
+
+passed=0 failed=0 skipped=0
+pass() { printf 'PASS cli.%s (%s)\n' "$1" "$2"; passed=$((passed + 1)); }
+fail() { printf 'FAIL cli.%s: %s\n' "$1" "$2"; failed=$((failed + 1)); }
+skip() { printf 'SKIP cli.%s: %s\n' "$1" "$2"; skipped=$((skipped + 1)); }
+
+version=$("$P" --version 2>&1)
+have_png=0 have_exr=0
+case $version in *"PNG yes"*) have_png=1 ;; esac
+case $version in *"OpenEXR yes"*) have_exr=1 ;; esac
+
+# The bytes of a file from offset $2, $3 of them, as hex without spaces.
+hexbytes() { od -An -tx1 -j "$2" -N "$3" "$1" | tr -d ' \n'; }
+
+# ---- help and version
+t_help() {
+    local n status
+    n=$("$P" --help | wc -l)
+    "$P" -h >"$W/h.txt"
+    status=$?
+    if [ "$n" -le 40 ] && [ "$status" = 0 ] && "$P" --help | cmp -s - "$W/h.txt"; then
+        pass help "--help is $n lines, -h is the same"
+    else
+        fail help "--help is $n lines (want <= 40), -h exit status $status or a different text"
+    fi
+    if [[ $version =~ ^pdftrace\ [0-9]+\.[0-9]+\.[0-9]+\  ]] && [ "$(printf '%s\n' "$version" | wc -l)" = 1 ]; then
+        pass version "$version"
+    else
+        fail version "--version printed '$version'"
+    fi
+}
+
+# ---- PNG and EXR outputs of a 600 x 600 scene
+t_png_exr() {
+    local dir=$W/formats args=() what=""
+    mkdir -p "$dir"
+    [ $have_png = 1 ] && args+=(-o "$dir/c.png") && what="png"
+    [ $have_exr = 1 ] && args+=(-o "$dir/c.exr") && what="$what exr"
+    if [ ${#args[@]} = 0 ]; then
+        skip png_exr "built without libpng and OpenEXR"
+        return
+    fi
+    if ! "$P" "$S/cornell.scene" -q --spp 1 "${args[@]}" -o "$dir/c.pfm" -o "$dir/c.ppm" 2>"$W/err.txt"; then
+        fail png_exr "the render failed: $(head -n 1 "$W/err.txt")"
+        return
+    fi
+    if [ $have_png = 1 ]; then
+        # signature, then the IHDR chunk: length 13, "IHDR", width, height, depth 8, colour type 2 (RGB)
+        local want=89504e470d0a1a0a0000000d49484452000002580000025808020000
+        local got
+        got=$(hexbytes "$dir/c.png" 0 28)
+        [ "$got" = "$want" ] || { fail png_exr "c.png starts with $got, want $want (600 x 600 8-bit RGB)"; return; }
+    fi
+    if [ $have_exr = 1 ]; then
+        [ "$(hexbytes "$dir/c.exr" 0 4)" = 762f3101 ] || { fail png_exr "c.exr has no OpenEXR magic number"; return; }
+        if command -v exrheader >/dev/null; then
+            exrheader "$dir/c.exr" | grep -q 'dataWindow (type box2i): (0 0) - (599 599)' ||
+                { fail png_exr "exrheader: c.exr's data window is not (0 0) - (599 599)"; return; }
+            what="$what (exrheader)"
+        fi
+    fi
+    [ "$(head -c 15 "$dir/c.ppm" | tr '\n' ' ')" = "P6 600 600 255 " ] || { fail png_exr "c.ppm header"; return; }
+    [ "$(head -c 14 "$dir/c.pfm" | tr '\n' ' ')" = "PF 600 600 -1." ] || { fail png_exr "c.pfm header"; return; }
+    [ -z "$(ls "$dir" | grep -v '^c\.\(png\|exr\|pfm\|ppm\)$')" ] || { fail png_exr "extra files: $(ls "$dir")"; return; }
+    pass png_exr "$what ppm pfm: 600x600 headers"
+}
+
+# ---- bad input: status 2, one line "pdftrace: ..." on stderr, nothing written
+bad_case() { # what, arguments...
+    local what=$1 status lines first
+    shift
+    rm -rf "$W/bad" && mkdir -p "$W/bad"
+    (cd "$W/bad" && "$P" "$@" >"$W/out.txt" 2>"$W/err.txt")
+    status=$?
+    lines=$(wc -l <"$W/err.txt")
+    first=$(head -n 1 "$W/err.txt")
+    if [ "$status" != 2 ] || [ "$lines" != 1 ] || [[ $first != pdftrace:\ * ]] || [ -n "$(ls -A "$W/bad")" ]; then
+        fail "bad_input" "$what: status $status, $lines stderr lines ('$first'), files: $(ls -A "$W/bad" | tr '\n' ' ')"
+        return 1
+    fi
+    printf '    %-34s -> %s\n' "$what" "$first"
+    return 0
+}
+t_bad_input() {
+    local ok=1 a
+    printf 'size 8 8\ncamera look_from 0 0 -5 look_at 0 0 0\nbogus 1 2 3\n' >"$W/broken.scene"
+    for a in "--bogus" "--spp 0" "--spp abc" "--width -5" "--size 3x" "--strategy best" "--sampler halton" \
+             "--light-weight 2" "--threads" "--tonemap filmic" "--exposure inf" "--preview-every 0" "--adaptive -1" \
+             "--disable-skips nope" "--indirect-paths 9" "--backend fast" "--quiet=1" "-o out.tiff" \
+             "-o no/such/dir/x.ppm" "--export-pov no/such/dir/x.pov"; do
+        # shellcheck disable=SC2086
+        bad_case "$a" "$S/mirror.scene" --spp 1 --size 8x8 -o "$W/bad/x.ppm" $a || ok=0
+    done
+    bad_case "missing scene file" "$S/no-such.scene" -o "$W/bad/x.ppm" || ok=0
+    bad_case "unparseable scene file" "$W/broken.scene" -o "$W/bad/x.ppm" || ok=0
+    grep -q "broken.scene:3: " "$W/err.txt" || { fail bad_input "no file:line in '$(cat "$W/err.txt")'"; ok=0; }
+    bad_case "no scene file" -o "$W/bad/x.ppm" || ok=0
+    bad_case "two scene files" "$S/mirror.scene" "$S/glass.scene" || ok=0
+    case $version in
+    *"Embree no"*) bad_case "--backend embree (no Embree)" "$S/mirror.scene" --backend embree -o "$W/bad/x.ppm" || ok=0 ;;
+    esac
+    if [ $have_png = 0 ]; then
+        bad_case "-o x.png (no libpng)" "$S/mirror.scene" -o "$W/bad/x.png" || ok=0
+        grep -q "x.png: built without PNG support (install libpng-dev and rebuild)" "$W/err.txt" ||
+            { fail bad_input "-o x.png without libpng: '$(cat "$W/err.txt")'"; ok=0; }
+    fi
+    if [ $have_exr = 0 ]; then
+        bad_case "-o x.exr (no OpenEXR)" "$S/mirror.scene" -o "$W/bad/x.exr" || ok=0
+    fi
+    [ $ok = 1 ] && pass bad_input "status 2, one line, no file, for each case above"
+}
+
+# ---- --export-pov: alone it writes only the .pov; with -o it renders too
+t_export_pov() {
+    local dir=$W/pov
+    mkdir -p "$dir"
+    if ! (cd "$dir" && "$P" "$S/mirror.scene" -q --export-pov m.pov) 2>"$W/err.txt"; then
+        fail export_pov "failed: $(head -n 1 "$W/err.txt")"
+        return
+    fi
+    if [ "$(ls "$dir")" != m.pov ] || ! grep -q '^camera' "$dir/m.pov"; then
+        fail export_pov "wrote '$(ls "$dir" | tr '\n' ' ')' (want only m.pov, with a camera)"
+        return
+    fi
+    rm -f "$dir/m.pov"
+    if ! "$P" "$S/mirror.scene" -q --spp 1 --size 16x16 --export-pov "$dir/m.pov" -o "$dir/m.pfm" 2>"$W/err.txt" ||
+        [ ! -s "$dir/m.pov" ] || [ ! -s "$dir/m.pfm" ]; then
+        fail export_pov "with -o: $(head -n 1 "$W/err.txt"); wrote $(ls "$dir" | tr '\n' ' ')"
+        return
+    fi
+    pass export_pov "alone: only the .pov; with -o: the .pov and the image"
+}
+
+# ---- no -o: SCENE's base name in the current directory
+t_default_output() {
+    local dir=$W/default want=mirror.png
+    [ $have_png = 1 ] || want=mirror.ppm
+    mkdir -p "$dir"
+    if (cd "$dir" && "$P" "$S/mirror.scene" -q --spp 1 --size 8x8) && [ "$(ls "$dir")" = "$want" ]; then
+        pass default_output "$want"
+    else
+        fail default_output "wrote '$(ls "$dir" | tr '\n' ' ')', want $want"
+    fi
+}
+
+# ---- --preview-every: the output appears and changes while the render runs
+t_preview() {
+    local dir=$W/preview out pid first="" sum changed=0 i running=1
+    mkdir -p "$dir"
+    out=$dir/p.pfm
+    "$P" "$S/mirror.scene" -q --size 32x32 --spp 65536 --preview-every 0.05 -o "$out" 2>"$W/err.txt" &
+    pid=$!
+    for i in $(seq 1 1200); do # up to 60 s
+        kill -0 "$pid" 2>/dev/null || { running=0; break; }
+        if [ -f "$out" ]; then
+            sum=$(cksum <"$out")
+            if [ -z "$first" ]; then first=$sum; elif [ "$sum" != "$first" ]; then changed=1; break; fi
+        fi
+        sleep 0.05
+    done
+    kill "$pid" 2>/dev/null
+    wait "$pid" 2>/dev/null
+    if [ $changed = 1 ]; then
+        pass preview_every "the output was rewritten with new content while rendering (${i}th poll)"
+    else
+        fail preview_every "no change seen while running (running=$running, file $([ -f "$out" ] && echo present || echo absent))"
+    fi
+    # previews do not change the result, and leave no temporary files
+    rm -rf "$dir" && mkdir -p "$dir"
+    "$P" "$S/mirror.scene" -q --size 24x24 --spp 64 -o "$dir/a.pfm" &&
+        "$P" "$S/mirror.scene" -q --size 24x24 --spp 64 --preview-every 0.000001 -o "$dir/b.pfm"
+    if cmp -s "$dir/a.pfm" "$dir/b.pfm" && [ "$(ls "$dir" | wc -l)" = 2 ]; then
+        pass preview_final "with previews after every pass the final image is the same bytes; no temporaries"
+    else
+        fail preview_final "the final image differs with --preview-every, or files are left: $(ls "$dir" | tr '\n' ' ')"
+    fi
+}
+
+# ---- the command line over the scene file's settings
+t_overrides() {
+    local dir=$W/over ok=1 why=""
+    mkdir -p "$dir"
+    "$P" "$S/mirror.scene" -q --spp 1 --size 40x30 -o "$dir/size.pfm" &&
+        "$P" "$S/mirror.scene" -q --spp 1 --width 24 -o "$dir/width.pfm" &&
+        "$P" "$S/mirror.scene" -q --spp 2 --size 16x16 -o "$dir/spp2.pfm" &&
+        "$P" "$S/mirror.scene" -q --spp 4 --size 16x16 -o "$dir/spp4.pfm" &&
+        "$P" "$S/mirror.scene" -q --spp 2 --size 16x16 --seed 7 -o "$dir/seed7.pfm" &&
+        "$P" "$S/mirror.scene" -q --spp 2 --size 16x16 --max-depth 1 -o "$dir/depth1.pfm" || { ok=0; why="a render failed"; }
+    if [ $ok = 1 ]; then
+        [ "$(head -c 8 "$dir/size.pfm" | tr '\n' ' ')" = "PF 40 30" ] || { ok=0; why="--size 40x30 not applied"; }
+        [ "$(head -c 10 "$dir/width.pfm" | tr '\n' ' ')" = "PF 24 128 " ] || { ok=0; why="--width 24 did not keep the file's height 128"; }
+        ! cmp -s "$dir/spp2.pfm" "$dir/spp4.pfm" || { ok=0; why="--spp had no effect"; }
+        ! cmp -s "$dir/spp2.pfm" "$dir/seed7.pfm" || { ok=0; why="--seed had no effect"; }
+        ! cmp -s "$dir/spp2.pfm" "$dir/depth1.pfm" || { ok=0; why="--max-depth had no effect"; }
+    fi
+    if [ $ok = 1 ]; then pass overrides "--size, --width (height from the file), --spp, --seed, --max-depth"
+    else fail overrides "$why"; fi
+}
+
+# ---- --exposure and --tonemap change the 8-bit outputs, not the float ones; -q prints nothing
+t_display() {
+    local dir=$W/display
+    mkdir -p "$dir"
+    "$P" "$S/mirror.scene" -q --spp 2 --size 16x16 -o "$dir/a.ppm" -o "$dir/a.pfm" >"$W/out.txt" 2>&1 &&
+        "$P" "$S/mirror.scene" -q --spp 2 --size 16x16 --exposure 1 --tonemap aces -o "$dir/b.ppm" -o "$dir/b.pfm" ||
+        { fail display "a render failed"; return; }
+    if [ -s "$W/out.txt" ]; then fail quiet "-q printed: $(head -n 1 "$W/out.txt")"; else pass quiet "no output"; fi
+    if cmp -s "$dir/a.pfm" "$dir/b.pfm" && ! cmp -s "$dir/a.ppm" "$dir/b.ppm"; then
+        pass display "--exposure 1 --tonemap aces: PPM changed, PFM the same bytes"
+    else
+        fail display "the PFM changed or the PPM did not"
+    fi
+}
+
+t_help
+t_png_exr
+t_bad_input
+t_export_pov
+t_default_output
+t_preview
+t_overrides
+t_display
+echo "$passed passed, $failed failed, $skipped skipped"
+[ $failed = 0 ]

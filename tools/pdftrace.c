@@ -1,0 +1,790 @@
+#define _POSIX_C_SOURCE 200809L
+/* pdftrace.c - the pdftrace command: renders a scene file (the format of pdftrace_scene.h) and
+   writes the image as PNG, OpenEXR, PFM or PPM, chosen by each output's extension.
+
+       pdftrace scenes/cornell.scene -o cornell.png -o cornell.exr --spp 256
+
+   Run with --help for the options. The whole command line, the scene file and the outputs are
+   checked before anything renders: a bad option or value, a scene file that does not load or an
+   output that cannot be written gives one line on stderr and exit status 2, and no file is
+   written. A failure once rendering has started gives exit status 1.
+   Built with -DPDFTRACE_PNG (pdftrace_png.h, libpng) and -DPDFTRACE_OPENEXR (pdftrace_exr.h,
+   OpenEXRCore) when those libraries are present: the Makefile's PNG and TOOL_EXR. */
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define PDFTRACE_IMPLEMENTATION
+#define PDFTRACE_SCENE_IMPLEMENTATION
+#include "pdftrace_scene.h"
+#ifdef PDFTRACE_PNG
+#define PDFTRACE_PNG_IMPLEMENTATION
+#include "pdftrace_png.h"
+#endif
+#ifdef PDFTRACE_OPENEXR
+#define PDFTRACE_EXR_IMPLEMENTATION
+#include "pdftrace_exr.h"
+#endif
+
+#define MAX_OUTPUTS 16
+#define EXIT_USAGE 2 /* bad command line, scene file or output path: nothing was written */
+
+typedef enum format { FMT_PNG, FMT_EXR, FMT_PFM, FMT_PPM } format;
+
+typedef struct output {
+    const char *path;
+    format fmt;
+} output;
+
+/* The render settings a scene file has; set on the command line, they replace the file's. */
+enum { GIVEN_WIDTH = 1, GIVEN_HEIGHT = 2, GIVEN_SPP = 4, GIVEN_STRATEGY = 8, GIVEN_SAMPLER = 16,
+       GIVEN_SEED = 32, GIVEN_DEPTH = 64, GIVEN_INDIRECT = 128 };
+
+typedef struct options {
+    const char *scene;
+    output outputs[MAX_OUTPUTS];
+    int output_count;
+    char default_output[4096];   /* SCENE's base name + .png (.ppm without libpng) */
+    const char *pov;             /* --export-pov */
+    pt_render_desc set;          /* the settings given: the scene file's ones only where `given` says */
+    unsigned given;              /* GIVEN_* */
+    pt_backend backend;
+    pt_display_desc display;     /* for the 8-bit outputs */
+    double preview_every;        /* seconds; 0: off */
+    int quiet;
+} options;
+
+enum { PARSED = 0, PARSED_EXIT = 1, PARSE_FAILED = 2 }; /* PARSED_EXIT: --help or --version printed */
+
+/* ---------------------------------------------------------------------------------------
+   Messages and help
+   --------------------------------------------------------------------------------------- */
+
+/* One line on stderr, "pdftrace: <message>". Returns PARSE_FAILED so that checks can `return fail(...)`. */
+static int fail(const char *fmt, ...)
+{
+    va_list ap;
+    fputs("pdftrace: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return PARSE_FAILED;
+}
+
+static int have_png(void)
+{
+#ifdef PDFTRACE_PNG
+    return 1;
+#else
+    return 0;
+#endif
+}
+static int have_exr(void)
+{
+#ifdef PDFTRACE_OPENEXR
+    return 1;
+#else
+    return 0;
+#endif
+}
+static int have_embree(void)
+{
+#ifdef PDFTRACE_EMBREE
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+static void print_help(void)
+{
+    printf("usage: pdftrace SCENE [options]\n"
+           "Renders a scene file (format: pdftrace_scene.h) and writes the image.\n"
+           "\n"
+           "  -o, --output FILE      write the image; repeatable; format by extension: .png (8-bit\n"
+           "                         sRGB), .exr (half RGB), .pfm (float RGB), .ppm (8-bit sRGB);\n"
+           "                         default: SCENE's base name + .png in the current directory\n"
+           "Render settings (they override the scene file's):\n"
+           "      --width N, --height N, --size WxH   image size in pixels\n"
+           "      --spp N            samples per pixel (with --adaptive: the most a pixel gets)\n"
+           "      --strategy S       mis | material | light | mixture\n"
+           "      --sampler S        independent | sobol (scrambled Sobol points)\n"
+           "      --seed N           random seed, a non-negative integer\n"
+           "      --max-depth N      scattering events per path (1: direct light only)\n"
+           "      --indirect-paths N paths each camera sample continues as, 1..8\n"
+           "      --light-weight W   light PDF weight of the mixture strategy, in (0, 1] (0.5)\n"
+           "      --threads N        worker threads, 0 = all cores (0)\n"
+           "      --backend B        auto | builtin | embree: ray traversal (auto)\n"
+           "      --adaptive T       adaptive sampling toward RMS relative error T, e.g. 0.05\n"
+           "      --adaptive-min-spp N  samples before a pixel may stop (max(16, spp/16))\n"
+           "      --adaptive-check N    re-plan the samples every N passes (1)\n"
+           "      --adaptive-neighbours-only  plan each pixel from its neighbours alone\n"
+           "      --disable-skips L  force the general path: all, or a comma-separated list of\n"
+           "                         no-emitters, delta-vertex, facing-away, no-textures,\n"
+           "                         zero-bsdf-shadow (for benchmarks)\n"
+           "Display, for .png and .ppm:\n"
+           "      --exposure EV      multiply by 2^EV (0)\n"
+           "      --tonemap T        clamp | aces | reinhard (clamp)\n"
+           "Other:\n"
+           "      --preview-every S  rewrite the outputs every S seconds while rendering\n"
+           "      --export-pov FILE  write the scene for POV-Ray 3.7 (renders too only with -o)\n"
+           "  -q, --quiet            no progress and no statistics\n"
+           "  -h, --help             this help\n"
+           "      --version          the version and the formats built in\n"
+           "Long options also take --name=value. Exit status: 0 done, 1 rendering or writing\n"
+           "failed, 2 bad command line, scene file or output (nothing written).\n");
+    if (!have_png() || !have_exr())
+        printf("This build has no %s output (rebuild with %s installed).\n",
+               !have_png() && !have_exr() ? ".png or .exr" : !have_png() ? ".png" : ".exr",
+               !have_png() && !have_exr() ? "libpng-dev and libopenexr-dev" : !have_png() ? "libpng-dev" : "libopenexr-dev");
+}
+
+static void print_version(void)
+{
+    printf("pdftrace %d.%d.%d (PNG %s, OpenEXR %s, Embree %s)\n", PDFTRACE_VERSION_MAJOR, PDFTRACE_VERSION_MINOR,
+           PDFTRACE_VERSION_PATCH, have_png() ? "yes" : "no", have_exr() ? "yes" : "no", have_embree() ? "yes" : "no");
+}
+
+/* ---------------------------------------------------------------------------------------
+   Values
+   --------------------------------------------------------------------------------------- */
+
+static int parse_long(const char *opt, const char *text, long lo, long hi, long *out)
+{
+    char *end;
+    long v;
+    errno = 0;
+    v = strtol(text, &end, 10);
+    if (text[0] == '\0' || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+        return fail("%s: expected an integer in [%ld, %ld], got '%s'", opt, lo, hi, text);
+    *out = v;
+    return PARSED;
+}
+
+static int parse_int(const char *opt, const char *text, int lo, int hi, int *out)
+{
+    long v = 0;
+    if (parse_long(opt, text, lo, hi, &v) != PARSED) return PARSE_FAILED;
+    *out = (int)v;
+    return PARSED;
+}
+
+static int parse_u64(const char *opt, const char *text, uint64_t *out)
+{
+    char *end;
+    unsigned long long v;
+    errno = 0;
+    v = strtoull(text, &end, 10);
+    if (text[0] < '0' || text[0] > '9' || *end != '\0' || errno == ERANGE)
+        return fail("%s: expected a non-negative integer, got '%s'", opt, text);
+    *out = (uint64_t)v;
+    return PARSED;
+}
+
+/* A finite number in [lo, hi], or in (lo, hi] when lo_open; `range` describes it in messages. */
+static int parse_real(const char *opt, const char *text, double lo, double hi, int lo_open, const char *range,
+                      float *out)
+{
+    char *end;
+    double v;
+    errno = 0;
+    v = strtod(text, &end);
+    /* written as !(inside) so that NaN fails too */
+    if (text[0] == '\0' || *end != '\0' || errno == ERANGE || !(lo_open ? v > lo : v >= lo) || !(v <= hi))
+        return fail("%s: expected %s, got '%s'", opt, range, text);
+    *out = (float)v;
+    return PARSED;
+}
+
+/* "WxH", each 1..16384. */
+static int parse_size(const char *opt, const char *text, int *w, int *h)
+{
+    char *end, *end2;
+    long a, b;
+    errno = 0;
+    a = strtol(text, &end, 10);
+    if (end == text || (*end != 'x' && *end != 'X')) return fail("%s: expected WxH (e.g. 640x480), got '%s'", opt, text);
+    b = strtol(end + 1, &end2, 10);
+    if (end2 == end + 1 || *end2 != '\0' || errno == ERANGE || a < 1 || a > 16384 || b < 1 || b > 16384)
+        return fail("%s: expected WxH with W and H in [1, 16384], got '%s'", opt, text);
+    *w = (int)a;
+    *h = (int)b;
+    return PARSED;
+}
+
+/* text is one of names[0 .. count-1]: *index is its position. */
+static int parse_choice(const char *opt, const char *text, const char *const *names, int count, const char *list,
+                        int *index)
+{
+    int i;
+    for (i = 0; i < count; i++)
+        if (strcmp(text, names[i]) == 0) {
+            *index = i;
+            return PARSED;
+        }
+    return fail("%s: expected %s, got '%s'", opt, list, text);
+}
+
+static const struct { const char *name; unsigned bit; } skip_names[] = {
+    { "no-emitters", PT_SKIP_NO_EMITTERS },   { "delta-vertex", PT_SKIP_DELTA_VERTEX },
+    { "facing-away", PT_SKIP_FACING_AWAY },   { "no-textures", PT_SKIP_NO_TEXTURES },
+    { "zero-bsdf-shadow", PT_SKIP_ZERO_BSDF_SHADOW }
+};
+
+/* "all", a comma-separated list of skip_names, or a number whose bits lie in PT_SKIP_ALL. */
+static int parse_skips(const char *opt, const char *text, unsigned *out)
+{
+    const char *p = text;
+    unsigned bits = 0;
+    if (strcmp(text, "all") == 0) {
+        *out = PT_SKIP_ALL;
+        return PARSED;
+    }
+    if (text[0] >= '0' && text[0] <= '9') {
+        char *end;
+        unsigned long v = strtoul(text, &end, 0);
+        if (*end != '\0' || (v & ~(unsigned long)PT_SKIP_ALL) != 0)
+            return fail("%s: '%s' is not a set of PT_SKIP_* bits (mask 0x%x)", opt, text, PT_SKIP_ALL);
+        *out = (unsigned)v;
+        return PARSED;
+    }
+    for (;;) {
+        const char *comma = strchr(p, ',');
+        size_t n = comma ? (size_t)(comma - p) : strlen(p), k;
+        int found = 0;
+        for (k = 0; k < sizeof skip_names / sizeof skip_names[0]; k++)
+            if (strlen(skip_names[k].name) == n && strncmp(p, skip_names[k].name, n) == 0) {
+                bits |= skip_names[k].bit;
+                found = 1;
+            }
+        if (!found) return fail("%s: unknown skip '%.*s' (see --help)", opt, (int)n, p);
+        if (!comma) break;
+        p = comma + 1;
+    }
+    *out = bits;
+    return PARSED;
+}
+
+/* ---------------------------------------------------------------------------------------
+   Options: a table of names, then one function per group of what they set
+   --------------------------------------------------------------------------------------- */
+
+typedef enum opt_id {
+    O_OUTPUT, O_WIDTH, O_HEIGHT, O_SIZE, O_SPP, O_STRATEGY, O_SAMPLER, O_SEED, O_MAX_DEPTH, O_INDIRECT,
+    O_LIGHT_WEIGHT, O_THREADS, O_BACKEND, O_ADAPTIVE, O_ADAPTIVE_MIN, O_ADAPTIVE_CHECK, O_ADAPTIVE_NB,
+    O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_QUIET, O_HELP, O_VERSION
+} opt_id;
+
+static const struct option_def {
+    const char *name, *alias; /* alias: the short form, or NULL */
+    int takes_value;
+    opt_id id;
+} option_defs[] = {
+    { "--output", "-o", 1, O_OUTPUT },        { "--width", NULL, 1, O_WIDTH },
+    { "--height", NULL, 1, O_HEIGHT },        { "--size", NULL, 1, O_SIZE },
+    { "--spp", NULL, 1, O_SPP },              { "--strategy", NULL, 1, O_STRATEGY },
+    { "--sampler", NULL, 1, O_SAMPLER },      { "--seed", NULL, 1, O_SEED },
+    { "--max-depth", NULL, 1, O_MAX_DEPTH },  { "--indirect-paths", NULL, 1, O_INDIRECT },
+    { "--light-weight", NULL, 1, O_LIGHT_WEIGHT }, { "--threads", NULL, 1, O_THREADS },
+    { "--backend", NULL, 1, O_BACKEND },      { "--adaptive", NULL, 1, O_ADAPTIVE },
+    { "--adaptive-min-spp", NULL, 1, O_ADAPTIVE_MIN }, { "--adaptive-check", NULL, 1, O_ADAPTIVE_CHECK },
+    { "--adaptive-neighbours-only", NULL, 0, O_ADAPTIVE_NB }, { "--disable-skips", NULL, 1, O_SKIPS },
+    { "--exposure", NULL, 1, O_EXPOSURE },    { "--tonemap", NULL, 1, O_TONEMAP },
+    { "--preview-every", NULL, 1, O_PREVIEW }, { "--export-pov", NULL, 1, O_POV },
+    { "--quiet", "-q", 0, O_QUIET },          { "--help", "-h", 0, O_HELP },
+    { "--version", NULL, 0, O_VERSION }
+};
+
+static const struct option_def *find_option(const char *name)
+{
+    size_t k;
+    for (k = 0; k < sizeof option_defs / sizeof option_defs[0]; k++)
+        if (strcmp(name, option_defs[k].name) == 0 || (option_defs[k].alias && strcmp(name, option_defs[k].alias) == 0))
+            return &option_defs[k];
+    return NULL;
+}
+
+/* The settings a scene file has too (GIVEN_* records that they were set here). */
+static int set_scene_setting(options *o, opt_id id, const char *name, const char *v)
+{
+    static const char *const strategies[] = { "mis", "material", "light", "mixture" };
+    static const pt_strategy strategy_ids[] = { PT_STRATEGY_MIS, PT_STRATEGY_MATERIAL, PT_STRATEGY_LIGHT,
+                                                PT_STRATEGY_MIXTURE };
+    static const char *const samplers[] = { "independent", "sobol" };
+    pt_render_desc *d = &o->set;
+    int k = 0, rc = PARSED;
+    switch (id) {
+    case O_WIDTH: rc = parse_int(name, v, 1, 16384, &d->width); o->given |= GIVEN_WIDTH; break;
+    case O_HEIGHT: rc = parse_int(name, v, 1, 16384, &d->height); o->given |= GIVEN_HEIGHT; break;
+    case O_SIZE:
+        rc = parse_size(name, v, &d->width, &d->height);
+        o->given |= GIVEN_WIDTH | GIVEN_HEIGHT;
+        break;
+    case O_SPP: rc = parse_int(name, v, 1, 1 << 20, &d->samples_per_pixel); o->given |= GIVEN_SPP; break;
+    case O_STRATEGY:
+        rc = parse_choice(name, v, strategies, 4, "mis, material, light or mixture", &k);
+        d->strategy = strategy_ids[k];
+        o->given |= GIVEN_STRATEGY;
+        break;
+    case O_SAMPLER:
+        rc = parse_choice(name, v, samplers, 2, "independent or sobol", &k);
+        d->sampler = k ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
+        o->given |= GIVEN_SAMPLER;
+        break;
+    case O_SEED: rc = parse_u64(name, v, &d->seed); o->given |= GIVEN_SEED; break;
+    case O_MAX_DEPTH: rc = parse_int(name, v, 1, 100000, &d->max_depth); o->given |= GIVEN_DEPTH; break;
+    case O_INDIRECT: rc = parse_int(name, v, 1, 8, &d->indirect_paths); o->given |= GIVEN_INDIRECT; break;
+    default: return fail("internal error: option %s", name);
+    }
+    return rc;
+}
+
+/* The settings only the command line has (the scene file leaves them at their defaults). */
+static int set_render_setting(options *o, opt_id id, const char *name, const char *v)
+{
+    static const char *const backends[] = { "auto", "builtin", "embree" };
+    static const pt_backend backend_ids[] = { PT_BACKEND_AUTO, PT_BACKEND_BUILTIN, PT_BACKEND_EMBREE };
+    pt_render_desc *d = &o->set;
+    int k = 0, rc;
+    switch (id) {
+    case O_LIGHT_WEIGHT: return parse_real(name, v, 0.0, 1.0, 1, "a number in (0, 1]", &d->light_weight);
+    case O_THREADS: return parse_int(name, v, 0, 1024, &d->threads);
+    case O_BACKEND:
+        rc = parse_choice(name, v, backends, 3, "auto, builtin or embree", &k);
+        o->backend = backend_ids[k];
+        return rc;
+    case O_ADAPTIVE: return parse_real(name, v, 0.0, 1e30, 0, "a finite number >= 0", &d->adaptive_threshold);
+    case O_ADAPTIVE_MIN: return parse_int(name, v, 2, 1 << 20, &d->adaptive_min_spp);
+    case O_ADAPTIVE_CHECK: return parse_int(name, v, 1, 1 << 20, &d->adaptive_check_passes);
+    case O_SKIPS: return parse_skips(name, v, &d->disable_skips);
+    default: return set_scene_setting(o, id, name, v);
+    }
+}
+
+static int ends_with(const char *s, const char *suffix) /* ASCII case-insensitive */
+{
+    size_t n = strlen(s), m = strlen(suffix), i;
+    if (n <= m) return 0;
+    for (i = 0; i < m; i++) {
+        char c = s[n - m + i];
+        if (c >= 'A' && c <= 'Z') c = (char)(c - 'A' + 'a');
+        if (c != suffix[i]) return 0;
+    }
+    return 1;
+}
+
+/* path's directory exists and is writable, and path is not a directory. */
+static int check_writable(const char *path)
+{
+    char dir[4096];
+    const char *slash = strrchr(path, '/');
+    struct stat st;
+    size_t len = !slash ? 1 : slash == path ? 1 : (size_t)(slash - path);
+    if (!*path) return fail("empty output path");
+    if (len >= sizeof dir) return fail("%s: path too long", path);
+    if (!slash) strcpy(dir, ".");
+    else {
+        memcpy(dir, path, len);
+        dir[len] = '\0';
+    }
+    if (access(dir, W_OK) != 0) return fail("%s: cannot write to directory '%s': %s", path, dir, strerror(errno));
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) return fail("%s: is a directory", path);
+    return PARSED;
+}
+
+/* An image output: a known extension this build can write, in a writable directory. */
+static int add_output(options *o, const char *path)
+{
+    output *out = &o->outputs[o->output_count];
+    if (o->output_count == MAX_OUTPUTS) return fail("too many outputs (at most %d)", MAX_OUTPUTS);
+    if (ends_with(path, ".png")) out->fmt = FMT_PNG;
+    else if (ends_with(path, ".exr")) out->fmt = FMT_EXR;
+    else if (ends_with(path, ".pfm")) out->fmt = FMT_PFM;
+    else if (ends_with(path, ".ppm")) out->fmt = FMT_PPM;
+    else return fail("%s: unknown image format (use .png, .exr, .pfm or .ppm)", path);
+    if (out->fmt == FMT_PNG && !have_png())
+        return fail("%s: built without PNG support (install libpng-dev and rebuild)", path);
+    if (out->fmt == FMT_EXR && !have_exr())
+        return fail("%s: built without OpenEXR support (install libopenexr-dev and rebuild)", path);
+    if (check_writable(path) != PARSED) return PARSE_FAILED;
+    out->path = path;
+    o->output_count++;
+    return PARSED;
+}
+
+/* What is written, how the 8-bit outputs look, and how the command behaves. */
+static int set_output_option(options *o, opt_id id, const char *name, const char *v)
+{
+    static const char *const tonemaps[] = { "clamp", "reinhard", "aces" };
+    static const pt_tonemap tonemap_ids[] = { PT_TONEMAP_CLAMP, PT_TONEMAP_REINHARD, PT_TONEMAP_ACES };
+    float seconds = 0.0f;
+    int k = 0, rc;
+    switch (id) {
+    case O_OUTPUT: return add_output(o, v);
+    case O_POV:
+        if (o->pov) return fail("%s given twice", name);
+        o->pov = v;
+        return check_writable(v);
+    case O_EXPOSURE: return parse_real(name, v, -1e30, 1e30, 0, "a finite number", &o->display.exposure);
+    case O_TONEMAP:
+        rc = parse_choice(name, v, tonemaps, 3, "clamp, aces or reinhard", &k);
+        o->display.tonemap = tonemap_ids[k];
+        return rc;
+    case O_PREVIEW:
+        rc = parse_real(name, v, 0.0, 1e6, 1, "a number of seconds > 0", &seconds);
+        o->preview_every = seconds;
+        return rc;
+    default: return set_render_setting(o, id, name, v);
+    }
+}
+
+/* Splits "--name=value"; otherwise the value, if the option takes one, is the next argument. */
+static int parse_one(options *o, int argc, char **argv, int *i)
+{
+    const char *arg = argv[*i], *value = NULL, *eq = strchr(arg, '=');
+    char name[64];
+    const struct option_def *def;
+    size_t n = strncmp(arg, "--", 2) == 0 && eq ? (size_t)(eq - arg) : strlen(arg);
+    if (n >= sizeof name) return fail("unknown option '%s' (see pdftrace --help)", arg);
+    memcpy(name, arg, n);
+    name[n] = '\0';
+    if (n < strlen(arg)) value = eq + 1;
+    def = find_option(name);
+    if (!def) return fail("unknown option '%s' (see pdftrace --help)", arg);
+    if (!def->takes_value) {
+        if (value) return fail("%s takes no value", name);
+        switch (def->id) {
+        case O_HELP: print_help(); return PARSED_EXIT;
+        case O_VERSION: print_version(); return PARSED_EXIT;
+        case O_QUIET: o->quiet = 1; return PARSED;
+        case O_ADAPTIVE_NB: o->set.adaptive_neighbours_only = 1; return PARSED;
+        default: return fail("internal error: option %s", name);
+        }
+    }
+    if (!value) {
+        if (*i + 1 >= argc) return fail("%s needs a value", name);
+        value = argv[++*i];
+    }
+    return set_output_option(o, def->id, name, value);
+}
+
+/* The default output: SCENE's base name without its extension, + .png (.ppm without libpng). */
+static int add_default_output(options *o)
+{
+    const char *base = strrchr(o->scene, '/'), *dot;
+    size_t n;
+    base = base ? base + 1 : o->scene;
+    dot = strrchr(base, '.');
+    n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    if (n == 0 || n + 5 > sizeof o->default_output) return fail("%s: no name to derive an output from (use -o)", o->scene);
+    memcpy(o->default_output, base, n);
+    strcpy(o->default_output + n, have_png() ? ".png" : ".ppm");
+    return add_output(o, o->default_output);
+}
+
+static int parse_options(int argc, char **argv, options *o)
+{
+    int i, rc;
+    memset(o, 0, sizeof *o);
+    o->backend = PT_BACKEND_AUTO;
+    o->display.tonemap = PT_TONEMAP_CLAMP;
+    for (i = 1; i < argc; i++) {
+        if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            if ((rc = parse_one(o, argc, argv, &i)) != PARSED) return rc;
+        } else if (o->scene) {
+            return fail("more than one scene file ('%s' and '%s')", o->scene, argv[i]);
+        } else {
+            o->scene = argv[i];
+        }
+    }
+    if (!o->scene) return fail("no scene file given (usage: pdftrace SCENE [options]; see pdftrace --help)");
+    if (o->output_count == 0 && !o->pov) return add_default_output(o);
+    return PARSED;
+}
+
+/* ---------------------------------------------------------------------------------------
+   The scene: loaded, built, the command line's settings applied
+   --------------------------------------------------------------------------------------- */
+
+static void apply_settings(const options *o, pt_render_desc *d)
+{
+    const pt_render_desc *s = &o->set;
+    if (o->given & GIVEN_WIDTH) d->width = s->width;
+    if (o->given & GIVEN_HEIGHT) d->height = s->height;
+    if (o->given & GIVEN_SPP) d->samples_per_pixel = s->samples_per_pixel;
+    if (o->given & GIVEN_STRATEGY) d->strategy = s->strategy;
+    if (o->given & GIVEN_SAMPLER) d->sampler = s->sampler;
+    if (o->given & GIVEN_SEED) d->seed = s->seed;
+    if (o->given & GIVEN_DEPTH) d->max_depth = s->max_depth;
+    if (o->given & GIVEN_INDIRECT) d->indirect_paths = s->indirect_paths;
+    d->light_weight = s->light_weight;
+    d->threads = s->threads;
+    d->adaptive_threshold = s->adaptive_threshold;
+    d->adaptive_min_spp = s->adaptive_min_spp;
+    d->adaptive_check_passes = s->adaptive_check_passes;
+    d->adaptive_neighbours_only = s->adaptive_neighbours_only;
+    d->disable_skips = s->disable_skips;
+}
+
+/* Loads and builds the scene, writes the POV-Ray export if asked; EXIT_SUCCESS or an exit status. */
+static int load_scene(const options *o, pt_scenefile *sf, pt_scene **scene, pt_render_desc *d)
+{
+    char err[1024];
+    int rc = pt_scenefile_load(o->scene, sf, err, sizeof err);
+    *scene = NULL;
+    if (rc == PT_OK) rc = pt_scenefile_build(sf, scene, d, err, sizeof err);
+    if (rc != PT_OK) {
+        fail("%s", err);
+        return rc == PT_ERROR_OUT_OF_MEMORY ? EXIT_FAILURE : EXIT_USAGE;
+    }
+    apply_settings(o, d);
+    if (o->backend != PT_BACKEND_AUTO) { /* built with AUTO: commit again with the one asked for */
+        rc = pt_scene_set_backend(*scene, o->backend);
+        if (rc == PT_OK) rc = pt_scene_commit(*scene);
+        if (rc != PT_OK) {
+            fail("--backend: %s", pt_scene_error_message(*scene));
+            return rc == PT_ERROR_OUT_OF_MEMORY ? EXIT_FAILURE : EXIT_USAGE;
+        }
+    }
+    if (o->pov) {
+        pt_pov_options po;
+        po.radiosity = -1;
+        po.light_grid = 0;
+        po.width = d->width;
+        po.height = d->height;
+        rc = pt_scenefile_write_pov(sf, o->pov, &po, err, sizeof err);
+        if (rc != PT_OK) {
+            fail("%s", err);
+            return rc == PT_ERROR_IO || rc == PT_ERROR_OUT_OF_MEMORY ? EXIT_FAILURE : EXIT_USAGE;
+        }
+        if (!o->quiet) printf("wrote      %s\n", o->pov);
+    }
+    return EXIT_SUCCESS;
+}
+
+/* ---------------------------------------------------------------------------------------
+   Writing the outputs
+   --------------------------------------------------------------------------------------- */
+
+static int write_one(const output *out, const pt_image *linear, const pt_image *shown, char *err, size_t err_size)
+{
+    err[0] = '\0';
+    switch (out->fmt) {
+#ifdef PDFTRACE_PNG
+    case FMT_PNG: return pt_write_png(out->path, shown, err, err_size);
+#endif
+#ifdef PDFTRACE_OPENEXR
+    case FMT_EXR: return pt_write_exr(out->path, linear, NULL, err, err_size);
+#endif
+    case FMT_PFM: return pt_write_pfm_ex(out->path, linear, err, err_size);
+    case FMT_PPM: return pt_write_ppm_ex(out->path, shown, err, err_size);
+    default: return PT_ERROR_UNSUPPORTED; /* refused by add_output */
+    }
+}
+
+/* Writes img to every output, the 8-bit ones through the display transform. Returns 1 when all
+   were written; prints one line per failure (and, if announce, one per file written). */
+static int write_outputs(const options *o, const pt_image *img, int announce)
+{
+    pt_image shown = {0, 0, NULL};
+    char err[1024];
+    int i, rc, ok = 1;
+    for (i = 0; i < o->output_count; i++)
+        if (o->outputs[i].fmt == FMT_PNG || o->outputs[i].fmt == FMT_PPM) break;
+    if (i < o->output_count && (rc = pt_image_apply_display(img, &o->display, &shown)) != PT_OK) {
+        fail("display transform: %s", pt_result_string(rc));
+        return 0;
+    }
+    for (i = 0; i < o->output_count; i++) {
+        rc = write_one(&o->outputs[i], img, &shown, err, sizeof err);
+        if (rc != PT_OK) {
+            if (err[0]) fail("%s", err);
+            else fail("%s: writing failed: %s", o->outputs[i].path, pt_result_string(rc));
+            ok = 0;
+        } else if (announce) {
+            printf("wrote      %s\n", o->outputs[i].path);
+        }
+    }
+    pt_image_free(&shown);
+    return ok;
+}
+
+/* ---------------------------------------------------------------------------------------
+   Progress (bar on a terminal, a line now and then otherwise) and previews
+   --------------------------------------------------------------------------------------- */
+
+typedef struct progress_state {
+    const options *o;
+    const pt_film *film;
+    pt_image preview;            /* the film resolved for --preview-every */
+    int tty;                     /* stderr is a terminal: one bar, redrawn */
+    int shown;                   /* something is on the bar's line */
+    int last_tenth;              /* plain lines: the 10 % step of the last line printed */
+    double last_line, last_preview; /* render seconds */
+    int preview_failed;
+} progress_state;
+
+/* "12.3 s" under a minute, else "m:ss" or "h:mm:ss". */
+static void format_time(double s, char *buf, size_t n)
+{
+    long t = s > 0 && s < 1e8 ? (long)(s + 0.5) : 0;
+    if (s < 59.95) snprintf(buf, n, "%.1f s", s > 0 ? s : 0.0);
+    else if (t < 3600) snprintf(buf, n, "%ld:%02ld", t / 60, t % 60);
+    else snprintf(buf, n, "%ld:%02ld:%02ld", t / 3600, t / 60 % 60, t % 60);
+}
+
+/* The bar or a plain line: done of total samples after `seconds`. */
+static void show_progress(progress_state *ps, uint64_t done, uint64_t total, double seconds, int final)
+{
+    double f = total ? (double)done / (double)total : 1.0, rate = seconds > 0 ? (double)done / seconds : 0.0;
+    char elapsed[32], eta[32];
+    format_time(seconds, elapsed, sizeof elapsed);
+    format_time(f > 0 ? seconds * (1.0 - f) / f : 0.0, eta, sizeof eta);
+    if (final) f = 1.0;
+    if (ps->tty) {
+        char bar[31];
+        int k, full = (int)(f * 30.0);
+        for (k = 0; k < 30; k++) bar[k] = k < full ? '#' : '-';
+        bar[30] = '\0';
+        fprintf(stderr, "\r[%s] %5.1f%%  %6.2f M samples/s  %s elapsed  %s%s   ", bar, 100.0 * f, rate * 1e-6, elapsed,
+                final ? "done" : "ETA ", final ? "    " : eta);
+        ps->shown = 1;
+    } else {
+        fprintf(stderr, "rendering %3.0f%%  %.2f M samples/s  %s elapsed%s%s\n", 100.0 * f, rate * 1e-6, elapsed,
+                final ? "" : "  ETA ", final ? "" : eta);
+    }
+    fflush(stderr);
+}
+
+/* Called by pt_render on its own thread between passes: progress, then a preview if due. */
+static int on_pass(void *user, const pt_progress *p)
+{
+    progress_state *ps = (progress_state *)user;
+    if (!ps->o->quiet) {
+        /* plain lines: at a new 10 % step at most once a second, else every 10 s */
+        int tenth = p->samples_total ? (int)(10 * p->samples_done / p->samples_total) : 10;
+        double since = p->seconds - ps->last_line;
+        if (ps->tty || (tenth > ps->last_tenth && since >= 1.0) || since >= 10.0) {
+            if (p->pass < p->pass_count) show_progress(ps, p->samples_done, p->samples_total, p->seconds, 0);
+            ps->last_tenth = tenth;
+            ps->last_line = p->seconds;
+        }
+    }
+    if (ps->o->preview_every > 0 && p->pass < p->pass_count && p->seconds - ps->last_preview >= ps->o->preview_every) {
+        ps->last_preview = p->seconds;
+        if (pt_film_resolve(ps->film, &ps->preview) != PT_OK || !write_outputs(ps->o, &ps->preview, 0)) {
+            ps->preview_failed = 1;
+            return 1; /* cancel: the final write would fail the same way */
+        }
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------------------------------
+   Rendering and statistics
+   --------------------------------------------------------------------------------------- */
+
+static const char *strategy_name(pt_strategy s)
+{
+    switch (s) {
+    case PT_STRATEGY_MIS: return "mis";
+    case PT_STRATEGY_MATERIAL: return "material";
+    case PT_STRATEGY_LIGHT: return "light";
+    case PT_STRATEGY_MIXTURE: return "mixture";
+    }
+    return "?";
+}
+
+static void print_stats(const options *o, const pt_scene *scene, const pt_render_desc *d, const pt_render_stats *st)
+{
+    pt_scene_info info;
+    uint64_t rays = st->camera_rays + st->bounce_rays + st->shadow_rays;
+    double secs = st->seconds > 0 ? st->seconds : 1e-9, pixels = (double)d->width * (double)d->height;
+    printf("scene      %s", o->scene);
+    if (pt_scene_get_info(scene, &info) == PT_OK)
+        printf(": %u primitives, %s traversal", (unsigned)info.primitive_count,
+               info.backend == PT_BACKEND_EMBREE ? "Embree" : "built-in BVH");
+    printf("\nimage      %d x %d, %d spp, strategy %s", d->width, d->height, d->samples_per_pixel ? d->samples_per_pixel : 16,
+           strategy_name(d->strategy));
+    if (d->strategy == PT_STRATEGY_MIXTURE) printf(" (light weight %g)", d->light_weight ? (double)d->light_weight : 0.5);
+    if (d->sampler == PT_SAMPLER_SOBOL) printf(", sobol sampler");
+    if (d->indirect_paths) printf(", %d indirect path%s", d->indirect_paths, d->indirect_paths == 1 ? "" : "s");
+    printf(", max depth %d, seed %llu\n", d->max_depth ? d->max_depth : 50, (unsigned long long)d->seed);
+    printf("time       %.3f s on %d thread%s, %d pass%s\n", st->seconds, st->threads, st->threads == 1 ? "" : "s",
+           st->passes, st->passes == 1 ? "" : "es");
+    printf("samples    %llu (%.3f M samples/s)\n", (unsigned long long)st->samples, (double)st->samples / secs * 1e-6);
+    if (d->adaptive_threshold > 0.0f)
+        printf("adaptive   threshold %g: %llu pixels converged early (%.1f%%), %u to %u spp, mean %.1f\n",
+               (double)d->adaptive_threshold, (unsigned long long)st->pixels_converged,
+               100.0 * (double)st->pixels_converged / pixels, st->min_spp, st->max_spp, (double)st->samples / pixels);
+    if (st->estimated_error >= 0) printf("error      estimated RMS relative error %.4f\n", st->estimated_error);
+    if (d->disable_skips) printf("skips      general path forced for mask 0x%x\n", d->disable_skips);
+    printf("rays       %llu camera + %llu bounce + %llu shadow = %llu\n", (unsigned long long)st->camera_rays,
+           (unsigned long long)st->bounce_rays, (unsigned long long)st->shadow_rays, (unsigned long long)rays);
+    printf("rays/s     %.3f M\n", (double)rays / secs * 1e-6);
+    printf("NaN/Inf    %llu samples (caught and zeroed)\n", (unsigned long long)st->nonfinite_samples);
+}
+
+/* Renders into a film of our own (so that previews can resolve it between passes) and writes
+   the outputs. Returns the exit status. */
+static int render(const options *o, const pt_scene *scene, pt_render_desc *d)
+{
+    progress_state ps;
+    pt_film film;
+    pt_image img = {0, 0, NULL};
+    pt_render_stats st;
+    int rc, ok;
+    memset(&ps, 0, sizeof ps);
+    ps.o = o;
+    ps.film = &film;
+    ps.tty = isatty(STDERR_FILENO);
+    ps.last_tenth = 0;
+    if ((rc = pt_film_init(&film, d->width, d->height)) != PT_OK) {
+        fail("%d x %d film: %s", d->width, d->height, pt_result_string(rc));
+        return EXIT_FAILURE;
+    }
+    d->progress = on_pass;
+    d->progress_user = &ps;
+    rc = pt_render(scene, d, &film, &st);
+    if (!o->quiet && rc == PT_OK) show_progress(&ps, st.samples, st.samples, st.seconds, 1);
+    if (ps.shown) fputc('\n', stderr);
+    pt_image_free(&ps.preview);
+    if (rc != PT_OK) {
+        if (!ps.preview_failed) fail("rendering failed: %s", st.error[0] ? st.error : pt_result_string(rc));
+        pt_film_free(&film);
+        return EXIT_FAILURE;
+    }
+    rc = pt_film_resolve(&film, &img);
+    pt_film_free(&film);
+    if (rc != PT_OK) {
+        fail("resolving the film: %s", pt_result_string(rc));
+        return EXIT_FAILURE;
+    }
+    if (!o->quiet) print_stats(o, scene, d, &st);
+    ok = write_outputs(o, &img, !o->quiet);
+    pt_image_free(&img);
+    return ok ? EXIT_SUCCESS : EXIT_FAILURE;
+}
+
+int main(int argc, char **argv)
+{
+    options o;
+    pt_scenefile sf;
+    pt_scene *scene = NULL;
+    pt_render_desc d;
+    int rc = parse_options(argc, argv, &o), status;
+    if (rc == PARSED_EXIT) return EXIT_SUCCESS;
+    if (rc != PARSED) return EXIT_USAGE;
+    memset(&sf, 0, sizeof sf);
+    memset(&d, 0, sizeof d);
+    status = load_scene(&o, &sf, &scene, &d);
+    if (status == EXIT_SUCCESS && o.output_count > 0) status = render(&o, scene, &d);
+    pt_scene_destroy(scene);
+    pt_scenefile_free(&sf);
+    return status;
+}
