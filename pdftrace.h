@@ -33,6 +33,7 @@
    with its own implementation macro (define it in one file, which may be the same file):
        pdftrace_scene.h   PDFTRACE_SCENE_IMPLEMENTATION   scene files, OBJ meshes, POV-Ray export
        pdftrace_exr.h     PDFTRACE_EXR_IMPLEMENTATION     OpenEXR output and input (OpenEXRCore)
+       pdftrace_png.h     PDFTRACE_PNG_IMPLEMENTATION     PNG output (libpng)
 
    OPTIONS (define before including the implementation)
    =======
