@@ -751,9 +751,11 @@ static int cmd_test(int argc, char **argv)
 #else
     skip_compare("built without OpenEXR (apt-get install libopenexr-dev)");
 #endif
-    if (argc != 5) {
-        skip("scenes/cornell.scene renders bit-identical to the built-in box", "no build/cornell argument");
-        skip("build/cornell --scene: the file's settings are defaults", "no build/cornell argument");
+    if (argc != 6) {
+        skip("pdftrace scenes/cornell.scene renders bit-identical to build/cornell's built-in box",
+             "no build/pdftrace and build/cornell arguments");
+        skip("pdftrace: the file's sampler and indirect_paths are defaults, --indirect-paths overrides",
+             "no build/pdftrace and build/cornell arguments");
     }
     printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);
     return failed ? 1 : 0;
