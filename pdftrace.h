@@ -78,7 +78,8 @@
    pt_result code; functions that create something return its id (>= 0) or an error code.
    A failure's one-line message goes where the call's own data is: into the scene for calls
    that build it (pt_scene_error_message), into pt_render_stats.error for a render, into the
-   caller's err[err_size] for the file writers and readers (pt_write_*_ex, sections 10, 11).
+   caller's err[err_size] for the file writers and readers (pt_write_*_ex here; the loaders
+   and writers of pdftrace_scene.h, pdftrace_exr.h and pdftrace_png.h).
    There is no global or per-thread error state.
 
    SECTIONS (in the order data flows)
