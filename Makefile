@@ -80,8 +80,13 @@ PT_CPPFLAGS := -I.
 PT_THREADS  ?= -pthread
 PT_LDLIBS   := -lm
 
-# The sanitizer build of the tests (added after CFLAGS, so its -O1 wins).
-SANFLAGS ?= -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all
+# The sanitizer build of the tests (added after CFLAGS, so its -O1 wins). gcc's undefined omits
+# float-cast-overflow (a float out of an integer's range converted to it), hence named here.
+SANFLAGS ?= -O1 -g -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all
+# make test also builds the runner with clang under ASan+UBSan when clang is installed (its
+# undefined includes float-cast-overflow; its checks differ from gcc's), else prints SKIP.
+SAN_CLANG      ?= clang
+SAN_CLANG_PATH := $(shell command -v $(SAN_CLANG) 2>/dev/null)
 # make tsan-test: ThreadSanitizer, and the runner's filter for the tests it runs.
 TSANFLAGS ?= -O1 -g -fsanitize=thread
 TSAN_TESTS ?= concurrent
@@ -206,6 +211,10 @@ $(BUILD)/test_runner_asan: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) 
 	$(need_tests)
 	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
+$(BUILD)/test_runner_asan_clang: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
+	$(need_tests)
+	$(SAN_CLANG) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(SANFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
+
 # Without threads: no -pthread at all, to show the library does not need it. Also without SIMD
 # (PDFTRACE_NO_SIMD), so that the scalar BVH code other architectures get is tested too.
 $(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
@@ -280,7 +289,8 @@ bench-refs: $(BUILD)/bench
 # Then the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
 # ASan+UBSan) and the FP-trap renders of the scene suite.
 test: $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads \
-      $(BUILD)/test_runner_asan $(BUILD)/fuzz_replay $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
+      $(BUILD)/test_runner_asan $(if $(SAN_CLANG_PATH),$(BUILD)/test_runner_asan_clang) $(BUILD)/fuzz_replay \
+      $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
 	mkdir -p $(BUILD)/ptv-work
 	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/pdftrace $(BUILD)/cornell
 	tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/ptv-work/cli
@@ -289,6 +299,11 @@ test: $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUI
 	./$(BUILD)/fptrap scenes/*.scene
 	./$(BUILD)/test_runner
 	./$(BUILD)/test_runner_nothreads
+ifneq ($(SAN_CLANG_PATH),)
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan_clang
+else
+	@echo "SKIP the clang ASan+UBSan runner: $(SAN_CLANG) is not installed (apt-get install clang)"
+endif
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan
 
 # ---- make stress: the numerical stress cases at full size (tests/stress/; the same cases run
