@@ -3415,6 +3415,26 @@ static float pt__blocks(uint32_t n) { return (float)((n + 3u) / 4u); }
 static float pt__pad_down(float x) { return x - (fabsf(x) * 2.384185791e-7f + 1e-30f); }
 static float pt__pad_up(float x) { return x + (fabsf(x) * 2.384185791e-7f + 1e-30f); }
 
+/* The bin of centroid coordinate c on an axis whose centroids start at cmin, scale = bins per unit
+   (finite, > 0). Clamped in float before the conversion: a float-to-int conversion of a value
+   out of int's range (or of NaN) is undefined behaviour (C99 6.3.1.4). */
+static int pt__bvh_bin(float c, float cmin, float scale)
+{
+    float f = (c - cmin) * scale;
+    if (!(f > 0.0f)) return 0;
+    if (f >= (float)(PT__BVH_BINS - 1)) return PT__BVH_BINS - 1;
+    return (int)f;
+}
+/* Bins per unit length on an axis whose centroids span ext, or 0 when the axis is flat for
+   binning: no extent, or one so small (denormal) that PT__BVH_BINS / ext overflows. */
+static float pt__bvh_bin_scale(float ext)
+{
+    float scale;
+    if (!(ext > 0.0f)) return 0.0f;
+    scale = (float)PT__BVH_BINS / ext;
+    return scale <= FLT_MAX ? scale : 0.0f;
+}
+
 static uint32_t pt__bvh_build_range(pt__bvh_build *b, uint32_t begin, uint32_t end, uint32_t depth)
 {
     uint32_t ni = b->node_count++, n = end - begin, i, mid = begin;
@@ -3446,14 +3466,11 @@ static uint32_t pt__bvh_build_range(pt__bvh_build *b, uint32_t begin, uint32_t e
             uint32_t right_cnt[PT__BVH_BINS];
             pt_vec3 alo, ahi;
             uint32_t acc;
-            if (!(ext > 0.0f)) continue;
-            scale = (float)PT__BVH_BINS / ext;
+            if (!((scale = pt__bvh_bin_scale(ext)) > 0.0f)) continue;
             for (k = 0; k < PT__BVH_BINS; ++k) { cnt[k] = 0; blo[k] = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX); bhi[k] = pt_neg(blo[k]); }
             for (i = begin; i < end; ++i) {
                 uint32_t p = b->idx[i];
-                int bin = (int)((pt__vget(b->c[p], axis) - cmin) * scale);
-                if (bin < 0) bin = 0;
-                if (bin >= PT__BVH_BINS) bin = PT__BVH_BINS - 1;
+                int bin = pt__bvh_bin(pt__vget(b->c[p], axis), cmin, scale);
                 cnt[bin]++;
                 blo[bin] = pt__vmin(blo[bin], b->lo[p]);
                 bhi[bin] = pt__vmax(bhi[bin], b->hi[p]);
@@ -3479,13 +3496,11 @@ static uint32_t pt__bvh_build_range(pt__bvh_build *b, uint32_t begin, uint32_t e
         float split_cost = PT__BVH_COST_NODE + PT__BVH_COST_BLOCK * (parent > 0.0f ? best_cost / parent : (float)n);
         if (split_cost >= PT__BVH_COST_BLOCK * pt__blocks(n) && n <= b->max_leaf) { node->count = n; return ni; }
         {
-            float cmin = pt__vget(clo, best_axis), scale = (float)PT__BVH_BINS / (pt__vget(chi, best_axis) - cmin);
+            float cmin = pt__vget(clo, best_axis), scale = pt__bvh_bin_scale(pt__vget(chi, best_axis) - cmin);
             uint32_t lo_i = begin, hi_i = end;
             while (lo_i < hi_i) {
                 uint32_t p = b->idx[lo_i];
-                int bin = (int)((pt__vget(b->c[p], best_axis) - cmin) * scale);
-                if (bin >= PT__BVH_BINS) bin = PT__BVH_BINS - 1;
-                if (bin <= best_bin) lo_i++;
+                if (pt__bvh_bin(pt__vget(b->c[p], best_axis), cmin, scale) <= best_bin) lo_i++;
                 else { b->idx[lo_i] = b->idx[--hi_i]; b->idx[hi_i] = p; }
             }
             mid = lo_i;

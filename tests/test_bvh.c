@@ -323,10 +323,50 @@ static void bvh_rebuild_after_change(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+static void bvh_denormal_extent(test_ctx *t)
+{
+    /* Two triangles at z = 0 and z = 1e-40: the centroids' z extent is denormal, so 16 / extent is
+       inf and the binning computed 0 * inf and converted the NaN to int (undefined behaviour: the
+       sanitizer runners stop here). Also 40 triangles with z steps of a few denormals (the SAH
+       build, leaves of up to 8) and a pair 1e-38 apart (a normal extent whose bin scale is near
+       FLT_MAX). Each must commit and agree with brute force on rays down -z and random rays. */
+    static const float dz[3] = { 1e-40f, 1e-44f, 1e-38f };
+    static const int count[3] = { 2, 40, 2 };
+    int c;
+    for (c = 0; c < 3; c++) {
+        pt_scene *s = pt_scene_create();
+        pt_rng rng;
+        bvh_stats st;
+        char ex[256] = "", name[64];
+        int m, rc = PT_OK, k;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        pt_rng_seed(&rng, 7100u + (uint64_t)c, 3u);
+        m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+        for (k = 0; k < count[c] && rc >= 0; k++) {
+            float z = dz[c] * (float)k;
+            rc = pt_scene_add_triangle(s, pt_v3(0, 0, z), pt_v3(1, 0, z), pt_v3(0, 1, z), m);
+        }
+        rc = rc >= 0 ? tb_commit_builtin(s) : rc;
+        snprintf(name, sizeof name, "%d triangles %g apart in z", count[c], (double)dz[c]);
+        if (!CHECK(t, rc == PT_OK, "%s: commit %d %s", name, rc, pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+        memset(&st, 0, sizeof st);
+        for (k = 0; k < 2000; k++) {
+            pt_ray r;
+            r.origin = pt_v3((float)tu_rand(&rng), (float)tu_rand(&rng), 1.0f);
+            r.dir = pt_v3((float)(0.2 * tu_rand(&rng) - 0.1), (float)(0.2 * tu_rand(&rng) - 0.1), -1.0f);
+            compare_ray(s, r, INFINITY, &st, ex, sizeof ex);
+        }
+        random_rays(s, &rng, 2.0, 2000, &st, ex, sizeof ex);
+        report(t, name, &st, ex, s);
+        pt_scene_destroy(s);
+    }
+}
+
 const test_case test_bvh_cases[] = {
     TEST_CASE(bvh_random_scenes),
     TEST_CASE(bvh_axis_aligned),
     TEST_CASE(bvh_ray_along_max_bound),
     TEST_CASE(bvh_rebuild_after_change),
+    TEST_CASE(bvh_denormal_extent),
     TEST_END
 };
