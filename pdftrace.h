@@ -973,6 +973,7 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #include <string.h>
 #include <stdarg.h>
 #include <float.h>
+#include <limits.h>
 #include <time.h>
 #include <errno.h>
 #ifndef PDFTRACE_NO_THREADS
@@ -5552,7 +5553,9 @@ static void pt__render_tile(void *data, int job)
     int index = ps->jobs[job];
     int tx = index % ps->tiles_x, ty = index / ps->tiles_x;
     int x0 = tx * ps->tile_size, y0 = ty * ps->tile_size;
-    int x1 = x0 + ps->tile_size, y1 = y0 + ps->tile_size, x, y, k, xa, xb;
+    /* x0 < width and y0 < height: the tile's far edge without int overflow */
+    int x1 = ps->tile_size < film->width - x0 ? x0 + ps->tile_size : film->width;
+    int y1 = ps->tile_size < film->height - y0 ? y0 + ps->tile_size : film->height, x, y, k, xa, xb;
     uint64_t taken = 0;
     pt_path_stats st;
     pt__sobol_cache cache;
@@ -5569,8 +5572,6 @@ static void pt__render_tile(void *data, int job)
         x0 = 0;
         x1 = film->width;
     } else {
-        if (x1 > film->width) x1 = film->width;
-        if (y1 > film->height) y1 = film->height;
         xa = x0;
         xb = x1;
     }
@@ -5930,6 +5931,16 @@ static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt
     if (film && (film->width != d->width || film->height != d->height))
         return pt__msg(err, n, bad, "pt_render_desc.width x height = %d x %d: the film is %d x %d", d->width, d->height,
                        film->width, film->height);
+    if (film) { /* a pixel's count and sample index are 32-bit: refuse a render that would wrap them */
+        size_t i, np = (size_t)film->width * (size_t)film->height;
+        uint32_t most = 0, spp = d->samples_per_pixel ? (uint32_t)d->samples_per_pixel : 16u;
+        for (i = 0; i < np; ++i)
+            if (film->count[i] > most) most = film->count[i];
+        if (most > 0xffffffffu - spp)
+            return pt__msg(err, n, bad,
+                           "pt_render_desc.samples_per_pixel = %d: the film holds %lu samples in a pixel already, "
+                           "and a pixel can count at most 4294967295", d->samples_per_pixel, (unsigned long)most);
+    }
     if ((rc = pt__settings_from_desc(d, cfg, err, n)) != PT_OK) return rc;
     if (!pt__isfinite(d->adaptive_threshold) || d->adaptive_threshold < 0.0f)
         return pt__msg(err, n, bad, "pt_render_desc.adaptive_threshold = %g: must be finite and >= 0 (0: off)",
@@ -6017,19 +6028,27 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
                             const pt_camera *cam, pt__pass *ps, pt__adaptive *ad, pt__render_run *r, char *err,
                             size_t en)
 {
-    int tiles, tiles_x, tiles_y, tile, slots, adaptive_ok;
+    int tiles, tiles_x, tiles_y, tile, slots, adaptive_ok, most;
     r->spp = d->samples_per_pixel ? d->samples_per_pixel : 16;
     r->per_pass = d->samples_per_pass ? d->samples_per_pass
                                       : (r->spp / (r->adaptive ? 64 : 16) > 0 ? r->spp / (r->adaptive ? 64 : 16) : 1);
     if (r->per_pass > r->spp) r->per_pass = r->spp;
-    r->passes = (r->spp + r->per_pass - 1) / r->per_pass;
+    /* rounded up without spp + per_pass - 1, which overflows int near INT_MAX */
+    r->passes = r->spp / r->per_pass + (r->spp % r->per_pass != 0);
     memset(ps, 0, sizeof *ps);
     /* default tiles: 8 x 8 pixels once a pass takes >= 8 samples per pixel (a job then holds >= 512
        samples), else 16 x 16: the smaller the jobs, the closer together the threads finish a pass
-       (docs/internals.md, "Tiles, chunks and threads") */
+       (docs/internals.md, "Tiles, chunks and threads"). A tile larger than the image is the whole
+       image (the image does not depend on the tiles), so the size is capped at the larger side. */
     ps->tile_size = d->tile_size ? d->tile_size : (r->per_pass >= 8 ? 8 : 16);
-    tiles_x = (d->width + ps->tile_size - 1) / ps->tile_size;
-    tiles_y = (d->height + ps->tile_size - 1) / ps->tile_size;
+    most = d->width > d->height ? d->width : d->height;
+    if (ps->tile_size > most) ps->tile_size = most;
+    tiles_x = d->width / ps->tile_size + (d->width % ps->tile_size != 0);
+    tiles_y = d->height / ps->tile_size + (d->height % ps->tile_size != 0);
+    if ((uint64_t)tiles_x * (uint64_t)tiles_y > (uint64_t)INT_MAX)
+        return pt__msg(err, en, PT_ERROR_INVALID_ARGUMENT,
+                       "pt_render_desc.tile_size = %d: %d x %d pixels make more than %d tiles", d->tile_size,
+                       d->width, d->height, INT_MAX);
     tiles = tiles_x * tiles_y;
     r->threads = d->threads ? d->threads : pt__cpu_count();
 #ifdef PDFTRACE_NO_THREADS

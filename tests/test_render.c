@@ -965,6 +965,77 @@ done:
     pt_scene_destroy(s);
 }
 
+static void render_counts_no_overflow(test_ctx *t)
+{
+    /* Schedules near INT_MAX: tile_size = INT_MAX (tiles_x = (w + tile - 1) / tile overflowed) and
+       samples_per_pixel = INT_MAX with 2 or INT_MAX per pass (passes = (spp + per_pass - 1) /
+       per_pass overflowed) returned PT_OK with zero samples and a black image. They must render
+       the samples asked for (or be cancelled), and a film whose 32-bit counts the render would wrap
+       must be refused naming samples_per_pixel. */
+    pt_render_desc d = tu_base_desc(8, 6, 2, 99);
+    pt_scene *s = cornell(0, &d);
+    pt_film ref, f;
+    pt_render_stats st;
+    progress_log log;
+    volatile int stop = 1;
+    int rc;
+    memset(&ref, 0, sizeof ref);
+    memset(&f, 0, sizeof f);
+    if (!CHECK(t, s != NULL, "Cornell scene")) return;
+    if (!tu_render_into(t, s, &d, &ref, NULL, "tile_size 0")) goto done;
+    {
+        pt_render_desc e = d;
+        e.tile_size = 2147483647;
+        e.threads = 2;
+        rc = pt_film_init(&f, e.width, e.height);
+        if (rc == PT_OK) rc = pt_render(s, &e, &f, &st);
+        CHECK(t, rc == PT_OK && st.samples == 96u, "tile_size = INT_MAX: rc %d, %llu samples (want 96) '%s'", rc,
+              (unsigned long long)st.samples, st.error);
+        CHECK(t, rc != PT_OK || tu_film_equal(&ref, &f), "tile_size = INT_MAX: the film differs from tile_size 0");
+        pt_film_free(&f);
+    }
+    {
+        pt_render_desc e = d;
+        memset(&log, 0, sizeof log);
+        e.samples_per_pixel = 2147483647;
+        e.samples_per_pass = 2;
+        e.progress = on_progress;
+        e.progress_user = &log;
+        log.cancel_at = 1;
+        rc = pt_film_init(&f, e.width, e.height);
+        if (rc == PT_OK) rc = pt_render(s, &e, &f, &st);
+        CHECK(t, rc == PT_ERROR_CANCELLED && st.samples == 96u && log.calls == 1,
+              "spp = INT_MAX, 2 per pass, cancelled after pass 1: rc %d, %llu samples (want 96), %d progress calls", rc,
+              (unsigned long long)st.samples, log.calls);
+        CHECK(t, log.pass_count == 1073741824 && log.total == 48u * 2147483647ull,
+              "spp = INT_MAX, 2 per pass: progress says %d passes (want 2^30) and %llu samples in all", log.pass_count,
+              (unsigned long long)log.total);
+        pt_film_free(&f);
+    }
+    {
+        pt_render_desc e = d;
+        e.samples_per_pixel = e.samples_per_pass = 2147483647;
+        e.cancel = &stop; /* cancelled before the one pass of INT_MAX samples starts */
+        rc = pt_film_init(&f, e.width, e.height);
+        if (rc == PT_OK) rc = pt_render(s, &e, &f, &st);
+        CHECK(t, rc == PT_ERROR_CANCELLED && st.samples == 0u,
+              "spp = samples_per_pass = INT_MAX, cancel set: rc %d (want cancelled, not PT_OK with no samples)", rc);
+        pt_film_free(&f);
+    }
+    {
+        rc = pt_film_init(&f, d.width, d.height);
+        if (!CHECK(t, rc == PT_OK, "film")) goto done;
+        f.count[5] = 0xffffffffu - 1u; /* one more sample fits, two do not */
+        rc = pt_render(s, &d, &f, &st);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "pt_render_desc.samples_per_pixel = 2:"),
+              "a film with a pixel at 2^32 - 2 samples, 2 more: rc %d '%s'", rc, st.error);
+        pt_film_free(&f);
+    }
+done:
+    pt_film_free(&ref);
+    pt_scene_destroy(s);
+}
+
 const test_case test_render_cases[] = {
     TEST_CASE(camera_conventions),
     TEST_CASE(threads_bit_identical),
@@ -974,6 +1045,7 @@ const test_case test_render_cases[] = {
     TEST_CASE(render_desc_validation),
     TEST_CASE(render_errors_name_the_field),
     TEST_CASE(concurrent_renders),
+    TEST_CASE(render_counts_no_overflow),
     TEST_CASE(furnace_closed_sphere),
     TEST_CASE(furnace_one_bounce),
     TEST_CASE(strategies_agree_cornell),
