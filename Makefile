@@ -9,7 +9,7 @@
 #                         under AddressSanitizer + UndefinedBehaviorSanitizer; every runner ends
 #                         with "N passed, M failed, K skipped" (a skipped test is not a pass)
 #   make nothreads-test   only the test runner built with -DPDFTRACE_NO_THREADS (and -DPDFTRACE_NO_SIMD)
-#   make tsan-test        the tests that render one scene from several threads at once, built with
+#   make tsan-test        the tests that render from several threads (and one scene from several at once), built with
 #                         ThreadSanitizer (build/test_runner_tsan; not part of make test)
 #   make cli-test         only the pdftrace command's tests (tests/cli/pdftrace.sh; part of make test)
 #   make exr-test         build the test runner with OpenEXR (build/test_runner_exr) and run
@@ -87,9 +87,13 @@ SANFLAGS ?= -O1 -g -fsanitize=address,undefined,float-cast-overflow -fno-sanitiz
 # undefined includes float-cast-overflow; its checks differ from gcc's), else prints SKIP.
 SAN_CLANG      ?= clang
 SAN_CLANG_PATH := $(shell command -v $(SAN_CLANG) 2>/dev/null)
-# make tsan-test: ThreadSanitizer, and the runner's filter for the tests it runs.
+# make tsan-test: ThreadSanitizer, and the runner's filters (one run each) for the tests that
+# render from several threads: pt_render's own threads, a host parallel_for, several renders
+# of one scene at once (render.concurrent_renders), and Embree's with EMBREE=1.
 TSANFLAGS ?= -O1 -g -fsanitize=thread
-TSAN_TESTS ?= concurrent
+TSAN_TESTS ?= render.threads_bit_identical render.progressive_equals_single render.cancellation_and_progress \
+              render.concurrent_renders render.render_counts adaptive.threads_bit_identical \
+              sampler.render_deterministic materials.furnace_spheres embree.embree_fp_state
 
 # check-warnings: the compilers and flags it uses.
 WARN_CC      ?= gcc clang
@@ -328,7 +332,10 @@ $(BUILD)/test_runner_tsan: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) 
 
 # A reported race fails the run (exit code 66).
 tsan-test: $(BUILD)/test_runner_tsan
-	TSAN_OPTIONS=halt_on_error=1 ./$(BUILD)/test_runner_tsan $(TSAN_TESTS)
+	@set -e; for f in $(TSAN_TESTS); do \
+	    echo "TSAN_OPTIONS=halt_on_error=1 ./$(BUILD)/test_runner_tsan $$f"; \
+	    TSAN_OPTIONS=halt_on_error=1 ./$(BUILD)/test_runner_tsan $$f; \
+	done
 
 # Only the pdftrace command's tests (part of make test).
 cli-test: $(BUILD)/pdftrace

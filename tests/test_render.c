@@ -870,7 +870,7 @@ static void render_errors_name_the_field(test_ctx *t)
 typedef struct conc_job {
     const pt_scene *s;
     pt_render_desc d;
-    int fail_kind;      /* 0: width 0; 1: max_depth -1; 2: cancelled before it starts */
+    int fail_kind;      /* 0: width 0; 1: max_depth -1; 2: cancelled before it starts; 3: width x height too many */
     int rounds;
     pt_film film;       /* the last valid render */
     int render_rc;      /* the first valid render's failure, else PT_OK */
@@ -880,8 +880,10 @@ typedef struct conc_job {
 
 static void *conc_run(void *arg)
 {
-    static const char *const want[3] = { "pt_render_desc.width = 0:", "pt_render_desc.max_depth = -1:", "cancelled" };
-    static const int want_rc[3] = { PT_ERROR_INVALID_ARGUMENT, PT_ERROR_INVALID_ARGUMENT, PT_ERROR_CANCELLED };
+    static const char *const want[4] = { "pt_render_desc.width = 0:", "pt_render_desc.max_depth = -1:", "cancelled",
+                                         "pt_render_desc.width x height = 65536 x 65536: too many pixels" };
+    static const int want_rc[4] = { PT_ERROR_INVALID_ARGUMENT, PT_ERROR_INVALID_ARGUMENT, PT_ERROR_CANCELLED,
+                                    PT_ERROR_INVALID_ARGUMENT };
     conc_job *j = (conc_job *)arg;
     volatile int stop = 1;
     int r, rc;
@@ -893,7 +895,8 @@ static void *conc_run(void *arg)
         memset(&img, 0, sizeof img);
         if (j->fail_kind == 0) e.width = 0;
         else if (j->fail_kind == 1) e.max_depth = -1;
-        else e.cancel = &stop;
+        else if (j->fail_kind == 2) e.cancel = &stop;
+        else e.width = e.height = 65536; /* width x height overflows what a film can index */
         rc = pt_render_image(j->s, &e, &img, &st);
         pt_image_free(&img);
         if (rc != want_rc[j->fail_kind] || !strstr(st.error, want[j->fail_kind])) {
@@ -909,23 +912,23 @@ static void *conc_run(void *arg)
 
 static void concurrent_renders(test_ctx *t)
 {
-    /* A committed scene rendered from three threads at once (each also with its own render threads
+    /* A committed scene rendered from four threads at once (each also with its own render threads
        or none): every film equals the same desc rendered alone, bit for bit, and each thread's failed
        renders are described in its own pt_render_stats, never in another's. Run under
        ThreadSanitizer by make tsan-test. */
     pt_render_desc d = tu_base_desc(32, 24, 8, 4242);
     pt_scene *s = cornell(1, &d);
-    conc_job job[3];
-    pt_film ref[3];
-    int k, started[3] = { 0, 0, 0 };
+    conc_job job[4];
+    pt_film ref[4];
+    int k, started[4] = { 0, 0, 0, 0 };
 #ifndef PDFTRACE_NO_THREADS
-    pthread_t th[3];
+    pthread_t th[4];
 #endif
     if (!CHECK(t, s != NULL, "Cornell scene")) return;
     d.max_depth = 8;
     memset(job, 0, sizeof job);
     memset(ref, 0, sizeof ref);
-    for (k = 0; k < 3; k++) {
+    for (k = 0; k < 4; k++) {
         job[k].s = s;
         job[k].d = d;
         job[k].d.seed = d.seed + (uint64_t)k;
@@ -937,13 +940,13 @@ static void concurrent_renders(test_ctx *t)
         if (!tu_render_into(t, s, &job[k].d, &ref[k], NULL, "alone")) goto done;
     }
 #ifndef PDFTRACE_NO_THREADS
-    for (k = 0; k < 3; k++) started[k] = pthread_create(&th[k], NULL, conc_run, &job[k]) == 0;
-    for (k = 0; k < 3; k++)
+    for (k = 0; k < 4; k++) started[k] = pthread_create(&th[k], NULL, conc_run, &job[k]) == 0;
+    for (k = 0; k < 4; k++)
         if (started[k]) pthread_join(th[k], NULL);
 #endif
-    for (k = 0; k < 3; k++)
+    for (k = 0; k < 4; k++)
         if (!started[k]) conc_run(&job[k]); /* no threads (in this build): one after the other */
-    for (k = 0; k < 3; k++) {
+    for (k = 0; k < 4; k++) {
         CHECK(t, job[k].render_rc == PT_OK, "thread %d: a valid render failed: %d", k, job[k].render_rc);
         CHECK(t, job[k].render_rc != PT_OK || tu_film_equal(&ref[k], &job[k].film),
               "thread %d: its film differs from the same desc rendered alone", k);
@@ -953,12 +956,12 @@ static void concurrent_renders(test_ctx *t)
     CHECK(t, pt_scene_error_message(s)[0] == '\0', "the renders wrote into the scene's message: '%s'",
           pt_scene_error_message(s));
 #ifndef PDFTRACE_NO_THREADS
-    test_note(t, "3 threads x 4 rounds (a failing and a valid render each), %d started", started[0] + started[1] + started[2]);
+    test_note(t, "4 threads x 4 rounds (a failing and a valid render each), %d started", started[0] + started[1] + started[2] + started[3]);
 #else
-    test_note(t, "no threads in this build: the three jobs ran one after the other");
+    test_note(t, "no threads in this build: the four jobs ran one after the other");
 #endif
 done:
-    for (k = 0; k < 3; k++) {
+    for (k = 0; k < 4; k++) {
         pt_film_free(&ref[k]);
         pt_film_free(&job[k].film);
     }
