@@ -5133,20 +5133,14 @@ static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
     return pt__planar_faces(p, lp->p0, lp->n, two);
 }
 
-/* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
-   if it is unoccluded, the contribution beta f Le w / p_light. */
-static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
-                                     const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
-                                     pt_path_stats *st)
+/* Whether the segment from v's spawn point to the light sample ls of light li is unoccluded
+   (one shadow ray). */
+static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, const pt__light_sample *ls, uint32_t li,
+                                     int tri, pt_path_stats *st)
 {
-    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
-    float w = 1.0f;
     pt_ray sr;
     pt__rayctx src;
     pt_vec3 target;
-    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
-    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
-        w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     sr.origin = v->o;
     target = pt__offset_origin(ls->point, ls->normal, pt_neg(ls->dir),
                                          pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
@@ -5156,7 +5150,21 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
     /* the light itself is skipped: a segment to a point sampled on a sphere (the near side seen
        from outside, any point from inside) or on a planar light meets that light only at the
        point, which the segment stops short of */
-    if (pt__scene_any(s, &src, 1.0f - 1e-4f, s->lights[li].prim)) return pt_v3(0, 0, 0);
+    return !pt__scene_any(s, &src, 1.0f - 1e-4f, s->lights[li].prim);
+}
+
+/* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
+   if it is unoccluded, the contribution beta f Le w / p_light. */
+static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+                                     const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
+                                     pt_path_stats *st)
+{
+    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
+    float w = 1.0f;
+    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
+    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
+        w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
+    if (!pt__light_visible(s, v, ls, li, tri, st)) return pt_v3(0, 0, 0);
     {
         const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
         return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
@@ -5249,10 +5257,11 @@ static pt__sampler *pt__split_sampler(pt__sampler *parent, pt__sampler *child, i
 }
 
 /* The continuation at vertex v (depth `depth`, throughput beta_in reaching it): the scattered
-   direction and its weight, the spawned ray, then Russian roulette. Returns 0 if the path ends. */
+   direction and its weight, the spawned ray, then Russian roulette. Returns 0 if the path ends.
+   *L_out (zero on entry) receives emission found without a ray (see the rounded case below). */
 static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, const pt_hit *h, int depth,
                         pt_color beta_in, pt__sampler *smp, int any_lights, int pick, pt_ray *ray, pt_color *beta,
-                        float *prev_pdf, int *prev_delta)
+                        float *prev_pdf, int *prev_delta, pt_color *L_out, pt_path_stats *st)
 {
     const pt__material *m = v->m;
     pt_vec3 wi;
@@ -5276,20 +5285,22 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         float p_total, u;
         pt_color f;
         int use_light = 0;
+        pt__light_sample ls;
+        uint32_t li = 0;
+        ls.rounded = 0;
         if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights &&
             (!s->light_count || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v->o))) {
             u = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_MIXTURE));
             use_light = u < cfg->light_weight;
             if (use_light) {
-                pt__light_sample ls;
-                uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                /* the direction must be a ray that meets the light (not a rounded one) */
-                if (!pt__lights_sample(s, v->o, u0, u1, u2, &ls, &li) || ls.rounded) return 0;
+                if (!pt__lights_sample(s, v->o, u0, u1, u2, &ls, &li)) return 0;
                 wi = ls.dir;
             } else if (!pt__scatter_sample(v, smp, depth, &wi)) return 0;
-            p_total = cfg->light_weight * pt__lights_value(s, v->o, wi) +
+            /* a rounded direction has no density for its own light: that light's share is the
+               sample's own (ls.pdf, the pick probability included) */
+            p_total = cfg->light_weight * (pt__lights_value(s, v->o, wi) + (ls.rounded ? ls.pdf : 0.0f)) +
                       (1.0f - cfg->light_weight) * pt__scatter_density(v, wi);
         } else {
             if (!pt__scatter_sample(v, smp, depth, &wi)) return 0;
@@ -5300,6 +5311,16 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         *beta = pt_mul(*beta, pt_scale(f, 1.0f / p_total));
         *prev_pdf = p_total;
         *prev_delta = 0;
+        if (ls.rounded) {
+            /* a sphere light narrower than float's angular resolution, which a ray along the
+               rounded direction misses: the ray's hit is the light when the segment to the
+               sampled point is unoccluded, and the path ends there (what such a light reflects
+               is O(r^2/d^2)); else the ray goes on to the occluder */
+            if (pt__light_visible(s, v, &ls, li, (s->features & PT_FEATURE_TRIANGLES) != 0, st)) {
+                *L_out = pt_mul(*beta, s->mats[s->prims[s->lights[li].prim].material].emission);
+                return 0;
+            }
+        }
     }
     /* non-delta directions always leave on the side of ng (pt__material_eval), so the spawn
        point is v.o, the point that light sampling used */
@@ -5337,10 +5358,12 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
         float pp2 = prev_pdf;
         int pd2 = prev_delta;
         st->split_paths++;
-        if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2)) {
+        pt_color Lc = pt_v3(0, 0, 0);
+        if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2, &Lc, st)) {
             st->bounce_rays++;
             L = pt_add(L, pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, cs, st, sp));
         }
+        L = pt_add(L, Lc);
     }
     return L;
 }
@@ -5449,8 +5472,13 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             L = pt_add(L, pt__split_copies(s, cfg, &v, &h, depth, k, beta_in, smp, any_lights, pick, prev_delta, prev_pdf,
                                            st, sp));
         }
-        if (!pt__continue(s, cfg, &v, &h, depth, beta_in, smp, any_lights, pick, &ray, &beta, &prev_pdf, &prev_delta))
-            break;
+        {
+            pt_color Lc = pt_v3(0, 0, 0);
+            int go = pt__continue(s, cfg, &v, &h, depth, beta_in, smp, any_lights, pick, &ray, &beta, &prev_pdf,
+                                  &prev_delta, &Lc, st);
+            L = pt_add(L, Lc);
+            if (!go) break;
+        }
         prev_p = v.o;
         st->bounce_rays++;
     }
