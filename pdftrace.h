@@ -2011,7 +2011,7 @@ static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int tw
         {
             /* a sample at the rim can round to just outside the cone; nudge it towards the axis
                (by a fraction of the cone's angle far below float resolution elsewhere) so that
-               sample and value agree for every direction */
+               sample and value agree wherever float directions resolve the cone */
             int k;
             float step = 1e-4f;
             for (k = 0; k < 24 && !pt__in_cone(ls->dir, o, c, r); ++k, step *= 2.0f)

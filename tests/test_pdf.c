@@ -10,7 +10,8 @@
    False-failure rate: all statistical comparisons in this file belong to the chi-square suite
    (test_util.h): alpha = 0.01 for the whole suite, Sidak-corrected over TU_SUITE_COMPARISONS (an
    upper bound on their number, checked by suite.chi2_table), so each is made at
-   1 - 0.99^(1/TU_SUITE_COMPARISONS). Seeds are fixed, so a run is reproducible. */
+   1 - 0.99^(1/TU_SUITE_COMPARISONS); sphere_light_point_limit and sphere_light_point_limit_path
+   state their own families. Seeds are fixed, so a run is reproducible. */
 #include "test_util.h"
 
 #include <stdio.h>
