@@ -337,7 +337,10 @@ typedef struct pt_pdf {
 PTDEF pt_pdf pt_pdf_uniform_sphere(void);
 PTDEF pt_pdf pt_pdf_cosine_hemisphere(pt_vec3 unit_normal);
 /* A sphere light seen from origin. One-sided spheres emit outwards only, so their density is
-   zero from inside; two-sided ones are sampled by area from inside or on the surface. */
+   zero from inside; two-sided ones are sampled by area from inside or on the surface. A sphere
+   narrower than float's angular resolution (r below ~1e-7 of its distance) may hold no float
+   direction: pt_pdf_sample then returns the rounding of a direction in its cone with the cone's
+   density, whose pt_pdf_value is 0 (inside a mixture such a draw fails instead). */
 PTDEF pt_pdf pt_pdf_sphere_light(pt_vec3 origin, pt_vec3 center, float radius, int two_sided);
 /* One-sided quads and triangles emit on the side of their normal; seen from behind, their
    density is zero everywhere and sampling fails (returns 0). */
@@ -1935,6 +1938,9 @@ typedef struct pt__light_sample {
     float dist;       /* distance to the light point */
     float pdf;        /* solid-angle density of dir for this light alone */
     pt_vec3 point, normal;
+    int rounded;      /* 1: dir is only the float rounding of a direction that meets the light
+                         (a sphere narrower than float's angular resolution): a segment to
+                         point is valid, a ray along dir misses and has density 0 */
 } pt__light_sample;
 
 /* --- sphere light. Outside: uniform in the cone of directions that meet the sphere, with
@@ -1971,6 +1977,21 @@ static float pt__cone_one_minus_cos(float s2)
     float cosmax = pt__safe_sqrt(1.0f - s2);
     return s2 / (1.0f + cosmax);
 }
+/* A cone narrower than float's angular resolution (half-angle below ~1e-7: a float unit vector
+   near the axis is ~2^-24 off in each component) may hold no float direction at all. Such a
+   sample keeps the sampled point and density with the rounded direction (pt__light_sample's
+   `rounded`): a shadow segment to the point lights like the exact sphere, which tends to the
+   point light as r/d -> 0. The normal at the sampled point then comes from the angles, not from
+   point - c (whose float error exceeds r): cos(alpha) = sin^2/sin_max + cos sqrt(1 -
+   sin^2/sin_max^2), alpha measured at the centre from the direction towards o (pbrt-v4 sec.
+   6.2.4, "Sampling a sphere"). */
+static pt_vec3 pt__cone_normal(const pt_onb *b, float s2, float sin2_t, float cos_t, float phi)
+{
+    float smax = sqrtf(s2), q = sin2_t / s2;
+    float cos_a = pt__minf(1.0f, sin2_t / smax + cos_t * pt__safe_sqrt(1.0f - q));
+    float sin_a = pt__safe_sqrt(1.0f - cos_a * cos_a);
+    return pt_normalize(pt_onb_to_world(b, pt_v3(sin_a * cosf(phi), sin_a * sinf(phi), -cos_a)));
+}
 static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w);
 static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided, float u1, float u2,
                                    pt__light_sample *ls)
@@ -1984,24 +2005,30 @@ static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int tw
         float cos_t = 1.0f - uc, sin2_t = uc * (2.0f - uc), sin_t = pt__safe_sqrt(sin2_t);
         float phi = 2.0f * PT__PI * u2, t;
         pt_onb b = pt__onb(pt_scale(wc, 1.0f / d));
+        pt_vec3 w0;
         if (!(omc > 0.0f)) return 0;
-        ls->dir = pt_normalize(pt_onb_to_world(&b, pt_v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t)));
+        w0 = ls->dir = pt_normalize(pt_onb_to_world(&b, pt_v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t)));
+        ls->rounded = 0;
         {
             /* a sample at the rim can round to just outside the cone; nudge it towards the axis
                (by a fraction of the cone's angle far below float resolution elsewhere) so that
-               sample and value agree for every direction */
+               sample and value agree wherever float directions resolve the cone */
             int k;
             float step = 1e-4f;
             for (k = 0; k < 24 && !pt__in_cone(ls->dir, o, c, r); ++k, step *= 2.0f)
                 ls->dir = pt_normalize(pt_add(ls->dir, pt_scale(pt_sub(b.n, ls->dir), step)));
-            if (!pt__in_cone(ls->dir, o, c, r)) return 0;
+            if (!pt__in_cone(ls->dir, o, c, r)) {
+                ls->rounded = 1; /* below float resolution (see pt__cone_normal) */
+                ls->dir = w0;
+            }
         }
         ls->pdf = 1.0f / (2.0f * PT__PI * omc);
         /* distance to the near intersection: d (cos - sqrt(s^2 - sin^2)) */
         t = d * (cos_t - pt__safe_sqrt(s2 - sin2_t));
         ls->dist = t > 0.0f ? t : 0.0f;
         ls->point = pt_madd(o, ls->dir, ls->dist);
-        ls->normal = pt_normalize(pt_sub(ls->point, c));
+        if (ls->rounded) ls->normal = pt__cone_normal(&b, s2, sin2_t, cos_t, phi);
+        else ls->normal = pt_normalize(pt_sub(ls->point, c));
         return pt__isfinite(ls->pdf) && ls->dist > 0.0f;
     }
     if (!two_sided) return 0;
@@ -2018,6 +2045,7 @@ static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int tw
         ls->dist = dist;
         ls->point = p;
         ls->normal = n;
+        ls->rounded = 0;
         return pt__isfinite(ls->pdf);
     }
 }
@@ -2099,6 +2127,7 @@ static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided,
     ls->dist = dist;
     ls->point = q;
     ls->normal = p->n;
+    ls->rounded = 0;
     return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
 }
 /* The density of unit direction w towards quad or triangle primitive p from o. */
@@ -2352,11 +2381,11 @@ PTDEF int pt_pdf_validate(const pt_pdf *pdf) { return pt__pdf_validate_depth(pdf
    unbounded recursion. */
 #define PT__PDF_MAX_DEPTH 32
 static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth);
-static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value, int depth);
+static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value, int depth, int exact);
 PTDEF float pt_pdf_value(const pt_pdf *pdf, pt_vec3 w) { return pt__pdf_value_depth(pdf, w, 0); }
 PTDEF int pt_pdf_sample(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value)
 {
-    return pt__pdf_sample_depth(pdf, rng, dir, pdf_value, 0);
+    return pt__pdf_sample_depth(pdf, rng, dir, pdf_value, 0, 0);
 }
 static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
 {
@@ -2407,7 +2436,8 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     return pt__isfinite(v) && v > 0.0f ? v : 0.0f;
 }
 
-static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value, int depth)
+/* exact = 1: only directions whose pt_pdf_value is the returned density (see PT_PDF_SPHERE_LIGHT) */
+static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, float *pdf_value, int depth, int exact)
 {
     pt_vec3 w = pt_v3(0, 0, 0);
     float p = 0.0f;
@@ -2436,6 +2466,10 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
         ok = pt__sphere_light_sample(pdf->origin, pdf->as.sphere.center, pdf->as.sphere.radius,
                                      pdf->as.sphere.two_sided, u1, u2, &ls);
+        /* a rounded direction (a sphere below float's angular resolution) has density 0 for
+           pt_pdf_value: returned alone, refused inside a mixture, whose density must be the
+           sum of its components' values */
+        if (ok && ls.rounded && exact) ok = 0;
         w = ls.dir; p = ls.pdf;
         break;
     }
@@ -2485,7 +2519,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
             if (u < acc) break;
         }
         if (chosen < 0) break;
-        if (!pt__pdf_sample_depth(&pdf->as.mixture.components[chosen], rng, &w, &pk, depth + 1)) break;
+        if (!pt__pdf_sample_depth(&pdf->as.mixture.components[chosen], rng, &w, &pk, depth + 1, 1)) break;
         /* density of the mixture: sum over every component, the chosen one included */
         p = 0.0f;
         for (k = 0; k < n; ++k) {
@@ -5170,8 +5204,8 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
 {
     float u0 = v->has_guide ? pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_GUIDE)) : 1.0f;
     if (v->has_guide && u0 < v->g) {
-        float pg;
-        return pt_pdf_sample(&v->guide, pt__sampler_rng(smp), wi, &pg);
+        float pg; /* (a one-sample mixture: only directions of the guide's own density) */
+        return pt__pdf_sample_depth(&v->guide, pt__sampler_rng(smp), wi, &pg, 0, 1);
     } else {
         float u1, u2, u3, pm;
         pt__draw_scatter(smp, depth, &u1, &u2);
@@ -5193,20 +5227,14 @@ static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
     return pt__planar_faces(p, lp->p0, lp->n, two);
 }
 
-/* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
-   if it is unoccluded, the contribution beta f Le w / p_light. */
-static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
-                                     const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
-                                     pt_path_stats *st)
+/* Whether the segment from v's spawn point to the light sample ls of light li is unoccluded
+   (one shadow ray). */
+static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, const pt__light_sample *ls, uint32_t li,
+                                     int tri, pt_path_stats *st)
 {
-    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
-    float w = 1.0f;
     pt_ray sr;
     pt__rayctx src;
     pt_vec3 target;
-    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
-    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
-        w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     sr.origin = v->o;
     target = pt__offset_origin(ls->point, ls->normal, pt_neg(ls->dir),
                                          pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
@@ -5216,7 +5244,21 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
     /* the light itself is skipped: a segment to a point sampled on a sphere (the near side seen
        from outside, any point from inside) or on a planar light meets that light only at the
        point, which the segment stops short of */
-    if (pt__scene_any(s, &src, 1.0f - 1e-4f, s->lights[li].prim)) return pt_v3(0, 0, 0);
+    return !pt__scene_any(s, &src, 1.0f - 1e-4f, s->lights[li].prim);
+}
+
+/* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
+   if it is unoccluded, the contribution beta f Le w / p_light. */
+static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+                                     const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
+                                     pt_path_stats *st)
+{
+    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
+    float w = 1.0f;
+    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
+    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
+        w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
+    if (!pt__light_visible(s, v, ls, li, tri, st)) return pt_v3(0, 0, 0);
     {
         const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
         return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
@@ -5309,10 +5351,11 @@ static pt__sampler *pt__split_sampler(pt__sampler *parent, pt__sampler *child, i
 }
 
 /* The continuation at vertex v (depth `depth`, throughput beta_in reaching it): the scattered
-   direction and its weight, the spawned ray, then Russian roulette. Returns 0 if the path ends. */
+   direction and its weight, the spawned ray, then Russian roulette. Returns 0 if the path ends.
+   *L_out (zero on entry) receives emission found without a ray (see the rounded case below). */
 static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, const pt_hit *h, int depth,
                         pt_color beta_in, pt__sampler *smp, int any_lights, int pick, pt_ray *ray, pt_color *beta,
-                        float *prev_pdf, int *prev_delta)
+                        float *prev_pdf, int *prev_delta, pt_color *L_out, pt_path_stats *st)
 {
     const pt__material *m = v->m;
     pt_vec3 wi;
@@ -5336,19 +5379,22 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         float p_total, u;
         pt_color f;
         int use_light = 0;
+        pt__light_sample ls;
+        uint32_t li = 0;
+        ls.rounded = 0;
         if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights &&
             (!s->light_count || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v->o))) {
             u = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_MIXTURE));
             use_light = u < cfg->light_weight;
             if (use_light) {
-                pt__light_sample ls;
-                uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                 if (!pt__lights_sample(s, v->o, u0, u1, u2, &ls, &li)) return 0;
                 wi = ls.dir;
             } else if (!pt__scatter_sample(v, smp, depth, &wi)) return 0;
-            p_total = cfg->light_weight * pt__lights_value(s, v->o, wi) +
+            /* a rounded direction has no density for its own light: that light's share is the
+               sample's own (ls.pdf, the pick probability included) */
+            p_total = cfg->light_weight * (pt__lights_value(s, v->o, wi) + (ls.rounded ? ls.pdf : 0.0f)) +
                       (1.0f - cfg->light_weight) * pt__scatter_density(v, wi);
         } else {
             if (!pt__scatter_sample(v, smp, depth, &wi)) return 0;
@@ -5359,6 +5405,16 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         *beta = pt_mul(*beta, pt_scale(f, 1.0f / p_total));
         *prev_pdf = p_total;
         *prev_delta = 0;
+        if (ls.rounded) {
+            /* a sphere light narrower than float's angular resolution, which a ray along the
+               rounded direction misses: the ray's hit is the light when the segment to the
+               sampled point is unoccluded, and the path ends there (what such a light reflects
+               is O(r^2/d^2)); else the ray goes on to the occluder */
+            if (pt__light_visible(s, v, &ls, li, (s->features & PT_FEATURE_TRIANGLES) != 0, st)) {
+                *L_out = pt_mul(*beta, s->mats[s->prims[s->lights[li].prim].material].emission);
+                return 0;
+            }
+        }
     }
     /* non-delta directions always leave on the side of ng (pt__material_eval), so the spawn
        point is v.o, the point that light sampling used */
@@ -5396,10 +5452,12 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
         float pp2 = prev_pdf;
         int pd2 = prev_delta;
         st->split_paths++;
-        if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2)) {
+        pt_color Lc = pt_v3(0, 0, 0);
+        if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2, &Lc, st)) {
             st->bounce_rays++;
             L = pt_add(L, pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, cs, st, sp));
         }
+        L = pt_add(L, Lc);
     }
     return L;
 }
@@ -5508,8 +5566,13 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             L = pt_add(L, pt__split_copies(s, cfg, &v, &h, depth, k, beta_in, smp, any_lights, pick, prev_delta, prev_pdf,
                                            st, sp));
         }
-        if (!pt__continue(s, cfg, &v, &h, depth, beta_in, smp, any_lights, pick, &ray, &beta, &prev_pdf, &prev_delta))
-            break;
+        {
+            pt_color Lc = pt_v3(0, 0, 0);
+            int go = pt__continue(s, cfg, &v, &h, depth, beta_in, smp, any_lights, pick, &ray, &beta, &prev_pdf,
+                                  &prev_delta, &Lc, st);
+            L = pt_add(L, Lc);
+            if (!go) break;
+        }
         prev_p = v.o;
         st->bounce_rays++;
     }

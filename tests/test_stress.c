@@ -31,6 +31,7 @@ static void run(test_ctx *t, void (*fn)(st_ctx *))
 static void scale_sweep(test_ctx *t) { run(t, st_scale_sweep); }
 static void spawn_no_self_hits(test_ctx *t) { run(t, st_spawn); }
 static void tiny_sphere_light(test_ctx *t) { run(t, st_tiny_light); }
+static void sphere_light_point_limit(test_ctx *t) { run(t, st_point_light); }
 static void watertight(test_ctx *t) { run(t, st_watertight); }
 static void edges_and_tangents(test_ctx *t) { run(t, st_edges); }
 static void light_geometry(test_ctx *t) { run(t, st_light_geometry); }
@@ -42,6 +43,7 @@ const test_case test_stress_cases[] = {
     TEST_CASE(scale_sweep),
     TEST_CASE(spawn_no_self_hits),
     TEST_CASE(tiny_sphere_light),
+    TEST_CASE(sphere_light_point_limit),
     TEST_CASE(watertight),
     TEST_CASE(edges_and_tangents),
     TEST_CASE(light_geometry),

@@ -34,6 +34,7 @@ void st_init(st_ctx *c, int full, st_row_fn row, void *user);
 void st_scale_sweep(st_ctx *c);      /* 1: images at 10^k, k = -6..6, and at a 1e6 offset; leaks */
 void st_spawn(st_ctx *c);            /* 1: rays spawned from sphere/quad/triangle/mesh never re-hit */
 void st_tiny_light(st_ctx *c);       /* 2: sphere light 1e-1 .. 1e-6 at fixed intensity */
+void st_point_light(st_ctx *c);      /* 2: sphere light r/d 1e-1 .. 1e-9 at constant power: the point light */
 void st_watertight(st_ctx *c);       /* 3: rays from inside closed shapes never escape */
 void st_edges(st_ctx *c);            /* 3: rays along edges, through vertices, tangent to spheres */
 void st_light_geometry(st_ctx *c);   /* 3: shading points on lights, horizon, normals facing away */

@@ -43,6 +43,7 @@ int main(int argc, char **argv)
 {
     static const struct { const char *name; void (*fn)(st_ctx *); } cases[] = {
         { "sweep", st_scale_sweep }, { "spawn", st_spawn }, { "tiny", st_tiny_light },
+        { "point", st_point_light },
         { "watertight", st_watertight }, { "edges", st_edges }, { "lights", st_light_geometry },
         { "degenerate", st_degenerate }, { "slivers", st_slivers },
     };
