@@ -157,7 +157,7 @@ OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON) TOOL_EXR=$(TOOL_E
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
-TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
+TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h
 
 .PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress install uninstall install-check FORCE
 
