@@ -1539,14 +1539,19 @@ static void pt__pov_body(pt__pov *w, const pt_pov_options *o, int width, int hei
    same validation: pt_scenefile_build itself), then what POV-Ray cannot match. POV-Ray's
    focal blur draws a few aperture samples per pixel and stops adaptively (blur_samples,
    confidence, variance) rather than integrating over the lens disk, so a thin lens has no
-   exact twin. */
-static int pt__pov_refuse(const pt_scenefile *d, char *err, size_t err_size)
+   exact twin. A camera the renderer refuses (pt_camera_init) is refused too. */
+static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *err, size_t err_size)
 {
     pt_scene *scene = NULL;
     pt_render_desc rd;
+    pt_camera cam;
     int i, rc = pt_scenefile_build(d, &scene, &rd, err, err_size);
     pt_scene_destroy(scene);
     if (rc != PT_OK) return rc;
+    if (pt_camera_init(&cam, &d->camera, width, height) != PT_OK) /* the renderer's own check */
+        return pt__sf_failf(err, err_size, d->file, d->camera_line, PT_ERROR_INVALID_ARGUMENT,
+                            "POV-Ray export: pdftrace cannot render this camera (a non-finite vector, look_at "
+                            "equal to look_from, up parallel to the view, or vfov outside (0, 180))");
     if (d->camera.lens_radius > 0.0f)
         return pt__sf_failf(err, err_size, d->file, d->camera_line, PT_ERROR_UNSUPPORTED,
                             "POV-Ray export: a thin-lens camera (lens_radius %g) has no exact POV-Ray equivalent; "
@@ -1629,7 +1634,7 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
     if (!d || !path || !*path) return PT_ERROR_INVALID_ARGUMENT;
     width = o && o->width > 0 ? o->width : d->width;
     height = o && o->height > 0 ? o->height : d->height;
-    if ((rc = pt__pov_refuse(d, err, err_size)) != PT_OK) return rc;
+    if ((rc = pt__pov_refuse(d, width, height, err, err_size)) != PT_OK) return rc;
     pt__pov_setup(&w, d, o);
     pt__pov_body(&w, o, width, height); /* w.f == NULL: only checks the numbers */
     if (w.bad)
