@@ -26,7 +26,8 @@
 #                         Either or both: make OPENEXR=1 EMBREE=1 test (use a separate BUILD=
 #                         per combination, or let the options stamp rebuild on a change).
 #   make fuzz             build the libFuzzer targets (clang, libclang-rt-14-dev) for the scene
-#                         loader, the OBJ loader and the EXR reader (tests/fuzz/) and run each for
+#                         loader, the OBJ loader, the POV-Ray exporter and the EXR reader
+#                         (tests/fuzz/) and run each for
 #                         FUZZ_SECONDS (default 60) from tests/fuzz/corpus/<target>/; new inputs go
 #                         to $(BUILD)/fuzz-corpus/, crashes to $(BUILD)/fuzz-artifacts/
 #   make fuzz-merge       minimise tests/fuzz/corpus/<target>/ plus $(BUILD)/fuzz-corpus/<target>/
@@ -166,7 +167,7 @@ OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON) TOOL_EXR=$(TOOL_E
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
-TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h)
+TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h
 
 .PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress install uninstall install-check FORCE
 
@@ -521,13 +522,15 @@ FUZZ_FLAGS   ?= -std=c99 -O1 -g -ftrapping-math -fsanitize=fuzzer,address,undefi
 FPTRAP_FLAGS ?= -ftrapping-math
 FUZZ_ARGS    ?= -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
 FUZZ_HAVE_EXR := $(shell [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ] && echo yes)
-FUZZ_TARGETS := scene obj $(if $(FUZZ_HAVE_EXR),exr)
-FUZZ_SRCS    := tests/fuzz/harness.c tests/fuzz/harness.h
+FUZZ_TARGETS := scene obj pov $(if $(FUZZ_HAVE_EXR),exr)
+FUZZ_SRCS    := tests/fuzz/harness.c tests/fuzz/harness.h tests/fuzz/pov_check.h
 FUZZ_MAXLEN_scene := 8192
 FUZZ_MAXLEN_obj   := 16384
+FUZZ_MAXLEN_pov   := 8192
 FUZZ_MAXLEN_exr   := 16384
 FUZZ_DICT_scene := -dict=tests/fuzz/scene.dict
 FUZZ_DICT_obj   := -dict=tests/fuzz/obj.dict
+FUZZ_DICT_pov   := -dict=tests/fuzz/scene.dict
 FUZZ_DICT_exr   :=
 
 .PHONY: fuzz fuzz-build fuzz-merge fptrap-test
@@ -542,11 +545,12 @@ fuzz-build: $(FUZZ_TARGETS:%=$(BUILD)/fuzz_%)
 fuzz: fuzz-build
 	@status=0; for t in $(FUZZ_TARGETS); do \
 	    mkdir -p $(BUILD)/fuzz-corpus/$$t $(BUILD)/fuzz-artifacts; \
-	    case $$t in scene) ml=$(FUZZ_MAXLEN_scene); d='$(FUZZ_DICT_scene)';; obj) ml=$(FUZZ_MAXLEN_obj); d='$(FUZZ_DICT_obj)';; \
+	    seeds=; case $$t in scene) ml=$(FUZZ_MAXLEN_scene); d='$(FUZZ_DICT_scene)';; obj) ml=$(FUZZ_MAXLEN_obj); d='$(FUZZ_DICT_obj)';; \
+	                pov) ml=$(FUZZ_MAXLEN_pov); d='$(FUZZ_DICT_pov)'; seeds=tests/fuzz/corpus/scene;; \
 	                *) ml=$(FUZZ_MAXLEN_exr); d='$(FUZZ_DICT_exr)';; esac; \
 	    echo "== fuzz $$t for $(FUZZ_SECONDS) s"; \
 	    ./$(BUILD)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -max_len=$$ml $$d $(FUZZ_ARGS) \
-	        -artifact_prefix=$(BUILD)/fuzz-artifacts/$$t- $(BUILD)/fuzz-corpus/$$t tests/fuzz/corpus/$$t || status=1; \
+	        -artifact_prefix=$(BUILD)/fuzz-artifacts/$$t- $(BUILD)/fuzz-corpus/$$t tests/fuzz/corpus/$$t $$seeds || status=1; \
 	done; \
 	if [ $$status != 0 ]; then echo "make fuzz: crashes in $(BUILD)/fuzz-artifacts/"; ls $(BUILD)/fuzz-artifacts; fi; \
 	exit $$status

@@ -83,7 +83,10 @@
    meshes as mesh2 with normal_vectors; `assumed_gamma 1.0`, `ambient_light 0`, ambient 0.
    Not exportable (PT_ERROR_UNSUPPORTED with file:line): a thin-lens camera (POV-Ray's focal
    blur stops adaptively after a few aperture samples: no exact twin), fuzzy metal, emitting
-   triangles, boxes or meshes.
+   triangles, boxes or meshes; and every scene pt_scenefile_build refuses (the exporter runs
+   the build first, so it never writes what pdftrace would not render, such as a sphere under
+   a non-uniform scale), or one that would need a non-finite number. The scene's file name is
+   the only text from input in the output, in comments, escaped by pt_scenefile_escape.
 */
 #ifndef PDFTRACE_SCENE_H
 #define PDFTRACE_SCENE_H
@@ -183,8 +186,25 @@ typedef struct pt_pov_options {
     int light_grid;              /* 0: the scene's pov_light_grid */
     int width, height;           /* 0: the scene's size (used for the camera's aspect ratio) */
 } pt_pov_options;
+/* How pt_scenefile_escape writes text taken from input into an exporter's output. */
+typedef enum pt_scenefile_escape_mode {
+    /* Inside a comment of POV-Ray (or C, or any format with line or block comments): keeps
+       A-Z a-z 0-9 and " ._-+/:,=@~", writes every other byte as \xNN. No newline, `*`, `#`,
+       quote or backslash remains, so the text can neither end a comment nor start one. */
+    PT_SCENEFILE_ESCAPE_COMMENT = 0,
+    /* XML text or a quoted attribute value: & < > " ' as entities; control bytes, DEL and
+       bytes >= 0x80 as '?' (so the result is plain ASCII and well-formed). Not for comments. */
+    PT_SCENEFILE_ESCAPE_XML
+} pt_scenefile_escape_mode;
+/* Writes text (NUL-terminated; NULL: empty) escaped into out, size bytes with the NUL; a
+   text too long is cut before the first escape that does not fit. Returns strlen(out). */
+PTDEF size_t pt_scenefile_escape(char *out, size_t size, const char *text, pt_scenefile_escape_mode mode);
+
 /* Writes the POV-Ray 3.7 scene (through a temporary file renamed into place). opt may be
-   NULL. The first comment lines give the command line that renders it. */
+   NULL. The first comment lines give the command line that renders it. Refuses (writing
+   nothing) every scene pt_scenefile_build refuses, with the build's message, the features
+   POV-Ray cannot match, and a scene that would need a non-finite number. Text from the
+   scene (its file name) reaches the output only escaped (PT_SCENEFILE_ESCAPE_COMMENT). */
 PTDEF int pt_scenefile_write_pov(const pt_scenefile *desc, const char *path, const pt_pov_options *opt, char *err,
                                  size_t err_size);
 
@@ -1199,15 +1219,87 @@ done:
     return PT_OK;
 }
 
-/* ---- POV-Ray 3.7 export (the recipe: docs/povray.md). */
+/* ---- Escaping text taken from input (scene names, paths) for the exporters' output. */
+PTDEF size_t pt_scenefile_escape(char *out, size_t size, const char *text, pt_scenefile_escape_mode mode)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    size_t n = 0;
+    if (!out || size == 0) return 0;
+    for (; text && *text; ++text) {
+        unsigned char c = (unsigned char)*text;
+        char rep[8];
+        size_t k;
+        if (mode == PT_SCENEFILE_ESCAPE_XML) {
+            const char *e = c == '&' ? "&amp;" : c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '"' ? "&quot;"
+                          : c == '\'' ? "&apos;" : NULL;
+            if (e) strcpy(rep, e);
+            else { rep[0] = (c >= 0x20 && c < 0x7f) ? (char)c : '?'; rep[1] = '\0'; }
+        } else if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || (c && strchr(" ._-+/:,=@~", c))) {
+            rep[0] = (char)c; rep[1] = '\0';
+        } else {
+            rep[0] = '\\'; rep[1] = 'x'; rep[2] = hex[c >> 4]; rep[3] = hex[c & 15]; rep[4] = '\0';
+        }
+        k = strlen(rep);
+        if (n + k >= size) break; /* never half an escape */
+        memcpy(out + n, rep, k);
+        n += k;
+    }
+    out[n] = '\0';
+    return n;
+}
+
+/* ---- POV-Ray 3.7 export (the recipe: docs/povray.md). Everything is written through
+   pt__pov_put (fixed text, integers), pt__pov_g (numbers, checked finite) and the escaped
+   scene name. The exporter runs twice: a first pass with f == NULL writes nothing and only
+   finds a non-finite number, so a file is written only when every number is finite. */
 typedef struct pt__pov {
-    FILE *f;
+    FILE *f;                  /* NULL: the checking pass */
     const pt_scenefile *d;
     double fd, hair;          /* fade distance, light offset */
     int grid;
+    int line;                 /* the statement being written (0: none), for messages */
+    int bad_line, bad;        /* the first non-finite number: where */
+    char name[4 * sizeof(((pt_scenefile *)0)->file) + 1]; /* d->file, escaped for comments */
 } pt__pov;
 
-static void pt__pov_v(FILE *f, pt_vec3 v) { fprintf(f, "<%.9g, %.9g, %.9g>", (double)v.x, (double)v.y, (double)v.z); }
+static void pt__pov_put(pt__pov *w, const char *fmt, ...)
+{
+    va_list ap;
+    if (!w->f) return;
+    va_start(ap, fmt);
+    vfprintf(w->f, fmt, ap);
+    va_end(ap);
+}
+static void pt__pov_g(pt__pov *w, double x)
+{
+    if (!pt__sf_finite(x)) {
+        if (!w->bad) w->bad_line = w->line;
+        w->bad = 1;
+        x = 0;
+    }
+    if (w->f) fprintf(w->f, "%.9g", x);
+}
+static void pt__pov_v(pt__pov *w, pt_vec3 v)
+{
+    pt__pov_put(w, "<");
+    pt__pov_g(w, (double)v.x);
+    pt__pov_put(w, ", ");
+    pt__pov_g(w, (double)v.y);
+    pt__pov_put(w, ", ");
+    pt__pov_g(w, (double)v.z);
+    pt__pov_put(w, ">");
+}
+/* rgb <r, g, b> scaled by k (in double). */
+static void pt__pov_rgb(pt__pov *w, pt_color c, double k)
+{
+    pt__pov_put(w, "rgb <");
+    pt__pov_g(w, (double)c.x * k);
+    pt__pov_put(w, ", ");
+    pt__pov_g(w, (double)c.y * k);
+    pt__pov_put(w, ", ");
+    pt__pov_g(w, (double)c.z * k);
+    pt__pov_put(w, ">");
+}
 
 static void pt__sf_bounds_add(pt_vec3 *lo, pt_vec3 *hi, pt_vec3 p)
 {
@@ -1224,109 +1316,118 @@ static float pt__sf_xf_scale(const pt_transform *t) { return pt_length(pt_transf
 static void pt__pov_texture(pt__pov *w, int material)
 {
     const pt_scenefile_material *m = &w->d->materials[material];
-    FILE *f = w->f;
     switch (m->type) {
     case PT_MATERIAL_LAMBERTIAN:
         if (m->checker >= 0) {
             const pt_scenefile_checker *c = &w->d->checkers[m->checker];
             /* Both renderers: second colour where floor(x/s)+floor(y/s)+floor(z/s) is odd. */
-            fprintf(f, "texture { pigment { checker rgb ");
-            pt__pov_v(f, c->even);
-            fprintf(f, ", rgb ");
-            pt__pov_v(f, c->odd);
-            fprintf(f, " scale %.9g } finish { diffuse 1 } }", (double)c->scale);
+            pt__pov_put(w, "texture { pigment { checker ");
+            pt__pov_rgb(w, c->even, 1.0);
+            pt__pov_put(w, ", ");
+            pt__pov_rgb(w, c->odd, 1.0);
+            pt__pov_put(w, " scale ");
+            pt__pov_g(w, (double)c->scale);
+            pt__pov_put(w, " } finish { diffuse 1 } }");
         } else {
-            fprintf(f, "texture { pigment { rgb ");
-            pt__pov_v(f, m->albedo);
-            fprintf(f, " } finish { diffuse 1 } }");
+            pt__pov_put(w, "texture { pigment { ");
+            pt__pov_rgb(w, m->albedo, 1.0);
+            pt__pov_put(w, " } finish { diffuse 1 } }");
         }
         break;
     case PT_MATERIAL_METAL:
-        fprintf(f, "texture { pigment { rgb 0 } finish { diffuse 0 reflection { rgb ");
-        pt__pov_v(f, m->albedo);
-        fprintf(f, " } } }");
+        pt__pov_put(w, "texture { pigment { rgb 0 } finish { diffuse 0 reflection { ");
+        pt__pov_rgb(w, m->albedo, 1.0);
+        pt__pov_put(w, " } } }");
         break;
     case PT_MATERIAL_DIELECTRIC:
-        fprintf(f, "texture { pigment { rgbf 1 } finish { diffuse 0 reflection { 0, 1 fresnel on } conserve_energy } } "
-                   "interior { ior %.9g }", (double)(m->ior > 0 ? m->ior : 1.5f));
+        pt__pov_put(w, "texture { pigment { rgbf 1 } finish { diffuse 0 reflection { 0, 1 fresnel on } conserve_energy } } "
+                       "interior { ior ");
+        pt__pov_g(w, (double)(m->ior > 0 ? m->ior : 1.5f));
+        pt__pov_put(w, " }");
         break;
     default: /* emitter: the visible surface, pixel = pigment x emission */
-        fprintf(f, "texture { pigment { rgb ");
-        pt__pov_v(f, m->emission);
-        fprintf(f, " } finish { emission 1 diffuse 0 } }");
+        pt__pov_put(w, "texture { pigment { ");
+        pt__pov_rgb(w, m->emission, 1.0);
+        pt__pov_put(w, " } finish { emission 1 diffuse 0 } }");
         break;
     }
+}
+
+static void pt__pov_mesh2(pt__pov *w, const pt_obj_mesh *m, const pt_transform *t)
+{
+    uint32_t i;
+    pt__pov_put(w, "mesh2 {\n  vertex_vectors { %u", (unsigned)m->vertex_count);
+    for (i = 0; i < m->vertex_count; ++i) {
+        pt__pov_put(w, ",\n    ");
+        pt__pov_v(w, pt_transform_point(t, pt_v3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2])));
+    }
+    pt__pov_put(w, " }\n");
+    if (m->normals) {
+        pt__pov_put(w, "  normal_vectors { %u", (unsigned)m->vertex_count);
+        for (i = 0; i < m->vertex_count; ++i) {
+            pt_vec3 n;
+            if (pt_transform_normal(t, pt_v3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2]), &n) != PT_OK)
+                n = pt_v3(0, 1, 0);
+            pt__pov_put(w, ",\n    ");
+            pt__pov_v(w, pt_normalize(n));
+        }
+        pt__pov_put(w, " }\n");
+    }
+    pt__pov_put(w, "  face_indices { %u", (unsigned)m->triangle_count);
+    for (i = 0; i < m->triangle_count; ++i)
+        pt__pov_put(w, ",\n    <%u, %u, %u>", (unsigned)m->indices[3 * i], (unsigned)m->indices[3 * i + 1],
+                    (unsigned)m->indices[3 * i + 2]);
+    pt__pov_put(w, " }\n  ");
 }
 
 /* The geometry of a shape in world space, without its closing brace. */
 static void pt__pov_geometry(pt__pov *w, const pt_scenefile_shape *s)
 {
-    FILE *f = w->f;
     const pt_transform *t = &s->transform;
-    uint32_t i;
+    int i, j;
     switch (s->type) {
     case PT_SCENEFILE_SPHERE:
-        fprintf(f, "sphere { ");
-        pt__pov_v(f, pt_transform_point(t, s->p[0]));
-        fprintf(f, ", %.9g ", (double)(s->radius * pt__sf_xf_scale(t)));
+        pt__pov_put(w, "sphere { ");
+        pt__pov_v(w, pt_transform_point(t, s->p[0]));
+        pt__pov_put(w, ", ");
+        pt__pov_g(w, (double)s->radius * (double)pt__sf_xf_scale(t));
+        pt__pov_put(w, " ");
         break;
     case PT_SCENEFILE_QUAD: {
         pt_vec3 q = pt_transform_point(t, s->p[0]), u = pt_transform_vector(t, s->p[1]), v = pt_transform_vector(t, s->p[2]);
-        fprintf(f, "mesh { triangle { ");
-        pt__pov_v(f, q); fprintf(f, ", "); pt__pov_v(f, pt_add(q, u)); fprintf(f, ", "); pt__pov_v(f, pt_add(pt_add(q, u), v));
-        fprintf(f, " } triangle { ");
-        pt__pov_v(f, q); fprintf(f, ", "); pt__pov_v(f, pt_add(pt_add(q, u), v)); fprintf(f, ", "); pt__pov_v(f, pt_add(q, v));
-        fprintf(f, " } ");
+        pt__pov_put(w, "mesh { triangle { ");
+        pt__pov_v(w, q); pt__pov_put(w, ", "); pt__pov_v(w, pt_add(q, u)); pt__pov_put(w, ", "); pt__pov_v(w, pt_add(pt_add(q, u), v));
+        pt__pov_put(w, " } triangle { ");
+        pt__pov_v(w, q); pt__pov_put(w, ", "); pt__pov_v(w, pt_add(pt_add(q, u), v)); pt__pov_put(w, ", "); pt__pov_v(w, pt_add(q, v));
+        pt__pov_put(w, " } ");
         break;
     }
     case PT_SCENEFILE_TRIANGLE:
-        fprintf(f, "triangle { ");
-        pt__pov_v(f, pt_transform_point(t, s->p[0])); fprintf(f, ", ");
-        pt__pov_v(f, pt_transform_point(t, s->p[1])); fprintf(f, ", ");
-        pt__pov_v(f, pt_transform_point(t, s->p[2])); fprintf(f, " ");
+        pt__pov_put(w, "triangle { ");
+        pt__pov_v(w, pt_transform_point(t, s->p[0])); pt__pov_put(w, ", ");
+        pt__pov_v(w, pt_transform_point(t, s->p[1])); pt__pov_put(w, ", ");
+        pt__pov_v(w, pt_transform_point(t, s->p[2])); pt__pov_put(w, " ");
         break;
     case PT_SCENEFILE_BOX:
         /* POV's matrix: p' = p * M with rows x, y, z, translation, i.e. the transpose of ours. */
-        fprintf(f, "box { ");
-        pt__pov_v(f, s->p[0]); fprintf(f, ", "); pt__pov_v(f, s->p[1]);
-        fprintf(f, " matrix <%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g> ",
-                (double)t->m[0][0], (double)t->m[1][0], (double)t->m[2][0], (double)t->m[0][1], (double)t->m[1][1],
-                (double)t->m[2][1], (double)t->m[0][2], (double)t->m[1][2], (double)t->m[2][2], (double)t->m[0][3],
-                (double)t->m[1][3], (double)t->m[2][3]);
-        break;
-    case PT_SCENEFILE_MESH: {
-        const pt_obj_mesh *m = &w->d->meshes[s->mesh];
-        fprintf(f, "mesh2 {\n  vertex_vectors { %u", (unsigned)m->vertex_count);
-        for (i = 0; i < m->vertex_count; ++i) {
-            fprintf(f, ",\n    ");
-            pt__pov_v(f, pt_transform_point(t, pt_v3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2])));
-        }
-        fprintf(f, " }\n");
-        if (m->normals) {
-            fprintf(f, "  normal_vectors { %u", (unsigned)m->vertex_count);
-            for (i = 0; i < m->vertex_count; ++i) {
-                pt_vec3 n;
-                if (pt_transform_normal(t, pt_v3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2]), &n) != PT_OK)
-                    n = pt_v3(0, 1, 0);
-                fprintf(f, ",\n    ");
-                pt__pov_v(f, pt_normalize(n));
+        pt__pov_put(w, "box { ");
+        pt__pov_v(w, s->p[0]); pt__pov_put(w, ", "); pt__pov_v(w, s->p[1]);
+        pt__pov_put(w, " matrix <");
+        for (j = 0; j < 4; ++j)
+            for (i = 0; i < 3; ++i) {
+                pt__pov_g(w, (double)t->m[i][j]);
+                pt__pov_put(w, j == 3 && i == 2 ? "> " : ", ");
             }
-            fprintf(f, " }\n");
-        }
-        fprintf(f, "  face_indices { %u", (unsigned)m->triangle_count);
-        for (i = 0; i < m->triangle_count; ++i)
-            fprintf(f, ",\n    <%u, %u, %u>", (unsigned)m->indices[3 * i], (unsigned)m->indices[3 * i + 1],
-                    (unsigned)m->indices[3 * i + 2]);
-        fprintf(f, " }\n  ");
         break;
-    }
+    case PT_SCENEFILE_MESH:
+        pt__pov_mesh2(w, &w->d->meshes[s->mesh], t);
+        break;
     }
 }
 
 static void pt__pov_quad_lights(pt__pov *w, pt_vec3 q, pt_vec3 u, pt_vec3 v, pt_vec3 n, pt_color le)
 {
     /* N x N spotlights at the cell centres, a hair in front; colour Le*A/(N^2*2*pi*fd^2). */
-    FILE *f = w->f;
     int i, j, N = w->grid;
     double area = (double)pt_length(pt_cross(u, v));
     double k = area / ((double)N * N * 2.0 * 3.14159265358979323846 * w->fd * w->fd);
@@ -1334,52 +1435,69 @@ static void pt__pov_quad_lights(pt__pov *w, pt_vec3 q, pt_vec3 u, pt_vec3 v, pt_
     for (i = 0; i < N; ++i)
         for (j = 0; j < N; ++j) {
             pt_vec3 pos = pt_add(pt_madd(c, u, (float)((i + 0.5) / N)), pt_scale(v, (float)((j + 0.5) / N)));
-            fprintf(f, "light_source { ");
-            pt__pov_v(f, pos);
-            fprintf(f, ", rgb <%.9g, %.9g, %.9g> spotlight point_at ", (double)le.x * k, (double)le.y * k, (double)le.z * k);
-            pt__pov_v(f, pt_add(pos, n));
-            fprintf(f, " radius 90 falloff 90 tightness 1 fade_distance %.9g fade_power 2 }\n", w->fd);
+            pt__pov_put(w, "light_source { ");
+            pt__pov_v(w, pos);
+            pt__pov_put(w, ", ");
+            pt__pov_rgb(w, le, k);
+            pt__pov_put(w, " spotlight point_at ");
+            pt__pov_v(w, pt_add(pos, n));
+            pt__pov_put(w, " radius 90 falloff 90 tightness 1 fade_distance ");
+            pt__pov_g(w, w->fd);
+            pt__pov_put(w, " fade_power 2 }\n");
         }
 }
 
-static int pt__pov_body(pt__pov *w, const pt_pov_options *o, int width, int height)
+/* The file's header: comments, global settings, background and camera. */
+static void pt__pov_header(pt__pov *w, const pt_pov_options *o, int width, int height)
 {
     const pt_scenefile *d = w->d;
-    FILE *f = w->f;
-    int i, radiosity = o && o->radiosity >= 0 ? o->radiosity : d->pov_radiosity;
+    int radiosity = o && o->radiosity >= 0 ? o->radiosity : d->pov_radiosity;
     double vfov = d->camera.vfov_degrees > 0 ? (double)d->camera.vfov_degrees : 40.0;
     double aspect = (double)width / (double)height;
     double angle = 2.0 * atan(aspect * tan(vfov * 3.14159265358979323846 / 360.0)) * 180.0 / 3.14159265358979323846;
     pt_vec3 up = pt_length2(d->camera.up) > 0 ? d->camera.up : pt_v3(0, 1, 0);
 
-    fprintf(f, "// POV-Ray 3.7 scene written by pdftrace %d.%d.%d from %s\n", PDFTRACE_VERSION_MAJOR,
-            PDFTRACE_VERSION_MINOR, PDFTRACE_VERSION_PATCH, d->file);
-    fprintf(f, "// render: povray +I<this file> +O<out>.exr +FE +W%d +H%d +A0.0 +AM2 +R4 -D\n", width, height);
-    fprintf(f, "// (+FE: linear half-float OpenEXR; +A0.0 +AM2 +R4 approximates pdftrace's box-filtered pixels)\n");
-    fprintf(f, "#version 3.7;\n#default { finish { ambient 0 emission 0 diffuse 1 } }\n");
-    fprintf(f, "global_settings {\n  assumed_gamma 1.0\n  ambient_light 0\n  max_trace_level 64\n  adc_bailout 1e-6\n");
-    if (radiosity == 1) fprintf(f, "  radiosity { brightness 1 gray_threshold 0 }\n");
+    pt__pov_put(w, "// POV-Ray 3.7 scene written by pdftrace %d.%d.%d from %s\n", PDFTRACE_VERSION_MAJOR,
+                PDFTRACE_VERSION_MINOR, PDFTRACE_VERSION_PATCH, w->name);
+    pt__pov_put(w, "// render: povray +I<this file> +O<out>.exr +FE +W%d +H%d +A0.0 +AM2 +R4 -D\n", width, height);
+    pt__pov_put(w, "// (+FE: linear half-float OpenEXR; +A0.0 +AM2 +R4 approximates pdftrace's box-filtered pixels)\n");
+    pt__pov_put(w, "#version 3.7;\n#default { finish { ambient 0 emission 0 diffuse 1 } }\n");
+    pt__pov_put(w, "global_settings {\n  assumed_gamma 1.0\n  ambient_light 0\n  max_trace_level 64\n  adc_bailout 1e-6\n");
+    if (radiosity == 1) pt__pov_put(w, "  radiosity { brightness 1 gray_threshold 0 }\n");
     if (radiosity == 2)
-        fprintf(f, "  radiosity { count 200 error_bound 0.5 recursion_limit 4 nearest_count 10 brightness 1 gray_threshold 0 }\n");
+        pt__pov_put(w, "  radiosity { count 200 error_bound 0.5 recursion_limit 4 nearest_count 10 brightness 1 gray_threshold 0 }\n");
     if (radiosity == 3)
-        fprintf(f, "  radiosity { count 800,1600 error_bound 0.15 recursion_limit 8 nearest_count 20 pretrace_start 0.08\n"
-                   "    pretrace_end 0.005 minimum_reuse 0.005 maximum_reuse 0.1 low_error_factor 0.5 adc_bailout 0.001\n"
-                   "    brightness 1 gray_threshold 0 }\n");
-    fprintf(f, "}\nbackground { rgb ");
-    pt__pov_v(f, d->background);
-    fprintf(f, " }\n// right-handed pinhole: angle is the horizontal field of view\n");
-    fprintf(f, "camera { perspective location ");
-    pt__pov_v(f, d->camera.look_from);
-    fprintf(f, " right -x*%.9g up y direction z angle %.9g sky ", aspect, angle);
-    pt__pov_v(f, up);
-    fprintf(f, " look_at ");
-    pt__pov_v(f, d->camera.look_at);
-    fprintf(f, " }\n\n");
+        pt__pov_put(w, "  radiosity { count 800,1600 error_bound 0.15 recursion_limit 8 nearest_count 20 pretrace_start 0.08\n"
+                       "    pretrace_end 0.005 minimum_reuse 0.005 maximum_reuse 0.1 low_error_factor 0.5 adc_bailout 0.001\n"
+                       "    brightness 1 gray_threshold 0 }\n");
+    pt__pov_put(w, "}\nbackground { ");
+    w->line = 0;
+    pt__pov_rgb(w, d->background, 1.0);
+    pt__pov_put(w, " }\n// right-handed pinhole: angle is the horizontal field of view\n");
+    w->line = d->camera_line;
+    pt__pov_put(w, "camera { perspective location ");
+    pt__pov_v(w, d->camera.look_from);
+    pt__pov_put(w, " right -x*");
+    pt__pov_g(w, aspect);
+    pt__pov_put(w, " up y direction z angle ");
+    pt__pov_g(w, angle);
+    pt__pov_put(w, " sky ");
+    pt__pov_v(w, up);
+    pt__pov_put(w, " look_at ");
+    pt__pov_v(w, d->camera.look_at);
+    pt__pov_put(w, " }\n\n");
+}
 
+static void pt__pov_body(pt__pov *w, const pt_pov_options *o, int width, int height)
+{
+    const pt_scenefile *d = w->d;
+    int i;
+    pt__pov_header(w, o, width, height);
     for (i = 0; i < d->shape_count; ++i) {
         const pt_scenefile_shape *s = &d->shapes[i];
         const pt_scenefile_material *m = &d->materials[s->material];
-        fprintf(f, "// %s:%d\n", d->file, s->line);
+        w->line = s->line;
+        pt__pov_put(w, "// %s:%d\n", w->name, s->line);
         if (m->type == PT_MATERIAL_EMITTER) {
             if (s->type == PT_SCENEFILE_QUAD) {
                 const pt_transform *t = &s->transform;
@@ -1390,48 +1508,50 @@ static int pt__pov_body(pt__pov *w, const pt_pov_options *o, int width, int heig
             } else if (s->type == PT_SCENEFILE_SPHERE) {
                 /* A Lambertian sphere of radiance L has intensity L*pi*r^2 in every direction;
                    colour I/(2*pi*fd^2) = L*r^2/(2*fd^2). */
-                float r = s->radius * pt__sf_xf_scale(&s->transform);
-                double k = (double)r * r / (2.0 * w->fd * w->fd);
-                fprintf(f, "light_source { ");
-                pt__pov_v(f, pt_transform_point(&s->transform, s->p[0]));
-                fprintf(f, ", rgb <%.9g, %.9g, %.9g> fade_distance %.9g fade_power 2 }\n", (double)m->emission.x * k,
-                        (double)m->emission.y * k, (double)m->emission.z * k, w->fd);
+                double r = (double)s->radius * (double)pt__sf_xf_scale(&s->transform);
+                pt__pov_put(w, "light_source { ");
+                pt__pov_v(w, pt_transform_point(&s->transform, s->p[0]));
+                pt__pov_put(w, ", ");
+                pt__pov_rgb(w, m->emission, r * r / (2.0 * w->fd * w->fd));
+                pt__pov_put(w, " fade_distance ");
+                pt__pov_g(w, w->fd);
+                pt__pov_put(w, " fade_power 2 }\n");
             }
             pt__pov_geometry(w, s);
             pt__pov_texture(w, s->material);
-            fprintf(f, " no_shadow no_radiosity }\n");
+            pt__pov_put(w, " no_shadow no_radiosity }\n");
             pt__pov_geometry(w, s);
-            fprintf(f, "texture { pigment { rgb 0 } finish { diffuse 0 } } no_image no_reflection no_shadow }\n");
+            pt__pov_put(w, "texture { pigment { rgb 0 } finish { diffuse 0 } } no_image no_reflection no_shadow }\n");
         } else {
             pt__pov_geometry(w, s);
             pt__pov_texture(w, s->material);
             if (m->type == PT_MATERIAL_DIELECTRIC) {
-                fprintf(f, " no_shadow }\n");
+                pt__pov_put(w, " no_shadow }\n");
                 pt__pov_geometry(w, s); /* the opaque twin casts the shadow */
-                fprintf(f, "texture { pigment { rgb 0 } finish { diffuse 0 } } no_image no_reflection no_radiosity }\n");
+                pt__pov_put(w, "texture { pigment { rgb 0 } finish { diffuse 0 } } no_image no_reflection no_radiosity }\n");
             } else
-                fprintf(f, " }\n");
+                pt__pov_put(w, " }\n");
         }
     }
-    return 1;
 }
 
-PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const pt_pov_options *o, char *err,
-                                  size_t err_size)
+/* What the export refuses, before anything is written: every scene the build refuses (the
+   same validation: pt_scenefile_build itself), then what POV-Ray cannot match. POV-Ray's
+   focal blur draws a few aperture samples per pixel and stops adaptively (blur_samples,
+   confidence, variance) rather than integrating over the lens disk, so a thin lens has no
+   exact twin. A camera the renderer refuses (pt_camera_init) is refused too. */
+static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *err, size_t err_size)
 {
-    pt__pov w;
-    pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_v3(-FLT_MAX, -FLT_MAX, -FLT_MAX);
-    double diag;
-    int i, width, height, ok;
-    size_t len;
-    char *tmp;
-    if (err && err_size) err[0] = '\0';
-    if (!d || !path || !*path) return PT_ERROR_INVALID_ARGUMENT;
-    width = o && o->width > 0 ? o->width : d->width;
-    height = o && o->height > 0 ? o->height : d->height;
-    /* What POV-Ray cannot match is refused before anything is written. POV-Ray's focal blur
-       draws a few aperture samples per pixel and stops adaptively (blur_samples, confidence,
-       variance) rather than integrating over the lens disk, so a thin lens has no exact twin. */
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_camera cam;
+    int i, rc = pt_scenefile_build(d, &scene, &rd, err, err_size);
+    pt_scene_destroy(scene);
+    if (rc != PT_OK) return rc;
+    if (pt_camera_init(&cam, &d->camera, width, height) != PT_OK) /* the renderer's own check */
+        return pt__sf_failf(err, err_size, d->file, d->camera_line, PT_ERROR_INVALID_ARGUMENT,
+                            "POV-Ray export: pdftrace cannot render this camera (a non-finite vector, look_at "
+                            "equal to look_from, up parallel to the view, or vfov outside (0, 180))");
     if (d->camera.lens_radius > 0.0f)
         return pt__sf_failf(err, err_size, d->file, d->camera_line, PT_ERROR_UNSUPPORTED,
                             "POV-Ray export: a thin-lens camera (lens_radius %g) has no exact POV-Ray equivalent; "
@@ -1439,14 +1559,27 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
     for (i = 0; i < d->shape_count; ++i) {
         const pt_scenefile_shape *s = &d->shapes[i];
         const pt_scenefile_material *m = &d->materials[s->material];
-        const pt_transform *t = &s->transform;
-        uint32_t k;
         if (m->type == PT_MATERIAL_METAL && m->fuzz > 0)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: fuzzy metal (material %s) has no POV-Ray equivalent", m->name);
         if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
+    }
+    return PT_OK;
+}
+
+/* The scene's bounds set the fade distance and the light offset; the grid and the name. */
+static void pt__pov_setup(pt__pov *w, const pt_scenefile *d, const pt_pov_options *o)
+{
+    pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_v3(-FLT_MAX, -FLT_MAX, -FLT_MAX);
+    char file[sizeof d->file];
+    double diag;
+    int i;
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        const pt_transform *t = &s->transform;
+        uint32_t k;
         switch (s->type) {
         case PT_SCENEFILE_SPHERE: {
             pt_vec3 c = pt_transform_point(t, s->p[0]);
@@ -1478,13 +1611,35 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
         }
     }
     diag = d->shape_count ? (double)pt_length(pt_sub(hi, lo)) : 1.0;
-    if (!(diag > 0) || diag != diag) diag = 1.0;
-    memset(&w, 0, sizeof w);
-    w.d = d;
-    w.grid = o && o->light_grid > 0 ? o->light_grid : d->pov_light_grid > 0 ? d->pov_light_grid : 16;
-    if (w.grid > 64) w.grid = 64;
-    w.fd = 1e-4 * diag;   /* relative error (fd/d)^2 */
-    w.hair = 1e-5 * diag; /* the grid sits this far in front of its emitter (emitter and twin are no_shadow) */
+    if (!(diag > 0) || !pt__sf_finite(diag)) diag = 1.0;
+    memset(w, 0, sizeof *w);
+    w->d = d;
+    w->grid = o && o->light_grid > 0 ? o->light_grid : d->pov_light_grid > 0 ? d->pov_light_grid : 16;
+    if (w->grid > 64) w->grid = 64;
+    w->fd = 1e-4 * diag;   /* relative error (fd/d)^2 */
+    w->hair = 1e-5 * diag; /* the grid sits this far in front of its emitter (emitter and twin are no_shadow) */
+    memcpy(file, d->file, sizeof file); /* d->file is input: only safe bytes reach a comment */
+    file[sizeof file - 1] = '\0';
+    pt_scenefile_escape(w->name, sizeof w->name, file, PT_SCENEFILE_ESCAPE_COMMENT);
+}
+
+PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const pt_pov_options *o, char *err,
+                                  size_t err_size)
+{
+    pt__pov w;
+    int width, height, ok, rc;
+    size_t len;
+    char *tmp;
+    if (err && err_size) err[0] = '\0';
+    if (!d || !path || !*path) return PT_ERROR_INVALID_ARGUMENT;
+    width = o && o->width > 0 ? o->width : d->width;
+    height = o && o->height > 0 ? o->height : d->height;
+    if ((rc = pt__pov_refuse(d, width, height, err, err_size)) != PT_OK) return rc;
+    pt__pov_setup(&w, d, o);
+    pt__pov_body(&w, o, width, height); /* w.f == NULL: only checks the numbers */
+    if (w.bad)
+        return pt__sf_failf(err, err_size, d->file, w.bad_line, PT_ERROR_UNSUPPORTED,
+                            "POV-Ray export: a number to be written is not finite (nan or inf); POV-Ray cannot read it");
 
     len = strlen(path);
     tmp = (char *)PT_MALLOC(len + 6u);
@@ -1497,8 +1652,8 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
         PT_FREE(tmp);
         return pt__sf_failf(err, err_size, path, 0, PT_ERROR_IO, "cannot write: %s", strerror(e));
     }
-    ok = pt__pov_body(&w, o, width, height);
-    ok = (fflush(w.f) == 0) && ok && !ferror(w.f);
+    pt__pov_body(&w, o, width, height);
+    ok = (fflush(w.f) == 0) && !ferror(w.f);
     ok = (fclose(w.f) == 0) && ok;
     if (ok) ok = rename(tmp, path) == 0;
     if (!ok) remove(tmp);

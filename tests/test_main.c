@@ -102,6 +102,7 @@ int main(int argc, char **argv)
         { "regress", test_regress_cases },
         { "stress", test_stress_cases },
         { "scenefile", test_scenefile_cases },
+        { "pov", test_pov_cases },
         { "suite", test_suite_cases },
     };
     const char *filter = argc > 1 ? argv[1] : NULL;

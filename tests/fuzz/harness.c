@@ -19,8 +19,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "harness.h"
+#include "pov_check.h"
 
 #ifndef PT_FUZZ_SCENE_DIR
 #define PT_FUZZ_SCENE_DIR "scenes"
@@ -270,6 +272,98 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
     pt_image_free(&img);
     fz_check_rays(T, s, d.camera.look_from, 24);
     pt_scene_destroy(s);
+    pt_scenefile_free(&d);
+    return 0;
+}
+
+/* ---- POV-Ray export */
+
+/* Where the pov target writes: one file per process, removed after each input. */
+static const char *fz_pov_path(void)
+{
+    static char path[512];
+    if (!path[0]) {
+        const char *dir = getenv("TMPDIR");
+        snprintf(path, sizeof path, "%s/pt-fuzz-pov-%ld.pov", dir && *dir && strlen(dir) < 400 ? dir : "/tmp",
+                 (long)getpid());
+    }
+    return path;
+}
+
+static int fz_exists(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (f) fclose(f);
+    return f != NULL;
+}
+
+/* The whole file at path (NUL-terminated), or NULL. */
+static char *fz_read(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf = NULL;
+    long n;
+    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0) {
+        buf = (char *)malloc((size_t)n + 1u);
+        if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
+        if (buf) { buf[n] = '\0'; *len = (size_t)n; }
+    }
+    if (f) fclose(f);
+    return buf;
+}
+
+int pt_fuzz_pov(const uint8_t *data, size_t size)
+{
+    static const char *T = "pov";
+    const char *path = fz_pov_path();
+    char err[1024], why[256], tmp[600];
+    pt_scenefile d;
+    pt_scene *s = NULL;
+    pt_render_desc r;
+    pt_pov_options o;
+    uint64_t tris = 0;
+    size_t n, len = 0;
+    int rc, brc, i;
+    char *text;
+
+    if (size > 65536 || fz_unsafe_mesh_path((const char *)data, size)) return 0;
+    if (pt_scenefile_parse((const char *)data, size, "fuzz.scene", PT_FUZZ_SCENE_DIR, &d, err, sizeof err) != PT_OK) {
+        FZ_CHECK(T, pt_fuzz_expect <= 0, err); /* the scene target checks parse errors */
+        return 0;
+    }
+    for (i = 0; i < d.mesh_count; ++i) tris += d.meshes[i].triangle_count;
+    if (tris > 200000 || d.shape_count > 20000) {
+        pt_scenefile_free(&d);
+        return 0;
+    }
+    /* The scene's name is input too: the input's first bytes (to a NUL, at most 255), newlines,
+       '#' and quotes included, as a hostile path would be. */
+    n = size < sizeof d.file - 1 ? size : sizeof d.file - 1;
+    memcpy(d.file, data, n);
+    d.file[n] = '\0';
+    memset(&o, 0, sizeof o);
+    o.radiosity = (int)(size % 4u);
+    o.light_grid = 1 + (int)(size % 3u); /* bounds the output: up to 3x3 lights per emitting quad */
+    brc = pt_scenefile_build(&d, &s, &r, err, sizeof err);
+    pt_scene_destroy(s);
+    remove(path);
+    rc = pt_scenefile_write_pov(&d, path, &o, err, sizeof err);
+    FZ_CHECK(T, pt_fuzz_expect == 0 || (pt_fuzz_expect > 0) == (rc == PT_OK),
+             rc == PT_OK ? "an input named reject-* was exported" : err);
+    FZ_CHECK(T, brc != PT_OK ? rc != PT_OK : 1, "the exporter accepted a scene the build refuses");
+    snprintf(tmp, sizeof tmp, "%s.ptmp", path);
+    if (rc != PT_OK) {
+        FZ_CHECK(T, rc < 0 && err[0] != '\0', err);
+        FZ_CHECK(T, !fz_exists(path) && !fz_exists(tmp), "a refused export left a file");
+        fz_note(T, "refused", err);
+    } else {
+        text = fz_read(path, &len);
+        FZ_CHECK(T, text != NULL, "the export wrote no readable file");
+        FZ_CHECK(T, pt_pov_check_text(text, len, why, sizeof why), why);
+        free(text);
+        fz_note(T, "exported, text checked", NULL);
+    }
+    remove(path);
     pt_scenefile_free(&d);
     return 0;
 }

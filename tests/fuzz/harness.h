@@ -12,6 +12,11 @@
    from PT_FUZZ_SCENE_DIR (default "scenes", relative to the repository root); mesh paths
    with '/' are skipped so fuzzed input cannot read other files (/dev/stdin would hang). */
 int pt_fuzz_scene(const uint8_t *data, size_t size);
+/* Scene text -> pt_scenefile_parse (the scene's name set to the input's first bytes) ->
+   pt_scenefile_write_pov to a temporary file: every scene the build refuses is refused with a
+   message and no file; an exported text passes tests/fuzz/pov_check.h (no nan/inf, no
+   directive or string from input, comments whole lines, braces balanced). */
+int pt_fuzz_pov(const uint8_t *data, size_t size);
 /* OBJ text -> pt_obj_parse -> a committed scene with the mesh -> rays. */
 int pt_fuzz_obj(const uint8_t *data, size_t size);
 #ifdef PDFTRACE_OPENEXR

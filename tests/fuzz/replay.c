@@ -4,7 +4,7 @@
    the last two lines are "fuzz replay: N inputs (...)" and "N passed, 0 failed, K skipped"
    (K: the exr inputs when the build has no OpenEXR). Inputs named accept-* must load, reject-*
    must be refused (with a message); others may do either.
-   Usage: fuzz_replay CORPUS_DIR   (the directory holding scene/, obj/ and exr/)
+   Usage: fuzz_replay CORPUS_DIR   (the directory holding scene/, obj/, pov/ and exr/)
    PT_FUZZ_VERBOSE=1: one line per input. PT_FUZZ_FPTRAP=1 (glibc): FE_INVALID and
    FE_DIVBYZERO trap (SIGFPE) while the inputs run, e.g. to replay a fuzzer's own corpus. */
 #define _GNU_SOURCE 1
@@ -119,7 +119,7 @@ static long count_dir(const char *dir, const char *sub)
 
 int main(int argc, char **argv)
 {
-    long ns, no, ne = 0, skipped = 0;
+    long ns, no, np, ne = 0, skipped = 0;
     if (argc != 2) {
         fprintf(stderr, "usage: %s CORPUS_DIR\n", argv[0]);
         return 2;
@@ -139,22 +139,23 @@ int main(int argc, char **argv)
     }
     ns = replay_dir(argv[1], "scene", pt_fuzz_scene);
     no = replay_dir(argv[1], "obj", pt_fuzz_obj);
+    np = replay_dir(argv[1], "pov", pt_fuzz_pov);
 #ifdef PDFTRACE_OPENEXR
     ne = replay_dir(argv[1], "exr", pt_fuzz_exr);
 #endif
-    if (ns < 0 || no < 0 || ne < 0) return 1;
+    if (ns < 0 || no < 0 || np < 0 || ne < 0) return 1;
     if (trap_mode) printf("fuzz replay: FE_INVALID and FE_DIVBYZERO trapped\n");
-    if (ns == 0 || no == 0) {
-        fprintf(stderr, "fuzz replay: empty corpus (scene %ld, obj %ld)\n", ns, no);
+    if (ns == 0 || no == 0 || np == 0) {
+        fprintf(stderr, "fuzz replay: empty corpus (scene %ld, obj %ld, pov %ld)\n", ns, no, np);
         return 1;
     }
 #ifdef PDFTRACE_OPENEXR
-    printf("fuzz replay: %ld inputs (scene %ld, obj %ld, exr %ld)\n", ns + no + ne, ns, no, ne);
+    printf("fuzz replay: %ld inputs (scene %ld, obj %ld, pov %ld, exr %ld)\n", ns + no + np + ne, ns, no, np, ne);
 #else
     skipped = count_dir(argv[1], "exr");
-    printf("fuzz replay: %ld inputs (scene %ld, obj %ld); %ld exr inputs skipped: OpenEXR not compiled in\n", ns + no,
-           ns, no, skipped);
+    printf("fuzz replay: %ld inputs (scene %ld, obj %ld, pov %ld); %ld exr inputs skipped: OpenEXR not compiled in\n",
+           ns + no + np, ns, no, np, skipped);
 #endif
-    printf("%ld passed, 0 failed, %ld skipped\n", ns + no + ne, skipped);
+    printf("%ld passed, 0 failed, %ld skipped\n", ns + no + np + ne, skipped);
     return 0;
 }
