@@ -58,7 +58,8 @@
      triangle AX AY AZ BX BY BZ CX CY CZ MATERIAL
      box LOX LOY LOZ HIX HIY HIZ MATERIAL
      mesh PATH MATERIAL               Wavefront OBJ (v, vn, f; faces fanned into triangles),
-                                      PATH relative to the scene file's directory
+                                      PATH relative to the scene file's directory and
+                                      inside it (below); a file is read once
      translate X Y Z | rotate AX AY AZ DEGREES | scale SX SY SZ | identity
                                       transforms for the shapes that follow; each one is
                                       applied after those before it (as in POV-Ray);
@@ -68,7 +69,15 @@
 
    Numbers must be finite with magnitude <= 1e7; colours >= 0; names are [A-Za-z_][A-Za-z0-9_-]*
    up to 31 characters and must be defined before use. Every error is reported as
-   "file:line: message" and the load fails as a whole (nothing is left allocated).
+   "file:line: message" and the load fails as a whole (nothing is left allocated). A UTF-8
+   byte order mark at the start is skipped.
+
+   UNTRUSTED FILES (pt_scenefile_options; docs/scene-format.md has the details)
+   Only regular files are read (opened without blocking, checked with fstat). Mesh paths must
+   resolve (realpath) inside the scene's directory or an allowed one, else they are refused
+   before being opened. A file that is not OBJ is named, never quoted; messages write control
+   bytes as \xNN. Meshes may take mesh_memory bytes while loading (1 GiB) and `size` is
+   refused above image_memory bytes of film and images (4 GiB).
 
    POV-RAY EXPORT
    ==============
