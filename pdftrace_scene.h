@@ -255,24 +255,17 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *desc, const char *path, con
 #include <stdlib.h>
 #include <string.h>
 
-/* POSIX file access (open without blocking, fstat, realpath) where the declarations are
-   visible; otherwise a fallback on stdio that cannot tell a FIFO from a file and confines mesh
-   paths lexically only. PDFTRACE_SCENE_NO_POSIX forces the fallback. */
+/* POSIX file access (open without blocking, fstat, realpath) on Unix systems, in every
+   dialect: open, fstat and read are declared in all of them; realpath is declared here as
+   POSIX.1-2008 has it, since glibc and musl hide it in strict C99 (a compatible redeclaration).
+   Elsewhere, or with PDFTRACE_SCENE_NO_POSIX, a fallback on stdio that cannot tell a FIFO from
+   a file and confines mesh paths lexically only. */
 #if !defined(PDFTRACE_SCENE_NO_POSIX) && (defined(__unix__) || defined(__APPLE__))
-#include <unistd.h>
-#if defined(__GLIBC__)
-#if defined(__USE_XOPEN2K8)
 #define PT__SF_POSIX 1
-#endif
-#elif defined(_POSIX_VERSION) && _POSIX_VERSION >= 200809L
-#define PT__SF_POSIX 1
-#endif
-#endif
-#ifdef PT__SF_POSIX
 #include <fcntl.h>
 #include <sys/stat.h>
-#if defined(__GLIBC__) && !defined(__USE_MISC) && !defined(__USE_XOPEN_EXTENDED) && !defined(__cplusplus)
-/* POSIX.1-2008, but glibc's <stdlib.h> declares it only for X/Open or its default dialect. */
+#include <unistd.h>
+#if !defined(__cplusplus) && !defined(__APPLE__)
 extern char *realpath(const char *restrict name, char *restrict resolved);
 #endif
 #endif
@@ -473,6 +466,8 @@ static int pt__sf_in_open(pt__sf_in *in, const char *path, int nofollow, const c
 #endif
 #ifdef O_NOFOLLOW
     if (nofollow) flags |= O_NOFOLLOW; /* a link swapped in after the path was resolved */
+#else
+    (void)nofollow; /* glibc defines O_NOFOLLOW only for POSIX.1-2008 or a GNU dialect */
 #endif
     memset(in, 0, sizeof *in);
     in->fd = open(path, flags);
@@ -1106,36 +1101,16 @@ static int pt__sf_roots(pt__sf_parser *p)
     return PT_OK;
 }
 
-/* The one answer for every path that is not a file inside the allowed directories, whether
-   it exists or not, so that the message tells nothing about other directories. */
+/* The one answer for every path that does not resolve to something inside the allowed
+   directories: missing, dangling, or leading out through "..", an absolute path or a link.
+   Whether a file outside exists is not told (nor is a link's target opened to find out). */
 static int pt__sf_refuse(pt__sf_parser *p, const char *rel)
 {
     return pt__sf_fail(p, PT_ERROR_UNSUPPORTED,
-                       "mesh: '%s' is not a file inside the scene's directory%s (other directories need "
-                       "pt_scenefile_options.allowed_dirs, or pdftrace --allow-path DIR)",
-                       rel, p->root_count > 1 ? " or an allowed directory" : "");
+                       "mesh: no file '%s' inside the scene's directory%s (it is missing, or it leads out; other "
+                       "directories need pt_scenefile_options.allowed_dirs, or pdftrace --allow-path DIR)",
+                       rel, p->root_count > 1 ? " or an allowed one" : "");
 }
-
-#ifdef PT__SF_POSIX
-/* joined (normalised, absolute) does not resolve. It is reported missing only when its
-   directory resolves inside the allowed ones and the name there is absent (not a dangling
-   link); anything else gets the refusal. */
-static int pt__sf_missing(pt__sf_parser *p, const char *rel, const char *joined)
-{
-    char dir[PT__SF_PATH], real[PT__SF_PATH];
-    const char *slash = strrchr(joined, '/');
-    struct stat st;
-    size_t n = slash == joined ? 1u : (size_t)(slash - joined);
-    memcpy(dir, joined, n);
-    dir[n] = '\0';
-    if (pt__sf_resolve(dir, real) == 0 && pt__sf_inside_any(p, real) && strlen(real) + strlen(slash) < sizeof real) {
-        strcat(real, slash);
-        if (lstat(real, &st) != 0 && errno == ENOENT)
-            return pt__sf_fail(p, PT_ERROR_IO, "mesh: cannot read '%s': %s", rel, strerror(ENOENT));
-    }
-    return pt__sf_refuse(p, rel);
-}
-#endif
 
 /* Opens the mesh file `rel` of the statement if it resolves inside the allowed directories;
    shown receives the name for the OBJ file's messages (rel joined to base_dir). */
@@ -1157,7 +1132,7 @@ static int pt__sf_open_mesh(pt__sf_parser *p, const char *rel, char *shown, size
     pt__sf_normalize(joined);
     if (!pt__sf_inside_any(p, joined)) return pt__sf_refuse(p, rel);
 #ifdef PT__SF_POSIX
-    if (pt__sf_resolve(joined, real) != 0) return pt__sf_missing(p, rel, joined);
+    if (pt__sf_resolve(joined, real) != 0) return pt__sf_refuse(p, rel);
     if (!pt__sf_inside_any(p, real)) return pt__sf_refuse(p, rel);
 #else
     strcpy(real, joined);

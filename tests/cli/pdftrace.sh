@@ -250,7 +250,7 @@ t_scene_limits() {
     # meshes outside the scene's directory are refused unless allowed
     printf "${head}mesh ../shared/t.obj m\n" >"$d/scene/out.scene"
     bad_case "mesh ../shared/t.obj" "$d/scene/out.scene" -o "$W/bad/x.ppm" || ok=0
-    grep -q "out.scene:3: mesh: '../shared/t.obj' is not a file inside" "$W/err.txt" ||
+    grep -q "out.scene:3: mesh: no file '../shared/t.obj' inside the scene's directory" "$W/err.txt" ||
         { fail scene_limits "../shared: '$(cat "$W/err.txt")'"; ok=0; }
     "$P" "$d/scene/out.scene" -q --spp 1 --size 8x8 --allow-path "$d/shared" -o "$d/out.pfm" 2>"$W/err.txt" ||
         { fail scene_limits "--allow-path: $(cat "$W/err.txt")"; ok=0; }
