@@ -58,7 +58,8 @@
      triangle AX AY AZ BX BY BZ CX CY CZ MATERIAL
      box LOX LOY LOZ HIX HIY HIZ MATERIAL
      mesh PATH MATERIAL               Wavefront OBJ (v, vn, f; faces fanned into triangles),
-                                      PATH relative to the scene file's directory
+                                      PATH relative to the scene file's directory and
+                                      inside it (below); a file is read once
      translate X Y Z | rotate AX AY AZ DEGREES | scale SX SY SZ | identity
                                       transforms for the shapes that follow; each one is
                                       applied after those before it (as in POV-Ray);
@@ -68,7 +69,15 @@
 
    Numbers must be finite with magnitude <= 1e7; colours >= 0; names are [A-Za-z_][A-Za-z0-9_-]*
    up to 31 characters and must be defined before use. Every error is reported as
-   "file:line: message" and the load fails as a whole (nothing is left allocated).
+   "file:line: message" and the load fails as a whole (nothing is left allocated). A UTF-8
+   byte order mark at the start is skipped.
+
+   UNTRUSTED FILES (pt_scenefile_options; docs/scene-format.md has the details)
+   Only regular files are read (opened without blocking, checked with fstat). Mesh paths must
+   resolve (realpath) inside the scene's directory or an allowed one, else they are refused
+   before being opened. A file that is not OBJ is named, never quoted; messages write control
+   bytes as \xNN. Meshes may take mesh_memory bytes while loading (1 GiB) and `size` is
+   refused above image_memory bytes of film and images (4 GiB).
 
    POV-RAY EXPORT
    ==============
@@ -91,6 +100,10 @@
 #ifndef PDFTRACE_SCENE_H
 #define PDFTRACE_SCENE_H
 
+#if defined(PDFTRACE_SCENE_IMPLEMENTATION) && !defined(_POSIX_C_SOURCE) && !defined(_GNU_SOURCE) && \
+    !defined(_WIN32) && !defined(__cplusplus)
+#define _POSIX_C_SOURCE 200809L /* open, fstat, realpath; effective only when this header is the first one included */
+#endif
 #include "pdftrace.h"
 
 #ifdef __cplusplus
@@ -151,16 +164,44 @@ typedef struct pt_scenefile {
     pt_scenefile_checker *checkers; int checker_count;
     pt_scenefile_material *materials; int material_count;
     pt_scenefile_shape *shapes; int shape_count;
-    pt_obj_mesh *meshes; int mesh_count;
+    pt_obj_mesh *meshes; int mesh_count; /* one per distinct OBJ file: mesh statements naming the
+                                            same file share it (shapes[i].mesh) */
+    uint64_t mesh_bytes;         /* bytes the meshes hold (positions, normals, indices) */
 } pt_scenefile;
 
+/* What the loader may read and allocate. Zero fields take the defaults, so a zeroed struct
+   (or a NULL pointer) gives the defaults everywhere. */
+#define PT_SCENEFILE_MESH_MEMORY_DEFAULT ((uint64_t)1 << 30)  /* 1 GiB */
+#define PT_SCENEFILE_IMAGE_MEMORY_DEFAULT ((uint64_t)4 << 30) /* 4 GiB: about 6500 x 6500 pixels */
+typedef struct pt_scenefile_options {
+    /* Bytes the loader may use for meshes: the parsed meshes kept, plus the OBJ text and the
+       working arrays of the one being parsed. 0: PT_SCENEFILE_MESH_MEMORY_DEFAULT. */
+    uint64_t mesh_memory;
+    /* The largest pt_scenefile_image_bytes(W, H) a `size` statement may ask for.
+       0: PT_SCENEFILE_IMAGE_MEMORY_DEFAULT. */
+    uint64_t image_memory;
+    /* Mesh paths must resolve (symbolic links and `..` followed) inside the scene file's
+       directory or one of these directories; anything else is refused before it is opened. */
+    const char *const *allowed_dirs;
+    int allowed_dir_count;
+} pt_scenefile_options;
+
 /* Loads a scene file. On failure returns an error code, writes "file:line: message" to
-   err (err_size bytes, may be 0) and leaves *out empty (nothing to free). */
+   err (err_size bytes, may be 0) and leaves *out empty (nothing to free). Only regular files
+   are read (a FIFO or a device is refused without blocking). */
 PTDEF int pt_scenefile_load(const char *path, pt_scenefile *out, char *err, size_t err_size);
+/* The same with options (NULL: the defaults). */
+PTDEF int pt_scenefile_load_ex(const char *path, const pt_scenefile_options *opt, pt_scenefile *out, char *err,
+                               size_t err_size);
 /* The same from text in memory; `name` is used in messages, meshes are read relative to
-   base_dir (NULL: the current directory). */
+   base_dir (NULL: the current directory), which is also the directory they must lie in. */
 PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, const char *base_dir,
                              pt_scenefile *out, char *err, size_t err_size);
+PTDEF int pt_scenefile_parse_ex(const char *text, size_t length, const char *name, const char *base_dir,
+                                const pt_scenefile_options *opt, pt_scenefile *out, char *err, size_t err_size);
+/* Bytes a render of a width x height image needs for its pt_film (three double sums and a
+   count per pixel) and two float RGB images (the resolved one and its display copy). */
+PTDEF uint64_t pt_scenefile_image_bytes(int width, int height);
 PTDEF void pt_scenefile_free(pt_scenefile *desc);
 /* Parses a Wavefront OBJ file held in memory (the subset the `mesh` statement reads) into
    *out; `name` is used in messages ("name:line: message"). On failure *out is left empty.
@@ -170,7 +211,9 @@ PTDEF int pt_obj_parse(const char *text, size_t length, const char *name, pt_obj
 PTDEF void pt_obj_mesh_free(pt_obj_mesh *mesh);
 /* The pt_mesh_desc that adds a parsed mesh with the given material (the arrays are not copied). */
 PTDEF pt_mesh_desc pt_obj_mesh_desc(const pt_obj_mesh *mesh, int material);
-/* Reads and parses the OBJ file at path (messages "path:line: message"). */
+/* Reads and parses the OBJ file at path (messages "path:line: message"); only a regular file
+   is read. A file whose first statement is not an OBJ keyword is refused as "not an OBJ
+   file" without quoting it. */
 PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_size);
 /* Loads the OBJ file at path and adds its triangles to the scene with the given material,
    under the scene's current transform (pt_scene_set_transform), as pt_scene_add_mesh does.
@@ -232,6 +275,21 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *desc, const char *path, con
 #include <stdlib.h>
 #include <string.h>
 
+/* POSIX file access (open without blocking, fstat, realpath) on Unix systems, in every
+   dialect: open, fstat and read are declared in all of them; realpath is declared here as
+   POSIX.1-2008 has it, since glibc and musl hide it in strict C99 (a compatible redeclaration).
+   Elsewhere, or with PDFTRACE_SCENE_NO_POSIX, a fallback on stdio that cannot tell a FIFO from
+   a file and confines mesh paths lexically only. */
+#if !defined(PDFTRACE_SCENE_NO_POSIX) && (defined(__unix__) || defined(__APPLE__))
+#define PT__SF_POSIX 1
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#if !defined(__cplusplus) && !defined(__APPLE__)
+extern char *realpath(const char *restrict name, char *restrict resolved);
+#endif
+#endif
+
 #if defined(PT_MALLOC) && defined(PT_FREE) && defined(PT_REALLOC)
 /* all three given (or defined by pdftrace.h's implementation in this file) */
 #elif !defined(PT_MALLOC) && !defined(PT_FREE) && !defined(PT_REALLOC)
@@ -261,6 +319,10 @@ static int pt__sf_isfinite(float f)
 #define PT__SF_MAX_FILE (256u * 1024u * 1024u)
 #define PT__SF_MAX_MESH_VERTICES 8000000u
 
+#define PT__SF_MAX_MESHES 1024
+#define PT__SF_PATH 4096
+#define PT__SF_MAX_ROOTS 17 /* the scene's directory and up to 16 allowed ones */
+
 typedef struct pt__sf_parser {
     pt_scenefile *d;
     const char *name;    /* file name in messages */
@@ -272,7 +334,67 @@ typedef struct pt__sf_parser {
     int ntok, pos;
     pt_transform xf;
     int have_camera;
+    uint64_t mesh_limit, image_limit;  /* bytes (pt_scenefile_options, defaults applied) */
+    const pt_scenefile_options *opt;
+    char *roots[PT__SF_MAX_ROOTS];     /* resolved directories mesh paths may lie in, at the first mesh */
+    int root_count, roots_done;
+    uint64_t file_dev[PT__SF_MAX_MESHES], file_ino[PT__SF_MAX_MESHES]; /* identity of d->meshes[i]'s file */
+    int mesh_statements;
 } pt__sf_parser;
+
+/* Length of the printable UTF-8 sequence at s (1 for printable ASCII), or 0 for a control
+   byte (C0, DEL, C1), a malformed, overlong or surrogate sequence. */
+static int pt__sf_utf8_printable(const unsigned char *s)
+{
+    unsigned c = s[0], cp;
+    int n, i;
+    if (c >= 0x20u && c < 0x7fu) return 1;
+    if (c < 0xc2u || c > 0xf4u) return 0;
+    n = c >= 0xf0u ? 4 : c >= 0xe0u ? 3 : 2;
+    cp = c & (0x3fu >> (n - 1));
+    for (i = 1; i < n; ++i) {
+        if ((s[i] & 0xc0u) != 0x80u) return 0; /* also stops at the terminating NUL */
+        cp = cp << 6 | (s[i] & 0x3fu);
+    }
+    if (cp < 0xa0u || (n == 3 && cp < 0x800u) || (n == 4 && (cp < 0x10000u || cp > 0x10ffffu)) ||
+        (cp >= 0xd800u && cp <= 0xdfffu))
+        return 0;
+    return n;
+}
+
+/* Rewrites err so that it holds no byte a terminal would act on: control bytes and invalid
+   UTF-8 become \xNN (a message quotes tokens of the input, which may hold escape sequences). */
+static void pt__sf_escape(char *err, size_t size)
+{
+    size_t n = strlen(err), i, o = 0;
+    char *copy;
+    for (i = 0; i < n; ++i)
+        if (!pt__sf_utf8_printable((const unsigned char *)err + i)) break;
+    if (i == n) return;
+    copy = (char *)PT_MALLOC(n + 1u);
+    if (!copy) {
+        for (; i < n; ++i)
+            if (((unsigned char)err[i] & 0x80u) || (unsigned char)err[i] < 0x20u || err[i] == 0x7f) err[i] = '?';
+        return;
+    }
+    memcpy(copy, err, n + 1u);
+    for (i = 0; i < n;) {
+        int k = pt__sf_utf8_printable((const unsigned char *)copy + i);
+        if (k > 0) {
+            if (o + (size_t)k >= size) break;
+            memcpy(err + o, copy + i, (size_t)k);
+            o += (size_t)k;
+            i += (size_t)k;
+        } else {
+            if (o + 4u >= size) break;
+            snprintf(err + o, 5, "\\x%02x", (unsigned char)copy[i]);
+            o += 4u;
+            ++i;
+        }
+    }
+    err[o] = '\0';
+    PT_FREE(copy);
+}
 
 static void pt__sf_msg(char *err, size_t size, const char *file, int line, const char *fmt, va_list ap)
 {
@@ -282,6 +404,7 @@ static void pt__sf_msg(char *err, size_t size, const char *file, int line, const
     else n = snprintf(err, size, "%s: ", file);
     if (n < 0) n = 0;
     if ((size_t)n < size) vsnprintf(err + n, size - (size_t)n, fmt, ap);
+    pt__sf_escape(err, size);
 }
 static int pt__sf_fail(pt__sf_parser *p, int code, const char *fmt, ...)
 {
@@ -329,36 +452,128 @@ PTDEF void pt_scenefile_free(pt_scenefile *d)
     memset(d, 0, sizeof *d);
 }
 
-/* Reads a whole file (at most max bytes) into a NUL-terminated buffer. */
-static int pt__sf_read_file(const char *path, char **out, size_t *len, size_t max)
+/* ---- Reading files: regular files only, opened without blocking (a FIFO would block in
+   open until a writer comes), with the size known before anything is allocated. */
+typedef struct pt__sf_in {
+#ifdef PT__SF_POSIX
+    int fd;
+#else
+    FILE *f;
+#endif
+    uint64_t size;               /* bytes, from fstat (0 in the stdio fallback: unknown) */
+    uint64_t dev, ino;           /* the file's identity (the fallback: a hash of the path) */
+} pt__sf_in;
+
+#ifndef PT__SF_POSIX
+/* FNV-1a, 64 bits: the fallback's identity of a normalised path. */
+static uint64_t pt__sf_hash(const char *s)
 {
-    FILE *f = fopen(path, "rb");
+    uint64_t h = 14695981039346656037ull;
+    while (*s) h = (h ^ (unsigned char)*s++) * 1099511628211ull;
+    return h;
+}
+#endif
+
+/* Opens path for reading if it is a regular file; else returns an error code and *why.
+   nofollow: refuse a symbolic link as the last component. */
+static int pt__sf_in_open(pt__sf_in *in, const char *path, int nofollow, const char **why)
+{
+#ifdef PT__SF_POSIX
+    struct stat st;
+    int flags = O_RDONLY | O_NONBLOCK | O_NOCTTY;
+#ifdef O_CLOEXEC
+    flags |= O_CLOEXEC;
+#endif
+#ifdef O_NOFOLLOW
+    if (nofollow) flags |= O_NOFOLLOW; /* a link swapped in after the path was resolved */
+#else
+    (void)nofollow; /* glibc defines O_NOFOLLOW only for POSIX.1-2008 or a GNU dialect */
+#endif
+    memset(in, 0, sizeof *in);
+    in->fd = open(path, flags);
+    if (in->fd < 0) { *why = strerror(errno); return PT_ERROR_IO; }
+    if (fstat(in->fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        *why = "not a regular file";
+        close(in->fd);
+        in->fd = -1;
+        return PT_ERROR_IO;
+    }
+    in->size = st.st_size > 0 ? (uint64_t)st.st_size : 0u;
+    in->dev = (uint64_t)st.st_dev;
+    in->ino = (uint64_t)st.st_ino;
+#else
+    memset(in, 0, sizeof *in);
+    in->f = fopen(path, "rb");
+    if (!in->f) { *why = strerror(errno); return PT_ERROR_IO; }
+    in->ino = pt__sf_hash(path);
+    (void)nofollow;
+#endif
+    return PT_OK;
+}
+
+static void pt__sf_in_close(pt__sf_in *in)
+{
+#ifdef PT__SF_POSIX
+    if (in->fd >= 0) close(in->fd);
+    in->fd = -1;
+#else
+    if (in->f) fclose(in->f);
+    in->f = NULL;
+#endif
+}
+
+/* Reads the whole file (at most max bytes) into a NUL-terminated buffer and closes it. */
+static int pt__sf_in_read(pt__sf_in *in, size_t max, char **out, size_t *len, const char **why)
+{
     char *buf = NULL, *nb;
-    size_t n = 0, cap = 0, got;
+    size_t n = 0, cap = 0;
+    int rc = PT_OK;
     *out = NULL;
     *len = 0;
-    if (!f) return PT_ERROR_IO;
+    if (in->size > max) { pt__sf_in_close(in); *why = "file too large"; return PT_ERROR_UNSUPPORTED; }
     for (;;) {
+        size_t got;
         if (cap - n < 65536u) {
-            size_t ncap = cap ? cap * 2u : 65536u;
+            size_t ncap = cap ? cap * 2u : (size_t)in->size + 65536u;
             if (ncap > max + 65537u) ncap = max + 65537u;
-            if (ncap <= cap) { PT_FREE(buf); fclose(f); return PT_ERROR_UNSUPPORTED; } /* too large */
+            if (ncap <= cap) { rc = PT_ERROR_UNSUPPORTED; *why = "file too large"; break; }
             nb = (char *)PT_REALLOC(buf, ncap);
-            if (!nb) { PT_FREE(buf); fclose(f); return PT_ERROR_OUT_OF_MEMORY; }
+            if (!nb) { rc = PT_ERROR_OUT_OF_MEMORY; *why = "out of memory"; break; }
             buf = nb;
             cap = ncap;
         }
-        got = fread(buf + n, 1, cap - n - 1u, f);
+#ifdef PT__SF_POSIX
+        {
+            ssize_t r = read(in->fd, buf + n, cap - n - 1u);
+            if (r < 0 && errno == EINTR) continue;
+            if (r < 0) { rc = PT_ERROR_IO; *why = strerror(errno); break; }
+            got = (size_t)r;
+        }
+#else
+        got = fread(buf + n, 1, cap - n - 1u, in->f);
+        if (got == 0 && ferror(in->f)) { rc = PT_ERROR_IO; *why = "read error"; break; }
+#endif
         n += got;
-        if (n > max) { PT_FREE(buf); fclose(f); return PT_ERROR_UNSUPPORTED; }
+        if (n > max) { rc = PT_ERROR_UNSUPPORTED; *why = "file too large"; break; }
         if (got == 0) break;
     }
-    if (ferror(f)) { PT_FREE(buf); fclose(f); return PT_ERROR_IO; }
-    fclose(f);
+    pt__sf_in_close(in);
+    if (rc != PT_OK) { PT_FREE(buf); return rc; }
     buf[n] = '\0';
     *out = buf;
     *len = n;
     return PT_OK;
+}
+
+/* Opens and reads a regular file; on failure *why says why. */
+static int pt__sf_read_file(const char *path, char **out, size_t *len, size_t max, const char **why)
+{
+    pt__sf_in in;
+    int rc = pt__sf_in_open(&in, path, 0, why);
+    *out = NULL;
+    *len = 0;
+    if (rc != PT_OK) return rc;
+    return pt__sf_in_read(&in, max, out, len, why);
 }
 
 /* Splits text[0..len) into lines; calls fn for each with the line number. A line longer than
@@ -370,6 +585,7 @@ static int pt__sf_lines(const char *text, size_t len, void *ctx, pt__sf_line_fn 
     char buf[PT__SF_MAX_LINE + 2];
     size_t i = 0;
     int number = 0, rc;
+    if (len >= 3 && !memcmp(text, "\xef\xbb\xbf", 3)) i = 3; /* a UTF-8 byte order mark */
     while (i < len) {
         size_t j = i, n;
         while (j < len && text[j] != '\n') {
@@ -526,9 +742,48 @@ typedef struct pt__obj {
     pt_obj_mesh *m;
     uint32_t cap_vert, cap_tri;
     int with_normals;           /* -1 unknown, 0, 1 */
+    int statements;             /* statements read so far */
+    uint64_t limit, used;       /* bytes the arrays may take, and take (their capacities) */
+    int over_limit;             /* set when a growth was refused by the limit */
     const char *file;
     char *err; size_t err_size;
 } pt__obj;
+
+/* Accounts for an array growing from old_bytes to new_bytes; 0 if that would pass the limit. */
+static int pt__obj_charge(pt__obj *o, size_t old_bytes, size_t new_bytes)
+{
+    if (o->used - old_bytes + new_bytes > o->limit) {
+        o->over_limit = 1;
+        return 0;
+    }
+    o->used = o->used - old_bytes + new_bytes;
+    return 1;
+}
+/* Room for one more position or normal (3 floats) in *arr. */
+static int pt__obj_grow3(pt__obj *o, float **arr, int *cap, int count)
+{
+    size_t c = (size_t)*cap, nc = c ? c * 2u : 16u;
+    if (count < *cap) return PT_OK;
+    if (!pt__obj_charge(o, c * 3u * sizeof(float), nc * 3u * sizeof(float))) return PT_ERROR_OUT_OF_MEMORY;
+    if (!pt__sf_grow((void **)arr, cap, count, 3u * sizeof(float))) return PT_ERROR_OUT_OF_MEMORY;
+    return PT_OK;
+}
+
+/* The statements of the OBJ format (Wavefront, "Object Files (.obj)", Appendix B1 of the
+   Advanced Visualizer manual). A file whose first statement is none of them is not OBJ, and
+   no message quotes a word that is not one of them: an OBJ error must not reveal another
+   file's contents. */
+static int pt__obj_keyword(const char *t)
+{
+    static const char *const words[] = {
+        "v", "vt", "vn", "vp", "cstype", "deg", "bmat", "step", "p", "l", "f", "curv", "curv2", "surf", "parm",
+        "trim", "hole", "scrv", "sp", "end", "con", "g", "s", "mg", "o", "bevel", "c_interp", "d_interp", "lod",
+        "usemtl", "mtllib", "shadow_obj", "trace_obj", "ctech", "stech", "maplib", "usemap", "call", "csh"};
+    size_t i;
+    for (i = 0; i < sizeof words / sizeof words[0]; ++i)
+        if (!strcmp(t, words[i])) return 1;
+    return 0;
+}
 
 static int pt__obj_fail(pt__obj *o, int line, const char *fmt, ...)
 {
@@ -571,7 +826,10 @@ static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm)
     pt_obj_mesh *m = o->m;
     if (m->vertex_count == o->cap_vert) {
         uint32_t nc = o->cap_vert ? o->cap_vert * 2u : 1024u;
-        float *np = (float *)PT_REALLOC(m->positions, (size_t)nc * 3u * sizeof(float));
+        size_t per = 3u * sizeof(float) * (nrm ? 2u : 1u);
+        float *np;
+        if (!pt__obj_charge(o, (size_t)o->cap_vert * per, (size_t)nc * per)) return PT_ERROR_OUT_OF_MEMORY;
+        np = (float *)PT_REALLOC(m->positions, (size_t)nc * 3u * sizeof(float));
         if (!np) return PT_ERROR_OUT_OF_MEMORY;
         m->positions = np;
         if (nrm) {
@@ -593,6 +851,10 @@ static int pt__obj_line(void *ctx, char *line, int number)
     int n = pt__sf_tokenize(line, tok, 260), i;
     if (n < 0) return pt__obj_fail(o, number, "too many items on one line (at most 259 face corners)");
     if (n == 0) return PT_OK;
+    if (!pt__obj_keyword(tok[0]))
+        return o->statements == 0 ? pt__obj_fail(o, number, "not an OBJ file (its first statement is not an OBJ keyword)")
+                                  : pt__obj_fail(o, number, "not an OBJ statement (v, vn, f, vt, o, g, s, usemtl, mtllib)");
+    o->statements++;
     if (strcmp(tok[0], "v") == 0 || strcmp(tok[0], "vn") == 0) {
         int is_v = tok[0][1] == '\0';
         float xyz[3];
@@ -601,13 +863,13 @@ static int pt__obj_line(void *ctx, char *line, int number)
         if (n > (is_v ? 5 : 4)) return pt__obj_fail(o, number, "'%s' has too many numbers", tok[0]);
         if (is_v) {
             if ((uint32_t)o->nv >= PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many vertices");
-            if (!pt__sf_grow((void **)&o->v, &o->cv, o->nv, 3u * sizeof(float))) return PT_ERROR_OUT_OF_MEMORY;
+            if ((rc = pt__obj_grow3(o, &o->v, &o->cv, o->nv)) != PT_OK) return rc;
             memcpy(o->v + 3 * o->nv++, xyz, sizeof xyz);
         } else {
             if ((uint32_t)o->nn >= PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many normals");
             if (!(xyz[0] * xyz[0] + xyz[1] * xyz[1] + xyz[2] * xyz[2] > 1e-20f))
                 return pt__obj_fail(o, number, "normal has zero length");
-            if (!pt__sf_grow((void **)&o->vn, &o->cn, o->nn, 3u * sizeof(float))) return PT_ERROR_OUT_OF_MEMORY;
+            if ((rc = pt__obj_grow3(o, &o->vn, &o->cn, o->nn)) != PT_OK) return rc;
             memcpy(o->vn + 3 * o->nn++, xyz, sizeof xyz);
         }
         return PT_OK;
@@ -638,7 +900,9 @@ static int pt__obj_line(void *ctx, char *line, int number)
             pt_obj_mesh *m = o->m;
             if (m->triangle_count == o->cap_tri) {
                 uint32_t nc = o->cap_tri ? o->cap_tri * 2u : 1024u;
-                uint32_t *ni2 = (uint32_t *)PT_REALLOC(m->indices, (size_t)nc * 3u * sizeof(uint32_t));
+                uint32_t *ni2;
+                if (!pt__obj_charge(o, (size_t)o->cap_tri * 12u, (size_t)nc * 12u)) return PT_ERROR_OUT_OF_MEMORY;
+                ni2 = (uint32_t *)PT_REALLOC(m->indices, (size_t)nc * 3u * sizeof(uint32_t));
                 if (!ni2) return PT_ERROR_OUT_OF_MEMORY;
                 m->indices = ni2;
                 o->cap_tri = nc;
@@ -664,34 +928,56 @@ PTDEF void pt_obj_mesh_free(pt_obj_mesh *m)
     memset(m, 0, sizeof *m);
 }
 
-PTDEF int pt_obj_parse(const char *text, size_t length, const char *name, pt_obj_mesh *out, char *err,
-                       size_t err_size)
+/* Bytes a parsed mesh holds once its arrays are trimmed to their counts. */
+static uint64_t pt__obj_bytes(const pt_obj_mesh *m)
+{
+    return (uint64_t)m->vertex_count * 12u * (m->normals ? 2u : 1u) + (uint64_t)m->triangle_count * 12u;
+}
+
+/* pt_obj_parse with a limit on the bytes of its arrays; *over_limit tells that the limit, not
+   the allocator, refused a growth (then err is left for the caller). The arrays are trimmed. */
+static int pt__obj_parse(const char *text, size_t length, const char *name, uint64_t limit, pt_obj_mesh *out,
+                         char *err, size_t err_size, int *over_limit)
 {
     pt__obj o;
     int rc;
-    if (err && err_size) err[0] = '\0';
-    if (!out) return PT_ERROR_INVALID_ARGUMENT;
-    memset(out, 0, sizeof *out);
-    if (!name) name = "<obj>";
-    if (!text) return pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no text");
     memset(&o, 0, sizeof o);
     o.m = out;
     o.with_normals = -1;
+    o.limit = limit;
     o.file = name;
     o.err = err;
     o.err_size = err_size;
     rc = pt__sf_lines(text, length, &o, pt__obj_line, err, err_size, name);
     if (rc == PT_OK && out->triangle_count == 0) rc = pt__obj_fail(&o, 0, "no faces");
-    if (rc == PT_ERROR_OUT_OF_MEMORY) pt__sf_failf(err, err_size, name, 0, rc, "out of memory");
+    if (rc == PT_ERROR_OUT_OF_MEMORY && !o.over_limit) pt__sf_failf(err, err_size, name, 0, rc, "out of memory");
+    *over_limit = o.over_limit;
     PT_FREE(o.v);
     PT_FREE(o.vn);
-    if (rc != PT_OK) pt_obj_mesh_free(out);
-    return rc;
+    if (rc != PT_OK) {
+        pt_obj_mesh_free(out);
+        return rc;
+    }
+    { /* trim; a failed shrink keeps the larger block */
+        void *np = PT_REALLOC(out->positions, (size_t)out->vertex_count * 12u), *nn = NULL, *ni;
+        if (np) out->positions = (float *)np;
+        if (out->normals && (nn = PT_REALLOC(out->normals, (size_t)out->vertex_count * 12u)) != NULL)
+            out->normals = (float *)nn;
+        if ((ni = PT_REALLOC(out->indices, (size_t)out->triangle_count * 12u)) != NULL) out->indices = (uint32_t *)ni;
+    }
+    return PT_OK;
 }
 
-static const char *pt__sf_read_reason(int rc)
+PTDEF int pt_obj_parse(const char *text, size_t length, const char *name, pt_obj_mesh *out, char *err,
+                       size_t err_size)
 {
-    return rc == PT_ERROR_IO ? strerror(errno) : rc == PT_ERROR_UNSUPPORTED ? "file too large" : "out of memory";
+    int over = 0;
+    if (err && err_size) err[0] = '\0';
+    if (!out) return PT_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!name) name = "<obj>";
+    if (!text) return pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no text");
+    return pt__obj_parse(text, length, name, ~(uint64_t)0, out, err, err_size, &over);
 }
 
 PTDEF pt_mesh_desc pt_obj_mesh_desc(const pt_obj_mesh *m, int material)
@@ -711,14 +997,15 @@ PTDEF pt_mesh_desc pt_obj_mesh_desc(const pt_obj_mesh *m, int material)
 PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_size)
 {
     char *text = NULL;
+    const char *why = "";
     size_t len = 0;
     int rc;
     if (err && err_size) err[0] = '\0';
     if (out) memset(out, 0, sizeof *out);
     if (!path || !*path) return pt__sf_failf(err, err_size, "pt_obj_load", 0, PT_ERROR_INVALID_ARGUMENT, "path is NULL or empty");
     if (!out) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "pt_obj_load: out is NULL");
-    rc = pt__sf_read_file(path, &text, &len, PT__SF_MAX_FILE);
-    if (rc != PT_OK) return pt__sf_failf(err, err_size, path, 0, rc, "cannot read: %s", pt__sf_read_reason(rc));
+    rc = pt__sf_read_file(path, &text, &len, PT__SF_MAX_FILE, &why);
+    if (rc != PT_OK) return pt__sf_failf(err, err_size, path, 0, rc, "cannot read: %s", why);
     rc = pt_obj_parse(text, len, path, out, err, err_size);
     PT_FREE(text);
     return rc;
@@ -739,22 +1026,188 @@ PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char
     return rc;
 }
 
-static int pt__sf_load_obj(pt__sf_parser *p, const char *rel, pt_obj_mesh *m)
+/* ---- Mesh paths: confined to the scene's directory and the allowed ones. */
+
+/* Normalises a path lexically, in place: collapses "//" and "/./" and removes "name/.."
+   pairs ("/.." is "/"; a leading ".." of a relative path stays). */
+static void pt__sf_normalize(char *path)
 {
-    char path[1024];
+    char *out = path, *in = path, *base;
+    int absolute = path[0] == '/', depth = 0;
+    if (absolute) *out++ = '/';
+    base = out;
+    while (*in) {
+        char *c;
+        size_t n;
+        while (*in == '/') ++in;
+        if (!*in) break;
+        c = in;
+        while (*in && *in != '/') ++in;
+        n = (size_t)(in - c);
+        if (n == 1 && c[0] == '.') continue;
+        if (n == 2 && c[0] == '.' && c[1] == '.') {
+            if (depth > 0) { /* drop the last component and its separator */
+                while (out > base && out[-1] != '/') --out;
+                if (out > base) --out;
+                --depth;
+                continue;
+            }
+            if (absolute) continue;
+        } else
+            ++depth;
+        if (out > base) *out++ = '/';
+        memmove(out, c, n);
+        out += n;
+    }
+    if (out == path) *out++ = '.';
+    *out = '\0';
+}
+
+/* path (normalised) is root or lies below it. */
+static int pt__sf_inside(const char *path, const char *root)
+{
+    size_t n = strlen(root);
+    if (n == 1 && root[0] == '/') return path[0] == '/';
+    return strncmp(path, root, n) == 0 && (path[n] == '/' || path[n] == '\0');
+}
+static int pt__sf_inside_any(const pt__sf_parser *p, const char *path)
+{
+    int i;
+    for (i = 0; i < p->root_count; ++i)
+        if (pt__sf_inside(path, p->roots[i])) return 1;
+    return 0;
+}
+
+/* The canonical form of path (symbolic links, "." and ".." resolved), or -1 with errno. The
+   stdio fallback can only normalise it lexically. */
+static int pt__sf_resolve(const char *path, char *out)
+{
+#ifdef PT__SF_POSIX
+    char *r = realpath(path, NULL); /* allocated with malloc: released with free */
+    if (!r) return -1;
+    if (strlen(r) >= PT__SF_PATH) { free(r); errno = ENAMETOOLONG; return -1; }
+    strcpy(out, r);
+    free(r);
+#else
+    if (strlen(path) >= PT__SF_PATH) { errno = ENAMETOOLONG; return -1; }
+    strcpy(out, path);
+    pt__sf_normalize(out);
+#endif
+    return 0;
+}
+
+/* Resolves, once, the directories mesh paths may lie in: the scene's, then the allowed ones. */
+static int pt__sf_roots(pt__sf_parser *p)
+{
+    const pt_scenefile_options *o = p->opt;
+    int i, count = o && o->allowed_dirs ? o->allowed_dir_count : 0;
+    if (p->roots_done) return PT_OK;
+    if (count < 0 || count > PT__SF_MAX_ROOTS - 1)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "pt_scenefile_options.allowed_dir_count is %d (0..%d)",
+                           count, PT__SF_MAX_ROOTS - 1);
+    for (i = 0; i <= count; ++i) {
+        const char *dir = i == 0 ? (p->base_dir && *p->base_dir ? p->base_dir : ".") : o->allowed_dirs[i - 1];
+        char buf[PT__SF_PATH];
+        if (!dir) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "pt_scenefile_options.allowed_dirs[%d] is NULL", i - 1);
+        if (pt__sf_resolve(dir, buf) != 0)
+            return pt__sf_fail(p, PT_ERROR_IO, "mesh: cannot resolve the %s '%s': %s",
+                               i == 0 ? "scene's directory" : "allowed directory", dir, strerror(errno));
+        p->roots[i] = (char *)PT_MALLOC(strlen(buf) + 1u);
+        if (!p->roots[i]) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+        strcpy(p->roots[i], buf);
+        p->root_count = i + 1;
+    }
+    p->roots_done = 1;
+    return PT_OK;
+}
+
+/* The one answer for every path that does not resolve to something inside the allowed
+   directories: missing, dangling, or leading out through "..", an absolute path or a link.
+   Whether a file outside exists is not told (nor is a link's target opened to find out). */
+static int pt__sf_refuse(pt__sf_parser *p, const char *rel)
+{
+    return pt__sf_fail(p, PT_ERROR_UNSUPPORTED,
+                       "mesh: no file '%s' inside the scene's directory%s (it is missing, or it leads out; other "
+                       "directories need pt_scenefile_options.allowed_dirs, or pdftrace --allow-path DIR)",
+                       rel, p->root_count > 1 ? " or an allowed one" : "");
+}
+
+/* Opens the mesh file `rel` of the statement if it resolves inside the allowed directories;
+   shown receives the name for the OBJ file's messages (rel joined to base_dir). */
+static int pt__sf_open_mesh(pt__sf_parser *p, const char *rel, char *shown, size_t shown_size, pt__sf_in *in)
+{
+    char joined[PT__SF_PATH], real[PT__SF_PATH];
+    const char *why = "";
+    int rc, n, m;
+    if ((rc = pt__sf_roots(p)) != PT_OK) return rc;
+    if (rel[0] == '/' || !p->base_dir || !*p->base_dir) n = snprintf(shown, shown_size, "%s", rel);
+    else n = snprintf(shown, shown_size, "%s/%s", p->base_dir, rel);
+    if (rel[0] == '/') m = snprintf(joined, sizeof joined, "%s", rel);
+    else m = snprintf(joined, sizeof joined, "%s/%s", p->roots[0], rel);
+    if (n < 0 || (size_t)n >= shown_size || m < 0 || (size_t)m >= sizeof joined)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: path too long");
+#ifndef PT__SF_POSIX
+    if (strchr(rel, '\\') || strchr(rel, ':')) return pt__sf_refuse(p, rel); /* no lexical view of those */
+#endif
+    pt__sf_normalize(joined);
+    if (!pt__sf_inside_any(p, joined)) return pt__sf_refuse(p, rel);
+#ifdef PT__SF_POSIX
+    if (pt__sf_resolve(joined, real) != 0) return pt__sf_refuse(p, rel);
+    if (!pt__sf_inside_any(p, real)) return pt__sf_refuse(p, rel);
+#else
+    strcpy(real, joined);
+#endif
+    rc = pt__sf_in_open(in, real, 1, &why);
+    if (rc != PT_OK) return pt__sf_fail(p, rc, "mesh: cannot read '%s': %s", rel, why);
+    return PT_OK;
+}
+
+static int pt__sf_over_budget(pt__sf_parser *p, const char *rel)
+{
+    return pt__sf_fail(p, PT_ERROR_UNSUPPORTED,
+                       "mesh: '%s' does not fit in the mesh memory budget of %llu bytes (the meshes before it hold "
+                       "%llu; raise pt_scenefile_options.mesh_memory, or pdftrace --mesh-memory MB)",
+                       rel, (unsigned long long)p->mesh_limit, (unsigned long long)p->d->mesh_bytes);
+}
+
+/* Reads and parses the opened file `rel` within what is left of the budget, and appends it
+   to d->meshes. */
+static int pt__sf_new_mesh(pt__sf_parser *p, const char *rel, const char *shown, pt__sf_in *in)
+{
+    pt_scenefile *d = p->d;
+    uint64_t left = p->mesh_limit > d->mesh_bytes ? p->mesh_limit - d->mesh_bytes : 0u;
+    uint64_t dev = in->dev, ino = in->ino;
+    pt_obj_mesh m, *nm;
+    const char *why = "";
     char *text = NULL;
     size_t len = 0;
-    int rc, n;
-    memset(m, 0, sizeof *m);
-    if (rel[0] == '/' || !p->base_dir || !*p->base_dir) n = snprintf(path, sizeof path, "%s", rel);
-    else n = snprintf(path, sizeof path, "%s/%s", p->base_dir, rel);
-    if (n < 0 || (size_t)n >= sizeof path) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: path too long");
-    rc = pt__sf_read_file(path, &text, &len, PT__SF_MAX_FILE);
-    if (rc != PT_OK)
-        return pt__sf_fail(p, rc, "mesh: cannot read '%s': %s", path, pt__sf_read_reason(rc));
-    rc = pt_obj_parse(text, len, path, m, p->err, p->err_size);
+    int rc, over = 0;
+    if (in->size > left) {
+        pt__sf_in_close(in);
+        return pt__sf_over_budget(p, rel);
+    }
+    rc = pt__sf_in_read(in, PT__SF_MAX_FILE, &text, &len, &why);
+    if (rc != PT_OK) return pt__sf_fail(p, rc, "mesh: cannot read '%s': %s", rel, why);
+    if ((uint64_t)len > left) {
+        PT_FREE(text);
+        return pt__sf_over_budget(p, rel);
+    }
+    memset(&m, 0, sizeof m);
+    rc = pt__obj_parse(text, len, shown, left - len, &m, p->err, p->err_size, &over);
     PT_FREE(text);
-    return rc;
+    if (over) return pt__sf_over_budget(p, rel);
+    if (rc != PT_OK) return rc;
+    nm = (pt_obj_mesh *)PT_REALLOC(d->meshes, (size_t)(d->mesh_count + 1) * sizeof *nm);
+    if (!nm) {
+        pt_obj_mesh_free(&m);
+        return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+    }
+    d->meshes = nm;
+    p->file_dev[d->mesh_count] = dev;
+    p->file_ino[d->mesh_count] = ino;
+    d->meshes[d->mesh_count++] = m;
+    d->mesh_bytes += pt__obj_bytes(&m);
+    return PT_OK;
 }
 
 static int pt__sf_add_shape(pt__sf_parser *p, pt_scenefile_shape_type type, pt_scenefile_shape **out)
@@ -791,6 +1244,12 @@ static int pt__sf_int_setting(pt__sf_parser *p, const char *kw)
         d->width = (int)v;
         if ((rc = pt__sf_int(p, "size: height", 1, 16384, &v)) != PT_OK) return rc;
         d->height = (int)v;
+        if (pt_scenefile_image_bytes(d->width, d->height) > p->image_limit)
+            return pt__sf_fail(p, PT_ERROR_UNSUPPORTED,
+                               "size: a %d x %d render needs %llu bytes for its film and images, more than the "
+                               "limit of %llu (raise pt_scenefile_options.image_memory, or pdftrace --image-memory MB)",
+                               d->width, d->height, (unsigned long long)pt_scenefile_image_bytes(d->width, d->height),
+                               (unsigned long long)p->image_limit);
     } else if (!strcmp(kw, "spp")) {
         if ((rc = pt__sf_int(p, "spp", 1, 1L << 20, &v)) != PT_OK) return rc;
         d->samples_per_pixel = (int)v;
@@ -981,31 +1440,29 @@ static int pt__sf_shape(pt__sf_parser *p, const char *kw)
     return PT_OK;
 }
 
-/* mesh PATH MATERIAL: the OBJ file is read now, relative to the scene file. */
+/* mesh PATH MATERIAL: the OBJ file is read now, relative to the scene file; a file already
+   read by an earlier mesh statement (the same device and inode) is shared, not read again. */
 static int pt__sf_mesh(pt__sf_parser *p)
 {
     pt_scenefile *d = p->d;
-    int rc = PT_OK;
+    int rc = PT_OK, mat, i;
     const char *file = pt__sf_next(p);
-    int mat;
-    pt_obj_mesh m;
+    char shown[PT__SF_PATH];
+    pt__sf_in in;
     pt_scenefile_shape *s;
     if (!file) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: missing OBJ file name");
     if ((rc = pt__sf_material_ref(p, &mat)) != PT_OK) return rc;
     if ((rc = pt__sf_end(p)) != PT_OK) return rc;
-    if (d->mesh_count >= 1024) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many meshes (at most 1024)");
-    if ((rc = pt__sf_load_obj(p, file, &m)) != PT_OK) return rc;
-    {
-        pt_obj_mesh *nm = (pt_obj_mesh *)PT_REALLOC(d->meshes, (size_t)(d->mesh_count + 1) * sizeof *nm);
-        if (!nm) {
-            PT_FREE(m.positions); PT_FREE(m.normals); PT_FREE(m.indices);
-            return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
-        }
-        d->meshes = nm;
-        d->meshes[d->mesh_count++] = m;
-    }
+    if (p->mesh_statements >= PT__SF_MAX_MESHES)
+        return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many meshes (at most %d)", PT__SF_MAX_MESHES);
+    if ((rc = pt__sf_open_mesh(p, file, shown, sizeof shown, &in)) != PT_OK) return rc;
+    for (i = 0; i < d->mesh_count; ++i)
+        if (p->file_dev[i] == in.dev && p->file_ino[i] == in.ino) break;
+    if (i < d->mesh_count) pt__sf_in_close(&in);
+    else if ((rc = pt__sf_new_mesh(p, file, shown, &in)) != PT_OK) return rc;
+    p->mesh_statements++;
     if ((rc = pt__sf_add_shape(p, PT_SCENEFILE_MESH, &s)) != PT_OK) return rc;
-    s->mesh = d->mesh_count - 1;
+    s->mesh = i;
     s->material = mat;
     return PT_OK;
 }
@@ -1053,7 +1510,7 @@ static int pt__sf_statement(pt__sf_parser *p)
     } else if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity") || !strcmp(kw, "sampler")) {
         if ((rc = pt__sf_choice(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "background")) {
-        rc = pt__sf_color(p, "background", &d->background);
+        if ((rc = pt__sf_color(p, "background", &d->background)) != PT_OK) return rc;
     } else if (!strcmp(kw, "camera")) {
         if ((rc = pt__sf_camera(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "checker")) {
@@ -1084,11 +1541,23 @@ static int pt__sf_line(void *ctx, char *line, int number)
     return pt__sf_statement(p);
 }
 
+PTDEF uint64_t pt_scenefile_image_bytes(int width, int height)
+{
+    uint64_t n = width > 0 && height > 0 ? (uint64_t)width * (uint64_t)height : 0u;
+    return n * (9u * sizeof(double) + sizeof(uint32_t) + 6u * sizeof(float));
+}
+
 PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, const char *base_dir,
                              pt_scenefile *out, char *err, size_t err_size)
 {
+    return pt_scenefile_parse_ex(text, length, name, base_dir, NULL, out, err, err_size);
+}
+
+PTDEF int pt_scenefile_parse_ex(const char *text, size_t length, const char *name, const char *base_dir,
+                                const pt_scenefile_options *opt, pt_scenefile *out, char *err, size_t err_size)
+{
     pt__sf_parser p;
-    int rc;
+    int rc, i;
     if (err && err_size) err[0] = '\0';
     if (!out) return PT_ERROR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
@@ -1101,6 +1570,9 @@ PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, 
     p.err = err;
     p.err_size = err_size;
     p.xf = pt_transform_identity();
+    p.opt = opt;
+    p.mesh_limit = opt && opt->mesh_memory ? opt->mesh_memory : PT_SCENEFILE_MESH_MEMORY_DEFAULT;
+    p.image_limit = opt && opt->image_memory ? opt->image_memory : PT_SCENEFILE_IMAGE_MEMORY_DEFAULT;
     snprintf(out->file, sizeof out->file, "%s", name);
     out->width = 256;
     out->height = 256;
@@ -1112,24 +1584,29 @@ PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, 
         rc = pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no 'camera' statement");
     if (rc == PT_OK && out->shape_count == 0)
         rc = pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no shapes");
+    for (i = 0; i < p.root_count; ++i) PT_FREE(p.roots[i]);
     if (rc != PT_OK) pt_scenefile_free(out);
     return rc;
 }
 
 PTDEF int pt_scenefile_load(const char *path, pt_scenefile *out, char *err, size_t err_size)
 {
-    char *text = NULL, dir[1024];
-    const char *slash;
+    return pt_scenefile_load_ex(path, NULL, out, err, err_size);
+}
+
+PTDEF int pt_scenefile_load_ex(const char *path, const pt_scenefile_options *opt, pt_scenefile *out, char *err,
+                               size_t err_size)
+{
+    char *text = NULL, dir[PT__SF_PATH];
+    const char *slash, *why = "";
     size_t len = 0;
     int rc;
     if (err && err_size) err[0] = '\0';
     if (!out) return PT_ERROR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     if (!path) return PT_ERROR_INVALID_ARGUMENT;
-    rc = pt__sf_read_file(path, &text, &len, 64u * 1024u * 1024u);
-    if (rc != PT_OK)
-        return pt__sf_failf(err, err_size, path, 0, rc, "cannot read the scene: %s",
-                            rc == PT_ERROR_IO ? strerror(errno) : rc == PT_ERROR_UNSUPPORTED ? "file too large" : "out of memory");
+    rc = pt__sf_read_file(path, &text, &len, 64u * 1024u * 1024u, &why);
+    if (rc != PT_OK) return pt__sf_failf(err, err_size, path, 0, rc, "cannot read the scene: %s", why);
     slash = strrchr(path, '/');
     if (slash && (size_t)(slash - path) < sizeof dir) {
         memcpy(dir, path, (size_t)(slash - path));
@@ -1137,7 +1614,7 @@ PTDEF int pt_scenefile_load(const char *path, pt_scenefile *out, char *err, size
         if (slash == path) strcpy(dir, "/");
     } else
         strcpy(dir, ".");
-    rc = pt_scenefile_parse(text, len, path, dir, out, err, err_size);
+    rc = pt_scenefile_parse_ex(text, len, path, dir, opt, out, err, err_size);
     PT_FREE(text);
     return rc;
 }

@@ -1,12 +1,17 @@
 /* test_scenefile.c - pdftrace_scene.h: pt_obj_load and pt_scene_add_obj against the two-step path
-   they replace (read the file, pt_obj_parse, pt_scene_add_mesh), and the camera statement's
-   depth of field. The other statements are tested by validation/ptv.c's runner and the fuzz corpus. */
+   they replace (read the file, pt_obj_parse, pt_scene_add_mesh), the camera statement's depth of
+   field, and what an untrusted scene file can do: which files it may read (regular files inside
+   its directory), how much memory its meshes and its size may take, what its errors echo. The
+   other statements are tested by validation/ptv.c's runner and the fuzz corpus. */
+#define _POSIX_C_SOURCE 200809L /* mkfifo, symlink, alarm */
 #include "test_util.h"
 #include "pdftrace_scene.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #define MESH_PATH "scenes/mesh.obj"
 
@@ -241,11 +246,320 @@ static void camera_depth_of_field_errors(test_ctx *t)
     pt_scenefile_free(&sf);
 }
 
+/* Parses text as "t.scene" from base_dir; returns the code, err holds the message. */
+static int parse_text(const char *text, const char *base_dir, pt_scenefile *sf, char *err, size_t n)
+{
+    return pt_scenefile_parse(text, strlen(text), "t.scene", base_dir, sf, err, n);
+}
+#define T_HEAD "camera look_from 0 0 -5 look_at 0 0 0\nmaterial m lambertian 0.5 0.5 0.5\n"
+
+/* A bad background is a file:line error at load (its code was overwritten by the end-of-line check). */
+static void background_errors_at_load(test_ctx *t)
+{
+    static const char *const bad[] = {"background 1 1 nan\n", "background -5 -5 -5\n", "background 1 1\n"};
+    char text[512], err[512];
+    pt_scenefile sf;
+    size_t i;
+    for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        int rc;
+        snprintf(text, sizeof text, T_HEAD "%ssphere 0 0 0 1 m\n", bad[i]);
+        rc = parse_text(text, NULL, &sf, err, sizeof err);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strncmp(err, "t.scene:3: background:", 22) == 0, "'%.*s': %d '%s'",
+              (int)strlen(bad[i]) - 1, bad[i], rc, err);
+        if (rc == PT_OK) pt_scenefile_free(&sf);
+    }
+}
+
+/* A UTF-8 byte order mark before the first statement of a scene or an OBJ file is skipped. */
+static void byte_order_mark(test_ctx *t)
+{
+    const char *scene = "\xef\xbb\xbfsize 8 4\n" T_HEAD "sphere 0 0 0 1 m\n";
+    const char *obj = "\xef\xbb\xbfv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    char err[512];
+    pt_scenefile sf;
+    pt_obj_mesh m;
+    int rc = parse_text(scene, NULL, &sf, err, sizeof err);
+    if (CHECK(t, rc == PT_OK, "scene with a BOM: %d '%s'", rc, err)) {
+        CHECK(t, sf.width == 8 && sf.height == 4, "size %d x %d", sf.width, sf.height);
+        pt_scenefile_free(&sf);
+    }
+    rc = pt_obj_parse(obj, strlen(obj), "bom.obj", &m, err, sizeof err);
+    CHECK(t, rc == PT_OK && m.triangle_count == 1, "OBJ with a BOM: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_obj_mesh_free(&m);
+}
+
+/* Control bytes, C1 controls and invalid UTF-8 quoted from a scene line are escaped. */
+static void messages_escape_bytes(test_ctx *t)
+{
+    const char *text = T_HEAD "sph\x1b[2J\x07\xc2\x9b\xff" "ere 0 0 0 1 m \xc3\xa9\n";
+    char err[512];
+    pt_scenefile sf;
+    size_t i;
+    int rc = parse_text(text, NULL, &sf, err, sizeof err), raw = 0;
+    for (i = 0; err[i]; ++i)
+        if ((unsigned char)err[i] < 0x20 || err[i] == 0x7f || (unsigned char)err[i] == 0xff ||
+            ((unsigned char)err[i] == 0xc2 && (unsigned char)err[i + 1] == 0x9b))
+            raw = 1;
+    CHECK(t, rc != PT_OK && !raw && strstr(err, "t.scene:3:") && strstr(err, "sph\\x1b[2J\\x07\\xc2\\x9b\\xffere"),
+          "%d, raw bytes %d: '%s'", rc, raw, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+}
+
+/* `size 16384 16384` is refused at its line with the bytes the render would need; a size within
+   the limit loads. */
+static void size_memory_up_front(test_ctx *t)
+{
+    char err[512];
+    pt_scenefile sf;
+    int rc = parse_text("size 16384 16384\n" T_HEAD "sphere 0 0 0 1 m\n", NULL, &sf, err, sizeof err);
+    /* 16384^2 pixels x (9 doubles + 1 count + 6 floats) = 26843545600 bytes */
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "t.scene:1: size:", 16) == 0 && strstr(err, "26843545600"),
+          "%d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    rc = parse_text("size 4096 4096\n" T_HEAD "sphere 0 0 0 1 m\n", NULL, &sf, err, sizeof err);
+    CHECK(t, rc == PT_OK, "4096 x 4096: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+}
+
+/* Writes text to dir/name; 1 on success. */
+static int write_file(const char *dir, const char *name, const char *text)
+{
+    char path[512];
+    FILE *f;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    f = fopen(path, "w");
+    if (!f) return 0;
+    fputs(text, f);
+    return fclose(f) == 0;
+}
+#define TRI_OBJ "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+/* A FIFO as the scene or as a mesh is refused at once (it blocked forever in fopen). An alarm
+   ends the runner if a regression blocks again. */
+static void fifo_refused(test_ctx *t)
+{
+    char dir[256], fifo[300], text[512], err[512];
+    pt_scenefile sf;
+    int rc;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "no temporary directory")) return;
+    snprintf(fifo, sizeof fifo, "%s/pipe", dir);
+    if (mkfifo(fifo, 0600) != 0) {
+        test_skip(t, "mkfifo failed");
+        tu_remove_tree(dir);
+        return;
+    }
+    alarm(20);
+    rc = pt_scenefile_load(fifo, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && strstr(err, fifo) == err && strstr(err, "not a regular file"), "scene FIFO: %d '%s'",
+          rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    snprintf(text, sizeof text, T_HEAD "mesh pipe m\n");
+    rc = parse_text(text, dir, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && strncmp(err, "t.scene:3: mesh:", 16) == 0 && strstr(err, "not a regular file"),
+          "mesh FIFO: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    rc = pt_scenefile_load(dir, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && strstr(err, "not a regular file"), "directory as scene: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    alarm(0);
+    tu_remove_tree(dir);
+}
+
+/* The message of a mesh statement naming `mesh`, from the scene directory dir. */
+static int mesh_message(const char *dir, const char *mesh, char *err, size_t n)
+{
+    char text[1024];
+    pt_scenefile sf;
+    int rc;
+    snprintf(text, sizeof text, T_HEAD "mesh %s m\n", mesh);
+    rc = parse_text(text, dir, &sf, err, n);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    return rc;
+}
+
+/* Mesh paths stay inside the scene's directory: `..`, absolute paths and symbolic links that
+   lead out are refused before anything is opened, with one message whether the file exists or
+   not (the same as for a file missing inside). */
+static void mesh_paths_confined(test_ctx *t)
+{
+    char top[256], dir[300], path[600], err[512], first[512];
+    size_t i;
+    int rc;
+    if (!CHECK(t, tu_make_tmpdir(top, sizeof top), "no temporary directory")) return;
+    snprintf(dir, sizeof dir, "%s/scene", top);
+    if (!CHECK(t, mkdir(dir, 0700) == 0 && write_file(top, "secret.obj", TRI_OBJ) && write_file(dir, "in.obj", TRI_OBJ),
+               "cannot set up %s", top))
+        goto done;
+    snprintf(path, sizeof path, "%s/secret.obj", top);
+    {
+        char link[400];
+        snprintf(link, sizeof link, "%s/link.obj", dir);
+        if (!CHECK(t, symlink(path, link) == 0, "symlink failed")) goto done;
+        snprintf(link, sizeof link, "%s/updir", dir);
+        if (!CHECK(t, symlink(top, link) == 0, "symlink failed")) goto done;
+    }
+    rc = mesh_message(dir, "in.obj", err, sizeof err);
+    CHECK(t, rc == PT_OK, "in.obj: %d '%s'", rc, err);
+    {
+        char abs_secret[700], abs_missing[700];
+        const char *outside[6];
+        snprintf(abs_secret, sizeof abs_secret, "%s/secret.obj", top);
+        snprintf(abs_missing, sizeof abs_missing, "%s/missing.obj", top);
+        outside[0] = "../secret.obj";
+        outside[1] = "../missing.obj";
+        outside[2] = abs_secret;
+        outside[3] = abs_missing;
+        outside[4] = "link.obj";
+        outside[5] = "updir/secret.obj";
+        for (i = 0; i < 6; ++i) {
+            rc = mesh_message(dir, outside[i], err, sizeof err);
+            CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "t.scene:3: mesh:", 16) == 0 &&
+                         strstr(err, "inside the scene's directory") && strstr(err, outside[i]),
+                  "'%s': %d '%s'", outside[i], rc, err);
+        }
+        rc = mesh_message(dir, "updir/missing.obj", err, sizeof err);
+        CHECK(t, rc == PT_ERROR_UNSUPPORTED && strstr(err, "t.scene:3: mesh: no file 'updir/missing.obj' inside"),
+              "updir/missing.obj: %d '%s'", rc, err);
+        /* the message for an existing file outside equals the one for a missing one, up to the name */
+        mesh_message(dir, "../secret.obj", first, sizeof first);
+        mesh_message(dir, "../missing.obj", err, sizeof err);
+        {
+            char *a = strstr(first, "secret"), *b = strstr(err, "missing");
+            CHECK(t, a && b && (a - first) == (b - err) && !strcmp(a + 6, b + 7), "'%s' and '%s' differ", first, err);
+        }
+    }
+    rc = mesh_message(dir, "missing.obj", err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strstr(err, "t.scene:3: mesh: no file 'missing.obj' inside the scene's directory"),
+          "missing inside: %d '%s'", rc, err);
+    rc = mesh_message(dir, "/etc/shadow", err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && !strstr(err, "root:") && strstr(err, "no file '/etc/shadow' inside"),
+          "/etc/shadow: '%s'", err);
+done:
+    snprintf(path, sizeof path, "%s/updir", dir);
+    unlink(path); /* before tu_remove_tree, which follows links to directories */
+    tu_remove_tree(top);
+}
+
+/* A file that does not start with an OBJ statement is named, never quoted. */
+static void obj_contents_not_echoed(test_ctx *t)
+{
+    const char *shadow = "root:*:19000:0:99999:7:::\ndaemon:*:19000:0:99999:7:::\n";
+    const char *later = "v 0 0 0\nsecret-word 1 2 3\n";
+    char err[512];
+    pt_obj_mesh m;
+    int rc = pt_obj_parse(shadow, strlen(shadow), "f.obj", &m, err, sizeof err);
+    CHECK(t, rc != PT_OK && strstr(err, "f.obj:1: not an OBJ file") && !strstr(err, "root"), "%d '%s'", rc, err);
+    rc = pt_obj_parse(later, strlen(later), "f.obj", &m, err, sizeof err);
+    CHECK(t, rc != PT_OK && strstr(err, "f.obj:2:") && !strstr(err, "secret"), "%d '%s'", rc, err);
+}
+
+/* Several mesh statements naming one file (under different spellings) parse it once and share it. */
+static void mesh_parsed_once(test_ctx *t)
+{
+    const char *text = T_HEAD "mesh mesh.obj m\ntranslate 1 0 0\nmesh ./mesh.obj m\nmesh mesh.obj m\nmesh ../scenes/mesh.obj m\n";
+    char err[512];
+    pt_scenefile sf;
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_scene_info info;
+    int rc = parse_text(text, "scenes", &sf, err, sizeof err), i, same = 1;
+    if (!CHECK(t, rc == PT_OK, "%d '%s'", rc, err)) return;
+    for (i = 0; i < sf.shape_count; ++i) same &= sf.shapes[i].mesh == 0;
+    CHECK(t, sf.mesh_count == 1 && sf.shape_count == 4 && same, "%d meshes parsed for %d mesh statements", sf.mesh_count,
+          sf.shape_count);
+    rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+    if (CHECK(t, rc == PT_OK, "build: '%s'", err)) {
+        pt_scene_get_info(scene, &info);
+        CHECK(t, sf.mesh_count == 1 && info.primitive_count == 4u * sf.meshes[0].triangle_count, "%u primitives",
+              info.primitive_count);
+        test_note(t, "1 parse for 4 statements, %u primitives, %llu mesh bytes", info.primitive_count,
+                  (unsigned long long)sf.mesh_bytes);
+    }
+    pt_scene_destroy(scene);
+    pt_scenefile_free(&sf);
+}
+
+/* The mesh memory budget: one file shared four times fits where two distinct copies do not;
+   the refusal names the statement's file:line and the budget. */
+static void mesh_memory_budget(test_ctx *t)
+{
+    char top[256], err[512], text[1024];
+    pt_scenefile_options opt;
+    pt_scenefile sf;
+    size_t len = 0;
+    char *obj = read_all(MESH_PATH, &len);
+    int rc;
+    if (!CHECK(t, obj != NULL, "cannot read %s", MESH_PATH)) return;
+    if (!CHECK(t, tu_make_tmpdir(top, sizeof top) && write_file(top, "a.obj", obj) && write_file(top, "b.obj", obj),
+               "cannot write the meshes"))
+        goto done;
+    memset(&opt, 0, sizeof opt);
+    opt.mesh_memory = 500000;
+    snprintf(text, sizeof text, T_HEAD "mesh a.obj m\nmesh a.obj m\nmesh a.obj m\nmesh a.obj m\n");
+    rc = pt_scenefile_parse_ex(text, strlen(text), "t.scene", top, &opt, &sf, err, sizeof err);
+    if (CHECK(t, rc == PT_OK, "one file four times in 500000 bytes: %d '%s'", rc, err)) pt_scenefile_free(&sf);
+    snprintf(text, sizeof text, T_HEAD "mesh a.obj m\nmesh b.obj m\n");
+    rc = pt_scenefile_parse_ex(text, strlen(text), "t.scene", top, &opt, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "t.scene:4: mesh: 'b.obj'", 24) == 0 &&
+                 strstr(err, "budget of 500000 bytes"), "two files in 500000 bytes: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    opt.mesh_memory = 1000;
+    rc = pt_scenefile_parse_ex(text, strlen(text), "t.scene", top, &opt, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "t.scene:3: mesh: 'a.obj'", 24) == 0 &&
+                 strstr(err, "budget of 1000 bytes"), "1000 bytes: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+done:
+    tu_remove_tree(top);
+    free(obj);
+}
+
+/* pt_scenefile_options.allowed_dirs lets mesh paths reach another directory, and only that one. */
+static void mesh_allowed_dirs(test_ctx *t)
+{
+    char top[256], dir[300], other[300], err[512];
+    const char *allow[1];
+    pt_scenefile_options opt;
+    pt_scenefile sf;
+    const char *text = T_HEAD "mesh ../shared/a.obj m\n";
+    const char *text2 = T_HEAD "mesh ../a.obj m\n";
+    int rc;
+    if (!CHECK(t, tu_make_tmpdir(top, sizeof top), "no temporary directory")) return;
+    snprintf(dir, sizeof dir, "%s/scene", top);
+    snprintf(other, sizeof other, "%s/shared", top);
+    if (!CHECK(t, mkdir(dir, 0700) == 0 && mkdir(other, 0700) == 0 && write_file(other, "a.obj", TRI_OBJ) &&
+                      write_file(top, "a.obj", TRI_OBJ), "setup"))
+        goto done;
+    memset(&opt, 0, sizeof opt);
+    rc = pt_scenefile_parse_ex(text, strlen(text), "t.scene", dir, &opt, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED, "without allowed_dirs: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    allow[0] = other;
+    opt.allowed_dirs = allow;
+    opt.allowed_dir_count = 1;
+    rc = pt_scenefile_parse_ex(text, strlen(text), "t.scene", dir, &opt, &sf, err, sizeof err);
+    if (CHECK(t, rc == PT_OK && sf.mesh_count == 1, "with allowed_dirs: %d '%s'", rc, err)) pt_scenefile_free(&sf);
+    rc = pt_scenefile_parse_ex(text2, strlen(text2), "t.scene", dir, &opt, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strstr(err, "or an allowed one"), "a third directory: %d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+done:
+    tu_remove_tree(top);
+}
+
 const test_case test_scenefile_cases[] = {
     TEST_CASE(obj_load_matches_parse),
     TEST_CASE(add_obj_one_call),
     TEST_CASE(add_obj_errors),
     TEST_CASE(camera_depth_of_field),
     TEST_CASE(camera_depth_of_field_errors),
+    TEST_CASE(background_errors_at_load),
+    TEST_CASE(byte_order_mark),
+    TEST_CASE(messages_escape_bytes),
+    TEST_CASE(size_memory_up_front),
+    TEST_CASE(fifo_refused),
+    TEST_CASE(mesh_paths_confined),
+    TEST_CASE(obj_contents_not_echoed),
+    TEST_CASE(mesh_parsed_once),
+    TEST_CASE(mesh_memory_budget),
+    TEST_CASE(mesh_allowed_dirs),
     TEST_END
 };

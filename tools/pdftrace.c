@@ -31,6 +31,7 @@
 #endif
 
 #define MAX_OUTPUTS 16
+#define MAX_ALLOWED_DIRS 16
 #define EXIT_USAGE 2 /* bad command line, scene file or output path: nothing was written */
 
 typedef enum format { FMT_PNG, FMT_EXR, FMT_PFM, FMT_PPM } format;
@@ -56,6 +57,8 @@ typedef struct options {
     pt_display_desc display;     /* for the 8-bit outputs */
     double preview_every;        /* seconds; 0: off */
     int quiet;
+    const char *allowed_dirs[MAX_ALLOWED_DIRS]; /* --allow-path: more directories meshes may come from */
+    pt_scenefile_options load;   /* what the scene file may read and allocate */
 } options;
 
 enum { PARSED = 0, PARSED_EXIT = 1, PARSE_FAILED = 2 }; /* PARSED_EXIT: --help or --version printed */
@@ -133,6 +136,8 @@ static void print_help(void)
            "Other:\n"
            "      --preview-every S  rewrite the outputs every S seconds while rendering\n"
            "      --export-pov FILE  write the scene for POV-Ray 3.7 (renders too only with -o)\n"
+           "      --allow-path DIR   meshes may also come from DIR (default: the scene's directory only)\n"
+           "      --mesh-memory MB, --image-memory MB  memory limits of the scene (1024, 4096)\n"
            "  -q, --quiet            no progress and no statistics\n"
            "  -h, --help             this help\n"
            "      --version          the version and the formats built in\n"
@@ -277,7 +282,8 @@ static int parse_skips(const char *opt, const char *text, unsigned *out)
 typedef enum opt_id {
     O_OUTPUT, O_WIDTH, O_HEIGHT, O_SIZE, O_SPP, O_STRATEGY, O_SAMPLER, O_SEED, O_MAX_DEPTH, O_INDIRECT,
     O_LIGHT_WEIGHT, O_THREADS, O_BACKEND, O_ADAPTIVE, O_ADAPTIVE_MIN, O_ADAPTIVE_CHECK, O_ADAPTIVE_NB,
-    O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_QUIET, O_HELP, O_VERSION
+    O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_QUIET, O_HELP, O_VERSION, O_ALLOW_PATH, O_MESH_MEMORY,
+    O_IMAGE_MEMORY
 } opt_id;
 
 static const struct option_def {
@@ -297,7 +303,8 @@ static const struct option_def {
     { "--exposure", NULL, 1, O_EXPOSURE },    { "--tonemap", NULL, 1, O_TONEMAP },
     { "--preview-every", NULL, 1, O_PREVIEW }, { "--export-pov", NULL, 1, O_POV },
     { "--quiet", "-q", 0, O_QUIET },          { "--help", "-h", 0, O_HELP },
-    { "--version", NULL, 0, O_VERSION }
+    { "--version", NULL, 0, O_VERSION },      { "--allow-path", NULL, 1, O_ALLOW_PATH },
+    { "--mesh-memory", NULL, 1, O_MESH_MEMORY }, { "--image-memory", NULL, 1, O_IMAGE_MEMORY }
 };
 
 static const struct option_def *find_option(const char *name)
@@ -426,6 +433,18 @@ static int set_output_option(options *o, opt_id id, const char *name, const char
     int k = 0, rc;
     switch (id) {
     case O_OUTPUT: return add_output(o, v);
+    case O_ALLOW_PATH:
+        if (o->load.allowed_dir_count == MAX_ALLOWED_DIRS) return fail("%s: at most %d directories", name, MAX_ALLOWED_DIRS);
+        o->allowed_dirs[o->load.allowed_dir_count++] = v;
+        o->load.allowed_dirs = o->allowed_dirs;
+        return PARSED;
+    case O_MESH_MEMORY:
+    case O_IMAGE_MEMORY: {
+        long mb = 0;
+        if (parse_long(name, v, 1, 1L << 20, &mb) != PARSED) return PARSE_FAILED; /* MiB, up to 1 TiB */
+        *(id == O_MESH_MEMORY ? &o->load.mesh_memory : &o->load.image_memory) = (uint64_t)mb << 20;
+        return PARSED;
+    }
     case O_POV:
         if (o->pov) return fail("%s given twice", name);
         o->pov = v;
@@ -535,7 +554,8 @@ static void apply_settings(const options *o, pt_render_desc *d)
 static int load_scene(const options *o, pt_scenefile *sf, pt_scene **scene, pt_render_desc *d)
 {
     char err[1024];
-    int rc = pt_scenefile_load(o->scene, sf, err, sizeof err);
+    uint64_t limit = o->load.image_memory ? o->load.image_memory : PT_SCENEFILE_IMAGE_MEMORY_DEFAULT;
+    int rc = pt_scenefile_load_ex(o->scene, &o->load, sf, err, sizeof err);
     *scene = NULL;
     if (rc == PT_OK) rc = pt_scenefile_build(sf, scene, d, err, sizeof err);
     if (rc != PT_OK) {
@@ -543,6 +563,12 @@ static int load_scene(const options *o, pt_scenefile *sf, pt_scene **scene, pt_r
         return rc == PT_ERROR_OUT_OF_MEMORY ? EXIT_FAILURE : EXIT_USAGE;
     }
     apply_settings(o, d);
+    if (pt_scenefile_image_bytes(d->width, d->height) > limit) { /* the size given here: said before rendering */
+        fail("a %d x %d render needs %llu bytes for its film and images, more than the limit of %llu "
+             "(--image-memory MB)", d->width, d->height,
+             (unsigned long long)pt_scenefile_image_bytes(d->width, d->height), (unsigned long long)limit);
+        return EXIT_USAGE;
+    }
     if (o->backend != PT_BACKEND_AUTO) { /* built with AUTO: commit again with the one asked for */
         rc = pt_scene_set_backend(*scene, o->backend);
         if (rc == PT_OK) rc = pt_scene_commit(*scene);
@@ -755,14 +781,15 @@ static int render(const options *o, const pt_scene *scene, pt_render_desc *d)
     if (ps.shown) fputc('\n', stderr);
     pt_image_free(&ps.preview);
     if (rc != PT_OK) {
-        if (!ps.preview_failed) fail("rendering failed: %s", st.error[0] ? st.error : pt_result_string(rc));
+        if (!ps.preview_failed)
+            fail("rendering failed (%d x %d): %s", d->width, d->height, st.error[0] ? st.error : pt_result_string(rc));
         pt_film_free(&film);
         return EXIT_FAILURE;
     }
     rc = pt_film_resolve(&film, &img);
     pt_film_free(&film);
     if (rc != PT_OK) {
-        fail("resolving the film: %s", pt_result_string(rc));
+        fail("resolving the %d x %d film: %s", d->width, d->height, pt_result_string(rc));
         return EXIT_FAILURE;
     }
     if (!o->quiet) print_stats(o, scene, d, &st);

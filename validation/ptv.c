@@ -359,7 +359,7 @@ static const bad_case bad_cases[] = {
     {"include (not supported)", "%Hinclude other.scene\n", "unknown statement 'include'"},
     {"too many tokens", "%Hsphere 0 0 0 1 m 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37 38 39 40\n",
      "too many items on one line"},
-    {"missing mesh file", "%Hmesh no-such.obj m\n", "bad.scene:3: mesh: cannot read"},
+    {"missing mesh file", "%Hmesh no-such.obj m\n", "bad.scene:3: mesh: no file 'no-such.obj' inside"},
     {"OBJ index out of range", "%Hmesh bad-index.obj m\n", "bad-index.obj:4: face vertex '7': position index out of range"},
     {"OBJ index zero", "%Hmesh bad-zero.obj m\n", "bad-zero.obj:4: face vertex '0'"},
     {"OBJ normal index", "%Hmesh bad-normal.obj m\n", "bad-normal.obj:5: face vertex '3//2': normal index out of range"},

@@ -236,6 +236,70 @@ t_display() {
     fi
 }
 
+# ---- what a scene file may do: read regular files inside its directory (or --allow-path),
+# within --mesh-memory and --image-memory; its errors name file:line and echo no control bytes
+t_scene_limits() {
+    local d=$W/limits ok=1 head='camera look_from 0 0 -5 look_at 0 0 0\nmaterial m lambertian 0.5 0.5 0.5\n' status
+    mkdir -p "$d/scene" "$d/shared"
+    printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$d/shared/t.obj"
+    cp "$d/shared/t.obj" "$d/scene/t.obj"
+    # a bad background is a load error with file:line (it loaded and failed later)
+    printf "${head}background 1 1 nan\nsphere 0 0 0 1 m\n" >"$d/scene/nan.scene"
+    bad_case "background 1 1 nan" "$d/scene/nan.scene" -o "$W/bad/x.ppm" || ok=0
+    grep -q "nan.scene:3: background:" "$W/err.txt" || { fail scene_limits "background: '$(cat "$W/err.txt")'"; ok=0; }
+    # meshes outside the scene's directory are refused unless allowed
+    printf "${head}mesh ../shared/t.obj m\n" >"$d/scene/out.scene"
+    bad_case "mesh ../shared/t.obj" "$d/scene/out.scene" -o "$W/bad/x.ppm" || ok=0
+    grep -q "out.scene:3: mesh: no file '../shared/t.obj' inside the scene's directory" "$W/err.txt" ||
+        { fail scene_limits "../shared: '$(cat "$W/err.txt")'"; ok=0; }
+    "$P" "$d/scene/out.scene" -q --spp 1 --size 8x8 --allow-path "$d/shared" -o "$d/out.pfm" 2>"$W/err.txt" ||
+        { fail scene_limits "--allow-path: $(cat "$W/err.txt")"; ok=0; }
+    printf "${head}mesh /etc/shadow m\n" >"$d/scene/shadow.scene"
+    bad_case "mesh /etc/shadow" "$d/scene/shadow.scene" -o "$W/bad/x.ppm" || ok=0
+    ! grep -q "root" "$W/err.txt" || { fail scene_limits "/etc/shadow: '$(cat "$W/err.txt")'"; ok=0; }
+    # a FIFO as the scene or as a mesh: refused at once (it blocked in fopen)
+    if mkfifo "$d/scene/pipe.obj" "$d/pipe.scene" 2>/dev/null; then
+        printf "${head}mesh pipe.obj m\n" >"$d/scene/fifo.scene"
+        timeout 20 "$P" "$d/pipe.scene" -o "$d/x.ppm" 2>"$W/err.txt"
+        status=$?
+        [ $status = 2 ] && grep -q "pipe.scene: cannot read the scene: not a regular file" "$W/err.txt" ||
+            { fail scene_limits "FIFO scene: status $status (124: it blocked), '$(cat "$W/err.txt")'"; ok=0; }
+        timeout 20 "$P" "$d/scene/fifo.scene" -o "$d/x.ppm" 2>"$W/err.txt"
+        status=$?
+        [ $status = 2 ] && grep -q "fifo.scene:3: mesh: cannot read 'pipe.obj': not a regular file" "$W/err.txt" ||
+            { fail scene_limits "FIFO mesh: status $status (124: it blocked), '$(cat "$W/err.txt")'"; ok=0; }
+    else
+        skip fifo "mkfifo failed"
+    fi
+    # the mesh memory budget: a 1.3 MB OBJ in 1 MiB
+    awk 'BEGIN { for (i = 0; i < 30000; i++) printf "v %d 0 0\nv %d 1 0\nv %d 0 1\n", i, i, i;
+                 for (i = 0; i < 30000; i++) printf "f %d %d %d\n", 3 * i + 1, 3 * i + 2, 3 * i + 3 }' >"$d/scene/big.obj"
+    printf "${head}mesh t.obj m\nmesh big.obj m\n" >"$d/scene/big.scene"
+    bad_case "--mesh-memory 1" "$d/scene/big.scene" --mesh-memory 1 -o "$W/bad/x.ppm" || ok=0
+    grep -q "big.scene:4: mesh: 'big.obj' does not fit in the mesh memory budget of 1048576 bytes" "$W/err.txt" ||
+        { fail scene_limits "--mesh-memory: '$(cat "$W/err.txt")'"; ok=0; }
+    # size 16384 16384: refused at its line with the bytes it needs, before any allocation (run
+    # under a 2 GB address-space limit and a timeout, so that a regression fails quickly)
+    printf "size 16384 16384\n${head}sphere 0 0 0 1 m\n" >"$d/scene/huge.scene"
+    printf '#!/bin/sh\nulimit -v 2097152\nexec timeout 60 "%s" "$@"\n' "$P" >"$d/limited.sh"
+    chmod +x "$d/limited.sh"
+    local P_saved=$P
+    P=$d/limited.sh
+    bad_case "size 16384 16384" "$d/scene/huge.scene" -o "$W/bad/x.ppm" || ok=0
+    grep -q "huge.scene:1: size: a 16384 x 16384 render needs 26843545600 bytes" "$W/err.txt" ||
+        { fail scene_limits "size: '$(cat "$W/err.txt")'"; ok=0; }
+    bad_case "--size 16384x16384" "$S/mirror.scene" --size 16384x16384 -o "$W/bad/x.ppm" || ok=0
+    P=$P_saved
+    # an escape sequence in a scene line is printed escaped
+    printf "${head}sph\033[2Jere 0 0 0 1 m\n" >"$d/scene/esc.scene"
+    bad_case "ESC in a statement" "$d/scene/esc.scene" -o "$W/bad/x.ppm" || ok=0
+    if grep -q "$(printf '\033')" "$W/err.txt" || ! grep -qF 'sph\x1b[2Jere' "$W/err.txt"; then
+        fail scene_limits "ESC echoed raw: '$(cat -v "$W/err.txt")'"
+        ok=0
+    fi
+    [ $ok = 1 ] && pass scene_limits "background, paths outside, --allow-path, /etc/shadow, FIFOs, --mesh-memory, size, escapes"
+}
+
 t_help
 t_png_exr
 t_bad_input
@@ -244,5 +308,6 @@ t_default_output
 t_preview
 t_overrides
 t_display
+t_scene_limits
 echo "$passed passed, $failed failed, $skipped skipped"
 [ $failed = 0 ]
