@@ -1422,9 +1422,8 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
     pt__pov w;
     pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_v3(-FLT_MAX, -FLT_MAX, -FLT_MAX);
     double diag;
-    int i, width, height, ok;
-    size_t len;
-    char *tmp;
+    int i, width, height, ok, rc;
+    pt_output_file out;
     if (err && err_size) err[0] = '\0';
     if (!d || !path || !*path) return PT_ERROR_INVALID_ARGUMENT;
     width = o && o->width > 0 ? o->width : d->width;
@@ -1486,25 +1485,11 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
     w.fd = 1e-4 * diag;   /* relative error (fd/d)^2 */
     w.hair = 1e-5 * diag; /* the grid sits this far in front of its emitter (emitter and twin are no_shadow) */
 
-    len = strlen(path);
-    tmp = (char *)PT_MALLOC(len + 6u);
-    if (!tmp) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_OUT_OF_MEMORY, "out of memory");
-    memcpy(tmp, path, len);
-    memcpy(tmp + len, ".ptmp", 6u);
-    w.f = fopen(tmp, "w");
-    if (!w.f) {
-        int e = errno;
-        PT_FREE(tmp);
-        return pt__sf_failf(err, err_size, path, 0, PT_ERROR_IO, "cannot write: %s", strerror(e));
-    }
+    rc = pt_output_open(&out, path, 1, "POV-Ray scene", err, err_size); /* exclusive temporary, renamed into place */
+    if (rc != PT_OK) return rc;
+    w.f = out.file;
     ok = pt__pov_body(&w, o, width, height);
-    ok = (fflush(w.f) == 0) && ok && !ferror(w.f);
-    ok = (fclose(w.f) == 0) && ok;
-    if (ok) ok = rename(tmp, path) == 0;
-    if (!ok) remove(tmp);
-    PT_FREE(tmp);
-    if (!ok) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_IO, "writing failed");
-    return PT_OK;
+    return pt_output_close(&out, ok, "POV-Ray scene", err, err_size);
 }
 
 #ifdef __cplusplus
