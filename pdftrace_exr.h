@@ -373,7 +373,9 @@ PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_optio
                            strcmp(what, "setting the header") == 0
                        ? PT_ERROR_INVALID_ARGUMENT
                        : PT_ERROR_IO;
-        if (sink.err_no) pt__exr_fail(err, err_size, code, path, what, strerror(sink.err_no)); /* the system's reason */
+        if (sink.err_no && err && err_size) /* a failed write: the temporary and the system's reason */
+            snprintf(err, err_size, "%s: writing EXR (%s): cannot write '%s': %s", path, what, out.tmp_path,
+                     strerror(sink.err_no));
         else pt__exr_lib_fail(err, err_size, code, path, what, rv, &sink.msg);
         (void)pt_output_close(&out, 0, "EXR", err, err_size);
         return rv == EXR_ERR_OUT_OF_MEMORY ? PT_ERROR_OUT_OF_MEMORY : code;
