@@ -135,8 +135,13 @@
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
 
+#if defined(PDFTRACE_IMPLEMENTATION) && !defined(_POSIX_C_SOURCE) && !defined(_GNU_SOURCE) && !defined(_WIN32) && \
+    !defined(__cplusplus)
+#define _POSIX_C_SOURCE 200809L /* effective only when this header is the first one included */
+#endif
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h> /* FILE, for pt_output_file */
 #include <math.h>
 
 #define PDFTRACE_VERSION_MAJOR 0
@@ -917,20 +922,45 @@ PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, 
    9. OUTPUT: image writers (OpenEXR: pdftrace_exr.h)
    ========================================================================================== */
 
-/* Writers. Each writes to a temporary file "<path>.ptmp" beside the target and renames it into
-   place, so a failed write leaves no partial file (and no temporary). PFM: linear float RGB
+/* Writers. Each writes to a new temporary file beside the target (pt_output_open) and renames it
+   into place, so a failed write leaves no partial file (and no temporary). PFM: linear float RGB
    (little-endian, bottom row first as the format requires). PPM: binary P6, sRGB-encoded,
    clamped to [0, 1]. They return PT_OK, PT_ERROR_INVALID_ARGUMENT (no path, an empty image),
    PT_ERROR_OUT_OF_MEMORY or PT_ERROR_IO. The _ex forms also write a one-line message into
    err[0 .. err_size-1] when err is not NULL ("" on success), as pt_write_exr does
-   (pdftrace_exr.h): "dir/x.ppm: writing PPM: cannot create 'dir/x.ppm.ptmp': No such file or
-   directory" (the path and the system's reason). No global state: safe to call from several
-   threads at once. */
+   (pdftrace_exr.h): "dir/x.ppm: writing PPM: cannot create 'dir/x.ppm.1a2b3c4d.ptmp': No such
+   file or directory" (the path and the system's reason). Safe to call from several threads at
+   once (the only shared state is the registry of temporaries, behind a mutex). */
 PTDEF int pt_write_pfm(const char *path, const pt_image *image);
 PTDEF int pt_write_ppm(const char *path, const pt_image *image);
 PTDEF int pt_write_pfm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
 PTDEF int pt_write_ppm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
 PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, clamped */
+
+/* The temporary file every writer of the family (this header, pdftrace_exr.h, pdftrace_png.h,
+   pdftrace_scene.h) writes through; for writers of other formats too. pt_output_open creates
+   "<path>.XXXXXXXX.ptmp" in the target's directory exclusively (POSIX: O_CREAT | O_EXCL |
+   O_NOFOLLOW, so a file or symlink planted there is never followed or reused; permissions 0666
+   less the umask, as fopen's), opens it as t->file ("wb", or "w" when text) and registers its name
+   for pt_output_remove_temporaries. pt_output_close flushes and closes it and, when ok is nonzero,
+   renames it onto path; on any failure, or when ok is 0, the temporary is removed. Both return
+   PT_OK, PT_ERROR_INVALID_ARGUMENT, PT_ERROR_OUT_OF_MEMORY or PT_ERROR_IO and write
+   "path: writing <what>: <step> '<temporary>': <reason>" into err (reason: the system's strerror,
+   e.g. "No space left on device"). pt_output_close must follow every successful pt_output_open.
+   Without POSIX (no <fcntl.h>) the exclusive creation is a check then fopen, which a concurrent
+   process can race. */
+typedef struct pt_output_file {
+    FILE *file;     /* the open temporary */
+    char *tmp_path; /* its name (owned) */
+    const char *path; /* the target, as given (not copied) */
+    int slot;       /* the registry's slot, -1 if not registered */
+} pt_output_file;
+PTDEF int pt_output_open(pt_output_file *t, const char *path, int text, const char *what, char *err, size_t err_size);
+PTDEF int pt_output_close(pt_output_file *t, int ok, const char *what, char *err, size_t err_size);
+/* Removes every temporary an output writer of this process has open (at most 16 are tracked at
+   once; more still work, untracked). Async-signal-safe: call it from a SIGINT/SIGTERM handler,
+   which then re-raises the signal; nothing else in this header is safe there. */
+PTDEF void pt_output_remove_temporaries(void);
 
 /* Display transform for the 8-bit outputs: each channel is multiplied by 2^exposure and mapped
    to display-linear [0, 1], which pt_write_ppm (and pdftrace_png.h's pt_write_png) then
@@ -967,9 +997,6 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #ifndef PDFTRACE_IMPLEMENTATION_DONE
 #define PDFTRACE_IMPLEMENTATION_DONE
 
-#if !defined(_POSIX_C_SOURCE) && !defined(_GNU_SOURCE) && !defined(_WIN32) && !defined(__cplusplus)
-#define _POSIX_C_SOURCE 200809L /* effective only when this header is the first one included */
-#endif
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -6504,56 +6531,226 @@ PTDEF float pt_srgb_encode(float x)
     return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
 }
 
-/* Writes through "<path>.ptmp" and renames it into place; no partial file is left behind. A failure
-   is described in err as "path: writing <what>: <step>: strerror(errno)" (the format of
-   pt_write_exr's messages). errno is read right after the step that failed, before cleanup. */
+/* Output temporaries. The registry lets a signal handler remove the temporaries in progress: a
+   slot holds a name while its writer has the file open (live = 1). Slots are taken round-robin and
+   a released name is freed only when its slot is taken again, so a handler running on another
+   thread while a slot is released still reads a whole, unfreed name. */
+#if (defined(__unix__) || defined(__unix) || defined(__APPLE__)) && \
+    (defined(_POSIX_C_SOURCE) || defined(_XOPEN_SOURCE) || defined(_GNU_SOURCE))
+#include <fcntl.h>
+#include <unistd.h>
+#define PT__POSIX_IO 1
+#endif
+#include <signal.h> /* sig_atomic_t */
+#define PT__TMP_SLOTS 16
+static char *volatile pt__tmp_name[PT__TMP_SLOTS];
+static volatile sig_atomic_t pt__tmp_live[PT__TMP_SLOTS];
+static unsigned pt__tmp_next, pt__tmp_counter;
+#ifndef PDFTRACE_NO_THREADS
+static pthread_mutex_t pt__tmp_lock = PTHREAD_MUTEX_INITIALIZER;
+#define PT__TMP_LOCK() pthread_mutex_lock(&pt__tmp_lock)
+#define PT__TMP_UNLOCK() pthread_mutex_unlock(&pt__tmp_lock)
+#else
+#define PT__TMP_LOCK() ((void)0)
+#define PT__TMP_UNLOCK() ((void)0)
+#endif
+
+/* Takes a slot for name (-1: all busy); the old name of the slot is returned to be freed. */
+static int pt__tmp_register(char *name, char **old)
+{
+    int k, slot = -1;
+    PT__TMP_LOCK();
+    for (k = 0; k < PT__TMP_SLOTS && slot < 0; ++k) {
+        int i = (int)((pt__tmp_next + (unsigned)k) % PT__TMP_SLOTS);
+        if (!pt__tmp_live[i]) slot = i;
+    }
+    *old = NULL;
+    if (slot >= 0) {
+        *old = pt__tmp_name[slot];
+        pt__tmp_name[slot] = name;
+        pt__tmp_live[slot] = 1;
+        pt__tmp_next = (unsigned)slot + 1u;
+    }
+    PT__TMP_UNLOCK();
+    return slot;
+}
+static void pt__tmp_release(int slot)
+{
+    if (slot < 0 || slot >= PT__TMP_SLOTS) return;
+    PT__TMP_LOCK();
+    pt__tmp_live[slot] = 0;
+    PT__TMP_UNLOCK();
+}
+PTDEF void pt_output_remove_temporaries(void)
+{
+    int i;
+    for (i = 0; i < PT__TMP_SLOTS; ++i) {
+        char *name = pt__tmp_name[i];
+        if (pt__tmp_live[i] && name) {
+#ifdef PT__POSIX_IO
+            unlink(name); /* async-signal-safe (POSIX.1-2008 2.4.3); remove() is not listed */
+#else
+            remove(name);
+#endif
+        }
+    }
+}
+
+/* A name for the temporary: path + "." + 8 hex digits + ".ptmp"; the digits mix the process id,
+   the clock, a per-process counter and the attempt, so concurrent writers rarely collide. */
+static void pt__tmp_name_for(char *tmp, size_t len, const char *path, unsigned attempt)
+{
+    uint32_t h = 2166136261u, v[4];
+    int k;
+    PT__TMP_LOCK();
+    v[0] = pt__tmp_counter++;
+    PT__TMP_UNLOCK();
+#ifdef PT__POSIX_IO
+    v[1] = (uint32_t)getpid();
+#else
+    v[1] = (uint32_t)(uintptr_t)&h;
+#endif
+    v[2] = (uint32_t)time(NULL) ^ (uint32_t)clock();
+    v[3] = attempt;
+    for (k = 0; k < 16; ++k) h = (h ^ ((v[k / 4] >> (8 * (k % 4))) & 0xffu)) * 16777619u; /* FNV-1a */
+    memcpy(tmp, path, len);
+    snprintf(tmp + len, 15, ".%08lx.ptmp", (unsigned long)h);
+}
+
+/* Creates tmp exclusively; NULL with errno set on failure (EEXIST: the name is taken). */
+static FILE *pt__tmp_create(const char *tmp, int text)
+{
+#ifdef PT__POSIX_IO
+    int flags = O_WRONLY | O_CREAT | O_EXCL, fd;
+    FILE *f;
+#ifdef O_NOFOLLOW
+    flags |= O_NOFOLLOW;
+#endif
+#ifdef O_CLOEXEC
+    flags |= O_CLOEXEC;
+#endif
+    fd = open(tmp, flags, 0666); /* the umask applies, as for fopen */
+    if (fd < 0) return NULL;
+    f = fdopen(fd, text ? "w" : "wb");
+    if (!f) {
+        int e = errno;
+        close(fd);
+        unlink(tmp);
+        errno = e;
+    }
+    return f;
+#else
+    FILE *f = fopen(tmp, "rb"); /* without POSIX: a check, then create (racy, see the declaration) */
+    if (f) {
+        fclose(f);
+        errno = EEXIST;
+        return NULL;
+    }
+    return fopen(tmp, text ? "w" : "wb");
+#endif
+}
+
+PTDEF int pt_output_open(pt_output_file *t, const char *path, int text, const char *what, char *err, size_t err_size)
+{
+    size_t len;
+    char *old = NULL;
+    unsigned attempt;
+    int e = 0;
+    if (err && err_size) err[0] = '\0';
+    if (!what) what = "output";
+    if (!t) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "%s: writing %s: no pt_output_file", path ? path : "(null)", what);
+    memset(t, 0, sizeof *t);
+    t->slot = -1;
+    if (!path || !*path) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "writing %s: no path", what);
+    len = strlen(path);
+    if (len > ((size_t)-1) - 16u || !(t->tmp_path = (char *)PT_MALLOC(len + 16u)))
+        return pt__msg(err, err_size, PT_ERROR_OUT_OF_MEMORY, "%s: writing %s: out of memory", path, what);
+    t->path = path;
+    for (attempt = 0; attempt < 64u; ++attempt) {
+        pt__tmp_name_for(t->tmp_path, len, path, attempt);
+        errno = 0;
+        if ((t->file = pt__tmp_create(t->tmp_path, text)) != NULL) break;
+        e = errno;
+        if (e != EEXIST) break;
+    }
+    if (!t->file) {
+        int rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot create '%s': %s", path, what, t->tmp_path,
+                         e ? strerror(e) : "cannot create the file");
+        PT_FREE(t->tmp_path);
+        t->tmp_path = NULL;
+        return rc;
+    }
+    t->slot = pt__tmp_register(t->tmp_path, &old);
+    PT_FREE(old);
+    errno = 0;
+    return PT_OK;
+}
+
+/* A failure of pt_output_close's step: the message, then the temporary is removed. */
+static int pt__output_fail(pt_output_file *t, int e, const char *step, const char *what, char *err, size_t err_size)
+{
+    int ren = strcmp(step, "cannot rename") == 0, rc;
+    rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: %s '%s'%s%s%s: %s", t->path, what, step, t->tmp_path,
+                 ren ? " to '" : "", ren ? t->path : "", ren ? "'" : "", e ? strerror(e) : "write error");
+    remove(t->tmp_path);
+    return rc;
+}
+
+PTDEF int pt_output_close(pt_output_file *t, int ok, const char *what, char *err, size_t err_size)
+{
+    int e = ok ? 0 : errno, rc = PT_OK;
+    if (!what) what = "output";
+    if (!t || !t->tmp_path) return PT_ERROR_INVALID_ARGUMENT;
+    if (t->file) {
+        errno = 0;
+        if (fflush(t->file) != 0 || ferror(t->file)) {
+            if (ok) e = errno;
+            ok = 0;
+        }
+        errno = 0;
+        if (fclose(t->file) != 0 && ok) {
+            e = errno;
+            ok = 0;
+        }
+        t->file = NULL;
+    }
+    if (!ok) {
+        if (err && err_size && !err[0]) rc = pt__output_fail(t, e, "cannot write", what, err, err_size);
+        else {
+            remove(t->tmp_path);
+            rc = PT_ERROR_IO;
+        }
+    } else {
+#ifdef _WIN32
+        remove(t->path); /* rename does not replace an existing file there */
+#endif
+        errno = 0;
+        if (rename(t->tmp_path, t->path) != 0) rc = pt__output_fail(t, errno, "cannot rename", what, err, err_size);
+    }
+    pt__tmp_release(t->slot); /* the name stays allocated in the registry until its slot is reused */
+    if (t->slot < 0) PT_FREE(t->tmp_path);
+    t->tmp_path = NULL;
+    t->slot = -1;
+    return rc;
+}
+
+/* PFM and PPM through pt_output_open/close. errno is read right after the step that failed. */
 typedef int (*pt__writer_fn)(FILE *f, const pt_image *img);
 static int pt__write_atomic(const char *path, const pt_image *img, pt__writer_fn fn, const char *what, char *err,
                             size_t err_size)
 {
-    size_t len, n;
-    char *tmp;
-    FILE *f;
-    int ok, e = 0, rc = PT_OK;
+    pt_output_file t;
+    size_t n;
+    int ok, rc;
     if (err && err_size) err[0] = '\0';
     if (!path || !*path) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "writing %s: no path", what);
     if (!img) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "%s: writing %s: image is NULL", path, what);
     if (!img->rgb || !pt__pixels(img->width, img->height, &n))
         return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "%s: writing %s: the image has no pixels (%d x %d%s)",
                        path, what, img->width, img->height, img->rgb ? "" : ", rgb NULL");
-    len = strlen(path);
-    tmp = (char *)PT_MALLOC(len + 6u);
-    if (!tmp) return pt__msg(err, err_size, PT_ERROR_OUT_OF_MEMORY, "%s: writing %s: out of memory", path, what);
-    memcpy(tmp, path, len);
-    memcpy(tmp + len, ".ptmp", 6u);
-    errno = 0;
-    f = fopen(tmp, "wb");
-    if (!f) {
-        e = errno;
-        rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot create '%s': %s", path, what, tmp,
-                     e ? strerror(e) : "fopen failed");
-        PT_FREE(tmp);
-        return rc;
-    }
-    errno = 0; /* a successful fopen may leave any value */
-    ok = fn(f, img);
-    if (!ok) e = errno;
-    if (fflush(f) != 0 || ferror(f)) { if (ok) e = errno; ok = 0; }
-    if (fclose(f) != 0) { if (ok) e = errno; ok = 0; }
-    if (!ok) rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot write '%s': %s", path, what, tmp,
-                          e ? strerror(e) : "write error");
-#ifdef _WIN32
-    if (ok) remove(path);
-#endif
-    if (ok && rename(tmp, path) != 0) {
-        e = errno;
-        ok = 0;
-        rc = pt__msg(err, err_size, PT_ERROR_IO, "%s: writing %s: cannot rename '%s' to '%s': %s", path, what, tmp,
-                     path, e ? strerror(e) : "rename failed");
-    }
-    if (!ok) remove(tmp);
-    PT_FREE(tmp);
-    return rc;
+    if ((rc = pt_output_open(&t, path, 0, what, err, err_size)) != PT_OK) return rc;
+    ok = fn(t.file, img);
+    return pt_output_close(&t, ok, what, err, err_size);
 }
 static int pt__pfm_body(FILE *f, const pt_image *img)
 {

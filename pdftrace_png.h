@@ -11,13 +11,13 @@
    truncated; for exposure and tone mapping apply pt_image_apply_display first. libpng marks
    8-bit files as sRGB (an sRGB chunk, perceptual intent). pt_write_png_rgb8 writes bytes the
    caller has already encoded (3 per pixel, row 0 at the top).
-   Both write to "<path>.ptmp" beside the target and rename it into place: a failed write
-   leaves no file (and no temporary). They return PT_OK or a pt_result code
-   (PT_ERROR_INVALID_ARGUMENT, PT_ERROR_OUT_OF_MEMORY, PT_ERROR_IO) and, when err is not NULL,
-   write a one-line message into err[0 .. err_size-1] (empty on success): "PATH: writing PNG:
-   cannot create 'PATH.ptmp': REASON", "... cannot rename 'PATH.ptmp' to 'PATH': REASON" (the
-   system's strerror) or libpng's own message. No global state: safe to call from several
-   threads at once.
+   Both write to a new temporary beside the target (pdftrace.h's pt_output_open) and rename it
+   into place: a failed write leaves no file (and no temporary). They return PT_OK or a pt_result
+   code (PT_ERROR_INVALID_ARGUMENT, PT_ERROR_OUT_OF_MEMORY, PT_ERROR_IO) and, when err is not
+   NULL, write a one-line message into err[0 .. err_size-1] (empty on success): "PATH: writing
+   PNG: cannot create 'PATH.XXXXXXXX.ptmp': REASON", "... cannot write 'TMP': REASON", "...
+   cannot rename 'TMP' to 'PATH': REASON" (the system's strerror) or libpng's own message. Safe
+   to call from several threads at once.
 
    BUILDING
    ========
@@ -62,8 +62,8 @@ PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsig
 /* ==========================================================================================
    IMPLEMENTATION
    The simplified API writes a whole image from one buffer: a png_image names its size and
-   format (PNG_FORMAT_RGB), png_image_write_to_stdio writes it to an open FILE and reports
-   failure in png_image.message. The file is then flushed, closed and renamed into place.
+   format (PNG_FORMAT_RGB), png_image_write_to_stdio writes it to the open temporary and reports
+   failure in png_image.message; pt_output_close flushes, closes and renames it into place.
    ========================================================================================== */
 #ifdef PDFTRACE_PNG_IMPLEMENTATION
 #ifndef PDFTRACE_PNG_IMPLEMENTATION_DONE
@@ -115,62 +115,37 @@ static int pt__png_pixels(int w, int h, size_t *n)
     return 1;
 }
 
-/* Writes the open file f, then flushes and closes it; on failure *detail says why. */
-static int pt__png_write_file(FILE *f, int w, int h, const unsigned char *rgb, png_image *im, const char **detail)
+/* Writes the open temporary t->file; on failure the message is libpng's, or the system's reason
+   when a write failed (libpng's own text for that is only "Write Error"). */
+static int pt__png_write_file(pt_output_file *t, int w, int h, const unsigned char *rgb, char *err, size_t err_size)
 {
-    int ok, closed;
-    memset(im, 0, sizeof *im);
-    im->version = PNG_IMAGE_VERSION;
-    im->width = (png_uint_32)w;
-    im->height = (png_uint_32)h;
-    im->format = PNG_FORMAT_RGB;
-    ok = png_image_write_to_stdio(im, f, 0, rgb, 0, NULL) != 0;
-    if (!ok) *detail = im->message[0] ? im->message : "libpng failed";
+    png_image im;
+    int ok, e;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    im.width = (png_uint_32)w;
+    im.height = (png_uint_32)h;
+    im.format = PNG_FORMAT_RGB;
     errno = 0;
-    if (fflush(f) != 0 || ferror(f)) {
-        if (ok) *detail = errno ? strerror(errno) : "write error";
-        ok = 0;
-    }
-    closed = fclose(f) == 0;
-    if (ok && !closed) *detail = strerror(errno);
-    return ok && closed;
+    ok = png_image_write_to_stdio(&im, t->file, 0, rgb, 0, NULL) != 0;
+    e = errno;
+    if (!ok && !(ferror(t->file) && e))
+        pt__png_fail(err, err_size, PT_ERROR_IO, t->path, "%s", im.message[0] ? im.message : "libpng failed");
+    errno = e;
+    return ok;
 }
 
 PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsigned char *rgb, char *err,
                             size_t err_size)
 {
-    png_image im;
-    const char *detail = "";
-    char *tmp;
-    size_t len, n;
-    FILE *f;
-    int rc = PT_OK;
+    pt_output_file t;
+    size_t n;
+    int rc;
     if (err && err_size) err[0] = '\0';
     if (!path || !*path || !rgb || !pt__png_pixels(width, height, &n))
         return pt__png_fail(err, err_size, PT_ERROR_INVALID_ARGUMENT, path, "no path or an empty image");
-    len = strlen(path);
-    tmp = (char *)PT_MALLOC(len + 6u);
-    if (!tmp) return pt__png_fail(err, err_size, PT_ERROR_OUT_OF_MEMORY, path, "out of memory");
-    memcpy(tmp, path, len);
-    memcpy(tmp + len, ".ptmp", 6u);
-    f = fopen(tmp, "wb");
-    if (!f) {
-        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "cannot create '%s': %s", tmp, strerror(errno));
-    } else if (!pt__png_write_file(f, width, height, rgb, &im, &detail)) {
-        remove(tmp);
-        rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "%s", detail);
-    } else {
-#ifdef _WIN32
-        remove(path);
-#endif
-        if (rename(tmp, path) != 0) {
-            rc = pt__png_fail(err, err_size, PT_ERROR_IO, path, "cannot rename '%s' to '%s': %s", tmp, path,
-                              strerror(errno));
-            remove(tmp);
-        }
-    }
-    PT_FREE(tmp);
-    return rc;
+    if ((rc = pt_output_open(&t, path, 0, "PNG", err, err_size)) != PT_OK) return rc;
+    return pt_output_close(&t, pt__png_write_file(&t, width, height, rgb, err, err_size), "PNG", err, err_size);
 }
 
 PTDEF int pt_write_png(const char *path, const pt_image *img, char *err, size_t err_size)

@@ -2104,9 +2104,8 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
                                   size_t err_size)
 {
     pt__pov w;
-    int width, height, ok, rc;
-    size_t len;
-    char *tmp;
+    int width, height, rc;
+    pt_output_file out;
     if (err && err_size) err[0] = '\0';
     if (!d || !path || !*path) return PT_ERROR_INVALID_ARGUMENT;
     width = o && o->width > 0 ? o->width : d->width;
@@ -2118,25 +2117,11 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
         return pt__sf_failf(err, err_size, d->file, w.bad_line, PT_ERROR_UNSUPPORTED,
                             "POV-Ray export: a number to be written is not finite (nan or inf); POV-Ray cannot read it");
 
-    len = strlen(path);
-    tmp = (char *)PT_MALLOC(len + 6u);
-    if (!tmp) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_OUT_OF_MEMORY, "out of memory");
-    memcpy(tmp, path, len);
-    memcpy(tmp + len, ".ptmp", 6u);
-    w.f = fopen(tmp, "w");
-    if (!w.f) {
-        int e = errno;
-        PT_FREE(tmp);
-        return pt__sf_failf(err, err_size, path, 0, PT_ERROR_IO, "cannot write: %s", strerror(e));
-    }
+    rc = pt_output_open(&out, path, 1, "POV-Ray scene", err, err_size); /* exclusive temporary, renamed into place */
+    if (rc != PT_OK) return rc;
+    w.f = out.file;
     pt__pov_body(&w, o, width, height);
-    ok = (fflush(w.f) == 0) && !ferror(w.f);
-    ok = (fclose(w.f) == 0) && ok;
-    if (ok) ok = rename(tmp, path) == 0;
-    if (!ok) remove(tmp);
-    PT_FREE(tmp);
-    if (!ok) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_IO, "writing failed");
-    return PT_OK;
+    return pt_output_close(&out, !ferror(w.f), "POV-Ray scene", err, err_size);
 }
 
 #ifdef __cplusplus

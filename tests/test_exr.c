@@ -448,6 +448,18 @@ static void memory_reader(test_ctx *t)
             CHECK(t, rc == PT_ERROR_UNSUPPORTED && image_empty(&m) && strstr(err, "PDFTRACE_EXR_MAX_PIXELS"),
                   "2^29-pixel data window: rc %d '%s' (want PT_ERROR_UNSUPPORTED)", rc, err);
             if (rc == PT_OK) pt_image_free(&m);
+            /* under the pixel cap but 768 MiB of floats: refused by the byte budget before allocating
+               (a hostile header used to make the reader allocate it) */
+            {
+                static const unsigned char b8k[16] = { 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0x1f, 0, 0, 0xff, 0x1f, 0, 0 };
+                memcpy(buf + at, b8k, 16);
+                m.width = 1; m.height = 1; m.rgb = NULL;
+                rc = pt_read_exr_memory(buf, (size_t)size, "8k.exr", &m, err, sizeof err);
+                CHECK(t, rc == PT_ERROR_UNSUPPORTED && image_empty(&m) && strstr(err, "PDFTRACE_EXR_MAX_BYTES") &&
+                             strstr(err, "8192 x 8192"),
+                      "8192 x 8192 data window: rc %d '%s' (want PT_ERROR_UNSUPPORTED naming PDFTRACE_EXR_MAX_BYTES)", rc, err);
+                if (rc == PT_OK) pt_image_free(&m);
+            }
             memcpy(buf + at, save, 16);
         }
     }
@@ -466,6 +478,71 @@ done:
     tu_remove_tree(dir);
 }
 
+/* A 2 x 40 float image whose last ZIP chunk (lines 32-39) deflates to exactly its packed size:
+   OpenEXRCore up to 3.4.7 stores the zlib bytes as if uncompressed, and the rows read back as
+   garbage, while the write reports success. The values: 26 of 64 random, the rest 0.5. */
+static void zip_chunk_exactly_packed_size(test_ctx *t)
+{
+    pt_image a = { 0, 0, NULL }, b = { 0, 0, NULL };
+    pt_exr_options o;
+    char dir[64], path[160], err[512];
+    uint32_t x = 1567u * 2654435761u;
+    size_t i;
+    int rc, bad = 0;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    if (!CHECK(t, pt_image_init(&a, 2, 40) == PT_OK, "image")) goto done;
+    for (i = 0; i < 240; ++i) {
+        x = x * 1664525u + 1013904223u;
+        a.rgb[i] = (x >> 26) < 26u ? (float)((x >> 8) & 0xffffu) / 65536.0f : 0.5f;
+    }
+    o.pixel_type = PT_EXR_FLOAT;
+    o.compression = PT_EXR_ZIP;
+    snprintf(path, sizeof path, "%s/z.exr", dir);
+    rc = pt_write_exr(path, &a, &o, err, sizeof err);
+    CHECK(t, rc == PT_OK, "write: %d '%s'", rc, err);
+    rc = pt_read_exr(path, &b, err, sizeof err);
+    if (CHECK(t, rc == PT_OK && b.width == 2 && b.height == 40, "read back: %d '%s'", rc, err))
+        for (i = 0; i < 240; ++i) bad += memcmp(&a.rgb[i], &b.rgb[i], 4) != 0;
+    CHECK(t, bad == 0, "%d of 240 values differ after the round trip", bad);
+    test_note(t, "2 x 40 float ZIP, %d values differ", bad);
+done:
+    pt_image_free(&a);
+    pt_image_free(&b);
+    tu_remove_tree(dir);
+}
+
+/* A file or symlink planted at the old temporary name "<path>.ptmp" is neither followed nor
+   overwritten; the written file has the usual permissions (0666 less the umask). */
+static void temporary_not_followed(test_ctx *t)
+{
+    pt_image a = { 0, 0, NULL };
+    char dir[64], path[160], link[200], victim[160], err[512], list[256];
+    unsigned char *v;
+    long n = 0;
+    struct stat st;
+    mode_t old = umask(022);
+    int rc;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) { umask(old); return; }
+    if (!CHECK(t, make_test_image(&a, 8, 5), "image")) goto done;
+    snprintf(victim, sizeof victim, "%s/victim", dir);
+    snprintf(path, sizeof path, "%s/out.exr", dir);
+    snprintf(link, sizeof link, "%s.ptmp", path);
+    CHECK(t, spit(victim, (const unsigned char *)"keep", 4), "victim");
+    CHECK(t, symlink(victim, link) == 0, "symlink");
+    rc = pt_write_exr(path, &a, NULL, err, sizeof err);
+    CHECK(t, rc == PT_OK, "write: %d '%s'", rc, err);
+    v = tu_read_file(victim, &n);
+    CHECK(t, v && n == 4 && memcmp(v, "keep", 4) == 0, "the symlink's target was overwritten (%ld bytes)", n);
+    free(v);
+    CHECK(t, lstat(link, &st) == 0 && S_ISLNK(st.st_mode), "the planted symlink was removed or replaced");
+    CHECK(t, stat(path, &st) == 0 && (st.st_mode & 0777) == 0644, "mode %o, want 644 under umask 022", (unsigned)(st.st_mode & 0777));
+    CHECK(t, tu_dir_entries(dir, list, sizeof list) == 3, "want out.exr, out.exr.ptmp, victim: %s", list);
+done:
+    umask(old);
+    pt_image_free(&a);
+    tu_remove_tree(dir);
+}
+
 const test_case test_exr_cases[] = {
     TEST_CASE(round_trip),
     TEST_CASE(half_rounding),
@@ -473,6 +550,8 @@ const test_case test_exr_cases[] = {
     TEST_CASE(bad_files),
     TEST_CASE(write_errors),
     TEST_CASE(memory_reader),
+    TEST_CASE(zip_chunk_exactly_packed_size),
+    TEST_CASE(temporary_not_followed),
     TEST_END
 };
 

@@ -10,7 +10,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #ifdef PDFTRACE_PNG /* built with libpng (make PNG=auto|1): pdftrace_png.h is implemented here */
@@ -25,6 +28,16 @@
 
 /* Parses a Netpbm-style header: magic, then `fields` whitespace-separated tokens, then exactly one
    whitespace byte. Returns the offset of the data or -1. */
+/* err == before + path + "." + 8 hex digits + ".ptmp" + after: a message naming the temporary. */
+static int tmp_message(const char *err, const char *before, const char *path, const char *after)
+{
+    size_t a = strlen(before), b = strlen(path), i;
+    if (strncmp(err, before, a) != 0 || strncmp(err + a, path, b) != 0 || err[a + b] != '.') return 0;
+    for (i = 1; i <= 8; ++i)
+        if (!strchr("0123456789abcdef", err[a + b + i]) || !err[a + b + i]) return 0;
+    return strncmp(err + a + b + 9, ".ptmp", 5) == 0 && strcmp(err + a + b + 14, after) == 0;
+}
+
 static long parse_header(const unsigned char *b, long n, const char *magic, char tokens[][32], int fields)
 {
     long i = 0;
@@ -365,11 +378,11 @@ static void write_error_messages(test_ctx *t)
             }
             err[0] = '\0';
             rc = writer(path, &img, err, sizeof err);
-            if (c == 1) snprintf(want, sizeof want, "%s: writing %s: cannot rename '%s.ptmp' to '%s': %s", path, what, path,
-                                 path, strerror(code[c]));
-            else snprintf(want, sizeof want, "%s: writing %s: cannot create '%s.ptmp': %s", path, what, path, strerror(code[c]));
-            CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "%s case %d: %d, message '%s', want '%s'", name, c, rc, err,
-                  want);
+            snprintf(want, sizeof want, "%s: writing %s: cannot %s '", path, what, c == 1 ? "rename" : "create");
+            if (c == 1) snprintf(list, sizeof list, "' to '%s': %s", path, strerror(code[c]));
+            else snprintf(list, sizeof list, "': %s", strerror(code[c]));
+            CHECK(t, rc == PT_ERROR_IO && tmp_message(err, want, path, list), "%s case %d: %d, message '%s', want '%s%s.XXXXXXXX.ptmp%s'",
+                  name, c, rc, err, want, path, list);
             if (c == 1) {
                 CHECK(t, tu_dir_entries(path, NULL, 0) == 0, "%s onto a directory wrote into it", name);
                 rmdir(path);
@@ -646,16 +659,20 @@ static void png_round_trip(test_ctx *t)
     rc = pt_write_png(path, &img, err, sizeof err);
     {
         char want[512];
-        snprintf(want, sizeof want, "%s: writing PNG: cannot create '%s.ptmp': %s", path, path, strerror(ENOENT));
-        CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "missing directory: %d '%s', want '%s'", rc, err, want);
+        char after[256];
+        snprintf(want, sizeof want, "%s: writing PNG: cannot create '", path);
+        snprintf(after, sizeof after, "': %s", strerror(ENOENT));
+        CHECK(t, rc == PT_ERROR_IO && tmp_message(err, want, path, after), "missing directory: %d '%s'", rc, err);
     }
     snprintf(path, sizeof path, "%s/target.png", dir);
     mkdir(path, 0700);
     rc = pt_write_png(path, &img, err, sizeof err);
     {
         char want[512];
-        snprintf(want, sizeof want, "%s: writing PNG: cannot rename '%s.ptmp' to '%s': %s", path, path, path, strerror(EISDIR));
-        CHECK(t, rc == PT_ERROR_IO && strcmp(err, want) == 0, "a directory as the target: %d '%s', want '%s'", rc, err, want);
+        char after[256];
+        snprintf(want, sizeof want, "%s: writing PNG: cannot rename '", path);
+        snprintf(after, sizeof after, "' to '%s': %s", path, strerror(EISDIR));
+        CHECK(t, rc == PT_ERROR_IO && tmp_message(err, want, path, after), "a directory as the target: %d '%s'", rc, err);
     }
     rmdir(path);
     CHECK(t, pt_write_png(path, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT && err[0], "NULL image accepted");
@@ -670,6 +687,156 @@ static void png_round_trip(test_ctx *t)
 }
 #endif
 
+typedef int (*tu_writer)(const char *, const pt_image *, char *, size_t);
+static int write_png_or_skip(const char *path, const pt_image *img, char *err, size_t n)
+{
+#ifdef PDFTRACE_PNG
+    return pt_write_png(path, img, err, n);
+#else
+    (void)path; (void)img; (void)err; (void)n;
+    return -1000;
+#endif
+}
+
+/* A symlink planted at the old temporary name "<path>.ptmp" is not followed: its target keeps its
+   bytes (each writer used to overwrite it), and the written file has mode 0666 less the umask. */
+static void temporary_symlink_not_followed(test_ctx *t)
+{
+    static const tu_writer writers[3] = { pt_write_pfm_ex, pt_write_ppm_ex, write_png_or_skip };
+    static const char *const names[3] = { "out.pfm", "out.ppm", "out.png" };
+    char dir[64], path[160], link[200], victim[160], err[1024], list[256];
+    pt_image img;
+    mode_t old = umask(022);
+    int k, ran = 0;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) { umask(old); return; }
+    memset(&img, 0, sizeof img);
+    CHECK(t, pt_image_init(&img, 4, 3) == PT_OK, "pt_image_init");
+    for (k = 0; k < 3 && img.rgb; ++k) {
+        unsigned char *v;
+        long n = 0;
+        struct stat st;
+        FILE *f;
+        int rc;
+        snprintf(victim, sizeof victim, "%s/victim", dir);
+        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
+        snprintf(link, sizeof link, "%s.ptmp", path);
+        f = fopen(victim, "wb");
+        if (f) { fputs("keep", f); fclose(f); }
+        CHECK(t, symlink(victim, link) == 0, "symlink %s", link);
+        rc = writers[k](path, &img, err, sizeof err);
+        if (rc != -1000) {
+            ran++;
+            CHECK(t, rc == PT_OK, "%s: %d '%s'", names[k], rc, err);
+            v = tu_read_file(victim, &n);
+            CHECK(t, v && n == 4 && memcmp(v, "keep", 4) == 0, "%s: the symlink's target was overwritten (%ld bytes)",
+                  names[k], n);
+            free(v);
+            CHECK(t, lstat(link, &st) == 0 && S_ISLNK(st.st_mode), "%s: the planted symlink was replaced", names[k]);
+            CHECK(t, stat(path, &st) == 0 && (st.st_mode & 0777) == 0644, "%s: mode %o, want 644 under umask 022",
+                  names[k], (unsigned)(st.st_mode & 0777));
+        }
+        unlink(link);
+        unlink(path);
+        unlink(victim);
+    }
+    CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "files left: %s", list);
+    test_note(t, "%d writers (PNG %s)", ran, ran == 3 ? "included" : "not built");
+    umask(old);
+    pt_image_free(&img);
+    tu_remove_tree(dir);
+}
+
+/* pt_output_remove_temporaries (the command's SIGINT/SIGTERM handler calls it) removes the
+   temporaries that are open; pt_output_close then reports the failed rename and writes nothing. */
+static void temporaries_removed_by_hook(test_ctx *t)
+{
+    pt_output_file a, b;
+    char dir[64], pa[160], pb[160], err[1024], list[256];
+    struct stat st;
+    int rc;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    snprintf(pa, sizeof pa, "%s/a.pfm", dir);
+    snprintf(pb, sizeof pb, "%s/b.pfm", dir);
+    rc = pt_output_open(&a, pa, 0, "test", err, sizeof err);
+    CHECK(t, rc == PT_OK && a.file && a.tmp_path, "open a: %d '%s'", rc, err);
+    rc = pt_output_open(&b, pb, 1, "test", err, sizeof err);
+    CHECK(t, rc == PT_OK && b.file && b.tmp_path, "open b: %d '%s'", rc, err);
+    if (rc == PT_OK && a.tmp_path) {
+        fputs("x", a.file);
+        CHECK(t, stat(a.tmp_path, &st) == 0 && tu_dir_entries(dir, NULL, 0) == 2, "the temporaries do not exist");
+        pt_output_remove_temporaries();
+        CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "left after the hook: %s", list);
+        rc = pt_output_close(&a, 1, "test", err, sizeof err);
+        CHECK(t, rc == PT_ERROR_IO && strstr(err, "cannot rename") && strstr(err, strerror(ENOENT)), "close a: %d '%s'", rc, err);
+        rc = pt_output_close(&b, 1, "test", err, sizeof err);
+        CHECK(t, rc == PT_ERROR_IO, "close b: %d", rc);
+        CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "files after closing: %s", list);
+    }
+    /* a closed output is no longer removed by the hook */
+    rc = pt_output_open(&a, pa, 0, "test", err, sizeof err);
+    if (CHECK(t, rc == PT_OK, "open: '%s'", err)) {
+        rc = pt_output_close(&a, 1, "test", err, sizeof err);
+        pt_output_remove_temporaries();
+        CHECK(t, rc == PT_OK && stat(pa, &st) == 0, "a closed output was removed: %d '%s'", rc, err);
+    }
+    tu_remove_tree(dir);
+}
+
+/* A write that fails for lack of room names the path, the temporary and the system's reason. The
+   writers never write in place (a temporary, then rename), so /dev/full cannot be their target:
+   a child process with RLIMIT_FSIZE of 1000 bytes (SIGXFSZ ignored: write fails with EFBIG)
+   stands for a full disk. */
+static void write_error_disk_full(test_ctx *t)
+{
+    static const tu_writer writers[3] = { pt_write_pfm_ex, pt_write_ppm_ex, write_png_or_skip };
+    static const char *const names[3] = { "PFM", "PPM", "PNG" };
+    char dir[64], path[160], err[1024], list[256];
+    pt_image img;
+    int k, ran = 0;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    memset(&img, 0, sizeof img);
+    CHECK(t, pt_image_init(&img, 200, 200) == PT_OK, "pt_image_init");
+    for (k = 0; k < 40000 * 3 && img.rgb; ++k) img.rgb[k] = (float)((k * 7919) % 1000) / 999.0f; /* little to compress */
+    for (k = 0; k < 3 && img.rgb; ++k) {
+        int fds[2], status = 0, rc;
+        ssize_t got;
+        pid_t pid;
+        snprintf(path, sizeof path, "%s/out.img", dir);
+        if (!CHECK(t, pipe(fds) == 0, "pipe")) break;
+        pid = fork();
+        if (pid == 0) {
+            struct rlimit rl;
+            close(fds[0]);
+            signal(SIGXFSZ, SIG_IGN);
+            rl.rlim_cur = rl.rlim_max = 1000;
+            setrlimit(RLIMIT_FSIZE, &rl);
+            err[0] = '\0';
+            rc = writers[k](path, &img, err, sizeof err);
+            if (write(fds[1], &rc, sizeof rc) < 0 || write(fds[1], err, strlen(err) + 1) < 0) _exit(2);
+            _exit(0);
+        }
+        close(fds[1]);
+        rc = 0;
+        memset(err, 0, sizeof err);
+        got = read(fds[0], &rc, sizeof rc);
+        if (got == (ssize_t)sizeof rc) {
+            ssize_t m = read(fds[0], err, sizeof err - 1);
+            if (m < 0) err[0] = '\0';
+        }
+        close(fds[0]);
+        waitpid(pid, &status, 0);
+        if (rc == -1000) continue;
+        ran++;
+        CHECK(t, got == (ssize_t)sizeof rc && rc == PT_ERROR_IO && strncmp(err, path, strlen(path)) == 0 &&
+                     strstr(err, names[k]) && strstr(err, ".ptmp'") && strstr(err, strerror(EFBIG)),
+              "%s: %d '%s' (want the path, the temporary and '%s')", names[k], rc, err, strerror(EFBIG));
+        CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "%s: files left: %s", names[k], list);
+    }
+    test_note(t, "%d writers; e.g. '%s'", ran, err);
+    pt_image_free(&img);
+    tu_remove_tree(dir);
+}
+
 const test_case test_output_cases[] = {
     TEST_CASE(pfm_layout),
     TEST_CASE(ppm_srgb),
@@ -682,5 +849,8 @@ const test_case test_output_cases[] = {
     TEST_CASE(display_exposure),
     TEST_CASE(display_bad_arguments),
     TEST_CASE(png_round_trip),
+    TEST_CASE(temporary_symlink_not_followed),
+    TEST_CASE(temporaries_removed_by_hook),
+    TEST_CASE(write_error_disk_full),
     TEST_END
 };

@@ -11,6 +11,7 @@
    Built with -DPDFTRACE_PNG (pdftrace_png.h, libpng) and -DPDFTRACE_OPENEXR (pdftrace_exr.h,
    OpenEXRCore) when those libraries are present: the Makefile's PNG and TOOL_EXR. */
 #include <errno.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -798,6 +799,45 @@ static int render(const options *o, const pt_scene *scene, pt_render_desc *d)
     return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 
+/* SIGINT and SIGTERM remove the temporaries of the outputs being written, then end the process
+   as the signal would have (SA_RESETHAND restores the default action; the raised signal is
+   delivered when the handler returns). A signal ignored when the command starts (SIGINT of a
+   shell's background job) stays ignored. */
+static void on_signal(int sig)
+{
+    pt_output_remove_temporaries();
+    raise(sig);
+}
+static void install_signal_handlers(void)
+{
+    static const int sigs[2] = { SIGINT, SIGTERM };
+    struct sigaction sa;
+    int i;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sa.sa_flags = SA_RESETHAND;
+    sigemptyset(&sa.sa_mask);
+    for (i = 0; i < 2; i++) {
+        struct sigaction old;
+        if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN) sigaction(sigs[i], &sa, NULL);
+    }
+}
+
+/* An output that is the scene file itself (the same device and inode, so also through a link)
+   would replace the input: refused before anything is read or written. */
+static int check_outputs_not_input(const options *o)
+{
+    struct stat in, st;
+    int i;
+    if (stat(o->scene, &in) != 0) return PARSED; /* reported when the scene is loaded */
+    for (i = 0; i <= o->output_count; i++) {
+        const char *path = i < o->output_count ? o->outputs[i].path : o->pov;
+        if (path && stat(path, &st) == 0 && st.st_dev == in.st_dev && st.st_ino == in.st_ino)
+            return fail("%s: is the scene file %s; an output must not replace an input", path, o->scene);
+    }
+    return PARSED;
+}
+
 int main(int argc, char **argv)
 {
     options o;
@@ -807,6 +847,8 @@ int main(int argc, char **argv)
     int rc = parse_options(argc, argv, &o), status;
     if (rc == PARSED_EXIT) return EXIT_SUCCESS;
     if (rc != PARSED) return EXIT_USAGE;
+    if (check_outputs_not_input(&o) != PARSED) return EXIT_USAGE;
+    install_signal_handlers();
     memset(&sf, 0, sizeof sf);
     memset(&d, 0, sizeof d);
     status = load_scene(&o, &sf, &scene, &d);

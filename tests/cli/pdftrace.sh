@@ -300,6 +300,86 @@ t_scene_limits() {
     [ $ok = 1 ] && pass scene_limits "background, paths outside, --allow-path, /etc/shadow, FIFOs, --mesh-memory, size, escapes"
 }
 
+# ---- SIGINT or SIGTERM while an output is being written leaves no temporary file. The command
+# is stopped (SIGSTOP) as soon as a temporary is seen; if it is still there, the signal is sent.
+# Job control (set -m) keeps SIGINT of the background job from being ignored.
+t_signal() {
+    local dir=$W/signal sig pid f caught i status left
+    for sig in INT TERM; do
+        rm -rf "$dir" && mkdir -p "$dir"
+        # 16 passes of 2 spp, each followed by a preview: a 7.7 MB PFM written through a temporary
+        set -m
+        "$P" "$S/mirror.scene" -q --size 800x800 --spp 32 --preview-every 0.01 -o "$dir/big.pfm" 2>/dev/null &
+        pid=$!
+        set +m
+        caught=""
+        for i in $(seq 1 1000000); do # busy-poll (no fork) for a temporary while the command runs
+            for f in "$dir"/*.ptmp; do [ -e "$f" ] && caught=$f; done
+            if [ -n "$caught" ]; then
+                kill -STOP "$pid"
+                [ -e "$caught" ] && break
+                caught=""
+                kill -CONT "$pid"
+            fi
+            kill -0 "$pid" 2>/dev/null || break
+        done
+        if [ -n "$caught" ]; then kill -"$sig" "$pid"; kill -CONT "$pid"; else kill "$pid" 2>/dev/null; fi
+        wait "$pid" 2>/dev/null
+        status=$?
+        left=$(cd "$dir" && ls -- *.ptmp 2>/dev/null | tr '\n' ' ')
+        if [ -z "$caught" ]; then
+            skip "signal_$sig" "no temporary seen while the command ran"
+        elif [ -n "$left" ]; then
+            fail "signal_$sig" "SIG$sig while writing left $left($(du -k "$dir" | cut -f1) KB in the directory)"
+        elif [ "$status" != $((128 + $(kill -l "$sig"))) ]; then
+            fail "signal_$sig" "exit status $status, want $((128 + $(kill -l "$sig"))) (killed by SIG$sig)"
+        else
+            pass "signal_$sig" "SIG$sig while $(basename "$caught") was written: removed, exit status $status"
+        fi
+    done
+}
+
+# ---- an output that is the scene file (or a link to it) is refused, the scene kept
+t_output_is_input() {
+    local dir=$W/same ok=1 why="" status
+    mkdir -p "$dir"
+    cp "$S/mirror.scene" "$dir/s.pfm" && cp "$S/mirror.scene" "$dir/s.scene" && ln -s s.scene "$dir/link.ppm"
+    "$P" "$dir/s.pfm" -q --size 8x8 --spp 1 -o "$dir/s.pfm" 2>"$W/err.txt"
+    status=$?
+    if [ $status != 2 ] || ! cmp -s "$S/mirror.scene" "$dir/s.pfm" || ! grep -q "scene file" "$W/err.txt"; then
+        ok=0; why="-o SCENE: exit $status, $(head -n 1 "$W/err.txt")"
+    fi
+    "$P" "$dir/s.scene" -q --size 8x8 --spp 1 --export-pov "$dir/s.scene" 2>"$W/err.txt"
+    status=$?
+    if [ $status != 2 ] || ! cmp -s "$S/mirror.scene" "$dir/s.scene"; then
+        ok=0; why="$why; --export-pov SCENE: exit $status, $(head -n 1 "$W/err.txt")"
+    fi
+    "$P" "$dir/s.scene" -q --size 8x8 --spp 1 -o "$dir/link.ppm" 2>"$W/err.txt"
+    status=$?
+    if [ $status != 2 ] || [ ! -L "$dir/link.ppm" ]; then ok=0; why="$why; -o LINK-TO-SCENE: exit $status"; fi
+    if [ $ok = 1 ]; then pass output_is_input "-o SCENE, --export-pov SCENE, -o a link to it: exit 2, scene kept"
+    else fail output_is_input "$why"; fi
+}
+
+# ---- a full disk (ulimit -f 1, SIGXFSZ ignored: writes fail with EFBIG): every output's message
+# names its path, its temporary and the reason; nothing is left behind
+t_disk_full() {
+    local dir=$W/full args=() f ok=1 why="" reason="File too large" exts="pfm ppm" left
+    mkdir -p "$dir"
+    args=(-o "$dir/x.pfm" -o "$dir/x.ppm")
+    [ $have_png = 1 ] && { args+=(-o "$dir/x.png"); exts="$exts png"; }
+    [ $have_exr = 1 ] && { args+=(-o "$dir/x.exr"); exts="$exts exr"; }
+    (trap '' XFSZ; ulimit -f 1; exec "$P" "$S/mirror.scene" -q --size 128x128 --spp 1 "${args[@]}") 2>"$W/err.txt"
+    (trap '' XFSZ; ulimit -f 1; exec "$P" "$S/mirror.scene" -q --size 300x300 --export-pov "$dir/x.pov") 2>>"$W/err.txt"
+    for f in "$dir"/*; do [ -e "$f" ] && { ok=0; why="$why $(basename "$f") left;"; }; done
+    for f in $exts pov; do
+        grep -q "^pdftrace: $dir/x.$f: .*'$dir/x.$f.[0-9a-f]*.ptmp'.*: $reason" "$W/err.txt" ||
+            { ok=0; why="$why x.$f: no message with the path, the temporary and '$reason';"; }
+    done
+    if [ $ok = 1 ]; then pass disk_full "$(wc -l <"$W/err.txt") messages, e.g. $(head -n 1 "$W/err.txt")"
+    else fail disk_full "$why ($(tr '\n' '|' <"$W/err.txt"))"; fi
+}
+
 t_help
 t_png_exr
 t_bad_input
@@ -309,5 +389,8 @@ t_preview
 t_overrides
 t_display
 t_scene_limits
+t_signal
+t_output_is_input
+t_disk_full
 echo "$passed passed, $failed failed, $skipped skipped"
 [ $failed = 0 ]
