@@ -44,7 +44,7 @@ int main(int argc, char **argv)
     static const struct { const char *name; void (*fn)(st_ctx *); } cases[] = {
         { "sweep", st_scale_sweep }, { "spawn", st_spawn }, { "tiny", st_tiny_light },
         { "watertight", st_watertight }, { "edges", st_edges }, { "lights", st_light_geometry },
-        { "degenerate", st_degenerate },
+        { "degenerate", st_degenerate }, { "cornell", st_cornell_offset },
     };
     const char *filter = NULL;
     int full = 1, a;
