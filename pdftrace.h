@@ -522,8 +522,9 @@ typedef struct pt_mesh_desc {
    consecutive primitive indices, starting at the returned one, in the order given. */
 PTDEF int pt_scene_add_mesh(pt_scene *scene, const pt_mesh_desc *mesh);
 
-/* Commit chooses the scene's origin: (0, 0, 0), or, for a scene farther from (0, 0, 0) than
-   8 times its size, the centre of its bounds (rounded to float). Geometry is stored, and
+/* Commit chooses the scene's origin (unless pt_scene_set_origin fixed it): (0, 0, 0), or, for
+   a scene farther from (0, 0, 0) than 8 times its size, the centre of its bounds (rounded to
+   float). Geometry is stored, and
    pt_render traces camera rays, relative to it (the difference taken in double), so spawn
    offsets and intersections keep the precision of a scene at the origin. Everything public
    stays in world coordinates: pt_scene_intersect, pt_scene_occluded and pt_trace_path take
@@ -538,6 +539,12 @@ PTDEF int pt_scene_add_mesh(pt_scene *scene, const pt_mesh_desc *mesh);
    unreliable there. */
 PTDEF int pt_scene_commit(pt_scene *scene);
 PTDEF int pt_scene_get_info(const pt_scene *scene, pt_scene_info *info);
+/* Fixes the origin instead of letting commit choose it: the shapes' coordinates (after the
+   scene's transform) are then relative to (x, y, z), i.e. world = given + origin, so a caller
+   that computes a far scene in double can hand pdftrace small floats. Everything else stays in
+   world coordinates, as above (rays, hits, bounds, camera). Only on a scene with no shapes yet
+   (PT_ERROR_INVALID_STATE otherwise); (x, y, z) must be finite. */
+PTDEF int pt_scene_set_origin(pt_scene *scene, double x, double y, double z);
 
 /* A ray-surface intersection. */
 typedef struct pt_hit {
@@ -1193,6 +1200,7 @@ struct pt_scene {
 #endif
     double origin[3];          /* the scene's centre: prims [0, placed) are stored relative to it */
     int has_origin;            /* origin is not (0, 0, 0) */
+    int fixed_origin;          /* pt_scene_set_origin: commit keeps it, every shape is relative to it */
     uint32_t placed;
     uint32_t fine_prims;       /* pt_scene_info.precision_warnings */
     char warning[200];         /* pt_scene_info.precision_warning */
@@ -4724,6 +4732,10 @@ static void pt__place(pt_scene *s)
     double size = 0.0, far = 0.0;
     uint32_t i;
     int k;
+    if (s->fixed_origin) {
+        s->placed = s->prim_count;
+        return;
+    }
     for (i = 0; i < s->prim_count; ++i) {
         pt_vec3 a, b;
         double o[3] = {0, 0, 0};
@@ -4870,6 +4882,23 @@ PTDEF int pt_scene_commit(pt_scene *s)
     }
     s->features = f;
     s->committed = 1;
+    return PT_OK;
+}
+
+PTDEF int pt_scene_set_origin(pt_scene *s, double x, double y, double z)
+{
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!(fabs(x) <= DBL_MAX && fabs(y) <= DBL_MAX && fabs(z) <= DBL_MAX))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "set_origin: (%g, %g, %g) is not finite", x, y, z);
+    if (s->prim_count)
+        return pt__fail(s, PT_ERROR_INVALID_STATE, "set_origin: %u primitives were added before it (set the origin first)",
+                        (unsigned)s->prim_count);
+    s->origin[0] = x;
+    s->origin[1] = y;
+    s->origin[2] = z;
+    s->has_origin = x != 0.0 || y != 0.0 || z != 0.0;
+    s->fixed_origin = 1;
+    s->committed = 0;
     return PT_OK;
 }
 

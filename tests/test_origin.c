@@ -4,8 +4,10 @@
 #include "pdftrace.h"
 #include "test.h"
 #include "test_util.h"
+#include "pdftrace_scene.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* A floor 10 x 10 at y = 0, a unit sphere on it at (0, 1, 0) and a quad light at y = 4, all
@@ -178,7 +180,63 @@ static void precision_warning(test_ctx *t)
     pt_scene_destroy(e);
 }
 
+/* A scene file: the Cornell box's floor and its tall rotated box, moved by `off` with a
+   translate statement composed after the box's rotation. */
+static pt_scene *far_scenefile(const char *off, pt_render_desc *d, char *err, size_t n)
+{
+    char text[512];
+    pt_scenefile f;
+    pt_scene *s = NULL;
+    snprintf(text, sizeof text,
+             "camera look_from 0 0 -1 look_at 0 0 0\nmaterial white lambertian 0.73 0.73 0.73\n"
+             "translate %s\nquad 0 0 0 555 0 0 0 0 555 white\nquad 0 555 0 0 0 555 555 0 0 white\nidentity\n"
+             "rotate 0 1 0 15\ntranslate 265 0 295\ntranslate %s\nbox 0 0 0 165 330 165 white\n", off, off);
+    if (pt_scenefile_parse(text, strlen(text), "far.scene", ".", &f, err, n) != PT_OK) return NULL;
+    if (pt_scenefile_build(&f, &s, d, err, n) != PT_OK) s = NULL;
+    pt_scenefile_free(&f);
+    return s;
+}
+static void scenefile_far_transforms_in_double(test_ctx *t)
+{
+    /* the scene-file build composes transforms in double and hands the core small coordinates
+       relative to the scene's centre: the rotated box moved by 1e7 is hit at the distances of the
+       box at the origin (in float at 1e7 its corners round to 1 unit) */
+    char err[256] = "";
+    pt_render_desc d;
+    pt_scene *z = far_scenefile("0 0 0", &d, err, sizeof err), *s = far_scenefile("10000000 10000000 10000000", &d, err, sizeof err);
+    pt_scene_info info;
+    double worst = 0.0;
+    int i, hits = 0;
+    if (!CHECK(t, z && s, "build: %s", err)) goto done;
+    pt_scene_get_info(s, &info);
+    CHECK(t, fabs(info.origin[0] - 1e7) < 600 && info.precision_warnings == 0, "origin x %.9g, %u warnings",
+          info.origin[0], (unsigned)info.precision_warnings);
+    for (i = 0; i < 64; i++) {
+        /* from the camera's place, at 64 points of the box's two faces it sees; and from the side */
+        dv3 o = i < 48 ? dv(278, 278, -800) : dv(900, 100 + 3 * i, 380), target = dv(265 + 2.6 * (i % 8) * 8, 20 + 38 * (i / 8), 280);
+        pt_ray r0, r1;
+        pt_hit h0, h1;
+        if (i >= 48) target = dv(300, 100 + 3 * i, 300 + 8 * (i - 48));
+        r0.origin = dv_to(o);
+        r0.dir = dv_to(dnorm(dsub(target, o)));
+        r1.origin = dv_to(dadd(o, dv(1e7, 1e7, 1e7)));
+        r1.dir = r0.dir;
+        if (pt_scene_intersect(z, r0, INFINITY, &h0) != 1) continue;
+        if (!CHECK(t, pt_scene_intersect(s, r1, INFINITY, &h1) == 1 && h1.primitive == h0.primitive,
+                   "ray %d: the far scene misses primitive %u", i, h0.primitive))
+            continue;
+        hits++;
+        if (!(fabs((double)h1.t - h0.t) <= worst)) worst = fabs((double)h1.t - h0.t);
+    }
+    CHECK(t, hits >= 48 && worst <= 0.01, "%d hits; largest |t(far) - t(origin)| = %.4g (want <= 0.01)", hits, worst);
+    test_note(t, "%d hits, largest t difference %.3g", hits, worst);
+done:
+    pt_scene_destroy(z);
+    pt_scene_destroy(s);
+}
+
 const test_case test_origin_cases[] = {
+    TEST_CASE(scenefile_far_transforms_in_double),
     TEST_CASE(far_scene_queries_are_world),
     TEST_CASE(recommit_moves_the_origin),
     TEST_CASE(far_render_guide_is_world),
