@@ -62,7 +62,9 @@
      translate X Y Z | rotate AX AY AZ DEGREES | scale SX SY SZ | identity
                                       transforms for the shapes that follow; each one is
                                       applied after those before it (as in POV-Ray);
-                                      identity starts again
+                                      identity starts again. Composed in double: a scene
+                                      far from the origin is handed to pdftrace relative
+                                      to its centre (pt_scene_set_origin)
      pov_light_grid N                 POV-Ray export: N x N spotlights per quad emitter (16)
      pov_radiosity none|default|medium|high       POV-Ray export: indirect light (none)
 
