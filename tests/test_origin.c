@@ -235,7 +235,38 @@ done:
     pt_scene_destroy(s);
 }
 
+static void set_origin_api(test_ctx *t)
+{
+    /* shapes given relative to a fixed origin; queries in world coordinates; misuse is refused */
+    pt_scene *s = pt_scene_create();
+    pt_scene_info info;
+    pt_hit h;
+    pt_ray r;
+    int m, rc;
+    CHECK(t, pt_scene_set_origin(NULL, 0, 0, 0) == PT_ERROR_INVALID_ARGUMENT, "NULL scene accepted");
+    rc = pt_scene_set_origin(s, 1e7, NAN, 0);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(pt_scene_error_message(s), "set_origin") != NULL,
+          "NaN origin: %d '%s'", rc, pt_scene_error_message(s));
+    CHECK(t, pt_scene_set_origin(s, 12345678.25, -1e7, 0.5) == PT_OK, "set_origin: %s", pt_scene_error_message(s));
+    m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    CHECK(t, pt_scene_add_sphere(s, pt_v3(0, 0, 0), 0.25f, m) >= 0, "sphere");
+    rc = pt_scene_set_origin(s, 0, 0, 0);
+    CHECK(t, rc == PT_ERROR_INVALID_STATE && strstr(pt_scene_error_message(s), "set_origin") != NULL,
+          "set_origin after a shape: %d '%s'", rc, pt_scene_error_message(s));
+    CHECK(t, pt_scene_commit(s) == PT_OK, "commit: %s", pt_scene_error_message(s));
+    pt_scene_get_info(s, &info);
+    CHECK(t, info.origin[0] == 12345678.25 && info.origin[1] == -1e7 && info.origin[2] == 0.5,
+          "commit changed the fixed origin to (%.17g %.17g %.17g)", info.origin[0], info.origin[1], info.origin[2]);
+    /* a sphere 0.25 wide 1.2e7 from (0, 0, 0): float world rays still find it (t is exact) */
+    r.origin = pt_v3(12345678.0f, -1e7f, 10.0f);
+    r.dir = pt_normalize(pt_v3(0.25f, 0, -9.5f));
+    CHECK(t, pt_scene_intersect(s, r, INFINITY, &h) == 1 && fabsf(h.t - (sqrtf(0.0625f + 90.25f) - 0.25f)) < 1e-4f,
+          "hit t %g, want %g", h.t, sqrtf(0.0625f + 90.25f) - 0.25f);
+    pt_scene_destroy(s);
+}
+
 const test_case test_origin_cases[] = {
+    TEST_CASE(set_origin_api),
     TEST_CASE(scenefile_far_transforms_in_double),
     TEST_CASE(far_scene_queries_are_world),
     TEST_CASE(recommit_moves_the_origin),
