@@ -238,7 +238,8 @@ PT_INLINE pt_vec3 pt_ray_at(pt_ray r, float t) { return pt_madd(r.origin, r.dir,
    leaves a 1e-6 scene altogether) or far larger (a coordinate near 0 of a point computed from
    coordinates near 1e6 has an error far above 1.5e-5). The offset is ~3e-5 magnitude: geometry
    closer than that to a surface is skipped, and float coordinates resolve 2^-24 of their
-   magnitude, so a scene d away from the origin needs features >= ~1e-3 d (e.g. >= 1e3 at 1e6). */
+   magnitude, so geometry d away from the origin needs features >= ~1e-3 d (e.g. >= 1e3 at 1e6);
+   the renderer measures d from the scene's own origin (pt_scene_commit), not from (0, 0, 0). */
 PTDEF pt_vec3 pt_offset_ray_origin_scaled(pt_vec3 p, pt_vec3 n, pt_vec3 w, float magnitude);
 /* The same with magnitude 1 (Waechter & Binder's constants: scenes of unit scale). */
 PTDEF pt_vec3 pt_offset_ray_origin(pt_vec3 p, pt_vec3 n, pt_vec3 w);
@@ -487,6 +488,11 @@ typedef struct pt_scene_info {
                                      pdftrace's primitive id maps. The scene's own primitive
                                      array, which shading uses with either backend, is not
                                      counted. */
+    double origin[3];             /* the centre the committed scene is stored and traced relative
+                                     to (see pt_scene_commit); (0, 0, 0) for most scenes */
+    uint32_t precision_warnings;  /* primitives smaller than float resolves at their coordinates,
+                                     or than the spawn offset there (see pt_scene_commit) */
+    char precision_warning[200];  /* "" when precision_warnings is 0, else what and where */
 } pt_scene_info;
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
@@ -524,8 +530,29 @@ typedef struct pt_mesh_desc {
    consecutive primitive indices, starting at the returned one, in the order given. */
 PTDEF int pt_scene_add_mesh(pt_scene *scene, const pt_mesh_desc *mesh);
 
+/* Commit chooses the scene's origin (unless pt_scene_set_origin fixed it): (0, 0, 0), or, for
+   a scene farther from (0, 0, 0) than 8 times its size, the centre of its bounds (rounded to
+   float). Geometry is stored, and
+   pt_render traces camera rays, relative to it (the difference taken in double), so spawn
+   offsets and intersections keep the precision of a scene at the origin. Everything public
+   stays in world coordinates: pt_scene_intersect, pt_scene_occluded and pt_trace_path take
+   world rays and return world hits, pt_pdf_scene_lights a world origin, guides world points,
+   textures are evaluated at world points, pt_scene_info.bounds are world. Input is float, so
+   a scene 1e7 away has its vertices rounded to 1 unit before this (build such scenes in
+   double relative to a centre you choose, as pdftrace_scene.h does).
+   Commit also counts the primitives float cannot represent well (pt_scene_info.precision_*):
+   a feature (sphere radius, smallest height of a quad or triangle) under 8 ulps of its world
+   coordinates, or, for a scattering material, under 16 spawn offsets (pt_offset_ray_origin:
+   ~3e-5 of the coordinates relative to the origin). Such a scene commits; the renders are
+   unreliable there. */
 PTDEF int pt_scene_commit(pt_scene *scene);
 PTDEF int pt_scene_get_info(const pt_scene *scene, pt_scene_info *info);
+/* Fixes the origin instead of letting commit choose it: the shapes' coordinates (after the
+   scene's transform) are then relative to (x, y, z), i.e. world = given + origin, so a caller
+   that computes a far scene in double can hand pdftrace small floats. Everything else stays in
+   world coordinates, as above (rays, hits, bounds, camera). Only on a scene with no shapes yet
+   (PT_ERROR_INVALID_STATE otherwise); (x, y, z) must be finite. */
+PTDEF int pt_scene_set_origin(pt_scene *scene, double x, double y, double z);
 
 /* A ray-surface intersection. */
 typedef struct pt_hit {
@@ -1202,8 +1229,29 @@ struct pt_scene {
 #ifdef PDFTRACE_EMBREE
     pt__rtc rtc;
 #endif
+    double origin[3];          /* the scene's centre: prims [0, placed) are stored relative to it */
+    int has_origin;            /* origin is not (0, 0, 0) */
+    int fixed_origin;          /* pt_scene_set_origin: commit keeps it, every shape is relative to it */
+    uint32_t placed;
+    uint32_t fine_prims;       /* pt_scene_info.precision_warnings */
+    char warning[200];         /* pt_scene_info.precision_warning */
     char error[256];
 };
+
+/* A world point (the public API's) into the scene's stored coordinates and back, in double:
+   the exact difference of two nearby floats, then rounded once. */
+static pt_vec3 pt__to_local(const pt_scene *s, pt_vec3 p)
+{
+    if (!s->has_origin) return p;
+    return pt_v3((float)((double)p.x - s->origin[0]), (float)((double)p.y - s->origin[1]),
+                 (float)((double)p.z - s->origin[2]));
+}
+static pt_vec3 pt__to_world(const pt_scene *s, pt_vec3 p)
+{
+    if (!s->has_origin) return p;
+    return pt_v3((float)((double)p.x + s->origin[0]), (float)((double)p.y + s->origin[1]),
+                 (float)((double)p.z + s->origin[2]));
+}
 
 /* A failed call that changes the scene records why. Not const: calls that only read a scene
    (queries, renders) cannot write it, so they may run on several threads at once. */
@@ -1255,6 +1303,8 @@ static int pt__isfinite(float f)
 }
 static int pt__vfinite(pt_vec3 v) { return pt__isfinite(v.x) && pt__isfinite(v.y) && pt__isfinite(v.z); }
 static float pt__minf(float a, float b) { return a < b ? a : b; }
+static double pt__mind(double a, double b) { return a < b ? a : b; }
+static double pt__maxd(double a, double b) { return a > b ? a : b; }
 static float pt__maxf(float a, float b) { return a > b ? a : b; }
 static float pt__safe_sqrt(float x) { return sqrtf(x > 0.0f ? x : 0.0f); }
 static pt_vec3 pt__vmin(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__minf(a.x, b.x), pt__minf(a.y, b.y), pt__minf(a.z, b.z)); }
@@ -2435,7 +2485,7 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     }
     case PT_PDF_SCENE_LIGHTS:
         if (pdf->as.lights.scene && pdf->as.lights.scene->committed)
-            v = pt__lights_value(pdf->as.lights.scene, pdf->origin, w);
+            v = pt__lights_value(pdf->as.lights.scene, pt__to_local(pdf->as.lights.scene, pdf->origin), w);
         break;
     case PT_PDF_MATERIAL:
         if (pdf->as.material.scene && pdf->as.material.material >= 0 &&
@@ -2512,12 +2562,14 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
     case PT_PDF_SCENE_LIGHTS: {
         float u0 = pt_rng_float(rng), u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
         uint32_t li;
+        pt_vec3 o;
         if (!pdf->as.lights.scene || !pdf->as.lights.scene->committed) break;
-        ok = pt__lights_sample(pdf->as.lights.scene, pdf->origin, u0, u1, u2, &ls, &li);
+        o = pt__to_local(pdf->as.lights.scene, pdf->origin);
+        ok = pt__lights_sample(pdf->as.lights.scene, o, u0, u1, u2, &ls, &li);
         if (ok) {
             w = ls.dir;
             /* the density of the direction over all lights, not the picked one's alone */
-            p = pt__lights_value(pdf->as.lights.scene, pdf->origin, w);
+            p = pt__lights_value(pdf->as.lights.scene, o, w);
             ok = p > 0.0f;
         }
         break;
@@ -3365,7 +3417,7 @@ PTDEF int pt_material_is_delta(const pt_scene *s, int material)
 }
 static pt_color pt__albedo(const pt_scene *s, const pt__material *m, pt_vec3 p)
 {
-    return m->texture ? pt__checker(&s->texs[m->texture - 1], p) : m->albedo;
+    return m->texture ? pt__checker(&s->texs[m->texture - 1], pt__to_world(s, p)) : m->albedo;
 }
 
 /* A * pScatter(wi) = BRDF * cos for a non-delta material, with ns and ng the shading and
@@ -4827,6 +4879,80 @@ static int pt__accel_build(pt_scene *s)
     return PT_OK;
 }
 
+/* The scene's origin (pt_scene_commit): the world bounds in double (prims [0, placed) are
+   relative to the previous origin), then every primitive moved to the new one. */
+static void pt__place(pt_scene *s)
+{
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, c[3] = {0, 0, 0};
+    double size = 0.0, far = 0.0;
+    uint32_t i;
+    int k;
+    if (s->fixed_origin) {
+        s->placed = s->prim_count;
+        return;
+    }
+    for (i = 0; i < s->prim_count; ++i) {
+        pt_vec3 a, b;
+        double o[3] = {0, 0, 0};
+        if (i < s->placed) memcpy(o, s->origin, sizeof o);
+        pt__prim_bounds(&s->prims[i], &a, &b);
+        lo[0] = pt__mind(lo[0], a.x + o[0]); lo[1] = pt__mind(lo[1], a.y + o[1]); lo[2] = pt__mind(lo[2], a.z + o[2]);
+        hi[0] = pt__maxd(hi[0], b.x + o[0]); hi[1] = pt__maxd(hi[1], b.y + o[1]); hi[2] = pt__maxd(hi[2], b.z + o[2]);
+    }
+    for (k = 0; k < 3 && s->prim_count; ++k) {
+        c[k] = 0.5 * lo[k] + 0.5 * hi[k];
+        size = pt__maxd(size, hi[k] - lo[k]);
+        far = pt__maxd(far, fabs(c[k]));
+    }
+    for (k = 0; k < 3; ++k) c[k] = far > 8.0 * size ? (double)(float)c[k] : 0.0;
+    for (i = 0; i < s->prim_count; ++i) {
+        pt__prim *p = &s->prims[i];
+        double d[3];
+        for (k = 0; k < 3; ++k) d[k] = c[k] - (i < s->placed ? s->origin[k] : 0.0);
+        if (d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0) continue;
+        p->p0 = pt_v3((float)(p->p0.x - d[0]), (float)(p->p0.y - d[1]), (float)(p->p0.z - d[2]));
+        if (p->type != PT__PRIM_TRIANGLE) continue; /* a sphere's radius, a quad's u and v stay */
+        p->p1 = pt_v3((float)(p->p1.x - d[0]), (float)(p->p1.y - d[1]), (float)(p->p1.z - d[2]));
+        p->p2 = pt_v3((float)(p->p2.x - d[0]), (float)(p->p2.y - d[1]), (float)(p->p2.z - d[2]));
+    }
+    memcpy(s->origin, c, sizeof c);
+    s->has_origin = c[0] != 0.0 || c[1] != 0.0 || c[2] != 0.0;
+    s->placed = s->prim_count;
+}
+
+/* The smallest extent of a primitive: a sphere's radius, a quad's or triangle's smallest height. */
+static float pt__prim_feature(const pt__prim *p)
+{
+    float a = pt__prim_area(p), e;
+    if (p->type == PT__PRIM_SPHERE) return p->p1.x;
+    if (p->type == PT__PRIM_QUAD) return a / pt__maxf(pt_length(p->p1), pt_length(p->p2));
+    e = pt__maxf(pt_length(pt_sub(p->p1, p->p0)), pt__maxf(pt_length(pt_sub(p->p2, p->p1)), pt_length(pt_sub(p->p0, p->p2))));
+    return 2.0f * a / e;
+}
+/* Counts the primitives float cannot represent well (pt_scene_commit) and describes the worst. */
+static void pt__precision_check(pt_scene *s)
+{
+    double worst = 1.0, far = pt__maxd(fabs(s->origin[0]), pt__maxd(fabs(s->origin[1]), fabs(s->origin[2])));
+    uint32_t i;
+    s->fine_prims = 0;
+    s->warning[0] = '\0';
+    for (i = 0; i < s->prim_count; ++i) {
+        const pt__prim *p = &s->prims[i];
+        double m = pt__vmaxabs(p->mag), f = pt__prim_feature(p), world = m + far;
+        double ulps = f / (FLT_EPSILON * world), offsets = f / (256.0 * FLT_EPSILON * m);
+        double r = ulps / 8.0;
+        if (s->mats[p->material].scatters) r = pt__mind(r, offsets / 16.0);
+        if (!(r < 1.0)) continue;
+        s->fine_prims++;
+        if (r >= worst) continue;
+        worst = r;
+        snprintf(s->warning, sizeof s->warning,
+                 "primitive %u is %.3g across at coordinates of %.3g: %.3g float ulps there, %.3g spawn offsets "
+                 "(move the scene nearer the origin or scale it up)",
+                 (unsigned)p->id, f, world, ulps, offsets);
+    }
+}
+
 PTDEF int pt_scene_commit(pt_scene *s)
 {
     uint32_t i, nl = 0;
@@ -4834,6 +4960,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
     double total = 0.0, acc = 0.0;
     unsigned f;
     if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
+    pt__place(s);
     if ((rc = pt__accel_build(s)) != PT_OK) return rc;
     /* light table: every emitting primitive is a light, picked in proportion to its power */
     PT_FREE(s->lights);
@@ -4844,6 +4971,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
         s->prims[i].light = -1;
         if (s->mats[s->prims[i].material].emits) nl++;
     }
+    pt__precision_check(s);
     if (nl) {
         /* lights in the order the primitives were added (their ids), not in the BVH's order of
            s->prims: which light a number picks, and so the image, does not depend on the tree or
@@ -4912,6 +5040,23 @@ PTDEF int pt_scene_commit(pt_scene *s)
     return PT_OK;
 }
 
+PTDEF int pt_scene_set_origin(pt_scene *s, double x, double y, double z)
+{
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!(fabs(x) <= DBL_MAX && fabs(y) <= DBL_MAX && fabs(z) <= DBL_MAX))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "set_origin: (%g, %g, %g) is not finite", x, y, z);
+    if (s->prim_count)
+        return pt__fail(s, PT_ERROR_INVALID_STATE, "set_origin: %u primitives were added before it (set the origin first)",
+                        (unsigned)s->prim_count);
+    s->origin[0] = x;
+    s->origin[1] = y;
+    s->origin[2] = z;
+    s->has_origin = x != 0.0 || y != 0.0 || z != 0.0;
+    s->fixed_origin = 1;
+    s->committed = 0;
+    return PT_OK;
+}
+
 PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
 {
     if (!s || !info) return PT_ERROR_INVALID_ARGUMENT;
@@ -4932,6 +5077,14 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     info->total_emitted_power = s->total_power;
     info->bounds_min = s->lo;
     info->bounds_max = s->hi;
+    if (s->has_origin) { /* world bounds, still padded outwards */
+        pt_vec3 lo = pt__to_world(s, s->lo), hi = pt__to_world(s, s->hi);
+        info->bounds_min = pt_v3(pt__pad_down(lo.x), pt__pad_down(lo.y), pt__pad_down(lo.z));
+        info->bounds_max = pt_v3(pt__pad_up(hi.x), pt__pad_up(hi.y), pt__pad_up(hi.z));
+    }
+    memcpy(info->origin, s->origin, sizeof info->origin);
+    info->precision_warnings = s->fine_prims;
+    memcpy(info->precision_warning, s->warning, sizeof info->precision_warning);
     info->backend = (pt_backend)s->backend;
     info->build_seconds = s->build_seconds;
     info->accel_bytes = s->accel_bytes;
@@ -4956,6 +5109,15 @@ static PT__HOT int pt__scene_any(const pt_scene *s, const pt__rayctx *rc, float 
 }
 
 /* --- public queries --- */
+/* A public hit is in world coordinates; its magnitude then includes the origin's. */
+static void pt__hit_to_world(const pt_scene *s, pt_hit *h)
+{
+    pt_vec3 n = h->geometric_normal;
+    if (!s->has_origin) return;
+    h->point = pt__to_world(s, h->point);
+    h->magnitude += (float)(fabsf(n.x) * fabs(s->origin[0]) + fabsf(n.y) * fabs(s->origin[1]) +
+                            fabsf(n.z) * fabs(s->origin[2]));
+}
 static int pt__query_ok(const pt_scene *s, pt_ray ray, float tmax)
 {
     if (!s) return PT_ERROR_INVALID_ARGUMENT;
@@ -4971,9 +5133,11 @@ PTDEF int pt_scene_intersect(const pt_scene *s, pt_ray ray, float tmax, pt_hit *
     int e = pt__query_ok(s, ray, tmax);
     if (e != PT_OK) return e;
     if (!hit) return PT_ERROR_INVALID_ARGUMENT;
+    ray.origin = pt__to_local(s, ray.origin);
     pt__rayctx_init(&rc, ray);
     if (!pt__scene_closest(s, &rc, tmax, &prim, &t, bary)) return 0;
     pt__fill_hit(s, &s->prims[prim], ray, t, bary, hit);
+    pt__hit_to_world(s, hit);
     return 1;
 }
 PTDEF int pt_scene_occluded(const pt_scene *s, pt_ray ray, float tmax)
@@ -4981,6 +5145,7 @@ PTDEF int pt_scene_occluded(const pt_scene *s, pt_ray ray, float tmax)
     pt__rayctx rc;
     int e = pt__query_ok(s, ray, tmax);
     if (e != PT_OK) return e;
+    ray.origin = pt__to_local(s, ray.origin);
     pt__rayctx_init(&rc, ray);
     return pt__scene_any(s, &rc, tmax, 0xffffffffu);
 }
@@ -4992,6 +5157,7 @@ PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tm
     int found = 0, e = pt__query_ok(s, ray, tmax);
     if (e != PT_OK) return e;
     if (!hit) return PT_ERROR_INVALID_ARGUMENT;
+    ray.origin = pt__to_local(s, ray.origin);
     pt__rayctx_init(&rc, ray);
     for (i = 0; i < s->prim_count; ++i) {
         if (pt__hit_prim(&rc, &s->prims[i], tmax, &t, bary)) {
@@ -5003,6 +5169,7 @@ PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tm
     }
     if (!found) return 0;
     pt__fill_hit(s, &s->prims[best], ray, tmax, best_bary, hit);
+    pt__hit_to_world(s, hit);
     return 1;
 }
 
@@ -5566,7 +5733,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             v.has_guide = 0;
             if (cfg->guide) {
                 pt_shading_point sp;
-                sp.position = v.p;
+                sp.position = pt__to_world(s, v.p);
                 sp.normal = v.ns;
                 sp.wo = v.wo;
                 sp.material = prim->material;
@@ -5644,6 +5811,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
         !pt__vfinite(ray.origin) || !pt__vfinite(ray.dir) || !(pt_length2(ray.dir) > 0.0f))
         return pt_v3(0, 0, 0);
     if (!(fabsf(pt_length2(ray.dir) - 1.0f) <= 1e-6f)) ray.dir = pt_normalize(ray.dir); /* unit: as given */
+    ray.origin = pt__to_local(s, ray.origin);
     memset(&local, 0, sizeof local);
     memset(&smp, 0, sizeof smp);
     smp.rng = *rng; /* independent: one path from the caller's stream, which advances as it draws */
@@ -6122,6 +6290,13 @@ static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt
     if (d->adaptive_neighbours_only != 0 && d->adaptive_neighbours_only != 1)
         return pt__msg(err, n, bad, "pt_render_desc.adaptive_neighbours_only = %d: must be 0 or 1",
                        d->adaptive_neighbours_only);
+    if (s->has_origin && pt__vfinite(d->camera.look_from) && pt__vfinite(d->camera.look_at)) {
+        pt_camera_desc local = d->camera; /* traced relative to the scene's origin (pt_scene_commit) */
+        local.look_from = pt__to_local(s, local.look_from);
+        local.look_at = pt__to_local(s, local.look_at);
+        if (pt_length2(pt_sub(local.look_at, local.look_from)) > 0.0f)
+            return pt__camera_init(cam, &local, d->width, d->height, err, n);
+    }
     return pt__camera_init(cam, &d->camera, d->width, d->height, err, n);
 }
 

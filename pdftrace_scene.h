@@ -63,7 +63,9 @@
      translate X Y Z | rotate AX AY AZ DEGREES | scale SX SY SZ | identity
                                       transforms for the shapes that follow; each one is
                                       applied after those before it (as in POV-Ray);
-                                      identity starts again
+                                      identity starts again. Composed in double: a scene
+                                      far from the origin is handed to pdftrace relative
+                                      to its centre (pt_scene_set_origin)
      pov_light_grid N                 POV-Ray export: N x N spotlights per quad emitter (16)
      pov_radiosity none|default|medium|high       POV-Ray export: indirect light (none)
 
@@ -146,6 +148,7 @@ typedef struct pt_scenefile_shape {
     float radius;                /* sphere */
     int mesh;                    /* PT_SCENEFILE_MESH: index into pt_scenefile.meshes */
     pt_transform transform;      /* object to world, in effect when the shape was read */
+    double transform_d[3][4];    /* the same composed in double (transform is it rounded) */
     int line;                    /* line of the statement, for messages */
 } pt_scenefile_shape;
 
@@ -333,6 +336,7 @@ typedef struct pt__sf_parser {
     char *tok[PT__SF_MAX_TOKENS];
     int ntok, pos;
     pt_transform xf;
+    double xfd[3][4];    /* xf composed in double */
     int have_camera;
     uint64_t mesh_limit, image_limit;  /* bytes (pt_scenefile_options, defaults applied) */
     const pt_scenefile_options *opt;
@@ -1227,6 +1231,7 @@ static int pt__sf_add_shape(pt__sf_parser *p, pt_scenefile_shape_type type, pt_s
     memset(s, 0, sizeof *s);
     s->type = type;
     s->transform = p->xf;
+    memcpy(s->transform_d, p->xfd, sizeof s->transform_d);
     s->line = p->line;
     s->mesh = -1;
     *out = s;
@@ -1467,6 +1472,25 @@ static int pt__sf_mesh(pt__sf_parser *p)
     return PT_OK;
 }
 
+/* xfd = t xfd in double: a translation of 1e7 after a rotation keeps the object's small
+   coordinates exact, where the float product rounds them to 1 unit. */
+static void pt__sf_xfd_identity(double x[3][4])
+{
+    int i, j;
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 4; ++j) x[i][j] = i == j ? 1.0 : 0.0;
+}
+static void pt__sf_xfd_mul(double x[3][4], const pt_transform *t)
+{
+    double r[3][4];
+    int i, j;
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 4; ++j)
+            r[i][j] = (double)t->m[i][0] * x[0][j] + (double)t->m[i][1] * x[1][j] + (double)t->m[i][2] * x[2][j] +
+                      (j == 3 ? (double)t->m[i][3] : 0.0);
+    memcpy(x, r, sizeof r);
+}
+
 /* translate, scale, rotate: composed after the transform in effect (identity resets it). */
 static int pt__sf_transform(pt__sf_parser *p, const char *kw)
 {
@@ -1487,6 +1511,7 @@ static int pt__sf_transform(pt__sf_parser *p, const char *kw)
     } else
         t = pt_transform_translate(a);
     p->xf = pt_transform_mul(t, p->xf); /* applied after the transforms before it */
+    pt__sf_xfd_mul(p->xfd, &t);
     det = p->xf.m[0][0] * (p->xf.m[1][1] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][1]) -
           p->xf.m[0][1] * (p->xf.m[1][0] * p->xf.m[2][2] - p->xf.m[1][2] * p->xf.m[2][0]) +
           p->xf.m[0][2] * (p->xf.m[1][0] * p->xf.m[2][1] - p->xf.m[1][1] * p->xf.m[2][0]);
@@ -1523,6 +1548,7 @@ static int pt__sf_statement(pt__sf_parser *p)
         if ((rc = pt__sf_mesh(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "identity")) {
         p->xf = pt_transform_identity();
+        pt__sf_xfd_identity(p->xfd);
     } else if (!strcmp(kw, "translate") || !strcmp(kw, "scale") || !strcmp(kw, "rotate")) {
         if ((rc = pt__sf_transform(p, kw)) != PT_OK) return rc;
     } else {
@@ -1573,6 +1599,7 @@ PTDEF int pt_scenefile_parse_ex(const char *text, size_t length, const char *nam
     p.opt = opt;
     p.mesh_limit = opt && opt->mesh_memory ? opt->mesh_memory : PT_SCENEFILE_MESH_MEMORY_DEFAULT;
     p.image_limit = opt && opt->image_memory ? opt->image_memory : PT_SCENEFILE_IMAGE_MEMORY_DEFAULT;
+    pt__sf_xfd_identity(p.xfd);
     snprintf(out->file, sizeof out->file, "%s", name);
     out->width = 256;
     out->height = 256;
@@ -1619,8 +1646,84 @@ PTDEF int pt_scenefile_load_ex(const char *path, const pt_scenefile_options *opt
     return rc;
 }
 
+/* A shape's transform in double: transform_d when it rounds to transform (as the parser makes
+   them), else transform itself (a pt_scenefile filled in by hand). */
+static void pt__sf_shape_xfd(const pt_scenefile_shape *sh, double x[3][4])
+{
+    int i, j, same = 1;
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 4; ++j) same &= (float)sh->transform_d[i][j] == sh->transform.m[i][j];
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 4; ++j) x[i][j] = same ? sh->transform_d[i][j] : (double)sh->transform.m[i][j];
+}
+static void pt__sf_dbounds(double x[3][4], pt_vec3 p, float pad, double lo[3], double hi[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i) {
+        double v = x[i][0] * p.x + x[i][1] * p.y + x[i][2] * p.z + x[i][3];
+        if (v - pad < lo[i]) lo[i] = v - pad;
+        if (v + pad > hi[i]) hi[i] = v + pad;
+    }
+}
+/* The origin for pt_scene_set_origin: the centre of the shapes' world bounds (in double, then
+   rounded to float so that untransformed float shapes move exactly) when they lie farther from
+   (0, 0, 0) than 8 times their size, pt_scene_commit's rule. Returns 0 for a scene near the
+   origin: the build then hands over the parser's float transforms unchanged. */
+static int pt__sf_origin(const pt_scenefile *d, double c[3])
+{
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, x[3][4], size = 0, far = 0;
+    int i, k;
+    uint32_t v;
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *sh = &d->shapes[i];
+        const pt_vec3 *p = sh->p;
+        pt__sf_shape_xfd(sh, x);
+        if (sh->type == PT_SCENEFILE_SPHERE) {
+            pt__sf_dbounds(x, p[0], sh->radius * pt_length(pt_transform_vector(&sh->transform, pt_v3(1, 0, 0))), lo, hi);
+        } else if (sh->type == PT_SCENEFILE_QUAD) {
+            pt__sf_dbounds(x, p[0], 0, lo, hi);
+            pt__sf_dbounds(x, pt_add(p[0], p[1]), 0, lo, hi);
+            pt__sf_dbounds(x, pt_add(p[0], p[2]), 0, lo, hi);
+            pt__sf_dbounds(x, pt_add(pt_add(p[0], p[1]), p[2]), 0, lo, hi);
+        } else if (sh->type == PT_SCENEFILE_TRIANGLE) {
+            for (k = 0; k < 3; ++k) pt__sf_dbounds(x, p[k], 0, lo, hi);
+        } else if (sh->type == PT_SCENEFILE_BOX) {
+            for (k = 0; k < 8; ++k)
+                pt__sf_dbounds(x, pt_v3((k & 1) ? p[1].x : p[0].x, (k & 2) ? p[1].y : p[0].y, (k & 4) ? p[1].z : p[0].z), 0,
+                               lo, hi);
+        } else {
+            const pt_obj_mesh *m = &d->meshes[sh->mesh];
+            for (v = 0; v < m->vertex_count; ++v)
+                pt__sf_dbounds(x, pt_v3(m->positions[3 * v], m->positions[3 * v + 1], m->positions[3 * v + 2]), 0, lo, hi);
+        }
+    }
+    for (k = 0; k < 3 && d->shape_count; ++k) {
+        c[k] = 0.5 * lo[k] + 0.5 * hi[k];
+        if (hi[k] - lo[k] > size) size = hi[k] - lo[k];
+        if (fabs(c[k]) > far) far = fabs(c[k]);
+    }
+    if (!(far > 8.0 * size) || !(far < 1e30)) return 0;
+    for (k = 0; k < 3; ++k) c[k] = (double)(float)c[k];
+    return 1;
+}
+/* The float transform of shape sh relative to origin c: the double translation minus c, rounded once. */
+static pt_transform pt__sf_local_xf(const pt_scenefile_shape *sh, const double c[3])
+{
+    double x[3][4];
+    pt_transform t;
+    int i, j;
+    pt__sf_shape_xfd(sh, x);
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) t.m[i][j] = (float)x[i][j];
+        t.m[i][3] = (float)(x[i][3] - c[i]);
+    }
+    return t;
+}
+
 PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_desc *r, char *err, size_t err_size)
 {
+    double origin[3] = {0, 0, 0};
+    int far;
     pt_scene *s;
     int *tex = NULL, *mat = NULL, i, rc = PT_OK;
     if (err && err_size) err[0] = '\0';
@@ -1652,10 +1755,15 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         mat[i] = pt_scene_add_material(s, &md);
         if (mat[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, mat[i], "material %s: %s", m->name, pt_scene_error_message(s));
     }
+    far = rc == PT_OK && pt__sf_origin(d, origin);
+    if (far && (rc = pt_scene_set_origin(s, origin[0], origin[1], origin[2])) != PT_OK)
+        rc = pt__sf_failf(err, err_size, d->file, 0, rc, "%s", pt_scene_error_message(s));
     for (i = 0; i < d->shape_count && rc == PT_OK; ++i) {
         const pt_scenefile_shape *sh = &d->shapes[i];
         int m = mat[sh->material], id;
-        if ((rc = pt_scene_set_transform(s, &sh->transform)) != PT_OK) {
+        pt_transform local;
+        if (far) local = pt__sf_local_xf(sh, origin);
+        if ((rc = pt_scene_set_transform(s, far ? &local : &sh->transform)) != PT_OK) {
             rc = pt__sf_failf(err, err_size, d->file, sh->line, rc, "%s", pt_scene_error_message(s));
             break;
         }

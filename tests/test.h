@@ -67,6 +67,7 @@ extern const test_case test_exr_cases[];    /* OpenEXR (one skipped test without
 extern const test_case test_embree_cases[]; /* backends; Embree's tests with PDFTRACE_EMBREE */
 extern const test_case test_analytic_cases[];
 extern const test_case test_regress_cases[];
+extern const test_case test_origin_cases[];  /* scenes far from (0, 0, 0) */
 extern const test_case test_stress_cases[];  /* numerical stress (tests/stress/, fast sizes) */
 extern const test_case test_scenefile_cases[]; /* pdftrace_scene.h: pt_obj_load, pt_scene_add_obj */
 extern const test_case test_pov_cases[];       /* pdftrace_scene.h: the POV-Ray exporter against hostile scenes */

@@ -100,6 +100,7 @@ int main(int argc, char **argv)
         { "embree", test_embree_cases },
         { "analytic", test_analytic_cases },
         { "regress", test_regress_cases },
+        { "origin", test_origin_cases },
         { "stress", test_stress_cases },
         { "scenefile", test_scenefile_cases },
         { "pov", test_pov_cases },

@@ -578,6 +578,12 @@ static int load_scene(const options *o, pt_scenefile *sf, pt_scene **scene, pt_r
             return rc == PT_ERROR_OUT_OF_MEMORY ? EXIT_FAILURE : EXIT_USAGE;
         }
     }
+    {
+        pt_scene_info info; /* the scene renders; say where float cannot resolve it */
+        if (pt_scene_get_info(*scene, &info) == PT_OK && info.precision_warnings)
+            fail("warning: %s: %u primitive%s too small for float at their coordinates; %s", o->scene,
+                 (unsigned)info.precision_warnings, info.precision_warnings == 1 ? "" : "s", info.precision_warning);
+    }
     if (o->pov) {
         pt_pov_options po;
         po.radiosity = -1;

@@ -380,8 +380,28 @@ t_disk_full() {
     else fail disk_full "$why ($(tr '\n' '|' <"$W/err.txt"))"; fi
 }
 
+# ---- a box 10 wide 4e6 from the centre of a floor 1e7 wide: below the spawn offset there, so the
+# command warns on stderr (and renders); the same box without the floor is moved near the origin
+t_precision_warning() {
+    local dir=$W/precision f
+    mkdir -p "$dir"
+    for f in floor alone; do
+        { printf 'size 8 8\nspp 1\ncamera look_from 4000005 5 3999900 look_at 4000005 5 4000005\n'
+          printf 'material white lambertian 0.7 0.7 0.7\n'
+          [ $f = floor ] && printf 'quad -5000000 0 -5000000 0 0 10000000 10000000 0 0 white\n'
+          printf 'box 4000000 0 4000000 4000010 10 4000010 white\n'; } >"$dir/$f.scene"
+        "$P" "$dir/$f.scene" -q -o "$dir/$f.pfm" 2>"$dir/$f.err" || { fail precision_warning "$f: render failed"; return; }
+    done
+    if grep -q "warning: .*floor.scene: 6 primitives too small for float" "$dir/floor.err" && [ ! -s "$dir/alone.err" ]; then
+        pass precision_warning "far box on a huge floor: warned; alone: silent"
+    else
+        fail precision_warning "floor: '$(head -n 1 "$dir/floor.err")'; alone: '$(head -n 1 "$dir/alone.err")'"
+    fi
+}
+
 t_help
 t_png_exr
+t_precision_warning
 t_bad_input
 t_export_pov
 t_default_output
