@@ -9,6 +9,7 @@ int main(int argc, char **argv)
     const char *path = argc > 1 ? argv[1] : "minimal.ppm";
     pt_render_desc d = {0}; /* zero means "default" for every field */
     pt_image img = {0};
+    char err[512] = "";
     pt_render_stats st;
     pt_scene *s = pt_scene_create();
     int white, light, rc = s ? PT_OK : PT_ERROR_OUT_OF_MEMORY;
@@ -27,10 +28,10 @@ int main(int argc, char **argv)
     d.width = 320; d.height = 240; d.samples_per_pixel = 64;
     d.camera.look_from = pt_v3(0, 2, -8); d.camera.look_at = pt_v3(0, 1, 0);
     d.background = pt_v3(0.01f, 0.01f, 0.02f); /* a faint night sky */
-    if ((rc = pt_render_image(s, &d, &img, &st)) == PT_OK && (rc = pt_write_ppm(path, &img)) == PT_OK)
+    if ((rc = pt_render_image(s, &d, &img, &st)) == PT_OK && (rc = pt_write_ppm_ex(path, &img, err, sizeof err)) == PT_OK)
         printf("wrote %s: %dx%d, %d spp in %.2f s\n", path, d.width, d.height, d.samples_per_pixel, st.seconds);
     else
-        fprintf(stderr, "minimal: %s: %s\n", path, pt_result_string(rc));
+        fprintf(stderr, "minimal: %s\n", err[0] ? err : pt_result_string(rc)); /* err names the path and the reason */
     pt_image_free(&img);
     pt_scene_destroy(s);
     return rc == PT_OK ? 0 : 1;
