@@ -1656,7 +1656,7 @@ static void pt__sf_shape_xfd(const pt_scenefile_shape *sh, double x[3][4])
     for (i = 0; i < 3; ++i)
         for (j = 0; j < 4; ++j) x[i][j] = same ? sh->transform_d[i][j] : (double)sh->transform.m[i][j];
 }
-static void pt__sf_dbounds(double x[3][4], pt_vec3 p, float pad, double lo[3], double hi[3])
+static void pt__sf_dbounds(double x[3][4], pt_vec3 p, double pad, double lo[3], double hi[3])
 {
     int i;
     for (i = 0; i < 3; ++i) {
@@ -1679,7 +1679,9 @@ static int pt__sf_origin(const pt_scenefile *d, double c[3])
         const pt_vec3 *p = sh->p;
         pt__sf_shape_xfd(sh, x);
         if (sh->type == PT_SCENEFILE_SPHERE) {
-            pt__sf_dbounds(x, p[0], sh->radius * pt_length(pt_transform_vector(&sh->transform, pt_v3(1, 0, 0))), lo, hi);
+            /* the radius scaled in double: in float, a huge scale overflows to inf (and inf - inf below) */
+            double sx = sqrt(x[0][0] * x[0][0] + x[1][0] * x[1][0] + x[2][0] * x[2][0]);
+            pt__sf_dbounds(x, p[0], (double)sh->radius * sx, lo, hi);
         } else if (sh->type == PT_SCENEFILE_QUAD) {
             pt__sf_dbounds(x, p[0], 0, lo, hi);
             pt__sf_dbounds(x, pt_add(p[0], p[1]), 0, lo, hi);
@@ -1698,6 +1700,7 @@ static int pt__sf_origin(const pt_scenefile *d, double c[3])
         }
     }
     for (k = 0; k < 3 && d->shape_count; ++k) {
+        if (!(fabs(lo[k]) < 1e300 && fabs(hi[k]) < 1e300)) return 0; /* unbounded: the build refuses it */
         c[k] = 0.5 * lo[k] + 0.5 * hi[k];
         if (hi[k] - lo[k] > size) size = hi[k] - lo[k];
         if (fabs(c[k]) > far) far = fabs(c[k]);
