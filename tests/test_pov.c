@@ -16,20 +16,6 @@
 
 #define POV_HEAD "size 8 8\ncamera look_from 0 0 -5 look_at 0 0 0\nmaterial m lambertian 0.5 0.5 0.5\nmaterial l emitter 4 4 4\n"
 
-static char *pov_read(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    char *buf;
-    long n;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) { fclose(f); return NULL; }
-    buf = (char *)malloc((size_t)n + 1u);
-    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
-    fclose(f);
-    if (buf) { buf[n] = '\0'; *len = (size_t)n; }
-    return buf;
-}
-
 static int pov_exists(const char *path) { return access(path, F_OK) == 0; }
 
 static int have_povray(void) { return system("povray --version >/dev/null 2>&1") == 0; }
@@ -83,7 +69,7 @@ static void pov_path_injection(test_ctx *t)
     rc = pt_scenefile_write_pov(&sf, pov, NULL, err, sizeof err);
     pt_scenefile_free(&sf);
     if (!CHECK(t, rc == PT_OK, "export: %d %s", rc, err)) return;
-    text = pov_read(pov, &len);
+    text = tu_read_text(pov, &len);
     if (!CHECK(t, text != NULL, "cannot read %s", pov)) return;
     CHECK(t, strstr(text, "\n#fopen") == NULL && strstr(text, "\n#write") == NULL, "the path's #fopen line reached the .pov");
     CHECK(t, strstr(text, "\"pwned.txt\"") == NULL, "a string from the path reached the .pov");
@@ -214,7 +200,7 @@ static void pov_checker_catches_bad_text(test_ctx *t)
         if (!CHECK(t, pt_scenefile_load(scenes[i], &sf, err, sizeof err) == PT_OK, "%s", err)) continue;
         CHECK(t, pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err) == PT_OK, "%s", err);
         pt_scenefile_free(&sf);
-        text = pov_read("build/test-pov.pov", &len);
+        text = tu_read_text("build/test-pov.pov", &len);
         CHECK(t, text && pt_pov_check_text(text, len, why, sizeof why), "%s: %s", scenes[i], text ? why : "no file");
         free(text);
     }

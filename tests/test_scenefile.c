@@ -15,27 +15,12 @@
 
 #define MESH_PATH "scenes/mesh.obj"
 
-/* The whole file at path, NUL-terminated, or NULL. */
-static char *read_all(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    char *buf;
-    long n;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) { fclose(f); return NULL; }
-    buf = (char *)malloc((size_t)n + 1u);
-    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
-    fclose(f);
-    if (buf) { buf[n] = '\0'; *len = (size_t)n; }
-    return buf;
-}
-
 static void obj_load_matches_parse(test_ctx *t)
 {
     pt_obj_mesh a, b;
     char err[512];
     size_t len = 0;
-    char *text = read_all(MESH_PATH, &len);
+    char *text = tu_read_text(MESH_PATH, &len);
     int ra, rb;
     if (!CHECK(t, text != NULL, "cannot read %s (run from the repository root)", MESH_PATH)) return;
     ra = pt_obj_load(MESH_PATH, &a, err, sizeof err);
@@ -487,7 +472,7 @@ static void mesh_memory_budget(test_ctx *t)
     pt_scenefile_options opt;
     pt_scenefile sf;
     size_t len = 0;
-    char *obj = read_all(MESH_PATH, &len);
+    char *obj = tu_read_text(MESH_PATH, &len);
     int rc;
     if (!CHECK(t, obj != NULL, "cannot read %s", MESH_PATH)) return;
     if (!CHECK(t, tu_make_tmpdir(top, sizeof top) && write_file(top, "a.obj", obj) && write_file(top, "b.obj", obj),

@@ -1211,20 +1211,30 @@ pt_render_desc tu_base_desc(int w, int h, int spp, uint64_t seed)
     return d;
 }
 
-/* The whole file at path (size into *size; one spare byte allocated), or NULL. */
+/* The whole file at path (size into *size), NUL-terminated, or NULL. */
 unsigned char *tu_read_file(const char *path, long *size)
 {
     FILE *f = fopen(path, "rb");
     unsigned char *buf;
     long n;
     if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    if (n < 0) { fclose(f); return NULL; }
-    buf = (unsigned char *)malloc((size_t)n + 1);
+    if (fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) {
+        fclose(f);
+        return NULL;
+    }
+    buf = (unsigned char *)malloc((size_t)n + 1u);
     if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) { free(buf); buf = NULL; }
     fclose(f);
+    if (buf) buf[n] = '\0';
     *size = n;
     return buf;
+}
+
+/* tu_read_file as text: the length into *len. */
+char *tu_read_text(const char *path, size_t *len)
+{
+    long n = 0;
+    char *text = (char *)tu_read_file(path, &n);
+    if (text) *len = (size_t)n;
+    return text;
 }

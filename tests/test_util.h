@@ -46,7 +46,8 @@ int tu_add_closed_furnace(pt_scene *s);
 int tu_make_tmpdir(char *buf, size_t n);
 int tu_dir_entries(const char *dir, char *list, size_t n);
 void tu_remove_tree(const char *dir);
-unsigned char *tu_read_file(const char *path, long *size); /* malloc'd; NULL on failure */
+unsigned char *tu_read_file(const char *path, long *size); /* malloc'd, NUL-terminated; NULL on failure */
+char *tu_read_text(const char *path, size_t *len);          /* the same as text */
 /* A render desc with every field zero (defaults) but size, samples per pixel and seed. */
 pt_render_desc tu_base_desc(int w, int h, int spp, uint64_t seed);
 double tu_sidak(double alpha, int k);      /* per-test level for family-wise alpha over k tests */
