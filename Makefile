@@ -232,7 +232,7 @@ $(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) | $(BUILD)
 	$(CC) -I. $(EXR_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(EXR_LIBS) -lm
 
 exr-test: $(BUILD)/test_runner_exr $(BUILD)/fuzz_replay_exr
-	./$(BUILD)/fuzz_replay_exr tests/fuzz/corpus
+	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay_exr tests/fuzz/corpus
 	./$(BUILD)/test_runner_exr exr
 
 # ---- scene files and POV-Ray validation (validation/ptv.c). OpenEXR (POV-Ray's +FE output) and

@@ -57,8 +57,8 @@ typedef struct pt_exr_options {
     pt_exr_compression compression; /* default (0): ZIP */
 } pt_exr_options;
 
-/* Writes img as an RGB EXR through "<path>.ptmp" renamed into place: a failed write leaves no
-   file (and no temporary). opt may be NULL (half, ZIP). Half values are rounded to nearest
+/* Writes img as an RGB EXR through a new temporary beside path (pt_output_open), renamed
+   into place: a failed write leaves no file (and no temporary). opt may be NULL (half, ZIP). Half values are rounded to nearest
    even (IEEE 754-2008 binary16); values beyond the half range become +-infinity, NaN stays
    NaN. Float values are stored bit-exactly. */
 PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_options *opt, char *err, size_t err_size);
@@ -112,6 +112,7 @@ PTDEF int pt_read_exr_memory(const void *data, size_t size, const char *name, pt
 #include <stdio.h>
 #include <stdlib.h>
 #include <errno.h>
+#include <fenv.h>
 #include <limits.h>
 #include <string.h>
 #include <openexr.h>
@@ -312,7 +313,7 @@ static exr_result_t pt__exr_write_chunks(exr_context_t ctx, int part, const pt_i
 
 static int pt__exr_verify(const char *tmp, const pt_image *img, int half, char *detail, size_t detail_size);
 
-PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_options *opt, char *err, size_t err_size)
+static int pt__exr_write(const char *path, const pt_image *img, const pt_exr_options *opt, char *err, size_t err_size)
 {
     static const char *const names[3] = { "R", "G", "B" };
     pt_exr_options o;
@@ -528,7 +529,15 @@ static int pt__exr_verify(const char *tmp, const pt_image *img, int half, char *
     return ok;
 }
 
-static int pt__exr_read(const char *path, pt__exr_src *src, pt_image *out, char *err, size_t err_size)
+PTDEF int pt_write_exr(const char *path, const pt_image *img, const pt_exr_options *opt, char *err, size_t err_size)
+{
+    fenv_t env; /* as pt__exr_read: the library runs in non-stop floating-point mode */
+    int held = feholdexcept(&env) == 0, rc = pt__exr_write(path, img, opt, err, err_size);
+    if (held) fesetenv(&env);
+    return rc;
+}
+
+static int pt__exr_read_body(const char *path, pt__exr_src *src, pt_image *out, char *err, size_t err_size)
 {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     exr_context_t ctx = NULL;
@@ -621,6 +630,17 @@ static int pt__exr_read(const char *path, pt__exr_src *src, pt_image *out, char 
     }
     *out = img;
     return PT_OK;
+}
+
+/* OpenEXRCore's own floating-point arithmetic (e.g. a NaN screenWindowWidth in a hostile header)
+   runs in non-stop mode: a host that traps FE_INVALID must not die inside the library, and its
+   exception flags and traps are restored afterwards (C99 feholdexcept / fesetenv). */
+static int pt__exr_read(const char *path, pt__exr_src *src, pt_image *out, char *err, size_t err_size)
+{
+    fenv_t env;
+    int held = feholdexcept(&env) == 0, rc = pt__exr_read_body(path, src, out, err, err_size);
+    if (held) fesetenv(&env);
+    return rc;
 }
 
 PTDEF int pt_read_exr(const char *path, pt_image *out, char *err, size_t err_size)
