@@ -313,7 +313,7 @@ endif
 
 # ---- make stress: the numerical stress cases at full size (tests/stress/; the same cases run
 # small in the runner's `stress` section). Prints case | metric | bound | result; non-zero exit
-# on any failing row. STRESS_ARGS: a case filter (sweep, spawn, tiny, watertight, edges, lights,
+# on any failing row. STRESS_ARGS: a case filter (sweep, spawn, tiny, watertight, edges, lights, slivers,
 # degenerate).
 STRESS_SRCS := tests/stress/stress_main.c tests/stress/stress_cases.c tests/test_util.c
 STRESS_ARGS ?=

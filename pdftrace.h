@@ -2744,9 +2744,64 @@ static PT__HOT int pt__hit_quad(const pt__rayctx *rc, const pt__prim *p, float t
     return 1;
 }
 
+/* Float leaves t with a relative error of about 6e-8 times the condition of U, V, W (the sum
+   of the products' magnitudes over |det|) plus that of T (the sum of its terms' magnitudes over
+   |T|: vertices far from the hit along the ray, in float rounded by more than t itself). When
+   either exceeds this (a sliver, a huge triangle hit close by), the distance and barycentrics
+   are recomputed in double (pt__hit_triangle_precise); below it t is within ~1e-5. */
+#ifndef PT__TRI_COND
+#define PT__TRI_COND 16.0f
+#endif
+
+/* For a hit pt__hit_triangle's float edge functions accepted (their signs decide it, so that
+   triangles sharing an edge decide it alike), t and the barycentrics in double: returns 1 with
+   *t_out and bary when 0 < t < tmax, 0 if not, -1 for a ray within 1e-3 radians of the plane
+   (along an edge, in the plane), which the float test decides as before: the plane's t is then
+   the far crossing of a ray its rounding tilted. t is the distance to the plane through a,
+   n.(a - o) / n.d with n = (b - a) x (c - a): differences of floats and their products are exact
+   in double (for coordinates within 2^29 of each other's exponent), so only the last sums
+   round; the watertight test's T / det, even in double, multiplies the rounding of U, V, W by
+   the vertices' distance along the ray. The barycentrics are U, V, W / det in double (Woop et
+   al. 2013). */
+static int pt__hit_triangle_precise(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, pt_vec3 c, float tmax, float *t_out,
+                                    float *bary)
+{
+    const int kx = rc->kx, ky = rc->ky, kz = rc->kz;
+    const double o[3] = { rc->o.x, rc->o.y, rc->o.z }, sx = rc->sx, sy = rc->sy, sz = rc->sz;
+    const double pa[3] = { a.x, a.y, a.z }, pb[3] = { b.x, b.y, b.z }, pc[3] = { c.x, c.y, c.z };
+    double Akz = pa[kz] - o[kz], Bkz = pb[kz] - o[kz], Ckz = pc[kz] - o[kz];
+    double Ax = (pa[kx] - o[kx]) - sx * Akz, Ay = (pa[ky] - o[ky]) - sy * Akz;
+    double Bx = (pb[kx] - o[kx]) - sx * Bkz, By = (pb[ky] - o[ky]) - sy * Bkz;
+    double Cx = (pc[kx] - o[kx]) - sx * Ckz, Cy = (pc[ky] - o[ky]) - sy * Ckz;
+    double U = Cx * By - Cy * Bx, V = Ax * Cy - Ay * Cx, W = Bx * Ay - By * Ax, det = U + V + W, t, nd;
+    double e1[3], e2[3], n[3];
+    int i;
+    for (i = 0; i < 3; ++i) { e1[i] = pb[i] - pa[i]; e2[i] = pc[i] - pa[i]; }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    nd = n[0] * rc->d.x + n[1] * rc->d.y + n[2] * rc->d.z;
+    (void)sz;
+    if (!(nd * nd > 1e-6 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) *
+                        ((double)rc->d.x * rc->d.x + (double)rc->d.y * rc->d.y + (double)rc->d.z * rc->d.z)))
+        return -1;
+    if (det == 0.0) return 0;
+    t = (n[0] * (pa[0] - o[0]) + n[1] * (pa[1] - o[1]) + n[2] * (pa[2] - o[2])) / nd;
+    if (!(t > 0.0 && t < (double)tmax) || !((float)t > 0.0f)) return 0;
+    *t_out = (float)t;
+    if (!(*t_out < tmax)) return 0;
+    if (bary) { /* >= 0: the double signs may differ from the float ones at an edge */
+        bary[0] = (float)(U / det > 0.0 ? U / det : 0.0);
+        bary[1] = (float)(V / det > 0.0 ? V / det : 0.0);
+        bary[2] = (float)(W / det > 0.0 ? W / det : 0.0);
+    }
+    return 1;
+}
+
 /* Watertight ray/triangle intersection (Woop, Benthin & Wald, "Watertight Ray/Triangle
    Intersection", JCGT 2(1), 2013): vertices translated to the ray origin, sheared so the ray
-   is +z, 2D edge functions; an edge function that is exactly zero is recomputed in double. */
+   is +z, 2D edge functions; an edge function that is exactly zero is recomputed in double, and
+   an ill-conditioned hit's distance too (PT__TRI_COND). */
 static PT__HOT int pt__hit_triangle(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, pt_vec3 c, float tmax, float *t_out,
                             float *bary)
 {
@@ -2755,7 +2810,10 @@ static PT__HOT int pt__hit_triangle(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, 
     float Ax = pt__vget(A, rc->kx) - rc->sx * Akz, Ay = pt__vget(A, rc->ky) - rc->sy * Akz;
     float Bx = pt__vget(B, rc->kx) - rc->sx * Bkz, By = pt__vget(B, rc->ky) - rc->sy * Bkz;
     float Cx = pt__vget(C, rc->kx) - rc->sx * Ckz, Cy = pt__vget(C, rc->ky) - rc->sy * Ckz;
-    float U = Cx * By - Cy * Bx, V = Ax * Cy - Ay * Cx, W = Bx * Ay - By * Ax, det, T, inv;
+    float CxBy = Cx * By, CyBx = Cy * Bx, AxCy = Ax * Cy, AyCx = Ay * Cx, BxAy = Bx * Ay, ByAx = By * Ax;
+    float U = CxBy - CyBx, V = AxCy - AyCx, W = BxAy - ByAx, det, T, inv, P;
+    /* the same sum in the same order as pt__tri4_hit's, so both route the same lanes */
+    P = fabsf(CxBy) + fabsf(CyBx) + fabsf(AxCy) + fabsf(AyCx) + fabsf(BxAy) + fabsf(ByAx);
     if (U == 0.0f || V == 0.0f || W == 0.0f) {
         U = (float)((double)Cx * (double)By - (double)Cy * (double)Bx);
         V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
@@ -2764,7 +2822,14 @@ static PT__HOT int pt__hit_triangle(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, 
     if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return 0;
     det = U + V + W;
     if (det == 0.0f) return 0;
-    T = U * (rc->sz * Akz) + V * (rc->sz * Bkz) + W * (rc->sz * Ckz);
+    {
+        float Ta = U * (rc->sz * Akz), Tb = V * (rc->sz * Bkz), Tc = W * (rc->sz * Ckz);
+        T = Ta + Tb + Tc;
+        if (P > PT__TRI_COND * fabsf(det) || fabsf(Ta) + fabsf(Tb) + fabsf(Tc) > PT__TRI_COND * fabsf(T)) {
+            int hit = pt__hit_triangle_precise(rc, a, b, c, tmax, t_out, bary);
+            if (hit >= 0) return hit;
+        }
+    }
     if (det < 0.0f ? (T >= 0.0f || T <= tmax * det) : (T <= 0.0f || T >= tmax * det)) return 0;
     inv = 1.0f / det;
     *t_out = T * inv;
@@ -3968,9 +4033,9 @@ static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tma
     __m128 By = _mm_sub_ps(_mm_sub_ps(_mm_loadu_ps(q->v[3 + ky]), tv->ok4[1]), _mm_mul_ps(tv->s4[1], Bkz));
     __m128 Cx = _mm_sub_ps(_mm_sub_ps(_mm_loadu_ps(q->v[6 + kx]), tv->ok4[0]), _mm_mul_ps(tv->s4[0], Ckz));
     __m128 Cy = _mm_sub_ps(_mm_sub_ps(_mm_loadu_ps(q->v[6 + ky]), tv->ok4[1]), _mm_mul_ps(tv->s4[1], Ckz));
-    __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
-    __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
-    __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
+    __m128 CxBy = _mm_mul_ps(Cx, By), CyBx = _mm_mul_ps(Cy, Bx), AxCy = _mm_mul_ps(Ax, Cy);
+    __m128 AyCx = _mm_mul_ps(Ay, Cx), BxAy = _mm_mul_ps(Bx, Ay), ByAx = _mm_mul_ps(By, Ax);
+    __m128 U = _mm_sub_ps(CxBy, CyBx), V = _mm_sub_ps(AxCy, AyCx), W = _mm_sub_ps(BxAy, ByAx);
     __m128 zmask = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
     __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
     __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
@@ -3980,8 +4045,21 @@ static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tma
     ok = _mm_andnot_ps(_mm_or_ps(zmask, _mm_and_ps(neg, pos)), _mm_castsi128_ps(_mm_set1_epi32(-1)));
     if (!_mm_movemask_ps(ok) && !zbits) return -1;
     det = _mm_add_ps(_mm_add_ps(U, V), W);
-    T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(tv->s4[2], Akz)), _mm_mul_ps(V, _mm_mul_ps(tv->s4[2], Bkz))),
-                   _mm_mul_ps(W, _mm_mul_ps(tv->s4[2], Ckz)));
+    {
+        /* ill-conditioned lanes (PT__TRI_COND) go to the scalar test, which redoes them in double */
+        const __m128 sign = _mm_set1_ps(-0.0f), cond = _mm_set1_ps(PT__TRI_COND);
+        __m128 Ta = _mm_mul_ps(U, _mm_mul_ps(tv->s4[2], Akz)), Tb = _mm_mul_ps(V, _mm_mul_ps(tv->s4[2], Bkz));
+        __m128 Tc = _mm_mul_ps(W, _mm_mul_ps(tv->s4[2], Ckz)), P, Q, ill;
+        P = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, CxBy), _mm_andnot_ps(sign, CyBx)), _mm_andnot_ps(sign, AxCy));
+        P = _mm_add_ps(_mm_add_ps(_mm_add_ps(P, _mm_andnot_ps(sign, AyCx)), _mm_andnot_ps(sign, BxAy)), _mm_andnot_ps(sign, ByAx));
+        T = _mm_add_ps(_mm_add_ps(Ta, Tb), Tc);
+        Q = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, Ta), _mm_andnot_ps(sign, Tb)), _mm_andnot_ps(sign, Tc));
+        ill = _mm_or_ps(_mm_cmpgt_ps(P, _mm_mul_ps(cond, _mm_andnot_ps(sign, det))),
+                        _mm_cmpgt_ps(Q, _mm_mul_ps(cond, _mm_andnot_ps(sign, T))));
+        ill = _mm_and_ps(ok, _mm_andnot_ps(_mm_cmpeq_ps(det, zero), ill)); /* det == 0: a miss either way */
+        zbits |= _mm_movemask_ps(ill);
+        ok = _mm_andnot_ps(ill, ok);
+    }
     /* tmax * det only where det != 0: inf * 0 would raise FE_INVALID (FP-trap builds) */
     tdet = _mm_cmpneq_ps(det, zero);
     tdet = _mm_mul_ps(tmax4, _mm_or_ps(_mm_and_ps(tdet, det), _mm_andnot_ps(tdet, _mm_set1_ps(1.0f))));

@@ -304,6 +304,49 @@ static void triangle_fan_watertight(test_ctx *t)
     test_note(t, "%d rays through shared edges and vertices", total);
 }
 
+static void sliver_triangle_distance(test_ctx *t)
+{
+    /* A huge sliver in the plane z = 1 (vertices ~5.5e6 from the origin, 1.5 wide where the ray
+       crosses it): float's cancellation gave t = 4.980 where the plane is at 5.099, a point
+       outside the triangle's flat bounding box, so the shadow ray pt_scene_occluded(t * 1.0001)
+       culled the box and disagreed with the closest hit. All queries must give the plane's t. */
+    const pt_vec3 a = { 2568343.0f, 4248663.0f, 1.0f }, b = { -2323722.5f, 6632148.0f, 1.0f };
+    const pt_vec3 c = { 0.834053755f, 5499998.5f, 1.0f };
+    pt_ray r;
+    pt_scene *s;
+    pt_hit h, hb;
+    double want;
+    float tt = 0.0f;
+    int m, rc, hi, bf, occ_after, occ_before, single;
+    r.origin = pt_v3(0.0f, 5500002.0f, 0.0f);
+    r.dir = pt_v3(0.0f, -0.9806f, 0.1961f);
+    want = 1.0 / (double)r.dir.z; /* the plane z = 1 from z = 0 */
+    single = pt_intersect_triangle(r, a, b, c, INFINITY, &tt);
+    CHECK(t, single == 1 && fabs(tt - want) <= 1e-6 * want, "pt_intersect_triangle: %d, t %.9g, want %.9g", single,
+          (double)tt, want);
+    s = pt_scene_create();
+    if (!CHECK(t, s != NULL, "scene")) return;
+    m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    rc = pt_scene_add_triangle(s, a, b, c, m);
+    if (rc >= 0) rc = pt_scene_set_backend(s, PT_BACKEND_BUILTIN);
+    if (rc >= 0) rc = pt_scene_commit(s);
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    memset(&h, 0, sizeof h);
+    memset(&hb, 0, sizeof hb);
+    hi = pt_scene_intersect(s, r, INFINITY, &h);
+    bf = pt_scene_intersect_brute_force(s, r, INFINITY, &hb);
+    occ_after = pt_scene_occluded(s, r, (float)(h.t * 1.0001));
+    occ_before = pt_scene_occluded(s, r, (float)(h.t * 0.9999));
+    CHECK(t, hi == 1 && fabs(h.t - want) <= 1e-6 * want, "pt_scene_intersect: %d, t %.9g, want %.9g", hi, h.t, want);
+    CHECK(t, bf == 1 && hb.t == h.t, "brute force: %d, t %.9g (intersect %.9g)", bf, hb.t, h.t);
+    CHECK(t, occ_after == 1 && occ_before == 0, "pt_scene_occluded at t * 1.0001: %d (want 1), at t * 0.9999: %d (want 0)",
+          occ_after, occ_before);
+    CHECK(t, hi != 1 || (fabs(h.point.x) < 1.0f && fabs(h.point.z - 1.0f) < 1e-6f),
+          "hit point (%.9g, %.9g, %.9g): want (0, 5499997, 1)", h.point.x, h.point.y, h.point.z);
+    test_note(t, "t %.9g, want %.9g", h.t, want);
+    pt_scene_destroy(s);
+}
+
 static void offset_ray_origin_scales(test_ctx *t)
 {
     /* Waechter & Binder (Ray Tracing Gems ch. 6): a ray leaving a hit point from the offset origin
@@ -946,6 +989,7 @@ const test_case test_geometry_cases[] = {
     TEST_CASE(intersect_sphere_far_tiny),
     TEST_CASE(intersect_planar),
     TEST_CASE(triangle_fan_watertight),
+    TEST_CASE(sliver_triangle_distance),
     TEST_CASE(offset_ray_origin_scales),
     TEST_CASE(transformed_emitters),
     TEST_CASE(box_helper),

@@ -36,6 +36,7 @@ static void watertight(test_ctx *t) { run(t, st_watertight); }
 static void edges_and_tangents(test_ctx *t) { run(t, st_edges); }
 static void light_geometry(test_ctx *t) { run(t, st_light_geometry); }
 static void degenerate_input(test_ctx *t) { run(t, st_degenerate); }
+static void sliver_triangles(test_ctx *t) { run(t, st_slivers); }
 static void cornell_offset(test_ctx *t) { run(t, st_cornell_offset); }
 static void family(test_ctx *t) { run(t, st_family); }
 
@@ -48,6 +49,7 @@ const test_case test_stress_cases[] = {
     TEST_CASE(edges_and_tangents),
     TEST_CASE(light_geometry),
     TEST_CASE(degenerate_input),
+    TEST_CASE(sliver_triangles),
     TEST_CASE(cornell_offset),
     TEST_CASE(family),
     TEST_END

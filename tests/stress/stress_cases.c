@@ -1229,6 +1229,91 @@ void st_degenerate(st_ctx *c)
     }
 }
 
+/* The exact distance along r to the plane of the float triangle a, b, c, in double. */
+static double st_plane_t(pt_ray r, pt_vec3 a, pt_vec3 b, pt_vec3 c)
+{
+    dv3 A = dv_from(a), n = dcross(dsub(dv_from(b), A), dsub(dv_from(c), A));
+    return ddot(n, dsub(A, dv_from(r.origin))) / ddot(n, dv_from(r.dir));
+}
+
+void st_slivers(st_ctx *c)
+{
+    /* Fuzzed sliver triangles (length L up to 1e7, width 1e-5 L .. 1e-2 L, at offsets up to 1e7;
+       every other one in an axis-aligned plane, as in x = const), each alone in a scene, hit from close by at a point well inside (barycentrics >= 0.1): the
+       closest hit, brute force and the shadow ray must agree (occluded just beyond t, not just
+       before), and t must match the double-precision plane distance. */
+    const int n = c->full ? 20000 : 1500;
+    int i, disagree = 0, missed = 0, hits = 0;
+    double worst = 0.0;
+    char ex[160] = "";
+    pt_rng rng;
+    pt_rng_seed(&rng, 0x511e4ull, 5u);
+    for (i = 0; i < n; i++) {
+        double M = pow(10.0, 7.0 * tu_rand(&rng)), L = M * (0.5 + 0.5 * tu_rand(&rng));
+        double w = L * pow(10.0, -5.0 + 3.0 * tu_rand(&rng)), u = 0.1 + 0.8 * tu_rand(&rng), v, wc;
+        dv3 off = dscale(tu_rand_dir(&rng), M * tu_rand(&rng)), e1 = tu_rand_dir(&rng), e2, nrm, p, dir;
+        pt_vec3 a, b, cc;
+        pt_scene *s = pt_scene_create();
+        pt_ray r;
+        pt_hit h, hb;
+        int m, hi, bf, occ_after, occ_before;
+        double tref, dist;
+        if (i % 2) { /* in an axis-aligned plane: a flat bounding box, which a wrong t misses */
+            int ax = (i / 2) % 3;
+            double ang = 2.0 * TU_PI * tu_rand(&rng);
+            dv3 x = dv(ax == 1, ax == 2, ax == 0), y = dv(ax == 2, ax == 0, ax == 1);
+            e1 = dadd(dscale(x, cos(ang)), dscale(y, sin(ang)));
+        }
+        tu_frame(e1, &e2, &nrm);
+        if (i % 2) {
+            int ax = (i / 2) % 3;
+            nrm = dv(ax == 0, ax == 1, ax == 2);
+            e2 = dcross(nrm, e1);
+        }
+        a = dv_to(dadd(off, dscale(e1, -0.5 * L)));
+        b = dv_to(dadd(off, dscale(e1, 0.5 * L)));
+        cc = dv_to(dadd(dadd(off, dscale(e1, (tu_rand(&rng) - 0.5) * L)), dscale(e2, w)));
+        /* a point with barycentrics (u', v', wc) all >= 0.1 (wc on the apex c) */
+        wc = 0.1 + 0.8 * tu_rand(&rng) * (1.0 - u);
+        v = 1.0 - u - wc;
+        if (v < 0.1) { v = 0.1; u = 1.0 - v - wc; }
+        p = dadd(dadd(dscale(dv_from(a), u), dscale(dv_from(b), v)), dscale(dv_from(cc), wc));
+        dir = dnorm(dadd(dscale(nrm, tu_rand(&rng) < 0.5 ? -1.0 : 1.0), dscale(tu_rand_dir(&rng), 0.9)));
+        dist = w * pow(10.0, 6.0 * tu_rand(&rng) - 3.0);
+        r.origin = dv_to(dsub(p, dscale(dir, dist)));
+        r.dir = dv_to(dir);
+        if (!s) continue;
+        m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+        if (pt_scene_add_triangle(s, a, b, cc, m) < 0 || pt_scene_set_backend(s, PT_BACKEND_BUILTIN) != PT_OK ||
+            pt_scene_commit(s) != PT_OK) {
+            pt_scene_destroy(s);
+            continue; /* no area in float: refused */
+        }
+        tref = st_plane_t(r, a, b, cc);
+        hi = pt_scene_intersect(s, r, INFINITY, &h);
+        bf = pt_scene_intersect_brute_force(s, r, INFINITY, &hb);
+        occ_after = hi == 1 ? pt_scene_occluded(s, r, (float)(h.t * 1.0001)) : 0;
+        occ_before = hi == 1 ? pt_scene_occluded(s, r, (float)(h.t * 0.9999)) : 0;
+        if (hi != 1 && tref > 0.0) missed++;
+        if (hi != bf || (hi == 1 && (hb.t != h.t || occ_after != 1 || occ_before != 0))) {
+            if (disagree++ == 0)
+                snprintf(ex, sizeof ex, "L %.3g w %.3g: intersect %d t %.9g, brute %d t %.9g, occluded %d/%d", L, w,
+                         hi, h.t, bf, hb.t, occ_before, occ_after);
+        }
+        if (hi == 1 && tref > 0.0) {
+            double e = fabs(h.t - tref) / tref;
+            hits++;
+            if (e > worst) worst = e;
+        }
+        pt_scene_destroy(s);
+    }
+    st_row(c, disagree == 0, "slivers: intersect / occluded", "closest hit = brute force; occluded at t(1 +- 1e-4)",
+           "0 disagreements", "%d of %d%s%s", disagree, n, disagree ? "; " : "", ex);
+    st_row(c, missed == 0 && hits > n / 2, "slivers: hits", "rays at barycentrics >= 0.1 that miss", "0",
+           "%d missed, %d hit", missed, hits);
+    st_row(c, worst <= 1e-5, "slivers: distance", "max |t - t_double| / t_double", "<= 1e-5", "%.3g", worst);
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* 5. the Cornell box far from the origin                                                      */
 

@@ -45,7 +45,7 @@ int main(int argc, char **argv)
         { "sweep", st_scale_sweep }, { "spawn", st_spawn }, { "tiny", st_tiny_light },
         { "point", st_point_light },
         { "watertight", st_watertight }, { "edges", st_edges }, { "lights", st_light_geometry },
-        { "degenerate", st_degenerate }, { "cornell", st_cornell_offset },
+        { "degenerate", st_degenerate }, { "slivers", st_slivers }, { "cornell", st_cornell_offset },
     };
     const char *filter = NULL;
     int full = 1, a;
