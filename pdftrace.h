@@ -2790,10 +2790,17 @@ static int pt__hit_triangle_precise(const pt__rayctx *rc, pt_vec3 a, pt_vec3 b, 
     if (!(t > 0.0 && t < (double)tmax) || !((float)t > 0.0f)) return 0;
     *t_out = (float)t;
     if (!(*t_out < tmax)) return 0;
-    if (bary) { /* >= 0: the double signs may differ from the float ones at an edge */
-        bary[0] = (float)(U / det > 0.0 ? U / det : 0.0);
-        bary[1] = (float)(V / det > 0.0 ? V / det : 0.0);
-        bary[2] = (float)(W / det > 0.0 ? W / det : 0.0);
+    if (bary) {
+        /* The double signs may differ from the float ones near an edge (the float test said
+           inside): clamp to >= 0 and divide by the new sum, so that the point stays on the
+           triangle's plane (a bare clamp leaves their sum above 1 and the point off the plane by
+           that excess times the vertices' size, where a spawned ray re-hits the triangle). */
+        double u = U / det > 0.0 ? U / det : 0.0, v = V / det > 0.0 ? V / det : 0.0;
+        double w = W / det > 0.0 ? W / det : 0.0, sum = u + v + w;
+        if (!(sum > 0.0)) { u = v = w = 1.0; sum = 3.0; }
+        bary[0] = (float)(u / sum);
+        bary[1] = (float)(v / sum);
+        bary[2] = (float)(w / sum);
     }
     return 1;
 }

@@ -347,6 +347,46 @@ static void sliver_triangle_distance(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+static void grazing_edge_hit_on_plane(test_ctx *t)
+{
+    /* A ray 0.3 degrees from a triangle's plane, crossing the mesh 1e-6 wide next to one of its
+       edges (a case of the stress row `spawn x1e-6`): the float edge functions call it inside,
+       in double U is -1.8 % of det (just outside). The hit point must still lie on the
+       triangle's plane: a bare clamp of the double barycentrics put it 1.2e-8 (8 % of the
+       triangle) off it, and a ray spawned from there into the mesh hit the same triangle. */
+    const pt_vec3 a = { 6.045085e-07f, 1.50000005e-07f, 4.54508495e-07f };
+    const pt_vec3 b = { 5.46890249e-07f, 2.51023209e-07f, 3.80311008e-07f };
+    const pt_vec3 c = { 4.93892628e-07f, 2.44095474e-07f, 5.12662723e-07f };
+    double e1[3], e2[3], n[3], nl, dist, size;
+    pt_ray r;
+    pt_scene *s;
+    pt_hit h;
+    int m, rc, hi;
+    r.origin = pt_v3(-0.00358455256f, 0.00263415207f, 0.00281427335f);
+    r.dir = pt_v3(0.681078494f, -0.500380754f, -0.534556925f);
+    s = pt_scene_create();
+    if (!CHECK(t, s != NULL, "scene")) return;
+    m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    rc = pt_scene_add_triangle(s, a, b, c, m);
+    if (rc >= 0) rc = pt_scene_commit(s);
+    if (!CHECK(t, rc == PT_OK, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    memset(&h, 0, sizeof h);
+    hi = pt_scene_intersect(s, r, INFINITY, &h);
+    e1[0] = (double)b.x - a.x; e1[1] = (double)b.y - a.y; e1[2] = (double)b.z - a.z;
+    e2[0] = (double)c.x - a.x; e2[1] = (double)c.y - a.y; e2[2] = (double)c.z - a.z;
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    size = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    dist = fabs(n[0] * ((double)h.point.x - a.x) + n[1] * ((double)h.point.y - a.y) + n[2] * ((double)h.point.z - a.z)) / nl;
+    /* a hit or a miss is a matter of rounding here; a hit's point must be on the plane to a few ulps */
+    CHECK(t, hi != 1 || dist <= 1e-5 * size, "hit point (%.9g, %.9g, %.9g) is %.3g off the plane (triangle %.3g wide)",
+          h.point.x, h.point.y, h.point.z, dist, size);
+    test_note(t, "hit %d, point %.3g off the plane", hi, dist);
+    pt_scene_destroy(s);
+}
+
 static void offset_ray_origin_scales(test_ctx *t)
 {
     /* Waechter & Binder (Ray Tracing Gems ch. 6): a ray leaving a hit point from the offset origin
@@ -990,6 +1030,7 @@ const test_case test_geometry_cases[] = {
     TEST_CASE(intersect_planar),
     TEST_CASE(triangle_fan_watertight),
     TEST_CASE(sliver_triangle_distance),
+    TEST_CASE(grazing_edge_hit_on_plane),
     TEST_CASE(offset_ray_origin_scales),
     TEST_CASE(transformed_emitters),
     TEST_CASE(box_helper),
