@@ -2667,7 +2667,7 @@ static void pt__mts_header(pt__mts *w)
     w->line = 0;
     for (i = 0; i < d->material_count; ++i)
         if (w->used[i]) pt__mts_bsdf(w, i);
-    if (d->background.x > 0 || d->background.y > 0 || d->background.z > 0) {
+    if (!(d->background.x == 0 && d->background.y == 0 && d->background.z == 0)) { /* (a nan is written: refused) */
         pt__mts_put(w, "  <emitter type=\"constant\">");
         pt__mts_rgb(w, "radiance", d->background);
         pt__mts_put(w, "</emitter>\n");
