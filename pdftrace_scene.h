@@ -1,4 +1,4 @@
-/* pdftrace_scene.h - scene files, Wavefront OBJ meshes and POV-Ray export for pdftrace.h.
+/* pdftrace_scene.h - scene files, Wavefront OBJ meshes, POV-Ray and Mitsuba 3 export for pdftrace.h.
    Part of the pdftrace header family. LICENSE: MIT or public domain, your choice (full text at
    the end of this file).
 
@@ -6,8 +6,8 @@
    =====
    Reads pdftrace's plain-text scene format (below) and Wavefront OBJ meshes, builds a
    committed pt_scene from them through pdftrace.h's public API, and writes the same scene
-   for POV-Ray 3.7, which renders the project's reference images. Nothing here reaches into
-   the core's internals: a parsed scene file (pt_scenefile) is plain data a program may
+   for POV-Ray 3.7 and for Mitsuba 3, the project's reference renderers. Nothing here reaches
+   into the core's internals: a parsed scene file (pt_scenefile) is plain data a program may
    inspect, edit or build itself.
 
    BUILDING
@@ -98,6 +98,22 @@
    the build first, so it never writes what pdftrace would not render, such as a sphere under
    a non-uniform scale), or one that would need a non-finite number. The scene's file name is
    the only text from input in the output, in comments, escaped by pt_scenefile_escape.
+
+   MITSUBA 3 EXPORT
+   ================
+   pt_scenefile_export_mitsuba writes an exact twin for Mitsuba 3 (docs/mitsuba.md has the
+   mapping, why each piece is exact, and measurements): the `path` integrator with max_depth
+   = pdftrace's + 1 (Mitsuba counts the camera segment) and its default Russian roulette; a
+   `perspective` sensor (fov_axis y, lookat), a thin lens as `thinlens`; `hdrfilm` float RGB
+   with a box filter; the `independent` sampler; quads and box faces as `rectangle` with the
+   exact to_world (columns u/2, v/2, unit u x v, centre); spheres; triangles and meshes as
+   binary little-endian PLY files "<xml without .xml>.N.ply" beside the XML (vertex normals
+   kept, else face_normals); Lambertian as two-sided `diffuse`, a mirror as a two-sided
+   `conductor` of material "none", glass as `dielectric`, an emitter as a one-sided `area`
+   light on its shape with a black bsdf, the background as a `constant` emitter. Refused with
+   file:line and the reason (PT_ERROR_UNSUPPORTED, nothing written): fuzzy metal, the 3-D
+   checker, two-sided emitters, an albedo above 1, a dielectric of ior 1, and, as for
+   POV-Ray, every scene the build refuses and one that needs a non-finite number.
 */
 #ifndef PDFTRACE_SCENE_H
 #define PDFTRACE_SCENE_H
@@ -262,7 +278,7 @@ typedef struct pt_mitsuba_options {
 /* Writes the Mitsuba 3 scene (XML, scene format version 3.0.0) to path and its triangles
    beside it as binary little-endian PLY files "<path without .xml>.N.ply", N = 0, 1, ...
    (all through temporary files renamed into place; on failure none is left). opt may be
-   NULL. The mapping and what is refused: the header comment above and docs/mitsuba.md.
+   NULL. The mapping and what is refused: MITSUBA 3 EXPORT above and docs/mitsuba.md.
    Refuses (writing nothing) every scene pt_scenefile_build refuses, with the build's
    message, the features Mitsuba has no exact twin for (with the statement's file:line), and
    a scene that would need a non-finite number. Text from the scene (its file name) reaches
@@ -2349,7 +2365,11 @@ static void pt__mts_comment_text(char *out, size_t size, const char *text)
 static void pt__mts_bsdf(pt__mts *w, int i)
 {
     const pt_scenefile_material *m = &w->d->materials[i];
-    pt__mts_put(w, "  <!-- material %d -->\n", i);
+    char name[16 * PT_SCENEFILE_NAME_MAX + 1], raw[PT_SCENEFILE_NAME_MAX];
+    memcpy(raw, m->name, sizeof raw);
+    raw[sizeof raw - 1] = '\0';
+    pt__mts_comment_text(name, sizeof name, raw);
+    pt__mts_put(w, "  <!-- material %s -->\n", name);
     switch (m->type) {
     case PT_MATERIAL_LAMBERTIAN:
         pt__mts_put(w, "  <bsdf type=\"twosided\" id=\"mat%d\"><bsdf type=\"diffuse\">", i);
