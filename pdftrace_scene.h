@@ -2865,12 +2865,12 @@ static int pt__mts_base(pt__mts *w, const char *path, char *err, size_t err_size
 }
 
 /* Writes PLY file `job` to its place (through a temporary renamed into place). */
-static int pt__mts_write_ply(pt__mts *w, const char *path, int job, char *ply_path, size_t size, char *err,
-                             size_t err_size)
+static int pt__mts_write_ply(pt__mts *w, const char *path, int job, char *err, size_t err_size)
 {
+    char ply_path[PT__SF_PATH + 32];
     pt_output_file out;
     int rc;
-    if (!pt__mts_ply_path(path, job, ply_path, size))
+    if (!pt__mts_ply_path(path, job, ply_path, sizeof ply_path))
         return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
     rc = pt_output_open(&out, ply_path, 0, "PLY mesh", err, err_size);
     if (rc != PT_OK) return rc;
@@ -2883,24 +2883,19 @@ static int pt__mts_write_ply(pt__mts *w, const char *path, int job, char *ply_pa
 /* The files: the PLY files first, then the XML; when one fails, the ones written are removed. */
 static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_size)
 {
-    char (*names)[PT__SF_PATH + 32] = NULL;
+    char ply_path[PT__SF_PATH + 32];
     pt_output_file out;
     int i, done = 0, rc = PT_OK;
-    if (w->ply_count) {
-        names = (char (*)[PT__SF_PATH + 32])PT_MALLOC((size_t)w->ply_count * sizeof *names);
-        if (!names) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
-    }
     for (i = 0; i < w->ply_count && rc == PT_OK; ++i)
-        if ((rc = pt__mts_write_ply(w, path, i, names[i], sizeof names[i], err, err_size)) == PT_OK) done = i + 1;
+        if ((rc = pt__mts_write_ply(w, path, i, err, err_size)) == PT_OK) done = i + 1;
     if (rc == PT_OK && (rc = pt_output_open(&out, path, 1, "Mitsuba scene", err, err_size)) == PT_OK) {
         w->f = out.file;
         pt__mts_body(w);
         w->f = NULL;
         rc = pt_output_close(&out, !ferror(out.file), "Mitsuba scene", err, err_size);
     }
-    if (rc != PT_OK)
-        for (i = 0; i < done; ++i) remove(names[i]);
-    PT_FREE(names);
+    for (i = 0; rc != PT_OK && i < done; ++i)
+        if (pt__mts_ply_path(path, i, ply_path, sizeof ply_path)) remove(ply_path);
     return rc;
 }
 
