@@ -167,7 +167,7 @@ OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON) TOOL_EXR=$(TOOL_E
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
-TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h
+TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h tests/fuzz/mitsuba_check.h
 
 .PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress install uninstall install-check FORCE
 
@@ -523,7 +523,7 @@ FPTRAP_FLAGS ?= -ftrapping-math
 FUZZ_ARGS    ?= -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
 FUZZ_HAVE_EXR := $(shell [ -f "$(patsubst -I%,%,$(firstword $(EXR_INCLUDES)))/openexr.h" ] && echo yes)
 FUZZ_TARGETS := scene obj pov $(if $(FUZZ_HAVE_EXR),exr)
-FUZZ_SRCS    := tests/fuzz/harness.c tests/fuzz/harness.h tests/fuzz/pov_check.h
+FUZZ_SRCS    := tests/fuzz/harness.c tests/fuzz/harness.h tests/fuzz/pov_check.h tests/fuzz/mitsuba_check.h
 FUZZ_MAXLEN_scene := 8192
 FUZZ_MAXLEN_obj   := 16384
 FUZZ_MAXLEN_pov   := 8192

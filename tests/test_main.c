@@ -104,6 +104,7 @@ int main(int argc, char **argv)
         { "stress", test_stress_cases },
         { "scenefile", test_scenefile_cases },
         { "pov", test_pov_cases },
+        { "mitsuba", test_mitsuba_cases },
         { "suite", test_suite_cases },
     };
     const char *filter = argc > 1 ? argv[1] : NULL;

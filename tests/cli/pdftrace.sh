@@ -6,7 +6,8 @@
 # last line "N passed, M failed, K skipped"; exit status 0 iff nothing failed.
 # Checked: PNG and EXR files are valid (PNG signature and IHDR, the EXR magic number and, with
 # exrheader, the data window); --help fits in 40 lines; bad options, values, scene files and
-# outputs exit with status 2, one line on stderr and no file written; --export-pov; the
+# outputs exit with status 2, one line on stderr and no file written; --export-pov;
+# --export-mitsuba (alone, with -o, with the overrides, and a refused scene); the
 # default output name; --preview-every rewrites the output while rendering and leaves the
 # final image as without it; the command line overrides a scene file's settings; --exposure
 # changes the 8-bit outputs only; -q prints nothing.
@@ -111,7 +112,7 @@ t_bad_input() {
     for a in "--bogus" "--spp 0" "--spp abc" "--width -5" "--size 3x" "--strategy best" "--sampler halton" \
              "--light-weight 2" "--threads" "--tonemap filmic" "--exposure inf" "--preview-every 0" "--adaptive -1" \
              "--disable-skips nope" "--indirect-paths 9" "--backend fast" "--quiet=1" "-o out.tiff" \
-             "-o no/such/dir/x.ppm" "--export-pov no/such/dir/x.pov"; do
+             "-o no/such/dir/x.ppm" "--export-pov no/such/dir/x.pov" "--export-mitsuba no/such/dir/x.xml"; do
         # shellcheck disable=SC2086
         bad_case "$a" "$S/mirror.scene" --spp 1 --size 8x8 -o "$W/bad/x.ppm" $a || ok=0
     done
@@ -153,6 +154,43 @@ t_export_pov() {
         return
     fi
     pass export_pov "alone: only the .pov; with -o: the .pov and the image"
+}
+
+# ---- --export-mitsuba: alone it writes the .xml and its PLY files only, with the command
+# line's size, spp and depth (written as depth + 1); with -o it renders too; a scene Mitsuba has
+# no exact twin for is refused (status 2, file:line, no file)
+t_export_mitsuba() {
+    local dir=$W/mitsuba first lines status
+    mkdir -p "$dir"
+    if ! (cd "$dir" && "$P" "$S/mesh.scene" -q --size 20x10 --spp 3 --max-depth 4 --export-mitsuba m.xml) 2>"$W/err.txt"; then
+        fail export_mitsuba "failed: $(head -n 1 "$W/err.txt")"
+        return
+    fi
+    if [ "$(ls "$dir" | tr '\n' ' ')" != "m.0.ply m.xml " ] ||
+        ! grep -q '<integer name="width" value="20"/><integer name="height" value="10"/>' "$dir/m.xml" ||
+        ! grep -q '<integer name="sample_count" value="3"/>' "$dir/m.xml" ||
+        ! grep -q '<integer name="max_depth" value="5"/>' "$dir/m.xml" ||
+        [ "$(head -c 36 "$dir/m.0.ply")" != "$(printf 'ply\nformat binary_little_endian 1.0')" ]; then
+        fail export_mitsuba "wrote '$(ls "$dir" | tr '\n' ' ')' (want m.0.ply m.xml, 20x10, spp 3, max_depth 5)"
+        return
+    fi
+    rm -f "$dir"/*
+    if ! "$P" "$S/mirror.scene" -q --spp 1 --size 16x16 --export-mitsuba "$dir/m.xml" -o "$dir/m.pfm" 2>"$W/err.txt" ||
+        [ ! -s "$dir/m.xml" ] || [ ! -s "$dir/m.pfm" ]; then
+        fail export_mitsuba "with -o: $(head -n 1 "$W/err.txt"); wrote $(ls "$dir" | tr '\n' ' ')"
+        return
+    fi
+    rm -f "$dir"/*
+    "$P" "$S/checker.scene" -q --export-mitsuba "$dir/c.xml" 2>"$W/err.txt"
+    status=$?
+    lines=$(wc -l <"$W/err.txt")
+    first=$(head -n 1 "$W/err.txt")
+    if [ $status != 2 ] || [ "$lines" != 1 ] || [[ $first != *"checker.scene:16: Mitsuba export: the 3-D checker"* ]] ||
+        [ -n "$(ls -A "$dir")" ]; then
+        fail export_mitsuba "checker.scene: status $status, $lines lines ('$first'), files: $(ls -A "$dir" | tr '\n' ' ')"
+        return
+    fi
+    pass export_mitsuba "alone: the .xml and its .ply, overrides applied; with -o: the image too; checker refused"
 }
 
 # ---- no -o: SCENE's base name in the current directory
@@ -404,6 +442,7 @@ t_png_exr
 t_precision_warning
 t_bad_input
 t_export_pov
+t_export_mitsuba
 t_default_output
 t_preview
 t_overrides

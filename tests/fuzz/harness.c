@@ -23,6 +23,7 @@
 
 #include "harness.h"
 #include "pov_check.h"
+#include "mitsuba_check.h"
 
 #ifndef PT_FUZZ_SCENE_DIR
 #define PT_FUZZ_SCENE_DIR "scenes"
@@ -335,6 +336,37 @@ static char *fz_read(const char *path, size_t *len)
     return buf;
 }
 
+/* The Mitsuba export of the same description (the pov target runs it too): refused when the
+   build refuses, a refusal leaves no file, an export passes tests/fuzz/mitsuba_check.h. */
+static void fz_mitsuba(const pt_scenefile *d, int build_rc)
+{
+    static const char *T = "pov";
+    char xml[600], ply[640], err[1024], why[256];
+    size_t len = 0;
+    char *text;
+    int rc, k;
+    snprintf(xml, sizeof xml, "%.500s.mitsuba.xml", fz_pov_path());
+    snprintf(ply, sizeof ply, "%.500s.mitsuba.0.ply", fz_pov_path());
+    rc = pt_scenefile_export_mitsuba(d, xml, NULL, err, sizeof err);
+    FZ_CHECK(T, build_rc != PT_OK ? rc != PT_OK : 1, "the Mitsuba exporter accepted a scene the build refuses");
+    if (rc != PT_OK) {
+        FZ_CHECK(T, rc < 0 && err[0] != '\0', err);
+        FZ_CHECK(T, !fz_exists(xml) && !fz_exists(ply), "a refused Mitsuba export left a file");
+        fz_note(T, "Mitsuba refused", err);
+    } else {
+        text = fz_read(xml, &len);
+        FZ_CHECK(T, text != NULL, "the Mitsuba export wrote no readable file");
+        FZ_CHECK(T, pt_mitsuba_check_text(text, len, why, sizeof why), why);
+        free(text);
+        fz_note(T, "Mitsuba exported, text checked", NULL);
+    }
+    remove(xml);
+    for (k = 0; k <= d->shape_count; ++k) { /* at most one PLY file per shape */
+        snprintf(ply, sizeof ply, "%.500s.mitsuba.%d.ply", fz_pov_path(), k);
+        if (remove(ply) != 0) break;
+    }
+}
+
 int pt_fuzz_pov(const uint8_t *data, size_t size)
 {
     static const char *T = "pov";
@@ -387,6 +419,7 @@ int pt_fuzz_pov(const uint8_t *data, size_t size)
         fz_note(T, "exported, text checked", NULL);
     }
     remove(path);
+    fz_mitsuba(&d, brc);
     pt_scenefile_free(&d);
     return 0;
 }

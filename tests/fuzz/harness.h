@@ -15,7 +15,8 @@ int pt_fuzz_scene(const uint8_t *data, size_t size);
 /* Scene text -> pt_scenefile_parse (the scene's name set to the input's first bytes) ->
    pt_scenefile_write_pov to a temporary file: every scene the build refuses is refused with a
    message and no file; an exported text passes tests/fuzz/pov_check.h (no nan/inf, no
-   directive or string from input, comments whole lines, braces balanced). */
+   directive or string from input, comments whole lines, braces balanced). Then the same for
+   pt_scenefile_export_mitsuba, whose XML must pass tests/fuzz/mitsuba_check.h. */
 int pt_fuzz_pov(const uint8_t *data, size_t size);
 /* OBJ text -> pt_obj_parse -> a committed scene with the mesh -> rays. */
 int pt_fuzz_obj(const uint8_t *data, size_t size);
