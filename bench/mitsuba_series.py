@@ -8,7 +8,7 @@
       takes at least S seconds, until its raw relMSE comes within 10x the reference's noise floor F, or
       up to M spp; seeds 2..N render the same ladder. Seeds are interleaved (seed-major, as bench.c's
       runs). One line per render: sampler, seed, spp asked, spp used, seconds, relMSE, bias.
-  python mitsuba_series.py refcheck --xml SCENE.xml --ref REF.pfm --spp N --seeds K [--ref-spp R]
+  python mitsuba_series.py refcheck --xml SCENE.xml --ref REF.pfm [REF2.pfm ...] --spp N --seeds K [--ref-spp R]
       K independent renders of N spp against a stored reference: the mean per channel and the means of
       4x4 regions, each with its standard error over the K seeds, and z = (Mitsuba - reference) / SE.
 
@@ -180,32 +180,41 @@ def region_stats(px, w, h, n=4):
 
 def cmd_refcheck(a):
     mi, dr = load_mitsuba()
-    rw, rh, ref = read_pfm(a.ref)
+    refs = [read_pfm(path) for path in a.ref]
     sc = load_scene(mi, a.xml, "independent")
-    rwhole, rreg = region_stats(ref, rw, rh)
     wholes, regs = [], []
     t0 = time.perf_counter()
     for seed in range(1, a.seeds + 1):
         _, img, _ = render(mi, dr, sc, a.spp, 1000 + seed)
         w, h, px = image_floats(dr, img)
-        if (w, h) != (rw, rh):
-            raise ValueError("render is %dx%d, reference %s is %dx%d" % (w, h, a.ref, rw, rh))
+        for path, (rw, rh, _) in zip(a.ref, refs):
+            if (w, h) != (rw, rh):
+                raise ValueError("render is %dx%d, reference %s is %dx%d" % (w, h, path, rw, rh))
         wh, rg = region_stats(px, w, h)
         wholes.append(wh)
         regs.append(rg)
-    k = a.seeds
+    seconds = time.perf_counter() - t0
+    for path, (rw, rh, ref) in zip(a.ref, refs):
+        report_refcheck(a, path, seconds, wholes, regs, region_stats(ref, rw, rh))
+    return 0
+
+
+def report_refcheck(a, path, seconds, wholes, regs, ref_stats):
+    """Prints the mean and 4x4-region comparison of the seeds' renders with one reference."""
+    rwhole, rreg = ref_stats
+    k = len(wholes)
     # the reference's own noise: with the same variance per sample as Mitsuba's, its SE is Mitsuba's
     # SE of the mean times sqrt(K N / R), R the reference's spp (a stated assumption, not a measurement)
     inflate = math.sqrt(1.0 + k * a.spp / a.ref_spp) if a.ref_spp > 0 else 1.0
 
     def stat(vals, rv):
         m = sum(vals) / k
-        sd = math.sqrt(sum((v - m) ** 2 for v in vals) / (k - 1))
-        se = sd / math.sqrt(k)
-        return m / rv - 1.0 if rv > 0 else float("nan"), (m - rv) / se if se > 0 else float("nan"), se / rv if rv > 0 else float("nan")
+        se = math.sqrt(sum((v - m) ** 2 for v in vals) / (k - 1) / k)
+        return (m / rv - 1.0 if rv > 0 else float("nan"), (m - rv) / se if se > 0 else float("nan"),
+                se / rv if rv > 0 else float("nan"))
 
     print("# refcheck %s against %s: %d seeds x %d spp (%.0f s); z = (Mitsuba - ref) / SE(Mitsuba seeds)%s"
-          % (a.xml, a.ref, k, a.spp, time.perf_counter() - t0,
+          % (a.xml, path, k, a.spp, seconds,
              "; z_both also counts the reference's noise (%d spp, same variance per sample assumed)" % a.ref_spp
              if a.ref_spp > 0 else ""))
     print("what\tchannel\tmitsuba_over_ref_minus_1\tse_rel\tz\tz_both")
@@ -223,7 +232,6 @@ def cmd_refcheck(a):
             zmax = max(zmax, abs(z))
     print("# regions x channels beyond 3 SE: %d of %d (with the reference's noise: %d); largest |z| %.2f"
           % (n3, 3 * len(rreg), n2, zmax))
-    return 0
 
 
 def main():
@@ -242,7 +250,7 @@ def main():
     s.add_argument("--keep", help="also write every render as DIR/SAMPLER-sSEED-SPP.pfm")
     r = sub.add_parser("refcheck")
     r.add_argument("--xml", required=True)
-    r.add_argument("--ref", required=True)
+    r.add_argument("--ref", required=True, nargs="+", help="one or more reference PFMs")
     r.add_argument("--spp", type=int, required=True)
     r.add_argument("--seeds", type=int, default=8)
     r.add_argument("--ref-spp", type=int, default=0, help="the reference's spp (for z_both)")
