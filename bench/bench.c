@@ -126,6 +126,7 @@ typedef struct config {
     const char *ref_dir;
     const char *mitsuba_python; /* the Python of the venv with Mitsuba 3 (make mitsuba-install) */
     const char *cache;          /* the headline's reference image (large: not in bench/ref) */
+    int headline_size;          /* 0: the scene file's size; else N x N (for quick checks) */
     int scene_on[SCENE_COUNT];
 } config;
 
@@ -1273,8 +1274,8 @@ static int run_headline(const config *cfg, headline_results *H)
     bs.file = HEADLINE_SCENE;
     if (!file_hash(bs.file, &hash) || !load_scene(&bs, &L)) return 0;
     /* load_scene sets the benchmark's size: back to the scene file's own */
-    L.rd.width = L.sd.width;
-    L.rd.height = L.sd.height;
+    L.rd.width = cfg->headline_size ? cfg->headline_size : L.sd.width;
+    L.rd.height = cfg->headline_size ? cfg->headline_size : L.sd.height;
     H->width = L.rd.width;
     H->height = L.rd.height;
     H->spp = L.rd.samples_per_pixel;
@@ -2447,12 +2448,13 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
         for (j = 0; M->ran[i] && j < MI_SAMPLERS; ++j) {
             const series *s = &M->s[i][j];
             const point *p = &s->med[s->levels - 1];
-            char slope[96];
+            char slope[96], slope_med[32];
+            fmt_g(slope_med, sizeof slope_med, s->slope_med);
             if (s->slope == s->slope) snprintf(slope, sizeof slope, "%.3f [%.3f, %.3f]", s->slope, s->slope_lo, s->slope_hi);
             else snprintf(slope, sizeof slope, "- (%d points with >= %d spp)", s->fit_points, FIT_MIN_SPP);
-            fprintf(f, "| Mitsuba 3 %s (one render per point) | %d | %.3g | %.3g | %+.2f%% | %.3g M | - | %s | %.3f | %.3g |\n",
+            fprintf(f, "| Mitsuba 3 %s (one render per point) | %d | %.3g | %.3g | %+.2f%% | %.3g M | - | %s | %s | %.3g |\n",
                     mi_samplers[j], M->spp_used[i][j][s->levels - 1], p->time, s->err[s->levels - 1], 100 * p->bias,
-                    p->samples / p->time / 1e6, slope, s->slope_med, efficiency(s));
+                    p->samples / p->time / 1e6, slope, slope_med, efficiency(s));
         }
         if (!M->ran[i] && M->available) fprintf(f, "| Mitsuba 3 | SKIP: %s |||||||||\n", M->scene_skip[i]);
         m = mis_vs_best(R, i, 0);
@@ -2606,6 +2608,7 @@ static int usage(void)
             "  --mitsuba-python: the Python of a venv with Mitsuba 3 (default $MITSUBA_PYTHON, else\n"
             "           build/mitsuba-venv/bin/python; make mitsuba-install creates it)\n"
             "  --cache: where the headline keeps its reference image (default build/bench-cache)\n"
+            "  --headline-size N: the headline at N x N instead of the scene's size (quick checks)\n"
             "  --scenes: comma-separated scene names (default all; see bench list)\n"
             "Run from the repository root (make bench / make bench-quick / make bench-refs).\n");
     return 2;
@@ -2693,6 +2696,10 @@ static int cmd_run(int argc, char **argv)
         else if (!strcmp(a, "--out") && i + 1 < argc) cfg.out = argv[++i];
         else if (!strcmp(a, "--mitsuba-python") && i + 1 < argc) cfg.mitsuba_python = argv[++i];
         else if (!strcmp(a, "--cache") && i + 1 < argc) cfg.cache = argv[++i];
+        else if (!strcmp(a, "--headline-size") && i + 1 < argc) {
+            if (!parse_positive(a, argv[++i], 8, 4096, &v)) return 2;
+            cfg.headline_size = (int)v;
+        }
         else if (!strcmp(a, "--budget") && i + 1 < argc) {
             if (!parse_positive(a, argv[++i], 0.001, 3600, &cfg.budget)) return 2;
             budget_set = 1;
