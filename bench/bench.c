@@ -327,19 +327,20 @@ static int progress_print(void *user, const pt_progress *p)
 
 /* A reference image of L's scene at L->rd's size: MIS, spp samples per pixel, seed REF_SEED; *floor
    = mean over pixels and channels of var(pixel mean) / (r^2 + 0.01), its noise in relMSE units. */
-static int render_reference_image(loaded *L, int spp, pt_image *mean, double *floor, pt_render_stats *st)
+static int render_reference_image(const loaded *L, int spp, pt_image *mean, double *floor, pt_render_stats *st)
 {
     pt_film film;
-    const int w = L->rd.width, h = L->rd.height;
+    pt_render_desc d = L->rd; /* L->rd stays the scene's (the headline renders it next) */
+    const int w = d.width, h = d.height;
     int x, y, rc, ok = 1;
     double fl = 0;
-    L->rd.samples_per_pixel = spp;
-    L->rd.samples_per_pass = spp / 64 > 0 ? spp / 64 : 1;
-    L->rd.strategy = PT_STRATEGY_MIS;
-    L->rd.seed = REF_SEED;
-    L->rd.progress = progress_print;
+    d.samples_per_pixel = spp;
+    d.samples_per_pass = spp / 64 > 0 ? spp / 64 : 1;
+    d.strategy = PT_STRATEGY_MIS;
+    d.seed = REF_SEED;
+    d.progress = progress_print;
     if (pt_film_init(&film, w, h) != PT_OK) die_oom();
-    rc = pt_render(L->scene, &L->rd, &film, st);
+    rc = pt_render(L->scene, &d, &film, st);
     fprintf(stderr, "\n");
     if (rc != PT_OK || pt_film_resolve(&film, mean) != PT_OK) {
         fprintf(stderr, "bench: reference render of %s failed: %s\n", L->sd.file, st->error);
@@ -1013,7 +1014,7 @@ static int mitsuba_export(const loaded *L, const char *path, int w, int h, char 
 /* Runs the series script on xml against ref (stop_floor: its floor-stop value; 0 = none) and reads
    its TSV into s[MI_SAMPLERS] (raw relMSE per seed; summarize_series subtracts floor). */
 static int mitsuba_series(const config *cfg, const char *xml, const char *ref, double stop_floor, double budget,
-                          int seeds, int pixels, const char *tsv, series *s, int (*used)[MAX_LEVELS])
+                          int max_spp, int seeds, int pixels, const char *tsv, series *s, int (*used)[MAX_LEVELS])
 {
     char qp[1100], qx[2200], qr[2200], qt[2200], cmd[8000], line[512];
     int n[MI_SAMPLERS][MAX_SEEDS], j, q, ok = 1;
@@ -1023,8 +1024,8 @@ static int mitsuba_series(const config *cfg, const char *xml, const char *ref, d
         fprintf(stderr, "bench: path too long for the Mitsuba command\n");
         return 0;
     }
-    snprintf(cmd, sizeof cmd, "%s %s series --xml %s --ref %s --floor %.6e --budget %.6g --seeds %d --out %s", qp,
-             MI_SCRIPT, qx, qr, stop_floor, budget, seeds, qt);
+    snprintf(cmd, sizeof cmd, "%s %s series --xml %s --ref %s --floor %.6e --budget %.6g --max-spp %d --seeds %d --out %s",
+             qp, MI_SCRIPT, qx, qr, stop_floor, budget, max_spp, seeds, qt);
     if (system(cmd) != 0) {
         fprintf(stderr, "bench: Mitsuba series failed: %s\n", cmd);
         return 0;
@@ -1095,7 +1096,8 @@ static int run_mitsuba(const config *cfg, results *R, mitsuba_results *M)
             printf("SKIP Mitsuba %s: not exported: %s\n", scenes[i].name, M->scene_skip[i]);
             continue;
         }
-        if (!mitsuba_series(cfg, xml, ref, R->L[i].floor, cfg->budget, cfg->seeds, BENCH_SIZE * BENCH_SIZE, tsv,
+        if (!mitsuba_series(cfg, xml, ref, R->L[i].floor, cfg->budget, 1 << (MAX_LEVELS - 1), cfg->seeds,
+                            BENCH_SIZE * BENCH_SIZE, tsv,
                             M->s[i], M->spp_used[i]))
             return 0;
         for (j = 0; j < MI_SAMPLERS; ++j) {
@@ -1256,6 +1258,34 @@ static int headline_reference(const config *cfg, loaded *L, uint64_t hash, headl
     return 1;
 }
 
+/* One pdftrace render of the headline at the scene's settings, seed index `seed`: time, relMSE - floor, bias. */
+static int headline_pdftrace(const loaded *L, const headline_results *H, int seed, double *t, double *e, double *b)
+{
+    pt_render_desc d = L->rd;
+    pt_render_stats st;
+    pt_film film;
+    pt_image img = {0, 0, NULL};
+    double t0;
+    d.seed = (uint64_t)(seed + 1);
+    d.progress = NULL;
+    if (pt_film_init(&film, H->width, H->height) != PT_OK) die_oom();
+    t0 = ptv_now();
+    if (pt_render(L->scene, &d, &film, &st) != PT_OK) {
+        fprintf(stderr, "bench: headline render failed: %s\n", st.error);
+        pt_film_free(&film);
+        return 0;
+    }
+    t[seed] = ptv_now() - t0;
+    if (pt_film_resolve(&film, &img) != PT_OK) die_oom();
+    measure(&img, &L->ref, &e[seed], &b[seed]);
+    e[seed] -= H->floor;
+    pt_image_free(&img);
+    pt_film_free(&film);
+    printf("  pdftrace seed %d: %.2f s, relMSE %.4g\n", seed + 1, t[seed], e[seed]);
+    fflush(stdout);
+    return 1;
+}
+
 static int run_headline(const config *cfg, headline_results *H)
 {
     bench_scene bs;
@@ -1288,33 +1318,13 @@ static int run_headline(const config *cfg, headline_results *H)
         free_scene(&L);
         return 0;
     }
-    for (seed = 0; ok && seed < H->seeds; ++seed) {
-        pt_render_desc d = L.rd;
-        pt_render_stats st;
-        pt_film film;
-        pt_image img = {0, 0, NULL};
-        double t0;
-        d.seed = (uint64_t)(seed + 1);
-        d.progress = NULL;
-        if (pt_film_init(&film, H->width, H->height) != PT_OK) die_oom();
-        t0 = ptv_now();
-        if (pt_render(L.scene, &d, &film, &st) != PT_OK) {
-            fprintf(stderr, "bench: headline render failed: %s\n", st.error);
-            ok = 0;
-        }
-        t[seed] = ptv_now() - t0;
-        if (ok && pt_film_resolve(&film, &img) != PT_OK) die_oom();
-        if (ok) measure(&img, &L.ref, &e[seed], &b[seed]);
-        e[seed] -= H->floor;
-        pt_image_free(&img);
-        pt_film_free(&film);
-        if (ok) printf("  pdftrace seed %d: %.2f s, relMSE %.4g\n", seed + 1, t[seed], e[seed]);
-        fflush(stdout);
-    }
+    /* pdftrace's seeds alternate before and after Mitsuba's series (1, 3, ... before; 2, 4, ...
+       after), so a change in the shared machine's load between the two does not favour either */
+    for (seed = 0; ok && seed < H->seeds; seed += 2) ok = headline_pdftrace(&L, H, seed, t, e, b);
     if (ok) {
-        H->pt_time = median(t, H->seeds);
-        H->pt_err = median(e, H->seeds);
-        H->pt_bias = median(b, H->seeds);
+        double tb[MAX_SEEDS];
+        int nb = 0;
+        for (seed = 0; seed < H->seeds; seed += 2) tb[nb++] = t[seed];
         snprintf(dir, sizeof dir, "%s/mitsuba", cfg->out);
         snprintf(xml, sizeof xml, "%s/cornell-%dx%d.xml", dir, H->width, H->height);
         snprintf(tsv, sizeof tsv, "%s/cornell-%dx%d.tsv", dir, H->width, H->height);
@@ -1324,9 +1334,16 @@ static int run_headline(const config *cfg, headline_results *H)
             fprintf(stderr, "bench: Mitsuba export of %s: %s\n", HEADLINE_SCENE, H->skip_reason);
             ok = 0;
         }
-        /* ladder until one render takes 1.5x pdftrace's time, so the series brackets it */
-        if (ok) ok = mitsuba_series(cfg, xml, ref, 0.0, 1.5 * H->pt_time, H->seeds, H->width * H->height, tsv, H->mi,
-                                    H->spp_used);
+        /* ladder until one render takes 2x pdftrace's time (seeds so far), so the series brackets
+           it (at most 16x pdftrace's spp) */
+        if (ok) ok = mitsuba_series(cfg, xml, ref, 0.0, 2.0 * median(tb, nb), 16 * H->spp, H->seeds,
+                                    H->width * H->height, tsv, H->mi, H->spp_used);
+    }
+    for (seed = 1; ok && seed < H->seeds; seed += 2) ok = headline_pdftrace(&L, H, seed, t, e, b);
+    if (ok) {
+        H->pt_time = median(t, H->seeds);
+        H->pt_err = median(e, H->seeds);
+        H->pt_bias = median(b, H->seeds);
     }
     for (j = 0; ok && j < MI_SAMPLERS; ++j) {
         summarize_series(&H->mi[j], H->seeds, H->floor);
