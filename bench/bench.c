@@ -1,7 +1,9 @@
 /* bench.c - `make bench` / `make bench-quick`: error against time for every strategy and scene,
-   POV-Ray on the same axes, adaptive sampling and the scene-feature skips.
+   POV-Ray and Mitsuba 3 on the same axes, adaptive sampling and the scene-feature skips, and the
+   headline (`make bench-headline`): the 600 x 600 Cornell box at its own settings against Mitsuba.
 
      bench run [--quick] [--out DIR] [--budget S] [--seeds N] [--parts LIST] [--scenes LIST]
+               [--mitsuba-python PYTHON] [--cache DIR] [--headline-size N]
      bench refs [NAME...]      render the stored references bench/ref/NAME.pfm (+ NAME.txt)
      bench list                the scenes, their files and their references
 
@@ -23,8 +25,9 @@
    of log relMSE against log time, fitted to the mean over seeds (see fit_loglog).
 
    Output (DIR, default bench/out): series.csv (medians), series-seeds.csv (every seed),
-   fits.csv, pov.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts (*.gp), PNG
-   plots and summary.md. Missing povray or gnuplot: that part prints SKIP and the rest runs.
+   fits.csv, pov.csv, mitsuba.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts
+   (*.gp), PNG plots, summary.md and headline.md. Missing povray, Mitsuba 3 (the venv of `make
+   mitsuba-install`) or gnuplot: that part prints SKIP and the rest runs.
    Exit status: 0 when everything ran (acceptance lines may still say FAIL: this is a
    measurement, not a test), 1 on an error, 2 on bad usage. */
 #define _POSIX_C_SOURCE 200809L

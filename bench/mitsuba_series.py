@@ -9,8 +9,9 @@
       up to M spp; seeds 2..N render the same ladder. Seeds are interleaved (seed-major, as bench.c's
       runs). One line per render: sampler, seed, spp asked, spp used, seconds, relMSE, bias.
   python mitsuba_series.py refcheck --xml SCENE.xml --ref REF.pfm [REF2.pfm ...] --spp N --seeds K [--ref-spp R]
-      K independent renders of N spp against a stored reference: the mean per channel and the means of
-      4x4 regions, each with its standard error over the K seeds, and z = (Mitsuba - reference) / SE.
+      K independent renders of N spp (seeds B+1 .. B+K, --seed-base B, default 1000) against stored
+      references: the mean per channel and the means of 4x4 regions, each with its standard error over
+      the K seeds, and z = (Mitsuba - reference) / SE; z_both also counts the reference's own noise.
 
 Variant llvm_ad_rgb (SIMD wavefronts on every core). Time is the render alone: mi.render with the
 evaluation of the image forced inside the timed region (drjit.eval, then drjit.sync_thread waits for
@@ -185,7 +186,7 @@ def cmd_refcheck(a):
     wholes, regs = [], []
     t0 = time.perf_counter()
     for seed in range(1, a.seeds + 1):
-        _, img, _ = render(mi, dr, sc, a.spp, 1000 + seed)
+        _, img, _ = render(mi, dr, sc, a.spp, a.seed_base + seed)
         w, h, px = image_floats(dr, img)
         for path, (rw, rh, _) in zip(a.ref, refs):
             if (w, h) != (rw, rh):
@@ -254,6 +255,7 @@ def main():
     r.add_argument("--spp", type=int, required=True)
     r.add_argument("--seeds", type=int, default=8)
     r.add_argument("--ref-spp", type=int, default=0, help="the reference's spp (for z_both)")
+    r.add_argument("--seed-base", type=int, default=1000, help="seeds seed_base+1 .. seed_base+K")
     a = p.parse_args()
     try:
         if a.cmd == "check":
