@@ -1187,7 +1187,7 @@ static versus versus_mitsuba(const results *R, const mitsuba_results *M, int i)
    its noise floor and scene hash and remade when either changes; its floor is subtracted as for
    the 128 x 128 scenes. Mitsuba's series here has no floor stop (it must reach pdftrace's error). */
 #define HEADLINE_SCENE "scenes/cornell.scene"
-#define HEADLINE_REF_SPP 2048
+#define HEADLINE_REF_SPP 1024
 #define HEADLINE_SEEDS 3
 
 typedef struct headline_results {
