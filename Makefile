@@ -49,7 +49,10 @@
 #   make bench            error against time for every scene and strategy, POV-Ray on the same
 #                         axes, adaptive sampling and skips -> bench/out/ (summary.md, CSV,
 #                         PNG plots by gnuplot; ~25 min on 2 cores; BENCH_OUT, BENCH_ARGS)
-#   make bench-quick      the same in under 3 minutes -> $(BUILD)/bench-quick/
+#   make bench-quick      the same in under 4 minutes -> $(BUILD)/bench-quick/
+#   make bench-headline   the 600x600 Cornell box (scenes/cornell.scene) at its own settings against
+#                         Mitsuba 3 at equal time and equal error -> $(BUILD)/bench-headline/
+#                         (needs make mitsuba-install; MITSUBA_VENV)
 #   make bench-refs       re-render the benchmark's reference images in bench/ref/ (~30 min)
 #   make stress          the numerical stress cases at full size (~1-2 min CPU): a table
 #                         case | metric | bound | result, non-zero exit on any failing row
@@ -169,7 +172,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h tests/fuzz/mitsuba_check.h
 
-.PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-refs bench-bvh stress install uninstall install-check FORCE
+.PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-headline bench-refs bench-bvh stress install uninstall install-check FORCE
 
 all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
@@ -273,15 +276,22 @@ validate-refs: $(BUILD)/ptv
 # without it the plots SKIP and the data and plots.gp are still written.
 BENCH_OUT  ?= bench/out
 BENCH_ARGS ?=
+# Mitsuba 3 on the same axes (bench/mitsuba_series.py run by the venv's Python; without it the
+# Mitsuba parts SKIP with the install command). The headline's 600x600 reference is cached here.
+MITSUBA_VENV ?= $(BUILD)/mitsuba-venv
+BENCH_MITSUBA = --mitsuba-python $(MITSUBA_VENV)/bin/python --cache $(BUILD)/bench-cache
 
 $(BUILD)/bench: bench/bench.c validation/ptv_common.h $(PT_HEADERS) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(PTV_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(PTV_LDLIBS) $(PT_LDLIBS)
 
 bench: $(BUILD)/bench
-	./$(BUILD)/bench run --out $(BENCH_OUT) $(BENCH_ARGS)
+	./$(BUILD)/bench run --out $(BENCH_OUT) $(BENCH_MITSUBA) $(BENCH_ARGS)
 
 bench-quick: $(BUILD)/bench
-	./$(BUILD)/bench run --quick --out $(BUILD)/bench-quick $(BENCH_ARGS)
+	./$(BUILD)/bench run --quick --out $(BUILD)/bench-quick $(BENCH_MITSUBA) $(BENCH_ARGS)
+
+bench-headline: $(BUILD)/bench
+	./$(BUILD)/bench run --parts headline --out $(BUILD)/bench-headline $(BENCH_MITSUBA) $(BENCH_ARGS)
 
 bench-refs: $(BUILD)/bench
 	./$(BUILD)/bench refs

@@ -1,7 +1,9 @@
 /* bench.c - `make bench` / `make bench-quick`: error against time for every strategy and scene,
-   POV-Ray on the same axes, adaptive sampling and the scene-feature skips.
+   POV-Ray and Mitsuba 3 on the same axes, adaptive sampling and the scene-feature skips, and the
+   headline (`make bench-headline`): the 600 x 600 Cornell box at its own settings against Mitsuba.
 
      bench run [--quick] [--out DIR] [--budget S] [--seeds N] [--parts LIST] [--scenes LIST]
+               [--mitsuba-python PYTHON] [--cache DIR] [--headline-size N]
      bench refs [NAME...]      render the stored references bench/ref/NAME.pfm (+ NAME.txt)
      bench list                the scenes, their files and their references
 
@@ -23,8 +25,9 @@
    of log relMSE against log time, fitted to the mean over seeds (see fit_loglog).
 
    Output (DIR, default bench/out): series.csv (medians), series-seeds.csv (every seed),
-   fits.csv, pov.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts (*.gp), PNG
-   plots and summary.md. Missing povray or gnuplot: that part prints SKIP and the rest runs.
+   fits.csv, pov.csv, mitsuba.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts
+   (*.gp), PNG plots, summary.md and headline.md. Missing povray, Mitsuba 3 (the venv of `make
+   mitsuba-install`) or gnuplot: that part prints SKIP and the rest runs.
    Exit status: 0 when everything ran (acceptance lines may still say FAIL: this is a
    measurement, not a test), 1 on an error, 2 on bad usage. */
 #define _POSIX_C_SOURCE 200809L
@@ -114,7 +117,8 @@ static const bench_strategy strategies[] = {
 #define S_MIS 5
 #define S_MIS_SOBOL 6
 
-enum { PART_SERIES = 1, PART_ADAPTIVE = 2, PART_SKIPS = 4, PART_POV = 8, PART_ALL = 15 };
+enum { PART_SERIES = 1, PART_ADAPTIVE = 2, PART_SKIPS = 4, PART_POV = 8, PART_MITSUBA = 16, PART_HEADLINE = 32,
+       PART_ALL = 63 };
 
 typedef struct config {
     int quick;
@@ -123,6 +127,9 @@ typedef struct config {
     unsigned parts;
     const char *out;
     const char *ref_dir;
+    const char *mitsuba_python; /* the Python of the venv with Mitsuba 3 (make mitsuba-install) */
+    const char *cache;          /* the headline's reference image (large: not in bench/ref) */
+    int headline_size;          /* 0: the scene file's size; else N x N (for quick checks) */
     int scene_on[SCENE_COUNT];
 } config;
 
@@ -321,47 +328,60 @@ static int progress_print(void *user, const pt_progress *p)
     return 0;
 }
 
-static int make_reference(const config *cfg, const bench_scene *bs, int spp_override)
+/* A reference image of L's scene at L->rd's size: MIS, spp samples per pixel, seed REF_SEED; *floor
+   = mean over pixels and channels of var(pixel mean) / (r^2 + 0.01), its noise in relMSE units. */
+static int render_reference_image(const loaded *L, int spp, pt_image *mean, double *floor, pt_render_stats *st)
 {
-    const int ref_spp = spp_override > 0 ? spp_override : bs->ref_spp;
-    loaded L;
     pt_film film;
-    pt_image mean = {0, 0, NULL};
-    pt_render_stats st;
-    char path[2048];
-    double fl = 0;
+    pt_render_desc d = L->rd; /* L->rd stays the scene's (the headline renders it next) */
+    const int w = d.width, h = d.height;
     int x, y, rc, ok = 1;
-    FILE *f;
-    uint64_t hash = 0;
-    if (!file_hash(bs->file, &hash) || !load_scene(bs, &L)) return 0;
-    L.rd.samples_per_pixel = ref_spp;
-    L.rd.samples_per_pass = ref_spp / 64 > 0 ? ref_spp / 64 : 1;
-    L.rd.strategy = PT_STRATEGY_MIS;
-    L.rd.seed = REF_SEED;
-    L.rd.progress = progress_print;
-    printf("bench refs: %s (%s), %dx%d, MIS, %d spp, seed %llu\n", bs->name, bs->file, BENCH_SIZE, BENCH_SIZE,
-           ref_spp, (unsigned long long)REF_SEED);
-    fflush(stdout);
-    if (pt_film_init(&film, BENCH_SIZE, BENCH_SIZE) != PT_OK) die_oom();
-    rc = pt_render(L.scene, &L.rd, &film, &st);
+    double fl = 0;
+    d.samples_per_pixel = spp;
+    d.samples_per_pass = spp / 64 > 0 ? spp / 64 : 1;
+    d.strategy = PT_STRATEGY_MIS;
+    d.seed = REF_SEED;
+    d.progress = progress_print;
+    if (pt_film_init(&film, w, h) != PT_OK) die_oom();
+    rc = pt_render(L->scene, &d, &film, st);
     fprintf(stderr, "\n");
-    if (rc != PT_OK || pt_film_resolve(&film, &mean) != PT_OK) {
-        fprintf(stderr, "bench: reference render of %s failed: %s\n", bs->name, st.error);
+    if (rc != PT_OK || pt_film_resolve(&film, mean) != PT_OK) {
+        fprintf(stderr, "bench: reference render of %s failed: %s\n", L->sd.file, st->error);
         ok = 0;
     }
-    if (ok && st.nonfinite_samples) {
-        fprintf(stderr, "bench: reference render of %s caught %llu NaN/Inf samples\n", bs->name,
-                (unsigned long long)st.nonfinite_samples);
+    if (ok && st->nonfinite_samples) {
+        fprintf(stderr, "bench: reference render of %s caught %llu NaN/Inf samples\n", L->sd.file,
+                (unsigned long long)st->nonfinite_samples);
         ok = 0;
     }
-    for (y = 0; ok && y < BENCH_SIZE; ++y)
-        for (x = 0; x < BENCH_SIZE; ++x) {
+    for (y = 0; ok && y < h; ++y)
+        for (x = 0; x < w; ++x) {
             pt_color m = pt_v3(0, 0, 0), v = pt_v3(0, 0, 0);
             if (pt_film_pixel(&film, x, y, &m, &v) != PT_OK) ok = 0; /* cannot happen: x, y are in range */
             fl += v.x / ((double)m.x * m.x + 0.01) + v.y / ((double)m.y * m.y + 0.01) + v.z / ((double)m.z * m.z + 0.01);
         }
-    fl /= 3.0 * BENCH_SIZE * BENCH_SIZE;
+    *floor = fl / (3.0 * w * h);
     pt_film_free(&film);
+    if (!ok) pt_image_free(mean);
+    return ok;
+}
+
+static int make_reference(const config *cfg, const bench_scene *bs, int spp_override)
+{
+    const int ref_spp = spp_override > 0 ? spp_override : bs->ref_spp;
+    loaded L;
+    pt_image mean = {0, 0, NULL};
+    pt_render_stats st;
+    char path[2048];
+    double fl = 0;
+    int ok = 1;
+    FILE *f;
+    uint64_t hash = 0;
+    if (!file_hash(bs->file, &hash) || !load_scene(bs, &L)) return 0;
+    printf("bench refs: %s (%s), %dx%d, MIS, %d spp, seed %llu\n", bs->name, bs->file, BENCH_SIZE, BENCH_SIZE,
+           ref_spp, (unsigned long long)REF_SEED);
+    fflush(stdout);
+    ok = render_reference_image(&L, ref_spp, &mean, &fl, &st);
     if (ok) {
         snprintf(path, sizeof path, "%s/%s.pfm", cfg->ref_dir, bs->name);
         if (pt_write_pfm(path, &mean) != PT_OK) {
@@ -906,6 +926,464 @@ static int write_pov_csv(const config *cfg, const results *R, const pov_results 
                 }
             }
     return close_out(f, "pov.csv");
+}
+
+/* ---- Mitsuba 3 on the same axes -------------------------------------------------------- */
+
+/* bench/mitsuba_series.py renders each scene's Mitsuba twin (pt_scenefile_export_mitsuba) with
+   Mitsuba 3's llvm_ad_rgb variant on every core, at 1, 2, 4, ... spp per sampler: the first seed
+   until one render takes the series budget (or its raw relMSE comes within FLOOR_STOP x the
+   floor), seeds 2..N the same ladder, seed-major. Time = the render alone after one untimed
+   warm-up render of that sampler and sample count (Dr.Jit compiles a kernel per configuration on
+   first use), the image's evaluation forced inside the timing. Each point is one render of N spp
+   (pdftrace's series are progressive, so their time is cumulative: a little more than one render
+   of N spp). relMSE and bias: this file's definitions (the script computes them as measure()). */
+#define MI_SAMPLERS 2
+static const char *const mi_samplers[MI_SAMPLERS] = {"independent", "multijitter"};
+#define MI_SCRIPT "bench/mitsuba_series.py"
+#define MI_INSTALL "make mitsuba-install"
+
+typedef struct mitsuba_results {
+    int available;
+    char skip_reason[512];
+    int ran[SCENE_COUNT];
+    char scene_skip[SCENE_COUNT][512];          /* why a scene has no Mitsuba series */
+    series s[SCENE_COUNT][MI_SAMPLERS];
+    int spp_used[SCENE_COUNT][MI_SAMPLERS][MAX_LEVELS]; /* multijitter may round a count up */
+} mitsuba_results;
+
+/* 'src' quoted for the shell (single quotes; a ' inside becomes '\''). */
+static int shell_quote(char *dst, size_t n, const char *src)
+{
+    size_t k = 0;
+    if (n < 3) return 0;
+    dst[k++] = '\'';
+    for (; *src; ++src) {
+        if (*src == '\'') {
+            if (k + 5 >= n) return 0;
+            memcpy(dst + k, "'\\''", 4);
+            k += 4;
+        } else {
+            if (k + 2 >= n) return 0;
+            dst[k++] = *src;
+        }
+    }
+    dst[k++] = '\'';
+    dst[k] = '\0';
+    return 1;
+}
+
+/* 1 when the venv's Python imports mitsuba and selects llvm_ad_rgb; else 0 with the reason. */
+static int mitsuba_usable(const config *cfg, char *why, size_t why_size)
+{
+    char q[1100], ql[2200], cmd[3400], log[2100];
+    FILE *f;
+    if (access(cfg->mitsuba_python, X_OK) != 0) {
+        snprintf(why, why_size, "Mitsuba 3 is not installed (no %s): %s, or pass --mitsuba-python PYTHON",
+                 cfg->mitsuba_python, MI_INSTALL);
+        return 0;
+    }
+    snprintf(log, sizeof log, "%s/mitsuba-check.log", cfg->out);
+    if (!shell_quote(q, sizeof q, cfg->mitsuba_python) || !shell_quote(ql, sizeof ql, log)) {
+        snprintf(why, why_size, "the path of the Mitsuba Python or of --out is too long");
+        return 0;
+    }
+    snprintf(cmd, sizeof cmd, "%s %s check >%s 2>&1", q, MI_SCRIPT, ql);
+    if (system(cmd) != 0) {
+        char line[400] = "";
+        f = fopen(log, "r");
+        if (f) {
+            if (!fgets(line, sizeof line, f)) line[0] = '\0';
+            fclose(f);
+        }
+        line[strcspn(line, "\n")] = '\0';
+        snprintf(why, why_size, "%s cannot run Mitsuba 3's llvm_ad_rgb variant (%s): %s", cfg->mitsuba_python,
+                 line[0] ? line : "see the log", MI_INSTALL);
+        return 0;
+    }
+    return 1;
+}
+
+/* Exports the scene of L as Mitsuba XML at w x h into path; 0 with the exporter's reason. */
+static int mitsuba_export(const loaded *L, const char *path, int w, int h, char *why, size_t why_size)
+{
+    pt_mitsuba_options o;
+    memset(&o, 0, sizeof o);
+    o.width = w;
+    o.height = h;
+    return pt_scenefile_export_mitsuba(&L->sd, path, &o, why, why_size) == PT_OK;
+}
+
+/* Runs the series script on xml against ref (stop_floor: its floor-stop value; 0 = none) and reads
+   its TSV into s[MI_SAMPLERS] (raw relMSE per seed; summarize_series subtracts floor). */
+static int mitsuba_series(const config *cfg, const char *xml, const char *ref, double stop_floor, double budget,
+                          int max_spp, int seeds, int pixels, const char *tsv, series *s, int (*used)[MAX_LEVELS])
+{
+    char qp[1100], qx[2200], qr[2200], qt[2200], cmd[8000], line[512];
+    int n[MI_SAMPLERS][MAX_SEEDS], j, q, ok = 1;
+    FILE *f;
+    if (!shell_quote(qp, sizeof qp, cfg->mitsuba_python) || !shell_quote(qx, sizeof qx, xml) ||
+        !shell_quote(qr, sizeof qr, ref) || !shell_quote(qt, sizeof qt, tsv)) {
+        fprintf(stderr, "bench: path too long for the Mitsuba command\n");
+        return 0;
+    }
+    snprintf(cmd, sizeof cmd, "%s %s series --xml %s --ref %s --floor %.6e --budget %.6g --max-spp %d --seeds %d --out %s",
+             qp, MI_SCRIPT, qx, qr, stop_floor, budget, max_spp, seeds, qt);
+    if (system(cmd) != 0) {
+        fprintf(stderr, "bench: Mitsuba series failed: %s\n", cmd);
+        return 0;
+    }
+    memset(n, 0, sizeof n);
+    for (j = 0; j < MI_SAMPLERS; ++j) memset(&s[j], 0, sizeof s[j]);
+    f = fopen(tsv, "r");
+    if (!f || !fgets(line, sizeof line, f)) {
+        fprintf(stderr, "bench: cannot read %s\n", tsv);
+        if (f) fclose(f);
+        return 0;
+    }
+    while (ok && fgets(line, sizeof line, f)) {
+        char name[32];
+        int seed, spp, spp_used;
+        double t, e, b;
+        point *p;
+        if (sscanf(line, "%31s %d %d %d %lf %lf %lf", name, &seed, &spp, &spp_used, &t, &e, &b) != 7) {
+            ok = 0;
+            break;
+        }
+        for (j = 0; j < MI_SAMPLERS && strcmp(name, mi_samplers[j]); ++j) {}
+        if (j == MI_SAMPLERS || seed < 1 || seed > seeds || n[j][seed - 1] >= MAX_LEVELS) {
+            ok = 0;
+            break;
+        }
+        p = &s[j].seed[seed - 1][n[j][seed - 1]];
+        p->spp = spp;
+        p->time = t;
+        p->relmse = e;
+        p->bias = b;
+        p->samples = (double)spp_used * pixels;
+        p->rays = 0; /* not counted by Mitsuba */
+        if (seed == 1) used[j][n[j][0]] = spp_used;
+        n[j][seed - 1]++;
+    }
+    fclose(f);
+    for (j = 0; ok && j < MI_SAMPLERS; ++j)
+        for (q = 0; q < seeds; ++q)
+            if (n[j][q] != n[j][0] || n[j][0] < 1) ok = 0;
+    if (!ok) {
+        fprintf(stderr, "bench: %s: unexpected content (one line per sampler, seed and spp)\n", tsv);
+        return 0;
+    }
+    for (j = 0; j < MI_SAMPLERS; ++j) s[j].levels = n[j][0];
+    return 1;
+}
+
+static int run_mitsuba(const config *cfg, results *R, mitsuba_results *M)
+{
+    char dir[2048];
+    int i, j;
+    memset(M, 0, sizeof *M);
+    if (!mitsuba_usable(cfg, M->skip_reason, sizeof M->skip_reason)) {
+        printf("SKIP Mitsuba: %s\n", M->skip_reason);
+        return 1;
+    }
+    snprintf(dir, sizeof dir, "%s/mitsuba", cfg->out);
+    if (!mkdirs(dir)) return 0;
+    M->available = 1;
+    for (i = 0; i < SCENE_COUNT; ++i) {
+        char xml[2300], tsv[2300], ref[2300];
+        if (!R->done[i]) continue;
+        snprintf(xml, sizeof xml, "%s/%s.xml", dir, scenes[i].name);
+        snprintf(tsv, sizeof tsv, "%s/%s.tsv", dir, scenes[i].name);
+        snprintf(ref, sizeof ref, "%s/%s.pfm", cfg->ref_dir, scenes[i].name);
+        if (!mitsuba_export(&R->L[i], xml, BENCH_SIZE, BENCH_SIZE, M->scene_skip[i], sizeof M->scene_skip[i])) {
+            printf("SKIP Mitsuba %s: not exported: %s\n", scenes[i].name, M->scene_skip[i]);
+            continue;
+        }
+        if (!mitsuba_series(cfg, xml, ref, R->L[i].floor, cfg->budget, 1 << (MAX_LEVELS - 1), cfg->seeds,
+                            BENCH_SIZE * BENCH_SIZE, tsv,
+                            M->s[i], M->spp_used[i]))
+            return 0;
+        for (j = 0; j < MI_SAMPLERS; ++j) {
+            const series *s = &M->s[i][j];
+            summarize_series(&M->s[i][j], cfg->seeds, R->L[i].floor);
+            printf("  Mitsuba %-16s %-12s %5d spp in %.3f s: relMSE %.3e, efficiency %.3g\n", scenes[i].name,
+                   mi_samplers[j], M->spp_used[i][j][s->levels - 1], s->med[s->levels - 1].time, s->err[s->levels - 1],
+                   efficiency(s));
+        }
+        M->ran[i] = 1;
+        fflush(stdout);
+    }
+    return 1;
+}
+
+static int write_mitsuba_csv(const config *cfg, const results *R, const mitsuba_results *M)
+{
+    FILE *f;
+    int i, j, k;
+    if (!M->available) return 1;
+    f = open_out(cfg, "mitsuba.csv");
+    if (!f) return 0;
+    fprintf(f, "scene,sampler,spp,spp_used,seeds,time_s,relmse,relmse_raw,floor,bias,samples_per_s\n");
+    for (i = 0; i < SCENE_COUNT; ++i)
+        if (M->ran[i])
+            for (j = 0; j < MI_SAMPLERS; ++j) {
+                const series *s = &M->s[i][j];
+                for (k = 0; k < s->levels; ++k)
+                    fprintf(f, "%s,%s,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", scenes[i].name, mi_samplers[j],
+                            s->med[k].spp, M->spp_used[i][j][k], cfg->seeds, s->med[k].time, s->err[k], s->med[k].relmse,
+                            R->L[i].floor, s->med[k].bias, s->med[k].samples / s->med[k].time);
+            }
+    return close_out(f, "mitsuba.csv");
+}
+
+/* pdftrace's best strategy (by efficiency at its last point) against Mitsuba's best sampler: both
+   curves read off at the same time t, the earlier of the two last points (log-log interpolation),
+   efficiency 1 / (relMSE(t) t); ratio = pdftrace's over Mitsuba's = Mitsuba's error over pdftrace's. */
+typedef struct versus {
+    int pt_best, mi_best;
+    double t, pt_err, mi_err, ratio;
+} versus;
+
+static versus versus_mitsuba(const results *R, const mitsuba_results *M, int i)
+{
+    versus v;
+    int j, ex;
+    double b = -1;
+    memset(&v, 0, sizeof v);
+    v.pt_best = v.mi_best = -1;
+    for (j = 0; j < STRATEGY_COUNT; ++j)
+        if (efficiency(&R->s[i][j]) > b) {
+            b = efficiency(&R->s[i][j]);
+            v.pt_best = j;
+        }
+    b = -1;
+    for (j = 0; j < MI_SAMPLERS; ++j)
+        if (efficiency(&M->s[i][j]) > b) {
+            b = efficiency(&M->s[i][j]);
+            v.mi_best = j;
+        }
+    if (v.pt_best < 0 || v.mi_best < 0) {
+        v.ratio = NAN;
+        return v;
+    }
+    {
+        const series *p = &R->s[i][v.pt_best], *m = &M->s[i][v.mi_best];
+        const double tp = p->med[p->levels - 1].time, tm = m->med[m->levels - 1].time;
+        v.t = tp < tm ? tp : tm;
+        v.pt_err = err_at_time(p, v.t, &ex);
+        v.mi_err = err_at_time(m, v.t, &ex);
+        v.ratio = v.mi_err / v.pt_err;
+    }
+    return v;
+}
+
+/* ---- headline: the user's default scene at its own size, pdftrace against Mitsuba ------ */
+
+/* The RTRL Cornell box as the user renders it (scenes/cornell.scene: 600 x 600, 128 spp, MIS,
+   independent numbers, every core) against Mitsuba 3's samplers on the same scene and size, both
+   ways: Mitsuba's error at pdftrace's time (equal time) and the time Mitsuba needs for pdftrace's
+   error (equal error), both read off Mitsuba's series (log-log interpolation). The reference is a
+   pdftrace MIS render of HEADLINE_REF_SPP spp (seed REF_SEED), kept in the cache directory with
+   its noise floor and scene hash and remade when either changes; its floor is subtracted as for
+   the 128 x 128 scenes. Mitsuba's series here has no floor stop (it must reach pdftrace's error). */
+#define HEADLINE_SCENE "scenes/cornell.scene"
+#define HEADLINE_REF_SPP 1024
+#define HEADLINE_SEEDS 3
+
+typedef struct headline_results {
+    int available;
+    char skip_reason[512];
+    int width, height, spp, ref_spp, seeds;
+    double floor, ref_seconds;
+    double pt_time, pt_err, pt_bias;            /* medians over seeds, pdftrace at the scene's settings */
+    series mi[MI_SAMPLERS];
+    int spp_used[MI_SAMPLERS][MAX_LEVELS];
+    double mi_err[MI_SAMPLERS], mi_time[MI_SAMPLERS]; /* at pdftrace's time; to pdftrace's error */
+    int mi_err_extrap[MI_SAMPLERS], mi_time_extrap[MI_SAMPLERS];
+    int best;                                   /* the sampler with the lower error at pdftrace's time */
+} headline_results;
+
+/* The headline reference: reused from cache/cornell-WxH-ref.{pfm,txt} when its hash, size and
+   spp match, else rendered and stored there. */
+static int headline_reference(const config *cfg, loaded *L, uint64_t hash, headline_results *H)
+{
+    char pfm[2300], txt[2300], line[512];
+    FILE *f;
+    unsigned long long stored = 0;
+    int w = 0, h = 0, spp = 0, have_floor = 0;
+    pt_image mean = {0, 0, NULL};
+    pt_render_stats st;
+    if (!mkdirs(cfg->cache)) return 0;
+    snprintf(pfm, sizeof pfm, "%s/cornell-%dx%d-ref.pfm", cfg->cache, H->width, H->height);
+    snprintf(txt, sizeof txt, "%s/cornell-%dx%d-ref.txt", cfg->cache, H->width, H->height);
+    f = fopen(txt, "r");
+    if (f) {
+        while (fgets(line, sizeof line, f)) {
+            (void)sscanf(line, "scene_fnv1a %llx", &stored);
+            (void)sscanf(line, "size %d %d", &w, &h);
+            (void)sscanf(line, "spp %d", &spp);
+            (void)sscanf(line, "seconds %lf", &H->ref_seconds);
+            if (sscanf(line, "noise_floor_relmse %lf", &H->floor) == 1) have_floor = 1;
+        }
+        fclose(f);
+        if (have_floor && stored == (unsigned long long)hash && w == H->width && h == H->height &&
+            spp == H->ref_spp && read_pfm(pfm, &L->ref) && L->ref.width == w && L->ref.height == h) {
+            printf("  reference %s (%d spp, noise floor %.3e), kept from an earlier run\n", pfm, spp, H->floor);
+            return 1;
+        }
+        pt_image_free(&L->ref);
+    }
+    printf("  reference: MIS, %d spp, %dx%d (about %d times the scene's own render)\n", H->ref_spp, H->width,
+           H->height, H->ref_spp / (H->spp > 0 ? H->spp : 1));
+    fflush(stdout);
+    if (!render_reference_image(L, H->ref_spp, &mean, &H->floor, &st)) return 0;
+    H->ref_seconds = st.seconds;
+    if (pt_write_pfm(pfm, &mean) != PT_OK) {
+        fprintf(stderr, "bench: cannot write %s\n", pfm);
+        pt_image_free(&mean);
+        return 0;
+    }
+    L->ref = mean;
+    f = fopen(txt, "w");
+    if (!f) {
+        fprintf(stderr, "bench: cannot write %s: %s\n", txt, strerror(errno));
+        return 0;
+    }
+    fprintf(f, "# bench headline reference of %s (bench/bench.c); delete it to remake it\nscene_fnv1a %016llx\n"
+               "size %d %d\nspp %d\nseed %llu\nseconds %.1f\nnoise_floor_relmse %.6e\n",
+            HEADLINE_SCENE, (unsigned long long)hash, H->width, H->height, H->ref_spp, (unsigned long long)REF_SEED,
+            H->ref_seconds, H->floor);
+    if (fclose(f) != 0) {
+        fprintf(stderr, "bench: error writing %s\n", txt);
+        return 0;
+    }
+    printf("  wrote %s (%.1f s, noise floor %.3e)\n", pfm, H->ref_seconds, H->floor);
+    return 1;
+}
+
+/* One pdftrace render of the headline at the scene's settings, seed index `seed`: time, relMSE - floor, bias. */
+static int headline_pdftrace(const loaded *L, const headline_results *H, int seed, double *t, double *e, double *b)
+{
+    pt_render_desc d = L->rd;
+    pt_render_stats st;
+    pt_film film;
+    pt_image img = {0, 0, NULL};
+    double t0;
+    d.seed = (uint64_t)(seed + 1);
+    d.progress = NULL;
+    if (pt_film_init(&film, H->width, H->height) != PT_OK) die_oom();
+    t0 = ptv_now();
+    if (pt_render(L->scene, &d, &film, &st) != PT_OK) {
+        fprintf(stderr, "bench: headline render failed: %s\n", st.error);
+        pt_film_free(&film);
+        return 0;
+    }
+    t[seed] = ptv_now() - t0;
+    if (pt_film_resolve(&film, &img) != PT_OK) die_oom();
+    measure(&img, &L->ref, &e[seed], &b[seed]);
+    e[seed] -= H->floor;
+    pt_image_free(&img);
+    pt_film_free(&film);
+    printf("  pdftrace seed %d: %.2f s, relMSE %.4g\n", seed + 1, t[seed], e[seed]);
+    fflush(stdout);
+    return 1;
+}
+
+static int run_headline(const config *cfg, headline_results *H)
+{
+    bench_scene bs;
+    loaded L;
+    uint64_t hash = 0;
+    char dir[2048], xml[2300], tsv[2300], ref[2300];
+    double t[MAX_SEEDS], e[MAX_SEEDS], b[MAX_SEEDS];
+    int seed, j, ok = 1;
+    memset(H, 0, sizeof *H);
+    if (!mitsuba_usable(cfg, H->skip_reason, sizeof H->skip_reason)) {
+        printf("SKIP headline: %s\n", H->skip_reason);
+        return 1;
+    }
+    memset(&bs, 0, sizeof bs);
+    bs.name = "cornell";
+    bs.file = HEADLINE_SCENE;
+    if (!file_hash(bs.file, &hash) || !load_scene(&bs, &L)) return 0;
+    /* load_scene sets the benchmark's size: back to the scene file's own */
+    L.rd.width = cfg->headline_size ? cfg->headline_size : L.sd.width;
+    L.rd.height = cfg->headline_size ? cfg->headline_size : L.sd.height;
+    H->width = L.rd.width;
+    H->height = L.rd.height;
+    H->spp = L.rd.samples_per_pixel;
+    H->ref_spp = HEADLINE_REF_SPP;
+    H->seeds = HEADLINE_SEEDS;
+    printf("headline: %s at %dx%d, %d spp (the scene's settings), %d seeds, against Mitsuba 3\n", HEADLINE_SCENE,
+           H->width, H->height, H->spp, H->seeds);
+    fflush(stdout);
+    if (!headline_reference(cfg, &L, hash, H)) {
+        free_scene(&L);
+        return 0;
+    }
+    /* pdftrace's seeds alternate before and after Mitsuba's series (1, 3, ... before; 2, 4, ...
+       after), so a change in the shared machine's load between the two does not favour either */
+    for (seed = 0; ok && seed < H->seeds; seed += 2) ok = headline_pdftrace(&L, H, seed, t, e, b);
+    if (ok) {
+        double tb[MAX_SEEDS];
+        int nb = 0;
+        for (seed = 0; seed < H->seeds; seed += 2) tb[nb++] = t[seed];
+        snprintf(dir, sizeof dir, "%s/mitsuba", cfg->out);
+        snprintf(xml, sizeof xml, "%s/cornell-%dx%d.xml", dir, H->width, H->height);
+        snprintf(tsv, sizeof tsv, "%s/cornell-%dx%d.tsv", dir, H->width, H->height);
+        snprintf(ref, sizeof ref, "%s/cornell-%dx%d-ref.pfm", cfg->cache, H->width, H->height);
+        ok = mkdirs(dir);
+        if (ok && !mitsuba_export(&L, xml, H->width, H->height, H->skip_reason, sizeof H->skip_reason)) {
+            fprintf(stderr, "bench: Mitsuba export of %s: %s\n", HEADLINE_SCENE, H->skip_reason);
+            ok = 0;
+        }
+        /* ladder until one render takes 2x pdftrace's time (seeds so far), so the series brackets
+           it (at most 16x pdftrace's spp) */
+        if (ok) ok = mitsuba_series(cfg, xml, ref, 0.0, 2.0 * median(tb, nb), 16 * H->spp, H->seeds,
+                                    H->width * H->height, tsv, H->mi, H->spp_used);
+    }
+    for (seed = 1; ok && seed < H->seeds; seed += 2) ok = headline_pdftrace(&L, H, seed, t, e, b);
+    if (ok) {
+        H->pt_time = median(t, H->seeds);
+        H->pt_err = median(e, H->seeds);
+        H->pt_bias = median(b, H->seeds);
+    }
+    for (j = 0; ok && j < MI_SAMPLERS; ++j) {
+        summarize_series(&H->mi[j], H->seeds, H->floor);
+        H->mi_err[j] = err_at_time(&H->mi[j], H->pt_time, &H->mi_err_extrap[j]);
+        H->mi_time[j] = time_to_reach(&H->mi[j], H->pt_err, &H->mi_time_extrap[j]);
+        if (j == 0 || H->mi_err[j] < H->mi_err[H->best]) H->best = j;
+        printf("  Mitsuba %-12s at %.2f s: relMSE %.4g (pdftrace %.4g, ratio %.3g); reaches pdftrace's error in %.2f s "
+               "(ratio %.3g)\n", mi_samplers[j], H->pt_time, H->mi_err[j], H->pt_err, H->mi_err[j] / H->pt_err,
+               H->mi_time[j], H->mi_time[j] / H->pt_time);
+    }
+    H->available = ok;
+    free_scene(&L);
+    return ok;
+}
+
+/* The headline table (summary.md and headline-600.md). */
+static void write_headline_table(FILE *f, const headline_results *H)
+{
+    int j;
+    fprintf(f, "| renderer | spp | time (s) | relMSE | efficiency 1/(relMSE·time) | Mitsuba / pdftrace |\n"
+               "|---|---|---|---|---|---|\n");
+    fprintf(f, "| pdftrace, the scene's settings (MIS, independent numbers) | %d | %.3g | %.4g | %.3g | - |\n", H->spp,
+            H->pt_time, H->pt_err, 1.0 / (H->pt_time * H->pt_err));
+    for (j = 0; j < MI_SAMPLERS; ++j)
+        fprintf(f, "| Mitsuba 3 `%s`%s, equal time | - | %.3g | %.4g%s | %.3g | %srelMSE %.3g×%s |\n", mi_samplers[j],
+                j == H->best ? " (best)" : "", H->pt_time, H->mi_err[j], H->mi_err_extrap[j] ? " (extrapolated)" : "",
+                1.0 / (H->pt_time * H->mi_err[j]), j == H->best ? "**" : "", H->mi_err[j] / H->pt_err,
+                j == H->best ? "**" : "");
+    for (j = 0; j < MI_SAMPLERS; ++j)
+        fprintf(f, "| Mitsuba 3 `%s`%s, equal error | - | %.3g%s | %.4g | %.3g | %stime %.3g×%s |\n", mi_samplers[j],
+                j == H->best ? " (best)" : "", H->mi_time[j], H->mi_time_extrap[j] ? " (extrapolated)" : "", H->pt_err,
+                1.0 / (H->mi_time[j] * H->pt_err), j == H->best ? "**" : "", H->mi_time[j] / H->pt_time,
+                j == H->best ? "**" : "");
+    fprintf(f, "\n%dx%d, median of %d seeds; the Mitsuba rows are read off its series (one render per point, "
+               "1, 2, 4, … spp) at pdftrace's time and at pdftrace's error. Reference: pdftrace MIS at %d spp, noise "
+               "floor %.3g subtracted. Ratios > 1: pdftrace is ahead.\n\n", H->width, H->height, H->seeds, H->ref_spp,
+            H->floor);
 }
 
 /* ---- adaptive sampling and the scene-feature skips ------------------------------------ */
@@ -1477,7 +1955,7 @@ static const char *const strategy_style[STRATEGY_COUNT] = {
     "lc rgb '#8c564b' pt 13 dt 2", "lc rgb '#2ca02c' pt 4 lw 2", "lc rgb '#17becf' pt 6 lw 2"};
 
 /* SCENE.dat: one block per strategy (time, relMSE - floor), then the POV-Ray points. */
-static int write_plot_data(const config *cfg, const results *R, const pov_results *P, int i)
+static int write_plot_data(const config *cfg, const results *R, const pov_results *P, const mitsuba_results *M, int i)
 {
     char name[256];
     FILE *f;
@@ -1497,10 +1975,20 @@ static int write_plot_data(const config *cfg, const results *R, const pov_result
         if (P->available && P->r[i][l].ran && P->r[i][l].err > 0)
             fprintf(f, "%.6g %.6g %d\n", P->r[i][l].time, P->r[i][l].err, l);
     fprintf(f, "\n\n");
+    for (j = 0; j < MI_SAMPLERS; ++j) { /* index STRATEGY_COUNT + 1 + j */
+        const series *s = &M->s[i][j];
+        fprintf(f, "# Mitsuba 3 %s: time_s relmse spp\n", mi_samplers[j]);
+        for (k = 0; M->ran[i] && k < s->levels; ++k)
+            if (s->err[k] > 0) fprintf(f, "%.6g %.6g %d\n", s->med[k].time, s->err[k], M->spp_used[i][j][k]);
+        if (!M->ran[i]) fprintf(f, "nan nan 0\n"); /* keeps the index for gnuplot */
+        fprintf(f, "\n\n");
+    }
     return close_out(f, name);
 }
 
-static void plot_commands(FILE *g, const results *R, const pov_results *P, int i, int small)
+static const char *const mitsuba_style[MI_SAMPLERS] = {"lc rgb '#000000' pt 2 dt 3 lw 2", "lc rgb '#7f7f7f' pt 1 dt 3 lw 2"};
+
+static void plot_commands(FILE *g, const results *R, const pov_results *P, const mitsuba_results *M, int i, int small)
 {
     int j, l, any_pov = 0;
     for (l = 0; l < POV_LEVEL_COUNT; ++l)
@@ -1516,6 +2004,10 @@ static void plot_commands(FILE *g, const results *R, const pov_results *P, int i
     if (any_pov)
         fprintf(g, ", \\\n     '%s.dat' index %d using 1:2:(sprintf('q%%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' "
                    "offset 0.8,0.6 font ',8' title 'POV-Ray'", scenes[i].name, STRATEGY_COUNT);
+    if (M->ran[i])
+        for (j = 0; j < MI_SAMPLERS; ++j)
+            fprintf(g, ", \\\n     '%s.dat' index %d using 1:2 with linespoints %s title 'Mitsuba %s'", scenes[i].name,
+                    STRATEGY_COUNT + 1 + j, mitsuba_style[j], mi_samplers[j]);
     fprintf(g, "\n");
     (void)R;
 }
@@ -1528,14 +2020,15 @@ static void write_adaptive_points(FILE *f, const adaptive_results *A)
         if (A->adaptive_err[k] > 0) fprintf(f, "%.6g %.6g %.3g\n", A->adaptive[k].time, A->adaptive_err[k], A->threshold[k]);
 }
 
-static int make_plots(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
+static int make_plots(const config *cfg, const results *R, const pov_results *P, const mitsuba_results *M,
+                      const adaptive_results *A,
                       const adaptive_results *A3, char *status, size_t status_size)
 {
     FILE *g;
     int i, n = 0;
     char cmd[4096];
     for (i = 0; i < SCENE_COUNT; ++i)
-        if (R->done[i] && !write_plot_data(cfg, R, P, i)) return 0;
+        if (R->done[i] && !write_plot_data(cfg, R, P, M, i)) return 0;
     if (A->available) {
         FILE *f = open_out(cfg, "adaptive.dat");
         int k;
@@ -1558,7 +2051,7 @@ static int make_plots(const config *cfg, const results *R, const pov_results *P,
     for (i = 0; i < SCENE_COUNT; ++i) {
         if (!R->done[i]) continue;
         fprintf(g, "set output '%s.png'\n", scenes[i].name);
-        plot_commands(g, R, P, i, 0);
+        plot_commands(g, R, P, M, i, 0);
         fprintf(g, "reset\n");
     }
     if (A->available) {
@@ -1576,7 +2069,7 @@ static int make_plots(const config *cfg, const results *R, const pov_results *P,
             BENCH_SIZE, BENCH_SIZE);
     for (i = 0; i < SCENE_COUNT; ++i) {
         if (!R->done[i]) continue;
-        plot_commands(g, R, P, i, 1);
+        plot_commands(g, R, P, M, i, 1);
         ++n;
     }
     if (A->available && n < 6)
@@ -1684,7 +2177,54 @@ static double adaptive_bias_vs_uniform(const adaptive_results *A)
     return (1.0 + A->adaptive[k].bias) / (1.0 + A->uniform[u].bias) - 1.0;
 }
 
-static int write_summary(const config *cfg, const results *R, const pov_results *P, const adaptive_results *A,
+/* summary.md: Mitsuba 3 against pdftrace per scene, and the headline. */
+static void write_mitsuba_summary(FILE *f, const config *cfg, const results *R, const mitsuba_results *M,
+                                  const headline_results *H)
+{
+    int i;
+    fprintf(f, "## Mitsuba 3 on the same axes\n\n");
+    if (!M->available)
+        fprintf(f, "SKIP: %s\n\n", M->skip_reason);
+    else {
+        fprintf(f, "Mitsuba 3 (`llvm_ad_rgb`, every core) renders each scene's export (`pt_scenefile_export_mitsuba`, "
+                   "in `%s/mitsuba/`) with its `independent` and `multijitter` samplers at 1, 2, 4, … spp, one render "
+                   "per point (pdftrace's points are cumulative progressive steps), render time only (after a warm-up "
+                   "render of each configuration; bench/mitsuba_series.py), median of %d seeds, the same reference and "
+                   "relMSE.\n\n"
+                   "### pdftrace's best strategy / Mitsuba's best sampler: efficiency at equal time\n\n"
+                   "Best = highest efficiency at the series' last point; both curves read off at the same time t (the "
+                   "earlier of the two last points). Ratio > 1: pdftrace reaches a lower error in the same time.\n\n"
+                   "| scene | pdftrace best | Mitsuba best | t (s) | pdftrace relMSE at t | Mitsuba relMSE at t | "
+                   "pdftrace efficiency | Mitsuba efficiency | **ratio** |\n|---|---|---|---|---|---|---|---|---|\n",
+                cfg->out, cfg->seeds);
+        for (i = 0; i < SCENE_COUNT; ++i) {
+            versus v;
+            if (!R->done[i]) continue;
+            if (!M->ran[i]) {
+                fprintf(f, "| %s | SKIP: %s |||||||\n", scenes[i].name, M->scene_skip[i]);
+                continue;
+            }
+            v = versus_mitsuba(R, M, i);
+            fprintf(f, "| %s | %s | %s | %.3g | %.3g | %.3g | %.3g | %.3g | **%.2f** |\n", scenes[i].name,
+                    strategies[v.pt_best].name, mi_samplers[v.mi_best], v.t, v.pt_err, v.mi_err, 1.0 / (v.pt_err * v.t),
+                    1.0 / (v.mi_err * v.t), v.ratio);
+        }
+        if (H->available)
+            fprintf(f, "| **cornell %dx%d** (headline: pdftrace at the scene's settings) | mis (%d spp) | %s | %.3g | "
+                       "%.4g | %.4g | %.3g | %.3g | **%.2f** |\n", H->width, H->height, H->spp, mi_samplers[H->best],
+                    H->pt_time, H->pt_err, H->mi_err[H->best], 1.0 / (H->pt_err * H->pt_time),
+                    1.0 / (H->mi_err[H->best] * H->pt_time), H->mi_err[H->best] / H->pt_err);
+        fprintf(f, "\n");
+    }
+    fprintf(f, "## Headline: the RTRL Cornell box as the user renders it, against Mitsuba 3\n\n");
+    if (!H->available)
+        fprintf(f, "SKIP: %s\n\n", H->skip_reason);
+    else
+        write_headline_table(f, H);
+}
+
+static int write_summary(const config *cfg, const results *R, const pov_results *P, const mitsuba_results *M,
+                         const headline_results *H, const adaptive_results *A,
                          const adaptive_results *A2, const adaptive_results *A3, const adaptive_results *A4,
                          const skip_results *S, const char *plot_status, double total_seconds)
 {
@@ -1829,8 +2369,9 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
     /* efficiency table */
     fprintf(f, "## Efficiency 1/(relMSE · time) at the last point (higher is better; best per scene in bold)\n\n| scene |");
     for (j = 0; j < STRATEGY_COUNT; ++j) fprintf(f, " %s |", strategies[j].name);
+    for (j = 0; j < MI_SAMPLERS; ++j) fprintf(f, " Mitsuba %s |", mi_samplers[j]);
     fprintf(f, " MIS time ratio* |\n|---|");
-    for (j = 0; j <= STRATEGY_COUNT; ++j) fprintf(f, "---|");
+    for (j = 0; j <= STRATEGY_COUNT + MI_SAMPLERS; ++j) fprintf(f, "---|");
     fprintf(f, "\n");
     for (i = 0; i < SCENE_COUNT; ++i) {
         double best = -1;
@@ -1838,9 +2379,12 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
         if (!R->done[i]) continue;
         for (j = 0; j < STRATEGY_COUNT; ++j)
             if (efficiency(&R->s[i][j]) > best) best = efficiency(&R->s[i][j]);
+        for (j = 0; M->ran[i] && j < MI_SAMPLERS; ++j)
+            if (efficiency(&M->s[i][j]) > best) best = efficiency(&M->s[i][j]);
         fprintf(f, "| %s |", scenes[i].name);
-        for (j = 0; j < STRATEGY_COUNT; ++j) {
-            double e = efficiency(&R->s[i][j]);
+        for (j = 0; j < STRATEGY_COUNT + MI_SAMPLERS; ++j) {
+            double e = j < STRATEGY_COUNT ? efficiency(&R->s[i][j])
+                       : M->ran[i]        ? efficiency(&M->s[i][j - STRATEGY_COUNT]) : NAN;
             fmt_g(b1, sizeof b1, e);
             fprintf(f, e == best ? " **%s** |" : " %s |", b1);
         }
@@ -1849,6 +2393,7 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
     }
     fprintf(f, "\n\\* time MIS needs to reach the final error of the best single strategy (material or light, by "
                "efficiency), divided by that strategy's time.\n\n");
+    write_mitsuba_summary(f, cfg, R, M, H);
     /* the Sobol sampler against independent sampling, both MIS */
     fprintf(f, "## Sobol sampler (mis-sobol) against independent sampling (mis)\n\n"
                "relMSE of MIS with PT_SAMPLER_SOBOL divided by MIS with independent sampling (< 1: Sobol lower), "
@@ -1873,15 +2418,25 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
     /* the same table for the README */
     h = open_out(cfg, "headline.md");
     if (h) {
-        fprintf(h, "| scene | material | light | mixture 0.5 | MIS | MIS time to the best single strategy's error |\n"
-                   "|---|---|---|---|---|---|\n");
+        fprintf(h, "| scene | material | light | mixture 0.5 | MIS | MIS time to the best single strategy's error | "
+                   "Mitsuba 3 best | pdftrace best / Mitsuba best at equal time |\n|---|---|---|---|---|---|---|---|\n");
         for (i = 0; i < SCENE_COUNT; ++i) {
             mis_ratio m;
             if (!R->done[i]) continue;
             m = mis_vs_best(R, i, 0);
-            fprintf(h, "| %s | %.3g | %.3g | %.3g | %.3g | %.2f× (vs %s) |\n", scenes[i].name, efficiency(&R->s[i][0]),
+            fprintf(h, "| %s | %.3g | %.3g | %.3g | %.3g | %.2f× (vs %s) |", scenes[i].name, efficiency(&R->s[i][0]),
                     efficiency(&R->s[i][1]), efficiency(&R->s[i][3]), efficiency(&R->s[i][S_MIS]), m.ratio,
                     m.best >= 0 ? strategies[m.best].name : "-");
+            if (M->ran[i]) {
+                const versus v = versus_mitsuba(R, M, i);
+                fprintf(h, " %.3g (%s) | %.2f× (%s) |\n", 1.0 / (v.mi_err * v.t), mi_samplers[v.mi_best], v.ratio,
+                        strategies[v.pt_best].name);
+            } else
+                fprintf(h, " - | - |\n");
+        }
+        if (H->available) {
+            fprintf(h, "\n");
+            write_headline_table(h, H);
         }
         close_out(h, "headline.md");
     }
@@ -1910,6 +2465,18 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
                     p->spp, p->time, s->err[s->levels - 1], 100 * p->bias, p->samples / p->time / 1e6,
                     p->rays / p->time / 1e6, slope, slope_med, efficiency(s));
         }
+        for (j = 0; M->ran[i] && j < MI_SAMPLERS; ++j) {
+            const series *s = &M->s[i][j];
+            const point *p = &s->med[s->levels - 1];
+            char slope[96], slope_med[32];
+            fmt_g(slope_med, sizeof slope_med, s->slope_med);
+            if (s->slope == s->slope) snprintf(slope, sizeof slope, "%.3f [%.3f, %.3f]", s->slope, s->slope_lo, s->slope_hi);
+            else snprintf(slope, sizeof slope, "- (%d points with >= %d spp)", s->fit_points, FIT_MIN_SPP);
+            fprintf(f, "| Mitsuba 3 %s (one render per point) | %d | %.3g | %.3g | %+.2f%% | %.3g M | - | %s | %s | %.3g |\n",
+                    mi_samplers[j], M->spp_used[i][j][s->levels - 1], p->time, s->err[s->levels - 1], 100 * p->bias,
+                    p->samples / p->time / 1e6, slope, slope_med, efficiency(s));
+        }
+        if (!M->ran[i] && M->available) fprintf(f, "| Mitsuba 3 | SKIP: %s |||||||||\n", M->scene_skip[i]);
         m = mis_vs_best(R, i, 0);
         ma = mis_vs_best(R, i, 1);
         fprintf(f, "\nMIS reaches the final error of %s (the best single strategy) in %.2f× its time%s; of %s (the best "
@@ -2052,9 +2619,16 @@ static int usage(void)
 {
     fprintf(stderr,
             "usage: bench run [--quick] [--out DIR] [--budget SECONDS] [--seeds N] [--parts LIST] [--scenes LIST]\n"
+            "                 [--mitsuba-python PYTHON] [--cache DIR]\n"
             "       bench refs [--spp N] [NAME...]   (--spp: override the table, for experiments)\n"
             "       bench list\n"
-            "  --parts: comma-separated series,adaptive,skips,pov (default all; pov needs series)\n"
+            "  --parts: comma-separated series,adaptive,skips,pov,mitsuba,headline (default all; pov and\n"
+            "           mitsuba need series; headline, the 600x600 Cornell box against Mitsuba, is left out of\n"
+            "           --quick unless named)\n"
+            "  --mitsuba-python: the Python of a venv with Mitsuba 3 (default $MITSUBA_PYTHON, else\n"
+            "           build/mitsuba-venv/bin/python; make mitsuba-install creates it)\n"
+            "  --cache: where the headline keeps its reference image (default build/bench-cache)\n"
+            "  --headline-size N: the headline at N x N instead of the scene's size (quick checks)\n"
             "  --scenes: comma-separated scene names (default all; see bench list)\n"
             "Run from the repository root (make bench / make bench-quick / make bench-refs).\n");
     return 2;
@@ -2084,8 +2658,10 @@ static int add_part(config *cfg, const char *p)
     else if (!strcmp(p, "adaptive")) cfg->parts |= PART_ADAPTIVE;
     else if (!strcmp(p, "skips")) cfg->parts |= PART_SKIPS;
     else if (!strcmp(p, "pov")) cfg->parts |= PART_POV;
+    else if (!strcmp(p, "mitsuba")) cfg->parts |= PART_MITSUBA;
+    else if (!strcmp(p, "headline")) cfg->parts |= PART_HEADLINE;
     else {
-        fprintf(stderr, "bench: unknown part '%s' (series, adaptive, skips, pov)\n", p);
+        fprintf(stderr, "bench: unknown part '%s' (series, adaptive, skips, pov, mitsuba, headline)\n", p);
         return 0;
     }
     return 1;
@@ -2122,6 +2698,8 @@ static int cmd_run(int argc, char **argv)
     static pov_results P;
     static adaptive_results A, A2, A3, A4; /* own samples at the end / 128 spp; neighbours only, the same */
     static skip_results S;
+    static mitsuba_results M;
+    static headline_results H;
     char plot_status[512] = "not made";
     int i, any_scene = 0, ok = 1, budget_set = 0;
     double t0 = ptv_now(), v;
@@ -2129,10 +2707,19 @@ static int cmd_run(int argc, char **argv)
     cfg.out = "bench/out";
     cfg.ref_dir = "bench/ref";
     cfg.seeds = 5;
+    cfg.mitsuba_python = getenv("MITSUBA_PYTHON") && *getenv("MITSUBA_PYTHON") ? getenv("MITSUBA_PYTHON")
+                                                                               : "build/mitsuba-venv/bin/python";
+    cfg.cache = "build/bench-cache";
     for (i = 2; i < argc; ++i) {
         const char *a = argv[i];
         if (!strcmp(a, "--quick")) cfg.quick = 1;
         else if (!strcmp(a, "--out") && i + 1 < argc) cfg.out = argv[++i];
+        else if (!strcmp(a, "--mitsuba-python") && i + 1 < argc) cfg.mitsuba_python = argv[++i];
+        else if (!strcmp(a, "--cache") && i + 1 < argc) cfg.cache = argv[++i];
+        else if (!strcmp(a, "--headline-size") && i + 1 < argc) {
+            if (!parse_positive(a, argv[++i], 8, 4096, &v)) return 2;
+            cfg.headline_size = (int)v;
+        }
         else if (!strcmp(a, "--budget") && i + 1 < argc) {
             if (!parse_positive(a, argv[++i], 0.001, 3600, &cfg.budget)) return 2;
             budget_set = 1;
@@ -2149,10 +2736,14 @@ static int cmd_run(int argc, char **argv)
         }
     }
     if (!budget_set) cfg.budget = cfg.quick ? 0.12 : 2.0;
-    if (!cfg.parts) cfg.parts = PART_ALL;
+    if (!cfg.parts) cfg.parts = cfg.quick ? PART_ALL & ~PART_HEADLINE : PART_ALL;
     for (i = 0; i < SCENE_COUNT; ++i) any_scene |= cfg.scene_on[i];
     if (!any_scene)
         for (i = 0; i < SCENE_COUNT; ++i) cfg.scene_on[i] = 1;
+    if ((cfg.parts & PART_MITSUBA) && !(cfg.parts & PART_SERIES)) {
+        fprintf(stderr, "bench: --parts mitsuba needs series (Mitsuba is compared with pdftrace's series)\n");
+        return 2;
+    }
     if ((cfg.parts & PART_POV) && !(cfg.parts & PART_SERIES)) {
         fprintf(stderr, "bench: --parts pov needs series (POV-Ray is compared with the MIS series at equal time)\n");
         return 2;
@@ -2190,6 +2781,12 @@ static int cmd_run(int argc, char **argv)
     }
     if (ok && (cfg.parts & PART_SKIPS)) ok = run_skips(&cfg, &R, &S) && write_skips_csv(&cfg, &S);
     if (ok && (cfg.parts & PART_POV)) ok = run_pov(&cfg, &R, &P) && write_pov_csv(&cfg, &R, &P);
+    if (ok && (cfg.parts & PART_MITSUBA)) ok = run_mitsuba(&cfg, &R, &M) && write_mitsuba_csv(&cfg, &R, &M);
+    if (ok && (cfg.parts & PART_HEADLINE)) ok = run_headline(&cfg, &H);
+    if (!(cfg.parts & PART_MITSUBA)) snprintf(M.skip_reason, sizeof M.skip_reason, "not run (--parts)");
+    if (!(cfg.parts & PART_HEADLINE))
+        snprintf(H.skip_reason, sizeof H.skip_reason, cfg.quick ? "quick mode (make bench-headline runs it)"
+                                                                : "not run (--parts)");
     if (!(cfg.parts & PART_ADAPTIVE)) snprintf(A.skip_reason, sizeof A.skip_reason, "not run (--parts)");
     {   /* the full mode's runs, when not run: why */
         adaptive_results *full_only[3];
@@ -2202,8 +2799,8 @@ static int cmd_run(int argc, char **argv)
     }
     if (!(cfg.parts & PART_SKIPS)) snprintf(S.skip_reason, sizeof S.skip_reason, "not run (--parts)");
     if (!(cfg.parts & PART_POV)) snprintf(P.skip_reason, sizeof P.skip_reason, "not run (--parts)");
-    if (ok && (cfg.parts & PART_SERIES)) ok = make_plots(&cfg, &R, &P, &A, &A3, plot_status, sizeof plot_status);
-    if (ok) ok = write_summary(&cfg, &R, &P, &A, &A2, &A3, &A4, &S, plot_status, ptv_now() - t0);
+    if (ok && (cfg.parts & PART_SERIES)) ok = make_plots(&cfg, &R, &P, &M, &A, &A3, plot_status, sizeof plot_status);
+    if (ok) ok = write_summary(&cfg, &R, &P, &M, &H, &A, &A2, &A3, &A4, &S, plot_status, ptv_now() - t0);
     for (i = 0; i < SCENE_COUNT; ++i) free_scene(&R.L[i]);
     if (!ok) {
         fprintf(stderr, "bench: failed\n");
