@@ -16,8 +16,9 @@ $MITSUBA_VARIANT if set, else llvm_ad_rgb when a shared libLLVM works here, else
 (with a note on stderr). Needs only mitsuba and drjit (no numpy).
 
 Regions: pixel (x, y), y counted from the top row, belongs to region (4x // W, 4y // H); the
-file is "pt-regions W H K" followed by K lines of 48 numbers, region-major in row-major region
-order (top-left first), R G B per region. build/ptv's `render` writes the same layout.
+file is "pt-regions W H K DOF" (DOF = K - 1: the degrees of freedom of PREFIX-var.pfm), then K
+lines of 48 numbers: R G B of each region in row-major region order (top-left first).
+build/ptv's `render ... SEEDS REGIONS.txt` writes the same layout.
 """
 import glob
 import os
@@ -148,7 +149,7 @@ def main(argv):
     write_pfm(prefix + "-var.pfm", w, h, var)
     tmp = prefix + "-regions.txt.tmp"
     with open(tmp, "w") as f:
-        f.write("pt-regions %d %d %d\n" % (w, h, seeds))
+        f.write("pt-regions %d %d %d %d\n" % (w, h, seeds, seeds - 1))
         for r in regions:
             f.write(" ".join("%.9g" % v for v in r) + "\n")
     os.replace(tmp, prefix + "-regions.txt")
