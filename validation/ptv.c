@@ -1047,6 +1047,92 @@ static void test_fuzz(const char *dir, const char *work, int rounds)
     result(!bad, "fuzz", detail);
 }
 
+/* ---- compare-mitsuba on synthetic images --------------------------------------------------- */
+
+/* One synthetic renderer: k seed images of a 64 x 64 gradient, each pixel with independent
+   Gaussian noise of 5 % (Box-Muller), scaled by gain, and by region_gain inside region 5
+   (second row, second column); then the mean, its variance (from the seeds) and the regions. */
+static int synth_run(const char *work, uint64_t seed, int k, double gain, double region_gain, pt_image *mean, pt_image *var, seed_regions *sr)
+{
+    const int w = 64, h = 64;
+    char path[2048];
+    pt_image *imgs = (pt_image *)calloc((size_t)k, sizeof *imgs);
+    pt_rng rng;
+    int s, x, y, c, ok = imgs != NULL && pt_image_init(mean, w, h) == PT_OK && pt_image_init(var, w, h) == PT_OK;
+    pt_rng_seed(&rng, seed, 7);
+    for (s = 0; ok && s < k; ++s) {
+        ok = pt_image_init(&imgs[s], w, h) == PT_OK;
+        for (y = 0; ok && y < h; ++y)
+            for (x = 0; x < w; ++x)
+                for (c = 0; c < 3; ++c) {
+                    double u1 = 1.0 - pt_rng_float(&rng), u2 = pt_rng_float(&rng); /* u1 in (0, 1] */
+                    double g = sqrt(-2 * log(u1)) * cos(6.283185307179586 * u2);
+                    double truth = (0.2 + 0.6 * (x + y) / (double)(w + h)) * (1.0 - 0.2 * c) * gain;
+                    if (4 * (4 * y / h) + 4 * x / w == 5) truth *= region_gain;
+                    imgs[s].rgb[3 * (y * w + x) + c] = (float)(truth * (1 + 0.05 * g));
+                }
+    }
+    for (y = 0; ok && y < h; ++y)
+        for (x = 0; x < w; ++x)
+            for (c = 0; c < 3; ++c) {
+                size_t j = 3 * ((size_t)y * (size_t)w + (size_t)x) + (size_t)c;
+                double s1 = 0, s2 = 0, m;
+                for (s = 0; s < k; ++s) { s1 += imgs[s].rgb[j]; s2 += (double)imgs[s].rgb[j] * imgs[s].rgb[j]; }
+                m = s1 / k;
+                mean->rgb[j] = (float)m;
+                var->rgb[j] = (float)((s2 - s1 * m) / (k - 1) / k);
+            }
+    snprintf(path, sizeof path, "%s/synth-regions.txt", work);
+    ok = ok && write_regions(path, imgs, k, k - 1) && read_regions(path, sr);
+    remove(path);
+    free_images(imgs, k);
+    return ok;
+}
+
+/* compare-mitsuba's tests on synthetic renders with known truth (fixed seeds): the same mean
+   passes every test; a 1 % offset fails the bias test; +2 % in one region fails the region
+   test. And the t quantiles against tables (t_{0.995} at 10 and 30 degrees of freedom). */
+static void test_compare_mitsuba(const char *work)
+{
+    static const struct { const char *what; double gain, region_gain; int use_region, expect_pass; } cases[] = {
+        {"identical mean passes (pixel test)", 1.0, 1.0, 0, 1},
+        {"identical mean passes (region test)", 1.0, 1.0, 1, 1},
+        {"1 % offset fails", 1.01, 1.0, 0, 0},
+        {"+2 % in one region fails the region test", 1.0, 1.02, 1, 0},
+    };
+    char detail[512];
+    double z01 = normal_quantile2(0.01), t10 = t_quantile2(z01, 10), t30 = t_quantile2(z01, 30), z = normal_quantile2(0.001);
+    size_t i;
+    snprintf(detail, sizeof detail, "z(0.001) %.4f (3.2905), t(0.01; 10) %.4f (3.1693), t(0.01; 30) %.4f (2.7500)", z, t10, t30);
+    result(fabs(z - 3.2905) < 1e-3 && fabs(t10 - 3.1693) < 5e-3 && fabs(t30 - 2.75) < 2e-3, "compare-mitsuba: quantiles", detail);
+    for (i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        pt_image x = {0, 0, NULL}, vx = {0, 0, NULL}, r = {0, 0, NULL}, vr = {0, 0, NULL};
+        seed_regions sx = {0, 0, 0, 0, NULL}, sr = {0, 0, 0, 0, NULL};
+        mi_metrics m;
+        int ok = synth_run(work, 11 + i, 16, cases[i].gain, cases[i].region_gain, &x, &vx, &sx) &&
+                 synth_run(work, 101 + i, 16, 1.0, 1.0, &r, &vr, &sr) &&
+                 compare_mitsuba(&x, &vx, &sx, &r, &vr, &sr, cases[i].use_region, &m, NULL);
+        char what[160];
+        snprintf(what, sizeof what, "compare-mitsuba: %s", cases[i].what);
+        if (ok) {
+            snprintf(detail, sizeof detail, "bias %+.3f%%±%.3f %+.3f%%±%.3f %+.3f%%±%.3f, pixels accepted %.2f%%, "
+                     "regions rejected %d (worst %.2f)", 100 * m.bias[0], 100 * m.se[0], 100 * m.bias[1], 100 * m.se[1],
+                     100 * m.bias[2], 100 * m.se[2], 100 * m.accepted, m.region_rejected, m.region_worst);
+            /* the region case must fail by the region test itself, whatever the bias test says */
+            ok = cases[i].expect_pass ? m.pass && m.bias_ok && m.pixel_ok && m.region_ok
+                 : cases[i].use_region ? !m.region_ok && !m.pass : !m.bias_ok && !m.pass;
+        } else
+            snprintf(detail, sizeof detail, "could not build the synthetic renders");
+        result(ok, what, detail);
+        free(sx.m);
+        free(sr.m);
+        pt_image_free(&x);
+        pt_image_free(&vx);
+        pt_image_free(&r);
+        pt_image_free(&vr);
+    }
+}
+
 /* 1 when the files at paths a and b both open and hold the same bytes. */
 static int same_bytes(const char *a, const char *b)
 {
@@ -1139,6 +1225,7 @@ static int cmd_test(int argc, char **argv)
     test_malformed(argv[3]);
     test_scenes_load(argv[2]);
     test_fuzz(argv[2], argv[3], 3000);
+    test_compare_mitsuba(argv[3]);
     if (argc == 6) {
         test_cornell_identical(argv[4], argv[5], argv[2], argv[3]);
         test_scene_settings(argv[4], argv[2], argv[3]);
