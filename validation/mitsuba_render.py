@@ -8,6 +8,7 @@ K independent seeds for `make validate` and writes, in the layout build/ptv read
   PREFIX-regions.txt  per seed, the mean of each of 4 x 4 image regions per channel (see below)
 
   usage: mitsuba_render.py SCENE.xml PREFIX SEEDS SPP [FIRST_SEED]
+         mitsuba_render.py --check      the Mitsuba version and the variant it would use
 
 Each seed is a separate mi.render(scene, spp=SPP, seed=FIRST_SEED + k) with the scene's own
 (independent) sampler, so the K images are independent. Any Mitsuba warning or error fails the
@@ -101,7 +102,19 @@ def region_means(img, w, h):
     return [sums[k] / counts[k // 3] if counts[k // 3] else 0.0 for k in range(48)]
 
 
+def check():
+    """Prints what a render would use; fails when mitsuba does not import."""
+    variant = choose_variant()
+    import mitsuba as mi
+    mi.set_variant(variant)
+    print("mitsuba %s, variant %s%s" % (mi.__version__, variant, " (DRJIT_LIBLLVM_PATH=%s)" %
+          os.environ["DRJIT_LIBLLVM_PATH"] if variant.startswith("llvm") and os.environ.get("DRJIT_LIBLLVM_PATH") else ""))
+    return 0
+
+
 def main(argv):
+    if len(argv) == 2 and argv[1] == "--check":
+        return check()
     if len(argv) not in (5, 6):
         print("usage: mitsuba_render.py SCENE.xml PREFIX SEEDS SPP [FIRST_SEED]", file=sys.stderr)
         return 2

@@ -635,23 +635,12 @@ static void html_escape(FILE *f, const char *s)
     }
 }
 
-static int cmd_report(int argc, char **argv)
+/* The POV-Ray table of the report, one row per name; returns 1 when every row passed. */
+static int report_pov(FILE *f, const char *outdir, char **names, int count)
 {
-    char path[2048], index[2048], tmp[2100], line[4096];
-    FILE *f;
+    char path[2048], line[4096];
     int i, all = 1;
-    if (argc < 4) { fprintf(stderr, "usage: ptv report OUTDIR NAME...\n"); return 2; }
-    snprintf(index, sizeof index, "%s/index.html", argv[2]);
-    snprintf(tmp, sizeof tmp, "%s.tmp", index);
-    f = fopen(tmp, "w");
-    if (!f) { fprintf(stderr, "ptv: cannot write %s\n", tmp); return 1; }
-    fprintf(f, "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pdftrace vs POV-Ray</title>\n<style>\n"
-               "body{font-family:sans-serif;margin:20px;background:#fafafa}table{border-collapse:collapse}"
-               "td,th{border:1px solid #bbb;padding:4px 8px;text-align:right}th{background:#eee}"
-               ".pass{color:#070;font-weight:bold}.fail{color:#b00;font-weight:bold}"
-               "img{width:256px;height:256px;image-rendering:pixelated;border:1px solid #888}"
-               ".scene{margin:18px 0}.scene td{text-align:center;border:none}</style></head><body>\n"
-               "<h1>pdftrace vs POV-Ray 3.7</h1>\n<p>bias<sub>c</sub> = &Sigma;x/&Sigma;r &minus; 1 per channel; relMSE = "
+    fprintf(f, "<h2>pdftrace vs POV-Ray 3.7</h2>\n<p>bias<sub>c</sub> = &Sigma;x/&Sigma;r &minus; 1 per channel; relMSE = "
                "mean (x&minus;r)&sup2;/(r&sup2;+0.01); per-pixel error e = mean<sub>c</sub> |x&minus;r|/(r+0.01); z-test: "
                "|x&minus;r| &le; 3.29&middot;&radic;(var<sub>pdftrace</sub> + (pov_err&middot;r)&sup2; + (5e-4&middot;r)&sup2;) "
                "in every channel (two-sided &alpha; = 0.001 per channel). Error map: red = pdftrace brighter, blue = darker, "
@@ -659,12 +648,12 @@ static int cmd_report(int argc, char **argv)
                "<table><tr><th>scene</th><th>size</th><th>bias R</th><th>bias G</th><th>bias B</th><th>bias tol</th>"
                "<th>relMSE</th><th>e p50</th><th>e p90</th><th>e p99</th><th>z-test accepted</th><th>required</th>"
                "<th>POV err</th><th>result</th><th>reference</th></tr>\n");
-    for (i = 3; i < argc; ++i) {
+    for (i = 0; i < count; ++i) {
         FILE *r;
         int w = 0, h = 0, pass = 0, n = 0;
         double v[11];
         char *note = NULL;
-        snprintf(path, sizeof path, "%s/%s.result", argv[2], argv[i]);
+        snprintf(path, sizeof path, "%s/%s.result", outdir, names[i]);
         r = fopen(path, "r");
         if (r && fgets(line, sizeof line, r)) {
             n = sscanf(line, "%d %d %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %d", &w, &h, &v[0], &v[1], &v[2], &v[3],
@@ -674,7 +663,7 @@ static int cmd_report(int argc, char **argv)
             if (note) note[strcspn(note, "\n")] = '\0';
         }
         if (r) fclose(r);
-        fprintf(f, "<tr><td><a href=\"#%s\">%s</a></td>", argv[i], argv[i]);
+        fprintf(f, "<tr><td><a href=\"#%s\">%s</a></td>", names[i], names[i]);
         if (n != 14) {
             fprintf(f, "<td colspan=\"14\" class=\"fail\">no result (render or comparison failed)</td></tr>\n");
             all = 0;
@@ -690,10 +679,116 @@ static int cmd_report(int argc, char **argv)
         fprintf(f, "</td></tr>\n");
     }
     fprintf(f, "</table>\n");
-    for (i = 3; i < argc; ++i)
-        fprintf(f, "<div class=\"scene\" id=\"%s\"><h2>%s</h2><table><tr><td><img src=\"%s-pt.png\" alt=\"pdftrace\"><br>pdftrace</td>"
-                   "<td><img src=\"%s-pov.png\" alt=\"POV-Ray\"><br>POV-Ray</td><td><img src=\"%s-err.png\" alt=\"error map\"><br>"
-                   "error map</td></tr></table></div>\n", argv[i], argv[i], argv[i], argv[i], argv[i]);
+    return all;
+}
+
+/* One row of the Mitsuba table from NAME-mitsuba.result: the numbers of write_mi_result, or a
+   line "skip REASON" / "refused REASON" (neither passes nor fails). Returns 0 on a failure. */
+static int report_mi_row(FILE *f, const char *outdir, const char *name)
+{
+    char path[2048], line[4096], *note = NULL;
+    FILE *r;
+    int w = 0, h = 0, kx = 0, kr = 0, rej = 0, use_region = 0, pass = 0, n = 0, k;
+    double v[12];
+    snprintf(path, sizeof path, "%s/%s-mitsuba.result", outdir, name);
+    r = fopen(path, "r");
+    if (r && fgets(line, sizeof line, r)) {
+        line[strcspn(line, "\n")] = '\0';
+        n = sscanf(line, "%d %d %d %d %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %d %d %d", &w, &h, &kx, &kr, &v[0],
+                   &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &v[7], &v[8], &v[9], &v[10], &v[11], &rej, &use_region, &pass);
+        for (note = line, k = 0; k < 19 && note; ++k) { note = strchr(note, ' '); if (note) ++note; }
+    }
+    if (r) fclose(r);
+    fprintf(f, "<tr><td><a href=\"#%s\">%s</a></td>", name, name);
+    if (n != 19) {
+        int skipped = r && (!strncmp(line, "skip ", 5) || !strncmp(line, "refused ", 8));
+        fprintf(f, "<td colspan=\"14\" class=\"%s\" style=\"text-align:left\">", skipped ? "" : "fail");
+        if (skipped) html_escape(f, !strncmp(line, "skip ", 5) ? "SKIP: " : "not exported: ");
+        html_escape(f, skipped ? strchr(line, ' ') + 1 : "no result (export, render or comparison failed)");
+        fprintf(f, "</td></tr>\n");
+        return skipped;
+    }
+    fprintf(f, "<td>%dx%d</td><td>%d / %d</td>", w, h, kx, kr);
+    for (k = 0; k < 3; ++k) fprintf(f, "<td>%+.3f%% &plusmn; %.3f</td>", 100 * v[k], 100 * v[3 + k]);
+    fprintf(f, "<td>%.2e</td><td>%.2f%% / %.2f%% / %.2f%%</td><td>%s%.2f%%</td><td>%s%d (%.2f)</td><td>%s</td>"
+               "<td class=\"%s\">%s</td><td style=\"text-align:left\">",
+            v[6], 100 * v[7], 100 * v[8], 100 * v[9], use_region ? "" : "<b>", 100 * v[10], use_region ? "<b>" : "", rej,
+            v[11], use_region ? "region" : "pixel", pass ? "pass" : "fail", pass ? "PASS" : "FAIL");
+    html_escape(f, note ? note : "");
+    fprintf(f, "</td></tr>\n");
+    return pass;
+}
+
+/* The Mitsuba table of the report; returns 1 when no row failed. */
+static int report_mitsuba(FILE *f, const char *outdir, char **names, int count)
+{
+    int i, all = 1;
+    fprintf(f, "<h2>pdftrace vs Mitsuba 3</h2>\n<p>Both renderers render the scene with K independent seeds. "
+               "bias<sub>c</sub> = mean<sub>x</sub>/mean<sub>r</sub> &minus; 1 &plusmn; its standard error from the seeds; "
+               "passes at |bias| &le; 3 SE and &le; 0.5 %% in every channel. The scene's test (bold) must pass too: "
+               "<i>pixel</i>: &ge; 99 %% of pixels with |x&minus;r| &le; t&middot;&radic;(var<sub>x</sub> + var<sub>r</sub>) "
+               "in every channel (Welch t, two-sided &alpha; = 0.001; pdftrace's variance from every sample, Mitsuba's "
+               "from its seeds); <i>region</i>: 4&times;4 region means of the seeds, Welch t per region and channel, "
+               "&Scaron;id&aacute;k-corrected to &alpha; = 0.01 over the 48 tests, none may reject (for scenes whose "
+               "caustics make per-pixel variances unreliable). Error map as above.</p>\n"
+               "<table><tr><th>scene</th><th>size</th><th>seeds pt / mi</th><th>bias R</th><th>bias G</th><th>bias B</th>"
+               "<th>relMSE</th><th>e p50 / p90 / p99</th><th>pixels accepted</th><th>regions rejected (worst |t|/crit)</th>"
+               "<th>test</th><th>result</th><th>note</th></tr>\n");
+    for (i = 0; i < count; ++i) all = report_mi_row(f, outdir, names[i]) && all;
+    fprintf(f, "</table>\n");
+    return all;
+}
+
+/* 1 when name is one of names[0 .. count). */
+static int listed(const char *name, char **names, int count)
+{
+    int i;
+    for (i = 0; i < count; ++i)
+        if (!strcmp(name, names[i])) return 1;
+    return 0;
+}
+
+/* The images of one scene: the POV-Ray comparison's and/or the Mitsuba comparison's. */
+static void report_images(FILE *f, const char *name, int pov, int mi)
+{
+    fprintf(f, "<div class=\"scene\" id=\"%s\"><h2>%s</h2><table>", name, name);
+    if (pov)
+        fprintf(f, "<tr><td><img src=\"%s-pt.png\" alt=\"pdftrace\"><br>pdftrace</td><td><img src=\"%s-pov.png\" "
+                   "alt=\"POV-Ray\"><br>POV-Ray</td><td><img src=\"%s-err.png\" alt=\"error map\"><br>error map</td></tr>",
+                name, name, name);
+    if (mi)
+        fprintf(f, "<tr><td><img src=\"%s-ptm.png\" alt=\"pdftrace\"><br>pdftrace (Mitsuba run)</td><td><img "
+                   "src=\"%s-mi.png\" alt=\"Mitsuba\"><br>Mitsuba 3</td><td><img src=\"%s-mierr.png\" alt=\"error map\"><br>"
+                   "error map vs Mitsuba</td></tr>", name, name, name);
+    fprintf(f, "</table></div>\n");
+}
+
+/* report OUTDIR [NAME...] [--mitsuba NAME...]: the POV-Ray rows, then the Mitsuba rows. */
+static int cmd_report(int argc, char **argv)
+{
+    char index[2048], tmp[2100];
+    FILE *f;
+    int i, all = 1, npov, nmi = 0;
+    char **pov = argv + 3, **mi = NULL;
+    if (argc < 4) { fprintf(stderr, "usage: ptv report OUTDIR [NAME...] [--mitsuba NAME...]\n"); return 2; }
+    for (npov = 0; 3 + npov < argc && strcmp(pov[npov], "--mitsuba"); ++npov) {}
+    if (3 + npov < argc) { mi = pov + npov + 1; nmi = argc - 4 - npov; }
+    snprintf(index, sizeof index, "%s/index.html", argv[2]);
+    snprintf(tmp, sizeof tmp, "%s.tmp", index);
+    f = fopen(tmp, "w");
+    if (!f) { fprintf(stderr, "ptv: cannot write %s\n", tmp); return 1; }
+    fprintf(f, "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pdftrace validation</title>\n<style>\n"
+               "body{font-family:sans-serif;margin:20px;background:#fafafa}table{border-collapse:collapse}"
+               "td,th{border:1px solid #bbb;padding:4px 8px;text-align:right}th{background:#eee}"
+               ".pass{color:#070;font-weight:bold}.fail{color:#b00;font-weight:bold}"
+               "img{width:256px;height:256px;image-rendering:pixelated;border:1px solid #888}"
+               ".scene{margin:18px 0}.scene td{text-align:center;border:none}</style></head><body>\n"
+               "<h1>pdftrace validation: POV-Ray 3.7 and Mitsuba 3</h1>\n");
+    if (npov) all = report_pov(f, argv[2], pov, npov);
+    if (nmi) all = report_mitsuba(f, argv[2], mi, nmi) && all;
+    for (i = 0; i < npov; ++i) report_images(f, pov[i], 1, listed(pov[i], mi, nmi));
+    for (i = 0; i < nmi; ++i)
+        if (!listed(mi[i], pov, npov)) report_images(f, mi[i], 0, 1);
     fprintf(f, "<p>Overall: <span class=\"%s\">%s</span></p></body></html>\n", all ? "pass" : "fail", all ? "all scenes pass" : "some scenes FAIL");
     if (fclose(f) != 0 || rename(tmp, index) != 0) { remove(tmp); fprintf(stderr, "ptv: writing %s failed\n", index); return 1; }
     printf("wrote %s: %s\n", index, all ? "all scenes pass" : "some scenes FAIL");
