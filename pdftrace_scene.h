@@ -254,6 +254,25 @@ PTDEF size_t pt_scenefile_escape(char *out, size_t size, const char *text, pt_sc
 PTDEF int pt_scenefile_write_pov(const pt_scenefile *desc, const char *path, const pt_pov_options *opt, char *err,
                                  size_t err_size);
 
+typedef struct pt_mitsuba_options {
+    int width, height;           /* 0: the scene's size */
+    int spp;                     /* 0: the scene's samples per pixel */
+    int max_depth;               /* pdftrace's scattering events (written as this + 1); 0: the scene's */
+} pt_mitsuba_options;
+/* Writes the Mitsuba 3 scene (XML, scene format version 3.0.0) to path and its triangles
+   beside it as binary little-endian PLY files "<path without .xml>.N.ply", N = 0, 1, ...
+   (all through temporary files renamed into place; on failure none is left). opt may be
+   NULL. The mapping and what is refused: the header comment above and docs/mitsuba.md.
+   Refuses (writing nothing) every scene pt_scenefile_build refuses, with the build's
+   message, the features Mitsuba has no exact twin for (with the statement's file:line), and
+   a scene that would need a non-finite number. Text from the scene (its file name) reaches
+   the XML only in comments, escaped (PT_SCENEFILE_ESCAPE_COMMENT, '-' as \x2D); the PLY file
+   names only in attribute values, escaped (PT_SCENEFILE_ESCAPE_XML), and an output name
+   whose file part that escape would alter otherwise (control bytes, bytes >= 0x80, '$', '\')
+   is refused when the scene needs PLY files. */
+PTDEF int pt_scenefile_export_mitsuba(const pt_scenefile *desc, const char *path, const pt_mitsuba_options *opt,
+                                      char *err, size_t err_size);
+
 #ifdef __cplusplus
 }
 #endif
@@ -2233,6 +2252,684 @@ PTDEF int pt_scenefile_write_pov(const pt_scenefile *d, const char *path, const 
     w.f = out.file;
     pt__pov_body(&w, o, width, height);
     return pt_output_close(&out, !ferror(w.f), "POV-Ray scene", err, err_size);
+}
+
+/* ---- Mitsuba 3 export (the mapping and its measurements: docs/mitsuba.md). As for POV-Ray,
+   every number goes through pt__mts_g (checked finite) and everything runs twice: a first
+   pass with no file open only looks for a non-finite number, so files are written only when
+   every number is finite. Triangles go to binary little-endian PLY files beside the XML: one
+   per mesh statement, and one per material for the triangle statements. */
+typedef struct pt__mts_ply {
+    int shape;                /* a mesh statement's shape, or -1: every triangle statement of `material` */
+    int material;
+    int line;                 /* the statement (the first triangle's) */
+} pt__mts_ply;
+
+typedef struct pt__mts {
+    FILE *f;                  /* the XML, or a PLY; NULL: the checking pass */
+    const pt_scenefile *d;
+    int width, height, spp, depth; /* depth: pdftrace's scattering events */
+    int line, bad, bad_line;  /* the statement being written; the first non-finite number */
+    double near_clip, far_clip;
+    unsigned char *used;      /* per material: some shape uses it (only those are written) */
+    pt__mts_ply *ply;         /* the PLY files, in the order the XML names them */
+    int ply_count;
+    char name[4 * sizeof(((pt_scenefile *)0)->file) * 4 + 1]; /* d->file, escaped for a comment */
+    char base[6 * PT__SF_PATH + 1];  /* the PLY names' common part (the XML's stem, no directory), XML-escaped */
+} pt__mts;
+
+static void pt__mts_put(pt__mts *w, const char *fmt, ...)
+{
+    va_list ap;
+    if (!w->f) return;
+    va_start(ap, fmt);
+    vfprintf(w->f, fmt, ap);
+    va_end(ap);
+}
+/* A number; %.17g so that a double read back is the same double (a float: the same float). */
+static void pt__mts_g(pt__mts *w, double x)
+{
+    if (!pt__sf_finite(x)) {
+        if (!w->bad) w->bad_line = w->line;
+        w->bad = 1;
+        x = 0;
+    }
+    if (x == 0) x = 0; /* no "-0" */
+    if (w->f) fprintf(w->f, "%.17g", x);
+}
+/* A float of the scene as it is (%.9g reads back as the same float). */
+static void pt__mts_f(pt__mts *w, float x)
+{
+    if (!pt__sf_isfinite(x)) {
+        pt__mts_g(w, (double)x);
+        return;
+    }
+    if (x == 0) x = 0;
+    if (w->f) fprintf(w->f, "%.9g", (double)x);
+}
+/* <point name=".." x=".." y=".." z=".."/> */
+static void pt__mts_point_el(pt__mts *w, const char *name, double x, double y, double z)
+{
+    pt__mts_put(w, "<point name=\"%s\" x=\"", name);
+    pt__mts_g(w, x);
+    pt__mts_put(w, "\" y=\"");
+    pt__mts_g(w, y);
+    pt__mts_put(w, "\" z=\"");
+    pt__mts_g(w, z);
+    pt__mts_put(w, "\"/>");
+}
+static void pt__mts_rgb(pt__mts *w, const char *name, pt_color c)
+{
+    pt__mts_put(w, "<rgb name=\"%s\" value=\"", name);
+    pt__mts_f(w, c.x);
+    pt__mts_put(w, ", ");
+    pt__mts_f(w, c.y);
+    pt__mts_put(w, ", ");
+    pt__mts_f(w, c.z);
+    pt__mts_put(w, "\"/>");
+}
+
+/* Text from input for an XML comment: the comment escape, with '-' as \x2D too (an XML
+   comment may not hold "--" nor end in '-'). */
+static void pt__mts_comment_text(char *out, size_t size, const char *text)
+{
+    char tmp[4 * sizeof(((pt_scenefile *)0)->file) + 1];
+    size_t i, n = 0;
+    pt_scenefile_escape(tmp, sizeof tmp, text, PT_SCENEFILE_ESCAPE_COMMENT);
+    for (i = 0; tmp[i] && n + 5u < size; ++i) {
+        if (tmp[i] == '-') { memcpy(out + n, "\\x2D", 4); n += 4; }
+        else out[n++] = tmp[i];
+    }
+    out[n] = '\0';
+}
+
+/* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse, a mirror as a
+   two-sided conductor without Fresnel (material "none": reflectance = specular_reflectance),
+   glass as a smooth dielectric in vacuum, an emitter as black diffuse (it reflects nothing). */
+static void pt__mts_bsdf(pt__mts *w, int i)
+{
+    const pt_scenefile_material *m = &w->d->materials[i];
+    pt__mts_put(w, "  <!-- material %d -->\n", i);
+    switch (m->type) {
+    case PT_MATERIAL_LAMBERTIAN:
+        pt__mts_put(w, "  <bsdf type=\"twosided\" id=\"mat%d\"><bsdf type=\"diffuse\">", i);
+        pt__mts_rgb(w, "reflectance", m->albedo);
+        pt__mts_put(w, "</bsdf></bsdf>\n");
+        break;
+    case PT_MATERIAL_METAL:
+        pt__mts_put(w, "  <bsdf type=\"twosided\" id=\"mat%d\"><bsdf type=\"conductor\"><string name=\"material\" "
+                       "value=\"none\"/>", i);
+        pt__mts_rgb(w, "specular_reflectance", m->albedo);
+        pt__mts_put(w, "</bsdf></bsdf>\n");
+        break;
+    case PT_MATERIAL_DIELECTRIC:
+        pt__mts_put(w, "  <bsdf type=\"dielectric\" id=\"mat%d\"><float name=\"int_ior\" value=\"", i);
+        pt__mts_f(w, m->ior > 0.0f ? m->ior : 1.5f); /* 0 means 1.5, as in pt_material_desc */
+        pt__mts_put(w, "\"/><float name=\"ext_ior\" value=\"1\"/></bsdf>\n");
+        break;
+    default:
+        pt__mts_put(w, "  <bsdf type=\"diffuse\" id=\"mat%d\"><rgb name=\"reflectance\" value=\"0, 0, 0\"/></bsdf>\n", i);
+    }
+}
+
+/* The end of a shape element: its bsdf and, for an emitter, a one-sided area light. */
+static void pt__mts_shape_end(pt__mts *w, int material)
+{
+    const pt_scenefile_material *m = &w->d->materials[material];
+    pt__mts_put(w, "<ref id=\"mat%d\"/>", material);
+    if (m->type == PT_MATERIAL_EMITTER) {
+        pt__mts_put(w, "<emitter type=\"area\">");
+        pt__mts_rgb(w, "radiance", m->emission);
+        pt__mts_put(w, "</emitter>");
+    }
+    pt__mts_put(w, "</shape>\n");
+}
+
+static double pt__mts_det(double x[3][4])
+{
+    return x[0][0] * (x[1][1] * x[2][2] - x[1][2] * x[2][1]) - x[0][1] * (x[1][0] * x[2][2] - x[1][2] * x[2][0]) +
+           x[0][2] * (x[1][0] * x[2][1] - x[1][1] * x[2][0]);
+}
+static void pt__mts_point(double x[3][4], pt_vec3 p, double out[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i) out[i] = x[i][0] * p.x + x[i][1] * p.y + x[i][2] * p.z + x[i][3];
+}
+static void pt__mts_vector(double x[3][4], pt_vec3 p, double out[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i) out[i] = x[i][0] * p.x + x[i][1] * p.y + x[i][2] * p.z;
+}
+
+/* Q + a u + b v (a, b in [0, 1]) as Mitsuba's rectangle, [-1, 1]^2 in z = 0 with normal +z:
+   to_world has the columns u/2, v/2, n = (u x v)/|u x v| and the centre Q + u/2 + v/2, so
+   the normal is pdftrace's u x v (n is orthogonal to u and v: Mitsuba's normal transform
+   M^-T maps +z onto it). Under a mirroring transform u and v are swapped first, as
+   pdftrace's builder does, which keeps the emitting side on the transformed normal. */
+static void pt__mts_rectangle(pt__mts *w, double x[3][4], pt_vec3 q0, pt_vec3 u0, pt_vec3 v0, int material)
+{
+    double q[3], u[3], v[3], n[3], len, m[3][4];
+    int i, j;
+    pt__mts_point(x, q0, q);
+    pt__mts_vector(x, u0, u);
+    pt__mts_vector(x, v0, v);
+    if (pt__mts_det(x) < 0) {
+        double t[3];
+        memcpy(t, u, sizeof t); memcpy(u, v, sizeof t); memcpy(v, t, sizeof t);
+    }
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+    len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (i = 0; i < 3; ++i) {
+        m[i][0] = 0.5 * u[i];
+        m[i][1] = 0.5 * v[i];
+        m[i][2] = n[i] / len; /* len == 0 gives NaN: caught by pt__mts_g */
+        m[i][3] = q[i] + 0.5 * u[i] + 0.5 * v[i];
+    }
+    pt__mts_put(w, "  <shape type=\"rectangle\"><transform name=\"to_world\"><matrix value=\"");
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 4; ++j) {
+            pt__mts_g(w, m[i][j]);
+            pt__mts_put(w, " ");
+        }
+    pt__mts_put(w, "0 0 0 1\"/></transform>");
+    pt__mts_shape_end(w, material);
+}
+
+/* A box: the six faces pdftrace's pt_scene_add_box makes (u x v out of the box), each a rectangle. */
+static void pt__mts_box(pt__mts *w, double x[3][4], pt_vec3 lo, pt_vec3 hi, int material)
+{
+    pt_vec3 q[6], u[6], v[6];
+    pt_vec3 dx = pt_v3(hi.x - lo.x, 0, 0), dy = pt_v3(0, hi.y - lo.y, 0), dz = pt_v3(0, 0, hi.z - lo.z);
+    int i;
+    q[0] = pt_v3(lo.x, lo.y, hi.z); u[0] = dx; v[0] = dy;
+    q[1] = pt_v3(hi.x, lo.y, lo.z); u[1] = pt_neg(dx); v[1] = dy;
+    q[2] = pt_v3(hi.x, lo.y, hi.z); u[2] = pt_neg(dz); v[2] = dy;
+    q[3] = pt_v3(lo.x, lo.y, lo.z); u[3] = dz; v[3] = dy;
+    q[4] = pt_v3(lo.x, hi.y, hi.z); u[4] = dx; v[4] = pt_neg(dz);
+    q[5] = pt_v3(lo.x, lo.y, lo.z); u[5] = dx; v[5] = dz;
+    for (i = 0; i < 6; ++i) pt__mts_rectangle(w, x, q[i], u[i], v[i], material);
+}
+
+/* A sphere under a similarity (the build refuses any other): the centre moved, the radius
+   scaled by the transform's scale (the length of its first column). */
+static void pt__mts_sphere(pt__mts *w, double x[3][4], pt_vec3 c0, float radius, int material)
+{
+    double c[3], s = sqrt(x[0][0] * x[0][0] + x[1][0] * x[1][0] + x[2][0] * x[2][0]);
+    pt__mts_point(x, c0, c);
+    pt__mts_put(w, "  <shape type=\"sphere\">");
+    pt__mts_point_el(w, "center", c[0], c[1], c[2]);
+    pt__mts_put(w, "<float name=\"radius\" value=\"");
+    pt__mts_g(w, (double)radius * s);
+    pt__mts_put(w, "\"/>");
+    pt__mts_shape_end(w, material);
+}
+
+/* ---- PLY (Turk, "The PLY Polygon File Format", 1994): a text header, then little-endian
+   float32 vertices (x y z [nx ny nz]) and faces (uint8 count 3, three uint32 indices). */
+static void pt__mts_le32(FILE *f, uint32_t u)
+{
+    unsigned char b[4];
+    b[0] = (unsigned char)(u & 0xffu);
+    b[1] = (unsigned char)((u >> 8) & 0xffu);
+    b[2] = (unsigned char)((u >> 16) & 0xffu);
+    b[3] = (unsigned char)(u >> 24);
+    fwrite(b, 1, 4, f);
+}
+/* A float: checked finite in both passes (a PLY float is not written as text). */
+static void pt__mts_ply_float(pt__mts *w, double x)
+{
+    float f = (float)x;
+    uint32_t u;
+    if (!pt__sf_isfinite(f) || !pt__sf_finite(x)) {
+        if (!w->bad) w->bad_line = w->line;
+        w->bad = 1;
+        f = 0.0f;
+    }
+    memcpy(&u, &f, sizeof u);
+    if (w->f) pt__mts_le32(w->f, u);
+}
+static void pt__mts_ply_header(pt__mts *w, uint32_t vertices, uint32_t faces, int normals)
+{
+    pt__mts_put(w, "ply\nformat binary_little_endian 1.0\ncomment written by pdftrace %d.%d.%d\n", PDFTRACE_VERSION_MAJOR,
+                PDFTRACE_VERSION_MINOR, PDFTRACE_VERSION_PATCH);
+    pt__mts_put(w, "element vertex %lu\nproperty float x\nproperty float y\nproperty float z\n", (unsigned long)vertices);
+    if (normals) pt__mts_put(w, "property float nx\nproperty float ny\nproperty float nz\n");
+    pt__mts_put(w, "element face %lu\nproperty list uchar uint vertex_indices\nend_header\n", (unsigned long)faces);
+}
+static void pt__mts_ply_face(pt__mts *w, uint32_t a, uint32_t b, uint32_t c)
+{
+    if (!w->f) return;
+    fputc(3, w->f);
+    pt__mts_le32(w->f, a);
+    pt__mts_le32(w->f, b);
+    pt__mts_le32(w->f, c);
+}
+
+/* A mesh statement: its vertices in world space (the transform in double, rounded once), the
+   normals by the inverse transpose and normalised (as pdftrace's builder does; dropped for an
+   emitter, which reflects nothing and emits on the geometric side), the corners' order
+   reversed under a mirroring transform. Triangles with no area in float are skipped, as the
+   builder skips them. */
+static void pt__mts_ply_mesh(pt__mts *w, const pt_scenefile_shape *s)
+{
+    const pt_obj_mesh *m = &w->d->meshes[s->mesh];
+    int normals = m->normals && w->d->materials[s->material].type != PT_MATERIAL_EMITTER;
+    double x[3][4], it[3][3], det;
+    uint32_t k, faces = 0, pass;
+    int i, j;
+    pt__sf_shape_xfd(s, x);
+    det = pt__mts_det(x);
+    for (i = 0; i < 3; ++i) /* inverse transpose = cofactors / det */
+        for (j = 0; j < 3; ++j)
+            it[i][j] = (x[(i + 1) % 3][(j + 1) % 3] * x[(i + 2) % 3][(j + 2) % 3] -
+                        x[(i + 1) % 3][(j + 2) % 3] * x[(i + 2) % 3][(j + 1) % 3]) / det;
+    for (pass = 0; pass < 2; ++pass) {
+        for (k = 0; k < m->triangle_count; ++k) {
+            pt_vec3 p[3];
+            uint32_t c, *ix = m->indices + 3u * k;
+            double q[3];
+            for (c = 0; c < 3; ++c) {
+                pt__mts_point(x, pt_v3(m->positions[3 * ix[c]], m->positions[3 * ix[c] + 1], m->positions[3 * ix[c] + 2]), q);
+                p[c] = pt_v3((float)q[0], (float)q[1], (float)q[2]);
+            }
+            if (!(pt_length2(pt_cross(pt_sub(p[1], p[0]), pt_sub(p[2], p[0]))) > 0.0f)) continue;
+            if (pass == 0) ++faces;
+            else if (det < 0) pt__mts_ply_face(w, ix[0], ix[2], ix[1]);
+            else pt__mts_ply_face(w, ix[0], ix[1], ix[2]);
+        }
+        if (pass == 1) break;
+        if (faces == 0) { /* nothing Mitsuba could load: as the build, refuse it */
+            if (!w->bad) w->bad_line = s->line;
+            w->bad = 1;
+        }
+        pt__mts_ply_header(w, m->vertex_count, faces, normals);
+        for (k = 0; k < m->vertex_count; ++k) {
+            double q[3];
+            const float *pp = m->positions + 3u * k;
+            pt__mts_point(x, pt_v3(pp[0], pp[1], pp[2]), q);
+            for (i = 0; i < 3; ++i) pt__mts_ply_float(w, q[i]);
+            if (normals) {
+                const float *nn = m->normals + 3u * k;
+                double n[3], len;
+                for (i = 0; i < 3; ++i) n[i] = it[i][0] * nn[0] + it[i][1] * nn[1] + it[i][2] * nn[2];
+                len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                for (i = 0; i < 3; ++i) pt__mts_ply_float(w, n[i] / len);
+            }
+        }
+    }
+}
+
+/* The triangle statements of one material: three vertices each, in world space, reversed
+   under a mirroring transform (as pt_scene_add_triangle does). */
+static void pt__mts_ply_triangles(pt__mts *w, int material)
+{
+    const pt_scenefile *d = w->d;
+    uint32_t n = 0, k;
+    int i, c, j;
+    for (i = 0; i < d->shape_count; ++i)
+        n += d->shapes[i].type == PT_SCENEFILE_TRIANGLE && d->shapes[i].material == material;
+    pt__mts_ply_header(w, 3u * n, n, 0);
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        double x[3][4], q[3];
+        int mirror;
+        if (s->type != PT_SCENEFILE_TRIANGLE || s->material != material) continue;
+        w->line = s->line;
+        pt__sf_shape_xfd(s, x);
+        mirror = pt__mts_det(x) < 0;
+        for (c = 0; c < 3; ++c) {
+            pt__mts_point(x, s->p[mirror && c ? 3 - c : c], q);
+            for (j = 0; j < 3; ++j) pt__mts_ply_float(w, q[j]);
+        }
+    }
+    for (k = 0; k < n; ++k) pt__mts_ply_face(w, 3u * k, 3u * k + 1u, 3u * k + 2u);
+}
+
+static void pt__mts_ply_body(pt__mts *w, int job)
+{
+    const pt__mts_ply *p = &w->ply[job];
+    w->line = p->line;
+    if (p->shape >= 0) pt__mts_ply_mesh(w, &w->d->shapes[p->shape]);
+    else pt__mts_ply_triangles(w, p->material);
+}
+
+/* The XML's shape for PLY file `job`. Without normals in the file, face_normals keeps
+   Mitsuba from computing smooth ones. */
+static void pt__mts_ply_shape(pt__mts *w, int job)
+{
+    const pt__mts_ply *p = &w->ply[job];
+    const pt_scenefile_shape *s = p->shape >= 0 ? &w->d->shapes[p->shape] : NULL;
+    int normals = s && w->d->meshes[s->mesh].normals && w->d->materials[p->material].type != PT_MATERIAL_EMITTER;
+    pt__mts_put(w, "  <shape type=\"ply\"><string name=\"filename\" value=\"%s.%d.ply\"/>", w->base, job);
+    if (!normals) pt__mts_put(w, "<boolean name=\"face_normals\" value=\"true\"/>");
+    pt__mts_shape_end(w, p->material);
+}
+
+/* The XML's head: the integrator, the sensor (with its sampler and film), the bsdfs of the
+   materials in use and the background. */
+static void pt__mts_header(pt__mts *w)
+{
+    const pt_scenefile *d = w->d;
+    const pt_camera_desc *c = &d->camera;
+    double vfov = c->vfov_degrees > 0 ? (double)c->vfov_degrees : 40.0;
+    pt_vec3 up = pt_length2(c->up) > 0 ? c->up : pt_v3(0, 1, 0);
+    int i;
+    w->line = 0;
+    pt__mts_put(w, "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
+    pt__mts_put(w, "<!-- Mitsuba 3 scene written by pdftrace %d.%d.%d from %s -->\n", PDFTRACE_VERSION_MAJOR,
+                PDFTRACE_VERSION_MINOR, PDFTRACE_VERSION_PATCH, w->name);
+    pt__mts_put(w, "<!-- render: mitsuba -m scalar_rgb -o OUT.exr THIS.xml (or -m llvm_ad_rgb) -->\n");
+    pt__mts_put(w, "<scene version=\"3.0.0\">\n");
+    /* Mitsuba's max_depth counts the camera segment too: N scattering events are N + 1 segments. */
+    pt__mts_put(w, "  <integrator type=\"path\"><integer name=\"max_depth\" value=\"%ld\"/>"
+                   "<boolean name=\"hide_emitters\" value=\"false\"/></integrator>\n", (long)w->depth + 1L);
+    w->line = d->camera_line;
+    pt__mts_put(w, "  <sensor type=\"%s\">\n    <string name=\"fov_axis\" value=\"y\"/><float name=\"fov\" value=\"",
+                c->lens_radius > 0 ? "thinlens" : "perspective");
+    pt__mts_g(w, vfov);
+    pt__mts_put(w, "\"/>\n");
+    if (c->lens_radius > 0) {
+        /* pdftrace's thin lens: a uniform disk of lens_radius, sharp at focus_distance (default
+           |look_at - look_from|) on a plane normal to the view, as Mitsuba's thinlens */
+        double focus = c->focus_distance > 0 ? (double)c->focus_distance : (double)pt_length(pt_sub(c->look_at, c->look_from));
+        pt__mts_put(w, "    <float name=\"aperture_radius\" value=\"");
+        pt__mts_f(w, c->lens_radius);
+        pt__mts_put(w, "\"/><float name=\"focus_distance\" value=\"");
+        pt__mts_g(w, focus);
+        pt__mts_put(w, "\"/>\n");
+    }
+    /* the clipping planes enclose the whole scene (Mitsuba's default far_clip is 1e4) */
+    pt__mts_put(w, "    <float name=\"near_clip\" value=\"");
+    pt__mts_g(w, w->near_clip);
+    pt__mts_put(w, "\"/><float name=\"far_clip\" value=\"");
+    pt__mts_g(w, w->far_clip);
+    pt__mts_put(w, "\"/>\n    <transform name=\"to_world\"><lookat origin=\"");
+    pt__mts_f(w, c->look_from.x); pt__mts_put(w, ", ");
+    pt__mts_f(w, c->look_from.y); pt__mts_put(w, ", ");
+    pt__mts_f(w, c->look_from.z);
+    pt__mts_put(w, "\" target=\"");
+    pt__mts_f(w, c->look_at.x); pt__mts_put(w, ", ");
+    pt__mts_f(w, c->look_at.y); pt__mts_put(w, ", ");
+    pt__mts_f(w, c->look_at.z);
+    pt__mts_put(w, "\" up=\"");
+    pt__mts_f(w, up.x); pt__mts_put(w, ", ");
+    pt__mts_f(w, up.y); pt__mts_put(w, ", ");
+    pt__mts_f(w, up.z);
+    pt__mts_put(w, "\"/></transform>\n");
+    pt__mts_put(w, "    <sampler type=\"independent\"><integer name=\"sample_count\" value=\"%d\"/>"
+                   "<integer name=\"seed\" value=\"%lu\"/></sampler>\n", w->spp, (unsigned long)(d->seed & 0x7fffffffu));
+    /* box filter: each sample counts for its own pixel only, as in pdftrace's film */
+    pt__mts_put(w, "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"%d\"/><integer name=\"height\" value=\"%d\"/>"
+                   "<string name=\"pixel_format\" value=\"rgb\"/><string name=\"component_format\" value=\"float32\"/>"
+                   "<rfilter type=\"box\"/></film>\n  </sensor>\n", w->width, w->height);
+    w->line = 0;
+    for (i = 0; i < d->material_count; ++i)
+        if (w->used[i]) pt__mts_bsdf(w, i);
+    if (d->background.x > 0 || d->background.y > 0 || d->background.z > 0) {
+        pt__mts_put(w, "  <emitter type=\"constant\">");
+        pt__mts_rgb(w, "radiance", d->background);
+        pt__mts_put(w, "</emitter>\n");
+    }
+}
+
+static void pt__mts_body(pt__mts *w)
+{
+    const pt_scenefile *d = w->d;
+    int i, job = 0;
+    for (i = 0; i < d->material_count; ++i) w->used[i] &= 1u;
+    pt__mts_header(w);
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        double x[3][4];
+        w->line = s->line;
+        pt__sf_shape_xfd(s, x);
+        if (s->type == PT_SCENEFILE_TRIANGLE) {
+            if (w->used[s->material] & 2u) continue; /* written with the first triangle of its material */
+            w->used[s->material] |= 2u;
+        }
+        pt__mts_put(w, "  <!-- %s:%d -->\n", w->name, s->line);
+        switch (s->type) {
+        case PT_SCENEFILE_SPHERE: pt__mts_sphere(w, x, s->p[0], s->radius, s->material); break;
+        case PT_SCENEFILE_QUAD: pt__mts_rectangle(w, x, s->p[0], s->p[1], s->p[2], s->material); break;
+        case PT_SCENEFILE_BOX: pt__mts_box(w, x, s->p[0], s->p[1], s->material); break;
+        default: pt__mts_ply_shape(w, job++);
+        }
+    }
+    pt__mts_put(w, "</scene>\n");
+}
+
+/* What the export refuses, before anything is written: every scene the build refuses (the
+   build itself runs), a camera the renderer refuses, then what Mitsuba has no exact twin for
+   (docs/mitsuba.md, with the measurements behind each). */
+static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *err, size_t err_size)
+{
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_camera cam;
+    int i, rc = pt_scenefile_build(d, &scene, &rd, err, err_size);
+    pt_scene_destroy(scene);
+    if (rc != PT_OK) return rc;
+    if (pt_camera_init(&cam, &d->camera, width, height) != PT_OK)
+        return pt__sf_failf(err, err_size, d->file, d->camera_line, PT_ERROR_INVALID_ARGUMENT,
+                            "Mitsuba export: pdftrace cannot render this camera (a non-finite vector, look_at "
+                            "equal to look_from, up parallel to the view, or vfov outside (0, 180))");
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        const pt_scenefile_material *m = &d->materials[s->material];
+        const char *why = NULL;
+        if (m->type == PT_MATERIAL_METAL && m->fuzz > 0)
+            why = "fuzzy metal (material %s) has no exact Mitsuba equivalent (its rough conductors are microfacet "
+                  "models, not pdftrace's mirror direction jittered in a ball)";
+        else if (m->type == PT_MATERIAL_LAMBERTIAN && m->checker >= 0)
+            why = "the 3-D checker texture (material %s) has no exact Mitsuba equivalent (Mitsuba's checkerboard "
+                  "is a 2-D texture over a shape's (u, v) coordinates)";
+        else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_METAL) &&
+                 (m->albedo.x > 1 || m->albedo.y > 1 || m->albedo.z > 1))
+            why = "an albedo above 1 (material %s): Mitsuba accepts RGB reflectances in [0, 1] only";
+        else if (m->type == PT_MATERIAL_DIELECTRIC && m->ior == 1.0f)
+            why = "a dielectric of ior 1 (material %s): Mitsuba's dielectric needs an interior index that differs "
+                  "from the exterior one (1)";
+        else if (m->type == PT_MATERIAL_EMITTER && m->two_sided)
+            why = "a two-sided emitter (material %s): Mitsuba's area lights emit on one side only, and a pair of "
+                  "coincident back-to-back shapes is not exact (each ray hits either one)";
+        if (why) {
+            char msg[320];
+            snprintf(msg, sizeof msg, why, m->name);
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED, "Mitsuba export: %s", msg);
+        }
+    }
+    return PT_OK;
+}
+
+/* The clipping planes: far beyond the farthest point of the scene's bounds from the camera,
+   near at a millionth of that (Mitsuba's sensors clip; pdftrace's camera does not). */
+static void pt__mts_clip(pt__mts *w)
+{
+    const pt_scenefile *d = w->d;
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, x[3][4], far2 = 0;
+    pt_vec3 e = d->camera.look_from;
+    int i, k;
+    uint32_t v;
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        const pt_vec3 *p = s->p;
+        pt__sf_shape_xfd(s, x);
+        if (s->type == PT_SCENEFILE_SPHERE) {
+            double sx = sqrt(x[0][0] * x[0][0] + x[1][0] * x[1][0] + x[2][0] * x[2][0]);
+            pt__sf_dbounds(x, p[0], (double)s->radius * sx, lo, hi);
+        } else if (s->type == PT_SCENEFILE_MESH) {
+            const pt_obj_mesh *m = &d->meshes[s->mesh];
+            for (v = 0; v < m->vertex_count; ++v)
+                pt__sf_dbounds(x, pt_v3(m->positions[3 * v], m->positions[3 * v + 1], m->positions[3 * v + 2]), 0, lo, hi);
+        } else if (s->type == PT_SCENEFILE_BOX) {
+            for (k = 0; k < 8; ++k)
+                pt__sf_dbounds(x, pt_v3((k & 1) ? p[1].x : p[0].x, (k & 2) ? p[1].y : p[0].y, (k & 4) ? p[1].z : p[0].z), 0,
+                               lo, hi);
+        } else if (s->type == PT_SCENEFILE_QUAD) {
+            pt__sf_dbounds(x, p[0], 0, lo, hi);
+            pt__sf_dbounds(x, pt_add(p[0], p[1]), 0, lo, hi);
+            pt__sf_dbounds(x, pt_add(p[0], p[2]), 0, lo, hi);
+            pt__sf_dbounds(x, pt_add(pt_add(p[0], p[1]), p[2]), 0, lo, hi);
+        } else
+            for (k = 0; k < 3; ++k) pt__sf_dbounds(x, p[k], 0, lo, hi);
+    }
+    for (k = 0; k < 8 && d->shape_count; ++k) {
+        double dx = ((k & 1) ? hi[0] : lo[0]) - (double)e.x, dy = ((k & 2) ? hi[1] : lo[1]) - (double)e.y,
+               dz = ((k & 4) ? hi[2] : lo[2]) - (double)e.z;
+        if (dx * dx + dy * dy + dz * dz > far2) far2 = dx * dx + dy * dy + dz * dz;
+    }
+    w->far_clip = 2.0 * sqrt(far2) + 1.0;
+    w->near_clip = 1e-6 * w->far_clip;
+}
+
+/* Which materials are used, and the PLY files: one per mesh statement, one per material of
+   the triangle statements (at its first triangle). Returns 0 when out of memory. */
+static int pt__mts_plan(pt__mts *w)
+{
+    const pt_scenefile *d = w->d;
+    int i;
+    w->used = (unsigned char *)PT_MALLOC((size_t)d->material_count + 1u);
+    w->ply = (pt__mts_ply *)PT_MALLOC(((size_t)d->shape_count + 1u) * sizeof *w->ply);
+    if (!w->used || !w->ply) return 0;
+    memset(w->used, 0, (size_t)d->material_count + 1u);
+    for (i = 0; i < d->shape_count; ++i) {
+        const pt_scenefile_shape *s = &d->shapes[i];
+        if (s->type == PT_SCENEFILE_MESH || (s->type == PT_SCENEFILE_TRIANGLE && !(w->used[s->material] & 2u))) {
+            w->ply[w->ply_count].shape = s->type == PT_SCENEFILE_MESH ? i : -1;
+            w->ply[w->ply_count].material = s->material;
+            w->ply[w->ply_count].line = s->line;
+            w->ply_count++;
+            if (s->type == PT_SCENEFILE_TRIANGLE) w->used[s->material] |= 2u;
+        }
+        w->used[s->material] |= 1u;
+    }
+    return 1;
+}
+
+/* "<path without .xml>.<job>.ply" into out (size bytes); 0 if it does not fit. */
+static int pt__mts_ply_path(const char *path, int job, char *out, size_t size)
+{
+    size_t n = strlen(path);
+    int k;
+    if (n > 4 && !strcmp(path + n - 4, ".xml")) n -= 4;
+    k = snprintf(out, size, "%.*s.%d.ply", (int)n, path, job);
+    return k > 0 && (size_t)k < size;
+}
+
+/* The PLY names' common part as the XML names them: the file part of the stem, XML-escaped.
+   A byte the escape would alter (not just spell as an entity), or '$' (Mitsuba substitutes
+   $name in attribute values), or '\' (a separator on Windows), would name another file:
+   refused. */
+static int pt__mts_base(pt__mts *w, const char *path, char *err, size_t err_size)
+{
+    char stem[PT__SF_PATH];
+    const char *b, *c;
+    size_t n = strlen(path);
+    if (n > 4 && !strcmp(path + n - 4, ".xml")) n -= 4;
+    if (n >= sizeof stem)
+        return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
+    memcpy(stem, path, n);
+    stem[n] = '\0';
+    b = strrchr(stem, '/');
+    b = b ? b + 1 : stem;
+    for (c = b; *c; ++c)
+        if ((unsigned char)*c < 0x20u || (unsigned char)*c >= 0x7fu || *c == '$' || *c == '\\')
+            return pt__sf_failf(err, err_size, w->d->file, w->ply[0].line, PT_ERROR_UNSUPPORTED,
+                                "Mitsuba export: the scene needs PLY files named after the output, and its file name "
+                                "holds a byte the XML cannot name them with (a control byte, a byte >= 0x80, '$' or "
+                                "'\\'); choose another name");
+    pt_scenefile_escape(w->base, sizeof w->base, b, PT_SCENEFILE_ESCAPE_XML);
+    return PT_OK;
+}
+
+/* Writes PLY file `job` to its place (through a temporary renamed into place). */
+static int pt__mts_write_ply(pt__mts *w, const char *path, int job, char *ply_path, size_t size, char *err,
+                             size_t err_size)
+{
+    pt_output_file out;
+    int rc;
+    if (!pt__mts_ply_path(path, job, ply_path, size))
+        return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
+    rc = pt_output_open(&out, ply_path, 0, "PLY mesh", err, err_size);
+    if (rc != PT_OK) return rc;
+    w->f = out.file;
+    pt__mts_ply_body(w, job);
+    w->f = NULL;
+    return pt_output_close(&out, !ferror(out.file), "PLY mesh", err, err_size);
+}
+
+/* The files: the PLY files first, then the XML; when one fails, the ones written are removed. */
+static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_size)
+{
+    char (*names)[PT__SF_PATH + 32] = NULL;
+    pt_output_file out;
+    int i, done = 0, rc = PT_OK;
+    if (w->ply_count) {
+        names = (char (*)[PT__SF_PATH + 32])PT_MALLOC((size_t)w->ply_count * sizeof *names);
+        if (!names) return pt__sf_failf(err, err_size, path, 0, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
+    }
+    for (i = 0; i < w->ply_count && rc == PT_OK; ++i)
+        if ((rc = pt__mts_write_ply(w, path, i, names[i], sizeof names[i], err, err_size)) == PT_OK) done = i + 1;
+    if (rc == PT_OK && (rc = pt_output_open(&out, path, 1, "Mitsuba scene", err, err_size)) == PT_OK) {
+        w->f = out.file;
+        pt__mts_body(w);
+        w->f = NULL;
+        rc = pt_output_close(&out, !ferror(out.file), "Mitsuba scene", err, err_size);
+    }
+    if (rc != PT_OK)
+        for (i = 0; i < done; ++i) remove(names[i]);
+    PT_FREE(names);
+    return rc;
+}
+
+PTDEF int pt_scenefile_export_mitsuba(const pt_scenefile *d, const char *path, const pt_mitsuba_options *o, char *err,
+                                      size_t err_size)
+{
+    pt__mts w;
+    char file[sizeof d->file];
+    int rc, i;
+    if (err && err_size) err[0] = '\0';
+    if (!d || !path || !*path)
+        return pt__sf_failf(err, err_size, "pt_scenefile_export_mitsuba", 0, PT_ERROR_INVALID_ARGUMENT,
+                            "the scene is NULL, or the path is NULL or empty");
+    if (o && (o->width < 0 || o->height < 0 || o->spp < 0 || o->max_depth < 0 || o->max_depth > 1000000))
+        return pt__sf_failf(err, err_size, "pt_scenefile_export_mitsuba", 0, PT_ERROR_INVALID_ARGUMENT,
+                            "pt_mitsuba_options: width, height, spp and max_depth must be >= 0 (0: the scene's), "
+                            "max_depth at most 1000000");
+    memset(&w, 0, sizeof w);
+    w.d = d;
+    w.width = o && o->width > 0 ? o->width : d->width;
+    w.height = o && o->height > 0 ? o->height : d->height;
+    w.spp = o && o->spp > 0 ? o->spp : d->samples_per_pixel > 0 ? d->samples_per_pixel : 16;
+    w.depth = o && o->max_depth > 0 ? o->max_depth : d->max_depth > 0 ? d->max_depth : 50;
+    if (w.width <= 0 || w.height <= 0)
+        return pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the image size is %d x %d",
+                            w.width, w.height);
+    if ((rc = pt__mts_refuse(d, w.width, w.height, err, err_size)) != PT_OK) return rc;
+    if (!pt__mts_plan(&w)) {
+        rc = pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
+        goto done;
+    }
+    if (w.ply_count && (rc = pt__mts_base(&w, path, err, err_size)) != PT_OK) goto done;
+    memcpy(file, d->file, sizeof file); /* d->file is input: only safe bytes reach a comment */
+    file[sizeof file - 1] = '\0';
+    pt__mts_comment_text(w.name, sizeof w.name, file);
+    pt__mts_clip(&w);
+    pt__mts_body(&w); /* w.f == NULL: only checks the numbers */
+    for (i = 0; i < w.ply_count; ++i) pt__mts_ply_body(&w, i);
+    if (w.bad) {
+        rc = pt__sf_failf(err, err_size, d->file, w.bad_line, PT_ERROR_UNSUPPORTED,
+                          "Mitsuba export: a number to be written is not finite (nan or inf), or a mesh has no "
+                          "triangle with an area in float");
+        goto done;
+    }
+    rc = pt__mts_write(&w, path, err, err_size);
+done:
+    PT_FREE(w.used);
+    PT_FREE(w.ply);
+    return rc;
 }
 
 #ifdef __cplusplus

@@ -52,6 +52,7 @@ typedef struct options {
     int output_count;
     char default_output[4096];   /* SCENE's base name + .png (.ppm without libpng) */
     const char *pov;             /* --export-pov */
+    const char *mitsuba;         /* --export-mitsuba */
     pt_render_desc set;          /* the settings given: the scene file's ones only where `given` says */
     unsigned given;              /* GIVEN_* */
     pt_backend backend;
@@ -137,6 +138,8 @@ static void print_help(void)
            "Other:\n"
            "      --preview-every S  rewrite the outputs every S seconds while rendering\n"
            "      --export-pov FILE  write the scene for POV-Ray 3.7 (renders too only with -o)\n"
+           "      --export-mitsuba FILE.xml  write the scene for Mitsuba 3 (meshes as FILE.N.ply beside it;\n"
+           "                         renders too only with -o)\n"
            "      --allow-path DIR   meshes may also come from DIR (default: the scene's directory only)\n"
            "      --mesh-memory MB, --image-memory MB  memory limits of the scene (1024, 4096)\n"
            "  -q, --quiet            no progress and no statistics\n"
@@ -283,7 +286,7 @@ static int parse_skips(const char *opt, const char *text, unsigned *out)
 typedef enum opt_id {
     O_OUTPUT, O_WIDTH, O_HEIGHT, O_SIZE, O_SPP, O_STRATEGY, O_SAMPLER, O_SEED, O_MAX_DEPTH, O_INDIRECT,
     O_LIGHT_WEIGHT, O_THREADS, O_BACKEND, O_ADAPTIVE, O_ADAPTIVE_MIN, O_ADAPTIVE_CHECK, O_ADAPTIVE_NB,
-    O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_QUIET, O_HELP, O_VERSION, O_ALLOW_PATH, O_MESH_MEMORY,
+    O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_MITSUBA, O_QUIET, O_HELP, O_VERSION, O_ALLOW_PATH, O_MESH_MEMORY,
     O_IMAGE_MEMORY
 } opt_id;
 
@@ -303,6 +306,7 @@ static const struct option_def {
     { "--adaptive-neighbours-only", NULL, 0, O_ADAPTIVE_NB }, { "--disable-skips", NULL, 1, O_SKIPS },
     { "--exposure", NULL, 1, O_EXPOSURE },    { "--tonemap", NULL, 1, O_TONEMAP },
     { "--preview-every", NULL, 1, O_PREVIEW }, { "--export-pov", NULL, 1, O_POV },
+    { "--export-mitsuba", NULL, 1, O_MITSUBA },
     { "--quiet", "-q", 0, O_QUIET },          { "--help", "-h", 0, O_HELP },
     { "--version", NULL, 0, O_VERSION },      { "--allow-path", NULL, 1, O_ALLOW_PATH },
     { "--mesh-memory", NULL, 1, O_MESH_MEMORY }, { "--image-memory", NULL, 1, O_IMAGE_MEMORY }
@@ -450,6 +454,10 @@ static int set_output_option(options *o, opt_id id, const char *name, const char
         if (o->pov) return fail("%s given twice", name);
         o->pov = v;
         return check_writable(v);
+    case O_MITSUBA:
+        if (o->mitsuba) return fail("%s given twice", name);
+        o->mitsuba = v;
+        return check_writable(v);
     case O_EXPOSURE: return parse_real(name, v, -1e30, 1e30, 0, "a finite number", &o->display.exposure);
     case O_TONEMAP:
         rc = parse_choice(name, v, tonemaps, 3, "clamp, aces or reinhard", &k);
@@ -523,7 +531,7 @@ static int parse_options(int argc, char **argv, options *o)
         }
     }
     if (!o->scene) return fail("no scene file given (usage: pdftrace SCENE [options]; see pdftrace --help)");
-    if (o->output_count == 0 && !o->pov) return add_default_output(o);
+    if (o->output_count == 0 && !o->pov && !o->mitsuba) return add_default_output(o);
     return PARSED;
 }
 
@@ -551,7 +559,8 @@ static void apply_settings(const options *o, pt_render_desc *d)
     d->disable_skips = s->disable_skips;
 }
 
-/* Loads and builds the scene, writes the POV-Ray export if asked; EXIT_SUCCESS or an exit status. */
+/* Loads and builds the scene, writes the POV-Ray and Mitsuba exports if asked; EXIT_SUCCESS or
+   an exit status. */
 static int load_scene(const options *o, pt_scenefile *sf, pt_scene **scene, pt_render_desc *d)
 {
     char err[1024];
@@ -596,6 +605,19 @@ static int load_scene(const options *o, pt_scenefile *sf, pt_scene **scene, pt_r
             return rc == PT_ERROR_IO || rc == PT_ERROR_OUT_OF_MEMORY ? EXIT_FAILURE : EXIT_USAGE;
         }
         if (!o->quiet) printf("wrote      %s\n", o->pov);
+    }
+    if (o->mitsuba) {
+        pt_mitsuba_options mo;
+        mo.width = d->width;
+        mo.height = d->height;
+        mo.spp = d->samples_per_pixel;
+        mo.max_depth = d->max_depth;
+        rc = pt_scenefile_export_mitsuba(sf, o->mitsuba, &mo, err, sizeof err);
+        if (rc != PT_OK) {
+            fail("%s", err);
+            return rc == PT_ERROR_IO || rc == PT_ERROR_OUT_OF_MEMORY ? EXIT_FAILURE : EXIT_USAGE;
+        }
+        if (!o->quiet) printf("wrote      %s\n", o->mitsuba);
     }
     return EXIT_SUCCESS;
 }
@@ -836,8 +858,8 @@ static int check_outputs_not_input(const options *o)
     struct stat in, st;
     int i;
     if (stat(o->scene, &in) != 0) return PARSED; /* reported when the scene is loaded */
-    for (i = 0; i <= o->output_count; i++) {
-        const char *path = i < o->output_count ? o->outputs[i].path : o->pov;
+    for (i = 0; i <= o->output_count + 1; i++) {
+        const char *path = i < o->output_count ? o->outputs[i].path : i == o->output_count ? o->pov : o->mitsuba;
         if (path && stat(path, &st) == 0 && st.st_dev == in.st_dev && st.st_ino == in.st_ino)
             return fail("%s: is the scene file %s; an output must not replace an input", path, o->scene);
     }
