@@ -683,7 +683,8 @@ static int report_pov(FILE *f, const char *outdir, char **names, int count)
 }
 
 /* One row of the Mitsuba table from NAME-mitsuba.result: the numbers of write_mi_result, or a
-   line "skip REASON" / "refused REASON" (neither passes nor fails). Returns 0 on a failure. */
+   line "skip REASON" / "refused REASON" (neither passes nor fails). Returns 1 on a pass, 0 on
+   a failure, 2 when skipped or not exported. */
 static int report_mi_row(FILE *f, const char *outdir, const char *name)
 {
     char path[2048], line[4096], *note = NULL;
@@ -706,7 +707,7 @@ static int report_mi_row(FILE *f, const char *outdir, const char *name)
         if (skipped) html_escape(f, !strncmp(line, "skip ", 5) ? "SKIP: " : "not exported: ");
         html_escape(f, skipped ? strchr(line, ' ') + 1 : "no result (export, render or comparison failed)");
         fprintf(f, "</td></tr>\n");
-        return skipped;
+        return skipped ? 2 : 0;
     }
     fprintf(f, "<td>%dx%d</td><td>%d / %d</td>", w, h, kx, kr);
     for (k = 0; k < 3; ++k) fprintf(f, "<td>%+.3f%% &plusmn; %.3f</td>", 100 * v[k], 100 * v[3 + k]);
@@ -719,8 +720,9 @@ static int report_mi_row(FILE *f, const char *outdir, const char *name)
     return pass;
 }
 
-/* The Mitsuba table of the report; returns 1 when no row failed. */
-static int report_mitsuba(FILE *f, const char *outdir, char **names, int count)
+/* The Mitsuba table of the report; returns 1 when no row failed; *skipped: rows skipped or
+   not exported. */
+static int report_mitsuba(FILE *f, const char *outdir, char **names, int count, int *skipped)
 {
     int i, all = 1;
     fprintf(f, "<h2>pdftrace vs Mitsuba 3</h2>\n<p>Both renderers render the scene with K independent seeds. "
@@ -734,7 +736,11 @@ static int report_mitsuba(FILE *f, const char *outdir, char **names, int count)
                "<table><tr><th>scene</th><th>size</th><th>seeds pt / mi</th><th>bias R</th><th>bias G</th><th>bias B</th>"
                "<th>relMSE</th><th>e p50 / p90 / p99</th><th>pixels accepted</th><th>regions rejected (worst |t|/crit)</th>"
                "<th>test</th><th>result</th><th>note</th></tr>\n");
-    for (i = 0; i < count; ++i) all = report_mi_row(f, outdir, names[i]) && all;
+    for (i = 0; i < count; ++i) {
+        int rc = report_mi_row(f, outdir, names[i]);
+        if (rc == 0) all = 0;
+        if (rc == 2) ++*skipped;
+    }
     fprintf(f, "</table>\n");
     return all;
 }
@@ -748,9 +754,14 @@ static int listed(const char *name, char **names, int count)
     return 0;
 }
 
-/* The images of one scene: the POV-Ray comparison's and/or the Mitsuba comparison's. */
-static void report_images(FILE *f, const char *name, int pov, int mi)
+/* The images of one scene: the POV-Ray comparison's and/or the Mitsuba comparison's (when it
+   wrote them: not for a skipped or refused row). */
+static void report_images(FILE *f, const char *outdir, const char *name, int pov, int mi)
 {
+    char path[2048];
+    snprintf(path, sizeof path, "%s/%s-mi.png", outdir, name);
+    mi = mi && access(path, F_OK) == 0;
+    if (!pov && !mi) return;
     fprintf(f, "<div class=\"scene\" id=\"%s\"><h2>%s</h2><table>", name, name);
     if (pov)
         fprintf(f, "<tr><td><img src=\"%s-pt.png\" alt=\"pdftrace\"><br>pdftrace</td><td><img src=\"%s-pov.png\" "
@@ -768,8 +779,8 @@ static int cmd_report(int argc, char **argv)
 {
     char index[2048], tmp[2100];
     FILE *f;
-    int i, all = 1, npov, nmi = 0;
-    char **pov = argv + 3, **mi = NULL;
+    int i, all = 1, npov, nmi = 0, skipped = 0;
+    char **pov = argv + 3, **mi = NULL, verdict[128];
     if (argc < 4) { fprintf(stderr, "usage: ptv report OUTDIR [NAME...] [--mitsuba NAME...]\n"); return 2; }
     for (npov = 0; 3 + npov < argc && strcmp(pov[npov], "--mitsuba"); ++npov) {}
     if (3 + npov < argc) { mi = pov + npov + 1; nmi = argc - 4 - npov; }
@@ -785,13 +796,16 @@ static int cmd_report(int argc, char **argv)
                ".scene{margin:18px 0}.scene td{text-align:center;border:none}</style></head><body>\n"
                "<h1>pdftrace validation: POV-Ray 3.7 and Mitsuba 3</h1>\n");
     if (npov) all = report_pov(f, argv[2], pov, npov);
-    if (nmi) all = report_mitsuba(f, argv[2], mi, nmi) && all;
-    for (i = 0; i < npov; ++i) report_images(f, pov[i], 1, listed(pov[i], mi, nmi));
+    if (nmi) all = report_mitsuba(f, argv[2], mi, nmi, &skipped) && all;
+    for (i = 0; i < npov; ++i) report_images(f, argv[2], pov[i], 1, listed(pov[i], mi, nmi));
     for (i = 0; i < nmi; ++i)
-        if (!listed(mi[i], pov, npov)) report_images(f, mi[i], 0, 1);
-    fprintf(f, "<p>Overall: <span class=\"%s\">%s</span></p></body></html>\n", all ? "pass" : "fail", all ? "all scenes pass" : "some scenes FAIL");
+        if (!listed(mi[i], pov, npov)) report_images(f, argv[2], mi[i], 0, 1);
+    snprintf(verdict, sizeof verdict, "%s%s", all ? "all compared scenes pass" : "some scenes FAIL",
+             skipped ? "; Mitsuba rows skipped or not exported: " : "");
+    if (skipped) snprintf(verdict + strlen(verdict), sizeof verdict - strlen(verdict), "%d", skipped);
+    fprintf(f, "<p>Overall: <span class=\"%s\">%s</span></p></body></html>\n", all ? "pass" : "fail", verdict);
     if (fclose(f) != 0 || rename(tmp, index) != 0) { remove(tmp); fprintf(stderr, "ptv: writing %s failed\n", index); return 1; }
-    printf("wrote %s: %s\n", index, all ? "all scenes pass" : "some scenes FAIL");
+    printf("wrote %s: %s\n", index, verdict);
     return all ? 0 : 3;
 }
 
