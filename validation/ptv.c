@@ -251,10 +251,10 @@ static void mi_regions(const seed_regions *x, const seed_regions *r, mi_metrics 
         for (k = 0; k < r->k; ++k) qr[k] = r->m[48 * k + i];
         seeds_mean_var(qx, x->k, &mx, &vx);
         seeds_mean_var(qr, r->k, &mr, &vr);
-        if (vx + vr > 0)
-            ratio = fabs(mx - mr) / sqrt(vx + vr) / t_quantile2(z, welch_dof(vx, x->k - 1, vr, r->k - 1));
-        else
-            ratio = fabs(mx - mr) <= 1e-5 * fabs(mr) + 1e-9 ? 0 : 1e30; /* noiseless: equal to rounding */
+        /* (1e-5 r)^2 + 1e-12: float rounding, so noiseless regions (a uniform background seen
+           directly) compare to rounding (Mitsuba stores an RGB 0.7 as 0.6999983) */
+        ratio = fabs(mx - mr) / sqrt(vx + vr + 1e-10 * mr * mr + 1e-12) /
+                (vx + vr > 0 ? t_quantile2(z, welch_dof(vx, x->k - 1, vr, r->k - 1)) : z);
         if (!(ratio <= 1)) ++m->region_rejected;
         if (!(ratio <= m->region_worst)) m->region_worst = ratio;
     }
