@@ -75,14 +75,14 @@ mi_table='
 direct-quad       scenes         64   16    256   pixel   quad light, direct only
 direct-sphere     scenes         64   16    256   pixel   small bright sphere light, direct only
 checker           scenes         64   16    256   pixel   3-D checker texture
-mirror            scenes         64   16    256   pixel   plane mirror
+mirror            scenes         64   16    1024  pixel   plane mirror
 glass             scenes         64   16    256   pixel   glass ball seen through, exact Fresnel
 mesh              scenes         64   16    256   pixel   OBJ mesh with vertex normals
-cornell-diffuse   scenes         64   16    1024  pixel   global illumination
-cornell           scenes         64   16    1024  region  RTRL box: glass ball, caustics (heavy-tailed)
+cornell-diffuse   scenes         64   16    512   pixel   global illumination
+cornell           scenes         64   16    512   region  RTRL box: glass ball, caustics (heavy-tailed)
 balls             bench/scenes   64   16    256   pixel   diffuse balls, global illumination
 many-lights       bench/scenes   64   16    512   pixel   five lights over four orders of power
-metal-glass       bench/scenes   64   16    1024  region  mirror and glass balls, caustics (heavy-tailed)
+metal-glass       bench/scenes   64   16    512   region  mirror and glass balls, caustics (heavy-tailed)
 sky               bench/scenes   64   16    256   pixel   uniform sky only, mirror ball
 tiny-light        bench/scenes   64   16    512   pixel   tiny bright sphere light and a dim window
 tiny-light-pure   bench/scenes   64   16    512   pixel   tiny bright sphere light only
