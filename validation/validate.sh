@@ -114,6 +114,11 @@ run_mitsuba() {
     t0=$SECONDS
     "$mitsuba_py" validation/mitsuba_render.py "$xml" "$out/$name-mi" "$seeds" "$spp" >"$out/$name-mitsuba.log" 2>&1 ||
         { echo "FAIL $name (Mitsuba): mitsuba_render failed: $(tail -n 3 "$out/$name-mitsuba.log")" >&2; return 1; }
+    # Mitsuba's own warnings fail the render (its logger raises); drjit's go to stderr, so the log
+    if grep -qi 'warn' "$out/$name-mitsuba.log"; then
+        echo "FAIL $name (Mitsuba): warnings in $out/$name-mitsuba.log: $(grep -i -m 2 'warn' "$out/$name-mitsuba.log")" >&2
+        return 1
+    fi
     t1=$SECONDS
     "$ptv" render "$dir/$name.scene" "$out/$name-ptm.pfm" "$out/$name-ptm-var.pfm" "$size" "$size" "$spp" "$seeds" \
         "$out/$name-ptm-regions.txt" || return 1
