@@ -282,6 +282,8 @@ VALIDATE_CI_SCENES ?= direct-quad glass cornell
 
 mitsuba-install:
 	@command -v python3 >/dev/null || { echo "make mitsuba-install: needs python3 (apt-get install python3 python3-venv)" >&2; exit 1; }
+	@test -x $(MITSUBA_VENV)/bin/python || python3 -c 'import venv, ensurepip' 2>/dev/null || \
+	    { echo "make mitsuba-install: python3 cannot make a venv (apt-get install python3-venv)" >&2; exit 1; }
 	test -x $(MITSUBA_VENV)/bin/python || python3 -m venv $(MITSUBA_VENV)
 	$(MITSUBA_VENV)/bin/python -m pip install --disable-pip-version-check -q 'mitsuba==$(MITSUBA_VERSION)'
 	$(MITSUBA_VENV)/bin/python validation/mitsuba_render.py --check
