@@ -43,8 +43,15 @@
 #                         and without libpng and OpenEXR, and the headers as C++; first
 #                         tests/lint_headers.sh: no comment over 25 lines in a header's
 #                         implementation, no function over 150 lines
-#   make validate         render every scene in scenes/ with pdftrace and POV-Ray, compare them and
-#                         write validation/out/index.html (needs povray, libopenexr-dev, libpng-dev)
+#   make validate         render every scene in scenes/ with pdftrace and POV-Ray, and every scene in
+#                         scenes/ and bench/scenes/ with Mitsuba 3, compare them and write
+#                         validation/out/index.html (needs povray, libopenexr-dev, libpng-dev; the
+#                         Mitsuba rows print SKIP until make mitsuba-install; ~15 min)
+#   make mitsuba-install  a Python venv in $(BUILD)/mitsuba-venv (or MITSUBA_VENV=DIR) with
+#                         mitsuba 3.9 from PyPI (needs python3, python3-venv; libllvm19 for the
+#                         fast llvm_ad_rgb variant, else the slower scalar_rgb)
+#   make validate-mitsuba only the Mitsuba rows of make validate (VALIDATE_SCENES="a b" for some)
+#   make validate-mitsuba-ci  the Mitsuba rows of direct-quad, glass and cornell (< 3 min)
 #   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
 #   make bench            error against time for every scene and strategy, POV-Ray on the same
 #                         axes, adaptive sampling and skips -> bench/out/ (summary.md, CSV,
@@ -172,7 +179,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h tests/fuzz/mitsuba_check.h
 
-.PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs bench bench-quick bench-headline bench-refs bench-bvh stress install uninstall install-check FORCE
+.PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs validate-mitsuba validate-mitsuba-ci mitsuba-install bench bench-quick bench-headline bench-refs bench-bvh stress install uninstall install-check FORCE
 
 all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
@@ -263,9 +270,32 @@ scenes/mesh.obj: validation/gen_mesh.c | $(BUILD)
 	$(CC) $(CFLAGS) -o $(BUILD)/gen_mesh $< -lm
 	$(BUILD)/gen_mesh $@
 
-validate: $(BUILD)/ptv
+validate: $(BUILD)/ptv $(BUILD)/pdftrace
 	@test "$(PTV_HAVE_EXR)" = yes || { echo "make validate: needs OpenEXR (apt-get install libopenexr-dev)" >&2; exit 1; }
-	validation/validate.sh $(BUILD)/ptv validation/out
+	$(MITSUBA_ENV) validation/validate.sh $(BUILD)/ptv validation/out
+
+# ---- Mitsuba 3 as the second reference (validation/mitsuba_render.py renders the XML that
+# pdftrace --export-mitsuba writes). Optional like POV-Ray: without the venv every Mitsuba
+# row prints SKIP. The version is pinned to major.minor; DRJIT_LIBLLVM_PATH is found at run time.
+MITSUBA_VENV    ?= $(BUILD)/mitsuba-venv
+MITSUBA_VERSION ?= 3.9.*
+MITSUBA_ENV      = PDFTRACE=$(BUILD)/pdftrace MITSUBA_PY=$(MITSUBA_VENV)/bin/python
+VALIDATE_SCENES ?=
+VALIDATE_CI_SCENES ?= direct-quad glass cornell
+
+mitsuba-install:
+	@command -v python3 >/dev/null || { echo "make mitsuba-install: needs python3 (apt-get install python3 python3-venv)" >&2; exit 1; }
+	@test -x $(MITSUBA_VENV)/bin/python || python3 -c 'import venv, ensurepip' 2>/dev/null || \
+	    { echo "make mitsuba-install: python3 cannot make a venv (apt-get install python3-venv)" >&2; exit 1; }
+	test -x $(MITSUBA_VENV)/bin/python || python3 -m venv $(MITSUBA_VENV)
+	$(MITSUBA_VENV)/bin/python -m pip install --disable-pip-version-check -q 'mitsuba==$(MITSUBA_VERSION)'
+	$(MITSUBA_VENV)/bin/python validation/mitsuba_render.py --check
+
+validate-mitsuba: $(BUILD)/ptv $(BUILD)/pdftrace
+	$(MITSUBA_ENV) validation/validate.sh $(BUILD)/ptv validation/out --mitsuba-only $(VALIDATE_SCENES)
+
+validate-mitsuba-ci: $(BUILD)/ptv $(BUILD)/pdftrace
+	$(MITSUBA_ENV) validation/validate.sh $(BUILD)/ptv $(BUILD)/validate-mitsuba-ci --mitsuba-only $(VALIDATE_CI_SCENES)
 
 validate-refs: $(BUILD)/ptv
 	validation/validate-refs.sh $(BUILD)/ptv
@@ -278,7 +308,6 @@ BENCH_OUT  ?= bench/out
 BENCH_ARGS ?=
 # Mitsuba 3 on the same axes (bench/mitsuba_series.py run by the venv's Python; without it the
 # Mitsuba parts SKIP with the install command). The headline's 600x600 reference is cached here.
-MITSUBA_VENV ?= $(BUILD)/mitsuba-venv
 BENCH_MITSUBA = --mitsuba-python $(MITSUBA_VENV)/bin/python --cache $(BUILD)/bench-cache
 
 $(BUILD)/bench: bench/bench.c validation/ptv_common.h $(PT_HEADERS) | $(BUILD)

@@ -128,6 +128,320 @@ PTV_MAYBE_UNUSED static void print_metrics(const char *name, const metrics *m)
            m->relmse, 100 * m->p50, 100 * m->p90, 100 * m->p99, 100 * m->accepted, 100 * m->accept_req);
 }
 
+/* ---- comparison with Mitsuba 3 ---------------------------------------------------------- */
+
+/* Per-seed 4 x 4 region means, as validation/mitsuba_render.py and `ptv render ... SEEDS`
+   write them: pixel (x, y), y from the top, is in region (4x / w, 4y / h); m[48 k + 3 r + c]
+   is seed k's mean of channel c over region r (row-major, top-left first). The file is
+   "pt-regions W H K DOF" and K lines of 48 numbers; DOF: the degrees of freedom of the
+   variance image written with it (K - 1 from seeds alone, K * spp - 1 from every sample). */
+typedef struct seed_regions {
+    int w, h, k;
+    double dof; /* degrees of freedom of the matching variance image */
+    double *m;
+} seed_regions;
+
+#define PTV_REGIONS 16
+
+/* The two-sided standard normal quantile: z with erfc(z / sqrt 2) = alpha, by bisection. */
+static double normal_quantile2(double alpha)
+{
+    double lo = 0, hi = 40;
+    int i;
+    for (i = 0; i < 200; ++i) {
+        double mid = 0.5 * (lo + hi);
+        if (erfc(mid / sqrt(2.0)) > alpha) lo = mid;
+        else hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+/* The two-sided Student t quantile for nu degrees of freedom from the normal one, by the
+   asymptotic expansion of Abramowitz & Stegun 26.7.5 (good to ~1e-3 for nu >= 7 at the tails
+   used here). */
+static double t_quantile2(double z, double nu)
+{
+    double z2 = z * z, z3 = z2 * z, z5 = z3 * z2, z7 = z5 * z2, z9 = z7 * z2;
+    double g1 = (z3 + z) / 4, g2 = (5 * z5 + 16 * z3 + 3 * z) / 96;
+    double g3 = (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / 384;
+    double g4 = (79 * z9 + 776 * z7 + 1482 * z5 - 1920 * z3 - 945 * z) / 92160;
+    if (!(nu < 1e12)) return z;
+    return z + g1 / nu + g2 / (nu * nu) + g3 / (nu * nu * nu) + g4 / (nu * nu * nu * nu);
+}
+
+/* Welch-Satterthwaite degrees of freedom of a + b, variances with na and nb degrees of freedom. */
+static double welch_dof(double a, double na, double b, double nb)
+{
+    double d = a * a / na + b * b / nb;
+    return d > 0 ? (a + b) * (a + b) / d : 1e30;
+}
+
+typedef struct mi_metrics {
+    double bias[3], se[3];       /* channel mean bias (x / r - 1) and its standard error, from the seeds */
+    double relmse, p50, p90, p99; /* as for POV-Ray (compare) */
+    double accepted;             /* fraction of pixels the per-pixel test accepts in every channel */
+    double region_worst;         /* largest |t| / critical value over the 48 region tests */
+    int region_rejected;         /* region tests that reject */
+    int use_region;              /* 1: the region test decides, 0: the per-pixel test (>= 99 %) */
+    int bias_ok, pixel_ok, region_ok, pass;
+} mi_metrics;
+
+/* Seed k's mean of channel c over the whole image, from its region means (weighted by the
+   number of pixels in each region). */
+static double seed_image_mean(const seed_regions *s, int k, int c)
+{
+    double sum = 0;
+    int r;
+    for (r = 0; r < PTV_REGIONS; ++r) {
+        int rx = r % 4, ry = r / 4;
+        /* region rx holds the x with 4x / w == rx: x in [ceil(rx w / 4), ceil((rx + 1) w / 4)) */
+        double nx = (double)(((rx + 1) * s->w + 3) / 4 - (rx * s->w + 3) / 4);
+        double ny = (double)(((ry + 1) * s->h + 3) / 4 - (ry * s->h + 3) / 4);
+        sum += nx * ny * s->m[48 * k + 3 * r + c];
+    }
+    return sum / ((double)s->w * (double)s->h);
+}
+
+/* Mean and variance of that mean over the seeds of a per-seed quantity q[k]. */
+static void seeds_mean_var(const double *q, int k, double *mean, double *var)
+{
+    double s = 0, ss = 0;
+    int i;
+    for (i = 0; i < k; ++i) s += q[i];
+    *mean = s / k;
+    for (i = 0; i < k; ++i) ss += (q[i] - *mean) * (q[i] - *mean);
+    *var = ss / (k - 1) / k;
+}
+
+/* Per channel: bias = mean_x / mean_r - 1 with the standard error of the ratio (first-order),
+   each mean's variance from its seeds. Pass iff |bias| <= 3 SE and <= 0.5 %. */
+static void mi_bias(const seed_regions *x, const seed_regions *r, mi_metrics *m)
+{
+    double qx[256], qr[256];
+    int c, k;
+    m->bias_ok = 1;
+    for (c = 0; c < 3; ++c) {
+        double mx, vx, mr, vr;
+        for (k = 0; k < x->k; ++k) qx[k] = seed_image_mean(x, k, c);
+        for (k = 0; k < r->k; ++k) qr[k] = seed_image_mean(r, k, c);
+        seeds_mean_var(qx, x->k, &mx, &vx);
+        seeds_mean_var(qr, r->k, &mr, &vr);
+        if (mr > 1e-9) {
+            m->bias[c] = mx / mr - 1;
+            m->se[c] = sqrt(vx / (mr * mr) + mx * mx * vr / (mr * mr * mr * mr));
+        } else {
+            m->bias[c] = mx - mr; /* a black channel: the absolute difference */
+            m->se[c] = sqrt(vx + vr);
+        }
+        if (!(fabs(m->bias[c]) <= 3 * m->se[c] + 1e-7 && fabs(m->bias[c]) <= 0.005)) m->bias_ok = 0;
+    }
+}
+
+/* The region test: per region and channel, Welch's t on the seeds' region means, two-sided,
+   Sidak-corrected to a family-wise alpha of 0.01 over the 48 tests. */
+static void mi_regions(const seed_regions *x, const seed_regions *r, mi_metrics *m)
+{
+    double qx[256], qr[256], a1 = 1 - pow(1 - 0.01, 1.0 / (3 * PTV_REGIONS)), z = normal_quantile2(a1);
+    int i, k;
+    m->region_worst = 0;
+    m->region_rejected = 0;
+    for (i = 0; i < 3 * PTV_REGIONS; ++i) {
+        double mx, vx, mr, vr, ratio;
+        for (k = 0; k < x->k; ++k) qx[k] = x->m[48 * k + i];
+        for (k = 0; k < r->k; ++k) qr[k] = r->m[48 * k + i];
+        seeds_mean_var(qx, x->k, &mx, &vx);
+        seeds_mean_var(qr, r->k, &mr, &vr);
+        /* (1e-5 r)^2 + 1e-12: float rounding, so noiseless regions (a uniform background seen
+           directly) compare to rounding (Mitsuba stores an RGB 0.7 as 0.6999983) */
+        ratio = fabs(mx - mr) / sqrt(vx + vr + 1e-10 * mr * mr + 1e-12) /
+                (vx + vr > 0 ? t_quantile2(z, welch_dof(vx, x->k - 1, vr, r->k - 1)) : z);
+        if (!(ratio <= 1)) ++m->region_rejected;
+        if (!(ratio <= m->region_worst)) m->region_worst = ratio;
+    }
+    m->region_ok = m->region_rejected == 0;
+}
+
+/* The per-pixel test with both renderers' noise: in every channel
+   |x - r| <= t * sqrt(var_x + var_r + (1e-5 r)^2 + 1e-12), t the two-sided alpha = 0.001
+   quantile of Student's t at the Welch-Satterthwaite degrees of freedom (1e-5 r: float
+   rounding of two sums). Writes the error map (as compare's) to map when map != NULL. */
+static void mi_pixels(const pt_image *x, const pt_image *vx, double nx, const pt_image *r, const pt_image *vr, double nr,
+                      mi_metrics *m, unsigned char *map)
+{
+    size_t n = (size_t)x->width * (size_t)x->height, i, acc = 0;
+    double z = normal_quantile2(0.001);
+    for (i = 0; i < n; ++i) {
+        int c, ok = 1;
+        double sd = 0, rm = 0;
+        for (c = 0; c < 3; ++c) {
+            size_t j = 3 * i + (size_t)c;
+            double d = (double)x->rgb[j] - (double)r->rgb[j], a = vx->rgb[j], b = vr->rgb[j], rv = r->rgb[j];
+            double sigma = sqrt(a + b + 1e-10 * rv * rv + 1e-12);
+            double t = a + b > 0 ? t_quantile2(z, welch_dof(a, nx, b, nr)) : z;
+            if (!(fabs(d) <= t * sigma)) ok = 0;
+            sd += d / 3;
+            rm += rv / 3;
+        }
+        acc += ok ? 1u : 0u;
+        if (map) {
+            double rel = sd / (rm + 0.01) / 0.05, a = fabs(rel) > 1 ? 1 : fabs(rel);
+            unsigned char hi = (unsigned char)(255 * a + 0.5);
+            map[3 * i + 0] = rel > 0 ? hi : 0;
+            map[3 * i + 1] = ok ? 0 : 255; /* rejected: green added */
+            map[3 * i + 2] = rel < 0 ? hi : 0;
+        }
+    }
+    m->accepted = (double)acc / (double)n;
+    m->pixel_ok = m->accepted >= 0.99;
+}
+
+/* Every test of a Mitsuba comparison; the scene passes on the bias test and on the per-pixel
+   test (use_region 0) or the region test (use_region 1). Returns 0 when the inputs disagree
+   in size. */
+static int compare_mitsuba(const pt_image *x, const pt_image *vx, const seed_regions *sx, const pt_image *r,
+                           const pt_image *vr, const seed_regions *sr, int use_region, mi_metrics *m, unsigned char *map)
+{
+    metrics pm;
+    int same = x->width == r->width && x->height == r->height;
+    same = same && vx->width == x->width && vx->height == x->height && vr->width == x->width && vr->height == x->height;
+    same = same && sx->w == x->width && sx->h == x->height && sr->w == x->width && sr->h == x->height;
+    if (!same || sx->k < 2 || sr->k < 2) return 0;
+    memset(m, 0, sizeof *m);
+    memset(&pm, 0, sizeof pm); /* compare's relMSE and error percentiles (its z-test is POV-Ray's) */
+    if (!compare(x, vx, r, &pm, NULL, "mitsuba")) return 0;
+    m->relmse = pm.relmse;
+    m->p50 = pm.p50;
+    m->p90 = pm.p90;
+    m->p99 = pm.p99;
+    m->use_region = use_region;
+    mi_bias(sx, sr, m);
+    mi_regions(sx, sr, m);
+    mi_pixels(x, vx, sx->dof, r, vr, sr->dof, m, map);
+    m->pass = m->bias_ok && (use_region ? m->region_ok : m->pixel_ok);
+    return 1;
+}
+
+/* Reads a regions file (see seed_regions); 0 with a message when it is malformed. */
+static int read_regions(const char *path, seed_regions *s)
+{
+    FILE *f = fopen(path, "r");
+    char magic[16] = "";
+    size_t i, n;
+    s->m = NULL;
+    if (!f) { fprintf(stderr, "ptv: cannot open %s: %s\n", path, strerror(errno)); return 0; }
+    if (fscanf(f, "%15s %d %d %d %lf", magic, &s->w, &s->h, &s->k, &s->dof) != 5 || strcmp(magic, "pt-regions") ||
+        s->w < 4 || s->h < 4 || s->w > 16384 || s->h > 16384 || s->k < 2 || s->k > 256 || !(s->dof >= 1)) {
+        fprintf(stderr, "ptv: %s: not a regions file (pt-regions W H K DOF; W, H >= 4; 2 <= K <= 256)\n", path);
+        fclose(f);
+        return 0;
+    }
+    n = (size_t)s->k * 48u;
+    s->m = (double *)malloc(n * sizeof *s->m);
+    for (i = 0; s->m && i < n; ++i)
+        if (fscanf(f, "%lf", &s->m[i]) != 1 || !isfinite(s->m[i])) break;
+    fclose(f);
+    if (!s->m || i != n) {
+        fprintf(stderr, "ptv: %s: expected %d lines of 48 finite numbers\n", path, s->k);
+        free(s->m);
+        s->m = NULL;
+        return 0;
+    }
+    return 1;
+}
+
+/* Writes a regions file from k images of w x h (top row first), with the given DOF. */
+static int write_regions(const char *path, const pt_image *imgs, int k, double dof)
+{
+    char tmp[2100];
+    FILE *f;
+    int s, ok;
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    f = fopen(tmp, "w");
+    if (!f) { fprintf(stderr, "ptv: cannot write %s\n", tmp); return 0; }
+    fprintf(f, "pt-regions %d %d %d %.17g\n", imgs[0].width, imgs[0].height, k, dof);
+    for (s = 0; s < k; ++s) {
+        double sum[48] = {0};
+        int cnt[PTV_REGIONS] = {0}, x, y, i;
+        const pt_image *im = &imgs[s];
+        for (y = 0; y < im->height; ++y)
+            for (x = 0; x < im->width; ++x) {
+                int reg = 4 * (4 * y / im->height) + 4 * x / im->width, c;
+                ++cnt[reg];
+                for (c = 0; c < 3; ++c) sum[3 * reg + c] += im->rgb[3 * ((size_t)y * (size_t)im->width + (size_t)x) + (size_t)c];
+            }
+        for (i = 0; i < 48; ++i) fprintf(f, "%s%.9g", i ? " " : "", cnt[i / 3] ? sum[i] / cnt[i / 3] : 0.0);
+        fprintf(f, "\n");
+    }
+    ok = fclose(f) == 0 && rename(tmp, path) == 0;
+    if (!ok) { remove(tmp); fprintf(stderr, "ptv: writing %s failed\n", path); }
+    return ok;
+}
+
+PTV_MAYBE_UNUSED static void print_mi_metrics(const char *name, const mi_metrics *m)
+{
+    printf("%s %s (Mitsuba, %s test): bias %+.3f%%±%.3f %+.3f%%±%.3f %+.3f%%±%.3f (need <= 3 SE and 0.5%%), relMSE %.2e, "
+           "rel.err p50 %.2f%% p90 %.2f%% p99 %.2f%%, pixels accepted %.2f%% (%s 99%%), regions rejected %d of 48 "
+           "(worst |t|/crit %.2f%s)\n",
+           m->pass ? "PASS" : "FAIL", name, m->use_region ? "region" : "pixel", 100 * m->bias[0], 100 * m->se[0],
+           100 * m->bias[1], 100 * m->se[1], 100 * m->bias[2], 100 * m->se[2], m->relmse, 100 * m->p50, 100 * m->p90,
+           100 * m->p99, 100 * m->accepted, m->use_region ? "reported; pixel test needs" : "need", m->region_rejected,
+           m->region_worst, m->use_region ? "" : "; reported");
+}
+
+/* Renders sd K times with seeds seed, seed + 1, ... (W x H, SPP; 0: the scene's) into K images
+   (*seeds, allocated here), their mean and the variance of that mean (the seeds' pt_film_pixel
+   variances summed over K^2: every camera sample counted, K * spp - 1 degrees of freedom). */
+static int render_seeds(const pt_scenefile *sd, int w, int h, int spp, int k, pt_image *mean, pt_image *var,
+                        pt_image **seeds, int *spp_used)
+{
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_film film;
+    pt_render_stats st;
+    char err[1024];
+    int rc = pt_scenefile_build(sd, &scene, &rd, err, sizeof err), s, ok = 1;
+    size_t n;
+    *seeds = NULL;
+    if (rc != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 0; }
+    if (w > 0) { rd.width = w; rd.height = h; }
+    if (spp > 0) rd.samples_per_pixel = spp;
+    *spp_used = rd.samples_per_pixel;
+    n = 3 * (size_t)rd.width * (size_t)rd.height;
+    *seeds = (pt_image *)calloc((size_t)k, sizeof **seeds);
+    if (!*seeds || pt_film_init(&film, rd.width, rd.height) != PT_OK || pt_image_init(mean, rd.width, rd.height) != PT_OK ||
+        pt_image_init(var, rd.width, rd.height) != PT_OK) {
+        pt_scene_destroy(scene);
+        fprintf(stderr, "ptv: out of memory\n");
+        return 0;
+    }
+    memset(mean->rgb, 0, n * sizeof *mean->rgb);
+    memset(var->rgb, 0, n * sizeof *var->rgb);
+    for (s = 0; s < k && ok; ++s) {
+        uint64_t seed0 = rd.seed;
+        int x, y;
+        rd.seed = seed0 + (uint64_t)s;
+        pt_film_clear(&film);
+        ok = pt_render(scene, &rd, &film, &st) == PT_OK && pt_image_init(&(*seeds)[s], rd.width, rd.height) == PT_OK;
+        rd.seed = seed0;
+        if (!ok) { fprintf(stderr, "ptv: render failed: %s\n", st.error); break; }
+        for (y = 0; y < rd.height; ++y)
+            for (x = 0; x < rd.width; ++x) {
+                pt_color mc, vc;
+                size_t j = 3 * ((size_t)y * (size_t)rd.width + (size_t)x);
+                float *o = &(*seeds)[s].rgb[j];
+                pt_film_pixel(&film, x, y, &mc, &vc);
+                o[0] = mc.x; o[1] = mc.y; o[2] = mc.z;
+                mean->rgb[j] += mc.x / (float)k; mean->rgb[j + 1] += mc.y / (float)k; mean->rgb[j + 2] += mc.z / (float)k;
+                var->rgb[j] += vc.x / ((float)k * (float)k);
+                var->rgb[j + 1] += vc.y / ((float)k * (float)k);
+                var->rgb[j + 2] += vc.z / ((float)k * (float)k);
+            }
+    }
+    pt_film_free(&film);
+    pt_scene_destroy(scene);
+    return ok;
+}
+
 /* ---- commands ------------------------------------------------------------------------- */
 
 static int load(const char *path, pt_scenefile *sd)
@@ -137,17 +451,35 @@ static int load(const char *path, pt_scenefile *sd)
     return 1;
 }
 
+static void free_images(pt_image *imgs, int k)
+{
+    int i;
+    for (i = 0; imgs && i < k; ++i) pt_image_free(&imgs[i]);
+    free(imgs);
+}
+
+/* render SCENE MEAN.pfm VAR.pfm [W H SPP [SEEDS REGIONS.txt]]: with SEEDS, SEEDS independent
+   renders (render_seeds) and their per-seed region means, for compare-mitsuba. */
 static int cmd_render(int argc, char **argv)
 {
     pt_scenefile sd;
-    pt_image mean = {0, 0, NULL}, var = {0, 0, NULL};
-    int ok, w = 0, h = 0, spp = 0;
-    if (argc != 5 && argc != 8) { fprintf(stderr, "usage: ptv render SCENE MEAN.pfm VAR.pfm [W H SPP]\n"); return 2; }
-    if (argc == 8) { w = atoi(argv[5]); h = atoi(argv[6]); spp = atoi(argv[7]); }
+    pt_image mean = {0, 0, NULL}, var = {0, 0, NULL}, *seeds = NULL;
+    int ok, w = 0, h = 0, spp = 0, k = 0, spp_used = 0;
+    if (argc != 5 && argc != 8 && argc != 10) {
+        fprintf(stderr, "usage: ptv render SCENE MEAN.pfm VAR.pfm [W H SPP [SEEDS REGIONS.txt]]\n");
+        return 2;
+    }
+    if (argc >= 8) { w = atoi(argv[5]); h = atoi(argv[6]); spp = atoi(argv[7]); }
+    if (argc == 10 && ((k = atoi(argv[8])) < 2 || k > 256 || w < 4 || h < 4)) {
+        fprintf(stderr, "ptv: render: SEEDS must be in [2, 256] and W, H >= 4\n");
+        return 2;
+    }
     if (!load(argv[2], &sd)) return 1;
-    ok = render_desc(&sd, w, h, spp, &mean, &var);
+    ok = k ? render_seeds(&sd, w, h, spp, k, &mean, &var, &seeds, &spp_used) : render_desc(&sd, w, h, spp, &mean, &var);
     pt_scenefile_free(&sd);
+    if (ok && k) ok = write_regions(argv[9], seeds, k, (double)k * spp_used - 1);
     if (ok) ok = pt_write_pfm(argv[3], &mean) == PT_OK && pt_write_pfm(argv[4], &var) == PT_OK;
+    free_images(seeds, k);
     pt_image_free(&mean);
     pt_image_free(&var);
     if (!ok) fprintf(stderr, "ptv: render %s failed\n", argv[2]);
@@ -222,6 +554,77 @@ static int cmd_compare(int argc, char **argv)
 #endif
 }
 
+/* Reads PREFIX.pfm, PREFIX-var.pfm and PREFIX-regions.txt. */
+static int read_run(const char *prefix, pt_image *mean, pt_image *var, seed_regions *s)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s.pfm", prefix);
+    if (!read_pfm(path, mean)) return 0;
+    snprintf(path, sizeof path, "%s-var.pfm", prefix);
+    if (!read_pfm(path, var)) return 0;
+    snprintf(path, sizeof path, "%s-regions.txt", prefix);
+    return read_regions(path, s);
+}
+
+/* Writes OUTDIR/NAME-mitsuba.result: one line of the numbers `report` reads, then the note. */
+static int write_mi_result(const char *outdir, const char *name, const pt_image *x, const seed_regions *sx,
+                           const seed_regions *sr, const mi_metrics *m, int argc, char **argv, int first_note)
+{
+    char path[2048];
+    FILE *f;
+    int i;
+    snprintf(path, sizeof path, "%s/%s-mitsuba.result", outdir, name);
+    f = fopen(path, "w");
+    if (!f) { fprintf(stderr, "ptv: cannot write %s\n", path); return 0; }
+    fprintf(f, "%d %d %d %d %.6g %.6g %.6g %.6g %.6g %.6g %.6g %.6g %.6g %.6g %.6g %.6g %d %d %d", x->width, x->height,
+            sx->k, sr->k, m->bias[0], m->bias[1], m->bias[2], m->se[0], m->se[1], m->se[2], m->relmse, m->p50, m->p90,
+            m->p99, m->accepted, m->region_worst, m->region_rejected, m->use_region, m->pass);
+    for (i = first_note; i < argc; ++i) fprintf(f, " %s", argv[i]);
+    fprintf(f, "\n");
+    return fclose(f) == 0;
+}
+
+/* compare-mitsuba NAME PT_PREFIX MI_PREFIX OUTDIR pixel|region [NOTE...] */
+static int cmd_compare_mitsuba(int argc, char **argv)
+{
+    pt_image x = {0, 0, NULL}, vx = {0, 0, NULL}, r = {0, 0, NULL}, vr = {0, 0, NULL};
+    seed_regions sx = {0, 0, 0, 0, NULL}, sr = {0, 0, 0, 0, NULL};
+    mi_metrics m;
+    unsigned char *map = NULL;
+    char path[2048];
+    int ok, use_region;
+    if (argc < 7 || (strcmp(argv[6], "pixel") && strcmp(argv[6], "region"))) {
+        fprintf(stderr, "usage: ptv compare-mitsuba NAME PT_PREFIX MI_PREFIX OUTDIR pixel|region [NOTE...]\n");
+        return 2;
+    }
+    use_region = !strcmp(argv[6], "region");
+    ok = read_run(argv[3], &x, &vx, &sx) && read_run(argv[4], &r, &vr, &sr);
+    if (ok) ok = (map = (unsigned char *)malloc(3 * (size_t)x.width * (size_t)x.height)) != NULL;
+    if (ok && !compare_mitsuba(&x, &vx, &sx, &r, &vr, &sr, use_region, &m, map)) {
+        fprintf(stderr, "ptv: %s: the pdftrace and Mitsuba images, variances and regions differ in size\n", argv[2]);
+        ok = 0;
+    }
+    if (ok) {
+        snprintf(path, sizeof path, "%s/%s-ptm.png", argv[5], argv[2]);
+        ok = png_tonemapped(path, &x);
+        snprintf(path, sizeof path, "%s/%s-mi.png", argv[5], argv[2]);
+        ok = ok && png_tonemapped(path, &r);
+        snprintf(path, sizeof path, "%s/%s-mierr.png", argv[5], argv[2]);
+        ok = ok && write_png(path, x.width, x.height, map);
+        ok = ok && write_mi_result(argv[5], argv[2], &x, &sx, &sr, &m, argc, argv, 7);
+    }
+    if (ok) print_mi_metrics(argv[2], &m);
+    free(map);
+    free(sx.m);
+    free(sr.m);
+    pt_image_free(&x);
+    pt_image_free(&vx);
+    pt_image_free(&r);
+    pt_image_free(&vr);
+    if (!ok) { fprintf(stderr, "ptv: compare-mitsuba %s failed\n", argv[2]); return 1; }
+    return m.pass ? 0 : 3;
+}
+
 static void html_escape(FILE *f, const char *s)
 {
     for (; *s; ++s) {
@@ -232,23 +635,12 @@ static void html_escape(FILE *f, const char *s)
     }
 }
 
-static int cmd_report(int argc, char **argv)
+/* The POV-Ray table of the report, one row per name; returns 1 when every row passed. */
+static int report_pov(FILE *f, const char *outdir, char **names, int count)
 {
-    char path[2048], index[2048], tmp[2100], line[4096];
-    FILE *f;
+    char path[2048], line[4096];
     int i, all = 1;
-    if (argc < 4) { fprintf(stderr, "usage: ptv report OUTDIR NAME...\n"); return 2; }
-    snprintf(index, sizeof index, "%s/index.html", argv[2]);
-    snprintf(tmp, sizeof tmp, "%s.tmp", index);
-    f = fopen(tmp, "w");
-    if (!f) { fprintf(stderr, "ptv: cannot write %s\n", tmp); return 1; }
-    fprintf(f, "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pdftrace vs POV-Ray</title>\n<style>\n"
-               "body{font-family:sans-serif;margin:20px;background:#fafafa}table{border-collapse:collapse}"
-               "td,th{border:1px solid #bbb;padding:4px 8px;text-align:right}th{background:#eee}"
-               ".pass{color:#070;font-weight:bold}.fail{color:#b00;font-weight:bold}"
-               "img{width:256px;height:256px;image-rendering:pixelated;border:1px solid #888}"
-               ".scene{margin:18px 0}.scene td{text-align:center;border:none}</style></head><body>\n"
-               "<h1>pdftrace vs POV-Ray 3.7</h1>\n<p>bias<sub>c</sub> = &Sigma;x/&Sigma;r &minus; 1 per channel; relMSE = "
+    fprintf(f, "<h2>pdftrace vs POV-Ray 3.7</h2>\n<p>bias<sub>c</sub> = &Sigma;x/&Sigma;r &minus; 1 per channel; relMSE = "
                "mean (x&minus;r)&sup2;/(r&sup2;+0.01); per-pixel error e = mean<sub>c</sub> |x&minus;r|/(r+0.01); z-test: "
                "|x&minus;r| &le; 3.29&middot;&radic;(var<sub>pdftrace</sub> + (pov_err&middot;r)&sup2; + (5e-4&middot;r)&sup2;) "
                "in every channel (two-sided &alpha; = 0.001 per channel). Error map: red = pdftrace brighter, blue = darker, "
@@ -256,12 +648,12 @@ static int cmd_report(int argc, char **argv)
                "<table><tr><th>scene</th><th>size</th><th>bias R</th><th>bias G</th><th>bias B</th><th>bias tol</th>"
                "<th>relMSE</th><th>e p50</th><th>e p90</th><th>e p99</th><th>z-test accepted</th><th>required</th>"
                "<th>POV err</th><th>result</th><th>reference</th></tr>\n");
-    for (i = 3; i < argc; ++i) {
+    for (i = 0; i < count; ++i) {
         FILE *r;
         int w = 0, h = 0, pass = 0, n = 0;
         double v[11];
         char *note = NULL;
-        snprintf(path, sizeof path, "%s/%s.result", argv[2], argv[i]);
+        snprintf(path, sizeof path, "%s/%s.result", outdir, names[i]);
         r = fopen(path, "r");
         if (r && fgets(line, sizeof line, r)) {
             n = sscanf(line, "%d %d %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %d", &w, &h, &v[0], &v[1], &v[2], &v[3],
@@ -271,7 +663,7 @@ static int cmd_report(int argc, char **argv)
             if (note) note[strcspn(note, "\n")] = '\0';
         }
         if (r) fclose(r);
-        fprintf(f, "<tr><td><a href=\"#%s\">%s</a></td>", argv[i], argv[i]);
+        fprintf(f, "<tr><td><a href=\"#%s\">%s</a></td>", names[i], names[i]);
         if (n != 14) {
             fprintf(f, "<td colspan=\"14\" class=\"fail\">no result (render or comparison failed)</td></tr>\n");
             all = 0;
@@ -287,13 +679,133 @@ static int cmd_report(int argc, char **argv)
         fprintf(f, "</td></tr>\n");
     }
     fprintf(f, "</table>\n");
-    for (i = 3; i < argc; ++i)
-        fprintf(f, "<div class=\"scene\" id=\"%s\"><h2>%s</h2><table><tr><td><img src=\"%s-pt.png\" alt=\"pdftrace\"><br>pdftrace</td>"
-                   "<td><img src=\"%s-pov.png\" alt=\"POV-Ray\"><br>POV-Ray</td><td><img src=\"%s-err.png\" alt=\"error map\"><br>"
-                   "error map</td></tr></table></div>\n", argv[i], argv[i], argv[i], argv[i], argv[i]);
-    fprintf(f, "<p>Overall: <span class=\"%s\">%s</span></p></body></html>\n", all ? "pass" : "fail", all ? "all scenes pass" : "some scenes FAIL");
+    return all;
+}
+
+/* One row of the Mitsuba table from NAME-mitsuba.result: the numbers of write_mi_result, or a
+   line "skip REASON" / "refused REASON" (neither passes nor fails). Returns 1 on a pass, 0 on
+   a failure, 2 when skipped or not exported. */
+static int report_mi_row(FILE *f, const char *outdir, const char *name)
+{
+    char path[2048], line[4096], *note = NULL;
+    FILE *r;
+    int w = 0, h = 0, kx = 0, kr = 0, rej = 0, use_region = 0, pass = 0, n = 0, k;
+    double v[12];
+    snprintf(path, sizeof path, "%s/%s-mitsuba.result", outdir, name);
+    r = fopen(path, "r");
+    if (r && fgets(line, sizeof line, r)) {
+        line[strcspn(line, "\n")] = '\0';
+        n = sscanf(line, "%d %d %d %d %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %d %d %d", &w, &h, &kx, &kr, &v[0],
+                   &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &v[7], &v[8], &v[9], &v[10], &v[11], &rej, &use_region, &pass);
+        for (note = line, k = 0; k < 19 && note; ++k) { note = strchr(note, ' '); if (note) ++note; }
+    }
+    if (r) fclose(r);
+    fprintf(f, "<tr><td><a href=\"#%s\">%s</a></td>", name, name);
+    if (n != 19) {
+        int skipped = r && (!strncmp(line, "skip ", 5) || !strncmp(line, "refused ", 8));
+        fprintf(f, "<td colspan=\"14\" class=\"%s\" style=\"text-align:left\">", skipped ? "" : "fail");
+        if (skipped) html_escape(f, !strncmp(line, "skip ", 5) ? "SKIP: " : "not exported: ");
+        html_escape(f, skipped ? strchr(line, ' ') + 1 : "no result (export, render or comparison failed)");
+        fprintf(f, "</td></tr>\n");
+        return skipped ? 2 : 0;
+    }
+    fprintf(f, "<td>%dx%d</td><td>%d / %d</td>", w, h, kx, kr);
+    for (k = 0; k < 3; ++k) fprintf(f, "<td>%+.3f%% &plusmn; %.3f</td>", 100 * v[k], 100 * v[3 + k]);
+    fprintf(f, "<td>%.2e</td><td>%.2f%% / %.2f%% / %.2f%%</td><td>%s%.2f%%</td><td>%s%d (%.2f)</td><td>%s</td>"
+               "<td class=\"%s\">%s</td><td style=\"text-align:left\">",
+            v[6], 100 * v[7], 100 * v[8], 100 * v[9], use_region ? "" : "<b>", 100 * v[10], use_region ? "<b>" : "", rej,
+            v[11], use_region ? "region" : "pixel", pass ? "pass" : "fail", pass ? "PASS" : "FAIL");
+    html_escape(f, note ? note : "");
+    fprintf(f, "</td></tr>\n");
+    return pass;
+}
+
+/* The Mitsuba table of the report; returns 1 when no row failed; *skipped: rows skipped or
+   not exported. */
+static int report_mitsuba(FILE *f, const char *outdir, char **names, int count, int *skipped)
+{
+    int i, all = 1;
+    fprintf(f, "<h2>pdftrace vs Mitsuba 3</h2>\n<p>Both renderers render the scene with K independent seeds. "
+               "bias<sub>c</sub> = mean<sub>x</sub>/mean<sub>r</sub> &minus; 1 &plusmn; its standard error from the seeds; "
+               "passes at |bias| &le; 3 SE and &le; 0.5 %% in every channel. The scene's test (bold) must pass too: "
+               "<i>pixel</i>: &ge; 99 %% of pixels with |x&minus;r| &le; t&middot;&radic;(var<sub>x</sub> + var<sub>r</sub>) "
+               "in every channel (Welch t, two-sided &alpha; = 0.001; pdftrace's variance from every sample, Mitsuba's "
+               "from its seeds); <i>region</i>: 4&times;4 region means of the seeds, Welch t per region and channel, "
+               "&Scaron;id&aacute;k-corrected to &alpha; = 0.01 over the 48 tests, none may reject (for scenes whose "
+               "caustics make per-pixel variances unreliable). Error map as above.</p>\n"
+               "<table><tr><th>scene</th><th>size</th><th>seeds pt / mi</th><th>bias R</th><th>bias G</th><th>bias B</th>"
+               "<th>relMSE</th><th>e p50 / p90 / p99</th><th>pixels accepted</th><th>regions rejected (worst |t|/crit)</th>"
+               "<th>test</th><th>result</th><th>note</th></tr>\n");
+    for (i = 0; i < count; ++i) {
+        int rc = report_mi_row(f, outdir, names[i]);
+        if (rc == 0) all = 0;
+        if (rc == 2) ++*skipped;
+    }
+    fprintf(f, "</table>\n");
+    return all;
+}
+
+/* 1 when name is one of names[0 .. count). */
+static int listed(const char *name, char **names, int count)
+{
+    int i;
+    for (i = 0; i < count; ++i)
+        if (!strcmp(name, names[i])) return 1;
+    return 0;
+}
+
+/* The images of one scene: the POV-Ray comparison's and/or the Mitsuba comparison's (when it
+   wrote them: not for a skipped or refused row). */
+static void report_images(FILE *f, const char *outdir, const char *name, int pov, int mi)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s/%s-mi.png", outdir, name);
+    mi = mi && access(path, F_OK) == 0;
+    if (!pov && !mi) return;
+    fprintf(f, "<div class=\"scene\" id=\"%s\"><h2>%s</h2><table>", name, name);
+    if (pov)
+        fprintf(f, "<tr><td><img src=\"%s-pt.png\" alt=\"pdftrace\"><br>pdftrace</td><td><img src=\"%s-pov.png\" "
+                   "alt=\"POV-Ray\"><br>POV-Ray</td><td><img src=\"%s-err.png\" alt=\"error map\"><br>error map</td></tr>",
+                name, name, name);
+    if (mi)
+        fprintf(f, "<tr><td><img src=\"%s-ptm.png\" alt=\"pdftrace\"><br>pdftrace (Mitsuba run)</td><td><img "
+                   "src=\"%s-mi.png\" alt=\"Mitsuba\"><br>Mitsuba 3</td><td><img src=\"%s-mierr.png\" alt=\"error map\"><br>"
+                   "error map vs Mitsuba</td></tr>", name, name, name);
+    fprintf(f, "</table></div>\n");
+}
+
+/* report OUTDIR [NAME...] [--mitsuba NAME...]: the POV-Ray rows, then the Mitsuba rows. */
+static int cmd_report(int argc, char **argv)
+{
+    char index[2048], tmp[2100];
+    FILE *f;
+    int i, all = 1, npov, nmi = 0, skipped = 0;
+    char **pov = argv + 3, **mi = NULL, verdict[128];
+    if (argc < 4) { fprintf(stderr, "usage: ptv report OUTDIR [NAME...] [--mitsuba NAME...]\n"); return 2; }
+    for (npov = 0; 3 + npov < argc && strcmp(pov[npov], "--mitsuba"); ++npov) {}
+    if (3 + npov < argc) { mi = pov + npov + 1; nmi = argc - 4 - npov; }
+    snprintf(index, sizeof index, "%s/index.html", argv[2]);
+    snprintf(tmp, sizeof tmp, "%s.tmp", index);
+    f = fopen(tmp, "w");
+    if (!f) { fprintf(stderr, "ptv: cannot write %s\n", tmp); return 1; }
+    fprintf(f, "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pdftrace validation</title>\n<style>\n"
+               "body{font-family:sans-serif;margin:20px;background:#fafafa}table{border-collapse:collapse}"
+               "td,th{border:1px solid #bbb;padding:4px 8px;text-align:right}th{background:#eee}"
+               ".pass{color:#070;font-weight:bold}.fail{color:#b00;font-weight:bold}"
+               "img{width:256px;height:256px;image-rendering:pixelated;border:1px solid #888}"
+               ".scene{margin:18px 0}.scene td{text-align:center;border:none}</style></head><body>\n"
+               "<h1>pdftrace validation: POV-Ray 3.7 and Mitsuba 3</h1>\n");
+    if (npov) all = report_pov(f, argv[2], pov, npov);
+    if (nmi) all = report_mitsuba(f, argv[2], mi, nmi, &skipped) && all;
+    for (i = 0; i < npov; ++i) report_images(f, argv[2], pov[i], 1, listed(pov[i], mi, nmi));
+    for (i = 0; i < nmi; ++i)
+        if (!listed(mi[i], pov, npov)) report_images(f, argv[2], mi[i], 0, 1);
+    snprintf(verdict, sizeof verdict, "%s%s", all ? "all compared scenes pass" : "some scenes FAIL",
+             skipped ? "; Mitsuba rows skipped or not exported: " : "");
+    if (skipped) snprintf(verdict + strlen(verdict), sizeof verdict - strlen(verdict), "%d", skipped);
+    fprintf(f, "<p>Overall: <span class=\"%s\">%s</span></p></body></html>\n", all ? "pass" : "fail", verdict);
     if (fclose(f) != 0 || rename(tmp, index) != 0) { remove(tmp); fprintf(stderr, "ptv: writing %s failed\n", index); return 1; }
-    printf("wrote %s: %s\n", index, all ? "all scenes pass" : "some scenes FAIL");
+    printf("wrote %s: %s\n", index, verdict);
     return all ? 0 : 3;
 }
 
@@ -644,6 +1156,92 @@ static void test_fuzz(const char *dir, const char *work, int rounds)
     result(!bad, "fuzz", detail);
 }
 
+/* ---- compare-mitsuba on synthetic images --------------------------------------------------- */
+
+/* One synthetic renderer: k seed images of a 64 x 64 gradient, each pixel with independent
+   Gaussian noise of 5 % (Box-Muller), scaled by gain, and by region_gain inside region 5
+   (second row, second column); then the mean, its variance (from the seeds) and the regions. */
+static int synth_run(const char *work, uint64_t seed, int k, double gain, double region_gain, pt_image *mean, pt_image *var, seed_regions *sr)
+{
+    const int w = 64, h = 64;
+    char path[2048];
+    pt_image *imgs = (pt_image *)calloc((size_t)k, sizeof *imgs);
+    pt_rng rng;
+    int s, x, y, c, ok = imgs != NULL && pt_image_init(mean, w, h) == PT_OK && pt_image_init(var, w, h) == PT_OK;
+    pt_rng_seed(&rng, seed, 7);
+    for (s = 0; ok && s < k; ++s) {
+        ok = pt_image_init(&imgs[s], w, h) == PT_OK;
+        for (y = 0; ok && y < h; ++y)
+            for (x = 0; x < w; ++x)
+                for (c = 0; c < 3; ++c) {
+                    double u1 = 1.0 - pt_rng_float(&rng), u2 = pt_rng_float(&rng); /* u1 in (0, 1] */
+                    double g = sqrt(-2 * log(u1)) * cos(6.283185307179586 * u2);
+                    double truth = (0.2 + 0.6 * (x + y) / (double)(w + h)) * (1.0 - 0.2 * c) * gain;
+                    if (4 * (4 * y / h) + 4 * x / w == 5) truth *= region_gain;
+                    imgs[s].rgb[3 * (y * w + x) + c] = (float)(truth * (1 + 0.05 * g));
+                }
+    }
+    for (y = 0; ok && y < h; ++y)
+        for (x = 0; x < w; ++x)
+            for (c = 0; c < 3; ++c) {
+                size_t j = 3 * ((size_t)y * (size_t)w + (size_t)x) + (size_t)c;
+                double s1 = 0, s2 = 0, m;
+                for (s = 0; s < k; ++s) { s1 += imgs[s].rgb[j]; s2 += (double)imgs[s].rgb[j] * imgs[s].rgb[j]; }
+                m = s1 / k;
+                mean->rgb[j] = (float)m;
+                var->rgb[j] = (float)((s2 - s1 * m) / (k - 1) / k);
+            }
+    snprintf(path, sizeof path, "%s/synth-regions.txt", work);
+    ok = ok && write_regions(path, imgs, k, k - 1) && read_regions(path, sr);
+    remove(path);
+    free_images(imgs, k);
+    return ok;
+}
+
+/* compare-mitsuba's tests on synthetic renders with known truth (fixed seeds): the same mean
+   passes every test; a 1 % offset fails the bias test; +2 % in one region fails the region
+   test. And the t quantiles against tables (t_{0.995} at 10 and 30 degrees of freedom). */
+static void test_compare_mitsuba(const char *work)
+{
+    static const struct { const char *what; double gain, region_gain; int use_region, expect_pass; } cases[] = {
+        {"identical mean passes (pixel test)", 1.0, 1.0, 0, 1},
+        {"identical mean passes (region test)", 1.0, 1.0, 1, 1},
+        {"1 % offset fails", 1.01, 1.0, 0, 0},
+        {"+2 % in one region fails the region test", 1.0, 1.02, 1, 0},
+    };
+    char detail[512];
+    double z01 = normal_quantile2(0.01), t10 = t_quantile2(z01, 10), t30 = t_quantile2(z01, 30), z = normal_quantile2(0.001);
+    size_t i;
+    snprintf(detail, sizeof detail, "z(0.001) %.4f (3.2905), t(0.01; 10) %.4f (3.1693), t(0.01; 30) %.4f (2.7500)", z, t10, t30);
+    result(fabs(z - 3.2905) < 1e-3 && fabs(t10 - 3.1693) < 5e-3 && fabs(t30 - 2.75) < 2e-3, "compare-mitsuba: quantiles", detail);
+    for (i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        pt_image x = {0, 0, NULL}, vx = {0, 0, NULL}, r = {0, 0, NULL}, vr = {0, 0, NULL};
+        seed_regions sx = {0, 0, 0, 0, NULL}, sr = {0, 0, 0, 0, NULL};
+        mi_metrics m;
+        int ok = synth_run(work, 11 + i, 16, cases[i].gain, cases[i].region_gain, &x, &vx, &sx) &&
+                 synth_run(work, 101 + i, 16, 1.0, 1.0, &r, &vr, &sr) &&
+                 compare_mitsuba(&x, &vx, &sx, &r, &vr, &sr, cases[i].use_region, &m, NULL);
+        char what[160];
+        snprintf(what, sizeof what, "compare-mitsuba: %s", cases[i].what);
+        if (ok) {
+            snprintf(detail, sizeof detail, "bias %+.3f%%±%.3f %+.3f%%±%.3f %+.3f%%±%.3f, pixels accepted %.2f%%, "
+                     "regions rejected %d (worst %.2f)", 100 * m.bias[0], 100 * m.se[0], 100 * m.bias[1], 100 * m.se[1],
+                     100 * m.bias[2], 100 * m.se[2], 100 * m.accepted, m.region_rejected, m.region_worst);
+            /* the region case must fail by the region test itself, whatever the bias test says */
+            ok = cases[i].expect_pass ? m.pass && m.bias_ok && m.pixel_ok && m.region_ok
+                 : cases[i].use_region ? !m.region_ok && !m.pass : !m.bias_ok && !m.pass;
+        } else
+            snprintf(detail, sizeof detail, "could not build the synthetic renders");
+        result(ok, what, detail);
+        free(sx.m);
+        free(sr.m);
+        pt_image_free(&x);
+        pt_image_free(&vx);
+        pt_image_free(&r);
+        pt_image_free(&vr);
+    }
+}
+
 /* 1 when the files at paths a and b both open and hold the same bytes. */
 static int same_bytes(const char *a, const char *b)
 {
@@ -736,6 +1334,7 @@ static int cmd_test(int argc, char **argv)
     test_malformed(argv[3]);
     test_scenes_load(argv[2]);
     test_fuzz(argv[2], argv[3], 3000);
+    test_compare_mitsuba(argv[3]);
     if (argc == 6) {
         test_cornell_identical(argv[4], argv[5], argv[2], argv[3]);
         test_scene_settings(argv[4], argv[2], argv[3]);
@@ -766,8 +1365,9 @@ int main(int argc, char **argv)
     if (argc >= 2 && !strcmp(argv[1], "render")) return cmd_render(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "pov")) return cmd_pov(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "compare")) return cmd_compare(argc, argv);
+    if (argc >= 2 && !strcmp(argv[1], "compare-mitsuba")) return cmd_compare_mitsuba(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "report")) return cmd_report(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "test")) return cmd_test(argc, argv);
-    fprintf(stderr, "usage: ptv render|pov|compare|report|test ... (see validation/ptv.c)\n");
+    fprintf(stderr, "usage: ptv render|pov|compare|compare-mitsuba|report|test ... (see validation/ptv.c)\n");
     return 2;
 }
