@@ -9,7 +9,9 @@
      cc -std=c99 -O2 -I. -pthread -o build/adaptive_bias bench/adaptive_bias.c -lm
      build/adaptive_bias scenes/cornell.scene --size 64x64 --spp 256 --threshold 0.1 --seeds 32
    Options: --size WxH, --spp N (the adaptive cap), --threshold T, --seeds K, --ref-spp N,
-   --ref-seeds K, --mode own-samples|neighbours|pilot, --min-spp N, --threads N. */
+   --ref-seeds K, --mode own-samples|neighbours|pilot, --min-spp N, --threads N, --ref-cache FILE
+   (the reference's statistics: read if it holds --ref-seeds seeds, else written; the caller keeps
+   scene, size and --ref-spp the same). */
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
 #define PDFTRACE_SCENE_IMPLEMENTATION
@@ -102,7 +104,7 @@ static void mean_var(const stats *s, int r, int c, double *m, double *v)
 
 int main(int argc, char **argv)
 {
-    const char *path = NULL, *mode = "default";
+    const char *path = NULL, *mode = "default", *cache = NULL;
     int w = 64, h = 64, spp = 256, seeds = 32, ref_spp = 2048, ref_seeds = 16, min_spp = 0, threads = 0, i, k, c, r;
     double threshold = 0.1, samples = 0.0, uniform_samples;
     char err[1024];
@@ -123,6 +125,7 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--min-spp") && v) min_spp = atoi(argv[++i]);
         else if (!strcmp(a, "--threads") && v) threads = atoi(argv[++i]);
         else if (!strcmp(a, "--mode") && v) mode = argv[++i];
+        else if (!strcmp(a, "--ref-cache") && v) cache = argv[++i];
         else if (a[0] != '-' && !path) path = a;
         else { fprintf(stderr, "adaptive_bias: bad argument '%s' (see the comment at the top of the source)\n", a); return 2; }
     }
@@ -140,7 +143,14 @@ int main(int argc, char **argv)
     base.threads = threads;
     memset(&A, 0, sizeof A);
     memset(&R, 0, sizeof R);
-    for (k = 0; k < ref_seeds + seeds; ++k) {
+    if (cache) { /* the reference's statistics from an earlier run with the same scene, size and reference */
+        FILE *cf = fopen(cache, "rb");
+        if (cf) {
+            if (fread(&R, sizeof R, 1, cf) != 1 || R.n != ref_seeds) memset(&R, 0, sizeof R);
+            fclose(cf);
+        }
+    }
+    for (k = R.n ? ref_seeds : 0; k < ref_seeds + seeds; ++k) {
         int ref = k < ref_seeds;
         pt_render_desc d = base;
         pt_film f;
@@ -151,10 +161,8 @@ int main(int argc, char **argv)
             d.adaptive_threshold = (float)threshold;
             d.adaptive_min_spp = min_spp;
             if (!strcmp(mode, "neighbours")) d.adaptive_neighbours_only = 1;
-#ifdef PT_ADAPTIVE_OWN_SAMPLES
             else if (!strcmp(mode, "own-samples")) d.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES;
             else if (!strcmp(mode, "pilot")) d.adaptive_mode = PT_ADAPTIVE_PILOT;
-#endif
             else if (strcmp(mode, "default")) { fprintf(stderr, "adaptive_bias: unknown mode '%s'\n", mode); return 2; }
         }
         if (pt_film_init(&f, w, h) != PT_OK || pt_render(scene, &d, &f, &st) != PT_OK) {
@@ -164,6 +172,11 @@ int main(int argc, char **argv)
         if (!ref) samples += (double)st.samples;
         add_film(ref ? &R : &A, &f);
         pt_film_free(&f);
+        if (ref && k == ref_seeds - 1 && cache) {
+            FILE *cf = fopen(cache, "wb");
+            if (!cf || fwrite(&R, sizeof R, 1, cf) != 1) fprintf(stderr, "adaptive_bias: cannot write %s\n", cache);
+            if (cf) fclose(cf);
+        }
     }
     uniform_samples = (double)seeds * w * h * spp;
     alpha = 1.0 - pow(1.0 - FAMILY_ALPHA, 1.0 / (3.0 * (RX * RY + 1)));
