@@ -161,42 +161,51 @@ static pt_scene *room_scene(pt_render_desc *d, int w, int h, int spp)
 static void easy_region_stops(test_ctx *t)
 {
     /* A pixel's noise is planned from the pixels of its 5x5 neighbourhood (itself included: zero
-       here for every emitter pixel). Columns 0-29
-       (every neighbour a zero-variance emitter pixel) stop at the first check; columns 30 and 31
-       are emitter pixels too, but column 32 (half emitter, half noisy wall) is within reach, so
-       they keep sampling (no seam where the noise starts); the noisy pixels would need more than the 64 samples
-       allowed (relative variance 0.16 / 0.26 per sample over half the image: 123 samples for
-       T = 0.05) and all sample to the cap. */
-    pt_render_desc d;
-    pt_scene *s = half_easy_scene(&d);
-    pt_film f;
-    pt_render_stats st;
-    int x, y, bad_easy = 0, bad_rest = 0;
-    uint64_t below = 0;
-    if (!CHECK(t, s != NULL, "scene")) return;
-    d.adaptive_threshold = 0.05f;
-    d.adaptive_min_spp = 8;
-    d.samples_per_pass = 4;
-    if (tu_render_into(t, s, &d, &f, &st, "adaptive")) {
-        for (y = 0; y < 16; y++)
-            for (x = 0; x < 64; x++) {
-                uint32_t n = f.count[y * 64 + x];
-                below += n < 64u;
-                if (x < 30) bad_easy += n != 8u;  /* stopped at the first check, after 8 samples */
-                else bad_rest += n != 64u;
-            }
-        CHECK(t, bad_easy == 0, "%d pixels of columns 0-29 did not stop after 8 samples", bad_easy);
-        CHECK(t, bad_rest == 0, "%d pixels of columns 30-63 (30, 31: near the noise) got fewer than 64 samples", bad_rest);
-        CHECK(t, st.pixels_converged == below && below == 30u * 16u, "stats.pixels_converged %llu, film: %llu below 64 spp",
-              (unsigned long long)st.pixels_converged, (unsigned long long)below);
-        CHECK(t, st.min_spp == 8u && st.max_spp == 64u, "stats spp range %u..%u, want 8..64", st.min_spp, st.max_spp);
-        CHECK(t, st.samples == (uint64_t)30 * 16 * 8 + (uint64_t)34 * 16 * 64, "stats.samples %llu",
-              (unsigned long long)st.samples);
-        test_note(t, "%llu of 1024 pixels stopped at 8 spp, %llu samples", (unsigned long long)st.pixels_converged,
-                  (unsigned long long)st.samples);
+       here for every emitter pixel). Columns 0-29 (every neighbour a zero-variance emitter pixel)
+       stop at once: re-planned from the film (own samples) after the first 8 samples; with the
+       pilot (the default) the film gets the least, 2, after the pilot's 8. Columns 30 and 31 are
+       emitter pixels too, but column 32 (half emitter, half noisy wall) is within reach, so they
+       keep sampling (no seam where the noise starts); the noisy pixels would need more than the
+       64 samples allowed (relative variance 0.16 / 0.26 per sample over half the image: 123
+       samples for T = 0.05) and all sample to the cap (64, or 64 - 8 beside the pilot). */
+    int mode;
+    for (mode = 0; mode < 2; mode++) {
+        pt_render_desc d;
+        pt_scene *s = half_easy_scene(&d);
+        pt_film f;
+        pt_render_stats st;
+        const char *name = mode ? "pilot" : "own samples";
+        const uint32_t easy = mode ? 2u : 8u, cap = mode ? 56u : 64u;
+        int x, y, bad_easy = 0, bad_rest = 0;
+        uint64_t below = 0, want_samples = mode ? 1024u * 8u + 30u * 16u * 2u + 34u * 16u * 56u : 30u * 16u * 8u + 34u * 16u * 64u;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.05f;
+        d.adaptive_min_spp = 8;
+        d.samples_per_pass = 4;
+        d.adaptive_mode = mode ? PT_ADAPTIVE_PILOT : PT_ADAPTIVE_OWN_SAMPLES;
+        if (tu_render_into(t, s, &d, &f, &st, name)) {
+            for (y = 0; y < 16; y++)
+                for (x = 0; x < 64; x++) {
+                    uint32_t n = f.count[y * 64 + x];
+                    below += n < cap;
+                    if (x < 30) bad_easy += n != easy;
+                    else bad_rest += n != cap;
+                }
+            CHECK(t, bad_easy == 0, "%s: %d pixels of columns 0-29 got other than %u samples", name, bad_easy, easy);
+            CHECK(t, bad_rest == 0, "%s: %d pixels of columns 30-63 (30, 31: near the noise) got other than %u samples",
+                  name, bad_rest, cap);
+            CHECK(t, st.pixels_converged == below && below == 30u * 16u, "%s: stats.pixels_converged %llu, film: %llu below %u",
+                  name, (unsigned long long)st.pixels_converged, (unsigned long long)below, cap);
+            CHECK(t, st.min_spp == easy && st.max_spp == cap, "%s: stats spp range %u..%u, want %u..%u", name, st.min_spp,
+                  st.max_spp, easy, cap);
+            CHECK(t, st.samples == want_samples, "%s: stats.samples %llu, want %llu", name, (unsigned long long)st.samples,
+                  (unsigned long long)want_samples);
+            test_note(t, "%s: %llu of 1024 pixels stopped at %u spp, %llu samples", name,
+                      (unsigned long long)st.pixels_converged, easy, (unsigned long long)st.samples);
+        }
+        pt_film_free(&f);
+        pt_scene_destroy(s);
     }
-    pt_film_free(&f);
-    pt_scene_destroy(s);
 }
 
 /* The noisy wall of two_halves_scene (64 x 16 pixels) behind stripes of emitter (radiance 1, two
@@ -228,35 +237,43 @@ static pt_scene *stripes_scene(pt_render_desc *d)
 static void per_pixel_allocation(test_ctx *t)
 {
     /* Noise in 2 of every 8 columns: the middle two columns of each 6-column emitter stripe (no
-       noise within their 5x5 neighbourhood) stop at the first check (8 samples); every other
-       pixel (noisy, or near noise) samples to the cap of 64 (T = 0.03 is out of reach: 25 % of
-       the pixels with relative variance 0.62 per sample would need 170). An allocation in 4x4 blocks would stop no pixel here (every block holds
-       a noisy column). */
-    pt_render_desc d;
-    pt_scene *s = stripes_scene(&d);
-    pt_film f;
-    pt_render_stats st;
-    int x, y, bad_quiet = 0, bad_rest = 0;
-    if (!CHECK(t, s != NULL, "scene")) return;
-    d.adaptive_threshold = 0.03f;
-    d.adaptive_min_spp = 8;
-    d.samples_per_pass = 4;
-    if (tu_render_into(t, s, &d, &f, &st, "adaptive")) {
-        for (y = 0; y < 16; y++)
-            for (x = 0; x < 64; x++) {
-                int quiet = x % 8 == 3 || x % 8 == 4;
-                uint32_t n = f.count[y * 64 + x];
-                if (quiet) bad_quiet += n != 8u;
-                else bad_rest += n != 64u;
-            }
-        CHECK(t, bad_quiet == 0, "%d of 256 stripe-centre pixels did not stop after 8 samples", bad_quiet);
-        CHECK(t, bad_rest == 0, "%d of 768 other pixels got other than 64 samples", bad_rest);
-        CHECK(t, st.pixels_converged == 256u, "stats.pixels_converged %llu, want 256",
-              (unsigned long long)st.pixels_converged);
-        test_note(t, "%llu of 1024 pixels stopped at 8 spp", (unsigned long long)st.pixels_converged);
+       noise within their 5x5 neighbourhood) stop at once (own samples: after 8; pilot: the
+       film's least, 2, after the pilot's 8); every other pixel (noisy, or near noise) samples to
+       the cap (64; 56 beside the pilot: T = 0.03 is out of reach, 25 % of the pixels with
+       relative variance 0.62 per sample would need 170). An allocation in 4x4 blocks would stop
+       no pixel here (every block holds a noisy column). */
+    int mode;
+    for (mode = 0; mode < 2; mode++) {
+        pt_render_desc d;
+        pt_scene *s = stripes_scene(&d);
+        pt_film f;
+        pt_render_stats st;
+        const char *name = mode ? "pilot" : "own samples";
+        const uint32_t quiet_n = mode ? 2u : 8u, cap = mode ? 56u : 64u;
+        int x, y, bad_quiet = 0, bad_rest = 0;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.03f;
+        d.adaptive_min_spp = 8;
+        d.samples_per_pass = 4;
+        d.adaptive_mode = mode ? PT_ADAPTIVE_PILOT : PT_ADAPTIVE_OWN_SAMPLES;
+        if (tu_render_into(t, s, &d, &f, &st, name)) {
+            for (y = 0; y < 16; y++)
+                for (x = 0; x < 64; x++) {
+                    int quiet = x % 8 == 3 || x % 8 == 4;
+                    uint32_t n = f.count[y * 64 + x];
+                    if (quiet) bad_quiet += n != quiet_n;
+                    else bad_rest += n != cap;
+                }
+            CHECK(t, bad_quiet == 0, "%s: %d of 256 stripe-centre pixels got other than %u samples", name, bad_quiet,
+                  quiet_n);
+            CHECK(t, bad_rest == 0, "%s: %d of 768 other pixels got other than %u samples", name, bad_rest, cap);
+            CHECK(t, st.pixels_converged == 256u, "%s: stats.pixels_converged %llu, want 256", name,
+                  (unsigned long long)st.pixels_converged);
+            test_note(t, "%s: %llu of 1024 pixels stopped at %u spp", name, (unsigned long long)st.pixels_converged, quiet_n);
+        }
+        pt_film_free(&f);
+        pt_scene_destroy(s);
     }
-    pt_film_free(&f);
-    pt_scene_destroy(s);
 }
 
 static void neyman_allocation(test_ctx *t)
@@ -308,15 +325,16 @@ static void neyman_allocation(test_ctx *t)
 
 static void mean_matches_uniform(test_ctx *t)
 {
-    /* The adaptive image against a uniform render with another seed (room scene: caustics, so rare
-       bright samples). adaptive_neighbours_only = 1: 16 region means (channel 1), z-tests in the
-       file's family (its bias, -0.4 % of the image mean over seeds 7-46, is below one render's
-       noise). The default (a pixel's own samples count) has the stopping bias of section 8: its
+    /* The re-planning modes' image against a uniform render with another seed (room scene:
+       caustics, so rare bright samples; the default, the pilot, is checked by pilot_unbiased).
+       PT_ADAPTIVE_NEIGHBOURS: 16 region means (channel 1), z-tests in the file's family (its
+       bias, -0.4 % of the image mean over seeds 7-46, is below one render's noise).
+       PT_ADAPTIVE_OWN_SAMPLES (a pixel's own samples count) has the stopping bias of section 8: its
        image mean over the neighbours-only one of the same seed (the two share most of their
        noise) was -0.79 % with a standard deviation of 0.24 % over seeds 7-46 (range -1.32 % to
        -0.33 %); it must lie in [-2 %, +0.5 %], 5 standard deviations either side (false failure
        ~1e-6 if normal). Planning a pixel from its own noise alone gives about -3 % and fails
-       it. The default must also take fewer samples (a pixel that drew no firefly stops at its
+       it. Own samples must also take fewer samples (a pixel that drew no firefly stops at its
        share). */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 48, 40, 96);
@@ -327,9 +345,10 @@ static void mean_matches_uniform(test_ctx *t)
     if (!CHECK(t, s != NULL, "scene")) return;
     d.adaptive_threshold = 0.18f;
     d.adaptive_min_spp = 16;
+    d.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES;
     if (tu_render_into(t, s, &d, &o, &so, "adaptive (own samples)")) {
         pt_render_desc n = d;
-        n.adaptive_neighbours_only = 1;
+        n.adaptive_mode = PT_ADAPTIVE_NEIGHBOURS;
         if (tu_render_into(t, s, &n, &a, &sa, "adaptive (neighbours only)")) {
             pt_render_desc e = d;
             e.adaptive_threshold = 0;
@@ -368,7 +387,7 @@ static void own_samples_dilute_fireflies(test_ctx *t)
     /* The emitter half of half_easy_scene (every sample exactly 1) after 8 uniform samples per
        pixel, plus one injected firefly (a 9th sample of 50) in pixel (10, 8); then adaptive
        sampling into the same film, cap 64 more samples, checks after 2. The noisy half is out of
-       reach for T = 0.05, so every pixel with noise > 0 samples to its cap. Own samples (default):
+       reach for T = 0.05, so every pixel with noise > 0 samples to its cap. Own samples:
        the firefly pixel and the pixels whose 5x5 neighbourhood holds it sample to the cap, diluting
        the firefly; neighbours only: the firefly pixel's own noise is not counted, so it stops
        after 2 samples with its firefly undiluted while the 24 around it sample on (a ring).
@@ -396,7 +415,7 @@ static void own_samples_dilute_fireflies(test_ctx *t)
             d.samples_per_pass = 2;
             d.adaptive_threshold = 0.05f;
             d.adaptive_min_spp = 2;
-            d.adaptive_neighbours_only = mode;
+            d.adaptive_mode = mode ? PT_ADAPTIVE_NEIGHBOURS : PT_ADAPTIVE_OWN_SAMPLES;
             d.seed += 1;
             if (CHECK(t, pt_render(s, &d, &f, &st) == PT_OK, "adaptive render: %s", st.error)) {
                 double fire = f.sum[3 * p + 1] / (double)f.count[p];
@@ -436,36 +455,43 @@ static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
 static void threads_bit_identical(test_ctx *t)
 {
     /* The adaptive film with threads 1, 2, 3, tile size 5 and a host parallel-for running tiles in
-       reverse: identical bit for bit (sums, squares, half-buffers, counts), with stopped pixels. */
-    pt_render_desc d;
-    pt_scene *s = room_scene(&d, 40, 32, 32);
-    pt_film ref, f;
-    pt_render_stats st, st0;
-    int k;
-    const char *names[4] = { "threads=2", "threads=3", "tile_size=5, threads=2", "host parallel_for (reverse)" };
-    if (!CHECK(t, s != NULL, "scene")) return;
-    d.adaptive_threshold = 0.21f;
-    d.adaptive_min_spp = 8;
-    d.samples_per_pass = 4;
-    d.threads = 1;
-    if (!tu_render_into(t, s, &d, &ref, &st0, "threads=1")) { pt_film_free(&ref); pt_scene_destroy(s); return; }
-    CHECK(t, st0.pixels_converged > 0 && st0.pixels_converged < 40u * 32u, "%llu pixels converged: want some, not all",
-          (unsigned long long)st0.pixels_converged);
-    for (k = 0; k < 4; k++) {
-        pt_render_desc e = d;
-        e.threads = k == 1 ? 3 : 2;
-        if (k == 2) e.tile_size = 5;
-        if (k == 3) { e.parallel_for = host_reverse; e.threads = 1; }
-        if (tu_render_into(t, s, &e, &f, &st, names[k])) {
-            CHECK(t, tu_film_equal(&ref, &f), "%s: film differs from threads=1", names[k]);
-            CHECK(t, st.samples == st0.samples && st.pixels_converged == st0.pixels_converged,
-                  "%s: stats differ from threads=1", names[k]);
+       reverse: identical bit for bit (sums, squares, half-buffers, counts), with stopped pixels,
+       in the pilot mode (the default) and the re-planning one (own samples). */
+    int mode;
+    for (mode = 0; mode < 2; mode++) {
+        pt_render_desc d;
+        pt_scene *s = room_scene(&d, 40, 32, 32);
+        pt_film ref, f;
+        pt_render_stats st, st0;
+        int k;
+        const char *names[4] = { "threads=2", "threads=3", "tile_size=5, threads=2", "host parallel_for (reverse)" };
+        const char *mname = mode ? "own samples" : "pilot";
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.21f;
+        d.adaptive_min_spp = 8;
+        d.samples_per_pass = 4;
+        d.adaptive_mode = mode ? PT_ADAPTIVE_OWN_SAMPLES : PT_ADAPTIVE_PILOT;
+        d.threads = 1;
+        if (!tu_render_into(t, s, &d, &ref, &st0, "threads=1")) { pt_film_free(&ref); pt_scene_destroy(s); return; }
+        CHECK(t, st0.pixels_converged > 0 && st0.pixels_converged < 40u * 32u, "%s: %llu pixels converged: want some, not all",
+              mname, (unsigned long long)st0.pixels_converged);
+        for (k = 0; k < 4; k++) {
+            pt_render_desc e = d;
+            e.threads = k == 1 ? 3 : 2;
+            if (k == 2) e.tile_size = 5;
+            if (k == 3) { e.parallel_for = host_reverse; e.threads = 1; }
+            if (tu_render_into(t, s, &e, &f, &st, names[k])) {
+                CHECK(t, tu_film_equal(&ref, &f), "%s, %s: film differs from threads=1", mname, names[k]);
+                CHECK(t, st.samples == st0.samples && st.pixels_converged == st0.pixels_converged,
+                      "%s, %s: stats differ from threads=1", mname, names[k]);
+            }
+            pt_film_free(&f);
         }
-        pt_film_free(&f);
+        test_note(t, "%s: 5 renders, %llu of 1280 pixels stopped early, bit-identical", mname,
+                  (unsigned long long)st0.pixels_converged);
+        pt_film_free(&ref);
+        pt_scene_destroy(s);
     }
-    test_note(t, "5 renders, %llu of 1280 pixels stopped early, bit-identical", (unsigned long long)st0.pixels_converged);
-    pt_film_free(&ref);
-    pt_scene_destroy(s);
 }
 
 static void threshold_zero_is_uniform(test_ctx *t)
@@ -526,12 +552,13 @@ static void invalid_settings(test_ctx *t)
     pt_scene *s = room_scene(&d, 8, 8, 4);
     pt_film f;
     int k, i;
-    const char *names[11] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
+    const char *names[14] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
                               "check_passes -1", "disable_skips removed bit 1u << 1", "disable_skips ~0",
-                              "disable_skips removed bit 1u << 5", "neighbours_only 2", "neighbours_only -1" };
+                              "disable_skips removed bit 1u << 5", "neighbours_only 2", "neighbours_only -1",
+                              "adaptive_mode 3", "adaptive_mode -1", "neighbours_only 1 with own samples" };
     if (!CHECK(t, s != NULL, "scene")) return;
     if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); return; }
-    for (k = 0; k < 11; k++) {
+    for (k = 0; k < 14; k++) {
         pt_render_desc e = d;
         pt_render_stats st;
         int rc, touched = 0;
@@ -547,11 +574,14 @@ static void invalid_settings(test_ctx *t)
         if (k == 8) e.disable_skips = 1u << 5; /* was PT_SKIP_NO_TRIANGLES, removed */
         if (k == 9) e.adaptive_neighbours_only = 2;
         if (k == 10) e.adaptive_neighbours_only = -1;
+        if (k == 11) e.adaptive_mode = (pt_adaptive_mode)3;
+        if (k == 12) e.adaptive_mode = (pt_adaptive_mode)-1;
+        if (k == 13) { e.adaptive_neighbours_only = 1; e.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES; }
         rc = pt_render(s, &e, &f, &st);
         for (i = 0; i < 64; i++) touched += f.count[i] != 0;
         CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "%s: pt_render returned %d", names[k], rc);
         CHECK(t, touched == 0 && st.samples == 0, "%s: %d pixels rendered", names[k], touched);
-        CHECK(t, strstr(st.error, k >= 9 ? "adaptive_neighbours_only" : k >= 6 ? "disable_skips" : "adaptive") != NULL,
+        CHECK(t, strstr(st.error, k >= 11 ? "adaptive_mode" : k >= 9 ? "adaptive_neighbours_only" : k >= 6 ? "disable_skips" : "adaptive") != NULL,
               "%s: message '%s'", names[k], st.error);
     }
     {   /* the valid extremes work: every skip disabled, min_spp 2, check every pass, neighbours only */
