@@ -445,6 +445,136 @@ static void own_samples_dilute_fireflies(test_ctx *t)
     }
 }
 
+/* P(|T| > t) for Student's t with df degrees of freedom, I_{df/(df+t^2)}(df/2, 1/2): the
+   regularised incomplete beta function by its continued fraction (Abramowitz & Stegun 26.5.8,
+   modified Lentz evaluation; the symmetry I_x(a, b) = 1 - I_{1-x}(b, a) where it converges
+   slowly). */
+static double beta_cf(double a, double b, double x)
+{
+    double c = 1.0, d = 1.0 - (a + b) * x / (a + 1.0), f;
+    int m;
+    d = 1.0 / (fabs(d) < 1e-300 ? 1e-300 : d);
+    f = d;
+    for (m = 1; m < 500; ++m) {
+        double num, delta;
+        int half;
+        for (half = 0; half < 2; ++half) {
+            num = half == 0 ? m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m))
+                            : -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0));
+            d = 1.0 + num * d;
+            c = 1.0 + num / c;
+            d = 1.0 / (fabs(d) < 1e-300 ? 1e-300 : d);
+            if (fabs(c) < 1e-300) c = 1e-300;
+            delta = d * c;
+            f *= delta;
+        }
+        if (fabs(delta - 1.0) < 1e-14) break;
+    }
+    return f;
+}
+static double t_two_sided(double t, double df)
+{
+    double a = 0.5 * df, b = 0.5, x = df / (df + t * t), front;
+    if (x >= 1.0) return 1.0;
+    front = exp(lgamma(a + b) - lgamma(a) - lgamma(b) + a * log(x) + b * log(1.0 - x));
+    if (x < (a + 1.0) / (a + b + 2.0)) return front * beta_cf(a, b, x) / a;
+    return 1.0 - front * beta_cf(b, a, 1.0 - x) / b;
+}
+
+/* Sparkles: a black view (stripes_desc, background 0) with a small two-sided emitter of radiance
+   8 in the middle of each pixel (x, y) with x % 5 == 2 and y % 5 == 2 (39 pixels), half a pixel
+   wide and a quarter high: a sample of such a pixel is 8 with probability 1/8, else 0 (mean 1);
+   every other pixel is exactly 0. No two sparkle pixels share a 5x5 neighbourhood. */
+static pt_scene *sparkle_scene(pt_render_desc *d)
+{
+    pt_scene *s = pt_scene_create();
+    int glow, rc = 0, x, y;
+    float hh = 10.0f * (float)tan(15.0 * TU_PI / 180.0), hw = 4.0f * hh, px = 2.0f * hw / 64.0f;
+    if (!s) return NULL;
+    glow = pt_scene_add_emitter(s, pt_v3(8, 8, 8), 1);
+    for (y = 2; y < 16; y += 5)
+        for (x = 2; x < 64; x += 5) {
+            /* pixel (x, y)'s centre on the plane z = 0 (screen right is -x, row 0 at the top) */
+            float cx = hw * (1.0f - 2.0f * ((float)x + 0.5f) / 64.0f), cy = hh * (1.0f - 2.0f * ((float)y + 0.5f) / 16.0f);
+            rc |= pt_scene_add_quad(s, pt_v3(cx - px / 4, cy - px / 8, 0), pt_v3(px / 2, 0, 0), pt_v3(0, px / 4, 0), glow);
+        }
+    if (glow < 0 || rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    stripes_desc(d, 1);
+    d->background = pt_v3(0, 0, 0);
+    return s;
+}
+
+#define PILOT_SEEDS 64
+static void pilot_unbiased(test_ctx *t)
+{
+    /* The default (PT_ADAPTIVE_PILOT) keeps the uniform render's expectation; re-planning from
+       the image's own samples does not. Sparkle scene, cap 64 spp, T = 0.05, pilot / minimum 8
+       spp, seeds 1..PILOT_SEEDS. Own samples: a sparkle pixel whose first 8 samples missed its
+       emitter (probability (7/8)^8 = 0.34) has zero noise in its whole 5x5 neighbourhood and
+       stops with the value 0: the image is about a third too dark. The pilot's film holds the
+       first n_i samples of the uniform render of the same seed, n_i fixed by the discarded
+       pilot, so D = adaptive image mean - uniform image mean (channel G) is paired, and its
+       mean over the seeds is the bias: a one-sample t-test (df = seeds - 1) at alpha 0.01. The
+       pilot must pass it and own samples must fail it (the test's power: it fails on the old
+       default). */
+    double dp[PILOT_SEEDS], dn[PILOT_SEEDS], mean_u = 0.0, samples_p = 0.0, total = 0.0;
+    int k;
+    for (k = 0; k < PILOT_SEEDS; k++) {
+        pt_render_desc d;
+        pt_scene *s = sparkle_scene(&d);
+        pt_film u, a, o;
+        pt_render_stats su, sa, so;
+        int ok = 0;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.seed = 1u + (uint64_t)k;
+        if (tu_render_into(t, s, &d, &u, &su, "uniform")) {
+            pt_render_desc e = d;
+            e.adaptive_threshold = 0.05f;
+            e.adaptive_min_spp = 8;
+            if (tu_render_into(t, s, &e, &a, &sa, "pilot")) {
+                e.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES;
+                if (tu_render_into(t, s, &e, &o, &so, "own samples")) {
+                    tu_region ru, ra, ro;
+                    tu_film_regions(&u, 1, 1, &ru);
+                    tu_film_regions(&a, 1, 1, &ra);
+                    tu_film_regions(&o, 1, 1, &ro);
+                    dp[k] = ra.mean[1] - ru.mean[1];
+                    dn[k] = ro.mean[1] - ru.mean[1];
+                    mean_u += ru.mean[1] / PILOT_SEEDS;
+                    samples_p += (double)sa.samples;
+                    total += (double)su.samples;
+                    ok = 1;
+                }
+                pt_film_free(&o);
+            }
+            pt_film_free(&a);
+        }
+        pt_film_free(&u);
+        pt_scene_destroy(s);
+        if (!ok) return;
+    }
+    {
+        tu_acc ap, ao;
+        double tp, tn, pp, pn;
+        memset(&ap, 0, sizeof ap);
+        memset(&ao, 0, sizeof ao);
+        for (k = 0; k < PILOT_SEEDS; k++) {
+            tu_acc_add(&ap, dp[k]);
+            tu_acc_add(&ao, dn[k]);
+        }
+        tp = tu_acc_se(&ap) > 0 ? ap.mean / tu_acc_se(&ap) : 0.0;
+        tn = tu_acc_se(&ao) > 0 ? ao.mean / tu_acc_se(&ao) : 0.0;
+        pp = t_two_sided(fabs(tp), PILOT_SEEDS - 1);
+        pn = t_two_sided(fabs(tn), PILOT_SEEDS - 1);
+        CHECK(t, pp >= 0.01, "pilot: image mean %+.2f %% against uniform (t %.2f, p %.2g < 0.01)", 100.0 * ap.mean / mean_u,
+              tp, pp);
+        CHECK(t, pn < 0.01 && tn < 0, "own samples: image mean %+.2f %% against uniform (t %.2f, p %.2g): the test "
+              "does not see its bias", 100.0 * ao.mean / mean_u, tn, pn);
+        test_note(t, "pilot: image mean %+.2f %% (t %.2f, p %.2g; %.0f %% of the samples); own samples %+.1f %% (t %.1f)",
+                  100.0 * ap.mean / mean_u, tp, pp, 100.0 * samples_p / total, 100.0 * ao.mean / mean_u, tn);
+    }
+}
+
 static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
 {
     int i;
@@ -704,6 +834,7 @@ const test_case test_adaptive_cases[] = {
     TEST_CASE(neyman_allocation),
     TEST_CASE(mean_matches_uniform),
     TEST_CASE(own_samples_dilute_fireflies),
+    TEST_CASE(pilot_unbiased),
     TEST_CASE(threads_bit_identical),
     TEST_CASE(threshold_zero_is_uniform),
     TEST_CASE(invalid_settings),
