@@ -575,6 +575,143 @@ static void pilot_unbiased(test_ctx *t)
     }
 }
 
+/* Adds pixel pix's samples first .. first + n - 1 (seed d->seed, the documented stream and camera
+   ray of threshold_zero_is_uniform) to film g, as pt_render would. */
+static void rebuild_samples(const pt_scene *s, const pt_render_desc *d, const pt_camera *cam, pt_film *g, int x, int y,
+                            uint32_t first, uint32_t n)
+{
+    uint32_t pix = (uint32_t)(y * d->width + x), k;
+    for (k = first; k < first + n; k++) {
+        pt_rng rng = pt_rng_for_sample(d->seed, pix, k);
+        float jx = pt_rng_float(&rng), jy = pt_rng_float(&rng);
+        float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
+        pt_color L = pt_trace_path(s, d, pt_camera_ray(cam, (float)x + jx, (float)y + jy, l1, l2), &rng, NULL);
+        double v[3];
+        int c;
+        v[0] = L.x; v[1] = L.y; v[2] = L.z;
+        for (c = 0; c < 3; c++) {
+            g->sum[3 * pix + c] += v[c];
+            g->sum_sq[3 * pix + c] += v[c] * v[c];
+            if (k & 1u) g->sum_odd[3 * pix + c] += v[c];
+        }
+        g->count[pix]++;
+    }
+}
+
+static void pilot_film_is_uniform_prefix(test_ctx *t)
+{
+    /* The pilot's samples are not in the image: pixel i of the film holds exactly the uniform
+       render's first n_i samples (rebuilt here from pt_trace_path), 2 <= n_i <= cap - pilot; the
+       stats count the pilot's samples too. Also into a film that already holds 3 samples per
+       pixel (a resumed render: samples 3 .. 3 + n_i - 1). */
+    int resumed;
+    for (resumed = 0; resumed < 2; resumed++) {
+        pt_render_desc d;
+        pt_scene *s = room_scene(&d, 20, 16, 24);
+        pt_film f, g;
+        pt_render_stats st;
+        pt_camera cam;
+        int x, y, bad_range = 0;
+        uint64_t film_samples = 0;
+        const uint32_t base = resumed ? 3u : 0u;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.3f;
+        d.adaptive_min_spp = 6;
+        d.samples_per_pass = 4;
+        if (!CHECK(t, pt_film_init(&f, d.width, d.height) == PT_OK && pt_film_init(&g, d.width, d.height) == PT_OK, "films")) {
+            pt_scene_destroy(s);
+            return;
+        }
+        pt_camera_init(&cam, &d.camera, d.width, d.height);
+        if (resumed) {
+            pt_render_desc u = d;
+            u.adaptive_threshold = 0.0f;
+            u.samples_per_pixel = 3;
+            CHECK(t, pt_render(s, &u, &f, &st) == PT_OK, "the first 3 samples: %s", st.error);
+        }
+        if (CHECK(t, pt_render(s, &d, &f, &st) == PT_OK, "pilot render: %s", st.error)) {
+            for (y = 0; y < d.height; y++)
+                for (x = 0; x < d.width; x++) {
+                    uint32_t n = f.count[y * d.width + x] - base;
+                    bad_range += n < 2u || n > 24u - 6u;
+                    film_samples += n;
+                    rebuild_samples(s, &d, &cam, &g, x, y, 0, base + n);
+                }
+            CHECK(t, tu_film_equal(&f, &g), "%s: the film is not the uniform render's first n_i samples",
+                  resumed ? "resumed" : "fresh");
+            CHECK(t, bad_range == 0, "%d pixels outside 2..18 film samples", bad_range);
+            CHECK(t, st.samples == film_samples + 6u * 20u * 16u, "stats.samples %llu, want %llu film + %u pilot samples",
+                  (unsigned long long)st.samples, (unsigned long long)film_samples, 6u * 20u * 16u);
+            CHECK(t, st.min_spp < st.max_spp, "every pixel got %u samples: no adaptation", st.min_spp);
+            test_note(t, "%s: film %u..%u spp, %llu samples with the pilot's", resumed ? "resumed" : "fresh", st.min_spp,
+                      st.max_spp, (unsigned long long)st.samples);
+        }
+        pt_film_free(&f);
+        pt_film_free(&g);
+        pt_scene_destroy(s);
+    }
+}
+
+static void pilot_plan_ignores_film(test_ctx *t)
+{
+    /* The plan depends on the pilot alone: a film holding a firefly (one injected sample of 50
+       after 8 uniform ones, as in own_samples_dilute_fireflies) gets exactly the samples per
+       pixel that the same film without it gets. With a pilot that leaves no room (pilot + 2 >
+       samples_per_pixel) the render is uniform, bit for bit. adaptive_neighbours_only = 1 is
+       adaptive_mode PT_ADAPTIVE_NEIGHBOURS, bit for bit. */
+    pt_render_desc d;
+    pt_scene *s = half_easy_scene(&d);
+    pt_film a, b;
+    pt_render_stats st;
+    int c, diff = 0;
+    size_t i, p = 8 * 64 + 10;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.samples_per_pixel = 8;
+    if (tu_render_into(t, s, &d, &a, &st, "uniform 8 spp") && tu_render_into(t, s, &d, &b, &st, "uniform 8 spp")) {
+        pt_render_desc e = d;
+        for (c = 0; c < 3; c++) {
+            b.sum[3 * p + c] += 50.0;
+            b.sum_sq[3 * p + c] += 2500.0;
+        }
+        b.count[p] += 1;
+        e.samples_per_pixel = 64;
+        e.adaptive_threshold = 0.05f;
+        e.adaptive_min_spp = 4;
+        e.seed += 1;
+        if (CHECK(t, pt_render(s, &e, &a, &st) == PT_OK && pt_render(s, &e, &b, &st) == PT_OK, "pilot renders: %s",
+                  st.error)) {
+            for (i = 0; i < 64u * 16u; i++) diff += b.count[i] - (i == p) != a.count[i];
+            CHECK(t, diff == 0, "%d pixels took other counts with a firefly in the film", diff);
+            CHECK(t, a.count[p] - 8u < 64u - 4u, "the firefly pixel took %u samples: no adaptation", a.count[p] - 8u);
+        }
+    }
+    pt_film_free(&a);
+    pt_film_free(&b);
+    {
+        pt_render_desc e = d, n;
+        pt_film u;
+        e.samples_per_pixel = 9;
+        e.adaptive_threshold = 0.05f;
+        e.adaptive_min_spp = 8;
+        n = e;
+        n.adaptive_threshold = 0.0f;
+        if (tu_render_into(t, s, &e, &a, &st, "pilot, no room") && tu_render_into(t, s, &n, &u, NULL, "uniform"))
+            CHECK(t, tu_film_equal(&a, &u) && st.pixels_converged == 0, "pilot without room: not the uniform render");
+        pt_film_free(&a);
+        pt_film_free(&u);
+        e.samples_per_pixel = 32;
+        e.adaptive_mode = PT_ADAPTIVE_NEIGHBOURS;
+        n = e;
+        n.adaptive_mode = PT_ADAPTIVE_PILOT;
+        n.adaptive_neighbours_only = 1;
+        if (tu_render_into(t, s, &e, &a, NULL, "neighbours") && tu_render_into(t, s, &n, &b, NULL, "neighbours_only 1"))
+            CHECK(t, tu_film_equal(&a, &b), "adaptive_neighbours_only = 1 differs from PT_ADAPTIVE_NEIGHBOURS");
+        pt_film_free(&a);
+        pt_film_free(&b);
+    }
+    pt_scene_destroy(s);
+}
+
 static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
 {
     int i;
@@ -835,6 +972,8 @@ const test_case test_adaptive_cases[] = {
     TEST_CASE(mean_matches_uniform),
     TEST_CASE(own_samples_dilute_fireflies),
     TEST_CASE(pilot_unbiased),
+    TEST_CASE(pilot_film_is_uniform_prefix),
+    TEST_CASE(pilot_plan_ignores_film),
     TEST_CASE(threads_bit_identical),
     TEST_CASE(threshold_zero_is_uniform),
     TEST_CASE(invalid_settings),
