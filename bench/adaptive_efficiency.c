@@ -9,7 +9,8 @@
      build/adaptive_efficiency scenes/cornell.scene bench/ref/cornell.pfm --floor 3.14e-4 \
          --spp 128 --seeds 5 --thresholds 0.07,0.08,0.09
    Prints one line per configuration: uniform at --spp, then each mode (pilot, own-samples) at
-   each threshold with a cap of 4 x --spp; the last column is the efficiency over uniform's. */
+   each threshold with a cap of 4 x --spp; the last column is the efficiency over uniform's.
+   --min-spp N sets adaptive_min_spp (the pilot's size), --pilot-only skips own-samples. */
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
 #define PDFTRACE_SCENE_IMPLEMENTATION
@@ -86,7 +87,7 @@ static int measure(const pt_scene *s, const pt_render_desc *d, const float *ref,
 int main(int argc, char **argv)
 {
     const char *path = NULL, *refpath = NULL;
-    int spp = 128, seeds = 5, nt = 0, i, k, m, w, h;
+    int spp = 128, seeds = 5, nt = 0, i, k, m, w, h, min_spp = 0, modes = 3;
     double floor_ = 0.0, T[MAX_T], base_eff = 0.0;
     char err[1024];
     pt_scenefile sf;
@@ -98,6 +99,8 @@ int main(int argc, char **argv)
         if (!strcmp(a, "--spp") && v) spp = atoi(argv[++i]);
         else if (!strcmp(a, "--seeds") && v) seeds = atoi(argv[++i]);
         else if (!strcmp(a, "--floor") && v) floor_ = atof(argv[++i]);
+        else if (!strcmp(a, "--min-spp") && v) min_spp = atoi(argv[++i]);
+        else if (!strcmp(a, "--pilot-only")) modes = 2;
         else if (!strcmp(a, "--thresholds") && v) {
             char *p = argv[++i];
             while (*p && nt < MAX_T) {
@@ -122,7 +125,7 @@ int main(int argc, char **argv)
     base.threads = 1;
     printf("%s %dx%d, 1 thread, %d seeds (medians); uniform %d spp, adaptive cap %d spp\n", path, w, h, seeds, spp, 4 * spp);
     printf("| mode | threshold | spp (mean, pilot included) | CPU s | relMSE | efficiency / uniform |\n|---|---:|---:|---:|---:|---:|\n");
-    for (m = 0; m < 3; ++m)
+    for (m = 0; m < modes; ++m)
         for (k = 0; k < (m ? nt : 1); ++k) {
             double rel[MAX_SEEDS], sec[MAX_SEEDS], eff[MAX_SEEDS], smp[MAX_SEEDS], e;
             char tbuf[32];
@@ -133,6 +136,7 @@ int main(int argc, char **argv)
                 d.samples_per_pixel = m ? 4 * spp : spp;
                 if (m) {
                     d.adaptive_threshold = (float)T[k];
+                    d.adaptive_min_spp = min_spp;
                     d.adaptive_mode = m == 1 ? PT_ADAPTIVE_PILOT : PT_ADAPTIVE_OWN_SAMPLES;
                 }
                 if (!measure(scene, &d, ref, floor_, &rel[j], &sec[j], &smp[j])) return 1;
