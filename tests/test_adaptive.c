@@ -6,18 +6,22 @@
    keeps sampling (its noise is planned from its neighbours); the allocation is per pixel, finer
    than 4x4 blocks; samples go to pixels in proportion to the square root
    of their noise (Neyman) and the image reaches the threshold, by the test's own error estimate
-   from the film's half-buffers; with adaptive_neighbours_only the image mean agrees with a
-   uniform render (z-tests, with most pixels stopped early on a scene with caustics), and by
-   default (a pixel's own samples count) it is within the documented stopping bias and takes
-   fewer samples; a pixel that drew a firefly samples on by default and stops with
-   adaptive_neighbours_only (its 24 neighbours sample on instead); films are bit-identical across thread counts, tile sizes and host
+   from the film's half-buffers; the default, planned from a discarded pilot, is unbiased (a
+   paired t-test on a scene where re-planning from a pixel's own samples is ~30 % dark, which the
+   same test must catch), its film is the uniform render's first n_i samples and its plan ignores
+   the film's samples; with PT_ADAPTIVE_NEIGHBOURS the image mean agrees with a
+   uniform render (z-tests, with most pixels stopped early on a scene with caustics), and with
+   PT_ADAPTIVE_OWN_SAMPLES it is within the documented stopping bias and takes
+   fewer samples; a pixel that drew a firefly samples on with own samples and stops with
+   neighbours only (its 24 neighbours sample on instead); films are bit-identical across thread counts, tile sizes and host
    parallel-fors; threshold 0 is the uniform path bit for bit (checked against a render rebuilt
    here from pt_trace_path); invalid settings are rejected before anything is rendered.
    skips: each PT_SKIP_* bit's general path gives the same image: bit for bit where the skip is
    exact, within noise (per-region z-tests) where it draws random numbers differently.
 
    Statistical checks use fixed seeds. The z-tests of this file form one family: alpha = 0.01,
-   Sidak-corrected over ADAPTIVE_Z_TESTS comparisons. */
+   Sidak-corrected over ADAPTIVE_Z_TESTS comparisons; pilot_unbiased's t-test is its own, at
+   alpha = 0.01. */
 #include "test_util.h"
 
 #ifndef PDFTRACE_NO_THREADS
