@@ -6080,7 +6080,7 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
    samples. The film's k-th sample is the uniform render's k-th (same seed, same index). Kept in
    the estimate, the pilot would bias it: a pilot that drew a firefly plans more samples that
    dilute it, one that drew none plans fewer (the stopping bias again). Re-planning from the film
-   is not allowed here for the same reason. Measured gain and bias: docs/internals.md. */
+   is not allowed here for the same reason. Measured gain and bias: docs/design.md. */
 #define PT__ADAPTIVE_FLOOR 2 /* film samples every pixel gets in pilot mode: its variance stays defined */
 
 /* Own samples or not. The allocation above minimises the expected error; the error of the one
@@ -6412,7 +6412,7 @@ static int pt__adaptive_init(pt__adaptive *ad, const pt_render_desc *d, const pt
 }
 static void pt__adaptive_free(pt__adaptive *ad)
 {
-    if (ad->pilot_film.sum) pt_film_free(&ad->pilot_film);
+    pt_film_free(&ad->pilot_film);
     PT_FREE(ad->start);
     PT_FREE(ad->want);
     PT_FREE(ad->step);
