@@ -124,13 +124,14 @@
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
    watertight-triangle set-up, as the only path.
-   Adaptive sampling (pt_render_desc.adaptive_threshold) skips pixels whose estimate has
-   converged: see section 8. By default a pixel's own samples count in its noise estimate, which
-   lowers the image's error and biases it dark: pixels that have not yet drawn a rare bright
-   sample stop sooner, so caustics and fireflies come out a little dark, more in some regions and
-   at the image border, less as samples grow; adaptive_neighbours_only = 1 plans each pixel from
-   its neighbours only (a smaller bias, more samples for the same error). The measured bias of
-   both: docs/internals.md, "Adaptive sampling". For a reference image, render uniformly.
+   Adaptive sampling (pt_render_desc.adaptive_threshold) gives noisy pixels more samples than
+   quiet ones: see section 8. The default (PT_ADAPTIVE_PILOT) plans every pixel's samples once,
+   from a separate pilot render whose samples are then discarded, so the image keeps the uniform
+   render's expectation. PT_ADAPTIVE_OWN_SAMPLES re-plans between passes from the image's own
+   samples: a lower error for the time, but biased dark (pixels that have not yet drawn a rare
+   bright sample stop sooner: caustics and fireflies come out up to a few % dark in some
+   regions); PT_ADAPTIVE_NEIGHBOURS (adaptive_neighbours_only = 1) leaves a pixel's own samples
+   out of its estimate, with a smaller bias. Measured: docs/internals.md, "Adaptive sampling".
 */
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
@@ -810,6 +811,15 @@ typedef int (*pt_progress_fn)(void *user, const pt_progress *progress);
 typedef void (*pt_job_fn)(void *job_data, int index);
 typedef void (*pt_parallel_for_fn)(void *user, int count, pt_job_fn job, void *job_data);
 
+/* How adaptive sampling plans (pt_render_desc.adaptive_mode; section 8 of the implementation). */
+typedef enum pt_adaptive_mode {
+    PT_ADAPTIVE_PILOT = 0,        /* unbiased: adaptive_min_spp pilot samples per pixel, rendered
+                                     apart and discarded, fix each pixel's count in the image once */
+    PT_ADAPTIVE_OWN_SAMPLES = 1,  /* biased dark: re-planned between passes from the image's samples,
+                                     a pixel's own included (1 of the 25 of its 5x5 neighbourhood) */
+    PT_ADAPTIVE_NEIGHBOURS = 2    /* biased, less: re-planned, a pixel's own samples left out */
+} pt_adaptive_mode;
+
 /* The most copies pt_render_desc.indirect_paths may ask for. */
 #define PT_INDIRECT_PATHS_MAX 8
 
@@ -845,27 +855,32 @@ typedef struct pt_render_desc {
     void *guide_user;
     float guide_weight;          /* in [0, 1); 0 with a guide: 0.5 */
     /* Adaptive sampling (see section 8 of the implementation): each pixel's noise is estimated
-       from the sample variances of the pixels of its 5x5 neighbourhood (with or without itself:
-       adaptive_neighbours_only); samples go to the pixels in proportion to the square root of
-       their noise per unit of cost (the allocation that minimises the image's mean relative
-       squared error for the time spent), and a pixel stops once it has its share.
-       samples_per_pixel is the most any pixel gets; the default samples_per_pass becomes
-       samples_per_pixel / 64 (more for each pixel once few pixels still sample). */
+       from the sample variances of the pixels of its 5x5 neighbourhood; samples go to the pixels
+       in proportion to the square root of their noise per unit of cost (the allocation that
+       minimises the image's mean relative squared error for the time spent). By default
+       (adaptive_mode PT_ADAPTIVE_PILOT) the noise comes from a pilot render that is discarded,
+       so the image is unbiased; the other modes plan from the image's own samples (biased).
+       samples_per_pixel is the most any pixel gets (the pilot's samples included); the default
+       samples_per_pass becomes samples_per_pixel / 64 (more for each pixel once few pixels
+       still sample). */
     float adaptive_threshold;    /* 0: off (every pixel gets samples_per_pixel). Otherwise a finite
                                     value > 0: the RMS relative error sqrt(mean((x-r)^2/(r^2+0.01)))
                                     the image should reach; e.g. 0.05 */
-    int adaptive_min_spp;        /* samples every pixel gets before it can stop, >= 2; 0: a default
-                                    of max(16, samples_per_pixel / 16); capped at samples_per_pixel */
-    int adaptive_check_passes;   /* the shares are re-planned every this many passes, >= 1; 0: 1 */
-    int adaptive_neighbours_only; /* 0: a pixel's noise estimate counts its own samples (as 1 of the
-                                    25 pixels of its 5x5 neighbourhood), so a pixel that drew a rare
-                                    bright sample (a firefly) samples on and dilutes it: the lowest
+    int adaptive_min_spp;        /* PT_ADAPTIVE_PILOT: the pilot's samples per pixel (the image then
+                                    gets 2 to samples_per_pixel - this per pixel; with fewer than
+                                    this + 2 samples_per_pixel the render is uniform); other modes:
+                                    samples every pixel gets before it can stop. >= 2; 0: a default
+                                    of max(16, samples_per_pixel / 16) */
+    int adaptive_check_passes;   /* re-planning modes: the shares are re-planned every this many
+                                    passes, >= 1; 0: 1 (PT_ADAPTIVE_PILOT plans once) */
+    int adaptive_neighbours_only; /* 1: the same as adaptive_mode = PT_ADAPTIVE_NEIGHBOURS (kept for
+                                    existing callers; adaptive_mode must then be 0 or that) */
+    pt_adaptive_mode adaptive_mode; /* 0: PT_ADAPTIVE_PILOT, unbiased. PT_ADAPTIVE_OWN_SAMPLES: a
+                                    pixel that drew a firefly samples on and dilutes it: the lowest
                                     error, but biased dark (pixels that drew none stop sooner; less
-                                    as samples grow). 1: only the 24 other pixels, so that a pixel's
-                                    stopping does not depend on its own samples directly: a smaller
-                                    bias, at more samples for the same error (both measured:
-                                    docs/internals.md, "Adaptive sampling"). For reference images
-                                    render uniformly (section 8) */
+                                    as samples grow). PT_ADAPTIVE_NEIGHBOURS: only the 24 other
+                                    pixels, a smaller bias (all measured: docs/internals.md,
+                                    "Adaptive sampling") */
     unsigned disable_skips;      /* PT_SKIP_* bits: force the general path; 0: every skip on; bits
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
@@ -873,14 +888,16 @@ typedef struct pt_render_desc {
 } pt_render_desc;
 
 typedef struct pt_render_stats {
-    uint64_t samples;            /* camera samples taken */
+    uint64_t samples;            /* camera samples taken (an adaptive pilot's included) */
     uint64_t camera_rays, bounce_rays, shadow_rays;
     uint64_t nonfinite_samples;  /* NaN/Inf samples caught, zeroed and counted */
     uint64_t split_paths;        /* extra paths started by splitting (section 7) */
     double seconds;              /* wall clock */
     int passes, threads;
-    uint64_t pixels_converged;   /* adaptive: pixels that stopped before samples_per_pixel */
-    uint32_t min_spp, max_spp;   /* fewest and most samples this render added to a pixel */
+    uint64_t pixels_converged;   /* adaptive: pixels that stopped before samples_per_pixel (the
+                                    pilot's samples counted) */
+    uint32_t min_spp, max_spp;   /* fewest and most samples this render added to a pixel (to the
+                                    film: without the pilot's) */
     double estimated_error;      /* the film's estimated RMS relative error at the end, the square
                                     root of pt_film_error over the whole image; -1 if unknown (a
                                     pixel with fewer than 2 samples) */
@@ -5842,9 +5859,10 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    added to the pixel in sample order by the one job that owns the tile, so the image does not
    depend on the thread count or the order in which tiles run. Even-numbered samples also go to
    half-buffer A, odd-numbered ones to B (the film keeps sum and sum_odd; A = sum - sum_odd).
-   With adaptive sampling (adaptive_threshold > 0) the samples each pixel still takes are
-   re-planned between passes from the film alone (Neyman's allocation, below), and a pass's
-   jobs are chunks of pixels of about equal work instead of tiles. pt_render validates the
+   With adaptive sampling (adaptive_threshold > 0) the samples each pixel takes are planned
+   between passes (Neyman's allocation, below): once from a discarded pilot render by default,
+   or re-planned from the film itself; a planned pass's jobs are chunks of pixels of about equal
+   work instead of tiles. pt_render validates the
    desc, sets the render up, runs the passes and sums up their statistics; the film's own
    functions (init, resolve, error estimate) close the section.
    ------------------------------------------------------------------------------------------ */
@@ -6023,7 +6041,7 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
     return 1;
 }
 
-/* Adaptive sampling (adaptive_threshold = T > 0), planned per pixel from the film alone.
+/* Adaptive sampling (adaptive_threshold = T > 0), planned per pixel.
    Goal: the image's relMSE, mean_i v_i / n_i over pixels i with v_i = Var(one sample) / (r_i^2 +
    0.01) averaged over the channels (the regularised relative error of rendering benchmarks; r_i
    the pixel's true value) and n_i its samples, should reach T^2 for the least time. With c_i the
@@ -6034,8 +6052,9 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
    uniform sampling for the same mean error.) How well v_i can be known bounds the gain: where
    rare bright samples (caustics) make most of the variance, a pixel's own variance is mostly
    noise even after thousands of samples, so v_i is averaged over a neighbourhood.
-   Estimates, every adaptive_check_passes passes once this render has given every pixel
-   adaptive_min_spp samples (default max(16, samples_per_pixel / 16)): s_i^2, the sample
+   Estimates, from the pilot (PT_ADAPTIVE_PILOT, below), else from the film every
+   adaptive_check_passes passes once this render has given every pixel adaptive_min_spp
+   samples (default max(16, samples_per_pixel / 16)): s_i^2, the sample
    variance of pixel i per channel (sum_sq, n - 1 degrees of freedom), divided by m^2 + 0.01
    with m the 3x3 mean of the pixel means (the pixel's own mean is a poor stand-in for r: a
    pixel that caught a firefly would divide it away); c_i = the rays pixel i traced per sample
@@ -6049,6 +6068,21 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
 #define PT__ADAPTIVE_R 2
 #define PT__ADAPTIVE_BOX ((2 * PT__ADAPTIVE_R + 1) * (2 * PT__ADAPTIVE_R + 1))
 
+/* The pilot (PT_ADAPTIVE_PILOT, the default). A pixel's estimate is the plain mean of the film's
+   samples, so it is unbiased only if the number of them, n_i, does not depend on their values:
+   planned from the film itself, n_i is a stopping time and E[mean] != the pixel's value (below).
+   So the pilot's adaptive_min_spp samples per pixel go to a film of their own, drawn with a
+   seed hashed from the render's (independent of the film's samples with either sampler); the
+   plan (n_i, clamped to [2, samples_per_pixel - pilot]) is made once from the pilot alone and
+   the pilot is then discarded. The film's samples are then drawn after, and independently of,
+   everything n_i depends on, so E[film mean_i | n_i] = the pixel's value for every n_i >= 1, and
+   unconditionally too (the tower rule): the image is unbiased, at the cost of the pilot's
+   samples. The film's k-th sample is the uniform render's k-th (same seed, same index). Kept in
+   the estimate, the pilot would bias it: a pilot that drew a firefly plans more samples that
+   dilute it, one that drew none plans fewer (the stopping bias again). Re-planning from the film
+   is not allowed here for the same reason. Measured gain and bias: docs/design.md. */
+#define PT__ADAPTIVE_FLOOR 2 /* film samples every pixel gets in pilot mode: its variance stays defined */
+
 /* Own samples or not. The allocation above minimises the expected error; the error of the one
    image rendered is what is judged, and with rare bright samples they differ: a pixel that drew
    a firefly has a large error now, and more samples there dilute it. With its own variance in
@@ -6059,17 +6093,21 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
    rare bright samples, so the image is biased dark, and the bias shrinks as the samples grow
    (each draw moves a pixel's mean by less). Leaving the pixel out (adaptive_neighbours_only)
    makes the bias smaller but not zero: a pixel's own samples still enter L and its neighbours'
-   normalisation m. The default counts the own samples: the error, bias included, is what
-   adaptive sampling is for; a reference image should be rendered uniformly. The measured bias
-   and gain of both modes: docs/internals.md, "Adaptive sampling".
+   normalisation m. PT_ADAPTIVE_OWN_SAMPLES counts the own samples, for the lowest error with
+   the bias included. The measured bias and gain of the modes: docs/internals.md, "Adaptive
+   sampling".
    Every decision is taken between passes on the calling thread from the film and the rays
    counted per pixel, so the image stays independent of the thread count and job order.
-   Memory: 124 bytes per pixel during an adaptive render, besides the film. */
+   Memory: 124 bytes per pixel during an adaptive render, besides the film (200 with the
+   pilot's film). */
 /* Adaptive sampling state of one pt_render call. */
 typedef struct pt__adaptive {
     double target;             /* threshold^2: the relMSE the image should reach */
     int min_spp, check_passes, per_pass, cap, width, height;
     int self;                  /* 1: a pixel's own noise is in its 5x5 mean; 0: only the neighbours' */
+    int pilot;                 /* PT_ADAPTIVE_PILOT: the pilot's samples per pixel; 0: re-planning */
+    pt_film pilot_film;        /* the pilot's samples (pilot > 0), planned from, never resolved */
+    pt_film *film;             /* the caller's film, which the passes after the pilot render into */
     uint32_t *start;           /* per pixel: the film's count when this render began */
     uint32_t *want;            /* per pixel: samples it should still take, from the last check */
     uint32_t *step;            /* per pixel: samples it takes in the next pass (0: none) */
@@ -6117,23 +6155,29 @@ static void pt__box_mean(const double *v, double *out, double *tmp, int w, int h
    found by Newton's method safeguarded by bisection (the mean is convex and decreasing in L);
    L = 0 (every pixel stops) when the target is already reached, and every pixel with v_i > 0
    samples to its cap when the target is out of reach. want_i = round(n_i - count_i), the
-   samples pixel i should still take (pt__adaptive_plan hands them out). */
+   samples pixel i should still take (pt__adaptive_plan hands them out). With the pilot
+   (a->pilot > 0) the variances and costs come from the pilot's film, count_i is the film's
+   (which the pilot did not touch), n_i >= count_i + 2 and the cap is lower by the pilot's
+   samples. */
 static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
 {
     size_t i, np = (size_t)a->width * (size_t)a->height;
     double f_lo = 0.0, f_hi = 0.0, target_sum, lam, lam_lo = HUGE_VAL, lam_hi = 0.0;
+    const pt_film *src = a->pilot ? &a->pilot_film : film; /* the samples the plan is made from */
+    const double least = a->pilot ? (double)PT__ADAPTIVE_FLOOR : 0.0, cap = (double)(a->cap - a->pilot);
     int iter, all_cap = 0;
     int c;
     for (i = 0; i < np && !all_cap; ++i) {
-        if (film->count[i] < 2) { all_cap = 1; break; } /* no variance yet (a resumed film's edge case) */
-        for (c = 0; c < 3; ++c) a->mean[c * np + i] = film->sum[3 * i + c] / (double)film->count[i];
+        if (src->count[i] < 2) { all_cap = 1; break; } /* no variance yet (a resumed film's edge case) */
+        for (c = 0; c < 3; ++c) a->mean[c * np + i] = src->sum[3 * i + c] / (double)src->count[i];
     }
     for (c = 0; c < 3 && !all_cap; ++c) pt__box_mean(a->mean + c * np, a->mbox + c * np, a->tmp, a->width, a->height, 1, 1);
     for (i = 0; i < np && !all_cap; ++i) {
-        double n = (double)film->count[i], v = 0.0, added = (double)(film->count[i] - a->start[i]);
+        double n = (double)src->count[i], v = 0.0;
+        double added = a->pilot ? n : (double)(film->count[i] - a->start[i]); /* the samples a->rays counts */
         for (c = 0; c < 3; ++c) {
             double m = a->mean[c * np + i], r = a->mbox[c * np + i];
-            double s2 = (film->sum_sq[3 * i + c] - film->sum[3 * i + c] * m) / (n - 1.0);
+            double s2 = (src->sum_sq[3 * i + c] - src->sum[3 * i + c] * m) / (n - 1.0);
             v += (s2 > 0.0 ? s2 : 0.0) / (r * r + 0.01);
         }
         a->noise[i] = v / 3.0;
@@ -6150,8 +6194,8 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
         /* r_i = sqrt(v_i / c_i) into tmp; the bracket of L: below lam_lo every n_i sits at its
            count, above lam_hi at its cap */
         for (i = 0; i < np; ++i) {
-            double r = sqrt(a->var[i] / a->cpp[i]), lo = (double)film->count[i];
-            double hi = (double)a->start[i] + (double)a->cap;
+            double r = sqrt(a->var[i] / a->cpp[i]), lo = (double)film->count[i] + least;
+            double hi = (double)a->start[i] + cap;
             a->tmp[i] = r;
             a->lo[i] = lo;
             a->hi[i] = hi > lo ? hi : lo;
@@ -6190,15 +6234,16 @@ static void pt__adaptive_check(pt__adaptive *a, const pt_film *film)
         }
         if (!all_cap)
             for (i = 0; i < np; ++i) {
-                double room = (double)a->start[i] + (double)a->cap - (double)film->count[i];
+                double room = (double)a->start[i] + cap - (double)film->count[i];
                 double want = a->tmp[i] > 0.0 ? floor(lam * a->tmp[i] - (double)film->count[i] + 0.5) : 0.0;
+                if (want < least) want = least;
                 if (want > room) want = room;
                 a->want[i] = want > 0.0 ? (uint32_t)want : 0u;
             }
     }
     if (all_cap)  /* an unknown or overflowing estimate: every pixel samples on to its cap */
         for (i = 0; i < np; ++i) {
-            a->want[i] = a->start[i] + (uint32_t)a->cap - film->count[i];
+            a->want[i] = a->start[i] + (uint32_t)(a->cap - a->pilot) - film->count[i];
             a->cpp[i] = 1.0;
         }
 }
@@ -6297,6 +6342,12 @@ static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt
     if (d->adaptive_neighbours_only != 0 && d->adaptive_neighbours_only != 1)
         return pt__msg(err, n, bad, "pt_render_desc.adaptive_neighbours_only = %d: must be 0 or 1",
                        d->adaptive_neighbours_only);
+    if ((int)d->adaptive_mode < 0 || (int)d->adaptive_mode > (int)PT_ADAPTIVE_NEIGHBOURS)
+        return pt__msg(err, n, bad, "pt_render_desc.adaptive_mode = %d: must be PT_ADAPTIVE_PILOT (0), "
+                       "PT_ADAPTIVE_OWN_SAMPLES (1) or PT_ADAPTIVE_NEIGHBOURS (2)", (int)d->adaptive_mode);
+    if (d->adaptive_neighbours_only && d->adaptive_mode == PT_ADAPTIVE_OWN_SAMPLES)
+        return pt__msg(err, n, bad, "pt_render_desc.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES: "
+                       "adaptive_neighbours_only = 1 asks for PT_ADAPTIVE_NEIGHBOURS");
     if (s->has_origin && pt__vfinite(d->camera.look_from) && pt__vfinite(d->camera.look_at)) {
         pt_camera_desc local = d->camera; /* traced relative to the scene's origin (pt_scene_commit) */
         local.look_from = pt__to_local(s, local.look_from);
@@ -6326,10 +6377,16 @@ typedef struct pt__render_run {
 static int pt__adaptive_init(pt__adaptive *ad, const pt_render_desc *d, const pt_film *film, int spp, int per_pass)
 {
     size_t np = (size_t)d->width * (size_t)d->height;
+    pt_adaptive_mode mode = d->adaptive_neighbours_only ? PT_ADAPTIVE_NEIGHBOURS : d->adaptive_mode;
     ad->target = (double)d->adaptive_threshold * (double)d->adaptive_threshold;
     ad->min_spp = d->adaptive_min_spp ? d->adaptive_min_spp : (spp / 16 > 16 ? spp / 16 : 16);
     ad->check_passes = d->adaptive_check_passes ? d->adaptive_check_passes : 1;
-    ad->self = !d->adaptive_neighbours_only;
+    ad->self = mode != PT_ADAPTIVE_NEIGHBOURS;
+    if (mode == PT_ADAPTIVE_PILOT) { /* no room beside the pilot: uniform (no check is ever reached) */
+        if (ad->min_spp + PT__ADAPTIVE_FLOOR <= spp) ad->pilot = ad->min_spp;
+        else ad->min_spp = spp;
+        if (ad->pilot && pt_film_init(&ad->pilot_film, d->width, d->height) != PT_OK) return 0;
+    }
     ad->per_pass = per_pass;
     ad->cap = spp;
     ad->width = d->width;
@@ -6355,6 +6412,7 @@ static int pt__adaptive_init(pt__adaptive *ad, const pt_render_desc *d, const pt
 }
 static void pt__adaptive_free(pt__adaptive *ad)
 {
+    pt_film_free(&ad->pilot_film);
     PT_FREE(ad->start);
     PT_FREE(ad->want);
     PT_FREE(ad->step);
@@ -6426,6 +6484,13 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
     if (!ps->tile_stats || !ps->tile_samples || !ps->tile_done || !r->job_list || !adaptive_ok)
         return pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory (%d x %d pixels)", d->width,
                        d->height);
+    if (ad->pilot) { /* the pilot's passes first, into its own film with its own seed (section 8) */
+        ad->film = film;
+        ps->film = &ad->pilot_film;
+        ps->seed = pt__mix64(d->seed ^ 0x3c6ef372fe94f82bULL);
+        r->passes = ad->pilot / r->per_pass + (ad->pilot % r->per_pass != 0) + (r->spp - ad->pilot) / r->per_pass +
+                    ((r->spp - ad->pilot) % r->per_pass != 0);
+    }
     for (tile = 0; tile < tiles; ++tile) r->job_list[tile] = tile;
     r->jobs = tiles;
     ps->jobs = r->job_list;
@@ -6445,6 +6510,9 @@ static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_des
     for (pass = 0; pass < r->passes && r->jobs > 0; ++pass) {
         int all_done = 1, j;
         ps->spp = (pass == r->passes - 1) ? r->spp - r->per_pass * (r->passes - 1) : r->per_pass;
+        if (ad->pilot) /* the pilot's passes end at exactly its count; the planned ones ignore ps->spp */
+            ps->spp = r->added < (uint32_t)ad->pilot && ad->pilot - (int)r->added < r->per_pass ? ad->pilot - (int)r->added
+                                                                                                : r->per_pass;
         for (j = 0; j < r->jobs; ++j) ps->tile_done[r->job_list[j]] = 0;
         r->used = pt__run_pass(ps, r->jobs, r->threads, d);
         for (j = 0; j < r->jobs; ++j) {
@@ -6470,7 +6538,13 @@ static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_des
             if (d->progress(d->progress_user, &pr)) return PT_ERROR_CANCELLED;
         }
         if (r->adaptive && pass + 1 < r->passes && r->added >= (uint32_t)ad->min_spp) {
-            if (!ps->pixel_spp || (pass + 1) % ad->check_passes == 0) pt__adaptive_check(ad, ps->film);
+            if (!ps->pixel_spp && ad->pilot) { /* the pilot is done: plan once from it, then render the film */
+                ps->film = ad->film;
+                ps->seed = d->seed;
+                pt__adaptive_check(ad, ps->film);
+            } else if (!ps->pixel_spp || (!ad->pilot && (pass + 1) % ad->check_passes == 0)) {
+                pt__adaptive_check(ad, ps->film);
+            }
             r->jobs = pt__adaptive_plan(ad, ps, r->job_list);
         }
     }
@@ -6494,7 +6568,7 @@ static void pt__render_end_stats(const pt__adaptive *ad, const pt_render_desc *d
         r->total.max_spp = 0;
         for (i = 0; i < np; ++i) {
             uint32_t n = film->count[i] - ad->start[i];
-            if (n < (uint32_t)r->spp) r->total.pixels_converged++;
+            if (n + (ad->pilot ? ad->pilot_film.count[i] : 0u) < (uint32_t)r->spp) r->total.pixels_converged++;
             if (n < r->total.min_spp) r->total.min_spp = n;
             if (n > r->total.max_spp) r->total.max_spp = n;
         }

@@ -6,18 +6,22 @@
    keeps sampling (its noise is planned from its neighbours); the allocation is per pixel, finer
    than 4x4 blocks; samples go to pixels in proportion to the square root
    of their noise (Neyman) and the image reaches the threshold, by the test's own error estimate
-   from the film's half-buffers; with adaptive_neighbours_only the image mean agrees with a
-   uniform render (z-tests, with most pixels stopped early on a scene with caustics), and by
-   default (a pixel's own samples count) it is within the documented stopping bias and takes
-   fewer samples; a pixel that drew a firefly samples on by default and stops with
-   adaptive_neighbours_only (its 24 neighbours sample on instead); films are bit-identical across thread counts, tile sizes and host
+   from the film's half-buffers; the default, planned from a discarded pilot, is unbiased (a
+   paired t-test on a scene where re-planning from a pixel's own samples is ~30 % dark, which the
+   same test must catch), its film is the uniform render's first n_i samples and its plan ignores
+   the film's samples; with PT_ADAPTIVE_NEIGHBOURS the image mean agrees with a
+   uniform render (z-tests, with most pixels stopped early on a scene with caustics), and with
+   PT_ADAPTIVE_OWN_SAMPLES it is within the documented stopping bias and takes
+   fewer samples; a pixel that drew a firefly samples on with own samples and stops with
+   neighbours only (its 24 neighbours sample on instead); films are bit-identical across thread counts, tile sizes and host
    parallel-fors; threshold 0 is the uniform path bit for bit (checked against a render rebuilt
    here from pt_trace_path); invalid settings are rejected before anything is rendered.
    skips: each PT_SKIP_* bit's general path gives the same image: bit for bit where the skip is
    exact, within noise (per-region z-tests) where it draws random numbers differently.
 
    Statistical checks use fixed seeds. The z-tests of this file form one family: alpha = 0.01,
-   Sidak-corrected over ADAPTIVE_Z_TESTS comparisons. */
+   Sidak-corrected over ADAPTIVE_Z_TESTS comparisons; pilot_unbiased's t-test is its own, at
+   alpha = 0.01. */
 #include "test_util.h"
 
 #ifndef PDFTRACE_NO_THREADS
@@ -161,42 +165,51 @@ static pt_scene *room_scene(pt_render_desc *d, int w, int h, int spp)
 static void easy_region_stops(test_ctx *t)
 {
     /* A pixel's noise is planned from the pixels of its 5x5 neighbourhood (itself included: zero
-       here for every emitter pixel). Columns 0-29
-       (every neighbour a zero-variance emitter pixel) stop at the first check; columns 30 and 31
-       are emitter pixels too, but column 32 (half emitter, half noisy wall) is within reach, so
-       they keep sampling (no seam where the noise starts); the noisy pixels would need more than the 64 samples
-       allowed (relative variance 0.16 / 0.26 per sample over half the image: 123 samples for
-       T = 0.05) and all sample to the cap. */
-    pt_render_desc d;
-    pt_scene *s = half_easy_scene(&d);
-    pt_film f;
-    pt_render_stats st;
-    int x, y, bad_easy = 0, bad_rest = 0;
-    uint64_t below = 0;
-    if (!CHECK(t, s != NULL, "scene")) return;
-    d.adaptive_threshold = 0.05f;
-    d.adaptive_min_spp = 8;
-    d.samples_per_pass = 4;
-    if (tu_render_into(t, s, &d, &f, &st, "adaptive")) {
-        for (y = 0; y < 16; y++)
-            for (x = 0; x < 64; x++) {
-                uint32_t n = f.count[y * 64 + x];
-                below += n < 64u;
-                if (x < 30) bad_easy += n != 8u;  /* stopped at the first check, after 8 samples */
-                else bad_rest += n != 64u;
-            }
-        CHECK(t, bad_easy == 0, "%d pixels of columns 0-29 did not stop after 8 samples", bad_easy);
-        CHECK(t, bad_rest == 0, "%d pixels of columns 30-63 (30, 31: near the noise) got fewer than 64 samples", bad_rest);
-        CHECK(t, st.pixels_converged == below && below == 30u * 16u, "stats.pixels_converged %llu, film: %llu below 64 spp",
-              (unsigned long long)st.pixels_converged, (unsigned long long)below);
-        CHECK(t, st.min_spp == 8u && st.max_spp == 64u, "stats spp range %u..%u, want 8..64", st.min_spp, st.max_spp);
-        CHECK(t, st.samples == (uint64_t)30 * 16 * 8 + (uint64_t)34 * 16 * 64, "stats.samples %llu",
-              (unsigned long long)st.samples);
-        test_note(t, "%llu of 1024 pixels stopped at 8 spp, %llu samples", (unsigned long long)st.pixels_converged,
-                  (unsigned long long)st.samples);
+       here for every emitter pixel). Columns 0-29 (every neighbour a zero-variance emitter pixel)
+       stop at once: re-planned from the film (own samples) after the first 8 samples; with the
+       pilot (the default) the film gets the least, 2, after the pilot's 8. Columns 30 and 31 are
+       emitter pixels too, but column 32 (half emitter, half noisy wall) is within reach, so they
+       keep sampling (no seam where the noise starts); the noisy pixels would need more than the
+       64 samples allowed (relative variance 0.16 / 0.26 per sample over half the image: 123
+       samples for T = 0.05) and all sample to the cap (64, or 64 - 8 beside the pilot). */
+    int mode;
+    for (mode = 0; mode < 2; mode++) {
+        pt_render_desc d;
+        pt_scene *s = half_easy_scene(&d);
+        pt_film f;
+        pt_render_stats st;
+        const char *name = mode ? "pilot" : "own samples";
+        const uint32_t easy = mode ? 2u : 8u, cap = mode ? 56u : 64u;
+        int x, y, bad_easy = 0, bad_rest = 0;
+        uint64_t below = 0, want_samples = mode ? 1024u * 8u + 30u * 16u * 2u + 34u * 16u * 56u : 30u * 16u * 8u + 34u * 16u * 64u;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.05f;
+        d.adaptive_min_spp = 8;
+        d.samples_per_pass = 4;
+        d.adaptive_mode = mode ? PT_ADAPTIVE_PILOT : PT_ADAPTIVE_OWN_SAMPLES;
+        if (tu_render_into(t, s, &d, &f, &st, name)) {
+            for (y = 0; y < 16; y++)
+                for (x = 0; x < 64; x++) {
+                    uint32_t n = f.count[y * 64 + x];
+                    below += n < cap;
+                    if (x < 30) bad_easy += n != easy;
+                    else bad_rest += n != cap;
+                }
+            CHECK(t, bad_easy == 0, "%s: %d pixels of columns 0-29 got other than %u samples", name, bad_easy, easy);
+            CHECK(t, bad_rest == 0, "%s: %d pixels of columns 30-63 (30, 31: near the noise) got other than %u samples",
+                  name, bad_rest, cap);
+            CHECK(t, st.pixels_converged == below && below == 30u * 16u, "%s: stats.pixels_converged %llu, film: %llu below %u",
+                  name, (unsigned long long)st.pixels_converged, (unsigned long long)below, cap);
+            CHECK(t, st.min_spp == easy && st.max_spp == cap, "%s: stats spp range %u..%u, want %u..%u", name, st.min_spp,
+                  st.max_spp, easy, cap);
+            CHECK(t, st.samples == want_samples, "%s: stats.samples %llu, want %llu", name, (unsigned long long)st.samples,
+                  (unsigned long long)want_samples);
+            test_note(t, "%s: %llu of 1024 pixels stopped at %u spp, %llu samples", name,
+                      (unsigned long long)st.pixels_converged, easy, (unsigned long long)st.samples);
+        }
+        pt_film_free(&f);
+        pt_scene_destroy(s);
     }
-    pt_film_free(&f);
-    pt_scene_destroy(s);
 }
 
 /* The noisy wall of two_halves_scene (64 x 16 pixels) behind stripes of emitter (radiance 1, two
@@ -228,35 +241,43 @@ static pt_scene *stripes_scene(pt_render_desc *d)
 static void per_pixel_allocation(test_ctx *t)
 {
     /* Noise in 2 of every 8 columns: the middle two columns of each 6-column emitter stripe (no
-       noise within their 5x5 neighbourhood) stop at the first check (8 samples); every other
-       pixel (noisy, or near noise) samples to the cap of 64 (T = 0.03 is out of reach: 25 % of
-       the pixels with relative variance 0.62 per sample would need 170). An allocation in 4x4 blocks would stop no pixel here (every block holds
-       a noisy column). */
-    pt_render_desc d;
-    pt_scene *s = stripes_scene(&d);
-    pt_film f;
-    pt_render_stats st;
-    int x, y, bad_quiet = 0, bad_rest = 0;
-    if (!CHECK(t, s != NULL, "scene")) return;
-    d.adaptive_threshold = 0.03f;
-    d.adaptive_min_spp = 8;
-    d.samples_per_pass = 4;
-    if (tu_render_into(t, s, &d, &f, &st, "adaptive")) {
-        for (y = 0; y < 16; y++)
-            for (x = 0; x < 64; x++) {
-                int quiet = x % 8 == 3 || x % 8 == 4;
-                uint32_t n = f.count[y * 64 + x];
-                if (quiet) bad_quiet += n != 8u;
-                else bad_rest += n != 64u;
-            }
-        CHECK(t, bad_quiet == 0, "%d of 256 stripe-centre pixels did not stop after 8 samples", bad_quiet);
-        CHECK(t, bad_rest == 0, "%d of 768 other pixels got other than 64 samples", bad_rest);
-        CHECK(t, st.pixels_converged == 256u, "stats.pixels_converged %llu, want 256",
-              (unsigned long long)st.pixels_converged);
-        test_note(t, "%llu of 1024 pixels stopped at 8 spp", (unsigned long long)st.pixels_converged);
+       noise within their 5x5 neighbourhood) stop at once (own samples: after 8; pilot: the
+       film's least, 2, after the pilot's 8); every other pixel (noisy, or near noise) samples to
+       the cap (64; 56 beside the pilot: T = 0.03 is out of reach, 25 % of the pixels with
+       relative variance 0.62 per sample would need 170). An allocation in 4x4 blocks would stop
+       no pixel here (every block holds a noisy column). */
+    int mode;
+    for (mode = 0; mode < 2; mode++) {
+        pt_render_desc d;
+        pt_scene *s = stripes_scene(&d);
+        pt_film f;
+        pt_render_stats st;
+        const char *name = mode ? "pilot" : "own samples";
+        const uint32_t quiet_n = mode ? 2u : 8u, cap = mode ? 56u : 64u;
+        int x, y, bad_quiet = 0, bad_rest = 0;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.03f;
+        d.adaptive_min_spp = 8;
+        d.samples_per_pass = 4;
+        d.adaptive_mode = mode ? PT_ADAPTIVE_PILOT : PT_ADAPTIVE_OWN_SAMPLES;
+        if (tu_render_into(t, s, &d, &f, &st, name)) {
+            for (y = 0; y < 16; y++)
+                for (x = 0; x < 64; x++) {
+                    int quiet = x % 8 == 3 || x % 8 == 4;
+                    uint32_t n = f.count[y * 64 + x];
+                    if (quiet) bad_quiet += n != quiet_n;
+                    else bad_rest += n != cap;
+                }
+            CHECK(t, bad_quiet == 0, "%s: %d of 256 stripe-centre pixels got other than %u samples", name, bad_quiet,
+                  quiet_n);
+            CHECK(t, bad_rest == 0, "%s: %d of 768 other pixels got other than %u samples", name, bad_rest, cap);
+            CHECK(t, st.pixels_converged == 256u, "%s: stats.pixels_converged %llu, want 256", name,
+                  (unsigned long long)st.pixels_converged);
+            test_note(t, "%s: %llu of 1024 pixels stopped at %u spp", name, (unsigned long long)st.pixels_converged, quiet_n);
+        }
+        pt_film_free(&f);
+        pt_scene_destroy(s);
     }
-    pt_film_free(&f);
-    pt_scene_destroy(s);
 }
 
 static void neyman_allocation(test_ctx *t)
@@ -308,15 +329,16 @@ static void neyman_allocation(test_ctx *t)
 
 static void mean_matches_uniform(test_ctx *t)
 {
-    /* The adaptive image against a uniform render with another seed (room scene: caustics, so rare
-       bright samples). adaptive_neighbours_only = 1: 16 region means (channel 1), z-tests in the
-       file's family (its bias, -0.4 % of the image mean over seeds 7-46, is below one render's
-       noise). The default (a pixel's own samples count) has the stopping bias of section 8: its
+    /* The re-planning modes' image against a uniform render with another seed (room scene:
+       caustics, so rare bright samples; the default, the pilot, is checked by pilot_unbiased).
+       PT_ADAPTIVE_NEIGHBOURS: 16 region means (channel 1), z-tests in the file's family (its
+       bias, -0.4 % of the image mean over seeds 7-46, is below one render's noise).
+       PT_ADAPTIVE_OWN_SAMPLES (a pixel's own samples count) has the stopping bias of section 8: its
        image mean over the neighbours-only one of the same seed (the two share most of their
        noise) was -0.79 % with a standard deviation of 0.24 % over seeds 7-46 (range -1.32 % to
        -0.33 %); it must lie in [-2 %, +0.5 %], 5 standard deviations either side (false failure
        ~1e-6 if normal). Planning a pixel from its own noise alone gives about -3 % and fails
-       it. The default must also take fewer samples (a pixel that drew no firefly stops at its
+       it. Own samples must also take fewer samples (a pixel that drew no firefly stops at its
        share). */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 48, 40, 96);
@@ -327,9 +349,10 @@ static void mean_matches_uniform(test_ctx *t)
     if (!CHECK(t, s != NULL, "scene")) return;
     d.adaptive_threshold = 0.18f;
     d.adaptive_min_spp = 16;
+    d.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES;
     if (tu_render_into(t, s, &d, &o, &so, "adaptive (own samples)")) {
         pt_render_desc n = d;
-        n.adaptive_neighbours_only = 1;
+        n.adaptive_mode = PT_ADAPTIVE_NEIGHBOURS;
         if (tu_render_into(t, s, &n, &a, &sa, "adaptive (neighbours only)")) {
             pt_render_desc e = d;
             e.adaptive_threshold = 0;
@@ -368,7 +391,7 @@ static void own_samples_dilute_fireflies(test_ctx *t)
     /* The emitter half of half_easy_scene (every sample exactly 1) after 8 uniform samples per
        pixel, plus one injected firefly (a 9th sample of 50) in pixel (10, 8); then adaptive
        sampling into the same film, cap 64 more samples, checks after 2. The noisy half is out of
-       reach for T = 0.05, so every pixel with noise > 0 samples to its cap. Own samples (default):
+       reach for T = 0.05, so every pixel with noise > 0 samples to its cap. Own samples:
        the firefly pixel and the pixels whose 5x5 neighbourhood holds it sample to the cap, diluting
        the firefly; neighbours only: the firefly pixel's own noise is not counted, so it stops
        after 2 samples with its firefly undiluted while the 24 around it sample on (a ring).
@@ -396,7 +419,7 @@ static void own_samples_dilute_fireflies(test_ctx *t)
             d.samples_per_pass = 2;
             d.adaptive_threshold = 0.05f;
             d.adaptive_min_spp = 2;
-            d.adaptive_neighbours_only = mode;
+            d.adaptive_mode = mode ? PT_ADAPTIVE_NEIGHBOURS : PT_ADAPTIVE_OWN_SAMPLES;
             d.seed += 1;
             if (CHECK(t, pt_render(s, &d, &f, &st) == PT_OK, "adaptive render: %s", st.error)) {
                 double fire = f.sum[3 * p + 1] / (double)f.count[p];
@@ -426,6 +449,273 @@ static void own_samples_dilute_fireflies(test_ctx *t)
     }
 }
 
+/* P(|T| > t) for Student's t with df degrees of freedom, I_{df/(df+t^2)}(df/2, 1/2): the
+   regularised incomplete beta function by its continued fraction (Abramowitz & Stegun 26.5.8,
+   modified Lentz evaluation; the symmetry I_x(a, b) = 1 - I_{1-x}(b, a) where it converges
+   slowly). */
+static double beta_cf(double a, double b, double x)
+{
+    double c = 1.0, d = 1.0 - (a + b) * x / (a + 1.0), f;
+    int m;
+    d = 1.0 / (fabs(d) < 1e-300 ? 1e-300 : d);
+    f = d;
+    for (m = 1; m < 500; ++m) {
+        double num, delta;
+        int half;
+        for (half = 0; half < 2; ++half) {
+            num = half == 0 ? m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m))
+                            : -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0));
+            d = 1.0 + num * d;
+            c = 1.0 + num / c;
+            d = 1.0 / (fabs(d) < 1e-300 ? 1e-300 : d);
+            if (fabs(c) < 1e-300) c = 1e-300;
+            delta = d * c;
+            f *= delta;
+        }
+        if (fabs(delta - 1.0) < 1e-14) break;
+    }
+    return f;
+}
+static double t_two_sided(double t, double df)
+{
+    double a = 0.5 * df, b = 0.5, x = df / (df + t * t), front;
+    if (x >= 1.0) return 1.0;
+    front = exp(lgamma(a + b) - lgamma(a) - lgamma(b) + a * log(x) + b * log(1.0 - x));
+    if (x < (a + 1.0) / (a + b + 2.0)) return front * beta_cf(a, b, x) / a;
+    return 1.0 - front * beta_cf(b, a, 1.0 - x) / b;
+}
+
+/* Sparkles: a black view (stripes_desc, background 0) with a small two-sided emitter of radiance
+   8 in the middle of each pixel (x, y) with x % 5 == 2 and y % 5 == 2 (39 pixels), half a pixel
+   wide and a quarter high: a sample of such a pixel is 8 with probability 1/8, else 0 (mean 1);
+   every other pixel is exactly 0. No two sparkle pixels share a 5x5 neighbourhood. */
+static pt_scene *sparkle_scene(pt_render_desc *d)
+{
+    pt_scene *s = pt_scene_create();
+    int glow, rc = 0, x, y;
+    float hh = 10.0f * (float)tan(15.0 * TU_PI / 180.0), hw = 4.0f * hh, px = 2.0f * hw / 64.0f;
+    if (!s) return NULL;
+    glow = pt_scene_add_emitter(s, pt_v3(8, 8, 8), 1);
+    for (y = 2; y < 16; y += 5)
+        for (x = 2; x < 64; x += 5) {
+            /* pixel (x, y)'s centre on the plane z = 0 (screen right is -x, row 0 at the top) */
+            float cx = hw * (1.0f - 2.0f * ((float)x + 0.5f) / 64.0f), cy = hh * (1.0f - 2.0f * ((float)y + 0.5f) / 16.0f);
+            rc |= pt_scene_add_quad(s, pt_v3(cx - px / 4, cy - px / 8, 0), pt_v3(px / 2, 0, 0), pt_v3(0, px / 4, 0), glow);
+        }
+    if (glow < 0 || rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    stripes_desc(d, 1);
+    d->background = pt_v3(0, 0, 0);
+    return s;
+}
+
+#define PILOT_SEEDS 64
+static void pilot_unbiased(test_ctx *t)
+{
+    /* The default (PT_ADAPTIVE_PILOT) keeps the uniform render's expectation; re-planning from
+       the image's own samples does not. Sparkle scene, cap 64 spp, T = 0.05, pilot / minimum 8
+       spp, seeds 1..PILOT_SEEDS. Own samples: a sparkle pixel whose first 8 samples missed its
+       emitter (probability (7/8)^8 = 0.34) has zero noise in its whole 5x5 neighbourhood and
+       stops with the value 0: the image is about a third too dark. The pilot's film holds the
+       first n_i samples of the uniform render of the same seed, n_i fixed by the discarded
+       pilot, so D = adaptive image mean - uniform image mean (channel G) is paired, and its
+       mean over the seeds is the bias: a one-sample t-test (df = seeds - 1) at alpha 0.01. The
+       pilot must pass it and own samples must fail it (the test's power: it fails on the old
+       default). */
+    double dp[PILOT_SEEDS], dn[PILOT_SEEDS], mean_u = 0.0, samples_p = 0.0, total = 0.0;
+    int k;
+    for (k = 0; k < PILOT_SEEDS; k++) {
+        pt_render_desc d;
+        pt_scene *s = sparkle_scene(&d);
+        pt_film u, a, o;
+        pt_render_stats su, sa, so;
+        int ok = 0;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.seed = 1u + (uint64_t)k;
+        if (tu_render_into(t, s, &d, &u, &su, "uniform")) {
+            pt_render_desc e = d;
+            e.adaptive_threshold = 0.05f;
+            e.adaptive_min_spp = 8;
+            if (tu_render_into(t, s, &e, &a, &sa, "pilot")) {
+                e.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES;
+                if (tu_render_into(t, s, &e, &o, &so, "own samples")) {
+                    tu_region ru, ra, ro;
+                    tu_film_regions(&u, 1, 1, &ru);
+                    tu_film_regions(&a, 1, 1, &ra);
+                    tu_film_regions(&o, 1, 1, &ro);
+                    dp[k] = ra.mean[1] - ru.mean[1];
+                    dn[k] = ro.mean[1] - ru.mean[1];
+                    mean_u += ru.mean[1] / PILOT_SEEDS;
+                    samples_p += (double)sa.samples;
+                    total += (double)su.samples;
+                    ok = 1;
+                }
+                pt_film_free(&o);
+            }
+            pt_film_free(&a);
+        }
+        pt_film_free(&u);
+        pt_scene_destroy(s);
+        if (!ok) return;
+    }
+    {
+        tu_acc ap, ao;
+        double tp, tn, pp, pn;
+        memset(&ap, 0, sizeof ap);
+        memset(&ao, 0, sizeof ao);
+        for (k = 0; k < PILOT_SEEDS; k++) {
+            tu_acc_add(&ap, dp[k]);
+            tu_acc_add(&ao, dn[k]);
+        }
+        tp = tu_acc_se(&ap) > 0 ? ap.mean / tu_acc_se(&ap) : 0.0;
+        tn = tu_acc_se(&ao) > 0 ? ao.mean / tu_acc_se(&ao) : 0.0;
+        pp = t_two_sided(fabs(tp), PILOT_SEEDS - 1);
+        pn = t_two_sided(fabs(tn), PILOT_SEEDS - 1);
+        CHECK(t, pp >= 0.01, "pilot: image mean %+.2f %% against uniform (t %.2f, p %.2g < 0.01)", 100.0 * ap.mean / mean_u,
+              tp, pp);
+        CHECK(t, pn < 0.01 && tn < 0, "own samples: image mean %+.2f %% against uniform (t %.2f, p %.2g): the test "
+              "does not see its bias", 100.0 * ao.mean / mean_u, tn, pn);
+        test_note(t, "pilot: image mean %+.2f %% (t %.2f, p %.2g; %.0f %% of the samples); own samples %+.1f %% (t %.1f)",
+                  100.0 * ap.mean / mean_u, tp, pp, 100.0 * samples_p / total, 100.0 * ao.mean / mean_u, tn);
+    }
+}
+
+/* Adds pixel pix's samples first .. first + n - 1 (seed d->seed, the documented stream and camera
+   ray of threshold_zero_is_uniform) to film g, as pt_render would. */
+static void rebuild_samples(const pt_scene *s, const pt_render_desc *d, const pt_camera *cam, pt_film *g, int x, int y,
+                            uint32_t first, uint32_t n)
+{
+    uint32_t pix = (uint32_t)(y * d->width + x), k;
+    for (k = first; k < first + n; k++) {
+        pt_rng rng = pt_rng_for_sample(d->seed, pix, k);
+        float jx = pt_rng_float(&rng), jy = pt_rng_float(&rng);
+        float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
+        pt_color L = pt_trace_path(s, d, pt_camera_ray(cam, (float)x + jx, (float)y + jy, l1, l2), &rng, NULL);
+        double v[3];
+        int c;
+        v[0] = L.x; v[1] = L.y; v[2] = L.z;
+        for (c = 0; c < 3; c++) {
+            g->sum[3 * pix + c] += v[c];
+            g->sum_sq[3 * pix + c] += v[c] * v[c];
+            if (k & 1u) g->sum_odd[3 * pix + c] += v[c];
+        }
+        g->count[pix]++;
+    }
+}
+
+static void pilot_film_is_uniform_prefix(test_ctx *t)
+{
+    /* The pilot's samples are not in the image: pixel i of the film holds exactly the uniform
+       render's first n_i samples (rebuilt here from pt_trace_path), 2 <= n_i <= cap - pilot; the
+       stats count the pilot's samples too. Also into a film that already holds 3 samples per
+       pixel (a resumed render: samples 3 .. 3 + n_i - 1). */
+    int resumed;
+    for (resumed = 0; resumed < 2; resumed++) {
+        pt_render_desc d;
+        pt_scene *s = room_scene(&d, 20, 16, 24);
+        pt_film f, g;
+        pt_render_stats st;
+        pt_camera cam;
+        int x, y, bad_range = 0;
+        uint64_t film_samples = 0;
+        const uint32_t base = resumed ? 3u : 0u;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.3f;
+        d.adaptive_min_spp = 6;
+        d.samples_per_pass = 4;
+        if (!CHECK(t, pt_film_init(&f, d.width, d.height) == PT_OK && pt_film_init(&g, d.width, d.height) == PT_OK, "films")) {
+            pt_scene_destroy(s);
+            return;
+        }
+        pt_camera_init(&cam, &d.camera, d.width, d.height);
+        if (resumed) {
+            pt_render_desc u = d;
+            u.adaptive_threshold = 0.0f;
+            u.samples_per_pixel = 3;
+            CHECK(t, pt_render(s, &u, &f, &st) == PT_OK, "the first 3 samples: %s", st.error);
+        }
+        if (CHECK(t, pt_render(s, &d, &f, &st) == PT_OK, "pilot render: %s", st.error)) {
+            for (y = 0; y < d.height; y++)
+                for (x = 0; x < d.width; x++) {
+                    uint32_t n = f.count[y * d.width + x] - base;
+                    bad_range += n < 2u || n > 24u - 6u;
+                    film_samples += n;
+                    rebuild_samples(s, &d, &cam, &g, x, y, 0, base + n);
+                }
+            CHECK(t, tu_film_equal(&f, &g), "%s: the film is not the uniform render's first n_i samples",
+                  resumed ? "resumed" : "fresh");
+            CHECK(t, bad_range == 0, "%d pixels outside 2..18 film samples", bad_range);
+            CHECK(t, st.samples == film_samples + 6u * 20u * 16u, "stats.samples %llu, want %llu film + %u pilot samples",
+                  (unsigned long long)st.samples, (unsigned long long)film_samples, 6u * 20u * 16u);
+            CHECK(t, st.min_spp < st.max_spp, "every pixel got %u samples: no adaptation", st.min_spp);
+            test_note(t, "%s: film %u..%u spp, %llu samples with the pilot's", resumed ? "resumed" : "fresh", st.min_spp,
+                      st.max_spp, (unsigned long long)st.samples);
+        }
+        pt_film_free(&f);
+        pt_film_free(&g);
+        pt_scene_destroy(s);
+    }
+}
+
+static void pilot_plan_ignores_film(test_ctx *t)
+{
+    /* The plan depends on the pilot alone: a film holding a firefly (one injected sample of 50
+       after 8 uniform ones, as in own_samples_dilute_fireflies) gets exactly the samples per
+       pixel that the same film without it gets. With a pilot that leaves no room (pilot + 2 >
+       samples_per_pixel) the render is uniform, bit for bit. adaptive_neighbours_only = 1 is
+       adaptive_mode PT_ADAPTIVE_NEIGHBOURS, bit for bit. */
+    pt_render_desc d;
+    pt_scene *s = half_easy_scene(&d);
+    pt_film a, b;
+    pt_render_stats st;
+    int c, diff = 0;
+    size_t i, p = 8 * 64 + 10;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    d.samples_per_pixel = 8;
+    if (tu_render_into(t, s, &d, &a, &st, "uniform 8 spp") && tu_render_into(t, s, &d, &b, &st, "uniform 8 spp")) {
+        pt_render_desc e = d;
+        for (c = 0; c < 3; c++) {
+            b.sum[3 * p + c] += 50.0;
+            b.sum_sq[3 * p + c] += 2500.0;
+        }
+        b.count[p] += 1;
+        e.samples_per_pixel = 64;
+        e.adaptive_threshold = 0.05f;
+        e.adaptive_min_spp = 4;
+        e.seed += 1;
+        if (CHECK(t, pt_render(s, &e, &a, &st) == PT_OK && pt_render(s, &e, &b, &st) == PT_OK, "pilot renders: %s",
+                  st.error)) {
+            for (i = 0; i < 64u * 16u; i++) diff += b.count[i] - (i == p) != a.count[i];
+            CHECK(t, diff == 0, "%d pixels took other counts with a firefly in the film", diff);
+            CHECK(t, a.count[p] - 8u < 64u - 4u, "the firefly pixel took %u samples: no adaptation", a.count[p] - 8u);
+        }
+    }
+    pt_film_free(&a);
+    pt_film_free(&b);
+    {
+        pt_render_desc e = d, n;
+        pt_film u;
+        e.samples_per_pixel = 9;
+        e.adaptive_threshold = 0.05f;
+        e.adaptive_min_spp = 8;
+        n = e;
+        n.adaptive_threshold = 0.0f;
+        if (tu_render_into(t, s, &e, &a, &st, "pilot, no room") && tu_render_into(t, s, &n, &u, NULL, "uniform"))
+            CHECK(t, tu_film_equal(&a, &u) && st.pixels_converged == 0, "pilot without room: not the uniform render");
+        pt_film_free(&a);
+        pt_film_free(&u);
+        e.samples_per_pixel = 32;
+        e.adaptive_mode = PT_ADAPTIVE_NEIGHBOURS;
+        n = e;
+        n.adaptive_mode = PT_ADAPTIVE_PILOT;
+        n.adaptive_neighbours_only = 1;
+        if (tu_render_into(t, s, &e, &a, NULL, "neighbours") && tu_render_into(t, s, &n, &b, NULL, "neighbours_only 1"))
+            CHECK(t, tu_film_equal(&a, &b), "adaptive_neighbours_only = 1 differs from PT_ADAPTIVE_NEIGHBOURS");
+        pt_film_free(&a);
+        pt_film_free(&b);
+    }
+    pt_scene_destroy(s);
+}
+
 static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
 {
     int i;
@@ -436,36 +726,43 @@ static void host_reverse(void *user, int count, pt_job_fn job, void *job_data)
 static void threads_bit_identical(test_ctx *t)
 {
     /* The adaptive film with threads 1, 2, 3, tile size 5 and a host parallel-for running tiles in
-       reverse: identical bit for bit (sums, squares, half-buffers, counts), with stopped pixels. */
-    pt_render_desc d;
-    pt_scene *s = room_scene(&d, 40, 32, 32);
-    pt_film ref, f;
-    pt_render_stats st, st0;
-    int k;
-    const char *names[4] = { "threads=2", "threads=3", "tile_size=5, threads=2", "host parallel_for (reverse)" };
-    if (!CHECK(t, s != NULL, "scene")) return;
-    d.adaptive_threshold = 0.21f;
-    d.adaptive_min_spp = 8;
-    d.samples_per_pass = 4;
-    d.threads = 1;
-    if (!tu_render_into(t, s, &d, &ref, &st0, "threads=1")) { pt_film_free(&ref); pt_scene_destroy(s); return; }
-    CHECK(t, st0.pixels_converged > 0 && st0.pixels_converged < 40u * 32u, "%llu pixels converged: want some, not all",
-          (unsigned long long)st0.pixels_converged);
-    for (k = 0; k < 4; k++) {
-        pt_render_desc e = d;
-        e.threads = k == 1 ? 3 : 2;
-        if (k == 2) e.tile_size = 5;
-        if (k == 3) { e.parallel_for = host_reverse; e.threads = 1; }
-        if (tu_render_into(t, s, &e, &f, &st, names[k])) {
-            CHECK(t, tu_film_equal(&ref, &f), "%s: film differs from threads=1", names[k]);
-            CHECK(t, st.samples == st0.samples && st.pixels_converged == st0.pixels_converged,
-                  "%s: stats differ from threads=1", names[k]);
+       reverse: identical bit for bit (sums, squares, half-buffers, counts), with stopped pixels,
+       in the pilot mode (the default) and the re-planning one (own samples). */
+    int mode;
+    for (mode = 0; mode < 2; mode++) {
+        pt_render_desc d;
+        pt_scene *s = room_scene(&d, 40, 32, 32);
+        pt_film ref, f;
+        pt_render_stats st, st0;
+        int k;
+        const char *names[4] = { "threads=2", "threads=3", "tile_size=5, threads=2", "host parallel_for (reverse)" };
+        const char *mname = mode ? "own samples" : "pilot";
+        if (!CHECK(t, s != NULL, "scene")) return;
+        d.adaptive_threshold = 0.21f;
+        d.adaptive_min_spp = 8;
+        d.samples_per_pass = 4;
+        d.adaptive_mode = mode ? PT_ADAPTIVE_OWN_SAMPLES : PT_ADAPTIVE_PILOT;
+        d.threads = 1;
+        if (!tu_render_into(t, s, &d, &ref, &st0, "threads=1")) { pt_film_free(&ref); pt_scene_destroy(s); return; }
+        CHECK(t, st0.pixels_converged > 0 && st0.pixels_converged < 40u * 32u, "%s: %llu pixels converged: want some, not all",
+              mname, (unsigned long long)st0.pixels_converged);
+        for (k = 0; k < 4; k++) {
+            pt_render_desc e = d;
+            e.threads = k == 1 ? 3 : 2;
+            if (k == 2) e.tile_size = 5;
+            if (k == 3) { e.parallel_for = host_reverse; e.threads = 1; }
+            if (tu_render_into(t, s, &e, &f, &st, names[k])) {
+                CHECK(t, tu_film_equal(&ref, &f), "%s, %s: film differs from threads=1", mname, names[k]);
+                CHECK(t, st.samples == st0.samples && st.pixels_converged == st0.pixels_converged,
+                      "%s, %s: stats differ from threads=1", mname, names[k]);
+            }
+            pt_film_free(&f);
         }
-        pt_film_free(&f);
+        test_note(t, "%s: 5 renders, %llu of 1280 pixels stopped early, bit-identical", mname,
+                  (unsigned long long)st0.pixels_converged);
+        pt_film_free(&ref);
+        pt_scene_destroy(s);
     }
-    test_note(t, "5 renders, %llu of 1280 pixels stopped early, bit-identical", (unsigned long long)st0.pixels_converged);
-    pt_film_free(&ref);
-    pt_scene_destroy(s);
 }
 
 static void threshold_zero_is_uniform(test_ctx *t)
@@ -526,12 +823,13 @@ static void invalid_settings(test_ctx *t)
     pt_scene *s = room_scene(&d, 8, 8, 4);
     pt_film f;
     int k, i;
-    const char *names[11] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
+    const char *names[14] = { "threshold -0.1", "threshold NaN", "threshold +Inf", "min_spp -1", "min_spp 1",
                               "check_passes -1", "disable_skips removed bit 1u << 1", "disable_skips ~0",
-                              "disable_skips removed bit 1u << 5", "neighbours_only 2", "neighbours_only -1" };
+                              "disable_skips removed bit 1u << 5", "neighbours_only 2", "neighbours_only -1",
+                              "adaptive_mode 3", "adaptive_mode -1", "neighbours_only 1 with own samples" };
     if (!CHECK(t, s != NULL, "scene")) return;
     if (!CHECK(t, pt_film_init(&f, 8, 8) == PT_OK, "film")) { pt_scene_destroy(s); return; }
-    for (k = 0; k < 11; k++) {
+    for (k = 0; k < 14; k++) {
         pt_render_desc e = d;
         pt_render_stats st;
         int rc, touched = 0;
@@ -547,11 +845,14 @@ static void invalid_settings(test_ctx *t)
         if (k == 8) e.disable_skips = 1u << 5; /* was PT_SKIP_NO_TRIANGLES, removed */
         if (k == 9) e.adaptive_neighbours_only = 2;
         if (k == 10) e.adaptive_neighbours_only = -1;
+        if (k == 11) e.adaptive_mode = (pt_adaptive_mode)3;
+        if (k == 12) e.adaptive_mode = (pt_adaptive_mode)-1;
+        if (k == 13) { e.adaptive_neighbours_only = 1; e.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES; }
         rc = pt_render(s, &e, &f, &st);
         for (i = 0; i < 64; i++) touched += f.count[i] != 0;
         CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT, "%s: pt_render returned %d", names[k], rc);
         CHECK(t, touched == 0 && st.samples == 0, "%s: %d pixels rendered", names[k], touched);
-        CHECK(t, strstr(st.error, k >= 9 ? "adaptive_neighbours_only" : k >= 6 ? "disable_skips" : "adaptive") != NULL,
+        CHECK(t, strstr(st.error, k >= 11 ? "adaptive_mode" : k >= 9 ? "adaptive_neighbours_only" : k >= 6 ? "disable_skips" : "adaptive") != NULL,
               "%s: message '%s'", names[k], st.error);
     }
     {   /* the valid extremes work: every skip disabled, min_spp 2, check every pass, neighbours only */
@@ -674,6 +975,9 @@ const test_case test_adaptive_cases[] = {
     TEST_CASE(neyman_allocation),
     TEST_CASE(mean_matches_uniform),
     TEST_CASE(own_samples_dilute_fireflies),
+    TEST_CASE(pilot_unbiased),
+    TEST_CASE(pilot_film_is_uniform_prefix),
+    TEST_CASE(pilot_plan_ignores_film),
     TEST_CASE(threads_bit_identical),
     TEST_CASE(threshold_zero_is_uniform),
     TEST_CASE(invalid_settings),

@@ -126,9 +126,10 @@ static void print_help(void)
            "      --threads N        worker threads, 0 = all cores (0)\n"
            "      --backend B        auto | builtin | embree: ray traversal (auto)\n"
            "      --adaptive T       adaptive sampling toward RMS relative error T, e.g. 0.05\n"
-           "      --adaptive-min-spp N  samples before a pixel may stop (max(16, spp/16))\n"
-           "      --adaptive-check N    re-plan the samples every N passes (1)\n"
-           "      --adaptive-neighbours-only  plan each pixel from its neighbours alone\n"
+           "      --adaptive-mode M  pilot (unbiased) | own-samples | neighbours (biased) (pilot)\n"
+           "      --adaptive-min-spp N  the pilot's spp, or the least a pixel gets (max(16, spp/16))\n"
+           "      --adaptive-check N    own-samples, neighbours: re-plan every N passes (1)\n"
+           "      --adaptive-neighbours-only  the same as --adaptive-mode neighbours\n"
            "      --disable-skips L  force the general path: all, or a comma-separated list of\n"
            "                         no-emitters, delta-vertex, facing-away, no-textures,\n"
            "                         zero-bsdf-shadow (for benchmarks)\n"
@@ -285,8 +286,9 @@ static int parse_skips(const char *opt, const char *text, unsigned *out)
 
 typedef enum opt_id {
     O_OUTPUT, O_WIDTH, O_HEIGHT, O_SIZE, O_SPP, O_STRATEGY, O_SAMPLER, O_SEED, O_MAX_DEPTH, O_INDIRECT,
-    O_LIGHT_WEIGHT, O_THREADS, O_BACKEND, O_ADAPTIVE, O_ADAPTIVE_MIN, O_ADAPTIVE_CHECK, O_ADAPTIVE_NB,
-    O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_MITSUBA, O_QUIET, O_HELP, O_VERSION, O_ALLOW_PATH, O_MESH_MEMORY,
+    O_LIGHT_WEIGHT, O_THREADS, O_BACKEND, O_ADAPTIVE, O_ADAPTIVE_MIN, O_ADAPTIVE_CHECK, O_ADAPTIVE_NB, O_ADAPTIVE_MODE,
+    O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_MITSUBA, O_QUIET, O_HELP, O_VERSION, O_ALLOW_PATH,
+    O_MESH_MEMORY,
     O_IMAGE_MEMORY
 } opt_id;
 
@@ -303,7 +305,8 @@ static const struct option_def {
     { "--light-weight", NULL, 1, O_LIGHT_WEIGHT }, { "--threads", NULL, 1, O_THREADS },
     { "--backend", NULL, 1, O_BACKEND },      { "--adaptive", NULL, 1, O_ADAPTIVE },
     { "--adaptive-min-spp", NULL, 1, O_ADAPTIVE_MIN }, { "--adaptive-check", NULL, 1, O_ADAPTIVE_CHECK },
-    { "--adaptive-neighbours-only", NULL, 0, O_ADAPTIVE_NB }, { "--disable-skips", NULL, 1, O_SKIPS },
+    { "--adaptive-neighbours-only", NULL, 0, O_ADAPTIVE_NB }, { "--adaptive-mode", NULL, 1, O_ADAPTIVE_MODE },
+    { "--disable-skips", NULL, 1, O_SKIPS },
     { "--exposure", NULL, 1, O_EXPOSURE },    { "--tonemap", NULL, 1, O_TONEMAP },
     { "--preview-every", NULL, 1, O_PREVIEW }, { "--export-pov", NULL, 1, O_POV },
     { "--export-mitsuba", NULL, 1, O_MITSUBA },
@@ -361,6 +364,8 @@ static int set_render_setting(options *o, opt_id id, const char *name, const cha
 {
     static const char *const backends[] = { "auto", "builtin", "embree" };
     static const pt_backend backend_ids[] = { PT_BACKEND_AUTO, PT_BACKEND_BUILTIN, PT_BACKEND_EMBREE };
+    static const char *const modes[] = { "pilot", "own-samples", "neighbours" };
+    static const pt_adaptive_mode mode_ids[] = { PT_ADAPTIVE_PILOT, PT_ADAPTIVE_OWN_SAMPLES, PT_ADAPTIVE_NEIGHBOURS };
     pt_render_desc *d = &o->set;
     int k = 0, rc;
     switch (id) {
@@ -373,6 +378,10 @@ static int set_render_setting(options *o, opt_id id, const char *name, const cha
     case O_ADAPTIVE: return parse_real(name, v, 0.0, 1e30, 0, "a finite number >= 0", &d->adaptive_threshold);
     case O_ADAPTIVE_MIN: return parse_int(name, v, 2, 1 << 20, &d->adaptive_min_spp);
     case O_ADAPTIVE_CHECK: return parse_int(name, v, 1, 1 << 20, &d->adaptive_check_passes);
+    case O_ADAPTIVE_MODE:
+        rc = parse_choice(name, v, modes, 3, "pilot, own-samples or neighbours", &k);
+        d->adaptive_mode = mode_ids[k];
+        return rc;
     case O_SKIPS: return parse_skips(name, v, &d->disable_skips);
     default: return set_scene_setting(o, id, name, v);
     }
@@ -490,7 +499,7 @@ static int parse_one(options *o, int argc, char **argv, int *i)
         case O_HELP: print_help(); return PARSED_EXIT;
         case O_VERSION: print_version(); return PARSED_EXIT;
         case O_QUIET: o->quiet = 1; return PARSED;
-        case O_ADAPTIVE_NB: o->set.adaptive_neighbours_only = 1; return PARSED;
+        case O_ADAPTIVE_NB: o->set.adaptive_mode = PT_ADAPTIVE_NEIGHBOURS; return PARSED; /* an alias */
         default: return fail("internal error: option %s", name);
         }
     }
@@ -555,7 +564,7 @@ static void apply_settings(const options *o, pt_render_desc *d)
     d->adaptive_threshold = s->adaptive_threshold;
     d->adaptive_min_spp = s->adaptive_min_spp;
     d->adaptive_check_passes = s->adaptive_check_passes;
-    d->adaptive_neighbours_only = s->adaptive_neighbours_only;
+    d->adaptive_mode = s->adaptive_mode;
     d->disable_skips = s->disable_skips;
 }
 

@@ -10,7 +10,7 @@
 # --export-mitsuba (alone, with -o, with the overrides, and a refused scene); the
 # default output name; --preview-every rewrites the output while rendering and leaves the
 # final image as without it; the command line overrides a scene file's settings; --exposure
-# changes the 8-bit outputs only; -q prints nothing.
+# changes the 8-bit outputs only; -q prints nothing; --adaptive-mode and its alias.
 set -u
 
 if [ $# -ne 3 ]; then
@@ -111,6 +111,7 @@ t_bad_input() {
     printf 'size 8 8\ncamera look_from 0 0 -5 look_at 0 0 0\nbogus 1 2 3\n' >"$W/broken.scene"
     for a in "--bogus" "--spp 0" "--spp abc" "--width -5" "--size 3x" "--strategy best" "--sampler halton" \
              "--light-weight 2" "--threads" "--tonemap filmic" "--exposure inf" "--preview-every 0" "--adaptive -1" \
+             "--adaptive-mode best" \
              "--disable-skips nope" "--indirect-paths 9" "--backend fast" "--quiet=1" "-o out.tiff" \
              "-o no/such/dir/x.ppm" "--export-pov no/such/dir/x.pov" "--export-mitsuba no/such/dir/x.xml"; do
         # shellcheck disable=SC2086
@@ -257,6 +258,29 @@ t_overrides() {
     fi
     if [ $ok = 1 ]; then pass overrides "--size, --width (height from the file), --spp, --seed, --max-depth"
     else fail overrides "$why"; fi
+}
+
+# ---- --adaptive-mode: pilot is the default, own-samples and neighbours differ from it,
+# --adaptive-neighbours-only is --adaptive-mode neighbours
+t_adaptive_mode() {
+    local dir=$W/adaptive ok=1 why="" m
+    mkdir -p "$dir"
+    for m in default pilot own-samples neighbours nb-flag; do
+        case $m in
+        default) set -- ;;
+        nb-flag) set -- --adaptive-neighbours-only ;;
+        *) set -- --adaptive-mode "$m" ;;
+        esac
+        "$P" "$S/glass.scene" -q --spp 64 --size 24x24 --adaptive 0.1 "$@" -o "$dir/$m.pfm" || { ok=0; why="$m: the render failed"; }
+    done
+    if [ $ok = 1 ]; then
+        cmp -s "$dir/default.pfm" "$dir/pilot.pfm" || { ok=0; why="the default is not --adaptive-mode pilot"; }
+        ! cmp -s "$dir/pilot.pfm" "$dir/own-samples.pfm" || { ok=0; why="own-samples is the pilot's image"; }
+        ! cmp -s "$dir/own-samples.pfm" "$dir/neighbours.pfm" || { ok=0; why="neighbours is own-samples' image"; }
+        cmp -s "$dir/neighbours.pfm" "$dir/nb-flag.pfm" || { ok=0; why="--adaptive-neighbours-only is not --adaptive-mode neighbours"; }
+    fi
+    if [ $ok = 1 ]; then pass adaptive_mode "default = pilot; own-samples, neighbours differ; --adaptive-neighbours-only = neighbours"
+    else fail adaptive_mode "$why"; fi
 }
 
 # ---- --exposure and --tonemap change the 8-bit outputs, not the float ones; -q prints nothing
@@ -446,6 +470,7 @@ t_export_mitsuba
 t_default_output
 t_preview
 t_overrides
+t_adaptive_mode
 t_display
 t_scene_limits
 t_signal
