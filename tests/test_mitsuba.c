@@ -476,11 +476,13 @@ static void mitsuba_project_scenes(test_ctx *t)
     tu_remove_tree(tmp);
 }
 
-/* The Python that imports Mitsuba 3: $PDFTRACE_MITSUBA_PYTHON, else python3. */
+/* The Python to try for Mitsuba 3: $PDFTRACE_MITSUBA_PYTHON, else make mitsuba-install's venv
+   (build/mitsuba-venv), else python3. */
 static const char *mts_python(void)
 {
     const char *p = getenv("PDFTRACE_MITSUBA_PYTHON");
-    return p && *p ? p : "python3";
+    if (p && *p) return p;
+    return access("build/mitsuba-venv/bin/python", X_OK) == 0 ? "build/mitsuba-venv/bin/python" : "python3";
 }
 
 /* Mitsuba loads and renders exported scenes (scalar_rgb, 1 spp) without a warning or an error. */
