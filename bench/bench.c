@@ -130,6 +130,9 @@ typedef struct config {
     const char *mitsuba_python; /* the Python of the venv with Mitsuba 3 (make mitsuba-install) */
     const char *cache;          /* the headline's reference image (large: not in bench/ref) */
     int headline_size;          /* 0: the scene file's size; else N x N (for quick checks) */
+    int headline_seeds;         /* seeds of the headline (both renderers) */
+    int headline_ref_spp;       /* spp of the headline's reference */
+    const char *headline_samplers; /* Mitsuba samplers of the headline (comma-separated) */
     int scene_on[SCENE_COUNT];
 } config;
 
@@ -1016,8 +1019,9 @@ static int mitsuba_export(const loaded *L, const char *path, int w, int h, char 
 
 /* Runs the series script on xml against ref (stop_floor: its floor-stop value; 0 = none) and reads
    its TSV into s[MI_SAMPLERS] (raw relMSE per seed; summarize_series subtracts floor). */
-static int mitsuba_series(const config *cfg, const char *xml, const char *ref, double stop_floor, double budget,
-                          int max_spp, int seeds, int pixels, const char *tsv, series *s, int (*used)[MAX_LEVELS])
+static int mitsuba_series(const config *cfg, const char *xml, const char *ref, const char *samplers, double stop_floor,
+                          double budget, int max_spp, int seeds, int pixels, const char *tsv, series *s,
+                          int (*used)[MAX_LEVELS])
 {
     char qp[1100], qx[2200], qr[2200], qt[2200], cmd[8000], line[512];
     int n[MI_SAMPLERS][MAX_SEEDS], j, q, ok = 1;
@@ -1027,8 +1031,8 @@ static int mitsuba_series(const config *cfg, const char *xml, const char *ref, d
         fprintf(stderr, "bench: path too long for the Mitsuba command\n");
         return 0;
     }
-    snprintf(cmd, sizeof cmd, "%s %s series --xml %s --ref %s --floor %.6e --budget %.6g --max-spp %d --seeds %d --out %s",
-             qp, MI_SCRIPT, qx, qr, stop_floor, budget, max_spp, seeds, qt);
+    snprintf(cmd, sizeof cmd, "%s %s series --xml %s --ref %s --samplers %s --floor %.6e --budget %.6g --max-spp %d "
+             "--seeds %d --out %s", qp, MI_SCRIPT, qx, qr, samplers, stop_floor, budget, max_spp, seeds, qt);
     if (system(cmd) != 0) {
         fprintf(stderr, "bench: Mitsuba series failed: %s\n", cmd);
         return 0;
@@ -1068,7 +1072,7 @@ static int mitsuba_series(const config *cfg, const char *xml, const char *ref, d
     fclose(f);
     for (j = 0; ok && j < MI_SAMPLERS; ++j)
         for (q = 0; q < seeds; ++q)
-            if (n[j][q] != n[j][0] || n[j][0] < 1) ok = 0;
+            if (n[j][q] != n[j][0] || (n[j][0] < 1 && strstr(samplers, mi_samplers[j]))) ok = 0;
     if (!ok) {
         fprintf(stderr, "bench: %s: unexpected content (one line per sampler, seed and spp)\n", tsv);
         return 0;
@@ -1099,7 +1103,7 @@ static int run_mitsuba(const config *cfg, results *R, mitsuba_results *M)
             printf("SKIP Mitsuba %s: not exported: %s\n", scenes[i].name, M->scene_skip[i]);
             continue;
         }
-        if (!mitsuba_series(cfg, xml, ref, R->L[i].floor, cfg->budget, 1 << (MAX_LEVELS - 1), cfg->seeds,
+        if (!mitsuba_series(cfg, xml, ref, "independent,multijitter", R->L[i].floor, cfg->budget, 1 << (MAX_LEVELS - 1), cfg->seeds,
                             BENCH_SIZE * BENCH_SIZE, tsv,
                             M->s[i], M->spp_used[i]))
             return 0;
@@ -1312,8 +1316,8 @@ static int run_headline(const config *cfg, headline_results *H)
     H->width = L.rd.width;
     H->height = L.rd.height;
     H->spp = L.rd.samples_per_pixel;
-    H->ref_spp = HEADLINE_REF_SPP;
-    H->seeds = HEADLINE_SEEDS;
+    H->ref_spp = cfg->headline_ref_spp;
+    H->seeds = cfg->headline_seeds;
     printf("headline: %s at %dx%d, %d spp (the scene's settings), %d seeds, against Mitsuba 3\n", HEADLINE_SCENE,
            H->width, H->height, H->spp, H->seeds);
     fflush(stdout);
@@ -1337,10 +1341,10 @@ static int run_headline(const config *cfg, headline_results *H)
             fprintf(stderr, "bench: Mitsuba export of %s: %s\n", HEADLINE_SCENE, H->skip_reason);
             ok = 0;
         }
-        /* ladder until one render takes 2x pdftrace's time (seeds so far), so the series brackets
-           it (at most 16x pdftrace's spp) */
-        if (ok) ok = mitsuba_series(cfg, xml, ref, 0.0, 2.0 * median(tb, nb), 16 * H->spp, H->seeds,
-                                    H->width * H->height, tsv, H->mi, H->spp_used);
+        /* ladder until one render takes pdftrace's time (its seeds so far), so the series reaches it
+           (at most 16x pdftrace's spp); an equal error beyond its end is extrapolated (marked) */
+        if (ok) ok = mitsuba_series(cfg, xml, ref, cfg->headline_samplers, 0.0, median(tb, nb), 16 * H->spp,
+                                    H->seeds, H->width * H->height, tsv, H->mi, H->spp_used);
     }
     for (seed = 1; ok && seed < H->seeds; seed += 2) ok = headline_pdftrace(&L, H, seed, t, e, b);
     if (ok) {
@@ -1348,16 +1352,18 @@ static int run_headline(const config *cfg, headline_results *H)
         H->pt_err = median(e, H->seeds);
         H->pt_bias = median(b, H->seeds);
     }
+    H->best = -1;
     for (j = 0; ok && j < MI_SAMPLERS; ++j) {
+        if (H->mi[j].levels < 1) continue; /* not asked for (--headline-samplers) */
         summarize_series(&H->mi[j], H->seeds, H->floor);
         H->mi_err[j] = err_at_time(&H->mi[j], H->pt_time, &H->mi_err_extrap[j]);
         H->mi_time[j] = time_to_reach(&H->mi[j], H->pt_err, &H->mi_time_extrap[j]);
-        if (j == 0 || H->mi_err[j] < H->mi_err[H->best]) H->best = j;
+        if (H->best < 0 || H->mi_err[j] < H->mi_err[H->best]) H->best = j;
         printf("  Mitsuba %-12s at %.2f s: relMSE %.4g (pdftrace %.4g, ratio %.3g); reaches pdftrace's error in %.2f s "
                "(ratio %.3g)\n", mi_samplers[j], H->pt_time, H->mi_err[j], H->pt_err, H->mi_err[j] / H->pt_err,
                H->mi_time[j], H->mi_time[j] / H->pt_time);
     }
-    H->available = ok;
+    H->available = ok && H->best >= 0;
     free_scene(&L);
     return ok;
 }
@@ -1371,12 +1377,14 @@ static void write_headline_table(FILE *f, const headline_results *H)
     fprintf(f, "| pdftrace, the scene's settings (MIS, independent numbers) | %d | %.3g | %.4g | %.3g | - |\n", H->spp,
             H->pt_time, H->pt_err, 1.0 / (H->pt_time * H->pt_err));
     for (j = 0; j < MI_SAMPLERS; ++j)
-        fprintf(f, "| Mitsuba 3 `%s`%s, equal time | - | %.3g | %.4g%s | %.3g | %srelMSE %.3g×%s |\n", mi_samplers[j],
+        if (H->mi[j].levels > 0)
+            fprintf(f, "| Mitsuba 3 `%s`%s, equal time | - | %.3g | %.4g%s | %.3g | %srelMSE %.3g×%s |\n", mi_samplers[j],
                 j == H->best ? " (best)" : "", H->pt_time, H->mi_err[j], H->mi_err_extrap[j] ? " (extrapolated)" : "",
                 1.0 / (H->pt_time * H->mi_err[j]), j == H->best ? "**" : "", H->mi_err[j] / H->pt_err,
                 j == H->best ? "**" : "");
     for (j = 0; j < MI_SAMPLERS; ++j)
-        fprintf(f, "| Mitsuba 3 `%s`%s, equal error | - | %.3g%s | %.4g | %.3g | %stime %.3g×%s |\n", mi_samplers[j],
+        if (H->mi[j].levels > 0)
+            fprintf(f, "| Mitsuba 3 `%s`%s, equal error | - | %.3g%s | %.4g | %.3g | %stime %.3g×%s |\n", mi_samplers[j],
                 j == H->best ? " (best)" : "", H->mi_time[j], H->mi_time_extrap[j] ? " (extrapolated)" : "", H->pt_err,
                 1.0 / (H->mi_time[j] * H->pt_err), j == H->best ? "**" : "", H->mi_time[j] / H->pt_time,
                 j == H->best ? "**" : "");
@@ -2629,6 +2637,8 @@ static int usage(void)
             "           build/mitsuba-venv/bin/python; make mitsuba-install creates it)\n"
             "  --cache: where the headline keeps its reference image (default build/bench-cache)\n"
             "  --headline-size N: the headline at N x N instead of the scene's size (quick checks)\n"
+            "  --headline-seeds N, --headline-ref-spp N (3, 1024), --headline-samplers independent,multijitter\n"
+            "           (or one of them): a cheaper headline on a busy machine\n"
             "  --scenes: comma-separated scene names (default all; see bench list)\n"
             "Run from the repository root (make bench / make bench-quick / make bench-refs).\n");
     return 2;
@@ -2710,13 +2720,29 @@ static int cmd_run(int argc, char **argv)
     cfg.mitsuba_python = getenv("MITSUBA_PYTHON") && *getenv("MITSUBA_PYTHON") ? getenv("MITSUBA_PYTHON")
                                                                                : "build/mitsuba-venv/bin/python";
     cfg.cache = "build/bench-cache";
+    cfg.headline_seeds = HEADLINE_SEEDS;
+    cfg.headline_ref_spp = HEADLINE_REF_SPP;
+    cfg.headline_samplers = "independent,multijitter";
     for (i = 2; i < argc; ++i) {
         const char *a = argv[i];
         if (!strcmp(a, "--quick")) cfg.quick = 1;
         else if (!strcmp(a, "--out") && i + 1 < argc) cfg.out = argv[++i];
         else if (!strcmp(a, "--mitsuba-python") && i + 1 < argc) cfg.mitsuba_python = argv[++i];
         else if (!strcmp(a, "--cache") && i + 1 < argc) cfg.cache = argv[++i];
-        else if (!strcmp(a, "--headline-size") && i + 1 < argc) {
+        else if (!strcmp(a, "--headline-samplers") && i + 1 < argc) {
+            cfg.headline_samplers = argv[++i];
+            if (strcmp(cfg.headline_samplers, "independent") && strcmp(cfg.headline_samplers, "multijitter") &&
+                strcmp(cfg.headline_samplers, "independent,multijitter")) {
+                fprintf(stderr, "bench: --headline-samplers: independent, multijitter or independent,multijitter\n");
+                return 2;
+            }
+        } else if (!strcmp(a, "--headline-seeds") && i + 1 < argc) {
+            if (!parse_positive(a, argv[++i], 1, MAX_SEEDS, &v)) return 2;
+            cfg.headline_seeds = (int)v;
+        } else if (!strcmp(a, "--headline-ref-spp") && i + 1 < argc) {
+            if (!parse_positive(a, argv[++i], 16, 1 << 20, &v)) return 2;
+            cfg.headline_ref_spp = (int)v;
+        } else if (!strcmp(a, "--headline-size") && i + 1 < argc) {
             if (!parse_positive(a, argv[++i], 8, 4096, &v)) return 2;
             cfg.headline_size = (int)v;
         }
