@@ -144,8 +144,9 @@ def cmd_series(a):
             sc = scenes[s]
             spp, k, prev = 1, 0, 0.0
             while True:
-                if seed == 1 and prev < WARMUP_BELOW:
-                    render(mi, dr, sc, spp, WARMUP_SEED)  # compiles this configuration's kernels
+                if seed == 1:
+                    if prev < WARMUP_BELOW:
+                        render(mi, dr, sc, spp, WARMUP_SEED)  # compiles this configuration's kernels
                 elif k >= ladders[s]:
                     break
                 t, img, used = render(mi, dr, sc, spp, seed)
