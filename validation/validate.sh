@@ -87,6 +87,12 @@ sky               bench/scenes   64   16    256   pixel   uniform sky only, mirr
 tiny-light        bench/scenes   64   16    512   pixel   tiny bright sphere light and a dim window
 tiny-light-pure   bench/scenes   64   16    512   pixel   tiny bright sphere light only
 '
+# Scenes where Mitsuba 3.9 is known to be wrong, with the reason (docs/accuracy.md, "Tiny sphere
+# lights and Mitsuba"). Such a row is KNOWN, not FAIL, only if pdftrace is darker than Mitsuba by
+# at most 0.5 % in every channel (ptv report); pdftrace itself is checked there against the
+# exact answer by make test's analytic.image_tiny_sphere_light.
+mi_known_reason="Mitsuba 3.9 computes a sphere light's cone density in float, which makes a light as small as this one (r/d ~ 0.005) about 0.07 % too bright (docs/accuracy.md)"
+mi_known=" tiny-light tiny-light-pure "
 mi_names=()
 mi_skip=""
 if [ "$mode" != pov ]; then
@@ -123,9 +129,15 @@ run_mitsuba() {
     "$ptv" render "$dir/$name.scene" "$out/$name-ptm.pfm" "$out/$name-ptm-var.pfm" "$size" "$size" "$spp" "$seeds" \
         "$out/$name-ptm-regions.txt" || return 1
     t2=$SECONDS
+    local rc=0
     "$ptv" compare-mitsuba "$name" "$out/$name-ptm" "$out/$name-mi" "$out" "$test" \
         "$note; $seeds seeds x $spp spp each; $(grep -o 'llvm_ad_rgb\|scalar_rgb' "$out/$name-mitsuba.log" | head -n 1);" \
-        "Mitsuba $((t1 - t0)) s, pdftrace $((t2 - t1)) s"
+        "Mitsuba $((t1 - t0)) s, pdftrace $((t2 - t1)) s" || rc=$?
+    if [[ $mi_known == *" $name "* ]] && [ -s "$res" ]; then
+        echo "known $mi_known_reason" >>"$res"
+        [ "$rc" != 3 ] || rc=0 # a failed comparison: ptv report decides whether it is the known one
+    fi
+    return "$rc"
 }
 if [ "$mode" != pov ]; then
     while read -r name dir size seeds spp test note; do
