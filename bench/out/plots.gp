@@ -16,7 +16,9 @@ plot 'cornell.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 titl
      'cornell.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'cornell.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'cornell.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'cornell.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'cornell.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'cornell.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'cornell.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 reset
 set output 'tiny-light.png'
 set title 'tiny-light (128x128, median of seeds)'
@@ -34,7 +36,9 @@ plot 'tiny-light.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 t
      'tiny-light.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'tiny-light.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'tiny-light.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'tiny-light.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'tiny-light.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 reset
 set output 'tiny-light-pure.png'
 set title 'tiny-light-pure (128x128, median of seeds)'
@@ -52,7 +56,9 @@ plot 'tiny-light-pure.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' p
      'tiny-light-pure.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light-pure.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'tiny-light-pure.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'tiny-light-pure.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light-pure.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'tiny-light-pure.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'tiny-light-pure.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 reset
 set output 'metal-glass.png'
 set title 'metal-glass (128x128, median of seeds)'
@@ -70,7 +76,9 @@ plot 'metal-glass.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'metal-glass.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'metal-glass.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'metal-glass.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'metal-glass.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'metal-glass.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'metal-glass.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'metal-glass.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 reset
 set output 'many-lights.png'
 set title 'many-lights (128x128, median of seeds)'
@@ -88,7 +96,9 @@ plot 'many-lights.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'many-lights.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'many-lights.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'many-lights.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'many-lights.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'many-lights.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'many-lights.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'many-lights.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 reset
 set output 'adaptive.png'
 set title 'cornell: adaptive vs uniform sampling (MIS)'
@@ -120,7 +130,9 @@ plot 'cornell.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 titl
      'cornell.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'cornell.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'cornell.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'cornell.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'cornell.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'cornell.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'cornell.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 set title 'tiny-light (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -136,7 +148,9 @@ plot 'tiny-light.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 t
      'tiny-light.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'tiny-light.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'tiny-light.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'tiny-light.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'tiny-light.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 set title 'tiny-light-pure (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -152,7 +166,9 @@ plot 'tiny-light-pure.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' p
      'tiny-light-pure.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'tiny-light-pure.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'tiny-light-pure.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'tiny-light-pure.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'tiny-light-pure.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'tiny-light-pure.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'tiny-light-pure.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 set title 'metal-glass (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -168,7 +184,9 @@ plot 'metal-glass.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'metal-glass.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'metal-glass.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'metal-glass.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'metal-glass.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'metal-glass.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'metal-glass.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'metal-glass.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 set title 'many-lights (128x128, median of seeds)'
 set logscale xy
 set format x '10^{%L}'
@@ -184,7 +202,9 @@ plot 'many-lights.dat' index 0 using 1:2 with linespoints lc rgb '#d62728' pt 5 
      'many-lights.dat' index 4 using 1:2 with linespoints lc rgb '#8c564b' pt 13 dt 2 title 'mix0.75', \
      'many-lights.dat' index 5 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'mis', \
      'many-lights.dat' index 6 using 1:2 with linespoints lc rgb '#17becf' pt 6 lw 2 title 'mis-sobol', \
-     'many-lights.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray'
+     'many-lights.dat' index 7 using 1:2:(sprintf('q%d', $3)) with labels point pt 3 ps 1.5 lc rgb 'black' offset 0.8,0.6 font ',8' title 'POV-Ray', \
+     'many-lights.dat' index 8 using 1:2 with linespoints lc rgb '#000000' pt 2 dt 3 lw 2 title 'Mitsuba independent', \
+     'many-lights.dat' index 9 using 1:2 with linespoints lc rgb '#7f7f7f' pt 1 dt 3 lw 2 title 'Mitsuba multijitter'
 set title 'cornell: adaptive vs uniform (MIS)'
 plot 'adaptive.dat' index 0 using 1:2 with linespoints lc rgb '#2ca02c' pt 4 lw 2 title 'uniform', \
      'adaptive.dat' index 1 using 1:2 with linespoints lc rgb '#e377c2' pt 6 lw 2 title 'adaptive', \
