@@ -315,11 +315,14 @@ typedef enum pt_pdf_type {
     PT_PDF_SCENE_LIGHTS,       /* all emitters of a committed scene, each picked by power */
     PT_PDF_MATERIAL,           /* a non-delta material's scattering PDF */
     PT_PDF_MIXTURE,            /* sum_k w_k p_k */
-    PT_PDF_CALLBACK            /* user-defined */
+    PT_PDF_CALLBACK,           /* user-defined */
+    PT_PDF_GUIDE               /* a learned guide's leaf (pt_pdf_guide) */
 } pt_pdf_type;
 
 struct pt_pdf;
 struct pt_scene;
+struct pt_guide;
+struct pt_image;
 
 /* User-defined PDF. sample: write a direction (unit length) and its density, return 1; return
    0 when no sample can be drawn. value: the density of a unit direction (0 where none). */
@@ -338,6 +341,7 @@ typedef struct pt_pdf {
         struct { const struct pt_scene *scene; int material; pt_vec3 normal, wo; } material;
         struct { int count; const struct pt_pdf *components; const float *weights; } mixture;
         struct { void *user; pt_pdf_sample_fn sample; pt_pdf_value_fn value; } callback;
+        struct { const struct pt_guide *guide; uint32_t leaf; } guide;
     } as;
 } pt_pdf;
 
@@ -369,6 +373,65 @@ PTDEF pt_pdf pt_pdf_material(const struct pt_scene *scene, int material, pt_vec3
    density (sampling fails, value 0). */
 PTDEF pt_pdf pt_pdf_mixture(int count, const pt_pdf *components, const float *weights);
 PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_fn value);
+
+/* A learned PDF: the guide (path guiding). A pt_guide is a spatial binary tree over a box whose
+   leaves each hold a quadtree over the directions (an SD-tree: Mueller, Gross & Novak, "Practical
+   Path Guiding for Efficient Light-Transport Simulation", EGSR 2017). Directions map to the unit
+   square by the cylindrical equal-area map x = (cos(theta) + 1) / 2, y = phi / (2 pi), so a
+   density q over the square is q / (4 pi) per steradian. Records (a point, a direction and a
+   value >= 0, e.g. incident radiance over the density it was sampled with) are added into the
+   guide's "building" tree; pt_guide_update turns them into the sampling tree (each quadtree
+   quadrant's probability in proportion to the values recorded in it) and refines both trees
+   where the values concentrate: a spatial leaf splits in two once it held more than
+   spatial_threshold x sqrt(2^k) records in update k, a directional cell splits in four when it
+   holds more than directional_threshold of its leaf's value. pt_render trains one itself
+   (pt_render_desc.guiding); this API builds, inspects and samples one outside a render.
+   Records from several threads at once are safe and their order does not matter: values are
+   summed in fixed point (integers), so a guide is bit-identical however its records were
+   scheduled. Sampling and pt_pdf_value of pt_pdf_guide agree exactly; a leaf with no data yet
+   is uniform over the sphere. */
+typedef struct pt_guide pt_guide;
+typedef struct pt_guide_desc {
+    pt_vec3 bounds_min, bounds_max; /* the box it learns over (pt_guide_create); points outside are
+                                       clamped into it */
+    size_t max_bytes;               /* memory bound of both trees; 0: 64 MiB. Refinement stops at it */
+    float spatial_threshold;        /* c above; 0: 12000 */
+    float directional_threshold;    /* rho above, in (0, 1); 0: 0.01 */
+    int max_directional_depth;      /* deepest quadtree level, 1..20; 0: 20 */
+    float value_resolution;         /* the fixed-point unit of the sums; 0: 2^-24. A record's
+                                       value is clamped to 2^40 units */
+} pt_guide_desc;
+typedef struct pt_guide_info {
+    int updates;                    /* pt_guide_update calls so far */
+    uint32_t spatial_leaves, spatial_depth;
+    uint64_t directional_nodes;     /* quadtree nodes, sampling and building trees */
+    size_t bytes;                   /* memory held */
+    size_t max_bytes;               /* the bound (resolved) */
+    int at_memory_bound;            /* 1 when the last update stopped refining at max_bytes */
+    uint64_t records;               /* records since the last update */
+} pt_guide_info;
+/* Creates an empty guide (every leaf uniform). desc NULL or a bad field: PT_ERROR_INVALID_ARGUMENT
+   with *out NULL; also PT_ERROR_OUT_OF_MEMORY. */
+PTDEF int pt_guide_create(const pt_guide_desc *desc, pt_guide **out);
+/* A guide over a committed scene's bounds (desc may be NULL: every default; its bounds are not
+   used), in world coordinates like every other point of the API. pt_render_desc.guiding_guide
+   takes only such a guide. */
+PTDEF int pt_guide_create_for_scene(const struct pt_scene *scene, const pt_guide_desc *desc, pt_guide **out);
+PTDEF void pt_guide_destroy(pt_guide *guide);
+/* Adds value (finite, >= 0) for unit direction dir at point. PT_ERROR_INVALID_ARGUMENT otherwise. */
+PTDEF int pt_guide_record(pt_guide *guide, pt_vec3 point, pt_vec3 dir, float value);
+/* Makes the records the sampling distribution, refines, and clears the records (see above).
+   Not concurrently with pt_guide_record or with sampling from the guide. */
+PTDEF int pt_guide_update(pt_guide *guide);
+PTDEF int pt_guide_get_info(const pt_guide *guide, pt_guide_info *info);
+/* The guide's density at point (the leaf holding it): PT_PDF_GUIDE. The guide must outlive it and
+   not be updated while it is used. A NULL guide gives a PDF with no density. */
+PTDEF pt_pdf pt_pdf_guide(const pt_guide *guide, pt_vec3 point);
+/* The guide's density at point as a latitude-longitude picture (column: phi from 0 to 2 pi about
+   +z, starting at +x; row: theta from 0 at +z at the top to pi), each pixel's value in all three
+   channels: the density of the direction at its centre, per steradian. *image is allocated or
+   reallocated as by pt_film_resolve. */
+PTDEF int pt_guide_image(const pt_guide *guide, pt_vec3 point, int width, int height, struct pt_image *image);
 
 /* PT_OK, or PT_ERROR_INVALID_ARGUMENT for a malformed PDF (bad weights, NULL callbacks,
    non-finite parameters, an uncommitted scene ...). */
@@ -820,6 +883,15 @@ typedef enum pt_adaptive_mode {
     PT_ADAPTIVE_NEIGHBOURS = 2    /* biased, less: re-planned, a pixel's own samples left out */
 } pt_adaptive_mode;
 
+/* Path guiding (pt_render_desc.guiding; section 8 of the implementation, "Guiding"). */
+typedef enum pt_guiding {
+    PT_GUIDING_OFF = 0,   /* the material's PDF (and a user guide, if any) alone */
+    PT_GUIDING_ON = 1,    /* train a guide (pt_guide) in the first guiding_budget of the samples,
+                             then render with p = alpha p_material + (1 - alpha) p_guide */
+    PT_GUIDING_AUTO = 2   /* train, then render guided only if training measured a higher
+                             efficiency (1 / (error x rays)) with the guide than without */
+} pt_guiding;
+
 /* The most copies pt_render_desc.indirect_paths may ask for. */
 #define PT_INDIRECT_PATHS_MAX 8
 
@@ -885,6 +957,19 @@ typedef struct pt_render_desc {
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
                                     quasi-Monte Carlo (section 2), lower error at equal samples */
+    /* Path guiding: a guide (section 2, pt_guide) learned in training iterations of 1, 2, 4, ...
+       samples per pixel, each rendered with the guide of the ones before and discarded; the image
+       is the rest of the samples, rendered with the final guide, so it is unbiased. Not with a
+       user guide (pt_render_desc.guide). */
+    pt_guiding guiding;          /* 0: PT_GUIDING_OFF */
+    float guiding_budget;        /* the share of samples_per_pixel training may take, in (0, 1); 0:
+                                    0.25. Iterations 1, 2, ..., 2^(T-1) spp: the most T with
+                                    2^T - 1 <= budget x samples_per_pixel; T < 2: no guiding */
+    float guiding_alpha;         /* the material's share of the guided mixture, in (0, 1); 0: 0.5 */
+    int guiding_max_mib;         /* the guide's memory bound in MiB, >= 1; 0: 64 */
+    pt_guide *guiding_guide;     /* optional: a guide from pt_guide_create_for_scene(scene) that the
+                                    render trains (on from what it holds) and leaves trained, to be
+                                    inspected or reused; NULL: the render makes its own */
 } pt_render_desc;
 
 typedef struct pt_render_stats {
@@ -901,6 +986,15 @@ typedef struct pt_render_stats {
     double estimated_error;      /* the film's estimated RMS relative error at the end, the square
                                     root of pt_film_error over the whole image; -1 if unknown (a
                                     pixel with fewer than 2 samples) */
+    int guiding_used;            /* 1 when the image was rendered with a learned guide */
+    int guiding_iterations;      /* training iterations run */
+    uint64_t guiding_samples;    /* camera samples the training took (counted in samples) */
+    double guiding_seconds;      /* wall clock of the training (counted in seconds) */
+    double guiding_gain;         /* training's measured efficiency with the guide over without (> 1:
+                                    the guide pays); 0 when not measured */
+    size_t guiding_bytes;        /* memory of the guide at the end */
+    uint32_t guiding_leaves;     /* its spatial leaves */
+    char guiding_note[128];      /* "" without guiding; else what was decided and why */
     char error[256];             /* "" on success; else why the call failed or stopped, naming the one
                                     argument or pt_render_desc field at fault with its value, e.g.
                                     "pt_render_desc.width = 0: must be > 0" */
@@ -2414,6 +2508,568 @@ PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_f
     return p;
 }
 
+/* --- the learned guide (pt_guide): an SD-tree after Mueller, Gross & Novak, "Practical Path
+   Guiding for Efficient Light-Transport Simulation" (EGSR 2017). A spatial binary tree (split
+   at the middle, axes x, y, z in turn) whose leaves hold two quadtrees over the equal-area square
+   of directions: the sampling tree (each node's four quadrant probabilities) and the building
+   tree (each node's four fixed-point sums of the records), whose topology is fixed between
+   updates so that records need no lock. --- */
+#define PT__GUIDE_MAX_DEPTH 20          /* quadtree levels: float's 24 bits hold 20 halvings */
+#define PT__GUIDE_SPATIAL_MAX_DEPTH 48  /* spatial levels (16 halvings per axis) */
+#define PT__GUIDE_CLAMP_UNITS ((uint64_t)1 << 40)
+
+typedef struct pt__dtree {
+    uint32_t nodes, cap;
+    uint32_t *child;   /* 4 per node: the quadrant's child node, 0: the quadrant is a leaf */
+    float *prob;       /* sampling tree: 4 per node, P(quadrant | node), summing to 1 */
+    uint64_t *energy;  /* building tree: 4 per node, sums of the records in fixed point */
+} pt__dtree;
+
+typedef struct pt__guide_leaf {
+    pt__dtree sampling, building;
+    uint64_t records;  /* records since the last update (added atomically) */
+    int trained;       /* the sampling tree holds learned data (else it is uniform) */
+} pt__guide_leaf;
+
+typedef struct pt__guide_node {
+    int axis;          /* 0, 1, 2: split at the middle of that axis; -1: a leaf */
+    int depth;         /* the root's is 0; a leaf at depth d splits along axis d mod 3 */
+    uint32_t a, b;     /* children (lower, upper half), or a = the leaf's index */
+} pt__guide_node;
+
+struct pt_guide {
+    pt_guide_desc desc;               /* resolved */
+    pt_vec3 lo, hi, inv_extent;       /* the box, in the coordinates records are made in */
+    const pt_scene *scene;            /* pt_guide_create_for_scene: points are converted to local */
+    pt__guide_node *nodes;
+    pt__guide_leaf *leaves;
+    uint32_t node_count, node_cap, leaf_count, leaf_cap;
+    uint64_t max_nodes;               /* directional nodes max_bytes allows */
+    double unit;                      /* the value of one fixed-point unit */
+    int updates, at_bound;
+#if !defined(PDFTRACE_NO_THREADS) && !defined(__GNUC__) && !defined(__clang__)
+    pthread_mutex_t lock;             /* no atomics: the sums are added under a lock */
+#endif
+};
+
+/* an integer sum does not depend on the order of its terms: the guide is the same whatever the
+   threads' schedule */
+static void pt__guide_add(pt_guide *g, uint64_t *p, uint64_t v)
+{
+#if defined(PDFTRACE_NO_THREADS)
+    (void)g;
+    *p += v;
+#elif defined(__GNUC__) || defined(__clang__)
+    (void)g;
+    (void)__atomic_fetch_add(p, v, __ATOMIC_RELAXED);
+#else
+    pthread_mutex_lock(&g->lock);
+    *p += v;
+    pthread_mutex_unlock(&g->lock);
+#endif
+}
+
+/* The cylindrical equal-area map: (x, y) in [0,1)^2, d(omega) = 4 pi dx dy. */
+static void pt__guide_dir_to_square(pt_vec3 w, float *x, float *y)
+{
+    float z = w.z < -1.0f ? -1.0f : (w.z > 1.0f ? 1.0f : w.z), phi = atan2f(w.y, w.x);
+    if (phi < 0.0f) phi += 2.0f * PT__PI;
+    *x = (z + 1.0f) * 0.5f;
+    *y = phi * (0.5f * PT__INV_PI);
+    if (!(*x < 1.0f)) *x = 0.99999994f;
+    if (!(*y < 1.0f)) *y = 0.99999994f;
+    if (!(*x >= 0.0f)) *x = 0.0f;
+    if (!(*y >= 0.0f)) *y = 0.0f;
+}
+static pt_vec3 pt__guide_square_to_dir(float x, float y)
+{
+    float z = 2.0f * x - 1.0f, r = sqrtf(pt__maxf(0.0f, 1.0f - z * z)), phi = 2.0f * PT__PI * y;
+    return pt_v3(r * cosf(phi), r * sinf(phi), z);
+}
+
+/* One level down the quadtree: the quadrant of (x, y) and (x, y) rescaled into it. */
+static int pt__guide_quadrant(float *x, float *y)
+{
+    int bx = *x >= 0.5f, by = *y >= 0.5f;
+    *x = 2.0f * *x - (float)bx;
+    *y = 2.0f * *y - (float)by;
+    return bx + 2 * by;
+}
+
+/* The sampling tree's density over the square at (x, y) (1: uniform). */
+static float pt__dtree_density(const pt__dtree *t, float x, float y)
+{
+    float d = 1.0f;
+    uint32_t n = 0;
+    int level;
+    if (!t->nodes) return 1.0f;
+    for (level = 0; level < PT__GUIDE_MAX_DEPTH; ++level) {
+        int q = pt__guide_quadrant(&x, &y);
+        d *= 4.0f * t->prob[4u * n + (uint32_t)q];
+        if (!(d > 0.0f)) return 0.0f;
+        n = t->child[4u * n + (uint32_t)q];
+        if (!n) break;
+    }
+    return d;
+}
+
+/* Draws (x, y) from the sampling tree by warping (ux, uy) level by level (a column by its
+   marginal, then the quadrant in it), so each level takes one bit of each number. */
+static void pt__dtree_sample(const pt__dtree *t, float ux, float uy, float *x, float *y)
+{
+    float ox = 0.0f, oy = 0.0f, size = 1.0f;
+    uint32_t n = 0;
+    int level;
+    for (level = 0; t->nodes && level < PT__GUIDE_MAX_DEPTH; ++level) {
+        const float *p = t->prob + 4u * n;
+        float left = p[0] + p[2], right = p[1] + p[3], top, bottom;
+        int bx, by;
+        if (!(left + right > 0.0f)) break;
+        bx = ux * (left + right) >= left;
+        ux = bx ? (ux * (left + right) - left) / right : ux * (left + right) / left;
+        top = p[bx];
+        bottom = p[bx + 2];
+        by = uy * (top + bottom) >= top;
+        uy = by ? (uy * (top + bottom) - top) / bottom : uy * (top + bottom) / top;
+        ux = pt__minf(pt__maxf(ux, 0.0f), 0.99999994f);
+        uy = pt__minf(pt__maxf(uy, 0.0f), 0.99999994f);
+        size *= 0.5f;
+        ox += (float)bx * size;
+        oy += (float)by * size;
+        n = t->child[4u * n + (uint32_t)(bx + 2 * by)];
+        if (!n) break;
+    }
+    *x = ox + ux * size;
+    *y = oy + uy * size;
+}
+
+static void pt__dtree_free(pt__dtree *t)
+{
+    PT_FREE(t->child);
+    PT_FREE(t->prob);
+    PT_FREE(t->energy);
+    memset(t, 0, sizeof *t);
+}
+/* Appends a node (its quadrants leaves: zero sums, or probability 1/4 each) as *index; 0 when
+   out of memory. */
+static int pt__dtree_push(pt__dtree *t, int building, uint32_t *index)
+{
+    uint32_t n;
+    int q;
+    if (t->nodes == t->cap) {
+        uint32_t cap = t->cap ? 2u * t->cap : 4u;
+        uint32_t *c = (uint32_t *)PT_REALLOC(t->child, sizeof(uint32_t) * 4u * cap);
+        if (!c) return 0;
+        t->child = c;
+        if (building) {
+            uint64_t *e = (uint64_t *)PT_REALLOC(t->energy, sizeof(uint64_t) * 4u * cap);
+            if (!e) return 0;
+            t->energy = e;
+        } else {
+            float *p = (float *)PT_REALLOC(t->prob, sizeof(float) * 4u * cap);
+            if (!p) return 0;
+            t->prob = p;
+        }
+        t->cap = cap;
+    }
+    n = t->nodes++;
+    for (q = 0; q < 4; ++q) {
+        t->child[4u * n + (uint32_t)q] = 0;
+        if (building) t->energy[4u * n + (uint32_t)q] = 0;
+        else t->prob[4u * n + (uint32_t)q] = 0.25f;
+    }
+    *index = n;
+    return 1;
+}
+static int pt__dtree_copy(pt__dtree *dst, const pt__dtree *src)
+{
+    memset(dst, 0, sizeof *dst);
+    if (!src->nodes) return 1;
+    dst->child = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * 4u * src->nodes);
+    dst->prob = src->prob ? (float *)PT_MALLOC(sizeof(float) * 4u * src->nodes) : NULL;
+    dst->energy = src->energy ? (uint64_t *)PT_MALLOC(sizeof(uint64_t) * 4u * src->nodes) : NULL;
+    if (!dst->child || (src->prob && !dst->prob) || (src->energy && !dst->energy)) { pt__dtree_free(dst); return 0; }
+    memcpy(dst->child, src->child, sizeof(uint32_t) * 4u * src->nodes);
+    if (src->prob) memcpy(dst->prob, src->prob, sizeof(float) * 4u * src->nodes);
+    if (src->energy) memcpy(dst->energy, src->energy, sizeof(uint64_t) * 4u * src->nodes);
+    dst->nodes = dst->cap = src->nodes;
+    return 1;
+}
+static size_t pt__dtree_bytes(const pt__dtree *t)
+{
+    return (size_t)t->cap * 4u * (sizeof(uint32_t) + (t->prob ? sizeof(float) : 0u) + (t->energy ? sizeof(uint64_t) : 0u));
+}
+
+/* The spatial leaf holding p (coordinates of the guide's box; outside: clamped into it). */
+static uint32_t pt__guide_leaf_at(const pt_guide *g, pt_vec3 p)
+{
+    float c[3];
+    uint32_t n = 0;
+    c[0] = (p.x - g->lo.x) * g->inv_extent.x;
+    c[1] = (p.y - g->lo.y) * g->inv_extent.y;
+    c[2] = (p.z - g->lo.z) * g->inv_extent.z;
+    while (g->nodes[n].axis >= 0) {
+        int a = g->nodes[n].axis;
+        if (c[a] < 0.5f) { c[a] *= 2.0f; n = g->nodes[n].a; }
+        else { c[a] = 2.0f * c[a] - 1.0f; n = g->nodes[n].b; }
+    }
+    return g->nodes[n].a;
+}
+static pt_vec3 pt__guide_local(const pt_guide *g, pt_vec3 p) { return g->scene ? pt__to_local(g->scene, p) : p; }
+
+static float pt__guide_value(const pt_guide *g, uint32_t leaf, pt_vec3 w)
+{
+    float x, y;
+    if (!g || leaf >= g->leaf_count) return 0.0f;
+    pt__guide_dir_to_square(w, &x, &y);
+    return pt__dtree_density(&g->leaves[leaf].sampling, x, y) * PT__INV_4PI;
+}
+static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2, pt_vec3 *w, float *p)
+{
+    float x, y;
+    if (!g || leaf >= g->leaf_count) return 0;
+    pt__dtree_sample(&g->leaves[leaf].sampling, u1, u2, &x, &y);
+    *w = pt_normalize(pt__guide_square_to_dir(x, y));
+    *p = pt__guide_value(g, leaf, *w); /* of the direction as rounded: sample and value agree */
+    return *p > 0.0f;
+}
+
+/* Adds `value` (>= 0) along w into the building tree of the leaf holding p (local coordinates). */
+static void pt__guide_splat(pt_guide *g, pt_vec3 p, pt_vec3 w, double value)
+{
+    pt__guide_leaf *l = &g->leaves[pt__guide_leaf_at(g, p)];
+    pt__dtree *t = &l->building;
+    double u = value / g->unit;
+    uint64_t units;
+    float x, y;
+    uint32_t n = 0;
+    int level;
+    pt__guide_add(g, &l->records, 1u);
+    if (!(u >= 0.5)) return; /* zero, below resolution, or NaN */
+    units = u >= (double)PT__GUIDE_CLAMP_UNITS ? PT__GUIDE_CLAMP_UNITS : (uint64_t)(u + 0.5);
+    pt__guide_dir_to_square(w, &x, &y);
+    for (level = 0; level < PT__GUIDE_MAX_DEPTH; ++level) {
+        int q = pt__guide_quadrant(&x, &y);
+        pt__guide_add(g, &t->energy[4u * n + (uint32_t)q], units);
+        n = t->child[4u * n + (uint32_t)q];
+        if (!n) break;
+    }
+}
+
+/* The sampling tree of a building tree: the same topology, each node's sums normalised (a node
+   whose sums are all zero is never reached by sampling: its parent's quadrant has none). */
+static int pt__dtree_to_sampling(const pt__dtree *b, pt__dtree *out)
+{
+    uint32_t n;
+    memset(out, 0, sizeof *out);
+    out->child = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * 4u * b->nodes);
+    out->prob = (float *)PT_MALLOC(sizeof(float) * 4u * b->nodes);
+    if (!out->child || !out->prob) { pt__dtree_free(out); return 0; }
+    memcpy(out->child, b->child, sizeof(uint32_t) * 4u * b->nodes);
+    for (n = 0; n < b->nodes; ++n) {
+        const uint64_t *e = b->energy + 4u * n;
+        double sum = (double)e[0] + (double)e[1] + (double)e[2] + (double)e[3];
+        int q;
+        for (q = 0; q < 4; ++q) out->prob[4u * n + (uint32_t)q] = sum > 0.0 ? (float)((double)e[q] / sum) : 0.25f;
+    }
+    out->nodes = out->cap = b->nodes;
+    return 1;
+}
+
+/* A fresh building tree for the next records: a quadrant is subdivided where the sampling tree
+   gives it more than rho of the leaf's probability (a leaf quadrant's share is spread evenly over
+   its four children), to max_directional_depth levels and while *budget (nodes) lasts. Mueller et
+   al. 2017, section 3.3. */
+typedef struct pt__refine_item { uint32_t s, b; int has_s, depth; float f; } pt__refine_item;
+static int pt__dtree_refine(const pt_guide *g, const pt__dtree *s, pt__dtree *b, uint64_t *budget, int *at_bound)
+{
+    pt__refine_item stack[4 * PT__GUIDE_MAX_DEPTH + 4];
+    int top = 0;
+    uint32_t root;
+    memset(b, 0, sizeof *b);
+    if (!pt__dtree_push(b, 1, &root)) return 0;
+    stack[top].s = 0;
+    stack[top].has_s = s->nodes > 0;
+    stack[top].b = root;
+    stack[top].depth = 1;
+    stack[top].f = 1.0f;
+    ++top;
+    while (top > 0) {
+        pt__refine_item it = stack[--top];
+        int q;
+        for (q = 0; q < 4; ++q) {
+            float fq = it.f * (it.has_s ? s->prob[4u * it.s + (uint32_t)q] : 0.25f);
+            uint32_t c;
+            if (!(fq > g->desc.directional_threshold) || it.depth >= g->desc.max_directional_depth) continue;
+            if (*budget == 0) { *at_bound = 1; continue; }
+            if (!pt__dtree_push(b, 1, &c)) return 0;
+            --*budget;
+            b->child[4u * it.b + (uint32_t)q] = c;
+            stack[top].has_s = it.has_s && s->child[4u * it.s + (uint32_t)q] != 0;
+            stack[top].s = stack[top].has_s ? s->child[4u * it.s + (uint32_t)q] : 0;
+            stack[top].b = c;
+            stack[top].depth = it.depth + 1;
+            stack[top].f = fq;
+            ++top;
+        }
+    }
+    return 1;
+}
+
+
+/* Splits spatial node i (a leaf) in two at the middle of axis depth mod 3: both halves start
+   from the leaf's sampling tree, each with half its records. 0 when out of memory. */
+static int pt__guide_split(pt_guide *g, uint32_t i)
+{
+    uint32_t old = g->nodes[i].a, fresh = g->leaf_count;
+    pt__guide_leaf *l;
+    if (g->node_count + 2u > g->node_cap) {
+        uint32_t cap = 2u * g->node_cap;
+        pt__guide_node *nn = (pt__guide_node *)PT_REALLOC(g->nodes, sizeof *nn * cap);
+        if (!nn) return 0;
+        g->nodes = nn;
+        g->node_cap = cap;
+    }
+    if (g->leaf_count + 1u > g->leaf_cap) {
+        uint32_t cap = 2u * g->leaf_cap;
+        pt__guide_leaf *nl = (pt__guide_leaf *)PT_REALLOC(g->leaves, sizeof *nl * cap);
+        if (!nl) return 0;
+        g->leaves = nl;
+        g->leaf_cap = cap;
+    }
+    l = &g->leaves[fresh];
+    memset(l, 0, sizeof *l);
+    if (!pt__dtree_copy(&l->sampling, &g->leaves[old].sampling)) return 0;
+    l->trained = g->leaves[old].trained;
+    g->leaves[old].records /= 2u;
+    l->records = g->leaves[old].records;
+    g->leaf_count++;
+    g->nodes[g->node_count].axis = -1;
+    g->nodes[g->node_count].depth = g->nodes[i].depth + 1;
+    g->nodes[g->node_count].a = old;
+    g->nodes[g->node_count].b = 0;
+    g->nodes[g->node_count + 1u] = g->nodes[g->node_count];
+    g->nodes[g->node_count + 1u].a = fresh;
+    g->nodes[i].axis = g->nodes[i].depth % 3;
+    g->nodes[i].a = g->node_count;
+    g->nodes[i].b = g->node_count + 1u;
+    g->node_count += 2u;
+    return 1;
+}
+
+static uint64_t pt__guide_sampling_nodes(const pt_guide *g)
+{
+    uint64_t n = 0;
+    uint32_t i;
+    for (i = 0; i < g->leaf_count; ++i) n += g->leaves[i].sampling.nodes;
+    return n;
+}
+
+/* The update (Mueller et al. 2017, section 3.4): every leaf's records become its sampling tree,
+   leaves with many records split (spatial_threshold x sqrt(2^updates), recursively, halving the
+   count each time), then every leaf gets a fresh building tree refined from its sampling tree.
+   Sequential, in node order: the result depends only on the sums. */
+static int pt__guide_update(pt_guide *g)
+{
+    uint32_t i;
+    uint64_t budget;
+    double threshold = (double)g->desc.spatial_threshold * sqrt(pow(2.0, (double)g->updates));
+    g->at_bound = 0;
+    for (i = 0; i < g->leaf_count; ++i) {
+        pt__guide_leaf *l = &g->leaves[i];
+        const uint64_t *e = l->building.energy;
+        if (l->building.nodes && e[0] + e[1] + e[2] + e[3] > 0u) {
+            pt__dtree s;
+            if (!pt__dtree_to_sampling(&l->building, &s)) return PT_ERROR_OUT_OF_MEMORY;
+            pt__dtree_free(&l->sampling);
+            l->sampling = s;
+            l->trained = 1;
+        }
+    }
+    for (i = 0; i < g->node_count; ++i) { /* (nodes appended by a split are visited too) */
+        uint32_t leaf;
+        if (g->nodes[i].axis >= 0) continue;
+        leaf = g->nodes[i].a;
+        if (!((double)g->leaves[leaf].records > threshold) || g->nodes[i].depth >= PT__GUIDE_SPATIAL_MAX_DEPTH)
+            continue;
+        if (2u * (pt__guide_sampling_nodes(g) + g->leaves[leaf].sampling.nodes + 1u) > g->max_nodes) {
+            g->at_bound = 1;
+            continue;
+        }
+        if (!pt__guide_split(g, i)) return PT_ERROR_OUT_OF_MEMORY;
+    }
+    {
+        uint64_t used = pt__guide_sampling_nodes(g);
+        budget = g->max_nodes > used + g->leaf_count ? g->max_nodes - used - g->leaf_count : 0u;
+    }
+    for (i = 0; i < g->leaf_count; ++i) {
+        pt__guide_leaf *l = &g->leaves[i];
+        pt__dtree_free(&l->building);
+        if (!pt__dtree_refine(g, &l->sampling, &l->building, &budget, &g->at_bound)) return PT_ERROR_OUT_OF_MEMORY;
+        l->records = 0;
+    }
+    g->updates++;
+    return PT_OK;
+}
+
+static int pt__guide_make(const pt_guide_desc *d, pt_vec3 lo, pt_vec3 hi, const pt_scene *scene, pt_guide **out)
+{
+    pt_guide *g;
+    pt_guide_desc r;
+    uint64_t budget;
+    int at = 0;
+    memset(&r, 0, sizeof r);
+    if (d) r = *d;
+    if (!r.max_bytes) r.max_bytes = (size_t)64 << 20;
+    if (r.spatial_threshold == 0.0f) r.spatial_threshold = 12000.0f;
+    if (r.directional_threshold == 0.0f) r.directional_threshold = 0.01f;
+    if (!r.max_directional_depth) r.max_directional_depth = PT__GUIDE_MAX_DEPTH;
+    if (r.value_resolution == 0.0f) r.value_resolution = 1.0f / 16777216.0f;
+    if (r.max_bytes < 4096u || !pt__isfinite(r.spatial_threshold) || !(r.spatial_threshold >= 1.0f) ||
+        !(r.directional_threshold > 0.0f && r.directional_threshold < 1.0f) || r.max_directional_depth < 1 ||
+        r.max_directional_depth > PT__GUIDE_MAX_DEPTH || !pt__isfinite(r.value_resolution) ||
+        !(r.value_resolution > 0.0f))
+        return PT_ERROR_INVALID_ARGUMENT;
+    g = (pt_guide *)PT_MALLOC(sizeof *g);
+    if (!g) return PT_ERROR_OUT_OF_MEMORY;
+    memset(g, 0, sizeof *g);
+    g->desc = r;
+    g->lo = lo;
+    g->hi = hi;
+    g->inv_extent = pt_v3(1.0f / (hi.x - lo.x), 1.0f / (hi.y - lo.y), 1.0f / (hi.z - lo.z));
+    g->scene = scene;
+    g->unit = (double)r.value_resolution;
+    /* a directional node costs 4 child indices and 4 probabilities (sampling) or 4 sums (building) */
+    g->max_nodes = (uint64_t)(r.max_bytes / (4u * (2u * sizeof(uint32_t) + sizeof(float) + sizeof(uint64_t))));
+    g->node_cap = g->leaf_cap = 16;
+    g->nodes = (pt__guide_node *)PT_MALLOC(sizeof(pt__guide_node) * g->node_cap);
+    g->leaves = (pt__guide_leaf *)PT_MALLOC(sizeof(pt__guide_leaf) * g->leaf_cap);
+    if (!g->nodes || !g->leaves) { pt_guide_destroy(g); return PT_ERROR_OUT_OF_MEMORY; }
+    g->node_count = g->leaf_count = 1;
+    g->nodes[0].axis = -1;
+    g->nodes[0].depth = 0;
+    g->nodes[0].a = g->nodes[0].b = 0;
+    memset(&g->leaves[0], 0, sizeof g->leaves[0]);
+#if !defined(PDFTRACE_NO_THREADS) && !defined(__GNUC__) && !defined(__clang__)
+    pthread_mutex_init(&g->lock, NULL);
+#endif
+    budget = g->max_nodes;
+    if (!pt__dtree_refine(g, &g->leaves[0].sampling, &g->leaves[0].building, &budget, &at)) {
+        pt_guide_destroy(g);
+        return PT_ERROR_OUT_OF_MEMORY;
+    }
+    *out = g;
+    return PT_OK;
+}
+
+PTDEF int pt_guide_create(const pt_guide_desc *d, pt_guide **out)
+{
+    if (out) *out = NULL;
+    if (!d || !out || !pt__vfinite(d->bounds_min) || !pt__vfinite(d->bounds_max) ||
+        !(d->bounds_max.x > d->bounds_min.x && d->bounds_max.y > d->bounds_min.y && d->bounds_max.z > d->bounds_min.z))
+        return PT_ERROR_INVALID_ARGUMENT;
+    return pt__guide_make(d, d->bounds_min, d->bounds_max, NULL, out);
+}
+
+PTDEF int pt_guide_create_for_scene(const pt_scene *s, const pt_guide_desc *d, pt_guide **out)
+{
+    pt_vec3 lo, hi, pad;
+    if (out) *out = NULL;
+    if (!s || !out || !s->committed) return !s || !out ? PT_ERROR_INVALID_ARGUMENT : PT_ERROR_INVALID_STATE;
+    lo = s->lo;
+    hi = s->hi;
+    if (!pt__vfinite(lo) || !pt__vfinite(hi) || !(hi.x >= lo.x && hi.y >= lo.y && hi.z >= lo.z)) {
+        lo = pt_v3(-1, -1, -1); /* no shapes */
+        hi = pt_v3(1, 1, 1);
+    }
+    /* a flat scene still gets a box: each side at least 1e-3 of the largest */
+    pad = pt_scale(pt_v3(1, 1, 1), 1e-3f * pt__maxf(1e-3f, pt_max_component(pt_sub(hi, lo))));
+    lo = pt_sub(lo, pad);
+    hi = pt_add(hi, pad);
+    return pt__guide_make(d, lo, hi, s, out);
+}
+
+PTDEF void pt_guide_destroy(pt_guide *g)
+{
+    uint32_t i;
+    if (!g) return;
+    for (i = 0; g->leaves && i < g->leaf_count; ++i) {
+        pt__dtree_free(&g->leaves[i].sampling);
+        pt__dtree_free(&g->leaves[i].building);
+    }
+#if !defined(PDFTRACE_NO_THREADS) && !defined(__GNUC__) && !defined(__clang__)
+    pthread_mutex_destroy(&g->lock);
+#endif
+    PT_FREE(g->nodes);
+    PT_FREE(g->leaves);
+    PT_FREE(g);
+}
+
+PTDEF int pt_guide_record(pt_guide *g, pt_vec3 point, pt_vec3 dir, float value)
+{
+    if (!g || !pt__vfinite(point) || !pt__vfinite(dir) || !(fabsf(pt_length2(dir) - 1.0f) <= 1e-3f) ||
+        !pt__isfinite(value) || value < 0.0f)
+        return PT_ERROR_INVALID_ARGUMENT;
+    pt__guide_splat(g, pt__guide_local(g, point), dir, (double)value);
+    return PT_OK;
+}
+
+PTDEF int pt_guide_update(pt_guide *g)
+{
+    return g ? pt__guide_update(g) : PT_ERROR_INVALID_ARGUMENT;
+}
+
+PTDEF int pt_guide_get_info(const pt_guide *g, pt_guide_info *info)
+{
+    uint32_t i;
+    if (!g || !info) return PT_ERROR_INVALID_ARGUMENT;
+    memset(info, 0, sizeof *info);
+    info->updates = g->updates;
+    info->spatial_leaves = g->leaf_count;
+    info->max_bytes = g->desc.max_bytes;
+    info->at_memory_bound = g->at_bound;
+    info->bytes = sizeof *g + sizeof(pt__guide_node) * g->node_cap + sizeof(pt__guide_leaf) * g->leaf_cap;
+    for (i = 0; i < g->node_count; ++i)
+        if ((uint32_t)g->nodes[i].depth > info->spatial_depth) info->spatial_depth = (uint32_t)g->nodes[i].depth;
+    for (i = 0; i < g->leaf_count; ++i) {
+        const pt__guide_leaf *l = &g->leaves[i];
+        info->directional_nodes += l->sampling.nodes + l->building.nodes;
+        info->bytes += pt__dtree_bytes(&l->sampling) + pt__dtree_bytes(&l->building);
+        info->records += l->records;
+    }
+    return PT_OK;
+}
+
+PTDEF pt_pdf pt_pdf_guide(const pt_guide *g, pt_vec3 point)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_GUIDE);
+    p.origin = point;
+    p.as.guide.guide = g;
+    p.as.guide.leaf = g && pt__vfinite(point) ? pt__guide_leaf_at(g, pt__guide_local(g, point)) : 0u;
+    return p;
+}
+
+PTDEF int pt_guide_image(const pt_guide *g, pt_vec3 point, int width, int height, pt_image *image)
+{
+    int x, y, rc;
+    uint32_t leaf;
+    if (!g || !image || !pt__vfinite(point) || width <= 0 || height <= 0) return PT_ERROR_INVALID_ARGUMENT;
+    if (!image->rgb || image->width != width || image->height != height) {
+        pt_image_free(image);
+        if ((rc = pt_image_init(image, width, height)) != PT_OK) return rc;
+    }
+    leaf = pt__guide_leaf_at(g, pt__guide_local(g, point));
+    for (y = 0; y < height; ++y)
+        for (x = 0; x < width; ++x) {
+            float theta = PT__PI * ((float)y + 0.5f) / (float)height, phi = 2.0f * PT__PI * ((float)x + 0.5f) / (float)width;
+            pt_vec3 w = pt_v3(sinf(theta) * cosf(phi), sinf(theta) * sinf(phi), cosf(theta));
+            float v = pt__guide_value(g, leaf, w);
+            float *px = image->rgb + 3u * ((size_t)y * (size_t)width + (size_t)x);
+            px[0] = px[1] = px[2] = v;
+        }
+    return PT_OK;
+}
+
 static int pt__pdf_validate_depth(const pt_pdf *pdf, int depth)
 {
     if (!pdf || depth > 32) return PT_ERROR_INVALID_ARGUMENT;
@@ -2466,6 +3122,9 @@ static int pt__pdf_validate_depth(const pt_pdf *pdf, int depth)
     }
     case PT_PDF_CALLBACK:
         return pdf->as.callback.sample && pdf->as.callback.value ? PT_OK : PT_ERROR_INVALID_ARGUMENT;
+    case PT_PDF_GUIDE:
+        return pdf->as.guide.guide && pdf->as.guide.leaf < pdf->as.guide.guide->leaf_count ? PT_OK
+                                                                                            : PT_ERROR_INVALID_ARGUMENT;
     default: return PT_ERROR_INVALID_ARGUMENT;
     }
 }
@@ -2525,6 +3184,7 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     case PT_PDF_CALLBACK:
         if (pdf->as.callback.value) v = pdf->as.callback.value(pdf->as.callback.user, w);
         break;
+    case PT_PDF_GUIDE: v = pt__guide_value(pdf->as.guide.guide, pdf->as.guide.leaf, w); break;
     default: break;
     }
     return pt__isfinite(v) && v > 0.0f ? v : 0.0f;
@@ -2630,6 +3290,11 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
     case PT_PDF_CALLBACK:
         if (pdf->as.callback.sample) ok = pdf->as.callback.sample(pdf->as.callback.user, rng, &w, &p) ? 1 : 0;
         break;
+    case PT_PDF_GUIDE: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
+        ok = pt__guide_sample(pdf->as.guide.guide, pdf->as.guide.leaf, u1, u2, &w, &p);
+        break;
+    }
     default: break;
     }
     if (!ok || !pt__vfinite(w) || !pt__isfinite(p) || !(p > 0.0f)) return 0;
@@ -5333,6 +5998,9 @@ typedef struct pt__settings {
     float guide_weight;
     unsigned general;  /* PT_SKIP_* bits whose general path is forced (pt_render_desc.disable_skips) */
     pt_sampler sampler;
+    const pt_guide *learned;  /* path guiding (section 8): the guide sampled at non-delta vertices */
+    pt_guide *recording;      /* the guide the paths' radiance is recorded into (training) */
+    float learned_weight;     /* 1 - alpha: the guide's share of the scatter density */
 } pt__settings;
 
 /* Whether the skip `bit` is taken (not disabled by pt_render_desc.disable_skips). */
@@ -5466,19 +6134,22 @@ static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, con
 }
 
 /* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
-   if it is unoccluded, the contribution beta f Le w / p_light. */
+   if it is unoccluded, the contribution beta f Le w / p_light; *rec receives what guiding records
+   of it (the mean of Le w / p_light; 0 when occluded). */
 static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
                                      const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
-                                     pt_path_stats *st)
+                                     pt_path_stats *st, float *rec)
 {
     pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
     float w = 1.0f;
+    *rec = 0.0f;
     if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
     if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
         w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     if (!pt__light_visible(s, v, ls, li, tri, st)) return pt_v3(0, 0, 0);
     {
         const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
+        *rec = (lm->emission.x + lm->emission.y + lm->emission.z) * (w / (3.0f * ls->pdf));
         return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
     }
 }
@@ -5650,6 +6321,33 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                                int prev_delta, float prev_pdf, pt_vec3 prev_p, pt__sampler *smp, pt_path_stats *st,
                                pt__splits *sp);
 
+/* Training a guide (section 8, "Guiding"): a non-delta vertex that continued along w with
+   density pdf and throughput beta (after the scatter weight and roulette) when the path had
+   gathered L0; what the path gathers after it, divided by beta, estimates the radiance L_i
+   arriving along w, and L_i / pdf is recorded (Mueller et al. 2017: the records' sum over a
+   directional cell estimates the integral of L_i over it). The first PT__GUIDE_PATH_RECORDS
+   vertices of a path (and of each split copy) are recorded. */
+#define PT__GUIDE_PATH_RECORDS 12
+static int pt__guide_direct = 0;
+typedef struct pt__guide_rec {
+    pt_vec3 p, w;
+    float pdf;
+    pt_color beta, L0;
+} pt__guide_rec;
+static void pt__guide_record_path(pt_guide *g, const pt__guide_rec *r, int n, pt_color L)
+{
+    int i;
+    if (!pt__vfinite(L)) return;
+    for (i = 0; i < n; ++i) {
+        const float *b = &r[i].beta.x, *l = &L.x, *l0 = &r[i].L0.x;
+        double sum = 0.0;
+        int c, used = 0;
+        for (c = 0; c < 3; ++c)
+            if (b[c] > 0.0f) { sum += ((double)l[c] - (double)l0[c]) / (double)b[c]; ++used; }
+        pt__guide_splat(g, r[i].p, r[i].w, used ? sum / (double)used / (double)r[i].pdf : 0.0);
+    }
+}
+
 /* Copies 1 .. k-1 of a split at vertex v, each with throughput beta_share (copy 0 is the path
    that split, which goes on in pt__trace_from). Kept out of line: it runs rarely, and inlined
    it slows the unsplit path (docs/internals.md, "Splitting (the weight window)"). */
@@ -5672,8 +6370,18 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
         st->split_paths++;
         pt_color Lc = pt_v3(0, 0, 0);
         if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2, &Lc, st)) {
+            pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, cs, st, sp);
             st->bounce_rays++;
-            L = pt_add(L, pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, cs, st, sp));
+            L = pt_add(L, Li);
+            if (PT__UNLIKELY(cfg->recording != NULL) && !pd2) {
+                pt__guide_rec one;
+                one.p = v->p;
+                one.w = r2.dir;
+                one.pdf = pp2;
+                one.beta = b2;
+                one.L0 = pt_v3(0, 0, 0);
+                pt__guide_record_path(cfg->recording, &one, 1, Li);
+            }
         }
         L = pt_add(L, Lc);
     }
@@ -5693,6 +6401,9 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
     const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
     const int pick = s->light_count != 1; /* the light choice's number is used (pt__pick_light) */
     pt__vertex v;
+    pt__guide_rec recs[PT__GUIDE_PATH_RECORDS]; /* training: this call's non-delta vertices */
+    int nrec = 0, rec_last = -1;
+    float rec;
     v.has_guide = 0; /* (every other field is set at each vertex before it is read; v.guide only
                         when has_guide is) */
     v.g = 0.0f;
@@ -5723,8 +6434,14 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                     w = pt__power_heuristic(prev_pdf, pl);
                 }
             }
-            if (w > 0.0f) L = pt_add(L, pt_scale(pt_mul(beta, m->emission), w));
+            if (w > 0.0f) {
+                pt_color e = pt_scale(pt_mul(beta, m->emission), w);
+                L = pt_add(L, e);
+                /* training with next-event estimation: direct light is NEE's, the guide learns the rest */
+                if (rec_last >= 0 && nee && !pt__guide_direct) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
+            }
         }
+        rec_last = -1;
         if (depth >= cfg->max_depth || !m->scatters) break;
 
         beta_in = beta;
@@ -5751,7 +6468,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
             pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
             if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
-                L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
+                L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st, &rec));
         }
         if (!m->delta) {
             v.has_guide = 0;
@@ -5764,6 +6481,15 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 sp.depth = depth;
                 v.g = cfg->guide_weight;
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
+            } else if (cfg->learned) { /* path guiding: the learned guide's leaf, once it has data */
+                uint32_t leaf = pt__guide_leaf_at(cfg->learned, v.p);
+                if (cfg->learned->leaves[leaf].trained) {
+                    v.guide = pt__pdf_blank(PT_PDF_GUIDE);
+                    v.guide.as.guide.guide = cfg->learned;
+                    v.guide.as.guide.leaf = leaf;
+                    v.g = cfg->learned_weight;
+                    v.has_guide = 1;
+                }
             }
             /* next-event estimation (LIGHT and MIS) */
             if (nee) {
@@ -5771,8 +6497,10 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
-                    L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
+                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) {
+                    L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st, &rec));
+                    if (PT__UNLIKELY(cfg->recording != NULL) && rec > 0.0f && pt__guide_direct) pt__guide_splat(cfg->recording, v.p, ls.dir, rec);
+                }
             }
         }
         /* the continuation: split copies first (each ends before the next starts), then this path */
@@ -5790,10 +6518,19 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                                   &prev_delta, &Lc, st);
             L = pt_add(L, Lc);
             if (!go) break;
+            if (PT__UNLIKELY(cfg->recording != NULL) && !prev_delta && nrec < PT__GUIDE_PATH_RECORDS) {
+                recs[nrec].p = v.p; /* what arrives along ray.dir is what L gains from here on */
+                recs[nrec].w = ray.dir;
+                recs[nrec].pdf = prev_pdf;
+                recs[nrec].beta = beta;
+                recs[nrec].L0 = L;
+                rec_last = nrec++;
+            }
         }
         prev_p = v.o;
         st->bounce_rays++;
     }
+    if (nrec) pt__guide_record_path(cfg->recording, recs, nrec, L);
     return L;
 }
 
@@ -6575,7 +7312,10 @@ static void pt__render_end_stats(const pt__adaptive *ad, const pt_render_desc *d
     }
 }
 
-PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
+/* One render of the desc's samples into the film (what pt_render does without guiding); with
+   learned/recording set, its paths sample from and record into a guide (section 8, "Guiding"). */
+static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats,
+                           const pt_guide *learned, pt_guide *recording, float learned_weight)
 {
     pt__settings cfg;
     pt_camera cam;
@@ -6592,6 +7332,9 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     memset(&ad, 0, sizeof ad);
     if (stats) memset(stats, 0, sizeof *stats);
     if ((rc = pt__render_check(s, d, film, 1, &cfg, &cam, err, en)) != PT_OK) return rc;
+    cfg.learned = learned;
+    cfg.recording = recording;
+    cfg.learned_weight = learned_weight;
     result = pt__render_setup(s, d, film, &cfg, &cam, &ps, &ad, &run, err, en);
     if (result == PT_OK) {
         result = pt__render_passes(&ps, &ad, d, &run);
@@ -6612,6 +7355,229 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     if (stats) *stats = run.total;
     if (result == PT_ERROR_CANCELLED) pt__msg(err, en, result, "pt_render: cancelled after %d passes", run.total.passes);
     return result;
+}
+
+/* --- Guiding: pt_render with pt_render_desc.guiding. Training iterations of 1, 2, 4, ...,
+   2^(T-1) samples per pixel (the most T with 2^T - 1 <= guiding_budget x spp), each rendered
+   into a scratch film with a seed of its own, guided by what the iterations before it recorded,
+   and recording its own paths' radiance for the next (Mueller et al. 2017, section 4: doubling
+   iterations). Their images are discarded: the film gets only the final render of the remaining
+   spp - (2^T - 1) samples with the final guide, which is fixed before any of its samples is
+   drawn, so every one of them is unbiased. Splats are summed as integers and the guide is
+   updated sequentially, so the image does not depend on the thread count. AUTO compares the
+   efficiency 1 / (relMSE per sample x rays per sample) of iteration 0 (unguided) with that of the
+   last iteration (guided), relMSE estimated against the mean of all iterations, and renders
+   guided when the guide pays (counts, not clocks: the decision is deterministic). --- */
+#define PT__GUIDING_BUDGET 0.25f
+#define PT__GUIDING_ALPHA 0.5f
+#define PT__GUIDING_MIB 64
+#define PT__GUIDING_MAX_ITERATIONS 16
+#define PT__GUIDING_AUTO_GAIN 1.1 /* AUTO guides above this measured gain (the guide's look-ups cost time rays do not count) */
+
+static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
+{
+    const int bad = PT_ERROR_INVALID_ARGUMENT;
+    if ((int)d->guiding < (int)PT_GUIDING_OFF || (int)d->guiding > (int)PT_GUIDING_AUTO)
+        return pt__msg(err, n, bad, "pt_render_desc.guiding = %d: must be PT_GUIDING_OFF (0), PT_GUIDING_ON (1) or "
+                       "PT_GUIDING_AUTO (2)", (int)d->guiding);
+    if (!pt__isfinite(d->guiding_budget) || !(d->guiding_budget >= 0.0f && d->guiding_budget < 1.0f))
+        return pt__msg(err, n, bad, "pt_render_desc.guiding_budget = %g: must be in (0, 1) (0: %g)",
+                       (double)d->guiding_budget, (double)PT__GUIDING_BUDGET);
+    if (!pt__isfinite(d->guiding_alpha) || !(d->guiding_alpha >= 0.0f && d->guiding_alpha < 1.0f))
+        return pt__msg(err, n, bad, "pt_render_desc.guiding_alpha = %g: must be in (0, 1) (0: %g)",
+                       (double)d->guiding_alpha, (double)PT__GUIDING_ALPHA);
+    if (d->guiding_max_mib < 0 || d->guiding_max_mib > 1048576)
+        return pt__msg(err, n, bad, "pt_render_desc.guiding_max_mib = %d: must be in 1 .. 1048576 (0: %d)",
+                       d->guiding_max_mib, PT__GUIDING_MIB);
+    if (d->guiding != PT_GUIDING_OFF && d->guide)
+        return pt__msg(err, n, bad, "pt_render_desc.guiding = %d: not with a user guide (pt_render_desc.guide)",
+                       (int)d->guiding);
+    return PT_OK;
+}
+
+/* relMSE per sample of the film's samples against the reference means ref (3 per pixel). */
+static double pt__guiding_rel_mse(const pt_film *f, const double *ref)
+{
+    size_t i, np = (size_t)f->width * (size_t)f->height;
+    double e = 0.0;
+    for (i = 0; i < 3u * np; ++i) {
+        double n = (double)f->count[i / 3u], r = ref[i];
+        if (n > 0.0) e += (f->sum_sq[i] - 2.0 * r * f->sum[i] + n * r * r) / n / (r * r + 0.01);
+    }
+    return e / (3.0 * (double)np);
+}
+
+/* What guiding needs for a render: whether the scene can use it at all (NULL) or why not. */
+static const char *pt__guiding_pointless(const pt_scene *s, const pt_render_desc *d)
+{
+    uint32_t i;
+    int non_delta = 0;
+    for (i = 0; i < s->mat_count; ++i)
+        if (s->mats[i].scatters && !s->mats[i].delta) non_delta = 1;
+    if (!non_delta) return "no material with a scattering density: nothing to guide";
+    if (!s->light_count && pt__is_black(d->background)) return "no emitter and a black background: no light to learn";
+    return NULL;
+}
+
+/* The fixed-point unit of a render's guide: 2^-24 of the brightest emission or background. */
+static float pt__guiding_unit(const pt_scene *s, const pt_render_desc *d)
+{
+    float top = (d->background.x + d->background.y + d->background.z) / 3.0f;
+    uint32_t i;
+    for (i = 0; i < s->mat_count; ++i)
+        if (s->mats[i].emits)
+            top = pt__maxf(top, (s->mats[i].emission.x + s->mats[i].emission.y + s->mats[i].emission.z) / 3.0f);
+    top = top > 0.0f && pt__isfinite(top) ? top : 1.0f;
+    return pt__maxf(top * (1.0f / 16777216.0f), 1e-30f);
+}
+
+static void pt__stats_add(pt_render_stats *t, const pt_render_stats *a)
+{
+    t->samples += a->samples;
+    t->camera_rays += a->camera_rays;
+    t->bounce_rays += a->bounce_rays;
+    t->shadow_rays += a->shadow_rays;
+    t->nonfinite_samples += a->nonfinite_samples;
+    t->split_paths += a->split_paths;
+}
+
+/* The training iterations (see above) into g; *gain receives the measured efficiency ratio. */
+static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_guide *g, int T, float weight,
+                             pt_render_stats *acc, double *gain, char *err, size_t en)
+{
+    pt_film first, cur;
+    double *ref = NULL, eff0 = 0.0, effT = 0.0;
+    size_t i, np = (size_t)d->width * (size_t)d->height;
+    int it, rc = PT_OK;
+    memset(&first, 0, sizeof first);
+    memset(&cur, 0, sizeof cur);
+    if (pt_film_init(&first, d->width, d->height) != PT_OK || pt_film_init(&cur, d->width, d->height) != PT_OK ||
+        !(ref = (double *)PT_MALLOC(sizeof(double) * 3u * np))) {
+        rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's training films");
+        goto done;
+    }
+    memset(ref, 0, sizeof(double) * 3u * np);
+    for (it = 0; it < T && rc == PT_OK; ++it) {
+        pt_render_desc sub = *d;
+        pt_render_stats st;
+        pt_film *f = it == 0 ? &first : &cur;
+        sub.guiding = PT_GUIDING_OFF;
+        sub.guiding_guide = NULL;
+        sub.samples_per_pixel = sub.samples_per_pass = 1 << it;
+        sub.adaptive_threshold = 0.0f;
+        sub.progress = NULL;
+        sub.seed = pt__mix64(d->seed ^ (0x6a09e667f3bcc909ULL * (uint64_t)(it + 1)));
+        pt_film_clear(f);
+        rc = pt__render_once(s, &sub, f, &st, it > 0 ? g : NULL, g, weight);
+        if (rc != PT_OK) { pt__msg(err, en, rc, "%s", st.error); break; }
+        pt__stats_add(acc, &st);
+        acc->guiding_iterations = it + 1;
+        for (i = 0; i < 3u * np; ++i) ref[i] += f->sum[i];
+        if (it == 0 || it == T - 1) {
+            double rays = (double)(st.camera_rays + st.bounce_rays + st.shadow_rays) / (double)(st.samples ? st.samples : 1);
+            /* the relMSE is computed below, once the reference is complete; keep the cost here */
+            if (it == 0) eff0 = rays; else effT = rays;
+        }
+        if ((rc = pt__guide_update(g)) != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the guide");
+    }
+    if (rc == PT_OK) {
+        double n = (double)((1u << T) - 1u), e0, eT;
+        for (i = 0; i < 3u * np; ++i) ref[i] /= n;
+        e0 = pt__guiding_rel_mse(&first, ref) * eff0;
+        eT = pt__guiding_rel_mse(&cur, ref) * effT;
+        *gain = eT > 0.0 ? e0 / eT : (e0 > 0.0 ? HUGE_VAL : 1.0);
+    }
+done:
+    pt_film_free(&first);
+    pt_film_free(&cur);
+    PT_FREE(ref);
+    return rc;
+}
+
+static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
+{
+    char *err = stats ? stats->error : NULL;
+    size_t en = stats ? sizeof stats->error : 0u;
+    pt_render_stats acc, fin;
+    pt_render_desc last = *d;
+    pt_guide *g = d->guiding_guide;
+    const char *why = pt__guiding_pointless(s, d);
+    int spp = d->samples_per_pixel ? d->samples_per_pixel : 16, T = 0, rc, use = 0;
+    float budget = d->guiding_budget > 0.0f ? d->guiding_budget : PT__GUIDING_BUDGET;
+    float weight = 1.0f - (d->guiding_alpha > 0.0f ? d->guiding_alpha : PT__GUIDING_ALPHA);
+    double t0 = pt__now(), gain = 0.0;
+    memset(&acc, 0, sizeof acc);
+    memset(&fin, 0, sizeof fin);
+    if (g && g->scene != s)
+        return pt__msg(err, en, PT_ERROR_INVALID_ARGUMENT,
+                       "pt_render_desc.guiding_guide: not made for this scene (pt_guide_create_for_scene)");
+    while (T < PT__GUIDING_MAX_ITERATIONS && (double)((1u << (T + 1)) - 1u) <= (double)budget * (double)spp) ++T;
+    if (!why && T < 2) why = "too few samples to train (fewer than 3 in the budget)";
+    if (!why) {
+        int own = !g;
+        pt_guide_desc gd;
+        memset(&gd, 0, sizeof gd);
+        gd.max_bytes = (size_t)(d->guiding_max_mib ? d->guiding_max_mib : PT__GUIDING_MIB) << 20;
+        gd.value_resolution = pt__guiding_unit(s, d);
+        if (own && (rc = pt_guide_create_for_scene(s, &gd, &g)) != PT_OK)
+            return pt__msg(err, en, rc, "pt_render: out of memory for the guide");
+        if (!own && !g->updates) g->unit = (double)gd.value_resolution;
+        rc = pt__guiding_train(s, d, g, T, weight, &acc, &gain, err, en);
+        if (rc == PT_OK) {
+            pt_guide_info gi;
+            use = d->guiding == PT_GUIDING_ON || gain > PT__GUIDING_AUTO_GAIN;
+            pt_guide_get_info(g, &gi);
+            acc.guiding_bytes = gi.bytes;
+            acc.guiding_leaves = gi.spatial_leaves;
+            acc.guiding_gain = gain;
+            pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0, "%s: %d training iterations, measured gain %.2f%s",
+                    use ? "guided" : "not guided", T, gain,
+                    d->guiding == PT_GUIDING_ON ? " (guiding on)" : use ? " (auto: above 1.1)" : " (auto: not above 1.1)");
+            last.samples_per_pixel = spp - ((1 << T) - 1);
+        }
+        acc.guiding_seconds = pt__now() - t0;
+        acc.guiding_samples = acc.samples;
+        if (rc != PT_OK) {
+            if (own) pt_guide_destroy(g);
+            if (stats) { *stats = acc; } /* (err already holds the message) */
+            return rc;
+        }
+        if (!use && own) { pt_guide_destroy(g); g = NULL; }
+        else if (!use) g = NULL;
+        rc = pt__render_once(s, &last, film, &fin, use ? g : NULL, NULL, weight);
+        if (own && g) pt_guide_destroy(g);
+    } else {
+        pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0, "not guided: %s", why);
+        rc = pt__render_once(s, &last, film, &fin, NULL, NULL, 0.0f);
+    }
+    pt__stats_add(&fin, &acc);
+    fin.guiding_used = use;
+    fin.guiding_iterations = acc.guiding_iterations;
+    fin.guiding_samples = acc.guiding_samples;
+    fin.guiding_seconds = acc.guiding_seconds;
+    fin.guiding_gain = acc.guiding_gain;
+    fin.guiding_bytes = acc.guiding_bytes;
+    fin.guiding_leaves = acc.guiding_leaves;
+    memcpy(fin.guiding_note, acc.guiding_note, sizeof fin.guiding_note);
+    fin.seconds = pt__now() - t0;
+    if (stats) *stats = fin;
+    return rc;
+}
+
+PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
+{
+    char *err = stats ? stats->error : NULL;
+    size_t en = stats ? sizeof stats->error : 0u;
+    int rc;
+    if (stats) memset(stats, 0, sizeof *stats);
+    if (d && (rc = pt__guiding_check(d, err, en)) != PT_OK) return rc;
+    if (!d || d->guiding == PT_GUIDING_OFF) return pt__render_once(s, d, film, stats, NULL, NULL, 0.0f);
+    {   /* the desc, scene and film first: a guide is built only for a render that can run */
+        pt__settings cfg;
+        pt_camera cam;
+        if ((rc = pt__render_check(s, d, film, 1, &cfg, &cam, err, en)) != PT_OK) return rc;
+    }
+    return pt__render_guided(s, d, film, stats);
 }
 
 PTDEF int pt_render_image(const pt_scene *s, const pt_render_desc *d, pt_image *image, pt_render_stats *stats)
