@@ -826,6 +826,7 @@ typedef struct pt_path_stats {
     uint64_t camera_rays, bounce_rays, shadow_rays;
     uint64_t nonfinite_samples;   /* samples that were NaN/Inf, counted and replaced by zero */
     uint64_t split_paths;         /* extra paths started by splitting (section 7, "Splitting") */
+    uint64_t guided_vertices;     /* vertices that sampled from a learned guide (path guiding) */
 } pt_path_stats;
 
 /* Scene-feature skips (see "SKIPPING WORK A SCENE DOES NOT NEED" at the top). Each skip is on by
@@ -888,8 +889,8 @@ typedef enum pt_guiding {
     PT_GUIDING_OFF = 0,   /* the material's PDF (and a user guide, if any) alone */
     PT_GUIDING_ON = 1,    /* train a guide (pt_guide) in the first guiding_budget of the samples,
                              then render with p = alpha p_material + (1 - alpha) p_guide */
-    PT_GUIDING_AUTO = 2   /* train, then render guided only if training measured a higher
-                             efficiency (1 / (error x rays)) with the guide than without */
+    PT_GUIDING_AUTO = 2   /* train, and go on guided only while training measures a higher
+                             efficiency (1 / (error x cost)) with the guide than without */
 } pt_guiding;
 
 /* The most copies pt_render_desc.indirect_paths may ask for. */
@@ -958,9 +959,10 @@ typedef struct pt_render_desc {
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
                                     quasi-Monte Carlo (section 2), lower error at equal samples */
     /* Path guiding: a guide (section 2, pt_guide) learned in training iterations of 1, 2, 4, ...
-       samples per pixel, each rendered with the guide of the ones before and discarded; the image
-       is the rest of the samples, rendered with the final guide, so it is unbiased. Not with a
-       user guide (pt_render_desc.guide). */
+       samples per pixel, each rendered with the guide of the ones before; then the rest of the
+       samples with the final guide. Every sample counts in the image with equal weight and each
+       is unbiased, so the image is (section 8, "Guiding"). Not with a user guide
+       (pt_render_desc.guide); each pt_render call trains afresh (unless guiding_guide). */
     pt_guiding guiding;          /* 0: PT_GUIDING_OFF */
     float guiding_budget;        /* the share of samples_per_pixel training may take, in (0, 1); 0:
                                     0.25. Iterations 1, 2, ..., 2^(T-1) spp: the most T with
@@ -977,6 +979,7 @@ typedef struct pt_render_stats {
     uint64_t camera_rays, bounce_rays, shadow_rays;
     uint64_t nonfinite_samples;  /* NaN/Inf samples caught, zeroed and counted */
     uint64_t split_paths;        /* extra paths started by splitting (section 7) */
+    uint64_t guided_vertices;    /* vertices that sampled from a learned guide (path guiding) */
     double seconds;              /* wall clock */
     int passes, threads;
     uint64_t pixels_converged;   /* adaptive: pixels that stopped before samples_per_pixel (the
@@ -988,7 +991,7 @@ typedef struct pt_render_stats {
                                     pixel with fewer than 2 samples) */
     int guiding_used;            /* 1 when the image was rendered with a learned guide */
     int guiding_iterations;      /* training iterations run */
-    uint64_t guiding_samples;    /* camera samples the training took (counted in samples) */
+    uint64_t guiding_samples;    /* camera samples of the training iterations (in the image too) */
     double guiding_seconds;      /* wall clock of the training (counted in seconds) */
     double guiding_gain;         /* training's measured efficiency with the guide over without (> 1:
                                     the guide pays); 0 when not measured */
@@ -2569,10 +2572,26 @@ static void pt__guide_add(pt_guide *g, uint64_t *p, uint64_t v)
 #endif
 }
 
+/* atan2 to float precision, faster than libm's (it is most of a guide look-up): the octant's
+   argument a in [0, 1], reduced to |a'| <= tan(pi/12) by atan(a) = pi/6 + atan((a sqrt3 - 1) /
+   (a + sqrt3)), then the odd Taylor series to a^11 (remainder below a^13 / 13 < 3e-9). */
+static float pt__atan2f(float y, float x)
+{
+    float ax = fabsf(x), ay = fabsf(y), hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax, a, a2, r, base = 0.0f;
+    if (!(hi > 0.0f)) return 0.0f;
+    a = lo / hi;
+    if (a > 0.26794919f) { a = (a * 1.7320508f - 1.0f) / (a + 1.7320508f); base = 0.52359878f; }
+    a2 = a * a;
+    r = base + a * (1.0f + a2 * (-1.0f / 3.0f + a2 * (0.2f + a2 * (-1.0f / 7.0f + a2 * (1.0f / 9.0f + a2 * (-1.0f / 11.0f))))));
+    if (ay > ax) r = 1.57079633f - r;
+    if (x < 0.0f) r = PT__PI - r;
+    return y < 0.0f ? -r : r;
+}
+
 /* The cylindrical equal-area map: (x, y) in [0,1)^2, d(omega) = 4 pi dx dy. */
 static void pt__guide_dir_to_square(pt_vec3 w, float *x, float *y)
 {
-    float z = w.z < -1.0f ? -1.0f : (w.z > 1.0f ? 1.0f : w.z), phi = atan2f(w.y, w.x);
+    float z = w.z < -1.0f ? -1.0f : (w.z > 1.0f ? 1.0f : w.z), phi = pt__atan2f(w.y, w.x);
     if (phi < 0.0f) phi += 2.0f * PT__PI;
     *x = (z + 1.0f) * 0.5f;
     *y = phi * (0.5f * PT__INV_PI);
@@ -6080,18 +6099,22 @@ typedef struct pt__vertex {
     pt_pdf guide;
 } pt__vertex;
 
-static PT__HOT float pt__scatter_density(const pt__vertex *v, pt_vec3 wi)
+/* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
+static PT__HOT float pt__scatter_density_pg(const pt__vertex *v, pt_vec3 wi, float pg)
 {
     float pm = pt__material_density(v->m, v->ns, v->wo, wi);
     if (!v->has_guide) return pm;
-    return (1.0f - v->g) * pm + v->g * pt_pdf_value(&v->guide, wi);
+    return (1.0f - v->g) * pm + v->g * (pg >= 0.0f ? pg : pt_pdf_value(&v->guide, wi));
 }
-static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int depth, pt_vec3 *wi)
+static PT__HOT float pt__scatter_density(const pt__vertex *v, pt_vec3 wi) { return pt__scatter_density_pg(v, wi, -1.0f); }
+/* *pg receives the guide's density of *wi when the guide drew it, else -1 */
+static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int depth, pt_vec3 *wi, float *pg)
 {
     float u0 = v->has_guide ? pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_GUIDE)) : 1.0f;
+    *pg = -1.0f;
     if (v->has_guide && u0 < v->g) {
-        float pg; /* (a one-sample mixture: only directions of the guide's own density) */
-        return pt__pdf_sample_depth(&v->guide, pt__sampler_rng(smp), wi, &pg, 0, 1);
+        /* (a one-sample mixture: only directions of the guide's own density) */
+        return pt__pdf_sample_depth(&v->guide, pt__sampler_rng(smp), wi, pg, 0, 1);
     } else {
         float u1, u2, u3, pm;
         pt__draw_scatter(smp, depth, &u1, &u2);
@@ -6134,22 +6157,19 @@ static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, con
 }
 
 /* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
-   if it is unoccluded, the contribution beta f Le w / p_light; *rec receives what guiding records
-   of it (the mean of Le w / p_light; 0 when occluded). */
+   if it is unoccluded, the contribution beta f Le w / p_light. */
 static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
                                      const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
-                                     pt_path_stats *st, float *rec)
+                                     pt_path_stats *st)
 {
     pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
     float w = 1.0f;
-    *rec = 0.0f;
     if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
     if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
         w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     if (!pt__light_visible(s, v, ls, li, tri, st)) return pt_v3(0, 0, 0);
     {
         const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
-        *rec = (lm->emission.x + lm->emission.y + lm->emission.z) * (w / (3.0f * ls->pdf));
         return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
     }
 }
@@ -6265,7 +6285,7 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         }
         *prev_delta = 1;
     } else {
-        float p_total, u;
+        float p_total, u, pg = -1.0f;
         pt_color f;
         int use_light = 0;
         pt__light_sample ls;
@@ -6280,14 +6300,14 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                 if (!pt__lights_sample(s, v->o, u0, u1, u2, &ls, &li)) return 0;
                 wi = ls.dir;
-            } else if (!pt__scatter_sample(v, smp, depth, &wi)) return 0;
+            } else if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
             /* a rounded direction has no density for its own light: that light's share is the
                sample's own (ls.pdf, the pick probability included) */
             p_total = cfg->light_weight * (pt__lights_value(s, v->o, wi) + (ls.rounded ? ls.pdf : 0.0f)) +
-                      (1.0f - cfg->light_weight) * pt__scatter_density(v, wi);
+                      (1.0f - cfg->light_weight) * pt__scatter_density_pg(v, wi, pg);
         } else {
-            if (!pt__scatter_sample(v, smp, depth, &wi)) return 0;
-            p_total = pt__scatter_density(v, wi);
+            if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
+            p_total = pt__scatter_density_pg(v, wi, pg);
         }
         f = pt__material_eval(m, v->albedo, v->ns, v->ng, v->wo, wi);
         if (pt__is_black(f) || !(p_total > 0.0f)) return 0;
@@ -6326,9 +6346,10 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
    gathered L0; what the path gathers after it, divided by beta, estimates the radiance L_i
    arriving along w, and L_i / pdf is recorded (Mueller et al. 2017: the records' sum over a
    directional cell estimates the integral of L_i over it). The first PT__GUIDE_PATH_RECORDS
-   vertices of a path (and of each split copy) are recorded. */
+   vertices of a path (and of each split copy) are recorded. With next-event estimation (MIS,
+   LIGHT) the emission a recorded vertex's own ray finds is left out: direct light is NEE's to
+   sample, and the guide spends its share on the light NEE cannot see. */
 #define PT__GUIDE_PATH_RECORDS 12
-static int pt__guide_direct = 0;
 typedef struct pt__guide_rec {
     pt_vec3 p, w;
     float pdf;
@@ -6403,7 +6424,6 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
     pt__vertex v;
     pt__guide_rec recs[PT__GUIDE_PATH_RECORDS]; /* training: this call's non-delta vertices */
     int nrec = 0, rec_last = -1;
-    float rec;
     v.has_guide = 0; /* (every other field is set at each vertex before it is read; v.guide only
                         when has_guide is) */
     v.g = 0.0f;
@@ -6438,7 +6458,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 pt_color e = pt_scale(pt_mul(beta, m->emission), w);
                 L = pt_add(L, e);
                 /* training with next-event estimation: direct light is NEE's, the guide learns the rest */
-                if (rec_last >= 0 && nee && !pt__guide_direct) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
+                if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
             }
         }
         rec_last = -1;
@@ -6468,7 +6488,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
             pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
             if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
-                L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st, &rec));
+                L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
         if (!m->delta) {
             v.has_guide = 0;
@@ -6489,6 +6509,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                     v.guide.as.guide.leaf = leaf;
                     v.g = cfg->learned_weight;
                     v.has_guide = 1;
+                    st->guided_vertices++;
                 }
             }
             /* next-event estimation (LIGHT and MIS) */
@@ -6497,10 +6518,8 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li)) {
-                    L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st, &rec));
-                    if (PT__UNLIKELY(cfg->recording != NULL) && rec > 0.0f && pt__guide_direct) pt__guide_splat(cfg->recording, v.p, ls.dir, rec);
-                }
+                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
+                    L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
         }
         /* the continuation: split copies first (each ends before the next starts), then this path */
@@ -6584,6 +6603,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
         stats->shadow_rays += local.shadow_rays;
         stats->nonfinite_samples += local.nonfinite_samples;
         stats->split_paths += local.split_paths;
+        stats->guided_vertices += local.guided_vertices;
     }
     return L;
 }
@@ -7260,6 +7280,7 @@ static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_des
             r->total.shadow_rays += ts->shadow_rays;
             r->total.nonfinite_samples += ts->nonfinite_samples;
             r->total.split_paths += ts->split_paths;
+            r->total.guided_vertices += ts->guided_vertices;
             r->done += ps->tile_samples[r->job_list[j]];
         }
         r->added += (uint32_t)ps->spp;
@@ -7358,21 +7379,25 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
 }
 
 /* --- Guiding: pt_render with pt_render_desc.guiding. Training iterations of 1, 2, 4, ...,
-   2^(T-1) samples per pixel (the most T with 2^T - 1 <= guiding_budget x spp), each rendered
-   into a scratch film with a seed of its own, guided by what the iterations before it recorded,
-   and recording its own paths' radiance for the next (Mueller et al. 2017, section 4: doubling
-   iterations). Their images are discarded: the film gets only the final render of the remaining
-   spp - (2^T - 1) samples with the final guide, which is fixed before any of its samples is
-   drawn, so every one of them is unbiased. Splats are summed as integers and the guide is
-   updated sequentially, so the image does not depend on the thread count. AUTO compares the
-   efficiency 1 / (relMSE per sample x rays per sample) of iteration 0 (unguided) with that of the
-   last iteration (guided), relMSE estimated against the mean of all iterations, and renders
-   guided when the guide pays (counts, not clocks: the decision is deterministic). --- */
+   2^(T-1) samples per pixel (the most T with 2^T - 1 <= guiding_budget x spp; Mueller et al.
+   2017, section 4), each guided by what the iterations before it recorded and recording its own
+   paths' radiance for the next; then the rest of the spp with the final guide. Every sample goes
+   into the film with the same weight, fixed before any is drawn, and each is unbiased given the
+   guide it used (which only earlier samples shaped), so the image is unbiased; a render has the
+   same sample indices with and without guiding. Splats are summed as integers and the guide is
+   updated between iterations on one thread, so the image does not depend on the thread count.
+   AUTO compares, after each guided iteration, its efficiency 1 / (relMSE per sample x cost per
+   sample) with iteration 0's (unguided), relMSE estimated against the film's mean and the cost
+   counted in rays and guide look-ups (counts, not clocks: the decision is deterministic), and,
+   from iteration 3 on (or at the last), goes on unguided (and stops training) as soon as the guide
+   does not pay. --- */
 #define PT__GUIDING_BUDGET 0.25f
 #define PT__GUIDING_ALPHA 0.5f
 #define PT__GUIDING_MIB 64
 #define PT__GUIDING_MAX_ITERATIONS 16
-#define PT__GUIDING_AUTO_GAIN 1.1 /* AUTO guides above this measured gain (the guide's look-ups cost time rays do not count) */
+#define PT__GUIDING_AUTO_GAIN 1.05 /* AUTO guides above this measured gain */
+#define PT__GUIDING_AUTO_FIRST 3    /* ... judged from iteration 3 on (a guide learned from 7 spp), or the last */
+#define PT__GUIDING_LOOKUP_COST 1.0 /* AUTO's cost model: a guided vertex costs about one ray (docs/internals.md, "Path guiding") */
 
 static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
 {
@@ -7395,19 +7420,6 @@ static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
     return PT_OK;
 }
 
-/* relMSE per sample of the film's samples against the reference means ref (3 per pixel). */
-static double pt__guiding_rel_mse(const pt_film *f, const double *ref)
-{
-    size_t i, np = (size_t)f->width * (size_t)f->height;
-    double e = 0.0;
-    for (i = 0; i < 3u * np; ++i) {
-        double n = (double)f->count[i / 3u], r = ref[i];
-        if (n > 0.0) e += (f->sum_sq[i] - 2.0 * r * f->sum[i] + n * r * r) / n / (r * r + 0.01);
-    }
-    return e / (3.0 * (double)np);
-}
-
-/* What guiding needs for a render: whether the scene can use it at all (NULL) or why not. */
 static const char *pt__guiding_pointless(const pt_scene *s, const pt_render_desc *d)
 {
     uint32_t i;
@@ -7439,58 +7451,110 @@ static void pt__stats_add(pt_render_stats *t, const pt_render_stats *a)
     t->shadow_rays += a->shadow_rays;
     t->nonfinite_samples += a->nonfinite_samples;
     t->split_paths += a->split_paths;
+    t->guided_vertices += a->guided_vertices;
 }
 
-/* The training iterations (see above) into g; *gain receives the measured efficiency ratio. */
-static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_guide *g, int T, float weight,
-                             pt_render_stats *acc, double *gain, char *err, size_t en)
+/* The per-pixel sums of the samples one training iteration added to the film: the film after it
+   minus `before` (a copy of sum and sum_sq taken before it; counts likewise). */
+typedef struct pt__film_snap {
+    double *sum, *sum_sq;
+    uint32_t *count;
+} pt__film_snap;
+static void pt__snap_free(pt__film_snap *sn)
 {
-    pt_film first, cur;
-    double *ref = NULL, eff0 = 0.0, effT = 0.0;
-    size_t i, np = (size_t)d->width * (size_t)d->height;
+    PT_FREE(sn->sum);
+    PT_FREE(sn->sum_sq);
+    PT_FREE(sn->count);
+}
+static int pt__snap_take(pt__film_snap *sn, const pt_film *f)
+{
+    size_t np = (size_t)f->width * (size_t)f->height;
+    if (!sn->sum) {
+        sn->sum = (double *)PT_MALLOC(sizeof(double) * 3u * np);
+        sn->sum_sq = (double *)PT_MALLOC(sizeof(double) * 3u * np);
+        sn->count = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+        if (!sn->sum || !sn->sum_sq || !sn->count) return 0;
+    }
+    memcpy(sn->sum, f->sum, sizeof(double) * 3u * np);
+    memcpy(sn->sum_sq, f->sum_sq, sizeof(double) * 3u * np);
+    memcpy(sn->count, f->count, sizeof(uint32_t) * np);
+    return 1;
+}
+/* relMSE per sample of the samples `after` holds and `before` does not, against the film's mean
+   (all its samples). */
+static double pt__guiding_rel_mse(const pt_film *f, const pt__film_snap *after, const pt__film_snap *before)
+{
+    size_t i, np = (size_t)f->width * (size_t)f->height;
+    double e = 0.0;
+    for (i = 0; i < 3u * np; ++i) {
+        double n = (double)(after->count[i / 3u] - before->count[i / 3u]), r, s1, s2;
+        if (!(n > 0.0)) continue;
+        r = f->sum[i] / (double)f->count[i / 3u];
+        s1 = after->sum[i] - before->sum[i];
+        s2 = after->sum_sq[i] - before->sum_sq[i];
+        e += (s2 - 2.0 * r * s1 + n * r * r) / n / (r * r + 0.01);
+    }
+    return e / (3.0 * (double)np);
+}
+
+/* The training iterations (see above), into the caller's film. *use: whether the image goes on
+   guided (AUTO may turn it off after any guided iteration); *gain: the last measured efficiency
+   ratio. */
+static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_guide *g, int T,
+                             float weight, int *use, pt_render_stats *acc, double *gain, char *err, size_t en)
+{
+    pt__film_snap first, second, prev, now;
+    double cost0 = 1.0;
     int it, rc = PT_OK;
     memset(&first, 0, sizeof first);
-    memset(&cur, 0, sizeof cur);
-    if (pt_film_init(&first, d->width, d->height) != PT_OK || pt_film_init(&cur, d->width, d->height) != PT_OK ||
-        !(ref = (double *)PT_MALLOC(sizeof(double) * 3u * np))) {
-        rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's training films");
-        goto done;
+    memset(&second, 0, sizeof second);
+    memset(&prev, 0, sizeof prev);
+    now.sum = film->sum; /* (the film itself, read as a snapshot) */
+    now.sum_sq = film->sum_sq;
+    now.count = film->count;
+    if (!pt__snap_take(&first, film)) {
+        pt__snap_free(&first);
+        return pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
     }
-    memset(ref, 0, sizeof(double) * 3u * np);
-    for (it = 0; it < T && rc == PT_OK; ++it) {
+    *use = 1;
+    for (it = 0; it < T && rc == PT_OK && *use; ++it) {
         pt_render_desc sub = *d;
         pt_render_stats st;
-        pt_film *f = it == 0 ? &first : &cur;
+        double cost;
         sub.guiding = PT_GUIDING_OFF;
         sub.guiding_guide = NULL;
         sub.samples_per_pixel = sub.samples_per_pass = 1 << it;
         sub.adaptive_threshold = 0.0f;
         sub.progress = NULL;
-        sub.seed = pt__mix64(d->seed ^ (0x6a09e667f3bcc909ULL * (uint64_t)(it + 1)));
-        pt_film_clear(f);
-        rc = pt__render_once(s, &sub, f, &st, it > 0 ? g : NULL, g, weight);
+        if (it > 0 && !pt__snap_take(&prev, film)) {
+            rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
+            break;
+        }
+        rc = pt__render_once(s, &sub, film, &st, it > 0 ? g : NULL, g, weight);
         if (rc != PT_OK) { pt__msg(err, en, rc, "%s", st.error); break; }
         pt__stats_add(acc, &st);
         acc->guiding_iterations = it + 1;
-        for (i = 0; i < 3u * np; ++i) ref[i] += f->sum[i];
-        if (it == 0 || it == T - 1) {
-            double rays = (double)(st.camera_rays + st.bounce_rays + st.shadow_rays) / (double)(st.samples ? st.samples : 1);
-            /* the relMSE is computed below, once the reference is complete; keep the cost here */
-            if (it == 0) eff0 = rays; else effT = rays;
+        if ((rc = pt__guide_update(g)) != PT_OK) { pt__msg(err, en, rc, "pt_render: out of memory for the guide"); break; }
+        cost = ((double)(st.camera_rays + st.bounce_rays + st.shadow_rays) +
+                PT__GUIDING_LOOKUP_COST * (double)st.guided_vertices) / (double)(st.samples ? st.samples : 1);
+        if (it == 0) {
+            cost0 = cost;
+            if (!pt__snap_take(&second, film)) {
+                rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
+                break;
+            }
+        } else { /* both against the mean of every sample so far */
+            double e0 = pt__guiding_rel_mse(film, &second, &first) * cost0;
+            double e = pt__guiding_rel_mse(film, &now, &prev) * cost;
+            *gain = e > 0.0 ? e0 / e : (e0 > 0.0 ? HUGE_VAL : 1.0);
+            if (d->guiding == PT_GUIDING_AUTO && (it >= PT__GUIDING_AUTO_FIRST || it == T - 1) &&
+                !(*gain > PT__GUIDING_AUTO_GAIN))
+                *use = 0;
         }
-        if ((rc = pt__guide_update(g)) != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the guide");
     }
-    if (rc == PT_OK) {
-        double n = (double)((1u << T) - 1u), e0, eT;
-        for (i = 0; i < 3u * np; ++i) ref[i] /= n;
-        e0 = pt__guiding_rel_mse(&first, ref) * eff0;
-        eT = pt__guiding_rel_mse(&cur, ref) * effT;
-        *gain = eT > 0.0 ? e0 / eT : (e0 > 0.0 ? HUGE_VAL : 1.0);
-    }
-done:
-    pt_film_free(&first);
-    pt_film_free(&cur);
-    PT_FREE(ref);
+    pt__snap_free(&first);
+    pt__snap_free(&second);
+    pt__snap_free(&prev);
     return rc;
 }
 
@@ -7502,7 +7566,7 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
     pt_render_desc last = *d;
     pt_guide *g = d->guiding_guide;
     const char *why = pt__guiding_pointless(s, d);
-    int spp = d->samples_per_pixel ? d->samples_per_pixel : 16, T = 0, rc, use = 0;
+    int spp = d->samples_per_pixel ? d->samples_per_pixel : 16, T = 0, rc = PT_OK, use = 0, own = !g;
     float budget = d->guiding_budget > 0.0f ? d->guiding_budget : PT__GUIDING_BUDGET;
     float weight = 1.0f - (d->guiding_alpha > 0.0f ? d->guiding_alpha : PT__GUIDING_ALPHA);
     double t0 = pt__now(), gain = 0.0;
@@ -7514,7 +7578,6 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
     while (T < PT__GUIDING_MAX_ITERATIONS && (double)((1u << (T + 1)) - 1u) <= (double)budget * (double)spp) ++T;
     if (!why && T < 2) why = "too few samples to train (fewer than 3 in the budget)";
     if (!why) {
-        int own = !g;
         pt_guide_desc gd;
         memset(&gd, 0, sizeof gd);
         gd.max_bytes = (size_t)(d->guiding_max_mib ? d->guiding_max_mib : PT__GUIDING_MIB) << 20;
@@ -7522,30 +7585,23 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
         if (own && (rc = pt_guide_create_for_scene(s, &gd, &g)) != PT_OK)
             return pt__msg(err, en, rc, "pt_render: out of memory for the guide");
         if (!own && !g->updates) g->unit = (double)gd.value_resolution;
-        rc = pt__guiding_train(s, d, g, T, weight, &acc, &gain, err, en);
+        rc = pt__guiding_train(s, d, film, g, T, weight, &use, &acc, &gain, err, en);
+        acc.guiding_seconds = pt__now() - t0;
+        acc.guiding_samples = acc.samples;
         if (rc == PT_OK) {
             pt_guide_info gi;
-            use = d->guiding == PT_GUIDING_ON || gain > PT__GUIDING_AUTO_GAIN;
             pt_guide_get_info(g, &gi);
             acc.guiding_bytes = gi.bytes;
             acc.guiding_leaves = gi.spatial_leaves;
             acc.guiding_gain = gain;
             pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0, "%s: %d training iterations, measured gain %.2f%s",
-                    use ? "guided" : "not guided", T, gain,
-                    d->guiding == PT_GUIDING_ON ? " (guiding on)" : use ? " (auto: above 1.1)" : " (auto: not above 1.1)");
-            last.samples_per_pixel = spp - ((1 << T) - 1);
+                    use ? "guided" : "not guided", acc.guiding_iterations, gain,
+                    d->guiding == PT_GUIDING_ON ? " (guiding on)" : use ? " (auto: above 1.05)" : " (auto: not above 1.05)");
+            last.samples_per_pixel = spp - (int)(acc.guiding_samples / ((uint64_t)d->width * (uint64_t)d->height));
+            if (last.samples_per_pixel > 0)
+                rc = pt__render_once(s, &last, film, &fin, use ? g : NULL, NULL, weight);
         }
-        acc.guiding_seconds = pt__now() - t0;
-        acc.guiding_samples = acc.samples;
-        if (rc != PT_OK) {
-            if (own) pt_guide_destroy(g);
-            if (stats) { *stats = acc; } /* (err already holds the message) */
-            return rc;
-        }
-        if (!use && own) { pt_guide_destroy(g); g = NULL; }
-        else if (!use) g = NULL;
-        rc = pt__render_once(s, &last, film, &fin, use ? g : NULL, NULL, weight);
-        if (own && g) pt_guide_destroy(g);
+        if (own) pt_guide_destroy(g);
     } else {
         pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0, "not guided: %s", why);
         rc = pt__render_once(s, &last, film, &fin, NULL, NULL, 0.0f);
@@ -7560,7 +7616,10 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
     fin.guiding_leaves = acc.guiding_leaves;
     memcpy(fin.guiding_note, acc.guiding_note, sizeof fin.guiding_note);
     fin.seconds = pt__now() - t0;
-    if (stats) *stats = fin;
+    if (stats) {
+        if (rc != PT_OK && err && err[0]) memcpy(fin.error, err, sizeof fin.error);
+        *stats = fin;
+    }
     return rc;
 }
 
