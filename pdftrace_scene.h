@@ -42,6 +42,14 @@
      indirect_paths N                 paths each camera sample continues as from its first
                                       non-delta vertex (1..8; default 3 with sobol, else 1)
      seed N                           random seed (default 0)
+     guiding off|on|auto              path guiding (pdftrace.h, pt_render_desc.guiding): on
+                                      learns a guide in the first guiding_budget of the
+                                      samples and renders the rest with it; auto goes on
+                                      guided only while training measures a gain (default off)
+     guiding_budget F                 the share of spp training may take, 0 < F < 1 (0.25)
+     guiding_alpha F                  the material's share of the guided mixture alpha
+                                      p_material + (1 - alpha) p_guide, 0 < F < 1 (0.5)
+     guiding_memory MIB               the guide's memory bound in MiB, 1..1048576 (64)
      background R G B                 radiance of rays leaving the scene (default 0 0 0)
      camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES]      (required, once)
             [lens_radius R] [focus_distance D]   depth of field: a thin lens of radius R >= 0 (0,
@@ -72,7 +80,8 @@
    Numbers must be finite with magnitude <= 1e7; colours >= 0; names are [A-Za-z_][A-Za-z0-9_-]*
    up to 31 characters and must be defined before use. Every error is reported as
    "file:line: message" and the load fails as a whole (nothing is left allocated). A UTF-8
-   byte order mark at the start is skipped.
+   byte order mark at the start is skipped. The guiding statements are render settings, not
+   scene content: both exporters accept and ignore them.
 
    UNTRUSTED FILES (pt_scenefile_options; docs/scene-format.md has the details)
    Only regular files are read (opened without blocking, checked with fstat). Mesh paths must
@@ -174,6 +183,10 @@ typedef struct pt_scenefile {
     pt_strategy strategy;
     pt_sampler sampler;
     int indirect_paths;          /* 0: pt_render_desc's default */
+    pt_guiding guiding;          /* `guiding`; without one the loader's default (PT_GUIDING_OFF) */
+    float guiding_budget;        /* `guiding_budget`, in (0, 1); 0: pt_render_desc's default */
+    float guiding_alpha;         /* `guiding_alpha`, in (0, 1); 0: pt_render_desc's default */
+    int guiding_memory;          /* `guiding_memory` in MiB (guiding_max_mib); 0: its default */
     uint64_t seed;
     pt_color background;
     pt_camera_desc camera;
@@ -238,8 +251,9 @@ PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_
    under the scene's current transform (pt_scene_set_transform), as pt_scene_add_mesh does.
    Returns the first primitive's id, or an error code with a message in err. */
 PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char *err, size_t err_size);
-/* Builds a committed scene and fills *render (size, spp, depth, strategy, sampler, seed,
-   camera, background; other fields zero) with the public API. On failure *scene is NULL. */
+/* Builds a committed scene and fills *render (size, spp, depth, strategy, sampler, indirect
+   paths, seed, camera, background, guiding and its budget, alpha and memory bound; other fields
+   zero) with the public API. On failure *scene is NULL. */
 PTDEF int pt_scenefile_build(const pt_scenefile *desc, pt_scene **scene, pt_render_desc *render, char *err,
                              size_t err_size);
 
@@ -360,6 +374,10 @@ static int pt__sf_isfinite(float f)
 #define PT__SF_MAX_MESHES 1024
 #define PT__SF_PATH 4096
 #define PT__SF_MAX_ROOTS 17 /* the scene's directory and up to 16 allowed ones */
+
+/* Path guiding of a scene file without a `guiding` statement (pt_scenefile.guiding as loaded,
+   and so pt_render_desc.guiding from pt_scenefile_build): a render setting, not scene content. */
+#define PT__SF_DEFAULT_GUIDING PT_GUIDING_OFF
 
 typedef struct pt__sf_parser {
     pt_scenefile *d;
@@ -1337,6 +1355,38 @@ static int pt__sf_choice(pt__sf_parser *p, const char *kw)
     return PT_OK;
 }
 
+/* guiding off|on|auto, guiding_budget F, guiding_alpha F (both in (0, 1), checked as the float
+   pt_render gets), guiding_memory MIB. */
+static int pt__sf_guiding(pt__sf_parser *p, const char *kw)
+{
+    pt_scenefile *d = p->d;
+    int rc;
+    long v;
+    float f;
+    if (!strcmp(kw, "guiding")) {
+        static const char *const names[] = {"off", "on", "auto"};
+        static const pt_guiding ids[] = {PT_GUIDING_OFF, PT_GUIDING_ON, PT_GUIDING_AUTO};
+        const char *t = pt__sf_next(p);
+        int i, found = -1;
+        for (i = 0; t && i < 3; ++i)
+            if (!strcmp(t, names[i])) found = i;
+        if (found < 0)
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "guiding: expected off, on or auto, got '%s'",
+                               t ? t : "nothing");
+        d->guiding = ids[found];
+    } else if (!strcmp(kw, "guiding_memory")) {
+        if ((rc = pt__sf_int(p, "guiding_memory", 1, 1048576L, &v)) != PT_OK) return rc;
+        d->guiding_memory = (int)v;
+    } else {
+        if ((rc = pt__sf_num(p, kw, &f)) != PT_OK) return rc;
+        if (!(f > 0.0f && f < 1.0f))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: must be in (0, 1), got '%s'", kw, p->tok[p->pos - 1]);
+        if (!strcmp(kw, "guiding_budget")) d->guiding_budget = f;
+        else d->guiding_alpha = f;
+    }
+    return PT_OK;
+}
+
 /* camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES] [lens_radius R]
    [focus_distance D], once. */
 static int pt__sf_camera(pt__sf_parser *p)
@@ -1569,6 +1619,9 @@ static int pt__sf_statement(pt__sf_parser *p)
         if ((rc = pt__sf_int_setting(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity") || !strcmp(kw, "sampler")) {
         if ((rc = pt__sf_choice(p, kw)) != PT_OK) return rc;
+    } else if (!strcmp(kw, "guiding") || !strcmp(kw, "guiding_budget") || !strcmp(kw, "guiding_alpha") ||
+               !strcmp(kw, "guiding_memory")) {
+        if ((rc = pt__sf_guiding(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "background")) {
         if ((rc = pt__sf_color(p, "background", &d->background)) != PT_OK) return rc;
     } else if (!strcmp(kw, "camera")) {
@@ -1641,6 +1694,7 @@ PTDEF int pt_scenefile_parse_ex(const char *text, size_t length, const char *nam
     out->samples_per_pixel = 64;
     out->max_depth = 50;
     out->pov_light_grid = 16;
+    out->guiding = PT__SF_DEFAULT_GUIDING;
     rc = pt__sf_lines(text, length, &p, pt__sf_line, err, err_size, name);
     if (rc == PT_OK && !p.have_camera)
         rc = pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no 'camera' statement");
@@ -1835,6 +1889,10 @@ done:
     r->strategy = d->strategy;
     r->sampler = d->sampler;
     r->indirect_paths = d->indirect_paths;
+    r->guiding = d->guiding;
+    r->guiding_budget = d->guiding_budget;
+    r->guiding_alpha = d->guiding_alpha;
+    r->guiding_max_mib = d->guiding_memory;
     r->seed = d->seed;
     r->background = d->background;
     r->camera = d->camera;

@@ -530,6 +530,64 @@ done:
     tu_remove_tree(top);
 }
 
+/* The guiding statements: read into pt_scenefile and handed to pt_render_desc by the build;
+   without them the build's guiding is the file's default (the same as the parsed value, valid);
+   bad values are file:line errors naming the statement. */
+static void guiding_statements(test_ctx *t)
+{
+    static const struct { const char *line, *msg; } bad[] = {
+        {"guiding sometimes\n", "t.scene:3: guiding: expected off, on or auto, got 'sometimes'"},
+        {"guiding\n", "t.scene:3: guiding: expected off, on or auto, got 'nothing'"},
+        {"guiding on off\n", "t.scene:3: unexpected 'off' after the end of the 'guiding' statement"},
+        {"guiding_budget 1\n", "t.scene:3: guiding_budget: must be in (0, 1), got '1'"},
+        {"guiding_budget 0\n", "t.scene:3: guiding_budget: must be in (0, 1), got '0'"},
+        {"guiding_budget 0.99999999999\n", "t.scene:3: guiding_budget: must be in (0, 1), got '0.99999999999'"},
+        {"guiding_alpha -0.5\n", "t.scene:3: guiding_alpha: must be in (0, 1), got '-0.5'"},
+        {"guiding_alpha nan\n", "t.scene:3: guiding_alpha: 'nan' is not finite"},
+        {"guiding_memory 0\n", "t.scene:3: guiding_memory: expected an integer in [1, 1048576], got '0'"},
+        {"guiding_memory 2.5\n", "t.scene:3: guiding_memory: expected an integer in [1, 1048576], got '2.5'"}};
+    char text[512], err[512];
+    pt_scenefile sf;
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    size_t i;
+    int rc = parse_text(T_HEAD "guiding auto\nguiding_budget 0.4\nguiding_alpha 0.3\nguiding_memory 7\nsphere 0 0 0 1 m\n",
+                        NULL, &sf, err, sizeof err);
+    if (CHECK(t, rc == PT_OK, "the four statements: %d '%s'", rc, err)) {
+        CHECK(t, sf.guiding == PT_GUIDING_AUTO && sf.guiding_budget == 0.4f && sf.guiding_alpha == 0.3f &&
+                     sf.guiding_memory == 7, "read as %d %g %g %d", (int)sf.guiding, (double)sf.guiding_budget,
+              (double)sf.guiding_alpha, sf.guiding_memory);
+        rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+        if (CHECK(t, rc == PT_OK, "build: %d '%s'", rc, err))
+            CHECK(t, rd.guiding == PT_GUIDING_AUTO && rd.guiding_budget == 0.4f && rd.guiding_alpha == 0.3f &&
+                         rd.guiding_max_mib == 7 && rd.guiding_guide == NULL, "built as %d %g %g %d", (int)rd.guiding,
+                  (double)rd.guiding_budget, (double)rd.guiding_alpha, rd.guiding_max_mib);
+        pt_scene_destroy(scene);
+        scene = NULL;
+        pt_scenefile_free(&sf);
+    }
+    rc = parse_text(T_HEAD "sphere 0 0 0 1 m\n", NULL, &sf, err, sizeof err);
+    if (CHECK(t, rc == PT_OK, "no guiding statement: %d '%s'", rc, err)) {
+        rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+        if (CHECK(t, rc == PT_OK, "build: %d '%s'", rc, err))
+            CHECK(t, rd.guiding == sf.guiding && (int)rd.guiding >= (int)PT_GUIDING_OFF &&
+                         (int)rd.guiding <= (int)PT_GUIDING_AUTO && rd.guiding_budget == 0.0f &&
+                         rd.guiding_alpha == 0.0f && rd.guiding_max_mib == 0,
+                  "default: %d (file %d), %g %g %d", (int)rd.guiding, (int)sf.guiding, (double)rd.guiding_budget,
+                  (double)rd.guiding_alpha, rd.guiding_max_mib);
+        pt_scene_destroy(scene);
+        pt_scenefile_free(&sf);
+        test_note(t, "without a statement: guiding %d", (int)rd.guiding);
+    }
+    for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        snprintf(text, sizeof text, T_HEAD "%ssphere 0 0 0 1 m\n", bad[i].line);
+        rc = parse_text(text, NULL, &sf, err, sizeof err);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strcmp(err, bad[i].msg) == 0, "'%.*s': %d '%s'",
+              (int)strlen(bad[i].line) - 1, bad[i].line, rc, err);
+        if (rc == PT_OK) pt_scenefile_free(&sf);
+    }
+}
+
 const test_case test_scenefile_cases[] = {
     TEST_CASE(obj_load_matches_parse),
     TEST_CASE(add_obj_one_call),
@@ -546,5 +604,6 @@ const test_case test_scenefile_cases[] = {
     TEST_CASE(mesh_parsed_once),
     TEST_CASE(mesh_memory_budget),
     TEST_CASE(mesh_allowed_dirs),
+    TEST_CASE(guiding_statements),
     TEST_END
 };

@@ -11,6 +11,7 @@
    Built with -DPDFTRACE_PNG (pdftrace_png.h, libpng) and -DPDFTRACE_OPENEXR (pdftrace_exr.h,
    OpenEXRCore) when those libraries are present: the Makefile's PNG and TOOL_EXR. */
 #include <errno.h>
+#include <float.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -44,7 +45,10 @@ typedef struct output {
 
 /* The render settings a scene file has; set on the command line, they replace the file's. */
 enum { GIVEN_WIDTH = 1, GIVEN_HEIGHT = 2, GIVEN_SPP = 4, GIVEN_STRATEGY = 8, GIVEN_SAMPLER = 16,
-       GIVEN_SEED = 32, GIVEN_DEPTH = 64, GIVEN_INDIRECT = 128 };
+       GIVEN_SEED = 32, GIVEN_DEPTH = 64, GIVEN_INDIRECT = 128, GIVEN_GUIDING = 256, GIVEN_GUIDING_BUDGET = 512,
+       GIVEN_GUIDING_ALPHA = 1024, GIVEN_GUIDING_MEMORY = 2048 };
+
+#define GUIDE_IMAGE_HEIGHT 256 /* --guide-at: a 512 x 256 latitude-longitude picture */
 
 typedef struct options {
     const char *scene;
@@ -53,6 +57,8 @@ typedef struct options {
     char default_output[4096];   /* SCENE's base name + .png (.ppm without libpng) */
     const char *pov;             /* --export-pov */
     const char *mitsuba;         /* --export-mitsuba */
+    output guide_out;            /* --guide-at X Y Z OUT: the picture (path NULL: none) */
+    pt_vec3 guide_at;            /* its point, world coordinates */
     pt_render_desc set;          /* the settings given: the scene file's ones only where `given` says */
     unsigned given;              /* GIVEN_* */
     pt_backend backend;
@@ -117,35 +123,34 @@ static void print_help(void)
            "Render settings (they override the scene file's):\n"
            "      --width N, --height N, --size WxH   image size in pixels\n"
            "      --spp N            samples per pixel (with --adaptive: the most a pixel gets)\n"
-           "      --strategy S       mis | material | light | mixture\n"
-           "      --sampler S        independent | sobol (scrambled Sobol points)\n"
-           "      --seed N           random seed, a non-negative integer\n"
+           "      --strategy S       mis | material | light | mixture; --sampler S: independent | sobol\n"
+           "      --seed N, --threads N  random seed (>= 0); worker threads, 0 = all cores (0)\n"
            "      --max-depth N      scattering events per path (1: direct light only)\n"
            "      --indirect-paths N paths each camera sample continues as, 1..8\n"
            "      --light-weight W   light PDF weight of the mixture strategy, in (0, 1] (0.5)\n"
-           "      --threads N        worker threads, 0 = all cores (0)\n"
            "      --backend B        auto | builtin | embree: ray traversal (auto)\n"
+           "      --guiding G        off | on | auto: path guiding (auto: only where training pays)\n"
+           "      --guiding-budget F, --guiding-alpha F  in (0, 1): training's share of spp (0.25),\n"
+           "                         the material's in the guided mixture (0.5); --guiding-memory MIB (64)\n"
            "      --adaptive T       adaptive sampling toward RMS relative error T, e.g. 0.05\n"
            "      --adaptive-mode M  pilot (unbiased) | own-samples | neighbours (biased) (pilot)\n"
            "      --adaptive-min-spp N  the pilot's spp, or the least a pixel gets (max(16, spp/16))\n"
            "      --adaptive-check N    own-samples, neighbours: re-plan every N passes (1)\n"
            "      --adaptive-neighbours-only  the same as --adaptive-mode neighbours\n"
-           "      --disable-skips L  force the general path: all, or a comma-separated list of\n"
-           "                         no-emitters, delta-vertex, facing-away, no-textures,\n"
-           "                         zero-bsdf-shadow (for benchmarks)\n"
+           "      --disable-skips L  force the general path (for benchmarks): all, or a list of\n"
+           "                         no-emitters,delta-vertex,facing-away,no-textures,zero-bsdf-shadow\n"
            "Display, for .png and .ppm:\n"
-           "      --exposure EV      multiply by 2^EV (0)\n"
-           "      --tonemap T        clamp | aces | reinhard (clamp)\n"
+           "      --exposure EV      multiply by 2^EV (0); --tonemap T: clamp | aces | reinhard (clamp)\n"
            "Other:\n"
            "      --preview-every S  rewrite the outputs every S seconds while rendering\n"
+           "      --guide-at X Y Z OUT  render guided, write the guide learned at X Y Z: lat-long map\n"
            "      --export-pov FILE  write the scene for POV-Ray 3.7 (renders too only with -o)\n"
            "      --export-mitsuba FILE.xml  write the scene for Mitsuba 3 (meshes as FILE.N.ply beside it;\n"
            "                         renders too only with -o)\n"
            "      --allow-path DIR   meshes may also come from DIR (default: the scene's directory only)\n"
            "      --mesh-memory MB, --image-memory MB  memory limits of the scene (1024, 4096)\n"
            "  -q, --quiet            no progress and no statistics\n"
-           "  -h, --help             this help\n"
-           "      --version          the version and the formats built in\n"
+           "  -h, --help, --version  this help; the version and the formats built in\n"
            "Long options also take --name=value. Exit status: 0 done, 1 rendering or writing\n"
            "failed, 2 bad command line, scene file or output (nothing written).\n");
     if (!have_png() || !have_exr())
@@ -208,6 +213,16 @@ static int parse_real(const char *opt, const char *text, double lo, double hi, i
     if (text[0] == '\0' || *end != '\0' || errno == ERANGE || !(lo_open ? v > lo : v >= lo) || !(v <= hi))
         return fail("%s: expected %s, got '%s'", opt, range, text);
     *out = (float)v;
+    return PARSED;
+}
+
+/* A number strictly inside (0, 1), also once stored as a float (0.999999999 would round to 1). */
+static int parse_open_unit(const char *opt, const char *text, float *out)
+{
+    float f = 0.0f;
+    if (parse_real(opt, text, 0.0, 1.0, 1, "a number in (0, 1)", &f) != PARSED) return PARSE_FAILED;
+    if (!(f > 0.0f && f < 1.0f)) return fail("%s: expected a number in (0, 1), got '%s'", opt, text);
+    *out = f;
     return PARSED;
 }
 
@@ -288,13 +303,12 @@ typedef enum opt_id {
     O_OUTPUT, O_WIDTH, O_HEIGHT, O_SIZE, O_SPP, O_STRATEGY, O_SAMPLER, O_SEED, O_MAX_DEPTH, O_INDIRECT,
     O_LIGHT_WEIGHT, O_THREADS, O_BACKEND, O_ADAPTIVE, O_ADAPTIVE_MIN, O_ADAPTIVE_CHECK, O_ADAPTIVE_NB, O_ADAPTIVE_MODE,
     O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_MITSUBA, O_QUIET, O_HELP, O_VERSION, O_ALLOW_PATH,
-    O_MESH_MEMORY,
-    O_IMAGE_MEMORY
+    O_MESH_MEMORY, O_IMAGE_MEMORY, O_GUIDING, O_GUIDING_BUDGET, O_GUIDING_ALPHA, O_GUIDING_MEMORY, O_GUIDE_AT
 } opt_id;
 
 static const struct option_def {
     const char *name, *alias; /* alias: the short form, or NULL */
-    int takes_value;
+    int takes_value;          /* how many values: 0, 1, or 4 (--guide-at X Y Z OUT) */
     opt_id id;
 } option_defs[] = {
     { "--output", "-o", 1, O_OUTPUT },        { "--width", NULL, 1, O_WIDTH },
@@ -312,7 +326,10 @@ static const struct option_def {
     { "--export-mitsuba", NULL, 1, O_MITSUBA },
     { "--quiet", "-q", 0, O_QUIET },          { "--help", "-h", 0, O_HELP },
     { "--version", NULL, 0, O_VERSION },      { "--allow-path", NULL, 1, O_ALLOW_PATH },
-    { "--mesh-memory", NULL, 1, O_MESH_MEMORY }, { "--image-memory", NULL, 1, O_IMAGE_MEMORY }
+    { "--mesh-memory", NULL, 1, O_MESH_MEMORY }, { "--image-memory", NULL, 1, O_IMAGE_MEMORY },
+    { "--guiding", NULL, 1, O_GUIDING },      { "--guiding-budget", NULL, 1, O_GUIDING_BUDGET },
+    { "--guiding-alpha", NULL, 1, O_GUIDING_ALPHA }, { "--guiding-memory", NULL, 1, O_GUIDING_MEMORY },
+    { "--guide-at", NULL, 4, O_GUIDE_AT }
 };
 
 static const struct option_def *find_option(const char *name)
@@ -331,6 +348,8 @@ static int set_scene_setting(options *o, opt_id id, const char *name, const char
     static const pt_strategy strategy_ids[] = { PT_STRATEGY_MIS, PT_STRATEGY_MATERIAL, PT_STRATEGY_LIGHT,
                                                 PT_STRATEGY_MIXTURE };
     static const char *const samplers[] = { "independent", "sobol" };
+    static const char *const guidings[] = { "off", "on", "auto" };
+    static const pt_guiding guiding_ids[] = { PT_GUIDING_OFF, PT_GUIDING_ON, PT_GUIDING_AUTO };
     pt_render_desc *d = &o->set;
     int k = 0, rc = PARSED;
     switch (id) {
@@ -354,6 +373,17 @@ static int set_scene_setting(options *o, opt_id id, const char *name, const char
     case O_SEED: rc = parse_u64(name, v, &d->seed); o->given |= GIVEN_SEED; break;
     case O_MAX_DEPTH: rc = parse_int(name, v, 1, 100000, &d->max_depth); o->given |= GIVEN_DEPTH; break;
     case O_INDIRECT: rc = parse_int(name, v, 1, 8, &d->indirect_paths); o->given |= GIVEN_INDIRECT; break;
+    case O_GUIDING:
+        rc = parse_choice(name, v, guidings, 3, "off, on or auto", &k);
+        d->guiding = guiding_ids[k];
+        o->given |= GIVEN_GUIDING;
+        break;
+    case O_GUIDING_BUDGET: rc = parse_open_unit(name, v, &d->guiding_budget); o->given |= GIVEN_GUIDING_BUDGET; break;
+    case O_GUIDING_ALPHA: rc = parse_open_unit(name, v, &d->guiding_alpha); o->given |= GIVEN_GUIDING_ALPHA; break;
+    case O_GUIDING_MEMORY:
+        rc = parse_int(name, v, 1, 1 << 20, &d->guiding_max_mib); /* MiB, up to 1 TiB as pt_render takes */
+        o->given |= GIVEN_GUIDING_MEMORY;
+        break;
     default: return fail("internal error: option %s", name);
     }
     return rc;
@@ -418,11 +448,9 @@ static int check_writable(const char *path)
     return PARSED;
 }
 
-/* An image output: a known extension this build can write, in a writable directory. */
-static int add_output(options *o, const char *path)
+/* An image file: a known extension this build can write, in a writable directory. */
+static int check_output(output *out, const char *path)
 {
-    output *out = &o->outputs[o->output_count];
-    if (o->output_count == MAX_OUTPUTS) return fail("too many outputs (at most %d)", MAX_OUTPUTS);
     if (ends_with(path, ".png")) out->fmt = FMT_PNG;
     else if (ends_with(path, ".exr")) out->fmt = FMT_EXR;
     else if (ends_with(path, ".pfm")) out->fmt = FMT_PFM;
@@ -434,8 +462,31 @@ static int add_output(options *o, const char *path)
         return fail("%s: built without OpenEXR support (install libopenexr-dev and rebuild)", path);
     if (check_writable(path) != PARSED) return PARSE_FAILED;
     out->path = path;
+    return PARSED;
+}
+
+static int add_output(options *o, const char *path)
+{
+    if (o->output_count == MAX_OUTPUTS) return fail("too many outputs (at most %d)", MAX_OUTPUTS);
+    if (check_output(&o->outputs[o->output_count], path) != PARSED) return PARSE_FAILED;
     o->output_count++;
     return PARSED;
+}
+
+/* --guide-at X Y Z OUT: a finite point and an image file. */
+static int set_guide_at(options *o, const char *name, const char *const *v)
+{
+    static const char *const axes[3] = { "X", "Y", "Z" };
+    float c[3] = { 0.0f, 0.0f, 0.0f };
+    char what[80];
+    int k;
+    if (o->guide_out.path) return fail("%s given twice", name);
+    for (k = 0; k < 3; k++) {
+        snprintf(what, sizeof what, "%s %s", name, axes[k]);
+        if (parse_real(what, v[k], -FLT_MAX, FLT_MAX, 0, "a finite number", &c[k]) != PARSED) return PARSE_FAILED;
+    }
+    o->guide_at = pt_v3(c[0], c[1], c[2]);
+    return check_output(&o->guide_out, v[3]);
 }
 
 /* What is written, how the 8-bit outputs look, and how the command behaves. */
@@ -503,6 +554,16 @@ static int parse_one(options *o, int argc, char **argv, int *i)
         default: return fail("internal error: option %s", name);
         }
     }
+    if (def->takes_value > 1) { /* --guide-at: the values that follow (the first may be after '=') */
+        const char *v[4];
+        int k;
+        for (k = 0; k < def->takes_value && k < 4; k++) {
+            if (k == 0 && value) v[0] = value;
+            else if (*i + 1 >= argc) return fail("%s needs %d values: X Y Z OUT", name, def->takes_value);
+            else v[k] = argv[++*i];
+        }
+        return set_guide_at(o, name, v);
+    }
     if (!value) {
         if (*i + 1 >= argc) return fail("%s needs a value", name);
         value = argv[++*i];
@@ -540,7 +601,9 @@ static int parse_options(int argc, char **argv, options *o)
         }
     }
     if (!o->scene) return fail("no scene file given (usage: pdftrace SCENE [options]; see pdftrace --help)");
-    if (o->output_count == 0 && !o->pov && !o->mitsuba) return add_default_output(o);
+    if (o->guide_out.path && (o->given & GIVEN_GUIDING) && o->set.guiding == PT_GUIDING_OFF)
+        return fail("--guide-at learns a guide in the render: not with --guiding off");
+    if (o->output_count == 0 && !o->pov && !o->mitsuba && !o->guide_out.path) return add_default_output(o);
     return PARSED;
 }
 
@@ -559,6 +622,10 @@ static void apply_settings(const options *o, pt_render_desc *d)
     if (o->given & GIVEN_SEED) d->seed = s->seed;
     if (o->given & GIVEN_DEPTH) d->max_depth = s->max_depth;
     if (o->given & GIVEN_INDIRECT) d->indirect_paths = s->indirect_paths;
+    if (o->given & GIVEN_GUIDING) d->guiding = s->guiding;
+    if (o->given & GIVEN_GUIDING_BUDGET) d->guiding_budget = s->guiding_budget;
+    if (o->given & GIVEN_GUIDING_ALPHA) d->guiding_alpha = s->guiding_alpha;
+    if (o->given & GIVEN_GUIDING_MEMORY) d->guiding_max_mib = s->guiding_max_mib;
     d->light_weight = s->light_weight;
     d->threads = s->threads;
     d->adaptive_threshold = s->adaptive_threshold;
@@ -764,7 +831,8 @@ static const char *strategy_name(pt_strategy s)
     return "?";
 }
 
-static void print_stats(const options *o, const pt_scene *scene, const pt_render_desc *d, const pt_render_stats *st)
+static void print_stats(const options *o, const pt_scene *scene, const pt_render_desc *d, const pt_render_stats *st,
+                        int guiding_forced)
 {
     pt_scene_info info;
     uint64_t rays = st->camera_rays + st->bounce_rays + st->shadow_rays;
@@ -786,6 +854,15 @@ static void print_stats(const options *o, const pt_scene *scene, const pt_render
         printf("adaptive   threshold %g: %llu pixels converged early (%.1f%%), %u to %u spp, mean %.1f\n",
                (double)d->adaptive_threshold, (unsigned long long)st->pixels_converged,
                100.0 * (double)st->pixels_converged / pixels, st->min_spp, st->max_spp, (double)st->samples / pixels);
+    if (d->guiding != PT_GUIDING_OFF) {
+        printf("guiding    %s%s", st->guiding_note, guiding_forced ? " (turned on for --guide-at)" : "");
+        if (st->guiding_iterations > 0)
+            printf("; training %.3f s, %llu samples; guide %lu KiB, %lu lea%s; %llu guided vertices",
+                   st->guiding_seconds, (unsigned long long)st->guiding_samples,
+                   (unsigned long)(st->guiding_bytes / 1024u), (unsigned long)st->guiding_leaves,
+                   st->guiding_leaves == 1 ? "f" : "ves", (unsigned long long)st->guided_vertices);
+        printf("\n");
+    }
     if (st->estimated_error >= 0) printf("error      estimated RMS relative error %.4f\n", st->estimated_error);
     if (d->disable_skips) printf("skips      general path forced for mask 0x%x\n", d->disable_skips);
     printf("rays       %llu camera + %llu bounce + %llu shadow = %llu\n", (unsigned long long)st->camera_rays,
@@ -794,15 +871,51 @@ static void print_stats(const options *o, const pt_scene *scene, const pt_render
     printf("NaN/Inf    %llu samples (caught and zeroed)\n", (unsigned long long)st->nonfinite_samples);
 }
 
+/* --guide-at: the guide's density at the point as a 2N x N latitude-longitude picture (pt_guide_image:
+   per steradian, +z up). .pfm and .exr get it as it is; .png and .ppm get it divided by its maximum,
+   so that the likeliest direction is white. Returns 1 when it was written. */
+static int write_guide(const options *o, const pt_guide *guide, const pt_render_stats *st)
+{
+    pt_image img = {0, 0, NULL};
+    pt_guide_info info;
+    char err[1024];
+    int rc;
+    if ((rc = pt_guide_image(guide, o->guide_at, 2 * GUIDE_IMAGE_HEIGHT, GUIDE_IMAGE_HEIGHT, &img)) != PT_OK) {
+        fail("--guide-at: the guide's picture: %s", pt_result_string(rc));
+        return 0;
+    }
+    if (o->guide_out.fmt == FMT_PNG || o->guide_out.fmt == FMT_PPM) {
+        size_t i, n = 3u * (size_t)img.width * (size_t)img.height;
+        float top = 0.0f;
+        for (i = 0; i < n; i++)
+            if (img.rgb[i] > top) top = img.rgb[i];
+        for (i = 0; i < n && top > 0.0f; i++) img.rgb[i] /= top;
+    }
+    rc = write_one(&o->guide_out, &img, &img, err, sizeof err);
+    pt_image_free(&img);
+    if (rc != PT_OK) {
+        if (err[0]) fail("%s", err);
+        else fail("%s: writing failed: %s", o->guide_out.path, pt_result_string(rc));
+        return 0;
+    }
+    if (!o->quiet) printf("wrote      %s\n", o->guide_out.path);
+    if (pt_guide_get_info(guide, &info) == PT_OK && info.updates == 0)
+        fail("warning: --guide-at: the guide learned nothing (%s); %s shows a uniform density", st->guiding_note,
+             o->guide_out.path);
+    return 1;
+}
+
 /* Renders into a film of our own (so that previews can resolve it between passes) and writes
-   the outputs. Returns the exit status. */
+   the outputs, and with --guide-at trains a guide of our own (guiding turned on if it is off)
+   and writes its picture. Returns the exit status. */
 static int render(const options *o, const pt_scene *scene, pt_render_desc *d)
 {
     progress_state ps;
     pt_film film;
     pt_image img = {0, 0, NULL};
     pt_render_stats st;
-    int rc, ok;
+    pt_guide *guide = NULL;
+    int rc, ok, forced = 0;
     memset(&ps, 0, sizeof ps);
     ps.o = o;
     ps.film = &film;
@@ -811,6 +924,19 @@ static int render(const options *o, const pt_scene *scene, pt_render_desc *d)
     if ((rc = pt_film_init(&film, d->width, d->height)) != PT_OK) {
         fail("%d x %d film: %s", d->width, d->height, pt_result_string(rc));
         return EXIT_FAILURE;
+    }
+    if (o->guide_out.path) {
+        pt_guide_desc gd;
+        memset(&gd, 0, sizeof gd);
+        gd.max_bytes = d->guiding_max_mib > 0 ? (size_t)d->guiding_max_mib << 20 : 0u; /* 0: its default */
+        if ((rc = pt_guide_create_for_scene(scene, &gd, &guide)) != PT_OK) {
+            fail("--guide-at: creating the guide: %s", pt_result_string(rc));
+            pt_film_free(&film);
+            return EXIT_FAILURE;
+        }
+        forced = d->guiding == PT_GUIDING_OFF;
+        if (forced) d->guiding = PT_GUIDING_ON;
+        d->guiding_guide = guide;
     }
     d->progress = on_pass;
     d->progress_user = &ps;
@@ -822,17 +948,21 @@ static int render(const options *o, const pt_scene *scene, pt_render_desc *d)
         if (!ps.preview_failed)
             fail("rendering failed (%d x %d): %s", d->width, d->height, st.error[0] ? st.error : pt_result_string(rc));
         pt_film_free(&film);
+        pt_guide_destroy(guide);
         return EXIT_FAILURE;
     }
     rc = pt_film_resolve(&film, &img);
     pt_film_free(&film);
     if (rc != PT_OK) {
         fail("resolving the %d x %d film: %s", d->width, d->height, pt_result_string(rc));
+        pt_guide_destroy(guide);
         return EXIT_FAILURE;
     }
-    if (!o->quiet) print_stats(o, scene, d, &st);
+    if (!o->quiet) print_stats(o, scene, d, &st, forced);
     ok = write_outputs(o, &img, !o->quiet);
     pt_image_free(&img);
+    if (guide && !write_guide(o, guide, &st)) ok = 0;
+    pt_guide_destroy(guide);
     return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 
@@ -867,8 +997,9 @@ static int check_outputs_not_input(const options *o)
     struct stat in, st;
     int i;
     if (stat(o->scene, &in) != 0) return PARSED; /* reported when the scene is loaded */
-    for (i = 0; i <= o->output_count + 1; i++) {
-        const char *path = i < o->output_count ? o->outputs[i].path : i == o->output_count ? o->pov : o->mitsuba;
+    for (i = 0; i <= o->output_count + 2; i++) {
+        const char *path = i < o->output_count ? o->outputs[i].path : i == o->output_count ? o->pov
+                         : i == o->output_count + 1 ? o->mitsuba : o->guide_out.path;
         if (path && stat(path, &st) == 0 && st.st_dev == in.st_dev && st.st_ino == in.st_ino)
             return fail("%s: is the scene file %s; an output must not replace an input", path, o->scene);
     }
@@ -889,7 +1020,7 @@ int main(int argc, char **argv)
     memset(&sf, 0, sizeof sf);
     memset(&d, 0, sizeof d);
     status = load_scene(&o, &sf, &scene, &d);
-    if (status == EXIT_SUCCESS && o.output_count > 0) status = render(&o, scene, &d);
+    if (status == EXIT_SUCCESS && (o.output_count > 0 || o.guide_out.path)) status = render(&o, scene, &d);
     pt_scene_destroy(scene);
     pt_scenefile_free(&sf);
     return status;

@@ -10,7 +10,8 @@
 # --export-mitsuba (alone, with -o, with the overrides, and a refused scene); the
 # default output name; --preview-every rewrites the output while rendering and leaves the
 # final image as without it; the command line overrides a scene file's settings; --exposure
-# changes the 8-bit outputs only; -q prints nothing; --adaptive-mode and its alias.
+# changes the 8-bit outputs only; -q prints nothing; --adaptive-mode and its alias; path guiding
+# (--guiding*, the scene file's guiding statements, --guide-at's picture, exports unchanged by them).
 set -u
 
 if [ $# -ne 3 ]; then
@@ -113,7 +114,12 @@ t_bad_input() {
              "--light-weight 2" "--threads" "--tonemap filmic" "--exposure inf" "--preview-every 0" "--adaptive -1" \
              "--adaptive-mode best" \
              "--disable-skips nope" "--indirect-paths 9" "--backend fast" "--quiet=1" "-o out.tiff" \
-             "-o no/such/dir/x.ppm" "--export-pov no/such/dir/x.pov" "--export-mitsuba no/such/dir/x.xml"; do
+             "-o no/such/dir/x.ppm" "--export-pov no/such/dir/x.pov" "--export-mitsuba no/such/dir/x.xml" \
+             "--guiding sometimes" "--guiding" "--guiding-budget 1.5" "--guiding-budget 0" "--guiding-budget 1" \
+             "--guiding-alpha 0" "--guiding-alpha nan" "--guiding-memory 0" "--guiding-memory 2.5" \
+             "--guide-at 0 0 nan g.pfm" "--guide-at 0 inf 0 g.pfm" "--guide-at 1e39 0 0 g.pfm" "--guide-at x 0 0 g.pfm" \
+             "--guide-at 0 0 0 g.tiff" "--guide-at 0 0 0" "--guide-at 0 0 0 no/such/dir/g.pfm" \
+             "--guiding off --guide-at 0 0 0 g.pfm" "--guide-at 0 0 0 g.pfm --guide-at 0 0 0 h.pfm"; do
         # shellcheck disable=SC2086
         bad_case "$a" "$S/mirror.scene" --spp 1 --size 8x8 -o "$W/bad/x.ppm" $a || ok=0
     done
@@ -461,6 +467,85 @@ t_precision_warning() {
     fi
 }
 
+# ---- path guiding: the scene file's guiding statements are the command line's --guiding options
+# (same bytes), the command line overrides them, and they change the image; --guide-at writes the
+# guide's 512 x 256 picture (alone: only it), turning guiding on; the exports ignore the statements
+t_guiding() {
+    local dir=$W/guiding ok=1 why="" f common=(-q --size 24x24 --spp 16) status
+    mkdir -p "$dir/plain" "$dir/with"
+    cp "$S/cornell.scene" "$dir/plain/c.scene"
+    { cat "$S/cornell.scene"; printf '\nguiding on\n'; } >"$dir/on.scene"
+    { cat "$S/cornell.scene"; printf '\nguiding off\n'; } >"$dir/off.scene"
+    { cat "$S/cornell.scene"; printf '\nguiding on\nguiding_budget 0.5\nguiding_alpha 0.3\nguiding_memory 2\n'; } >"$dir/with/c.scene"
+    "$P" "$dir/on.scene" "${common[@]}" -o "$dir/file-on.pfm" &&
+        "$P" "$S/cornell.scene" "${common[@]}" --guiding on -o "$dir/cli-on.pfm" &&
+        "$P" "$dir/on.scene" "${common[@]}" --guiding off -o "$dir/file-on-cli-off.pfm" &&
+        "$P" "$S/cornell.scene" "${common[@]}" --guiding off -o "$dir/cli-off.pfm" &&
+        "$P" "$dir/with/c.scene" "${common[@]}" -o "$dir/file-params.pfm" &&
+        "$P" "$S/cornell.scene" "${common[@]}" --guiding=on --guiding-budget 0.5 --guiding-alpha=0.3 --guiding-memory 2 \
+            -o "$dir/cli-params.pfm" &&
+        "$P" "$S/cornell.scene" "${common[@]}" --guiding auto -o "$dir/cli-auto.pfm" ||
+        { ok=0; why="a render failed"; }
+    if [ $ok = 1 ]; then
+        cmp -s "$dir/file-on.pfm" "$dir/cli-on.pfm" || { ok=0; why="'guiding on' in the file != --guiding on"; }
+        cmp -s "$dir/file-on-cli-off.pfm" "$dir/cli-off.pfm" || { ok=0; why="--guiding off does not override the file's 'guiding on'"; }
+        ! cmp -s "$dir/file-on.pfm" "$dir/cli-off.pfm" || { ok=0; why="guiding on gave the unguided image"; }
+        cmp -s "$dir/file-params.pfm" "$dir/cli-params.pfm" || { ok=0; why="the file's guiding_budget/alpha/memory != the options"; }
+        ! cmp -s "$dir/file-params.pfm" "$dir/file-on.pfm" || { ok=0; why="guiding_budget 0.5, alpha 0.3 had no effect"; }
+        [ -s "$dir/cli-auto.pfm" ] || { ok=0; why="--guiding auto wrote nothing"; }
+    fi
+    # the statistics say what guiding did
+    "$P" "$dir/on.scene" --size 24x24 --spp 16 -o "$dir/s.pfm" >"$W/out.txt" 2>/dev/null
+    grep -q '^guiding    guided: [0-9]* training iterations.*; training .* s, .* samples; guide .* KiB' "$W/out.txt" ||
+        { ok=0; why="$why; no 'guiding' line in the statistics: $(grep guiding "$W/out.txt")"; }
+    if [ $ok = 1 ]; then pass guiding "file statements = options (same bytes), overridden by them, change the image; statistics"
+    else fail guiding "$why"; fi
+    # --guide-at alone: only its picture, PFM 512 x 256, guiding turned on (the scene file says off)
+    ok=1 why=""
+    rm -rf "$dir/at" && mkdir -p "$dir/at"
+    (cd "$dir/at" && "$P" "$dir/off.scene" --size 24x24 --spp 16 --guiding-memory 4 --guide-at 278 1 278 g.pfm) \
+        >"$W/out.txt" 2>"$W/err.txt" || { ok=0; why="failed: $(head -n 1 "$W/err.txt")"; }
+    [ "$(ls "$dir/at" | tr '\n' ' ')" = "g.pfm " ] || { ok=0; why="$why; wrote '$(ls "$dir/at" | tr '\n' ' ')' (want g.pfm only)"; }
+    [ "$(head -c 14 "$dir/at/g.pfm" 2>/dev/null | tr '\n' ' ')" = "PF 512 256 -1." ] || { ok=0; why="$why; g.pfm header"; }
+    [ "$(wc -c <"$dir/at/g.pfm" 2>/dev/null)" = $((16 + 512 * 256 * 12)) ] || { ok=0; why="$why; g.pfm size"; }
+    grep -q 'guiding    guided: .*(turned on for --guide-at)' "$W/out.txt" || { ok=0; why="$why; no '(turned on for --guide-at)'"; }
+    ! grep -q '^pdftrace: ' "$W/err.txt" || { ok=0; why="$why; stderr: $(grep '^pdftrace: ' "$W/err.txt")"; }
+    # with -o as well, an 8-bit picture; too few samples to train: a warning, still written
+    if [ $have_png = 1 ]; then f=g.png; else f=g.ppm; fi
+    "$P" "$dir/on.scene" -q --size 8x8 --spp 2 -o "$dir/at/img.ppm" --guide-at=0 0 0 "$dir/at/$f" 2>"$W/err.txt"
+    status=$?
+    [ $status = 0 ] && [ -s "$dir/at/img.ppm" ] && [ -s "$dir/at/$f" ] || { ok=0; why="$why; with -o: status $status"; }
+    grep -q "^pdftrace: warning: --guide-at: the guide learned nothing (not guided: too few samples" "$W/err.txt" ||
+        { ok=0; why="$why; untrained guide: '$(head -n 1 "$W/err.txt")'"; }
+    if [ $f = g.png ]; then
+        [ "$(hexbytes "$dir/at/g.png" 12 16)" = 49484452000002000000010008020000 ] || { ok=0; why="$why; g.png IHDR"; }
+    else
+        [ "$(head -c 15 "$dir/at/g.ppm" | tr '\n' ' ')" = "P6 512 256 255 " ] || { ok=0; why="$why; g.ppm header"; }
+    fi
+    if [ $ok = 1 ]; then pass guide_at "alone: only a 512x256 PFM, guiding turned on; $f with -o; an untrained guide warns"
+    else fail guide_at "$why"; fi
+    # the exports are the same with and without the guiding statements
+    ok=1
+    for f in plain with; do
+        (cd "$dir/$f" && "$P" c.scene -q --export-pov c.pov --export-mitsuba c.xml) 2>"$W/err.txt" ||
+            { ok=0; why="$f: $(head -n 1 "$W/err.txt")"; }
+    done
+    if [ $ok = 1 ] && cmp -s "$dir/plain/c.pov" "$dir/with/c.pov" && cmp -s "$dir/plain/c.xml" "$dir/with/c.xml"; then
+        pass guiding_export "POV-Ray and Mitsuba exports ignore the guiding statements"
+    else
+        fail guiding_export "${why:-the exports differ with the guiding statements}"
+    fi
+    # a bad statement: status 2, file:line
+    { cat "$S/mirror.scene"; printf 'guiding sometimes\n'; } >"$dir/bad.scene"
+    f=$(($(wc -l <"$S/mirror.scene") + 1))
+    if bad_case "guiding sometimes (scene file)" "$dir/bad.scene" -o "$W/bad/x.ppm" &&
+        grep -q "bad.scene:$f: guiding: expected off, on or auto, got 'sometimes'" "$W/err.txt"; then
+        pass guiding_statement "guiding sometimes: status 2, bad.scene:$f"
+    else
+        fail guiding_statement "'$(cat "$W/err.txt")'"
+    fi
+}
+
 t_help
 t_png_exr
 t_precision_warning
@@ -471,6 +556,7 @@ t_default_output
 t_preview
 t_overrides
 t_adaptive_mode
+t_guiding
 t_display
 t_scene_limits
 t_signal
