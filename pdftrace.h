@@ -993,8 +993,8 @@ typedef struct pt_render_stats {
     int guiding_iterations;      /* training iterations run */
     uint64_t guiding_samples;    /* camera samples of the training iterations (in the image too) */
     double guiding_seconds;      /* wall clock of the training (counted in seconds) */
-    double guiding_gain;         /* training's measured efficiency with the guide over without (> 1:
-                                    the guide pays); 0 when not measured */
+    double guiding_gain;         /* AUTO: the efficiency the last training iteration measured with
+                                    the guide over without (> 1: the guide pays); 0 when not measured */
     size_t guiding_bytes;        /* memory of the guide at the end */
     uint32_t guiding_leaves;     /* its spatial leaves */
     char guiding_note[128];      /* "" without guiding; else what was decided and why */
@@ -2634,9 +2634,9 @@ static float pt__dtree_density(const pt__dtree *t, float x, float y)
 
 /* Draws (x, y) from the sampling tree by warping (ux, uy) level by level (a column by its
    marginal, then the quadrant in it), so each level takes one bit of each number. */
-static void pt__dtree_sample(const pt__dtree *t, float ux, float uy, float *x, float *y)
+static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, float *x, float *y)
 {
-    float ox = 0.0f, oy = 0.0f, size = 1.0f;
+    float ox = 0.0f, oy = 0.0f, size = 1.0f, d = 1.0f;
     uint32_t n = 0;
     int level;
     for (level = 0; t->nodes && level < PT__GUIDE_MAX_DEPTH; ++level) {
@@ -2655,11 +2655,13 @@ static void pt__dtree_sample(const pt__dtree *t, float ux, float uy, float *x, f
         size *= 0.5f;
         ox += (float)bx * size;
         oy += (float)by * size;
+        d *= 4.0f * p[bx + 2 * by];
         n = t->child[4u * n + (uint32_t)(bx + 2 * by)];
         if (!n) break;
     }
     *x = ox + ux * size;
     *y = oy + uy * size;
+    return d; /* the density over the square of the cell drawn */
 }
 
 static void pt__dtree_free(pt__dtree *t)
@@ -2743,36 +2745,127 @@ static float pt__guide_value(const pt_guide *g, uint32_t leaf, pt_vec3 w)
     pt__guide_dir_to_square(w, &x, &y);
     return pt__dtree_density(&g->leaves[leaf].sampling, x, y) * PT__INV_4PI;
 }
-static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2, pt_vec3 *w, float *p)
+/* exact = 1: *p is pt_pdf_value of the direction as rounded, so that sample and value agree
+   exactly (pt_pdf_sample); 0: the density of the cell it was drawn in, which differs only where
+   rounding carries a direction across a cell's edge (the integrator's cheaper choice) */
+static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2, pt_vec3 *w, float *p, int exact)
 {
-    float x, y;
+    float x, y, d;
     if (!g || leaf >= g->leaf_count) return 0;
-    pt__dtree_sample(&g->leaves[leaf].sampling, u1, u2, &x, &y);
+    d = pt__dtree_sample(&g->leaves[leaf].sampling, u1, u2, &x, &y);
     *w = pt_normalize(pt__guide_square_to_dir(x, y));
-    *p = pt__guide_value(g, leaf, *w); /* of the direction as rounded: sample and value agree */
+    *p = exact ? pt__guide_value(g, leaf, *w) : d * PT__INV_4PI;
     return *p > 0.0f;
 }
 
-/* Adds `value` (>= 0) along w into the building tree of the leaf holding p (local coordinates). */
-static void pt__guide_splat(pt_guide *g, pt_vec3 p, pt_vec3 w, double value)
+static double pt__clampd(double v) { return v > 0.0 ? (v < 1.0 ? v : 1.0) : 0.0; }
+/* Records are spread by box filters (Mueller, "Practical Path Guiding in Production", SIGGRAPH
+   2019 course notes): over the spatial leaves that a box the size of the record's own leaf,
+   centred on it, overlaps, and within each leaf over the directional cells that a square the size
+   of the record's own cell overlaps, each in proportion to the overlap. A single record then
+   informs its neighbours too, so a guide learned from few records is less spiky. */
+static double pt__overlap(double a0, double a1, double b0, double b1)
 {
-    pt__guide_leaf *l = &g->leaves[pt__guide_leaf_at(g, p)];
-    pt__dtree *t = &l->building;
-    double u = value / g->unit;
-    uint64_t units;
-    float x, y;
+    double lo = a0 > b0 ? a0 : b0, hi = a1 < b1 ? a1 : b1;
+    return hi > lo ? hi - lo : 0.0;
+}
+/* Adds `density` units per unit area (of node n's square) over the box [x0,x1) x [y0,y1) of n's
+   square, to n's quadrants and, through them, to their subtrees. */
+static void pt__dtree_splat_box(pt_guide *g, pt__dtree *t, uint32_t n, double x0, double x1, double y0, double y1,
+                                double density, int level)
+{
+    int q;
+    for (q = 0; q < 4; ++q) {
+        double qx = 0.5 * (double)(q & 1), qy = 0.5 * (double)(q >> 1);
+        double a = pt__overlap(x0, x1, qx, qx + 0.5) * pt__overlap(y0, y1, qy, qy + 0.5) * density;
+        uint32_t c = t->child[4u * n + (uint32_t)q];
+        if (!(a >= 0.5)) continue; /* (below resolution) */
+        pt__guide_add(g, &t->energy[4u * n + (uint32_t)q], a >= (double)PT__GUIDE_CLAMP_UNITS ? PT__GUIDE_CLAMP_UNITS
+                                                                                          : (uint64_t)(a + 0.5));
+        if (c && level + 1 < PT__GUIDE_MAX_DEPTH)
+            pt__dtree_splat_box(g, t, c, 2.0 * (x0 - qx), 2.0 * (x1 - qx), 2.0 * (y0 - qy), 2.0 * (y1 - qy),
+                                density * 0.25, level + 1);
+    }
+}
+/* units along w into one leaf's building tree, spread over a square the size of w's cell. */
+static void pt__dtree_splat(pt_guide *g, pt__dtree *t, pt_vec3 w, double units)
+{
+    float x, y, cx, cy;
+    double s = 1.0, x0, x1, y0, y1, area;
     uint32_t n = 0;
     int level;
-    pt__guide_add(g, &l->records, 1u);
-    if (!(u >= 0.5)) return; /* zero, below resolution, or NaN */
-    units = u >= (double)PT__GUIDE_CLAMP_UNITS ? PT__GUIDE_CLAMP_UNITS : (uint64_t)(u + 0.5);
     pt__guide_dir_to_square(w, &x, &y);
-    for (level = 0; level < PT__GUIDE_MAX_DEPTH; ++level) {
-        int q = pt__guide_quadrant(&x, &y);
-        pt__guide_add(g, &t->energy[4u * n + (uint32_t)q], units);
+    cx = x;
+    cy = y;
+    for (level = 0; level < PT__GUIDE_MAX_DEPTH; ++level) { /* the size of w's cell */
+        int q = pt__guide_quadrant(&cx, &cy);
+        s *= 0.5;
         n = t->child[4u * n + (uint32_t)q];
         if (!n) break;
     }
+    x0 = (double)x - 0.5 * s;
+    x1 = (double)x + 0.5 * s;
+    if (x0 < 0.0) x0 = 0.0; /* (cos(theta) does not wrap) */
+    if (x1 > 1.0) x1 = 1.0;
+    y0 = (double)y - 0.5 * s;
+    y1 = (double)y + 0.5 * s;
+    area = (x1 - x0) * (y1 - y0);
+    if (!(area > 0.0)) return;
+    if (y0 < 0.0) { /* phi wraps around */
+        pt__dtree_splat_box(g, t, 0, x0, x1, y0 + 1.0, 1.0, units / area, 0);
+        y0 = 0.0;
+    } else if (y1 > 1.0) {
+        pt__dtree_splat_box(g, t, 0, x0, x1, 0.0, y1 - 1.0, units / area, 0);
+        y1 = 1.0;
+    }
+    pt__dtree_splat_box(g, t, 0, x0, x1, y0, y1, units / area, 0);
+}
+/* Over the leaves the box [lo, hi) (the guide's unit cube) overlaps, below node n whose cell is
+   [c0, c1): each gets units x its share of the box's volume. */
+static void pt__guide_splat_space(pt_guide *g, uint32_t n, const double *c0, const double *c1, const double *lo,
+                                  const double *hi, double vol, pt_vec3 w, double units)
+{
+    const pt__guide_node *nd = &g->nodes[n];
+    if (nd->axis < 0) {
+        double f = pt__overlap(lo[0], hi[0], c0[0], c1[0]) * pt__overlap(lo[1], hi[1], c0[1], c1[1]) *
+                   pt__overlap(lo[2], hi[2], c0[2], c1[2]) / vol;
+        if (f > 0.0) pt__dtree_splat(g, &g->leaves[nd->a].building, w, units * f);
+    } else {
+        int a = nd->axis;
+        double mid = 0.5 * (c0[a] + c1[a]), e0[3], e1[3];
+        memcpy(e0, c0, sizeof e0);
+        memcpy(e1, c1, sizeof e1);
+        if (lo[a] < mid) { e1[a] = mid; pt__guide_splat_space(g, nd->a, c0, e1, lo, hi, vol, w, units); }
+        if (hi[a] > mid) { e0[a] = mid; pt__guide_splat_space(g, nd->b, e0, c1, lo, hi, vol, w, units); }
+    }
+}
+
+/* Adds `value` (>= 0) along w at p (local coordinates), box-filtered as above. */
+static void pt__guide_splat(pt_guide *g, pt_vec3 p, pt_vec3 w, double value)
+{
+    double c[3], e[3] = {1.0, 1.0, 1.0}, lo[3], hi[3], c0[3] = {0, 0, 0}, c1[3] = {1, 1, 1}, vol = 1.0, u = value / g->unit;
+    uint32_t n = 0;
+    int a;
+    c[0] = pt__clampd((double)((p.x - g->lo.x) * g->inv_extent.x));
+    c[1] = pt__clampd((double)((p.y - g->lo.y) * g->inv_extent.y));
+    c[2] = pt__clampd((double)((p.z - g->lo.z) * g->inv_extent.z));
+    while (g->nodes[n].axis >= 0) { /* the record's leaf, and its size */
+        a = g->nodes[n].axis;
+        e[a] *= 0.5;
+        n = (c[a] - c0[a]) < e[a] ? (c1[a] = c0[a] + e[a], g->nodes[n].a) : (c0[a] += e[a], g->nodes[n].b);
+    }
+    pt__guide_add(g, &g->leaves[g->nodes[n].a].records, 1u);
+    if (!(u >= 0.5)) return; /* zero, below resolution, or NaN */
+    if (u > (double)PT__GUIDE_CLAMP_UNITS) u = (double)PT__GUIDE_CLAMP_UNITS;
+    for (a = 0; a < 3; ++a) {
+        lo[a] = c[a] - 0.5 * e[a] < 0.0 ? 0.0 : c[a] - 0.5 * e[a];
+        hi[a] = c[a] + 0.5 * e[a] > 1.0 ? 1.0 : c[a] + 0.5 * e[a];
+        vol *= hi[a] - lo[a];
+        c0[a] = 0.0;
+        c1[a] = 1.0;
+    }
+    if (!(vol > 0.0)) return;
+    pt__guide_splat_space(g, 0, c0, c1, lo, hi, vol, w, u);
 }
 
 /* The sampling tree of a building tree: the same topology, each node's sums normalised (a node
@@ -3311,7 +3404,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         break;
     case PT_PDF_GUIDE: {
         float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-        ok = pt__guide_sample(pdf->as.guide.guide, pdf->as.guide.leaf, u1, u2, &w, &p);
+        ok = pt__guide_sample(pdf->as.guide.guide, pdf->as.guide.leaf, u1, u2, &w, &p, 1);
         break;
     }
     default: break;
@@ -6114,6 +6207,11 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
     *pg = -1.0f;
     if (v->has_guide && u0 < v->g) {
         /* (a one-sample mixture: only directions of the guide's own density) */
+        if (v->guide.type == PT_PDF_GUIDE) { /* the learned guide, from the scattering numbers */
+            float u1, u2;
+            pt__draw_scatter(smp, depth, &u1, &u2);
+            return pt__guide_sample(v->guide.as.guide.guide, v->guide.as.guide.leaf, u1, u2, wi, pg, 0);
+        }
         return pt__pdf_sample_depth(&v->guide, pt__sampler_rng(smp), wi, pg, 0, 1);
     } else {
         float u1, u2, u3, pm;
@@ -7386,17 +7484,15 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
    guide it used (which only earlier samples shaped), so the image is unbiased; a render has the
    same sample indices with and without guiding. Splats are summed as integers and the guide is
    updated between iterations on one thread, so the image does not depend on the thread count.
-   AUTO compares, after each guided iteration, its efficiency 1 / (relMSE per sample x cost per
-   sample) with iteration 0's (unguided), relMSE estimated against the film's mean and the cost
-   counted in rays and guide look-ups (counts, not clocks: the decision is deterministic), and,
-   from iteration 3 on (or at the last), goes on unguided (and stops training) as soon as the guide
-   does not pay. --- */
+   AUTO renders the last iteration's first half unguided and its second half guided and compares
+   their efficiencies 1 / (relMSE per sample x cost per sample), relMSE estimated against the
+   film's mean and the cost counted in rays and guide look-ups (counts, not clocks: the decision
+   is deterministic); the rest of the samples are guided only if the guide pays. --- */
 #define PT__GUIDING_BUDGET 0.25f
 #define PT__GUIDING_ALPHA 0.5f
 #define PT__GUIDING_MIB 64
 #define PT__GUIDING_MAX_ITERATIONS 16
 #define PT__GUIDING_AUTO_GAIN 1.05 /* AUTO guides above this measured gain */
-#define PT__GUIDING_AUTO_FIRST 3    /* ... judged from iteration 3 on (a guide learned from 7 spp), or the last */
 #define PT__GUIDING_LOOKUP_COST 1.0 /* AUTO's cost model: a guided vertex costs about one ray (docs/internals.md, "Path guiding") */
 
 static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
@@ -7497,64 +7593,67 @@ static double pt__guiding_rel_mse(const pt_film *f, const pt__film_snap *after, 
     return e / (3.0 * (double)np);
 }
 
-/* The training iterations (see above), into the caller's film. *use: whether the image goes on
-   guided (AUTO may turn it off after any guided iteration); *gain: the last measured efficiency
-   ratio. */
+/* One training render of spp samples per pixel into the film, sampling from `learned` (NULL:
+   unguided) and recording into g; *cost: its cost per sample (rays and guide look-ups). */
+static int pt__guiding_step(const pt_scene *s, const pt_render_desc *d, pt_film *film, int spp, const pt_guide *learned,
+                            pt_guide *g, float weight, pt_render_stats *acc, double *cost, char *err, size_t en)
+{
+    pt_render_desc sub = *d;
+    pt_render_stats st;
+    int rc;
+    sub.guiding = PT_GUIDING_OFF;
+    sub.guiding_guide = NULL;
+    sub.samples_per_pixel = sub.samples_per_pass = spp;
+    sub.adaptive_threshold = 0.0f;
+    sub.progress = NULL;
+    rc = pt__render_once(s, &sub, film, &st, learned, g, weight);
+    if (rc != PT_OK) return pt__msg(err, en, rc, "%s", st.error);
+    pt__stats_add(acc, &st);
+    *cost = ((double)(st.camera_rays + st.bounce_rays + st.shadow_rays) +
+             PT__GUIDING_LOOKUP_COST * (double)st.guided_vertices) / (double)(st.samples ? st.samples : 1);
+    return PT_OK;
+}
+
+/* The training iterations (see above), into the caller's film. With AUTO the last one renders
+   half its samples unguided and half guided: *gain, the efficiency ratio of the two halves, then
+   decides *use (both measured on equally many samples at the same time: a rare bright path the
+   unguided half misses would make an unguided iteration of its own look better than it is). */
 static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_guide *g, int T,
                              float weight, int *use, pt_render_stats *acc, double *gain, char *err, size_t en)
 {
-    pt__film_snap first, second, prev, now;
-    double cost0 = 1.0;
+    pt__film_snap a, b, now;
     int it, rc = PT_OK;
-    memset(&first, 0, sizeof first);
-    memset(&second, 0, sizeof second);
-    memset(&prev, 0, sizeof prev);
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
     now.sum = film->sum; /* (the film itself, read as a snapshot) */
     now.sum_sq = film->sum_sq;
     now.count = film->count;
-    if (!pt__snap_take(&first, film)) {
-        pt__snap_free(&first);
-        return pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
-    }
     *use = 1;
-    for (it = 0; it < T && rc == PT_OK && *use; ++it) {
-        pt_render_desc sub = *d;
-        pt_render_stats st;
-        double cost;
-        sub.guiding = PT_GUIDING_OFF;
-        sub.guiding_guide = NULL;
-        sub.samples_per_pixel = sub.samples_per_pass = 1 << it;
-        sub.adaptive_threshold = 0.0f;
-        sub.progress = NULL;
-        if (it > 0 && !pt__snap_take(&prev, film)) {
-            rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
-            break;
-        }
-        rc = pt__render_once(s, &sub, film, &st, it > 0 ? g : NULL, g, weight);
-        if (rc != PT_OK) { pt__msg(err, en, rc, "%s", st.error); break; }
-        pt__stats_add(acc, &st);
-        acc->guiding_iterations = it + 1;
-        if ((rc = pt__guide_update(g)) != PT_OK) { pt__msg(err, en, rc, "pt_render: out of memory for the guide"); break; }
-        cost = ((double)(st.camera_rays + st.bounce_rays + st.shadow_rays) +
-                PT__GUIDING_LOOKUP_COST * (double)st.guided_vertices) / (double)(st.samples ? st.samples : 1);
-        if (it == 0) {
-            cost0 = cost;
-            if (!pt__snap_take(&second, film)) {
-                rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
-                break;
+    for (it = 0; it < T && rc == PT_OK; ++it) {
+        double cost_u, cost_g;
+        int n = 1 << it;
+        if (d->guiding == PT_GUIDING_AUTO && it == T - 1) {
+            if (!pt__snap_take(&a, film)) break;
+            rc = pt__guiding_step(s, d, film, n / 2, NULL, g, weight, acc, &cost_u, err, en);
+            if (rc != PT_OK) break;
+            if (!pt__snap_take(&b, film)) break;
+            rc = pt__guiding_step(s, d, film, n - n / 2, g, g, weight, acc, &cost_g, err, en);
+            if (rc != PT_OK) break;
+            { /* both against the mean of every sample so far */
+                double eu = pt__guiding_rel_mse(film, &b, &a) * cost_u, eg = pt__guiding_rel_mse(film, &now, &b) * cost_g;
+                *gain = eg > 0.0 ? eu / eg : (eu > 0.0 ? HUGE_VAL : 1.0);
+                *use = *gain > PT__GUIDING_AUTO_GAIN;
             }
-        } else { /* both against the mean of every sample so far */
-            double e0 = pt__guiding_rel_mse(film, &second, &first) * cost0;
-            double e = pt__guiding_rel_mse(film, &now, &prev) * cost;
-            *gain = e > 0.0 ? e0 / e : (e0 > 0.0 ? HUGE_VAL : 1.0);
-            if (d->guiding == PT_GUIDING_AUTO && (it >= PT__GUIDING_AUTO_FIRST || it == T - 1) &&
-                !(*gain > PT__GUIDING_AUTO_GAIN))
-                *use = 0;
+        } else {
+            rc = pt__guiding_step(s, d, film, n, it > 0 ? g : NULL, g, weight, acc, &cost_g, err, en);
+            if (rc != PT_OK) break;
         }
+        acc->guiding_iterations = it + 1;
+        if (*use && (rc = pt__guide_update(g)) != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the guide");
     }
-    pt__snap_free(&first);
-    pt__snap_free(&second);
-    pt__snap_free(&prev);
+    if (rc == PT_OK && it < T) rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
+    pt__snap_free(&a);
+    pt__snap_free(&b);
     return rc;
 }
 
@@ -7594,9 +7693,13 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
             acc.guiding_bytes = gi.bytes;
             acc.guiding_leaves = gi.spatial_leaves;
             acc.guiding_gain = gain;
-            pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0, "%s: %d training iterations, measured gain %.2f%s",
-                    use ? "guided" : "not guided", acc.guiding_iterations, gain,
-                    d->guiding == PT_GUIDING_ON ? " (guiding on)" : use ? " (auto: above 1.05)" : " (auto: not above 1.05)");
+            if (d->guiding == PT_GUIDING_ON)
+                pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0, "guided: %d training iterations (guiding on)",
+                        acc.guiding_iterations);
+            else
+                pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0,
+                        "%s: %d training iterations, measured gain %.2f (auto: %s %.2f)", use ? "guided" : "not guided",
+                        acc.guiding_iterations, gain, use ? "above" : "not above", PT__GUIDING_AUTO_GAIN);
             last.samples_per_pixel = spp - (int)(acc.guiding_samples / ((uint64_t)d->width * (uint64_t)d->height));
             if (last.samples_per_pixel > 0)
                 rc = pt__render_once(s, &last, film, &fin, use ? g : NULL, NULL, weight);
