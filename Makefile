@@ -104,7 +104,8 @@ SAN_CLANG_PATH := $(shell command -v $(SAN_CLANG) 2>/dev/null)
 TSANFLAGS ?= -O1 -g -fsanitize=thread
 TSAN_TESTS ?= render.threads_bit_identical render.progressive_equals_single render.cancellation_and_progress \
               render.concurrent_renders render.render_counts adaptive.threads_bit_identical \
-              sampler.render_deterministic materials.furnace_spheres embree.embree_fp_state
+              sampler.render_deterministic materials.furnace_spheres embree.embree_fp_state \
+              guide.render_threads_bit_identical guide.guide_order_independent
 
 # check-warnings: the compilers and flags it uses.
 WARN_CC      ?= gcc clang
@@ -352,7 +353,7 @@ endif
 
 # ---- make stress: the numerical stress cases at full size (tests/stress/; the same cases run
 # small in the runner's `stress` section). Prints case | metric | bound | result; non-zero exit
-# on any failing row. STRESS_ARGS: a case filter (sweep, spawn, tiny, watertight, edges, lights, slivers,
+# on any failing row. STRESS_ARGS: a case filter (sweep, spawn, tiny, watertight, edges, lights, slivers, guiding,
 # degenerate).
 STRESS_SRCS := tests/stress/stress_main.c tests/stress/stress_cases.c tests/test_util.c
 STRESS_ARGS ?=

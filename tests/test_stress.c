@@ -38,6 +38,7 @@ static void light_geometry(test_ctx *t) { run(t, st_light_geometry); }
 static void degenerate_input(test_ctx *t) { run(t, st_degenerate); }
 static void sliver_triangles(test_ctx *t) { run(t, st_slivers); }
 static void cornell_offset(test_ctx *t) { run(t, st_cornell_offset); }
+static void guiding(test_ctx *t) { run(t, st_guiding); }
 static void family(test_ctx *t) { run(t, st_family); }
 
 const test_case test_stress_cases[] = {
@@ -51,6 +52,7 @@ const test_case test_stress_cases[] = {
     TEST_CASE(degenerate_input),
     TEST_CASE(sliver_triangles),
     TEST_CASE(cornell_offset),
+    TEST_CASE(guiding),
     TEST_CASE(family),
     TEST_END
 };

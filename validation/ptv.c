@@ -4,6 +4,7 @@
    installed).
 
      ptv render SCENE MEAN.pfm VAR.pfm [W H SPP]      mean and variance of the mean per pixel
+                                                     (PTV_GUIDING=on|auto|off: path guiding)
      ptv pov SCENE OUT.pov [none|default|medium|high] [W H]
      ptv compare NAME MEAN.pfm VAR.pfm REF.exr OUTDIR BIAS_TOL POV_ERR ACCEPT [NOTE...]
      ptv report OUTDIR NAME...                       OUTDIR/index.html from OUTDIR/NAME.result
@@ -475,6 +476,10 @@ static int cmd_render(int argc, char **argv)
         return 2;
     }
     if (!load(argv[2], &sd)) return 1;
+    if (getenv("PTV_GUIDING")) { /* validate.sh's *-guided rows: the scene rendered with path guiding */
+        const char *g = getenv("PTV_GUIDING");
+        sd.guiding = !strcmp(g, "on") ? PT_GUIDING_ON : !strcmp(g, "auto") ? PT_GUIDING_AUTO : PT_GUIDING_OFF;
+    }
     ok = k ? render_seeds(&sd, w, h, spp, k, &mean, &var, &seeds, &spp_used) : render_desc(&sd, w, h, spp, &mean, &var);
     pt_scenefile_free(&sd);
     if (ok && k) ok = write_regions(argv[9], seeds, k, (double)k * spp_used - 1);

@@ -86,7 +86,14 @@ metal-glass       bench/scenes   64   16    512   region  mirror and glass balls
 sky               bench/scenes   64   16    256   pixel   uniform sky only, mirror ball
 tiny-light        bench/scenes   64   16    512   pixel   tiny bright sphere light and a dim window
 tiny-light-pure   bench/scenes   64   16    512   pixel   tiny bright sphere light only
+door              bench/scenes   64   16    512   region  Veach door: light only through a gap (heavy-tailed)
+caustic           bench/scenes   64   16    512   region  a glass ball caustic on a diffuse floor (heavy-tailed)
+cornell-guided    scenes         64   16    512   region  RTRL box, pdftrace with path guiding on
+door-guided       bench/scenes   64   16    512   region  Veach door, pdftrace with path guiding on
+caustic-guided    bench/scenes   64   16    512   region  the caustic, pdftrace with path guiding on
 '
+# A row NAME-guided renders NAME's scene with path guiding on (ptv render with PTV_GUIDING=on);
+# Mitsuba renders the same scene, so the row checks that guiding leaves the image unbiased.
 # Scenes where Mitsuba 3.9 is known to be wrong, with the reason (docs/accuracy.md, "Tiny sphere
 # lights and Mitsuba"). Such a row is KNOWN, not FAIL, only if pdftrace is darker than Mitsuba by
 # at most 0.5 % in every channel (ptv report); pdftrace itself is checked there against the
@@ -102,17 +109,18 @@ if [ "$mode" != pov ]; then
 fi
 # One Mitsuba row: export (a refusal is reported, not failed), both renders, the comparison.
 run_mitsuba() {
-    local name=$1 dir=$2 size=$3 seeds=$4 spp=$5 test=$6 note=$7 t0 t1 t2 msg
-    local xml="$out/mitsuba/$name.xml" res="$out/$name-mitsuba.result"
+    local name=$1 dir=$2 size=$3 seeds=$4 spp=$5 test=$6 note=$7 t0 t1 t2 msg guiding=off
+    local xml="$out/mitsuba/$name.xml" res="$out/$name-mitsuba.result" scene=$1
+    if [[ $name == *-guided ]]; then scene=${name%-guided}; guiding=on; fi
     rm -f "$res"
     if [ -n "$mi_skip" ]; then
         echo "SKIP $name (Mitsuba): $mi_skip"; echo "skip $mi_skip" >"$res"; return 0
     fi
     mkdir -p "$out/mitsuba"
-    if ! "$pdftrace" "$dir/$name.scene" --export-mitsuba "$xml" --size "${size}x$size" --spp "$spp" \
+    if ! "$pdftrace" "$dir/$scene.scene" --export-mitsuba "$xml" --size "${size}x$size" --spp "$spp" \
         >"$out/$name-export.log" 2>&1; then
         msg=$(tr '\n' ' ' <"$out/$name-export.log")
-        if grep -q "$name.scene" "$out/$name-export.log"; then # refused with file:line and the reason
+        if grep -q "$scene.scene" "$out/$name-export.log"; then # refused with file:line and the reason
             echo "NOT EXPORTED $name (Mitsuba): $msg"; echo "refused $msg" >"$res"; return 0
         fi
         echo "FAIL $name (Mitsuba): export failed: $msg" >&2; return 1
@@ -126,7 +134,7 @@ run_mitsuba() {
         return 1
     fi
     t1=$SECONDS
-    "$ptv" render "$dir/$name.scene" "$out/$name-ptm.pfm" "$out/$name-ptm-var.pfm" "$size" "$size" "$spp" "$seeds" \
+    PTV_GUIDING=$guiding "$ptv" render "$dir/$scene.scene" "$out/$name-ptm.pfm" "$out/$name-ptm-var.pfm" "$size" "$size" "$spp" "$seeds" \
         "$out/$name-ptm-regions.txt" || return 1
     t2=$SECONDS
     local rc=0

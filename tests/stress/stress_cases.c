@@ -1450,6 +1450,154 @@ void st_cornell_offset(st_ctx *c)
     st_row(c, nonfinite == 0, "cornell: all renders", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* 4. path guiding under the same stress                                                       */
+
+/* The scale-sweep room rendered with path guiding on at every place (scales 1e-6 .. 1e6 and far
+   offsets): the guided image against the unguided unit room; a guide held to its smallest memory
+   bound (it must stop refining, still unbiased); and emission scaled by 1e-6 and 1e6 (the
+   fixed-point sums follow the brightest emitter), guided image / scale against unit emission. */
+static void st_guiding_place(st_ctx *c, const st_place *pl, const st_mesh *ico, float *scratch, const pt_film *ref,
+                             int W, int spp, uint64_t seed, uint64_t *nonfinite)
+{
+    pt_camera_desc cam;
+    pt_scene *s = st_room(pl, 1, ico, scratch, &cam);
+    pt_render_desc d = tu_base_desc(W, W, spp, seed);
+    pt_render_stats st;
+    pt_film f;
+    char cas[64];
+    int rc, worst = -1;
+    double z;
+    snprintf(cas, sizeof cas, "guiding %s", pl->name);
+    if (!s) { st_row(c, 0, cas, "scene", "built", "failed"); return; }
+    d.camera = cam;
+    d.max_depth = 4;
+    d.threads = c->threads;
+    d.guiding = PT_GUIDING_ON;
+    rc = pt_film_init(&f, W, W) == PT_OK ? pt_render(s, &d, &f, &st) : PT_ERROR_OUT_OF_MEMORY;
+    pt_scene_destroy(s);
+    if (rc != PT_OK) { st_row(c, 0, cas, "render", "PT_OK", "rc %d", rc); pt_film_free(&f); return; }
+    *nonfinite += st.nonfinite_samples;
+    z = st_compare(c, &f, ref, 2, 2, &worst);
+    st_row(c, z <= c->z_bound && st.guiding_used == 1, cas, "guided image vs unguided unit: max|z| 2x2 regions",
+           st_zb(c), "%.2f (region %d), %u leaves", z, worst, st.guiding_leaves);
+    pt_film_free(&f);
+}
+
+/* The far-reflector scene (a floor lit by a small two-sided lamp and by a reflector above it)
+   with emission x k, rendered guided; its film divided by k. */
+static int st_reflector(const st_ctx *c, float k, int W, int spp, uint64_t seed, int guided, pt_film *f,
+                        pt_render_stats *st)
+{
+    pt_scene *s = pt_scene_create();
+    pt_render_desc d = tu_base_desc(W, W, spp, seed);
+    int white, lamp, rc = 0;
+    size_t i;
+    if (!s) return PT_ERROR_OUT_OF_MEMORY;
+    white = pt_scene_add_lambertian(s, pt_v3(0.7f, 0.7f, 0.7f));
+    lamp = pt_scene_add_emitter(s, pt_v3(10 * k, 10 * k, 10 * k), 1);
+    rc |= pt_scene_add_quad(s, pt_v3(-5, 0, -5), pt_v3(0, 0, 10), pt_v3(10, 0, 0), white) < 0;
+    rc |= pt_scene_add_quad(s, pt_v3(-2, 20, -2), pt_v3(4, 0, 0), pt_v3(0, 0, 4), white) < 0;
+    rc |= pt_scene_add_quad(s, pt_v3(-0.5f, 19.5f, -0.5f), pt_v3(1, 0, 0), pt_v3(0, 0, 1), lamp) < 0;
+    if (rc || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return PT_ERROR_INVALID_ARGUMENT; }
+    d.camera.look_from = pt_v3(0, 3, -3);
+    d.camera.look_at = pt_v3(0, 0, 0);
+    d.camera.vfov_degrees = 40;
+    d.max_depth = 4;
+    d.threads = c->threads;
+    d.guiding = guided ? PT_GUIDING_ON : PT_GUIDING_OFF;
+    rc = pt_film_init(f, W, W) == PT_OK ? pt_render(s, &d, f, st) : PT_ERROR_OUT_OF_MEMORY;
+    pt_scene_destroy(s);
+    for (i = 0; rc == PT_OK && i < 3u * (size_t)W * (size_t)W; i++) {
+        f->sum[i] /= (double)k;
+        f->sum_odd[i] /= (double)k;
+        f->sum_sq[i] /= (double)k * (double)k;
+    }
+    return rc;
+}
+
+void st_guiding(st_ctx *c)
+{
+    st_place pl[ST_NPLACES], unit;
+    st_mesh ico;
+    float *scratch;
+    int W = c->full ? 40 : 20, spp = c->full ? 128 : 16, RW = c->full ? 48 : 24, rspp = c->full ? 256 : 32, i;
+    static const float ks[] = {1e-6f, 1e6f};
+    pt_film ref, rref;
+    pt_camera_desc cam;
+    pt_render_stats st;
+    pt_scene *s;
+    uint64_t nonfinite = 0;
+    st_places(pl);
+    st_icosphere(&ico, 1);
+    scratch = (float *)malloc(sizeof(float) * 3 * (size_t)ico.nv);
+    unit.s = 1; unit.off = dv(0, 0, 0); unit.name = "unit";
+    s = st_room(&unit, 1, &ico, scratch, &cam);
+    if (!s || st_render(c, s, &cam, W, W, spp, 4, PT_STRATEGY_MIS, 7, &ref, &st) != PT_OK) {
+        st_row(c, 0, "guiding: unit scene", "render", "PT_OK", "failed");
+        pt_scene_destroy(s); st_mesh_free(&ico); free(scratch);
+        return;
+    }
+    pt_scene_destroy(s);
+    for (i = 0; i < ST_NPLACES; i += c->full ? 1 : 4)
+        st_guiding_place(c, &pl[i], &ico, scratch, &ref, W, spp, 400 + (uint64_t)i, &nonfinite);
+    {   /* the smallest memory bound: refinement stops there, the image stays unbiased */
+        pt_guide_desc gd;
+        pt_guide *g = NULL;
+        pt_guide_info gi;
+        pt_render_desc d = tu_base_desc(W, W, spp, 77);
+        pt_film f;
+        double z;
+        int rc;
+        memset(&gd, 0, sizeof gd);
+        gd.max_bytes = 4096;
+        s = st_room(&unit, 1, &ico, scratch, &cam);
+        rc = s ? pt_guide_create_for_scene(s, &gd, &g) : PT_ERROR_OUT_OF_MEMORY;
+        d.camera = cam;
+        d.max_depth = 4;
+        d.threads = c->threads;
+        d.guiding = PT_GUIDING_ON;
+        d.guiding_guide = g;
+        if (rc == PT_OK) rc = pt_film_init(&f, W, W) == PT_OK ? pt_render(s, &d, &f, &st) : PT_ERROR_OUT_OF_MEMORY;
+        if (rc == PT_OK && pt_guide_get_info(g, &gi) == PT_OK) {
+            nonfinite += st.nonfinite_samples;
+            z = st_compare(c, &f, &ref, 4, 4, NULL);
+            st_row(c, z <= c->z_bound && gi.at_memory_bound == 1 && gi.bytes <= 2 * gd.max_bytes + 4096,
+                   "guiding: 4 KiB memory bound", "at the bound; image vs unguided max|z|", st_zb(c),
+                   "at bound %d, %lu bytes held; %.2f", gi.at_memory_bound, (unsigned long)gi.bytes, z);
+            pt_film_free(&f);
+        } else {
+            st_row(c, 0, "guiding: 4 KiB memory bound", "render", "PT_OK", "rc %d", rc);
+        }
+        pt_guide_destroy(g);
+        pt_scene_destroy(s);
+    }
+    if (st_reflector(c, 1.0f, RW, rspp, 5, 0, &rref, &st) != PT_OK) {
+        st_row(c, 0, "guiding: reflector", "render", "PT_OK", "failed");
+    } else {
+        for (i = 0; i < (int)(sizeof ks / sizeof ks[0]); i++) {
+            pt_film f;
+            char cas[64];
+            double z;
+            snprintf(cas, sizeof cas, "guiding: emission x %g", (double)ks[i]);
+            if (st_reflector(c, ks[i], RW, rspp, 50 + (uint64_t)i, 1, &f, &st) != PT_OK) {
+                st_row(c, 0, cas, "render", "PT_OK", "failed");
+                continue;
+            }
+            nonfinite += st.nonfinite_samples;
+            z = st_compare(c, &f, &rref, 4, 4, NULL);
+            st_row(c, z <= c->z_bound && st.guiding_used == 1, cas, "guided / scale vs unguided x 1: max|z| 4x4",
+                   st_zb(c), "%.2f", z);
+            pt_film_free(&f);
+        }
+        pt_film_free(&rref);
+    }
+    pt_film_free(&ref);
+    st_row(c, nonfinite == 0, "guiding: all renders", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
+    st_mesh_free(&ico);
+    free(scratch);
+}
+
 void st_family(st_ctx *c)
 {
     char b[48];
