@@ -31,7 +31,7 @@
    =================
    Optional parts live in their own single-file headers, each including this one and each
    with its own implementation macro (define it in one file, which may be the same file):
-       pdftrace_scene.h   PDFTRACE_SCENE_IMPLEMENTATION   scene files, OBJ meshes, POV-Ray export
+       pdftrace_scene.h   PDFTRACE_SCENE_IMPLEMENTATION   scene files, OBJ meshes, POV-Ray and Mitsuba export
        pdftrace_exr.h     PDFTRACE_EXR_IMPLEMENTATION     OpenEXR output and input (OpenEXRCore)
        pdftrace_png.h     PDFTRACE_PNG_IMPLEMENTATION     PNG output (libpng)
 
@@ -88,7 +88,8 @@
    section opens with what it does and why.
    0. Internal types: the scene's private representation (implementation only)
    1. Math: vectors, rays, transforms, orthonormal basis, random numbers
-   2. Sampling and PDFs: samplers (independent, Sobol), warps, light and material densities
+   2. Sampling and PDFs: samplers (independent, Sobol), warps, light and material densities, the
+      learned guide (pt_guide)
    3. Geometry and scenes: primitives, intersections, building a scene
    4. Materials and textures
    5. BVH (the built-in traversal)
@@ -96,7 +97,8 @@
    5c. Commit and ray queries (implementation only; declared in section 3)
    6. Camera
    7. Integrator (strategies, Russian roulette, splitting)
-   8. Rendering (tiles, threads, passes, adaptive sampling, statistics; the film and images)
+   8. Rendering (tiles, threads, passes, adaptive sampling, guiding's training, statistics; the
+      film and images)
    9. Output (sRGB, PFM and PPM writers)
    The measurements behind the implementation's tuned choices: docs/internals.md.
 
@@ -132,6 +134,19 @@
    bright sample stop sooner: caustics and fireflies come out up to a few % dark in some
    regions); PT_ADAPTIVE_NEIGHBOURS (adaptive_neighbours_only = 1) leaves a pixel's own samples
    out of its estimate, with a smaller bias. Measured: docs/internals.md, "Adaptive sampling".
+
+   PATH GUIDING
+   ============
+   The light PDFs aim only at emitters a vertex can see; light that arrives off other surfaces,
+   through glass or through a gap is found by the material's PDF alone. pt_render_desc.guiding
+   learns where it comes from while rendering: a pt_guide (section 2; Mueller, Gross & Novak 2017)
+   records the radiance the paths of training iterations of 1, 2, 4, ... samples per pixel bring
+   back, and the material side of every strategy becomes alpha p_material + (1 - alpha) p_guide
+   at non-delta vertices, its density used everywhere (MIS weights included). Every sample stays
+   in the image with equal weight, so the image is unbiased and bit-identical at any thread count.
+   PT_GUIDING_AUTO measures, in the last training iteration, whether the guide pays and goes on
+   unguided if not; scenes where guiding cannot help (no non-delta material, no light) skip it.
+   What it gains where: docs/design.md, "Path guiding".
 */
 #ifndef PDFTRACE_H
 #define PDFTRACE_H
@@ -397,7 +412,8 @@ typedef struct pt_guide_desc {
     size_t max_bytes;               /* memory bound of both trees; 0: 64 MiB. Refinement stops at it */
     float spatial_threshold;        /* c above; 0: 12000 */
     float directional_threshold;    /* rho above, in (0, 1); 0: 0.01 */
-    int max_directional_depth;      /* deepest quadtree level, 1..20; 0: 20 */
+    int max_directional_depth;      /* deepest quadtree level, 1..16 (a level-16 cell is ~1e-4 rad
+                                       wide, ~1000 float roundings of a direction); 0: 16 */
     float value_resolution;         /* the fixed-point unit of the sums; 0: 2^-24. A record's
                                        value is clamped to 2^40 units */
 } pt_guide_desc;
@@ -2517,7 +2533,9 @@ PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_f
    of directions: the sampling tree (each node's four quadrant probabilities) and the building
    tree (each node's four fixed-point sums of the records), whose topology is fixed between
    updates so that records need no lock. --- */
-#define PT__GUIDE_MAX_DEPTH 20          /* quadtree levels: float's 24 bits hold 20 halvings */
+#define PT__GUIDE_MAX_DEPTH 16          /* quadtree levels: a float direction resolves ~1e-7 rad, a
+                                           level-16 cell is 1e-4 rad wide (deeper cells would be a
+                                           few roundings wide: sample and value would disagree) */
 #define PT__GUIDE_SPATIAL_MAX_DEPTH 48  /* spatial levels (16 halvings per axis) */
 #define PT__GUIDE_CLAMP_UNITS ((uint64_t)1 << 40)
 
@@ -2572,38 +2590,39 @@ static void pt__guide_add(pt_guide *g, uint64_t *p, uint64_t v)
 #endif
 }
 
-/* atan2 to float precision, faster than libm's (it is most of a guide look-up): the octant's
+/* atan2 to 3e-9, faster than libm's (it was most of a guide look-up): the octant's
    argument a in [0, 1], reduced to |a'| <= tan(pi/12) by atan(a) = pi/6 + atan((a sqrt3 - 1) /
    (a + sqrt3)), then the odd Taylor series to a^11 (remainder below a^13 / 13 < 3e-9). */
-static float pt__atan2f(float y, float x)
+static double pt__atan2d(double y, double x)
 {
-    float ax = fabsf(x), ay = fabsf(y), hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax, a, a2, r, base = 0.0f;
-    if (!(hi > 0.0f)) return 0.0f;
+    double ax = fabs(x), ay = fabs(y), hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax, a, a2, r, base = 0.0;
+    if (!(hi > 0.0)) return 0.0;
     a = lo / hi;
-    if (a > 0.26794919f) { a = (a * 1.7320508f - 1.0f) / (a + 1.7320508f); base = 0.52359878f; }
+    if (a > 0.2679491924311227) { a = (a * 1.7320508075688772 - 1.0) / (a + 1.7320508075688772); base = 0.5235987755982988; }
     a2 = a * a;
-    r = base + a * (1.0f + a2 * (-1.0f / 3.0f + a2 * (0.2f + a2 * (-1.0f / 7.0f + a2 * (1.0f / 9.0f + a2 * (-1.0f / 11.0f))))));
-    if (ay > ax) r = 1.57079633f - r;
-    if (x < 0.0f) r = PT__PI - r;
-    return y < 0.0f ? -r : r;
+    r = base + a * (1.0 + a2 * (-1.0 / 3.0 + a2 * (0.2 + a2 * (-1.0 / 7.0 + a2 * (1.0 / 9.0 + a2 * (-1.0 / 11.0))))));
+    if (ay > ax) r = 1.5707963267948966 - r;
+    if (x < 0.0) r = 3.141592653589793 - r;
+    return y < 0.0 ? -r : r;
 }
 
 /* The cylindrical equal-area map: (x, y) in [0,1)^2, d(omega) = 4 pi dx dy. */
 static void pt__guide_dir_to_square(pt_vec3 w, float *x, float *y)
 {
-    float z = w.z < -1.0f ? -1.0f : (w.z > 1.0f ? 1.0f : w.z), phi = pt__atan2f(w.y, w.x);
-    if (phi < 0.0f) phi += 2.0f * PT__PI;
-    *x = (z + 1.0f) * 0.5f;
-    *y = phi * (0.5f * PT__INV_PI);
+    /* in double: a deep cell (2^-20 wide) is a few float roundings of a direction wide */
+    double z = w.z < -1.0f ? -1.0 : (w.z > 1.0f ? 1.0 : (double)w.z), phi = pt__atan2d((double)w.y, (double)w.x);
+    if (phi < 0.0) phi += 6.283185307179586;
+    *x = (float)((z + 1.0) * 0.5);
+    *y = (float)(phi * 0.15915494309189535);
     if (!(*x < 1.0f)) *x = 0.99999994f;
     if (!(*y < 1.0f)) *y = 0.99999994f;
     if (!(*x >= 0.0f)) *x = 0.0f;
     if (!(*y >= 0.0f)) *y = 0.0f;
 }
-static pt_vec3 pt__guide_square_to_dir(float x, float y)
+static pt_vec3 pt__guide_square_to_dir(double x, double y)
 {
-    float z = 2.0f * x - 1.0f, r = sqrtf(pt__maxf(0.0f, 1.0f - z * z)), phi = 2.0f * PT__PI * y;
-    return pt_v3(r * cosf(phi), r * sinf(phi), z);
+    double z = 2.0 * x - 1.0, r = sqrt(1.0 - z * z > 0.0 ? 1.0 - z * z : 0.0), phi = 6.283185307179586 * y;
+    return pt_v3((float)(r * cos(phi)), (float)(r * sin(phi)), (float)z);
 }
 
 /* One level down the quadtree: the quadrant of (x, y) and (x, y) rescaled into it. */
@@ -2634,9 +2653,10 @@ static float pt__dtree_density(const pt__dtree *t, float x, float y)
 
 /* Draws (x, y) from the sampling tree by warping (ux, uy) level by level (a column by its
    marginal, then the quadrant in it), so each level takes one bit of each number. */
-static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, float *x, float *y)
+static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, double *x, double *y, double *cell)
 {
-    float ox = 0.0f, oy = 0.0f, size = 1.0f, d = 1.0f;
+    double ox = 0.0, oy = 0.0, size = 1.0;
+    float d = 1.0f;
     uint32_t n = 0;
     int level;
     for (level = 0; t->nodes && level < PT__GUIDE_MAX_DEPTH; ++level) {
@@ -2652,15 +2672,18 @@ static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, float *x, 
         uy = by ? (uy * (top + bottom) - top) / bottom : uy * (top + bottom) / top;
         ux = pt__minf(pt__maxf(ux, 0.0f), 0.99999994f);
         uy = pt__minf(pt__maxf(uy, 0.0f), 0.99999994f);
-        size *= 0.5f;
-        ox += (float)bx * size;
-        oy += (float)by * size;
+        size *= 0.5;
+        ox += (double)bx * size;
+        oy += (double)by * size;
         d *= 4.0f * p[bx + 2 * by];
         n = t->child[4u * n + (uint32_t)(bx + 2 * by)];
         if (!n) break;
     }
-    *x = ox + ux * size;
-    *y = oy + uy * size;
+    *x = ox + (double)ux * size;
+    *y = oy + (double)uy * size;
+    cell[0] = ox + 0.5 * size; /* its centre and size */
+    cell[1] = oy + 0.5 * size;
+    cell[2] = size;
     return d; /* the density over the square of the cell drawn */
 }
 
@@ -2750,11 +2773,24 @@ static float pt__guide_value(const pt_guide *g, uint32_t leaf, pt_vec3 w)
    rounding carries a direction across a cell's edge (the integrator's cheaper choice) */
 static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2, pt_vec3 *w, float *p, int exact)
 {
-    float x, y, d;
+    double x, y, cell[3];
+    float d;
+    int k;
     if (!g || leaf >= g->leaf_count) return 0;
-    d = pt__dtree_sample(&g->leaves[leaf].sampling, u1, u2, &x, &y);
-    *w = pt_normalize(pt__guide_square_to_dir(x, y));
-    *p = exact ? pt__guide_value(g, leaf, *w) : d * PT__INV_4PI;
+    d = pt__dtree_sample(&g->leaves[leaf].sampling, u1, u2, &x, &y, cell);
+    *w = pt__guide_square_to_dir(x, y); /* (unit to float precision) */
+    if (!exact) {
+        *p = d * PT__INV_4PI;
+        return *p > 0.0f;
+    }
+    /* a point within a float rounding of its cell's edge can round into the neighbour, which may
+       have no density: such a point moves a little toward its cell's centre (a change of the
+       density within the cell far below what a chi-square can see) */
+    for (k = 0; k < 4 && !((*p = pt__guide_value(g, leaf, *w)) > 0.0f); ++k) {
+        x = cell[0] + 0.75 * (x - cell[0]);
+        y = cell[1] + 0.75 * (y - cell[1]);
+        *w = pt__guide_square_to_dir(x, y);
+    }
     return *p > 0.0f;
 }
 
@@ -2790,6 +2826,7 @@ static void pt__dtree_splat_box(pt_guide *g, pt__dtree *t, uint32_t n, double x0
 /* units along w into one leaf's building tree, spread over a square the size of w's cell. */
 static void pt__dtree_splat(pt_guide *g, pt__dtree *t, pt_vec3 w, double units)
 {
+    {
     float x, y, cx, cy;
     double s = 1.0, x0, x1, y0, y1, area;
     uint32_t n = 0;
@@ -2819,6 +2856,7 @@ static void pt__dtree_splat(pt_guide *g, pt__dtree *t, pt_vec3 w, double units)
         y1 = 1.0;
     }
     pt__dtree_splat_box(g, t, 0, x0, x1, y0, y1, units / area, 0);
+    }
 }
 /* Over the leaves the box [lo, hi) (the guide's unit cube) overlaps, below node n whose cell is
    [c0, c1): each gets units x its share of the box's volume. */
@@ -7493,7 +7531,7 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
 #define PT__GUIDING_MIB 64
 #define PT__GUIDING_MAX_ITERATIONS 16
 #define PT__GUIDING_AUTO_GAIN 1.05 /* AUTO guides above this measured gain */
-#define PT__GUIDING_LOOKUP_COST 1.0 /* AUTO's cost model: a guided vertex costs about one ray (docs/internals.md, "Path guiding") */
+#define PT__GUIDING_LOOKUP_COST 1.0 /* AUTO's cost model: a guided vertex costs about one ray (docs/design.md, "Path guiding") */
 
 static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
 {
