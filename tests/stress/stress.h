@@ -11,7 +11,7 @@
 #define PDFTRACE_STRESS_H
 
 #define ST_ALPHA 0.01
-#define ST_COMPARISONS_FULL 600
+#define ST_COMPARISONS_FULL 700
 #define ST_COMPARISONS_FAST 600
 
 typedef void (*st_row_fn)(void *user, const char *case_name, const char *metric, const char *bound,
