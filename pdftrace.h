@@ -409,7 +409,8 @@ typedef struct pt_guide pt_guide;
 typedef struct pt_guide_desc {
     pt_vec3 bounds_min, bounds_max; /* the box it learns over (pt_guide_create); points outside are
                                        clamped into it */
-    size_t max_bytes;               /* memory bound of both trees; 0: 64 MiB. Refinement stops at it */
+    size_t max_bytes;               /* memory bound of both trees, >= 4096; 0: 64 MiB. Refinement
+                                       stops at it */
     float spatial_threshold;        /* c above; 0: 12000 */
     float directional_threshold;    /* rho above, in (0, 1); 0: 0.01 */
     int max_directional_depth;      /* deepest quadtree level, 1..16 (a level-16 cell is ~1e-4 rad
@@ -905,8 +906,9 @@ typedef enum pt_guiding {
     PT_GUIDING_OFF = 0,   /* the material's PDF (and a user guide, if any) alone */
     PT_GUIDING_ON = 1,    /* train a guide (pt_guide) in the first guiding_budget of the samples,
                              then render with p = alpha p_material + (1 - alpha) p_guide */
-    PT_GUIDING_AUTO = 2   /* train, and go on guided only while training measures a higher
-                             efficiency (1 / (error x cost)) with the guide than without */
+    PT_GUIDING_AUTO = 2   /* train as ON; the last training iteration measures the efficiency
+                             (1 / (error x cost)) with and without the guide on equal halves of
+                             its samples, and the rest is guided only if the guide pays */
 } pt_guiding;
 
 /* The most copies pt_render_desc.indirect_paths may ask for. */
@@ -987,7 +989,8 @@ typedef struct pt_render_desc {
     int guiding_max_mib;         /* the guide's memory bound in MiB, >= 1; 0: 64 */
     pt_guide *guiding_guide;     /* optional: a guide from pt_guide_create_for_scene(scene) that the
                                     render trains (on from what it holds) and leaves trained, to be
-                                    inspected or reused; NULL: the render makes its own */
+                                    inspected or reused (one never updated takes the render's
+                                    fixed-point unit); NULL: the render makes its own */
 } pt_render_desc;
 
 typedef struct pt_render_stats {

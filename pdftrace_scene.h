@@ -44,8 +44,8 @@
      seed N                           random seed (default 0)
      guiding off|on|auto              path guiding (pdftrace.h, pt_render_desc.guiding): on
                                       learns a guide in the first guiding_budget of the
-                                      samples and renders the rest with it; auto goes on
-                                      guided only while training measures a gain (default off)
+                                      samples and renders the rest with it; auto renders the
+                                      rest guided only if training measured a gain (default off)
      guiding_budget F                 the share of spp training may take, 0 < F < 1 (0.25)
      guiding_alpha F                  the material's share of the guided mixture alpha
                                       p_material + (1 - alpha) p_guide, 0 < F < 1 (0.5)
