@@ -1202,17 +1202,6 @@ static float cos_as_uniform_value(void *user, pt_vec3 dir)
     return pt_dot(dir, cosine->as.cosine.basis.n) > 0.0f ? (float)(1.0 / (2.0 * TU_PI)) : 0.0f;
 }
 
-/* Runs the checker on a wrong PDF into a scratch context; returns how many checks failed and
-   copies the first failure's reason. */
-static int run_wrong(tu_pdf_check *c, tu_pdf_result *r, char *reason, size_t size)
-{
-    test_ctx scratch;
-    memset(&scratch, 0, sizeof scratch);
-    c->expect_reject = 1;
-    tu_check_pdf_(&scratch, c, r, __FILE__, __LINE__);
-    snprintf(reason, size, "%s", scratch.failures ? scratch.reason : "(nothing failed)");
-    return scratch.failures;
-}
 
 static void harness_rejects_scaled_pdf(test_ctx *t)
 {
@@ -1240,7 +1229,7 @@ static void harness_rejects_scaled_pdf(test_ctx *t)
         c.axis = dv_from(inner.as.cosine.basis.n);
         c.omc = 1.0;
         issue3(&c, 40, 81);
-        failures = run_wrong(&c, &r, reason, sizeof reason);
+        failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
         CHECK(t, failures > 0, "%s was not rejected (chi2 p = %.3g, integral %.6f)", c.label, r.chi2_p, r.integral);
         CHECK(t, r.chi2_p < c.alpha, "%s: chi-square p = %.3g not below alpha %.3g", c.label, r.chi2_p, c.alpha);
         CHECK(t, r.integral > 1.0 + TU_MASS_TOL, "%s: the hard failure 'integrates to more than 1' did not fire (%.6f)",
@@ -1269,7 +1258,7 @@ static void harness_rejects_cosine_with_uniform_density(test_ctx *t)
     c.omc = 1.0;
     c.support = 2.0 * TU_PI;
     issue3(&c, 40, 81);
-    failures = run_wrong(&c, &r, reason, sizeof reason);
+    failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
     CHECK(t, failures > 0, "cosine sampling with density 1/(2 pi) was not rejected (chi2 p = %.3g)", r.chi2_p);
     CHECK(t, r.chi2_p < c.alpha, "chi-square p = %.3g not below alpha %.3g", r.chi2_p, c.alpha);
     test_note(t, "rejected by %d check(s); chi2 %.0f, %d dof, p = %.3g (alpha %.2g); integral %.4f, E[1/p] z = %.2f; first: %.160s",

@@ -916,6 +916,16 @@ int tu_check_pdf_(test_ctx *t, const tu_pdf_check *c, tu_pdf_result *res, const 
     return ok;
 }
 
+int tu_check_pdf_rejects(tu_pdf_check *c, tu_pdf_result *res, char *reason, size_t size)
+{
+    test_ctx scratch;
+    memset(&scratch, 0, sizeof scratch);
+    c->expect_reject = 1;
+    tu_check_pdf_(&scratch, c, res, __FILE__, __LINE__);
+    snprintf(reason, size, "%s", scratch.failures ? scratch.reason : "(nothing failed)");
+    return scratch.failures;
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* films                                                                                       */
 

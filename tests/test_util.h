@@ -195,6 +195,9 @@ void tu_chi2_print_table(void);
 
 int tu_check_pdf_(test_ctx *t, const tu_pdf_check *c, tu_pdf_result *res, const char *file, int line);
 #define TU_CHECK_PDF(t, c, res) tu_check_pdf_((t), (c), (res), __FILE__, __LINE__)
+/* Runs the checker on a deliberately wrong PDF (c->expect_reject is set) into a scratch context:
+   returns how many checks failed and copies the first failure's reason into reason[size]. */
+int tu_check_pdf_rejects(tu_pdf_check *c, tu_pdf_result *res, char *reason, size_t size);
 
 /* ---- films ---- */
 typedef struct tu_region { double mean[3], se[3]; int pixels; } tu_region;
