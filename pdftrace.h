@@ -906,9 +906,10 @@ typedef enum pt_guiding {
     PT_GUIDING_OFF = 0,   /* the material's PDF (and a user guide, if any) alone */
     PT_GUIDING_ON = 1,    /* train a guide (pt_guide) in the first guiding_budget of the samples,
                              then render with p = alpha p_material + (1 - alpha) p_guide */
-    PT_GUIDING_AUTO = 2   /* train as ON; the last training iteration measures the efficiency
-                             (1 / (error x cost)) with and without the guide on equal halves of
-                             its samples, and the rest is guided only if the guide pays */
+    PT_GUIDING_AUTO = 2   /* train as ON within a quarter of the budget, whose last iteration
+                             measures the efficiency (1 / (error x cost)) with and without the
+                             guide on equal halves of its samples; go on as ON only if the guide
+                             pays, else render the rest unguided */
 } pt_guiding;
 
 /* The most copies pt_render_desc.indirect_paths may ask for. */
@@ -2797,19 +2798,18 @@ static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2
     return *p > 0.0f;
 }
 
-static double pt__clampd(double v) { return v > 0.0 ? (v < 1.0 ? v : 1.0) : 0.0; }
-/* Records are spread by box filters (Mueller, "Practical Path Guiding in Production", SIGGRAPH
-   2019 course notes): over the spatial leaves that a box the size of the record's own leaf,
-   centred on it, overlaps, and within each leaf over the directional cells that a square the size
-   of the record's own cell overlaps, each in proportion to the overlap. A single record then
-   informs its neighbours too, so a guide learned from few records is less spiky. */
+/* A record is spread over the directional cells that a square the size of its own cell overlaps,
+   in proportion to the overlap (the directional box filter of Mueller, "Practical Path Guiding in
+   Production", SIGGRAPH 2019 course notes), so that one record informs its neighbours too and a
+   guide learned from few records is less spiky. (Its spatial filter, over the leaves a box the
+   size of the record's leaf overlaps, cost more training time than it gained: docs/design.md.) */
 static double pt__overlap(double a0, double a1, double b0, double b1)
 {
     double lo = a0 > b0 ? a0 : b0, hi = a1 < b1 ? a1 : b1;
     return hi > lo ? hi - lo : 0.0;
 }
 /* Adds `density` units per unit area (of node n's square) over the box [x0,x1) x [y0,y1) of n's
-   square, to n's quadrants and, through them, to their subtrees. */
+   square, to the leaf quadrants below n it overlaps. */
 static void pt__dtree_splat_box(pt_guide *g, pt__dtree *t, uint32_t n, double x0, double x1, double y0, double y1,
                                 double density, int level)
 {
@@ -2819,11 +2819,13 @@ static void pt__dtree_splat_box(pt_guide *g, pt__dtree *t, uint32_t n, double x0
         double a = pt__overlap(x0, x1, qx, qx + 0.5) * pt__overlap(y0, y1, qy, qy + 0.5) * density;
         uint32_t c = t->child[4u * n + (uint32_t)q];
         if (!(a >= 0.5)) continue; /* (below resolution) */
-        pt__guide_add(g, &t->energy[4u * n + (uint32_t)q], a >= (double)PT__GUIDE_CLAMP_UNITS ? PT__GUIDE_CLAMP_UNITS
-                                                                                          : (uint64_t)(a + 0.5));
         if (c && level + 1 < PT__GUIDE_MAX_DEPTH)
             pt__dtree_splat_box(g, t, c, 2.0 * (x0 - qx), 2.0 * (x1 - qx), 2.0 * (y0 - qy), 2.0 * (y1 - qy),
                                 density * 0.25, level + 1);
+        else /* only leaf quadrants are added to (one contended add, not one per level); the inner
+                sums are made at the update (pt__dtree_sum_up) */
+            pt__guide_add(g, &t->energy[4u * n + (uint32_t)q], a >= (double)PT__GUIDE_CLAMP_UNITS ? PT__GUIDE_CLAMP_UNITS
+                                                                                              : (uint64_t)(a + 0.5));
     }
 }
 /* units along w into one leaf's building tree, spread over a square the size of w's cell. */
@@ -2861,52 +2863,15 @@ static void pt__dtree_splat(pt_guide *g, pt__dtree *t, pt_vec3 w, double units)
     pt__dtree_splat_box(g, t, 0, x0, x1, y0, y1, units / area, 0);
     }
 }
-/* Over the leaves the box [lo, hi) (the guide's unit cube) overlaps, below node n whose cell is
-   [c0, c1): each gets units x its share of the box's volume. */
-static void pt__guide_splat_space(pt_guide *g, uint32_t n, const double *c0, const double *c1, const double *lo,
-                                  const double *hi, double vol, pt_vec3 w, double units)
-{
-    const pt__guide_node *nd = &g->nodes[n];
-    if (nd->axis < 0) {
-        double f = pt__overlap(lo[0], hi[0], c0[0], c1[0]) * pt__overlap(lo[1], hi[1], c0[1], c1[1]) *
-                   pt__overlap(lo[2], hi[2], c0[2], c1[2]) / vol;
-        if (f > 0.0) pt__dtree_splat(g, &g->leaves[nd->a].building, w, units * f);
-    } else {
-        int a = nd->axis;
-        double mid = 0.5 * (c0[a] + c1[a]), e0[3], e1[3];
-        memcpy(e0, c0, sizeof e0);
-        memcpy(e1, c1, sizeof e1);
-        if (lo[a] < mid) { e1[a] = mid; pt__guide_splat_space(g, nd->a, c0, e1, lo, hi, vol, w, units); }
-        if (hi[a] > mid) { e0[a] = mid; pt__guide_splat_space(g, nd->b, e0, c1, lo, hi, vol, w, units); }
-    }
-}
-
-/* Adds `value` (>= 0) along w at p (local coordinates), box-filtered as above. */
+/* Adds `value` (>= 0) along w at p (local coordinates): into the leaf holding p, filtered over
+   directions as above. */
 static void pt__guide_splat(pt_guide *g, pt_vec3 p, pt_vec3 w, double value)
 {
-    double c[3], e[3] = {1.0, 1.0, 1.0}, lo[3], hi[3], c0[3] = {0, 0, 0}, c1[3] = {1, 1, 1}, vol = 1.0, u = value / g->unit;
-    uint32_t n = 0;
-    int a;
-    c[0] = pt__clampd((double)((p.x - g->lo.x) * g->inv_extent.x));
-    c[1] = pt__clampd((double)((p.y - g->lo.y) * g->inv_extent.y));
-    c[2] = pt__clampd((double)((p.z - g->lo.z) * g->inv_extent.z));
-    while (g->nodes[n].axis >= 0) { /* the record's leaf, and its size */
-        a = g->nodes[n].axis;
-        e[a] *= 0.5;
-        n = (c[a] - c0[a]) < e[a] ? (c1[a] = c0[a] + e[a], g->nodes[n].a) : (c0[a] += e[a], g->nodes[n].b);
-    }
-    pt__guide_add(g, &g->leaves[g->nodes[n].a].records, 1u);
+    pt__guide_leaf *l = &g->leaves[pt__guide_leaf_at(g, p)];
+    double u = value / g->unit;
+    pt__guide_add(g, &l->records, 1u);
     if (!(u >= 0.5)) return; /* zero, below resolution, or NaN */
-    if (u > (double)PT__GUIDE_CLAMP_UNITS) u = (double)PT__GUIDE_CLAMP_UNITS;
-    for (a = 0; a < 3; ++a) {
-        lo[a] = c[a] - 0.5 * e[a] < 0.0 ? 0.0 : c[a] - 0.5 * e[a];
-        hi[a] = c[a] + 0.5 * e[a] > 1.0 ? 1.0 : c[a] + 0.5 * e[a];
-        vol *= hi[a] - lo[a];
-        c0[a] = 0.0;
-        c1[a] = 1.0;
-    }
-    if (!(vol > 0.0)) return;
-    pt__guide_splat_space(g, 0, c0, c1, lo, hi, vol, w, u);
+    pt__dtree_splat(g, &l->building, w, u > (double)PT__GUIDE_CLAMP_UNITS ? (double)PT__GUIDE_CLAMP_UNITS : u);
 }
 
 /* The sampling tree of a building tree: the same topology, each node's sums normalised (a node
@@ -3022,6 +2987,16 @@ static uint64_t pt__guide_sampling_nodes(const pt_guide *g)
    leaves with many records split (spatial_threshold x sqrt(2^updates), recursively, halving the
    count each time), then every leaf gets a fresh building tree refined from its sampling tree.
    Sequential, in node order: the result depends only on the sums. */
+/* An inner quadrant's sum is its child's four (children come after their parents). */
+static void pt__dtree_sum_up(pt__dtree *t)
+{
+    uint32_t n = 4u * t->nodes;
+    while (n-- > 0) {
+        uint32_t c = t->child[n];
+        if (c) t->energy[n] = t->energy[4u * c] + t->energy[4u * c + 1u] + t->energy[4u * c + 2u] + t->energy[4u * c + 3u];
+    }
+}
+
 static int pt__guide_update(pt_guide *g)
 {
     uint32_t i;
@@ -3031,6 +3006,7 @@ static int pt__guide_update(pt_guide *g)
     for (i = 0; i < g->leaf_count; ++i) {
         pt__guide_leaf *l = &g->leaves[i];
         const uint64_t *e = l->building.energy;
+        if (l->building.nodes) pt__dtree_sum_up(&l->building);
         if (l->building.nodes && e[0] + e[1] + e[2] + e[3] > 0u) {
             pt__dtree s;
             if (!pt__dtree_to_sampling(&l->building, &s)) return PT_ERROR_OUT_OF_MEMORY;
@@ -7525,15 +7501,17 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
    guide it used (which only earlier samples shaped), so the image is unbiased; a render has the
    same sample indices with and without guiding. Splats are summed as integers and the guide is
    updated between iterations on one thread, so the image does not depend on the thread count.
-   AUTO renders the last iteration's first half unguided and its second half guided and compares
-   their efficiencies 1 / (relMSE per sample x cost per sample), relMSE estimated against the
-   film's mean and the cost counted in rays and guide look-ups (counts, not clocks: the decision
-   is deterministic); the rest of the samples are guided only if the guide pays. --- */
+   AUTO trains within a quarter of the budget, renders the last of those iterations' first half
+   unguided and its second half guided and compares their efficiencies 1 / (relMSE per sample x
+   cost per sample), relMSE estimated against the film's mean and the cost counted in rays and
+   guide look-ups (counts, not clocks: the decision is deterministic); only if the guide pays does
+   training go on, and the rest is guided. --- */
 #define PT__GUIDING_BUDGET 0.25f
 #define PT__GUIDING_ALPHA 0.5f
 #define PT__GUIDING_MIB 64
 #define PT__GUIDING_MAX_ITERATIONS 16
 #define PT__GUIDING_AUTO_GAIN 1.05 /* AUTO guides above this measured gain */
+#define PT__GUIDING_AUTO_SHARE 0.25 /* ... measured within this share of the training budget */
 #define PT__GUIDING_LOOKUP_COST 1.0 /* AUTO's cost model: a guided vertex costs about one ray (docs/design.md, "Path guiding") */
 
 static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
@@ -7659,7 +7637,7 @@ static int pt__guiding_step(const pt_scene *s, const pt_render_desc *d, pt_film 
    half its samples unguided and half guided: *gain, the efficiency ratio of the two halves, then
    decides *use (both measured on equally many samples at the same time: a rare bright path the
    unguided half misses would make an unguided iteration of its own look better than it is). */
-static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_guide *g, int T,
+static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_guide *g, int T, int Td,
                              float weight, int *use, pt_render_stats *acc, double *gain, char *err, size_t en)
 {
     pt__film_snap a, b, now;
@@ -7673,7 +7651,7 @@ static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film
     for (it = 0; it < T && rc == PT_OK; ++it) {
         double cost_u, cost_g;
         int n = 1 << it;
-        if (d->guiding == PT_GUIDING_AUTO && it == T - 1) {
+        if (d->guiding == PT_GUIDING_AUTO && it == Td - 1) {
             if (!pt__snap_take(&a, film)) break;
             rc = pt__guiding_step(s, d, film, n / 2, NULL, g, weight, acc, &cost_u, err, en);
             if (rc != PT_OK) break;
@@ -7690,9 +7668,11 @@ static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film
             if (rc != PT_OK) break;
         }
         acc->guiding_iterations = it + 1;
-        if (*use && (rc = pt__guide_update(g)) != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the guide");
+        if (!*use) break; /* (AUTO: the rest unguided, untrained) */
+        if ((rc = pt__guide_update(g)) != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the guide");
     }
-    if (rc == PT_OK && it < T) rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
+    if (rc == PT_OK && it < T && *use)
+        rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
     pt__snap_free(&a);
     pt__snap_free(&b);
     return rc;
@@ -7706,7 +7686,7 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
     pt_render_desc last = *d;
     pt_guide *g = d->guiding_guide;
     const char *why = pt__guiding_pointless(s, d);
-    int spp = d->samples_per_pixel ? d->samples_per_pixel : 16, T = 0, rc = PT_OK, use = 0, own = !g;
+    int spp = d->samples_per_pixel ? d->samples_per_pixel : 16, T = 0, Td = 0, rc = PT_OK, use = 0, own = !g;
     float budget = d->guiding_budget > 0.0f ? d->guiding_budget : PT__GUIDING_BUDGET;
     float weight = 1.0f - (d->guiding_alpha > 0.0f ? d->guiding_alpha : PT__GUIDING_ALPHA);
     double t0 = pt__now(), gain = 0.0;
@@ -7716,6 +7696,9 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
         return pt__msg(err, en, PT_ERROR_INVALID_ARGUMENT,
                        "pt_render_desc.guiding_guide: not made for this scene (pt_guide_create_for_scene)");
     while (T < PT__GUIDING_MAX_ITERATIONS && (double)((1u << (T + 1)) - 1u) <= (double)budget * (double)spp) ++T;
+    /* AUTO decides within a quarter of the budget (at least iterations 0 and 1), so that a scene
+       the guide does not help pays little for finding out */
+    while (Td < T && (Td < 2 || (double)((1u << (Td + 1)) - 1u) <= PT__GUIDING_AUTO_SHARE * (double)budget * (double)spp)) ++Td;
     if (!why && T < 2) why = "too few samples to train (fewer than 3 in the budget)";
     if (!why) {
         pt_guide_desc gd;
@@ -7725,7 +7708,7 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
         if (own && (rc = pt_guide_create_for_scene(s, &gd, &g)) != PT_OK)
             return pt__msg(err, en, rc, "pt_render: out of memory for the guide");
         if (!own && !g->updates) g->unit = (double)gd.value_resolution;
-        rc = pt__guiding_train(s, d, film, g, T, weight, &use, &acc, &gain, err, en);
+        rc = pt__guiding_train(s, d, film, g, T, Td, weight, &use, &acc, &gain, err, en);
         acc.guiding_seconds = pt__now() - t0;
         acc.guiding_samples = acc.samples;
         if (rc == PT_OK) {

@@ -2295,7 +2295,7 @@ static void write_guiding_summary(FILE *f, const config *cfg, const results *R)
             fprintf(f, " `%s` (MIS, %s numbers, %s)", strategies[j].name,
                     strategies[j].sampler == PT_SAMPLER_SOBOL ? "Sobol" : "independent",
                     strategies[j].guiding == PT_GUIDING_ON ? "PT_GUIDING_ON"
-                                                          : "PT_GUIDING_AUTO: goes on guided only while training "
+                                                          : "PT_GUIDING_AUTO: goes on guided only if training "
                                                             "measures a gain");
     fprintf(f, ". A guide is trained per render, so each point of a guided series is one fresh render of N spp "
                "(its time = pt_render's wall clock, training included), not a progressive step; a render of fewer "
