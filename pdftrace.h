@@ -395,7 +395,8 @@ PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_f
    square by the cylindrical equal-area map x = (cos(theta) + 1) / 2, y = phi / (2 pi), so a
    density q over the square is q / (4 pi) per steradian. Records (a point, a direction and a
    value >= 0, e.g. incident radiance over the density it was sampled with) are added into the
-   guide's "building" tree; pt_guide_update turns them into the sampling tree (each quadtree
+   guide's "building" tree, each spread over the directional cells a square the size of its own
+   cell overlaps; pt_guide_update turns them into the sampling tree (each quadtree
    quadrant's probability in proportion to the values recorded in it) and refines both trees
    where the values concentrate: a spatial leaf splits in two once it held more than
    spatial_threshold x sqrt(2^k) records in update k, a directional cell splits in four when it
@@ -404,7 +405,8 @@ PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_f
    Records from several threads at once are safe and their order does not matter: values are
    summed in fixed point (integers), so a guide is bit-identical however its records were
    scheduled. Sampling and pt_pdf_value of pt_pdf_guide agree exactly; a leaf with no data yet
-   is uniform over the sphere. */
+   is uniform over the sphere. A spatial leaf's quadtree covers the whole sphere: at a surface,
+   the part of it below the surface is wasted (mix it with the material's PDF). */
 typedef struct pt_guide pt_guide;
 typedef struct pt_guide_desc {
     pt_vec3 bounds_min, bounds_max; /* the box it learns over (pt_guide_create); points outside are
