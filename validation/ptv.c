@@ -894,6 +894,8 @@ static const bad_case bad_cases[] = {
     {"bad strategy", "%Hstrategy best\n", "strategy: expected mis, material, light or mixture, got 'best'"},
     {"bad sampler", "%Hsampler halton\n", "bad.scene:3: sampler: expected independent or sobol, got 'halton'"},
     {"indirect_paths 9", "%Hindirect_paths 9\n", "bad.scene:3: indirect_paths: expected an integer in [1, 8], got '9'"},
+    {"bad guiding", "%Hguiding sometimes\n", "bad.scene:3: guiding: expected off, on or auto, got 'sometimes'"},
+    {"guiding_budget 1", "%Hguiding_budget 1\n", "bad.scene:3: guiding_budget"},
     {"singular scale", "%Hscale 1 0 1\n", "scale: every factor must have magnitude >= 1e-6"},
     {"rotate zero axis", "%Hrotate 0 0 0 45\n", "rotate: the axis has zero length"},
     {"overflowing transform", "%Hscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\n",
