@@ -540,7 +540,8 @@ enum {
     PT_FEATURE_TRIANGLES       = 1 << 9,
     PT_FEATURE_MESHES          = 1 << 10,
     PT_FEATURE_SHADING_NORMALS = 1 << 11, /* some mesh has per-vertex normals */
-    PT_FEATURE_TRANSFORMS      = 1 << 12  /* some shape was added under a non-identity transform */
+    PT_FEATURE_TRANSFORMS      = 1 << 12, /* some shape was added under a non-identity transform */
+    PT_FEATURE_DELTA_LIGHTS    = 1 << 13  /* some point, spot or directional light (pt_scene_add_light) */
 };
 
 /* Traversal backends (pt_scene_set_backend, section 5b). */
@@ -576,6 +577,7 @@ typedef struct pt_scene_info {
     uint32_t precision_warnings;  /* primitives smaller than float resolves at their coordinates,
                                      or than the spawn offset there (see pt_scene_commit) */
     char precision_warning[200];  /* "" when precision_warnings is 0, else what and where */
+    uint32_t delta_light_count;   /* point, spot and directional lights (pt_scene_add_light) */
 } pt_scene_info;
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
@@ -706,6 +708,46 @@ PTDEF int pt_scene_add_checker(pt_scene *scene, pt_color even, pt_color odd, flo
 PTDEF pt_color pt_scene_eval_texture(const pt_scene *scene, int texture, pt_vec3 p);
 /* 1 when the material scatters only into delta directions (mirror, glass) or not at all. */
 PTDEF int pt_material_is_delta(const pt_scene *scene, int material);
+
+/* Lights without a shape: point, spot and directional lights (delta lights). A ray cannot hit
+   one, so they are reached only by next-event estimation: at every vertex with a scattering
+   density, under every strategy (PT_STRATEGY_MATERIAL and _MIXTURE included), one delta light
+   is picked in proportion to its power and a shadow ray is traced to it, with MIS weight 1 (no
+   other technique can find it). Shaped emitters keep their own light table and strategy. Delta
+   lights are not seen by the camera, have no density in pt_pdf_scene_lights and are not in
+   pt_scene_info.emitter_count (pt_scene_info.delta_light_count). They are added under the
+   scene's current transform (the position as a point, the direction as a vector, normalised).
+   Units, per RGB channel:
+   - POINT: radiant intensity I (W/sr): a surface at distance d facing it at angle theta
+     receives E = I cos(theta) / d^2.
+   - SPOT: I along its axis; at angle a from the axis, I x falloff(a): 1 for a <= beam_width,
+     (cutoff_angle - a) / (cutoff_angle - beam_width) up to cutoff_angle (linear in the angle),
+     0 beyond (Mitsuba 3's `spot`).
+   - DIRECTIONAL: irradiance E (W/m^2) on a surface facing the light: E cos(theta) elsewhere; its
+     light arrives from -direction everywhere (the sun). */
+typedef enum pt_light_type {
+    PT_LIGHT_POINT = 1,
+    PT_LIGHT_SPOT = 2,
+    PT_LIGHT_DIRECTIONAL = 3
+} pt_light_type;
+
+typedef struct pt_light_desc {
+    pt_light_type type;
+    pt_vec3 position;            /* POINT, SPOT */
+    pt_vec3 direction;           /* SPOT: the axis the cone opens along; DIRECTIONAL: the direction
+                                    its light travels; any non-zero length */
+    pt_color intensity;          /* POINT, SPOT: I (W/sr); DIRECTIONAL: E (W/m^2); finite, >= 0,
+                                    not all zero */
+    float cutoff_angle;          /* SPOT: degrees in (0, 90]; 0: 20 */
+    float beam_width;            /* SPOT: degrees in (0, cutoff_angle]; 0: 3/4 of cutoff_angle */
+} pt_light_desc;
+
+/* Returns the light's id (>= 0, counting delta lights from 0) or an error code with
+   pt_scene_error_message naming the bad field. */
+PTDEF int pt_scene_add_light(pt_scene *scene, const pt_light_desc *light);
+/* The light as added (the transform applied, defaults resolved): PT_OK, or
+   PT_ERROR_INVALID_ARGUMENT for a bad id or NULL. */
+PTDEF int pt_scene_get_light(const pt_scene *scene, int id, pt_light_desc *light);
 
 /* Shading point passed to a user guide PDF (see pt_render_desc.guide). */
 typedef struct pt_shading_point {
@@ -1293,6 +1335,17 @@ typedef struct pt__light {
     float area;
 } pt__light;
 
+/* A delta light (pt_scene_add_light). */
+typedef struct pt__dlight {
+    pt_light_desc desc;  /* as added, transformed, defaults resolved; position in the caller's
+                            coordinates (relative to a fixed origin, if any) */
+    pt_vec3 pos;         /* relative to the scene's origin (commit) */
+    pt_vec3 axis;        /* unit: the spot's axis, the directional light's direction of travel */
+    float cos_cutoff, cos_beam, cutoff, inv_transition; /* SPOT (radians) */
+    double power;        /* picks it (commit) */
+    float select_pdf, cdf;
+} pt__dlight;
+
 #ifdef PDFTRACE_EMBREE
 /* The user data of an Embree user geometry: the scene and its primID -> prims index map. */
 typedef struct pt__rtc_geom { const pt_scene *scene; const uint32_t *map; float pad; } pt__rtc_geom;
@@ -1351,6 +1404,8 @@ struct pt_scene {
     pt__light *lights;
     uint32_t light_count;
     double total_power;
+    pt__dlight *dlights;       /* delta lights, in the order added */
+    uint32_t dlight_count, dlight_cap;
     pt_transform xf;
     int xf_identity;
     int committed;
@@ -2001,6 +2056,9 @@ enum {
     PT__SLOTS
 };
 #define PT__SET_BOUNCE(depth, slot) (2u + (uint32_t)PT__SLOTS * (uint32_t)(depth) + (uint32_t)(slot))
+/* The pick among delta lights at depth d (a set of its own, apart from the bounce sets above, so
+   that scenes without delta lights draw exactly what they drew before delta lights existed). */
+#define PT__SET_DELTA_PICK(depth) (0x80000000u + (uint32_t)(depth))
 
 /* SOBOL: the key of a pixel's sets (the same for all its samples). */
 static uint64_t pt__sobol_pixel_key(uint64_t seed, uint32_t pixel)
@@ -3835,6 +3893,7 @@ PTDEF void pt_scene_destroy(pt_scene *s)
     PT_FREE(s->normals);
     PT_FREE(s->bvh_mem);
     PT_FREE(s->lights);
+    PT_FREE(s->dlights);
     PT_FREE(s);
 }
 PTDEF const char *pt_scene_error_message(const pt_scene *s) { return s ? s->error : "scene is NULL"; }
@@ -4235,6 +4294,100 @@ PTDEF int pt_material_is_delta(const pt_scene *s, int material)
     if (!s || material < 0 || (uint32_t)material >= s->mat_count) return 0;
     return s->mats[material].delta || !s->mats[material].scatters;
 }
+/* --- delta lights (pt_scene_add_light) --- */
+PTDEF int pt_scene_add_light(pt_scene *s, const pt_light_desc *d)
+{
+    pt__dlight l;
+    const float deg = 0.017453292519943295f;
+    int positioned, directed;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!d) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: the pt_light_desc is NULL");
+    if (d->type != PT_LIGHT_POINT && d->type != PT_LIGHT_SPOT && d->type != PT_LIGHT_DIRECTIONAL)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: type = %d: must be PT_LIGHT_POINT, _SPOT or _DIRECTIONAL",
+                        (int)d->type);
+    if (!pt__color_ok(d->intensity) || pt__is_black(d->intensity))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: intensity must be finite, >= 0 and not all zero");
+    memset(&l, 0, sizeof l);
+    l.desc = *d;
+    positioned = d->type != PT_LIGHT_DIRECTIONAL;
+    directed = d->type != PT_LIGHT_POINT;
+    if (positioned) {
+        if (!pt__vfinite(d->position) || pt__vmaxabs(d->position) > PT__MAX_COORD)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: position must be finite, within %g",
+                            (double)PT__MAX_COORD);
+        l.desc.position = s->xf_identity ? d->position : pt_transform_point(&s->xf, d->position);
+        if (!pt__vfinite(l.desc.position) || pt__vmaxabs(l.desc.position) > PT__MAX_COORD)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: position beyond %g after the scene's transform",
+                            (double)PT__MAX_COORD);
+    } else {
+        l.desc.position = pt_v3(0, 0, 0);
+    }
+    if (directed) {
+        pt_vec3 a = d->direction;
+        float len;
+        if (!pt__vfinite(a) || !(pt_length2(a) > 0.0f))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: direction must be finite and non-zero");
+        if (!s->xf_identity) a = pt_transform_vector(&s->xf, a);
+        len = pt_length(a);
+        if (!(len > 0.0f) || !pt__isfinite(len))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: direction is zero or overflows after the transform");
+        l.axis = pt_scale(a, 1.0f / len);
+        l.desc.direction = l.axis;
+    } else {
+        l.desc.direction = pt_v3(0, 0, 0);
+    }
+    if (d->type == PT_LIGHT_SPOT) {
+        float c = d->cutoff_angle == 0.0f ? 20.0f : d->cutoff_angle, b;
+        if (!pt__isfinite(c) || !(c > 0.0f) || c > 90.0f)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "light: cutoff_angle = %g: must be in (0, 90] degrees (0: 20)",
+                            (double)d->cutoff_angle);
+        b = d->beam_width == 0.0f ? 0.75f * c : d->beam_width;
+        if (!pt__isfinite(b) || !(b > 0.0f) || b > c)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                            "light: beam_width = %g: must be in (0, cutoff_angle = %g] degrees (0: 3/4 of it)",
+                            (double)d->beam_width, (double)c);
+        l.desc.cutoff_angle = c;
+        l.desc.beam_width = b;
+        l.cutoff = c * deg;
+        l.cos_cutoff = cosf(l.cutoff);
+        l.cos_beam = cosf(b * deg);
+        l.inv_transition = b < c ? 1.0f / ((c - b) * deg) : 0.0f;
+    } else {
+        l.desc.cutoff_angle = l.desc.beam_width = 0.0f;
+    }
+    if (!pt__grow((void **)&s->dlights, &s->dlight_cap, s->dlight_count + 1u, sizeof(pt__dlight)))
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "light: out of memory");
+    s->dlights[s->dlight_count] = l;
+    s->committed = 0;
+    return (int)s->dlight_count++;
+}
+PTDEF int pt_scene_get_light(const pt_scene *s, int id, pt_light_desc *light)
+{
+    if (!s || !light || id < 0 || (uint32_t)id >= s->dlight_count) return PT_ERROR_INVALID_ARGUMENT;
+    *light = s->dlights[id].desc;
+    return PT_OK;
+}
+/* A spot's falloff toward unit w (from the light): Mitsuba 3's `spot`, linear in the angle. */
+static float pt__spot_falloff(const pt__dlight *l, pt_vec3 w)
+{
+    float c = pt_dot(l->axis, w);
+    if (c >= l->cos_beam) return 1.0f;
+    if (!(c > l->cos_cutoff)) return 0.0f;
+    return pt__minf(1.0f, pt__maxf(0.0f, (l->cutoff - acosf(c)) * l->inv_transition));
+}
+/* Radiant power, to pick among delta lights: 4 pi I for a point, I times the solid angle of the
+   cone to the middle of the falloff for a spot, and E times the cross-section of the scene's
+   bounding sphere (radius r) for a directional light. */
+static double pt__dlight_power(const pt__dlight *l, double r)
+{
+    double i = ((double)l->desc.intensity.x + (double)l->desc.intensity.y + (double)l->desc.intensity.z) / 3.0;
+    if (l->desc.type == PT_LIGHT_POINT) return 4.0 * 3.14159265358979323846 * i;
+    if (l->desc.type == PT_LIGHT_SPOT)
+        return 2.0 * 3.14159265358979323846 * i *
+               (1.0 - cos(0.5 * ((double)l->desc.cutoff_angle + (double)l->desc.beam_width) * 0.017453292519943295));
+    return 3.14159265358979323846 * r * r * i;
+}
+
 static pt_color pt__albedo(const pt_scene *s, const pt__material *m, pt_vec3 p)
 {
     return m->texture ? pt__checker(&s->texs[m->texture - 1], pt__to_world(s, p)) : m->albedo;
@@ -5855,6 +6008,28 @@ PTDEF int pt_scene_commit(pt_scene *s)
         if (m->type == PT_MATERIAL_DIELECTRIC) f |= PT_FEATURE_DIELECTRICS;
         if (m->texture) f |= PT_FEATURE_TEXTURES;
     }
+    if (s->dlight_count) {
+        /* delta lights: positions relative to the origin, and their pick table by power */
+        pt_vec3 ext = pt_sub(s->hi, s->lo);
+        double r = s->prim_count ? 0.5 * sqrt((double)ext.x * ext.x + (double)ext.y * ext.y + (double)ext.z * ext.z) : 1.0,
+               tot = 0.0, acc = 0.0;
+        if (!(r > 0.0) || !(r < 1e300)) r = 1.0;
+        for (i = 0; i < s->dlight_count; ++i) {
+            pt__dlight *l = &s->dlights[i];
+            l->pos = s->fixed_origin ? l->desc.position : pt__to_local(s, l->desc.position);
+            l->power = pt__dlight_power(l, r);
+            if (!(l->power > 0.0) || !(l->power < 1e300))
+                return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "commit: light %u has power %g", (unsigned)i, l->power);
+            tot += l->power;
+        }
+        for (i = 0; i < s->dlight_count; ++i) {
+            s->dlights[i].select_pdf = (float)(s->dlights[i].power / tot);
+            acc += s->dlights[i].power;
+            s->dlights[i].cdf = (float)(acc / tot);
+        }
+        s->dlights[s->dlight_count - 1u].cdf = 1.0f;
+        f |= PT_FEATURE_DELTA_LIGHTS;
+    }
     s->features = f;
     s->committed = 1;
     return PT_OK;
@@ -5889,6 +6064,7 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     info->triangle_count = s->triangle_count;
     info->mesh_count = s->mesh_count;
     info->emitter_count = s->committed ? s->light_count : 0u;
+    info->delta_light_count = s->dlight_count;
     info->material_count = s->mat_count;
     info->texture_count = s->tex_count;
     info->degenerate_triangles_skipped = s->degenerate_skipped;
@@ -6291,6 +6467,52 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
     }
 }
 
+/* Next-event estimation of the delta lights (pt_scene_add_light) at non-delta vertex v, under
+   every strategy, since no scattered ray can reach them: one light, picked by power (select_pdf
+   P), and one shadow ray; the contribution beta f L / P, with L = I falloff / d^2 (point, spot)
+   or E (directional), has MIS weight 1. A point light at the shading point itself (d = 0, an
+   integrand with no finite value) adds nothing. */
+static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, pt_color beta,
+                              int depth, pt__sampler *smp, int tri, pt_path_stats *st)
+{
+    const pt__dlight *l = &s->dlights[0];
+    pt_color f, Li;
+    pt_ray sr;
+    pt__rayctx src;
+    float tmax;
+    if (s->dlight_count > 1) {
+        float u = pt__draw1(smp, PT__SET_DELTA_PICK(depth));
+        uint32_t lo = 0, hi = s->dlight_count - 1u;
+        while (lo < hi) { /* first light whose cdf exceeds u */
+            uint32_t mid = (lo + hi) / 2u;
+            if (s->dlights[mid].cdf > u) hi = mid;
+            else lo = mid + 1u;
+        }
+        l = &s->dlights[lo];
+    }
+    sr.origin = v->o;
+    if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
+        sr.dir = pt_neg(l->axis);
+        Li = l->desc.intensity;
+        tmax = PT__INF;
+    } else {
+        pt_vec3 d = pt_sub(l->pos, v->o);
+        float d2 = pt_length2(d), fall = 1.0f;
+        if (!(d2 > 0.0f)) return pt_v3(0, 0, 0);
+        if (l->desc.type == PT_LIGHT_SPOT && !((fall = pt__spot_falloff(l, pt_scale(d, -1.0f / sqrtf(d2)))) > 0.0f))
+            return pt_v3(0, 0, 0);
+        Li = pt_scale(l->desc.intensity, fall / d2);
+        sr.dir = d; /* the segment to the light, short of it (a light on a surface is not hidden by it) */
+        tmax = 1.0f - 1e-4f;
+    }
+    f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, pt_normalize(sr.dir));
+    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
+    pt__rayctx_init2(&src, sr, tri);
+    st->shadow_rays++;
+    if (pt__scene_any(s, &src, tmax, 0xffffffffu)) return pt_v3(0, 0, 0);
+    return pt_mul(beta, pt_scale(pt_mul(f, Li), 1.0f / l->select_pdf));
+}
+
 /* The scene-feature skips (PT_SKIP_*) appear below as PT__SKIP(cfg, bit) tests; with the bit
    in cfg->general the general path runs instead. */
 /* Splitting (a weight window: Arvo & Kirk 1990, "Particle Transport and Image Synthesis", who
@@ -6638,6 +6860,8 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
+            /* the delta lights, under every strategy (a scene without them skips this) */
+            if (PT__UNLIKELY(s->dlight_count != 0)) L = pt_add(L, pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st));
         }
         /* the continuation: split copies first (each ends before the next starts), then this path */
         if (!m->delta &&
@@ -7547,7 +7771,8 @@ static const char *pt__guiding_pointless(const pt_scene *s, const pt_render_desc
     for (i = 0; i < s->mat_count; ++i)
         if (s->mats[i].scatters && !s->mats[i].delta) non_delta = 1;
     if (!non_delta) return "no material with a scattering density: nothing to guide";
-    if (!s->light_count && pt__is_black(d->background)) return "no emitter and a black background: no light to learn";
+    if (!s->light_count && !s->dlight_count && pt__is_black(d->background))
+        return "no emitter and a black background: no light to learn";
     return NULL;
 }
 
@@ -7559,6 +7784,9 @@ static float pt__guiding_unit(const pt_scene *s, const pt_render_desc *d)
     for (i = 0; i < s->mat_count; ++i)
         if (s->mats[i].emits)
             top = pt__maxf(top, (s->mats[i].emission.x + s->mats[i].emission.y + s->mats[i].emission.z) / 3.0f);
+    for (i = 0; i < s->dlight_count; ++i) /* (intensity or irradiance: the radiance it gives at unit scale) */
+        top = pt__maxf(top, (s->dlights[i].desc.intensity.x + s->dlights[i].desc.intensity.y +
+                             s->dlights[i].desc.intensity.z) / 3.0f);
     top = top > 0.0f && pt__isfinite(top) ? top : 1.0f;
     return pt__maxf(top * (1.0f / 16777216.0f), 1e-30f);
 }
