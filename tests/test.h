@@ -67,6 +67,7 @@ extern const test_case test_output_cases[];
 extern const test_case test_exr_cases[];    /* OpenEXR (one skipped test without PDFTRACE_OPENEXR) */
 extern const test_case test_embree_cases[]; /* backends; Embree's tests with PDFTRACE_EMBREE */
 extern const test_case test_analytic_cases[];
+extern const test_case test_lights_cases[];  /* point, spot and directional lights */
 extern const test_case test_regress_cases[];
 extern const test_case test_origin_cases[];  /* scenes far from (0, 0, 0) */
 extern const test_case test_stress_cases[];  /* numerical stress (tests/stress/, fast sizes) */

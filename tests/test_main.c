@@ -100,6 +100,7 @@ int main(int argc, char **argv)
         { "exr", test_exr_cases },
         { "embree", test_embree_cases },
         { "analytic", test_analytic_cases },
+        { "lights", test_lights_cases },
         { "regress", test_regress_cases },
         { "origin", test_origin_cases },
         { "stress", test_stress_cases },

@@ -987,6 +987,18 @@ int tu_film_equal(const pt_film *a, const pt_film *b)
 /* Irradiance at a point x of the plane y = 0 (normal +y) from the light, radiance Le. */
 double tu_plane_irradiance(const tu_light *L, double Le, dv3 x)
 {
+    if (L->kind == TU_POINT || L->kind == TU_SPOT) {
+        /* E = I falloff cos(theta) / d^2 (Mitsuba 3's spot falloff: linear in the angle) */
+        dv3 l = dsub(L->p0, x);
+        double d2 = ddot(l, l), d = sqrt(d2), fall = 1.0;
+        if (l.y <= 0.0) return 0.0;
+        if (L->kind == TU_SPOT) {
+            double a = acos(fmin(1.0, fmax(-1.0, -ddot(L->p1, l) / d))) * (180.0 / TU_PI);
+            fall = a <= L->beam ? 1.0 : a >= L->cutoff ? 0.0 : (L->cutoff - a) / (L->cutoff - L->beam);
+        }
+        return Le * fall * (l.y / d) / d2;
+    }
+    if (L->kind == TU_DIRECTIONAL) return Le * fmax(0.0, -L->p1.y);
     if (L->kind == TU_SPHERE) {
         /* E = pi L sin^2(alpha) cos(theta), sin alpha = R / d, cos theta = (c - x).n / d */
         dv3 l = dsub(L->p0, x);

@@ -79,12 +79,14 @@ double tu_lambert_polygon(dv3 x, dv3 n, const dv3 *verts, int count);
 double tu_fresnel_dielectric(double cos_i, double eta_i, double eta_t);
 
 /* Lights as seen by a light-sampling PDF (area or cone sampling converted to solid angle). */
-enum { TU_SPHERE, TU_QUAD, TU_TRIANGLE };
+enum { TU_SPHERE, TU_QUAD, TU_TRIANGLE, TU_POINT, TU_SPOT, TU_DIRECTIONAL };
 typedef struct tu_light {
     int kind;
-    dv3 p0, p1, p2;  /* sphere: center; quad: q, u, v; triangle: a, b, c */
+    dv3 p0, p1, p2;  /* sphere: center; quad: q, u, v; triangle: a, b, c; point, spot: position (p0),
+                        spot: unit axis (p1); directional: unit direction of travel (p1) */
     double radius;
     int two_sided;
+    double cutoff, beam; /* spot: degrees */
 } tu_light;
 /* Density in sr^-1 of the light's sampling PDF at unit direction w from o. *near is set when w is
    within float precision of the support boundary. Returns -1 when the reference is undefined
@@ -241,7 +243,8 @@ int tu_plane_scene_create_ex(tu_plane_scene *ps, int kind, int two_sided, int fl
    computes the references. */
 int tu_plane_scene_finish(tu_plane_scene *ps, int width, int height);
 void tu_plane_scene_destroy(tu_plane_scene *ps);
-/* Irradiance at x on the plane y = 0 (normal +y) from a light of radiance Le facing it. */
+/* Irradiance at x on the plane y = 0 (normal +y) from a light of radiance Le facing it (for the
+   delta lights, Le is the intensity I, W/sr, or the directional light's irradiance E). */
 double tu_plane_irradiance(const tu_light *L, double Le, dv3 x);
 
 typedef struct tu_image_stats {
