@@ -1341,7 +1341,7 @@ typedef struct pt__dlight {
                             coordinates (relative to a fixed origin, if any) */
     pt_vec3 pos;         /* relative to the scene's origin (commit) */
     pt_vec3 axis;        /* unit: the spot's axis, the directional light's direction of travel */
-    float cos_cutoff, cos_beam, cutoff, inv_transition; /* SPOT (radians) */
+    float cutoff, beam, inv_transition; /* SPOT (radians) */
     double power;        /* picks it (commit) */
     float select_pdf, cdf;
 } pt__dlight;
@@ -4349,9 +4349,8 @@ PTDEF int pt_scene_add_light(pt_scene *s, const pt_light_desc *d)
         l.desc.cutoff_angle = c;
         l.desc.beam_width = b;
         l.cutoff = c * deg;
-        l.cos_cutoff = cosf(l.cutoff);
-        l.cos_beam = cosf(b * deg);
-        l.inv_transition = b < c ? 1.0f / ((c - b) * deg) : 0.0f;
+        l.beam = b * deg;
+        l.inv_transition = b < c ? 1.0f / (l.cutoff - l.beam) : 0.0f;
     } else {
         l.desc.cutoff_angle = l.desc.beam_width = 0.0f;
     }
@@ -4367,13 +4366,15 @@ PTDEF int pt_scene_get_light(const pt_scene *s, int id, pt_light_desc *light)
     *light = s->dlights[id].desc;
     return PT_OK;
 }
-/* A spot's falloff toward unit w (from the light): Mitsuba 3's `spot`, linear in the angle. */
+/* A spot's falloff toward unit w (from the light): Mitsuba 3's `spot`, linear in the angle. The
+   angle is atan2(|axis x w|, axis . w), exact for small angles too, where acos of a dot product is
+   not (cos 0.01 degrees rounds to 1 in float). */
 static float pt__spot_falloff(const pt__dlight *l, pt_vec3 w)
 {
-    float c = pt_dot(l->axis, w);
-    if (c >= l->cos_beam) return 1.0f;
-    if (!(c > l->cos_cutoff)) return 0.0f;
-    return pt__minf(1.0f, pt__maxf(0.0f, (l->cutoff - acosf(c)) * l->inv_transition));
+    float a = atan2f(pt_length(pt_cross(l->axis, w)), pt_dot(l->axis, w));
+    if (a <= l->beam) return 1.0f;
+    if (!(a < l->cutoff)) return 0.0f;
+    return pt__minf(1.0f, (l->cutoff - a) * l->inv_transition);
 }
 /* Radiant power, to pick among delta lights: 4 pi I for a point, I times the solid angle of the
    cone to the middle of the falloff for a spot, and E times the cross-section of the scene's
@@ -6476,6 +6477,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
                               int depth, pt__sampler *smp, int tri, pt_path_stats *st)
 {
     const pt__dlight *l = &s->dlights[0];
+    pt_vec3 wi;
     pt_color f, Li;
     pt_ray sr;
     pt__rayctx src;
@@ -6492,20 +6494,24 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
     }
     sr.origin = v->o;
     if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
-        sr.dir = pt_neg(l->axis);
+        sr.dir = wi = pt_neg(l->axis);
         Li = l->desc.intensity;
         tmax = PT__INF;
     } else {
-        pt_vec3 d = pt_sub(l->pos, v->o);
+        /* distance and direction from the surface point itself, not from the spawn point above it,
+           whose offset would be a visible part of d for a light close to the surface */
+        pt_vec3 d = pt_sub(l->pos, v->p);
         float d2 = pt_length2(d), fall = 1.0f;
         if (!(d2 > 0.0f)) return pt_v3(0, 0, 0);
         if (l->desc.type == PT_LIGHT_SPOT && !((fall = pt__spot_falloff(l, pt_scale(d, -1.0f / sqrtf(d2)))) > 0.0f))
             return pt_v3(0, 0, 0);
         Li = pt_scale(l->desc.intensity, fall / d2);
-        sr.dir = d; /* the segment to the light, short of it (a light on a surface is not hidden by it) */
+        wi = pt_scale(d, 1.0f / sqrtf(d2));
+        sr.dir = pt_sub(l->pos, v->o); /* the segment to the light, short of it (a light on a surface is
+                                          not hidden by that surface) */
         tmax = 1.0f - 1e-4f;
     }
-    f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, pt_normalize(sr.dir));
+    f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, wi);
     if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
     pt__rayctx_init2(&src, sr, tri);
     st->shadow_rays++;

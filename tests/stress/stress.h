@@ -39,6 +39,8 @@ void st_watertight(st_ctx *c);       /* 3: rays from inside closed shapes never 
 void st_edges(st_ctx *c);            /* 3: rays along edges, through vertices, tangent to spheres */
 void st_light_geometry(st_ctx *c);   /* 3: shading points on lights, horizon, normals facing away */
 void st_guiding(st_ctx *c);         /* path guiding at every scale, memory bound, emission 1e-6 .. 1e6 */
+void st_delta_lights(st_ctx *c);     /* point/spot/directional lights at every scale, 0.01-degree cones,
+                                        close and grazing */
 void st_degenerate(st_ctx *c);       /* 4: degenerate input: errors or documented finite behaviour */
 void st_slivers(st_ctx *c);          /* fuzzed sliver triangles: intersect, brute force, occluded agree; t */
 void st_cornell_offset(st_ctx *c); /* 5: the Cornell box moved by 1e5 .. 1e7 renders as at the origin */

@@ -1598,6 +1598,202 @@ void st_guiding(st_ctx *c)
     free(scratch);
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* delta lights: point, spot and directional lights at every scale, tiny cones, close, grazing  */
+
+/* The radiance (green) of one direct-light path (max_depth 1) from `from` to the plane point `to`:
+   a delta light's estimate there has no variance, so it equals rho E / pi up to rounding. */
+static double st_delta_probe(const pt_scene *s, pt_vec3 from, pt_vec3 to, uint64_t *nonfinite)
+{
+    pt_render_desc d = tu_base_desc(1, 1, 1, 1);
+    pt_ray r;
+    pt_rng rng;
+    pt_path_stats ps;
+    pt_color L;
+    d.max_depth = 1;
+    r.origin = from;
+    r.dir = pt_normalize(pt_sub(to, from));
+    pt_rng_seed(&rng, 1, 1);
+    memset(&ps, 0, sizeof ps);
+    L = pt_trace_path(s, &d, r, &rng, &ps);
+    *nonfinite += ps.nonfinite_samples;
+    return (double)L.y;
+}
+static double st_rel(double got, double want) { return want != 0.0 ? fabs(got - want) / fabs(want) : fabs(got); }
+
+/* A Lambertian plane y = 0 (rho 0.5, 2 x 2 units, scaled and moved by pl) with one delta light. */
+static pt_scene *st_delta_plane(const st_place *pl, const pt_light_desc *light)
+{
+    pt_scene *s = pt_scene_create();
+    int m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    pt_light_desc d = *light;
+    d.position = sp_p(pl, light->position.x, light->position.y, light->position.z);
+    d.intensity = pt_scale(light->intensity, (float)(pl->s * pl->s)); /* E stays the same at every scale */
+    if (light->type == PT_LIGHT_DIRECTIONAL) d.intensity = light->intensity;
+    if (pt_scene_add_quad(s, sp_p(pl, -1, 0, -1), sp_v(pl, 0, 0, 2), sp_v(pl, 2, 0, 0), m) < 0 ||
+        pt_scene_add_light(s, &d) < 0 || pt_scene_commit(s) != PT_OK) {
+        fprintf(stderr, "stress: delta plane at %s: %s\n", pl->name, pt_scene_error_message(s));
+        pt_scene_destroy(s);
+        return NULL;
+    }
+    return s;
+}
+
+/* E at plane point (x, 0, z) of the unit scene, in double: I f cos / d^2, or E0 cos. */
+static double st_delta_E(const pt_light_desc *l, double x, double z)
+{
+    dv3 p = dv(x, 0, z), lp = dv(l->position.x, l->position.y, l->position.z), w, ax;
+    double d2, d, f = 1.0, ang;
+    if (l->type == PT_LIGHT_DIRECTIONAL) {
+        ax = dnorm(dv(l->direction.x, l->direction.y, l->direction.z));
+        return l->intensity.y * fmax(0.0, -ax.y);
+    }
+    w = dsub(lp, p);
+    d2 = ddot(w, w);
+    d = sqrt(d2);
+    if (l->type == PT_LIGHT_SPOT) {
+        ax = dnorm(dv(l->direction.x, l->direction.y, l->direction.z));
+        ang = atan2(dlen(dcross(ax, dscale(w, -1.0 / d))), -ddot(ax, w) / d) * (180.0 / TU_PI);
+        f = ang <= l->beam_width ? 1.0 : ang >= l->cutoff_angle ? 0.0 : (l->cutoff_angle - ang) / (l->cutoff_angle - l->beam_width);
+    }
+    return l->intensity.y * f * fmax(0.0, w.y / d) / d2;
+}
+
+/* At every scale and offset of the sweep, a point, a spot and a directional light over the plane
+   give the unit scene's irradiance (intensities scaled by s^2) at three probe points each. */
+static void st_delta_sweep(st_ctx *c)
+{
+    st_place pl[ST_NPLACES];
+    pt_light_desc L[3];
+    static const double px[3] = {0.0, 0.31, -0.47}, pz[3] = {0.0, -0.22, 0.38};
+    int i, k, j;
+    st_places(pl);
+    memset(L, 0, sizeof L);
+    L[0].type = PT_LIGHT_POINT; L[0].position = pt_v3(0.1f, 0.6f, -0.05f); L[0].intensity = pt_v3(1, 1, 1);
+    L[1].type = PT_LIGHT_SPOT; L[1].position = pt_v3(-0.1f, 0.8f, 0.1f); L[1].direction = pt_v3(0.1f, -1, -0.05f);
+    L[1].intensity = pt_v3(2, 2, 2); L[1].cutoff_angle = 40; L[1].beam_width = 15;
+    L[2].type = PT_LIGHT_DIRECTIONAL; L[2].direction = pt_v3(0.3f, -1, 0.2f); L[2].intensity = pt_v3(1.5f, 1.5f, 1.5f);
+    for (i = 0; i < ST_NPLACES; i++) {
+        double worst = 0.0;
+        uint64_t nf = 0;
+        int ok = 1;
+        for (k = 0; k < 3 && ok; k++) {
+            pt_scene *s = st_delta_plane(&pl[i], &L[k]);
+            if (!s) { ok = 0; break; }
+            for (j = 0; j < 3; j++) {
+                double want = 0.5 / TU_PI * st_delta_E(&L[k], px[j], pz[j]);
+                double got = st_delta_probe(s, sp_p(&pl[i], px[j] + 0.01, 0.3, pz[j]), sp_p(&pl[i], px[j], 0, pz[j]), &nf);
+                worst = fmax(worst, st_rel(got, want));
+            }
+            pt_scene_destroy(s);
+        }
+        st_row(c, ok && nf == 0 && worst <= 1e-5, "delta lights sweep", pl[i].name,
+               "rel err <= 1e-5", "%s%.1e (9 probes), %llu NaN/Inf", ok ? "" : "setup failed; ", worst, (unsigned long long)nf);
+    }
+}
+
+/* Spot cones from 10 down to 0.01 degrees (beam half the cutoff): the axis, the beam's middle, the
+   falloff's middle (f = 1/2) and just outside; the angle is the light's own float arithmetic on
+   positions 1 unit away, so a cone of 0.01 degrees (1.7e-4 rad) resolves to ~1e-7 / 1.7e-4. */
+static void st_delta_tiny_cones(st_ctx *c)
+{
+    static const double cones[4] = {10.0, 1.0, 0.1, 0.01};
+    static const double at[4] = {0.0, 0.25, 0.75, 1.05}; /* fractions of the cutoff */
+    st_place unit;
+    int i, j;
+    unit.s = 1.0;
+    unit.off = dv(0, 0, 0);
+    unit.name = "x1";
+    for (i = 0; i < 4; i++) {
+        pt_light_desc l;
+        pt_scene *s;
+        double worst = 0.0;
+        uint64_t nf = 0;
+        char name[48];
+        memset(&l, 0, sizeof l);
+        l.type = PT_LIGHT_SPOT;
+        l.position = pt_v3(0, 1, 0);
+        l.direction = pt_v3(0, -1, 0);
+        l.intensity = pt_v3(1, 1, 1);
+        l.cutoff_angle = (float)cones[i];
+        l.beam_width = (float)(cones[i] / 2);
+        snprintf(name, sizeof name, "cutoff %g deg, beam %g deg", cones[i], cones[i] / 2);
+        s = st_delta_plane(&unit, &l);
+        if (!s) { st_row(c, 0, "delta spot cones", name, "set up", "failed"); continue; }
+        for (j = 0; j < 4; j++) {
+            double x = tan(at[j] * cones[i] * TU_PI / 180.0), want = 0.5 / TU_PI * st_delta_E(&l, x, 0.0);
+            double got = st_delta_probe(s, pt_v3((float)x, 0.5f, 0.0f), pt_v3((float)x, 0, 0), &nf);
+            /* outside the cone: exactly 0; inside: relative; at the falloff's middle absolute in f */
+            worst = fmax(worst, want == 0.0 ? (got != 0.0 ? 1.0 : 0.0) : st_rel(got, want));
+        }
+        pt_scene_destroy(s);
+        st_row(c, nf == 0 && worst <= 1e-3, "delta spot cones", name, "rel err <= 1e-3", "%.1e (4 probes), %llu NaN/Inf", worst,
+               (unsigned long long)nf);
+    }
+}
+
+/* A point light close to the plane (height h, intensity h^2: E = 1 at its foot) and a directional
+   light at grazing elevation (E = E0 sin e): accurate down to h = 1e-5 (the light's distance is
+   taken from the surface point, not from the spawn point ~3e-5 above it) and e = 0.01 degrees; at
+   h = 1e-7, a few float roundings of the plane's coordinates, only finiteness is required. */
+static void st_delta_close_grazing(st_ctx *c)
+{
+    static const double hs[4] = {1e-1, 1e-3, 1e-5, 1e-7};
+    static const double es[3] = {10.0, 1.0, 0.01};
+    st_place unit;
+    int i;
+    unit.s = 1.0;
+    unit.off = dv(0, 0, 0);
+    unit.name = "x1";
+    for (i = 0; i < 4; i++) {
+        pt_light_desc l;
+        pt_scene *s;
+        uint64_t nf = 0;
+        double got, want = 0.5 / TU_PI, err;
+        char name[48];
+        int accurate = hs[i] >= 1e-5;
+        memset(&l, 0, sizeof l);
+        l.type = PT_LIGHT_POINT;
+        l.position = pt_v3(0.2f, (float)hs[i], 0.1f);
+        l.intensity = pt_v3((float)(hs[i] * hs[i]), (float)(hs[i] * hs[i]), (float)(hs[i] * hs[i]));
+        snprintf(name, sizeof name, "point light at height %g", hs[i]);
+        s = st_delta_plane(&unit, &l);
+        if (!s) { st_row(c, 0, "delta close and grazing", name, "set up", "failed"); continue; }
+        got = st_delta_probe(s, pt_v3(0.2f, 0.5f, 0.1f), pt_v3(0.2f, 0, 0.1f), &nf);
+        err = st_rel(got, want);
+        pt_scene_destroy(s);
+        st_row(c, nf == 0 && got == got && (!accurate || err <= 1e-4), "delta close and grazing", name,
+               accurate ? "rel err <= 1e-4" : "finite", "%.1e, %llu NaN/Inf", err, (unsigned long long)nf);
+    }
+    for (i = 0; i < 3; i++) {
+        pt_light_desc l;
+        pt_scene *s;
+        uint64_t nf = 0;
+        double e = es[i] * TU_PI / 180.0, got, want, err;
+        char name[48];
+        memset(&l, 0, sizeof l);
+        l.type = PT_LIGHT_DIRECTIONAL;
+        l.direction = pt_v3((float)cos(e), (float)-sin(e), 0.0f);
+        l.intensity = pt_v3(1, 1, 1);
+        snprintf(name, sizeof name, "directional at elevation %g deg", es[i]);
+        s = st_delta_plane(&unit, &l);
+        if (!s) { st_row(c, 0, "delta close and grazing", name, "set up", "failed"); continue; }
+        want = 0.5 / TU_PI * st_delta_E(&l, 0.0, 0.0);
+        got = st_delta_probe(s, pt_v3(0, 0.5f, 0.01f), pt_v3(0, 0, 0), &nf);
+        err = st_rel(got, want);
+        pt_scene_destroy(s);
+        st_row(c, nf == 0 && err <= 1e-5, "delta close and grazing", name, "rel err <= 1e-5", "%.1e, %llu NaN/Inf", err,
+               (unsigned long long)nf);
+    }
+}
+
+void st_delta_lights(st_ctx *c)
+{
+    st_delta_sweep(c);
+    st_delta_tiny_cones(c);
+    st_delta_close_grazing(c);
+}
+
 void st_family(st_ctx *c)
 {
     char b[48];
