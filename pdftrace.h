@@ -58,6 +58,9 @@
        pt_scene_add_quad(s, pt_v3(-5,0,-5), pt_v3(10,0,0), pt_v3(0,0,10), white);   (floor)
        pt_scene_add_quad(s, pt_v3(-1,4,-1), pt_v3(2,0,0), pt_v3(0,0,2), light);    (emits along u x v = -y)
        pt_scene_add_sphere(s, pt_v3(0,1,0), 1, white);
+       pt_light_desc sun = {0};                (optional: lights without a shape, section 4)
+       sun.type = PT_LIGHT_DIRECTIONAL; sun.direction = pt_v3(1,-3,1); sun.intensity = pt_v3(2,2,2);
+       pt_scene_add_light(s, &sun);
        if (pt_scene_commit(s) != PT_OK) puts(pt_scene_error_message(s));
        pt_render_desc d = {0};                 (zero means "default" for every field)
        d.width = 320; d.height = 240; d.samples_per_pixel = 64;
@@ -123,6 +126,8 @@
    - no texture on a material: albedo is read directly from it. PT_SKIP_NO_TEXTURES, exact.
    - a light sample the material does not reflect (below the surface): no shadow ray.
      PT_SKIP_ZERO_BSDF_SHADOW, exact.
+   - no point, spot or directional light: no delta-light estimate (one test per vertex; not a
+     switchable skip, since the general path would add nothing).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
    watertight-triangle set-up, as the only path.
