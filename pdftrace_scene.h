@@ -68,8 +68,21 @@
      mesh PATH MATERIAL               Wavefront OBJ (v, vn, f; faces fanned into triangles),
                                       PATH relative to the scene file's directory and
                                       inside it (below); a file is read once
+     point_light X Y Z R G B          a point light of intensity R G B (W/sr)
+     spot_light X Y Z TX TY TZ R G B [CUTOFF [BEAM]]   a spot light at X Y Z pointing at the
+                                      target TX TY TZ, intensity R G B (W/sr) on its axis,
+                                      falling off linearly in the angle from BEAM to CUTOFF
+                                      degrees from the axis (Mitsuba 3's spot); CUTOFF in
+                                      (0, 90] (default 20), BEAM in (0, CUTOFF] (default 3/4
+                                      of CUTOFF; BEAM = CUTOFF: a hard-edged cone)
+     directional_light DX DY DZ R G B a light from infinitely far travelling along DX DY DZ
+                                      (the sun), irradiance R G B (W/m^2) on a surface facing it
+                                      (lights: pdftrace.h, pt_light_desc; they are not seen by
+                                      the camera and are reached by shadow rays only)
      translate X Y Z | rotate AX AY AZ DEGREES | scale SX SY SZ | identity
-                                      transforms for the shapes that follow; each one is
+                                      transforms for the shapes and lights that follow (a
+                                      light's position as a point, its direction as a
+                                      vector; cone angles are kept); each one is
                                       applied after those before it (as in POV-Ray);
                                       identity starts again. Composed in double: a scene
                                       far from the origin is handed to pdftrace relative
@@ -100,10 +113,16 @@
    sphere emitter as one point light of intensity L*pi*r^2 (exact for a Lambertian sphere
    above the horizon); glass as rgbf 1 + fresnel reflection + conserve_energy, no_shadow,
    with an opaque twin; mirrors as `reflection`; checker as POV's checker (same parity);
-   meshes as mesh2 with normal_vectors; `assumed_gamma 1.0`, `ambient_light 0`, ambient 0.
-   Not exportable (PT_ERROR_UNSUPPORTED with file:line): a thin-lens camera (POV-Ray's focal
-   blur stops adaptively after a few aperture samples: no exact twin), fuzzy metal, emitting
-   triangles, boxes or meshes; and every scene pt_scenefile_build refuses (the exporter runs
+   meshes as mesh2 with normal_vectors; a point light as a fade-trick point light of colour
+   I/(2 pi fd^2), a hard-cone spot (beam = cutoff) as the same with `spotlight radius A falloff
+   A tightness 0`, a directional light as a `parallel` light of colour E/pi placed outside the
+   scene's bounds (POV-Ray's parallel lights are shadowed only by what lies between the
+   surface and the plane through their location); `assumed_gamma 1.0`, `ambient_light 0`,
+   ambient 0. Not exportable (PT_ERROR_UNSUPPORTED with file:line): a thin-lens camera
+   (POV-Ray's focal blur stops adaptively after a few aperture samples: no exact twin), fuzzy
+   metal, emitting triangles, boxes or meshes, a spot light whose beam is narrower than its
+   cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle, pdftrace's linear in
+   the angle); and every scene pt_scenefile_build refuses (the exporter runs
    the build first, so it never writes what pdftrace would not render, such as a sphere under
    a non-uniform scale), or one that would need a non-finite number. The scene's file name is
    the only text from input in the output, in comments, escaped by pt_scenefile_escape.
@@ -119,7 +138,9 @@
    binary little-endian PLY files "<xml without .xml>.N.ply" beside the XML (vertex normals
    kept, else face_normals); Lambertian as two-sided `diffuse`, a mirror as a two-sided
    `conductor` of material "none", glass as `dielectric`, an emitter as a one-sided `area`
-   light on its shape with a black bsdf, the background as a `constant` emitter. Refused with
+   light on its shape with a black bsdf, the background as a `constant` emitter, the point,
+   spot and directional lights as Mitsuba's `point`, `spot` (to_world a lookat along the axis)
+   and `directional` emitters (the same units and falloff). Refused with
    file:line and the reason (PT_ERROR_UNSUPPORTED, nothing written): fuzzy metal, the 3-D
    checker, two-sided emitters, an albedo above 1, a dielectric of ior 1, and, as for
    POV-Ray, every scene the build refuses and one that needs a non-finite number.
@@ -177,6 +198,17 @@ typedef struct pt_scenefile_shape {
     int line;                    /* line of the statement, for messages */
 } pt_scenefile_shape;
 
+/* A point_light, spot_light or directional_light statement. desc is the light as written:
+   position and direction in the statement's own space (the spot's direction is target -
+   position), the spot's cutoff and beam angles with their defaults filled in; the build hands
+   it to pt_scene_add_light under the transform. */
+typedef struct pt_scenefile_light {
+    pt_light_desc desc;
+    pt_transform transform;      /* object to world, in effect when the light was read */
+    double transform_d[3][4];    /* the same composed in double (transform is it rounded) */
+    int line;                    /* line of the statement, for messages */
+} pt_scenefile_light;
+
 typedef struct pt_scenefile {
     char file[256];              /* the name used in messages */
     int width, height, samples_per_pixel, max_depth;
@@ -196,6 +228,7 @@ typedef struct pt_scenefile {
     pt_scenefile_checker *checkers; int checker_count;
     pt_scenefile_material *materials; int material_count;
     pt_scenefile_shape *shapes; int shape_count;
+    pt_scenefile_light *lights; int light_count; /* in the file's order (their ids in the scene) */
     pt_obj_mesh *meshes; int mesh_count; /* one per distinct OBJ file: mesh statements naming the
                                             same file share it (shapes[i].mesh) */
     uint64_t mesh_bytes;         /* bytes the meshes hold (positions, normals, indices) */
@@ -251,9 +284,10 @@ PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_
    under the scene's current transform (pt_scene_set_transform), as pt_scene_add_mesh does.
    Returns the first primitive's id, or an error code with a message in err. */
 PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char *err, size_t err_size);
-/* Builds a committed scene and fills *render (size, spp, depth, strategy, sampler, indirect
-   paths, seed, camera, background, guiding and its budget, alpha and memory bound; other fields
-   zero) with the public API. On failure *scene is NULL. */
+/* Builds a committed scene (the shapes, then the lights in the file's order, so lights[i] is
+   the scene's light i) and fills *render (size, spp, depth, strategy, sampler, indirect paths,
+   seed, camera, background, guiding and its budget, alpha and memory bound; other fields zero)
+   with the public API. On failure *scene is NULL. */
 PTDEF int pt_scenefile_build(const pt_scenefile *desc, pt_scene **scene, pt_render_desc *render, char *err,
                              size_t err_size);
 
@@ -368,6 +402,7 @@ static int pt__sf_isfinite(float f)
 #define PT__SF_MAX_TOKENS 40
 #define PT__SF_MAX_VALUE 1e7
 #define PT__SF_MAX_SHAPES 1000000
+#define PT__SF_MAX_LIGHTS 65536
 #define PT__SF_MAX_FILE (256u * 1024u * 1024u)
 #define PT__SF_MAX_MESH_VERTICES 8000000u
 
@@ -504,6 +539,7 @@ PTDEF void pt_scenefile_free(pt_scenefile *d)
     }
     PT_FREE(d->meshes);
     PT_FREE(d->shapes);
+    PT_FREE(d->lights);
     PT_FREE(d->materials);
     PT_FREE(d->checkers);
     memset(d, 0, sizeof *d);
@@ -1557,6 +1593,72 @@ static int pt__sf_mesh(pt__sf_parser *p)
     return PT_OK;
 }
 
+/* point_light X Y Z R G B | spot_light X Y Z TX TY TZ R G B [CUTOFF [BEAM]] |
+   directional_light DX DY DZ R G B. Checked here as pt_scene_add_light checks them, so that
+   a bad light is a file:line error at load; the transform is checked by the build. */
+static int pt__sf_light(pt__sf_parser *p, const char *kw)
+{
+    pt_scenefile *d = p->d;
+    pt_scenefile_light l, *nl;
+    pt_light_desc *ld = &l.desc;
+    char what[48];
+    int rc;
+    memset(&l, 0, sizeof l);
+    ld->type = kw[0] == 'p' ? PT_LIGHT_POINT : kw[0] == 's' ? PT_LIGHT_SPOT : PT_LIGHT_DIRECTIONAL;
+    if (ld->type == PT_LIGHT_DIRECTIONAL) {
+        snprintf(what, sizeof what, "%s direction", kw);
+        if ((rc = pt__sf_vec(p, what, &ld->direction)) != PT_OK) return rc;
+        if (!(pt_length2(ld->direction) > 0.0f))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: the direction has zero length", kw);
+    } else {
+        snprintf(what, sizeof what, "%s position", kw);
+        if ((rc = pt__sf_vec(p, what, &ld->position)) != PT_OK) return rc;
+    }
+    if (ld->type == PT_LIGHT_SPOT) {
+        pt_vec3 target;
+        if ((rc = pt__sf_vec(p, "spot_light target", &target)) != PT_OK) return rc;
+        ld->direction = pt_sub(target, ld->position);
+        if (!(pt_length2(ld->direction) > 0.0f))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "spot_light: the target equals the position (no direction)");
+    }
+    snprintf(what, sizeof what, "%s %s", kw, ld->type == PT_LIGHT_DIRECTIONAL ? "irradiance" : "intensity");
+    if ((rc = pt__sf_color(p, what, &ld->intensity)) != PT_OK) return rc;
+    if (ld->intensity.x == 0.0f && ld->intensity.y == 0.0f && ld->intensity.z == 0.0f)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: all zero (a light must emit)", what);
+    if (ld->type == PT_LIGHT_SPOT) {
+        ld->cutoff_angle = 20.0f; /* pt_light_desc's defaults, written out for the exporters */
+        if (p->pos < p->ntok) {
+            if ((rc = pt__sf_num(p, "spot_light cutoff_angle", &ld->cutoff_angle)) != PT_OK) return rc;
+            if (!(ld->cutoff_angle > 0.0f && ld->cutoff_angle <= 90.0f))
+                return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "spot_light cutoff_angle: must be in (0, 90] degrees, got '%s'",
+                                   p->tok[p->pos - 1]);
+        }
+        ld->beam_width = 0.75f * ld->cutoff_angle;
+        if (p->pos < p->ntok) {
+            if ((rc = pt__sf_num(p, "spot_light beam_width", &ld->beam_width)) != PT_OK) return rc;
+            if (!(ld->beam_width > 0.0f && ld->beam_width <= ld->cutoff_angle))
+                return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT,
+                                   "spot_light beam_width: must be in (0, cutoff_angle = %g] degrees, got '%s'",
+                                   (double)ld->cutoff_angle, p->tok[p->pos - 1]);
+        }
+    }
+    if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+    if (d->light_count >= PT__SF_MAX_LIGHTS)
+        return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many lights (at most %d)", PT__SF_MAX_LIGHTS);
+    l.transform = p->xf;
+    memcpy(l.transform_d, p->xfd, sizeof l.transform_d);
+    l.line = p->line;
+    /* capacity as for shapes: 16, then doubled whenever the count reaches a power of two >= 16 */
+    if (d->light_count == 0 || (d->light_count >= 16 && (d->light_count & (d->light_count - 1)) == 0)) {
+        size_t ncap = d->light_count ? (size_t)d->light_count * 2u : 16u;
+        nl = (pt_scenefile_light *)PT_REALLOC(d->lights, ncap * sizeof *nl);
+        if (!nl) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+        d->lights = nl;
+    }
+    d->lights[d->light_count++] = l;
+    return PT_OK;
+}
+
 /* xfd = t xfd in double: a translation of 1e7 after a rotation keeps the object's small
    coordinates exact, where the float product rounds them to 1 unit. */
 static void pt__sf_xfd_identity(double x[3][4])
@@ -1634,6 +1736,8 @@ static int pt__sf_statement(pt__sf_parser *p)
         if ((rc = pt__sf_shape(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "mesh")) {
         if ((rc = pt__sf_mesh(p)) != PT_OK) return rc;
+    } else if (!strcmp(kw, "point_light") || !strcmp(kw, "spot_light") || !strcmp(kw, "directional_light")) {
+        if ((rc = pt__sf_light(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "identity")) {
         p->xf = pt_transform_identity();
         pt__sf_xfd_identity(p->xfd);
@@ -1735,15 +1839,19 @@ PTDEF int pt_scenefile_load_ex(const char *path, const pt_scenefile_options *opt
     return rc;
 }
 
-/* A shape's transform in double: transform_d when it rounds to transform (as the parser makes
-   them), else transform itself (a pt_scenefile filled in by hand). */
-static void pt__sf_shape_xfd(const pt_scenefile_shape *sh, double x[3][4])
+/* A shape's or light's transform in double: transform_d when it rounds to transform (as the
+   parser makes them), else transform itself (a pt_scenefile filled in by hand). */
+static void pt__sf_xfd(const pt_transform *t, const double td[3][4], double x[3][4])
 {
     int i, j, same = 1;
     for (i = 0; i < 3; ++i)
-        for (j = 0; j < 4; ++j) same &= (float)sh->transform_d[i][j] == sh->transform.m[i][j];
+        for (j = 0; j < 4; ++j) same &= (float)td[i][j] == t->m[i][j];
     for (i = 0; i < 3; ++i)
-        for (j = 0; j < 4; ++j) x[i][j] = same ? sh->transform_d[i][j] : (double)sh->transform.m[i][j];
+        for (j = 0; j < 4; ++j) x[i][j] = same ? td[i][j] : (double)t->m[i][j];
+}
+static void pt__sf_shape_xfd(const pt_scenefile_shape *sh, double x[3][4])
+{
+    pt__sf_xfd(&sh->transform, sh->transform_d, x);
 }
 static void pt__sf_dbounds(double x[3][4], pt_vec3 p, double pad, double lo[3], double hi[3])
 {
@@ -1798,13 +1906,13 @@ static int pt__sf_origin(const pt_scenefile *d, double c[3])
     for (k = 0; k < 3; ++k) c[k] = (double)(float)c[k];
     return 1;
 }
-/* The float transform of shape sh relative to origin c: the double translation minus c, rounded once. */
-static pt_transform pt__sf_local_xf(const pt_scenefile_shape *sh, const double c[3])
+/* The float transform (t, td) relative to origin c: the double translation minus c, rounded once. */
+static pt_transform pt__sf_local_xf(const pt_transform *tf, const double td[3][4], const double c[3])
 {
     double x[3][4];
     pt_transform t;
     int i, j;
-    pt__sf_shape_xfd(sh, x);
+    pt__sf_xfd(tf, td, x);
     for (i = 0; i < 3; ++i) {
         for (j = 0; j < 3; ++j) t.m[i][j] = (float)x[i][j];
         t.m[i][3] = (float)(x[i][3] - c[i]);
@@ -1854,7 +1962,7 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         const pt_scenefile_shape *sh = &d->shapes[i];
         int m = mat[sh->material], id;
         pt_transform local;
-        if (far) local = pt__sf_local_xf(sh, origin);
+        if (far) local = pt__sf_local_xf(&sh->transform, sh->transform_d, origin);
         if ((rc = pt_scene_set_transform(s, far ? &local : &sh->transform)) != PT_OK) {
             rc = pt__sf_failf(err, err_size, d->file, sh->line, rc, "%s", pt_scene_error_message(s));
             break;
@@ -1870,6 +1978,18 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         }
         }
         if (id < 0) rc = pt__sf_failf(err, err_size, d->file, sh->line, id, "%s", pt_scene_error_message(s));
+    }
+    for (i = 0; i < d->light_count && rc == PT_OK; ++i) { /* placed as the shapes are */
+        const pt_scenefile_light *l = &d->lights[i];
+        pt_transform local;
+        int id;
+        if (far) local = pt__sf_local_xf(&l->transform, l->transform_d, origin);
+        if ((rc = pt_scene_set_transform(s, far ? &local : &l->transform)) != PT_OK) {
+            rc = pt__sf_failf(err, err_size, d->file, l->line, rc, "%s", pt_scene_error_message(s));
+            break;
+        }
+        id = pt_scene_add_light(s, &l->desc);
+        if (id < 0) rc = pt__sf_failf(err, err_size, d->file, l->line, id, "%s", pt_scene_error_message(s));
     }
     if (rc == PT_OK) pt_scene_set_transform(s, NULL);
     if (rc == PT_OK && (rc = pt_scene_commit(s)) != PT_OK)
@@ -1937,6 +2057,7 @@ typedef struct pt__pov {
     FILE *f;                  /* NULL: the checking pass */
     const pt_scenefile *d;
     double fd, hair;          /* fade distance, light offset */
+    double centre[3], diag;   /* the shapes' bounds: centre and diagonal */
     int grid;
     int line;                 /* the statement being written (0: none), for messages */
     int bad_line, bad;        /* the first non-finite number: where */
@@ -2169,6 +2290,78 @@ static void pt__pov_header(pt__pov *w, const pt_pov_options *o, int width, int h
     pt__pov_put(w, " }\n\n");
 }
 
+/* The cone angles of a spot as pdftrace resolves them (0: the defaults of pt_light_desc). */
+static void pt__sf_spot_angles(const pt_light_desc *l, float *cutoff, float *beam)
+{
+    *cutoff = l->cutoff_angle == 0.0f ? 20.0f : l->cutoff_angle;
+    *beam = l->beam_width == 0.0f ? 0.75f * *cutoff : l->beam_width;
+}
+
+/* A point, hard-cone spot or directional light (pt__pov_refuse has refused the others). A
+   point of intensity I is the fade trick's point light, colour I/(2 pi fd^2) (docs/povray.md);
+   a spot adds a cone of constant intensity out to its cutoff (tightness 0: no cos^n factor;
+   radius = falloff: no smoothstep ramp), aimed along the axis from a point_at far enough away
+   for its printed digits to keep the direction. A directional light of irradiance E is a
+   parallel light of colour E/pi (POV's diffuse has no 1/pi: the recipe folds it into the
+   lights); POV-Ray traces its shadow rays only to the plane through its location, normal to
+   the light, so the location is put at least two bounds diagonals behind the scene's centre. */
+static void pt__pov_light(pt__pov *w, const pt_scenefile_light *l)
+{
+    const double inv_pi = 0.31830988618379067154;
+    const pt_light_desc *ld = &l->desc;
+    pt_vec3 pos = pt_transform_point(&l->transform, ld->position);
+    pt_vec3 dir = pt_transform_vector(&l->transform, ld->direction);
+    double len = sqrt((double)dir.x * dir.x + (double)dir.y * dir.y + (double)dir.z * dir.z), a[3], far;
+    a[0] = (double)dir.x / len; /* len == 0 (a hand-made description) gives nan: caught by pt__pov_g */
+    a[1] = (double)dir.y / len;
+    a[2] = (double)dir.z / len;
+    w->line = l->line;
+    pt__pov_put(w, "// %s:%d\nlight_source { ", w->name, l->line);
+    if (ld->type == PT_LIGHT_DIRECTIONAL) {
+        far = 2.0 * w->diag + fabs(w->centre[0]) + fabs(w->centre[1]) + fabs(w->centre[2]); /* digits, as for a spot */
+        pt__pov_put(w, "<");
+        pt__pov_g(w, w->centre[0] - far * a[0]);
+        pt__pov_put(w, ", ");
+        pt__pov_g(w, w->centre[1] - far * a[1]);
+        pt__pov_put(w, ", ");
+        pt__pov_g(w, w->centre[2] - far * a[2]);
+        pt__pov_put(w, ">, ");
+        pt__pov_rgb(w, ld->intensity, inv_pi);
+        pt__pov_put(w, " parallel point_at <");
+        pt__pov_g(w, w->centre[0]);
+        pt__pov_put(w, ", ");
+        pt__pov_g(w, w->centre[1]);
+        pt__pov_put(w, ", ");
+        pt__pov_g(w, w->centre[2]);
+        pt__pov_put(w, "> }\n");
+        return;
+    }
+    pt__pov_v(w, pos);
+    pt__pov_put(w, ", ");
+    pt__pov_rgb(w, ld->intensity, 0.5 * inv_pi / (w->fd * w->fd));
+    if (ld->type == PT_LIGHT_SPOT) {
+        float cutoff, beam;
+        double m = fabs((double)pos.x) > fabs((double)pos.y) ? fabs((double)pos.x) : fabs((double)pos.y);
+        if (fabs((double)pos.z) > m) m = fabs((double)pos.z);
+        far = w->diag + m; /* the target's 9 digits keep the axis to ~1e-8 */
+        pt__sf_spot_angles(ld, &cutoff, &beam);
+        pt__pov_put(w, " spotlight point_at <");
+        pt__pov_g(w, (double)pos.x + far * a[0]);
+        pt__pov_put(w, ", ");
+        pt__pov_g(w, (double)pos.y + far * a[1]);
+        pt__pov_put(w, ", ");
+        pt__pov_g(w, (double)pos.z + far * a[2]);
+        pt__pov_put(w, "> radius ");
+        pt__pov_g(w, (double)cutoff);
+        pt__pov_put(w, " falloff ");
+        pt__pov_g(w, (double)cutoff);
+        pt__pov_put(w, " tightness 0");
+    }
+    pt__pov_put(w, " fade_distance ");
+    pt__pov_g(w, w->fd);
+    pt__pov_put(w, " fade_power 2 }\n");
+}
+
 static void pt__pov_body(pt__pov *w, const pt_pov_options *o, int width, int height)
 {
     const pt_scenefile *d = w->d;
@@ -2214,6 +2407,7 @@ static void pt__pov_body(pt__pov *w, const pt_pov_options *o, int width, int hei
                 pt__pov_put(w, " }\n");
         }
     }
+    for (i = 0; i < d->light_count; ++i) pt__pov_light(w, &d->lights[i]);
 }
 
 /* What the export refuses, before anything is written: every scene the build refuses (the
@@ -2246,6 +2440,17 @@ static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *er
         if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
+    }
+    for (i = 0; i < d->light_count; ++i) {
+        const pt_scenefile_light *l = &d->lights[i];
+        float cutoff, beam;
+        pt__sf_spot_angles(&l->desc, &cutoff, &beam);
+        if (l->desc.type == PT_LIGHT_SPOT && beam < cutoff)
+            return pt__sf_failf(err, err_size, d->file, l->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: a spot light with a beam of %g degrees inside a cutoff of %g has no "
+                                "exact POV-Ray equivalent (POV-Ray's falloff is a smoothstep in the cosine of the angle, "
+                                "pdftrace's linear in the angle, as Mitsuba 3's); give it beam = cutoff (a hard-edged "
+                                "cone, exported exactly)", (double)beam, (double)cutoff);
     }
     return PT_OK;
 }
@@ -2295,6 +2500,10 @@ static void pt__pov_setup(pt__pov *w, const pt_scenefile *d, const pt_pov_option
     if (!(diag > 0) || !pt__sf_finite(diag)) diag = 1.0;
     memset(w, 0, sizeof *w);
     w->d = d;
+    w->diag = diag;
+    w->centre[0] = d->shape_count ? 0.5 * (double)lo.x + 0.5 * (double)hi.x : 0.0;
+    w->centre[1] = d->shape_count ? 0.5 * (double)lo.y + 0.5 * (double)hi.y : 0.0;
+    w->centre[2] = d->shape_count ? 0.5 * (double)lo.z + 0.5 * (double)hi.z : 0.0;
     w->grid = o && o->light_grid > 0 ? o->light_grid : d->pov_light_grid > 0 ? d->pov_light_grid : 16;
     if (w->grid > 64) w->grid = 64;
     w->fd = 1e-4 * diag;   /* relative error (fd/d)^2 */
@@ -2752,6 +2961,62 @@ static void pt__mts_header(pt__mts *w)
     }
 }
 
+/* A point, spot or directional light, in world space (the transform in double): Mitsuba 3's
+   `point` (intensity in W/sr), `spot` (its cone along +z of to_world, aimed by a lookat from
+   the position to position + axis; the same linear falloff in the angle from beam_width to
+   cutoff_angle, in degrees) and `directional` (`direction` the way the light travels,
+   irradiance in W/m^2): the same units and profiles as pdftrace's (docs/mitsuba.md). */
+static void pt__mts_light(pt__mts *w, const pt_scenefile_light *l)
+{
+    const pt_light_desc *ld = &l->desc;
+    double x[3][4], p[3], a[3], len;
+    int i;
+    pt__sf_xfd(&l->transform, l->transform_d, x);
+    pt__mts_point(x, ld->position, p);
+    pt__mts_vector(x, ld->direction, a);
+    len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (i = 0; i < 3; ++i) a[i] /= len; /* len == 0 (a hand-made description) gives nan: refused */
+    w->line = l->line;
+    pt__mts_put(w, "  <!-- %s:%d -->\n", w->name, l->line);
+    if (ld->type == PT_LIGHT_POINT) {
+        pt__mts_put(w, "  <emitter type=\"point\">");
+        pt__mts_point_el(w, "position", p[0], p[1], p[2]);
+        pt__mts_rgb(w, "intensity", ld->intensity);
+    } else if (ld->type == PT_LIGHT_SPOT) {
+        float cutoff, beam;
+        /* up: the world axis least aligned with the cone's (lookat needs one not parallel to
+           it; the cone is round, so which one does not matter) */
+        int k = fabs(a[0]) <= fabs(a[1]) && fabs(a[0]) <= fabs(a[2]) ? 0 : fabs(a[1]) <= fabs(a[2]) ? 1 : 2;
+        pt__sf_spot_angles(ld, &cutoff, &beam);
+        pt__mts_put(w, "  <emitter type=\"spot\"><transform name=\"to_world\"><lookat origin=\"");
+        for (i = 0; i < 3; ++i) {
+            pt__mts_g(w, p[i]);
+            pt__mts_put(w, i < 2 ? ", " : "\" target=\"");
+        }
+        for (i = 0; i < 3; ++i) {
+            pt__mts_g(w, p[i] + a[i]);
+            pt__mts_put(w, i < 2 ? ", " : "\" up=\"");
+        }
+        pt__mts_put(w, "%s\"/></transform>", k == 0 ? "1, 0, 0" : k == 1 ? "0, 1, 0" : "0, 0, 1");
+        pt__mts_rgb(w, "intensity", ld->intensity);
+        pt__mts_put(w, "<float name=\"cutoff_angle\" value=\"");
+        pt__mts_f(w, cutoff);
+        pt__mts_put(w, "\"/><float name=\"beam_width\" value=\"");
+        pt__mts_f(w, beam);
+        pt__mts_put(w, "\"/>");
+    } else {
+        pt__mts_put(w, "  <emitter type=\"directional\"><vector name=\"direction\" x=\"");
+        pt__mts_g(w, a[0]);
+        pt__mts_put(w, "\" y=\"");
+        pt__mts_g(w, a[1]);
+        pt__mts_put(w, "\" z=\"");
+        pt__mts_g(w, a[2]);
+        pt__mts_put(w, "\"/>");
+        pt__mts_rgb(w, "irradiance", ld->intensity);
+    }
+    pt__mts_put(w, "</emitter>\n");
+}
+
 static void pt__mts_body(pt__mts *w)
 {
     const pt_scenefile *d = w->d;
@@ -2775,6 +3040,7 @@ static void pt__mts_body(pt__mts *w)
         default: pt__mts_ply_shape(w, job++);
         }
     }
+    for (i = 0; i < d->light_count; ++i) pt__mts_light(w, &d->lights[i]);
     pt__mts_put(w, "</scene>\n");
 }
 

@@ -1,6 +1,7 @@
 /* test_scenefile.c - pdftrace_scene.h: pt_obj_load and pt_scene_add_obj against the two-step path
    they replace (read the file, pt_obj_parse, pt_scene_add_mesh), the camera statement's depth of
-   field, and what an untrusted scene file can do: which files it may read (regular files inside
+   field, the guiding and light statements (lights against the same lights added through the
+   API, under transforms and far from the origin), and what an untrusted scene file can do: which files it may read (regular files inside
    its directory), how much memory its meshes and its size may take, what its errors echo. The
    other statements are tested by validation/ptv.c's runner and the fuzz corpus. */
 #define _POSIX_C_SOURCE 200809L /* mkfifo, symlink, alarm */
@@ -588,6 +589,272 @@ static void guiding_statements(test_ctx *t)
     }
 }
 
+/* ---- point_light, spot_light, directional_light */
+
+#define L_SCENE_HEAD                                                                                          \
+    "size 24 16\nspp 4\nmax_depth 3\ncamera look_from 0 2 -6 look_at 0 0.5 0 vfov 45\n"                        \
+    "material white lambertian 0.7 0.7 0.7\nmaterial red lambertian 0.7 0.2 0.2\n"                           \
+    "quad -4 0 -4  0 0 8  8 0 0  white\nsphere 0 0.8 0 0.8 red\n"
+/* The lights of L_SCENE, line by line (from line 9): a point light, a spot under a translation
+   and a rotation, one with the default cone under a scale added to them, a directional light
+   under a rotation alone. */
+#define L_SCENE                                                                                               \
+    L_SCENE_HEAD "point_light 1.5 3 -1  4 5 6\n"                                                               \
+    "translate 0.5 0 0\nrotate 0 1 0 30\nspot_light 0 3 0  0 0 1  10 9 8  35 20\n"                             \
+    "scale 2 2 2\nspot_light -0.5 1.5 -1  -0.5 0 -1  6 6 6\n"                                                   \
+    "identity\nrotate 1 0 0 20\ndirectional_light 0 -1 0  0.5 0.4 0.3\n"
+
+/* Renders a committed scene with the scene file's render settings, one thread. */
+static int l_render(test_ctx *t, pt_scene *scene, const pt_render_desc *rd, pt_image *img)
+{
+    pt_render_desc d = *rd;
+    pt_render_stats st;
+    int rc;
+    d.threads = 1;
+    rc = pt_render_image(scene, &d, img, &st);
+    return CHECK(t, rc == PT_OK, "render: %s", st.error);
+}
+
+/* The three statements read into pt_scenefile (types, lines, the spot's direction target -
+   position, its cone with the defaults written out) and built as the same lights added through
+   the API under the same transforms: pt_scene_get_light agrees and the images are identical;
+   and a light moves with the transform (it is not the untransformed scene's image). */
+static void light_statements(test_ctx *t)
+{
+    pt_scenefile sf;
+    pt_scene *file_scene = NULL, *api = NULL;
+    pt_render_desc rd;
+    pt_image a = {0, 0, NULL}, b = {0, 0, NULL};
+    pt_transform x1, x2, x3;
+    pt_light_desc l[4], got;
+    char err[512];
+    int rc, i, white, red;
+    rc = parse_text(L_SCENE, NULL, &sf, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "parse: %s", err)) return;
+    if (!CHECK(t, sf.light_count == 4 && sf.lights != NULL, "%d lights", sf.light_count)) goto done;
+    CHECK(t, sf.lights[0].desc.type == PT_LIGHT_POINT && sf.lights[1].desc.type == PT_LIGHT_SPOT &&
+                 sf.lights[2].desc.type == PT_LIGHT_SPOT && sf.lights[3].desc.type == PT_LIGHT_DIRECTIONAL,
+          "types %d %d %d %d", (int)sf.lights[0].desc.type, (int)sf.lights[1].desc.type, (int)sf.lights[2].desc.type,
+          (int)sf.lights[3].desc.type);
+    CHECK(t, sf.lights[0].line == 9 && sf.lights[1].line == 12 && sf.lights[2].line == 14 && sf.lights[3].line == 17,
+          "lines %d %d %d %d", sf.lights[0].line, sf.lights[1].line, sf.lights[2].line, sf.lights[3].line);
+    CHECK(t, sf.lights[1].desc.direction.x == 0 && sf.lights[1].desc.direction.y == -3 && sf.lights[1].desc.direction.z == 1 &&
+                 sf.lights[1].desc.cutoff_angle == 35 && sf.lights[1].desc.beam_width == 20,
+          "spot 1: direction (%g %g %g), cone %g %g", (double)sf.lights[1].desc.direction.x,
+          (double)sf.lights[1].desc.direction.y, (double)sf.lights[1].desc.direction.z,
+          (double)sf.lights[1].desc.cutoff_angle, (double)sf.lights[1].desc.beam_width);
+    CHECK(t, sf.lights[2].desc.cutoff_angle == 20 && sf.lights[2].desc.beam_width == 15, "default cone %g %g",
+          (double)sf.lights[2].desc.cutoff_angle, (double)sf.lights[2].desc.beam_width);
+    CHECK(t, sf.lights[3].desc.intensity.x == 0.5f && sf.lights[3].desc.intensity.z == 0.3f &&
+                 sf.lights[3].desc.direction.y == -1, "directional light as read");
+
+    /* the same scene through the API: transforms composed as the parser documents (each one
+       applied after those before it) */
+    api = pt_scene_create();
+    white = pt_scene_add_lambertian(api, pt_v3(0.7f, 0.7f, 0.7f));
+    red = pt_scene_add_lambertian(api, pt_v3(0.7f, 0.2f, 0.2f));
+    pt_scene_add_quad(api, pt_v3(-4, 0, -4), pt_v3(0, 0, 8), pt_v3(8, 0, 0), white);
+    pt_scene_add_sphere(api, pt_v3(0, 0.8f, 0), 0.8f, red);
+    memset(l, 0, sizeof l);
+    l[0].type = PT_LIGHT_POINT;
+    l[0].position = pt_v3(1.5f, 3, -1);
+    l[0].intensity = pt_v3(4, 5, 6);
+    l[1].type = PT_LIGHT_SPOT;
+    l[1].position = pt_v3(0, 3, 0);
+    l[1].direction = pt_v3(0, -3, 1);
+    l[1].intensity = pt_v3(10, 9, 8);
+    l[1].cutoff_angle = 35;
+    l[1].beam_width = 20;
+    l[2].type = PT_LIGHT_SPOT;
+    l[2].position = pt_v3(-0.5f, 1.5f, -1);
+    l[2].direction = pt_v3(0, -1.5f, 0);
+    l[2].intensity = pt_v3(6, 6, 6);
+    l[3].type = PT_LIGHT_DIRECTIONAL;
+    l[3].direction = pt_v3(0, -1, 0);
+    l[3].intensity = pt_v3(0.5f, 0.4f, 0.3f);
+    x1 = pt_transform_mul(pt_transform_rotate(pt_v3(0, 1, 0), 30), pt_transform_translate(pt_v3(0.5f, 0, 0)));
+    x2 = pt_transform_mul(pt_transform_scale(pt_v3(2, 2, 2)), x1);
+    x3 = pt_transform_rotate(pt_v3(1, 0, 0), 20);
+    rc = pt_scene_add_light(api, &l[0]);
+    rc = rc >= 0 ? pt_scene_set_transform(api, &x1) : rc;
+    rc = rc >= 0 ? pt_scene_add_light(api, &l[1]) : rc;
+    rc = rc >= 0 ? pt_scene_set_transform(api, &x2) : rc;
+    rc = rc >= 0 ? pt_scene_add_light(api, &l[2]) : rc;
+    rc = rc >= 0 ? pt_scene_set_transform(api, &x3) : rc;
+    rc = rc >= 0 ? pt_scene_add_light(api, &l[3]) : rc;
+    pt_scene_set_transform(api, NULL);
+    if (!CHECK(t, rc >= 0 && pt_scene_commit(api) == PT_OK, "API scene: %s", pt_scene_error_message(api))) goto done;
+    rc = pt_scenefile_build(&sf, &file_scene, &rd, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "build: %s", err)) goto done;
+    for (i = 0; i < 4; ++i) {
+        pt_light_desc want;
+        if (!CHECK(t, pt_scene_get_light(file_scene, i, &got) == PT_OK && pt_scene_get_light(api, i, &want) == PT_OK,
+                   "light %d missing", i))
+            continue;
+        CHECK(t, !memcmp(&got, &want, sizeof got), "light %d differs from the API's: position (%g %g %g) vs (%g %g %g)",
+              i, (double)got.position.x, (double)got.position.y, (double)got.position.z, (double)want.position.x,
+              (double)want.position.y, (double)want.position.z);
+    }
+    /* by hand: translate then rotate 30 degrees about y maps (0, 3, 0) to (0.5 cos 30, 3, -0.5 sin 30)
+       (pt_transform_rotate is right-handed: x turns towards -z) */
+    if (pt_scene_get_light(file_scene, 1, &got) == PT_OK)
+        CHECK(t, fabs(got.position.x - 0.5 * cos(TU_PI / 6)) < 1e-6 && fabs(got.position.y - 3) < 1e-6 &&
+                     fabs(got.position.z + 0.5 * sin(TU_PI / 6)) < 1e-6,
+              "spot 1 at (%g %g %g)", (double)got.position.x, (double)got.position.y, (double)got.position.z);
+    if (pt_scene_get_light(file_scene, 3, &got) == PT_OK) /* (0, -1, 0) turned 20 degrees about x */
+        CHECK(t, fabs(got.direction.x) < 1e-6 && fabs(got.direction.y + cos(TU_PI / 9)) < 1e-6 &&
+                     fabs(got.direction.z + sin(TU_PI / 9)) < 1e-6,
+              "directional light travels along (%g %g %g)", (double)got.direction.x, (double)got.direction.y,
+              (double)got.direction.z);
+    if (l_render(t, file_scene, &rd, &a) && l_render(t, api, &rd, &b)) {
+        size_t n = 3u * (size_t)a.width * (size_t)a.height, k;
+        double sum = 0;
+        for (k = 0; k < n; ++k) sum += a.rgb[k];
+        CHECK(t, !memcmp(a.rgb, b.rgb, n * sizeof(float)), "the file's image differs from the API scene's");
+        CHECK(t, sum > 0, "the lights lit nothing");
+    }
+    pt_image_free(&a);
+    pt_image_free(&b);
+    pt_scene_destroy(file_scene);
+    file_scene = NULL;
+    /* without the transforms the lights sit elsewhere: a different image */
+    {
+        pt_scenefile plain;
+        const char *text = L_SCENE_HEAD "point_light 1.5 3 -1  4 5 6\nspot_light 0 3 0  0 0 1  10 9 8  35 20\n"
+                                        "spot_light -0.5 1.5 -1  -0.5 0 -1  6 6 6\ndirectional_light 0 -1 0  0.5 0.4 0.3\n";
+        rc = parse_text(text, NULL, &plain, err, sizeof err);
+        if (CHECK(t, rc == PT_OK, "parse: %s", err)) {
+            rc = pt_scenefile_build(&plain, &file_scene, &rd, err, sizeof err);
+            if (CHECK(t, rc == PT_OK, "build: %s", err) && l_render(t, file_scene, &rd, &a) && l_render(t, api, &rd, &b))
+                CHECK(t, memcmp(a.rgb, b.rgb, 3u * (size_t)a.width * (size_t)a.height * sizeof(float)) != 0,
+                      "the transforms changed nothing");
+            pt_scenefile_free(&plain);
+        }
+    }
+done:
+    pt_image_free(&a);
+    pt_image_free(&b);
+    pt_scene_destroy(file_scene);
+    pt_scene_destroy(api);
+    pt_scenefile_free(&sf);
+}
+
+/* Every malformed light statement is a file:line error at load naming the statement (and the
+   description is left empty); a light the transform carries out of float's range is one at build. */
+static void light_statement_errors(test_ctx *t)
+{
+    static const struct { const char *line, *msg; } bad[] = {
+        {"point_light 0 3 0  1 1\n", "t.scene:3: point_light intensity: missing number (line ends early)"},
+        {"point_light 0 3\n", "t.scene:3: point_light position: missing number (line ends early)"},
+        {"point_light 0 3 0  1 1 1 1\n", "t.scene:3: unexpected '1' after the end of the 'point_light' statement"},
+        {"point_light 0 x 0  1 1 1\n", "t.scene:3: point_light position: 'x' is not a number"},
+        {"point_light 0 nan 0  1 1 1\n", "t.scene:3: point_light position: 'nan' is not finite"},
+        {"point_light 2e7 3 0  1 1 1\n", "t.scene:3: point_light position: 2e7 is out of range (magnitude at most 1e7)"},
+        {"point_light 0 3 0  1 -1 1\n", "t.scene:3: point_light intensity: colour components must be >= 0"},
+        {"point_light 0 3 0  0 0 0\n", "t.scene:3: point_light intensity: all zero (a light must emit)"},
+        {"spot_light 0 3 0  0 0 0\n", "t.scene:3: spot_light intensity: missing number (line ends early)"},
+        {"spot_light 0 3 0  0 0\n", "t.scene:3: spot_light target: missing number (line ends early)"},
+        {"spot_light 1 2 3  1 2 3  1 1 1\n", "t.scene:3: spot_light: the target equals the position (no direction)"},
+        {"spot_light 0 3 0  0 0 0  1 -1 1\n", "t.scene:3: spot_light intensity: colour components must be >= 0"},
+        {"spot_light 0 3 0  0 0 0  0 0 0\n", "t.scene:3: spot_light intensity: all zero (a light must emit)"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  0\n", "t.scene:3: spot_light cutoff_angle: must be in (0, 90] degrees, got '0'"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  -10\n", "t.scene:3: spot_light cutoff_angle: must be in (0, 90] degrees, got '-10'"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  90.5\n", "t.scene:3: spot_light cutoff_angle: must be in (0, 90] degrees, got '90.5'"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  wide\n", "t.scene:3: spot_light cutoff_angle: 'wide' is not a number"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  30 40\n", "t.scene:3: spot_light beam_width: must be in (0, cutoff_angle = 30] degrees, got '40'"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  30 0\n", "t.scene:3: spot_light beam_width: must be in (0, cutoff_angle = 30] degrees, got '0'"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  30 inf\n", "t.scene:3: spot_light beam_width: 'inf' is not finite"},
+        {"spot_light 0 3 0  0 0 0  1 1 1  30 20 5\n", "t.scene:3: unexpected '5' after the end of the 'spot_light' statement"},
+        {"directional_light 0 0 0  1 1 1\n", "t.scene:3: directional_light: the direction has zero length"},
+        {"directional_light 1e-30 0 0  1 1 1\n", "t.scene:3: directional_light: the direction has zero length"},
+        {"directional_light 0 -1 0  1 1\n", "t.scene:3: directional_light irradiance: missing number (line ends early)"},
+        {"directional_light 0 -1 0  1 1 -1\n", "t.scene:3: directional_light irradiance: colour components must be >= 0"},
+        {"directional_light 0 -1 0  0 0 0\n", "t.scene:3: directional_light irradiance: all zero (a light must emit)"},
+        {"directional_light 0 -1 0  1 1 1  1\n", "t.scene:3: unexpected '1' after the end of the 'directional_light' statement"},
+        {"directional_light 0 -1\n", "t.scene:3: directional_light direction: missing number (line ends early)"},
+        {"point_lights 0 3 0  1 1 1\n", "t.scene:3: unknown statement 'point_lights'"}};
+    static const struct { const char *lines, *msg; } build_bad[] = {
+        {"scale 1e7 1 1e-6\nscale 1e7 1 1e-6\npoint_light 1e7 0 0  1 1 1\n", "t.scene:6: light: position beyond"},
+        {"scale 1e7 1 1e-6\nscale 1e7 1 1e-6\nscale 1e7 1 1e-6\nscale 1e7 1 1e-6\nscale 1e7 1 1e-6\n"
+         "directional_light 1e7 0 0  1 1 1\n", "t.scene:9: light: direction is zero or overflows"}};
+    char text[1024], err[512];
+    pt_scenefile sf;
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    size_t i;
+    int rc;
+    for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        snprintf(text, sizeof text, T_HEAD "%ssphere 0 0 0 1 m\n", bad[i].line);
+        memset(&sf, 0x5a, sizeof sf);
+        rc = parse_text(text, NULL, &sf, err, sizeof err);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strcmp(err, bad[i].msg) == 0, "'%.*s': %d '%s'",
+              (int)strlen(bad[i].line) - 1, bad[i].line, rc, err);
+        if (rc == PT_OK) pt_scenefile_free(&sf);
+        else CHECK(t, sf.lights == NULL && sf.light_count == 0 && sf.shapes == NULL, "a failed load kept its lights");
+    }
+    for (i = 0; i < sizeof build_bad / sizeof build_bad[0]; ++i) {
+        snprintf(text, sizeof text, T_HEAD "sphere 0 0 0 1 m\n%s", build_bad[i].lines);
+        rc = parse_text(text, NULL, &sf, err, sizeof err);
+        if (!CHECK(t, rc == PT_OK, "build case %d parse: %s", (int)i, err)) continue;
+        rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+        CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && scene == NULL && !strncmp(err, build_bad[i].msg, strlen(build_bad[i].msg)),
+              "build case %d: %d '%s'", (int)i, rc, err);
+        pt_scene_destroy(scene);
+        scene = NULL;
+        pt_scenefile_free(&sf);
+    }
+    test_note(t, "%d load errors, %d build errors", (int)(sizeof bad / sizeof bad[0]),
+              (int)(sizeof build_bad / sizeof build_bad[0]));
+}
+
+/* A scene far from (0, 0, 0) is built relative to its centre (pt_scene_set_origin): its lights
+   must move with its shapes. Direct light of a point, a spot and a directional light on a
+   floor, moved by 1000 along x (shapes, lights and camera): the image matches the one at the
+   origin to float rounding (the same light reaches every pixel; a light left behind would
+   leave the floor black or lit from elsewhere). */
+static void light_far_origin(test_ctx *t)
+{
+    static const char near_text[] =
+        "size 16 12\nspp 2\nmax_depth 1\ncamera look_from 0 2 -5 look_at 0 0 0\nmaterial m lambertian 0.5 0.5 0.5\n"
+        "quad -3 0 -3  0 0 6  6 0 0  m\npoint_light -1 2 0  4 4 4\nspot_light 1 2 0  1 0 0.5  6 6 6  40 40\n"
+        "directional_light 0.3 -1 0.2  0.5 0.5 0.5\n";
+    static const char far_text[] =
+        "size 16 12\nspp 2\nmax_depth 1\ncamera look_from 1000 2 -5 look_at 1000 0 0\nmaterial m lambertian 0.5 0.5 0.5\n"
+        "translate 1000 0 0\nquad -3 0 -3  0 0 6  6 0 0  m\npoint_light -1 2 0  4 4 4\nspot_light 1 2 0  1 0 0.5  6 6 6  40 40\n"
+        "directional_light 0.3 -1 0.2  0.5 0.5 0.5\n";
+    const char *texts[2] = {near_text, far_text};
+    pt_image img[2] = {{0, 0, NULL}, {0, 0, NULL}};
+    double worst = 0, total = 0;
+    int k;
+    for (k = 0; k < 2; ++k) {
+        pt_scenefile sf;
+        pt_scene *scene = NULL;
+        pt_render_desc rd;
+        pt_scene_info info;
+        char err[512];
+        int rc = parse_text(texts[k], NULL, &sf, err, sizeof err);
+        if (!CHECK(t, rc == PT_OK, "parse %d: %s", k, err)) goto done;
+        rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+        pt_scenefile_free(&sf);
+        if (!CHECK(t, rc == PT_OK, "build %d: %s", k, err)) goto done;
+        pt_scene_get_info(scene, &info);
+        CHECK(t, info.delta_light_count == 3, "scene %d: %u delta lights", k, (unsigned)info.delta_light_count);
+        rc = l_render(t, scene, &rd, &img[k]);
+        pt_scene_destroy(scene);
+        if (!rc) goto done;
+    }
+    for (k = 0; k < 3 * img[0].width * img[0].height; ++k) {
+        double a = img[0].rgb[k], b = img[1].rgb[k];
+        total += a;
+        if (fabs(a - b) / (a + 1e-3) > worst) worst = fabs(a - b) / (a + 1e-3);
+    }
+    CHECK(t, total > 0 && worst < 2e-3, "the far scene's image differs by %.2e (relative) from the near one's", worst);
+    test_note(t, "largest relative difference %.1e", worst);
+done:
+    pt_image_free(&img[0]);
+    pt_image_free(&img[1]);
+}
+
 const test_case test_scenefile_cases[] = {
     TEST_CASE(obj_load_matches_parse),
     TEST_CASE(add_obj_one_call),
@@ -605,5 +872,8 @@ const test_case test_scenefile_cases[] = {
     TEST_CASE(mesh_memory_budget),
     TEST_CASE(mesh_allowed_dirs),
     TEST_CASE(guiding_statements),
+    TEST_CASE(light_statements),
+    TEST_CASE(light_statement_errors),
+    TEST_CASE(light_far_origin),
     TEST_END
 };
