@@ -1,8 +1,9 @@
 /* test_mitsuba.c - pdftrace_scene.h's Mitsuba 3 exporter: the numbers it writes (a quad's
    to_world, a box's faces against pdftrace's own normals, a sphere under a transform, the
-   settings and their overrides), the binary PLY files beside the XML, every refusal with its
-   file:line and nothing left behind, write errors, hostile file names, the project's scenes;
-   and, with Mitsuba 3 importable, that Mitsuba loads and renders the exports without warnings. */
+   settings and their overrides, the point, spot and directional lights), the binary PLY files
+   beside the XML, every refusal with its file:line and nothing left behind, write errors,
+   hostile file names, the project's scenes; and, with Mitsuba 3 importable, that Mitsuba loads
+   and renders the exports without warnings. */
 #define _POSIX_C_SOURCE 200809L
 #include "test_util.h"
 #include "pdftrace_scene.h"
@@ -348,6 +349,67 @@ static void mitsuba_refusals(test_ctx *t)
     tu_remove_tree(dir);
 }
 
+/* Point, spot and directional lights in world space, as Mitsuba 3's point, spot and directional
+   emitters: the position under a translation and rotation (composed in double), the spot's lookat
+   from the position to position + unit axis with an up not parallel to it, its cone (given, and
+   the defaults 20 and 15 written out), the directional light's unit travel direction under a
+   non-uniform scale (a vector: the scale applies, then it is normalised), the colours as given. */
+static void mitsuba_lights(test_ctx *t)
+{
+    const char *text = MTS_HEAD "sphere 0 0 0 1 m\n"
+                                "point_light 1 4 -2  3 2 1\n"                   /* line 6 */
+                                "translate 0 1 0\nrotate 0 0 1 90\n"
+                                "spot_light 1 0 0  0 0 0  6 5 4  35 10\n"       /* line 9 */
+                                "spot_light 0 0 0  0 0 2  1 1 1\n"              /* line 10 */
+                                "identity\nscale 2 1 1\n"
+                                "directional_light 1 -2 0.5  0.8 0.7 0.6\n";    /* line 13 */
+    char dir[64];
+    char *xml;
+    double v[9];
+    const char *at, *p;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    xml = mts_xml_of(t, text, dir, NULL);
+    if (!xml) goto done;
+    at = mts_at_line(xml, "t.scene", 6);
+    if (CHECK(t, at && mts_numbers(at, "<emitter type=\"point\"><point name=\"position\" x=\"", v, 1) &&
+                     mts_numbers(at, "y=\"", v + 1, 1) && mts_numbers(at, "z=\"", v + 2, 1), "no point light at line 6")) {
+        CHECK(t, v[0] == 1 && v[1] == 4 && v[2] == -2, "point at (%g %g %g)", v[0], v[1], v[2]);
+        p = strstr(at, "<rgb name=\"intensity\" value=\"3, 2, 1\"/></emitter>");
+        CHECK(t, p && p < strstr(at, "</emitter>") + 1, "the point light's intensity");
+    }
+    at = mts_at_line(xml, "t.scene", 9);
+    if (CHECK(t, at && strncmp(strstr(at, "<emitter"), "<emitter type=\"spot\"><transform name=\"to_world\"><lookat origin=\"", 60) == 0 &&
+                     mts_numbers(at, "origin=\"", v, 3) && mts_numbers(at, "target=\"", v + 3, 3) && mts_numbers(at, "up=\"", v + 6, 3),
+              "no spot light at line 9")) {
+        /* (1, 0, 0) moved up 1, turned 90 degrees about z: (-1, 1, 0); the axis (-1, 0, 0) -> (0, -1, 0) */
+        dv3 o = dv(v[0], v[1], v[2]), a = dsub(dv(v[3], v[4], v[5]), o), up = dv(v[6], v[7], v[8]);
+        CHECK(t, fabs(o.x + 1) < 1e-15 && fabs(o.y - 1) < 1e-15 && fabs(o.z) < 1e-15, "origin (%.17g %.17g %.17g)", o.x, o.y, o.z);
+        CHECK(t, fabs(a.x) < 1e-15 && fabs(a.y + 1) < 1e-15 && fabs(a.z) < 1e-15, "axis (%.17g %.17g %.17g)", a.x, a.y, a.z);
+        CHECK(t, dlen(dcross(up, a)) > 0.5, "up (%g %g %g) nearly parallel to the axis", up.x, up.y, up.z);
+        CHECK(t, strstr(at, "<rgb name=\"intensity\" value=\"6, 5, 4\"/><float name=\"cutoff_angle\" value=\"35\"/>"
+                            "<float name=\"beam_width\" value=\"10\"/></emitter>") != NULL, "the spot's intensity and cone");
+    }
+    at = mts_at_line(xml, "t.scene", 10);
+    if (CHECK(t, at && mts_numbers(at, "origin=\"", v, 3) && mts_numbers(at, "target=\"", v + 3, 3), "no spot light at line 10")) {
+        dv3 a = dsub(dv(v[3], v[4], v[5]), dv(v[0], v[1], v[2])); /* (0, 0, 2) turned about z: still +z */
+        CHECK(t, fabs(a.x) < 1e-15 && fabs(a.y) < 1e-15 && fabs(a.z - 1) < 1e-15, "axis (%g %g %g)", a.x, a.y, a.z);
+        CHECK(t, strstr(at, "<float name=\"cutoff_angle\" value=\"20\"/><float name=\"beam_width\" value=\"15\"/>") != NULL,
+              "the default cone");
+    }
+    at = mts_at_line(xml, "t.scene", 13);
+    if (CHECK(t, at && mts_numbers(at, "<emitter type=\"directional\"><vector name=\"direction\" x=\"", v, 1) &&
+                     mts_numbers(at, "y=\"", v + 1, 1) && mts_numbers(at, "z=\"", v + 2, 1), "no directional light at line 13")) {
+        dv3 want = dnorm(dv(2, -2, 0.5));
+        CHECK(t, fabs(v[0] - want.x) < 1e-15 && fabs(v[1] - want.y) < 1e-15 && fabs(v[2] - want.z) < 1e-15,
+              "direction (%.17g %.17g %.17g), want (%.17g %.17g %.17g)", v[0], v[1], v[2], want.x, want.y, want.z);
+        CHECK(t, strstr(at, "<rgb name=\"irradiance\" value=\"0.800000012, 0.699999988, 0.600000024\"/></emitter>") != NULL,
+              "the irradiance");
+    }
+done:
+    free(xml);
+    tu_remove_tree(dir);
+}
+
 /* A number the build does not check (set through the API) that is not finite is refused, not written. */
 static void mitsuba_nonfinite_refused(test_ctx *t)
 {
@@ -489,7 +551,7 @@ static const char *mts_python(void)
 static void mitsuba_renders_exports(test_ctx *t)
 {
     static const char *const scenes[] = {"scenes/cornell.scene", "scenes/mesh.scene", "scenes/glass.scene",
-                                         "bench/scenes/metal-glass.scene", "bench/scenes/sky.scene"};
+                                         "bench/scenes/metal-glass.scene", "bench/scenes/sky.scene", "scenes/lights.scene"};
     char dir[64], cmd[2048], out[600], log[600], err[1024];
     size_t i, len = 0;
     if (strchr(mts_python(), '\'')) { test_skip(t, "PDFTRACE_MITSUBA_PYTHON holds a quote"); return; }
@@ -532,6 +594,7 @@ const test_case test_mitsuba_cases[] = {
     TEST_CASE(mitsuba_sphere_transform),
     TEST_CASE(mitsuba_settings),
     TEST_CASE(mitsuba_ply_files),
+    TEST_CASE(mitsuba_lights),
     TEST_CASE(mitsuba_refusals),
     TEST_CASE(mitsuba_nonfinite_refused),
     TEST_CASE(mitsuba_unwritable),

@@ -1,7 +1,8 @@
 /* test_pov.c - pdftrace_scene.h's POV-Ray exporter against hostile and extreme scenes: text
    from the scene never reaches the .pov unescaped, every number written is finite, every scene
    the build refuses is refused; and the output checker of the fuzz target (tests/fuzz/pov_check.h)
-   rejects bad text. With povray installed, exported scenes are rendered at a tiny size. */
+   rejects bad text; the point, hard-cone spot and directional lights as the recipe has them, and
+   the soft spot refused. With povray installed, exported scenes are rendered at a tiny size. */
 #define _POSIX_C_SOURCE 200809L
 #include "test_util.h"
 #include "pdftrace_scene.h"
@@ -189,7 +190,7 @@ static void pov_checker_catches_bad_text(test_ctx *t)
         "// a\x0c#declare\n", "sphere { <0, 0, 0>, 1 }", "background { rgb <1e, 0, 0> }\n", "// \xc3\xa9\n",
     };
     static const char *const scenes[] = {"scenes/cornell.scene", "scenes/checker.scene", "scenes/mesh.scene",
-                                         "scenes/glass.scene", "scenes/direct-sphere.scene"};
+                                         "scenes/glass.scene", "scenes/direct-sphere.scene", "scenes/lights-direct.scene"};
     char why[256], err[1024];
     size_t i, len = 0;
     for (i = 0; i < sizeof bad / sizeof bad[0]; ++i)
@@ -234,7 +235,7 @@ static void pov_escape_modes(test_ctx *t)
 /* Exported project scenes parse in POV-Ray (rendered at 4x4). */
 static void pov_exports_render(test_ctx *t)
 {
-    static const char *const scenes[] = {"cornell", "checker", "mesh", "glass", "direct-sphere", "mirror"};
+    static const char *const scenes[] = {"cornell", "checker", "mesh", "glass", "direct-sphere", "mirror", "lights-direct"};
     char dir[256], pov[320], path[320], err[1024];
     size_t i;
     if (!have_povray()) {
@@ -260,6 +261,140 @@ static void pov_exports_render(test_ctx *t)
     test_note(t, "%d exported scenes rendered at 4x4", (int)(sizeof scenes / sizeof scenes[0]));
 }
 
+/* Reads n numbers after `key` (the first at or after from); the end, or NULL. */
+static const char *pov_numbers(const char *from, const char *key, double *out, int n)
+{
+    const char *p = from ? strstr(from, key) : NULL;
+    int i;
+    if (!p) return NULL;
+    p += strlen(key);
+    for (i = 0; i < n; ++i) {
+        char *end;
+        while (*p && !((*p >= '0' && *p <= '9') || *p == '-' || *p == '+' || *p == '.')) ++p; /* words, <, > */
+        out[i] = strtod(p, &end);
+        if (end == p) return NULL;
+        p = end;
+    }
+    return p;
+}
+
+/* The light_source of the statement on `line`, up to its end of line (a static copy), or NULL. */
+static const char *pov_light_at(const char *text, int line)
+{
+    static char buf[1024];
+    char key[64];
+    const char *p, *e;
+    snprintf(key, sizeof key, "// l.scene:%d\nlight_source { ", line);
+    p = strstr(text, key);
+    if (!p) return NULL;
+    p += strlen(key) - strlen("light_source { ");
+    e = strchr(p, '\n');
+    if (!e || (size_t)(e - p) >= sizeof buf) return NULL;
+    memcpy(buf, p, (size_t)(e - p));
+    buf[e - p] = '\0';
+    return buf;
+}
+
+/* Point, hard-cone spot and directional lights as the recipe has them (docs/povray.md): the
+   fade trick's colour I/(2 pi fd^2) at the transformed position; the spot's cone of constant
+   intensity (radius = falloff = cutoff, tightness 0) along the transformed axis; the parallel
+   light of colour E/pi travelling along the transformed direction from a location whose plane
+   (normal to the light) leaves every corner of the scene's bounds in front of it. The text
+   passes the fuzz checker, and POV-Ray renders it. */
+static void pov_lights(test_ctx *t)
+{
+    const char *text = POV_HEAD "quad -3 0 -3  0 0 6  6 0 0  m\nsphere 0 1 0 1 m\n"
+                                "point_light 1 4 -2  3 2 1\n"                        /* line 7 */
+                                "translate 0 1 0\nrotate 0 0 1 90\n"
+                                "spot_light 1 0 0  0 0 0  6 5 4  25 25\n"            /* line 10 */
+                                "identity\nscale 2 1 1\n"
+                                "directional_light 1 -2 0.5  0.8 0.7 0.6\n";         /* line 13 */
+    const double two_pi = 2.0 * TU_PI;
+    char err[1024], why[256];
+    double v[9], fd = 0, lo_hi[2][3] = {{-3, 0, -3}, {3, 2, 3}};
+    const char *l;
+    char *out;
+    size_t len = 0;
+    int rc = pov_export_text(text, "l.scene", err, sizeof err), i;
+    if (!CHECK(t, rc == PT_OK, "export: %d '%s'", rc, err)) return;
+    out = tu_read_text("build/test-pov.pov", &len);
+    if (!CHECK(t, out != NULL, "no file")) return;
+    CHECK(t, pt_pov_check_text(out, len, why, sizeof why), "checker: %s", why);
+    l = pov_light_at(out, 7);
+    if (CHECK(t, l && pov_numbers(l, "light_source {", v, 6) && pov_numbers(l, "fade_distance", &fd, 1), "point: '%s'", l ? l : "none")) {
+        CHECK(t, v[0] == 1 && v[1] == 4 && v[2] == -2, "point at <%g %g %g>", v[0], v[1], v[2]);
+        CHECK(t, fabs(v[3] * two_pi * fd * fd / 3 - 1) < 1e-7 && fabs(v[4] * two_pi * fd * fd / 2 - 1) < 1e-7 &&
+                     fabs(v[5] * two_pi * fd * fd / 1 - 1) < 1e-7,
+              "point colour %g %g %g with fade_distance %g: not I/(2 pi fd^2)", v[3], v[4], v[5], fd);
+        CHECK(t, strstr(l, "fade_power 2 }") && !strstr(l, "spotlight"), "point: '%s'", l);
+    }
+    l = pov_light_at(out, 10);
+    if (CHECK(t, l && pov_numbers(l, "light_source {", v, 6) && pov_numbers(l, "point_at", v + 6, 3), "spot: '%s'", l ? l : "none")) {
+        /* (1, 0, 0) moved up 1, then turned 90 degrees about z: (1, 1, 0) -> (-1, 1, 0); the
+           axis (-1, 0, 0) -> (0, -1, 0) */
+        dv3 axis = dnorm(dv(v[6] - v[0], v[7] - v[1], v[8] - v[2]));
+        CHECK(t, fabs(v[0] + 1) < 1e-6 && fabs(v[1] - 1) < 1e-6 && fabs(v[2]) < 1e-6, "spot at <%g %g %g>", v[0], v[1], v[2]);
+        CHECK(t, fabs(axis.x) < 1e-6 && fabs(axis.y + 1) < 1e-9 && fabs(axis.z) < 1e-6, "spot axis (%g %g %g)", axis.x,
+              axis.y, axis.z);
+        CHECK(t, fabs(v[3] * two_pi * fd * fd / 6 - 1) < 1e-7 && fabs(v[5] * two_pi * fd * fd / 4 - 1) < 1e-7,
+              "spot colour %g %g %g", v[3], v[4], v[5]);
+        CHECK(t, strstr(l, " radius 25 falloff 25 tightness 0 fade_distance ") != NULL, "spot cone: '%s'", l);
+    }
+    l = pov_light_at(out, 13);
+    if (CHECK(t, l && pov_numbers(l, "light_source {", v, 6) && pov_numbers(l, "point_at", v + 6, 3), "directional: '%s'", l ? l : "none")) {
+        dv3 loc = dv(v[0], v[1], v[2]), d = dnorm(dsub(dv(v[6], v[7], v[8]), loc)), want = dnorm(dv(2, -2, 0.5));
+        int k;
+        CHECK(t, dlen(dsub(d, want)) < 1e-7, "travels along (%g %g %g), want (%g %g %g)", d.x, d.y, d.z, want.x, want.y, want.z);
+        CHECK(t, fabs(v[3] * TU_PI / 0.8 - 1) < 1e-7 && fabs(v[5] * TU_PI / 0.6 - 1) < 1e-7, "colour %g %g %g: not E/pi",
+              v[3], v[4], v[5]);
+        CHECK(t, strstr(l, " parallel point_at ") && !strstr(l, "fade"), "directional: '%s'", l);
+        for (k = 0; k < 8; ++k) {
+            dv3 c = dv(lo_hi[k & 1][0], lo_hi[(k >> 1) & 1][1], lo_hi[k >> 2][2]);
+            CHECK(t, ddot(dsub(c, loc), d) > 1.0, "corner %d lies behind the parallel light's plane", k);
+        }
+    }
+    for (i = 0; i < 3; ++i) /* no other light_source than the three */
+        l = strstr(i ? l + 1 : out, "light_source");
+    CHECK(t, l && !strstr(l + 1, "light_source"), "more than three light sources");
+    free(out);
+    if (have_povray()) {
+        char dir[256];
+        snprintf(dir, sizeof dir, "build/test-pov-lights-%ld", (long)getpid());
+        mkdir(dir, 0755);
+        CHECK(t, rename("build/test-pov.pov", "build/test-pov-lights.pov") == 0, "rename");
+        CHECK(t, pov_render(dir, "../test-pov-lights.pov", 4, 4), "povray failed on the lights (see %s/povray.log)", dir);
+        remove("build/test-pov-lights.pov");
+    } else
+        test_note(t, "povray not installed: render not tried");
+    remove("build/test-pov.pov");
+}
+
+/* A spot whose beam is narrower than its cutoff (given, or the default 3/4) has no exact POV-Ray
+   twin: refused with its file:line and why, and nothing written. */
+static void pov_soft_spot_refused(test_ctx *t)
+{
+    static const struct { const char *light; int line; } cases[] = {
+        {"spot_light 0 3 0  0 0 0  5 5 5  30 15\n", 6},
+        {"spot_light 0 3 0  0 0 0  5 5 5\n", 6},
+        {"spot_light 0 3 0  0 0 0  5 5 5  40\n", 6},
+        {"point_light 0 3 0  1 1 1\nrotate 1 0 0 10\nspot_light 0 3 0  0 0 0  5 5 5  30 29.9\n", 8}};
+    char text[1024], err[1024], want[32];
+    size_t i;
+    for (i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        int rc;
+        snprintf(text, sizeof text, POV_HEAD "sphere 0 0 0 1 m\n%s", cases[i].light);
+        snprintf(want, sizeof want, "s.scene:%d: ", cases[i].line);
+        rc = pov_export_text(text, "s.scene", err, sizeof err);
+        CHECK(t, rc == PT_ERROR_UNSUPPORTED && !strncmp(err, want, strlen(want)) && strstr(err, "smoothstep") &&
+                     strstr(err, "beam"),
+              "case %d: %d '%s'", (int)i, rc, err);
+        CHECK(t, !pov_exists("build/test-pov.pov") && !pov_exists("build/test-pov.pov.ptmp"), "case %d wrote a file", (int)i);
+    }
+    snprintf(text, sizeof text, POV_HEAD "sphere 0 0 0 1 m\nspot_light 0 3 0  0 0 0  5 5 5  40 40\n");
+    CHECK(t, pov_export_text(text, "s.scene", err, sizeof err) == PT_OK, "a hard cone: '%s'", err);
+    remove("build/test-pov.pov");
+}
+
 const test_case test_pov_cases[] = {
     TEST_CASE(pov_path_injection),
     TEST_CASE(pov_nonfinite_refused),
@@ -269,5 +404,7 @@ const test_case test_pov_cases[] = {
     TEST_CASE(pov_checker_catches_bad_text),
     TEST_CASE(pov_escape_modes),
     TEST_CASE(pov_exports_render),
+    TEST_CASE(pov_lights),
+    TEST_CASE(pov_soft_spot_refused),
     TEST_END
 };

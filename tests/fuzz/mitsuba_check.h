@@ -2,7 +2,7 @@
    pt_scenefile_export_mitsuba: plain ASCII; one XML declaration, then elements that nest and
    close, under a single <scene>; comments without "--" inside; attribute values quoted, without
    '<', and '&' only as one of XML's five entities; every number of a float, integer, rgb,
-   point or matrix element finite (no nan, no inf). Used by the fuzz harness and the tests. */
+   point, vector, matrix or lookat element finite (no nan, no inf). Used by the fuzz harness and the tests. */
 #ifndef PT_MITSUBA_CHECK_H
 #define PT_MITSUBA_CHECK_H
 
@@ -121,7 +121,8 @@ static int pt_mitsuba_check_text(const char *text, size_t len, char *why, size_t
                 return pt__mc_fail(why, why_size, "not a single <scene> root", i);
             numbers = (nl == 5 && !strncmp(name, "float", 5)) || (nl == 7 && !strncmp(name, "integer", 7)) ||
                       (nl == 3 && !strncmp(name, "rgb", 3)) || (nl == 5 && !strncmp(name, "point", 5)) ||
-                      (nl == 6 && !strncmp(name, "matrix", 6));
+                      (nl == 6 && !strncmp(name, "matrix", 6)) || (nl == 6 && !strncmp(name, "vector", 6)) ||
+                      (nl == 6 && !strncmp(name, "lookat", 6));
             if (!pt__mc_attrs(ne, empty ? e - 1 : e, numbers, why, why_size, i)) return 0;
             if (!empty) {
                 if (depth == PT__MC_DEPTH) return pt__mc_fail(why, why_size, "elements nested too deep", i);

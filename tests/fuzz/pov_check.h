@@ -23,7 +23,7 @@ static int pt_pov_check_keyword(const char *s, size_t n)
         "brightness", "gray_threshold", "count", "error_bound", "recursion_limit", "nearest_count",
         "pretrace_start", "pretrace_end", "minimum_reuse", "maximum_reuse", "low_error_factor", "background",
         "rgb", "rgbf", "camera", "perspective", "location", "right", "x", "up", "y", "direction", "z", "angle",
-        "sky", "look_at", "light_source", "spotlight", "point_at", "radius", "falloff", "tightness",
+        "sky", "look_at", "light_source", "spotlight", "parallel", "point_at", "radius", "falloff", "tightness",
         "fade_distance", "fade_power", "sphere", "mesh", "mesh2", "triangle", "box", "matrix", "vertex_vectors",
         "normal_vectors", "face_indices", "texture", "pigment", "checker", "scale", "finish", "diffuse",
         "emission", "reflection", "fresnel", "on", "conserve_energy", "interior", "ior", "no_shadow",
