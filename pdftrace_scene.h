@@ -2311,10 +2311,12 @@ static void pt__pov_light(pt__pov *w, const pt_scenefile_light *l)
     const pt_light_desc *ld = &l->desc;
     pt_vec3 pos = pt_transform_point(&l->transform, ld->position);
     pt_vec3 dir = pt_transform_vector(&l->transform, ld->direction);
-    double len = sqrt((double)dir.x * dir.x + (double)dir.y * dir.y + (double)dir.z * dir.z), a[3], far;
-    a[0] = (double)dir.x / len; /* len == 0 (a hand-made description) gives nan: caught by pt__pov_g */
-    a[1] = (double)dir.y / len;
-    a[2] = (double)dir.z / len;
+    double len = sqrt((double)dir.x * dir.x + (double)dir.y * dir.y + (double)dir.z * dir.z), a[3] = {0, 0, 0}, far;
+    if (ld->type != PT_LIGHT_POINT) { /* the build refused a zero or overflowing direction */
+        a[0] = (double)dir.x / len;
+        a[1] = (double)dir.y / len;
+        a[2] = (double)dir.z / len;
+    }
     w->line = l->line;
     pt__pov_put(w, "// %s:%d\nlight_source { ", w->name, l->line);
     if (ld->type == PT_LIGHT_DIRECTIONAL) {
@@ -2975,7 +2977,8 @@ static void pt__mts_light(pt__mts *w, const pt_scenefile_light *l)
     pt__mts_point(x, ld->position, p);
     pt__mts_vector(x, ld->direction, a);
     len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    for (i = 0; i < 3; ++i) a[i] /= len; /* len == 0 (a hand-made description) gives nan: refused */
+    if (ld->type != PT_LIGHT_POINT) /* the build refused a zero direction; an overflow gives nan: refused */
+        for (i = 0; i < 3; ++i) a[i] /= len;
     w->line = l->line;
     pt__mts_put(w, "  <!-- %s:%d -->\n", w->name, l->line);
     if (ld->type == PT_LIGHT_POINT) {
