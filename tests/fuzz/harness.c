@@ -235,6 +235,18 @@ int pt_fuzz_scene(const uint8_t *data, size_t size)
         for (k = 0; k < 3u * (size_t)m->triangle_count; ++k) FZ_CHECK(T, m->indices[k] < m->vertex_count, NULL);
         tris += m->triangle_count;
     }
+    FZ_CHECK(T, d.light_count >= 0 && (d.light_count == 0 || d.lights), NULL);
+    for (i = 0; i < d.light_count; ++i) { /* as the parser promises: what pt_scene_add_light accepts */
+        const pt_light_desc *l = &d.lights[i].desc;
+        FZ_CHECK(T, d.lights[i].line >= 1, NULL);
+        FZ_CHECK(T, l->type == PT_LIGHT_POINT || l->type == PT_LIGHT_SPOT || l->type == PT_LIGHT_DIRECTIONAL, NULL);
+        FZ_CHECK(T, l->intensity.x >= 0 && l->intensity.y >= 0 && l->intensity.z >= 0 &&
+                        l->intensity.x + l->intensity.y + l->intensity.z > 0, "a light of no intensity was accepted");
+        FZ_CHECK(T, l->type == PT_LIGHT_POINT || pt_length2(l->direction) > 0, "a light of no direction was accepted");
+        FZ_CHECK(T, l->type != PT_LIGHT_SPOT || (l->cutoff_angle > 0 && l->cutoff_angle <= 90 && l->beam_width > 0 &&
+                                                 l->beam_width <= l->cutoff_angle),
+                 "a spot of a bad cone was accepted");
+    }
     for (i = 0; i < d.shape_count; ++i) {
         const pt_scenefile_shape *sh = &d.shapes[i];
         FZ_CHECK(T, sh->material >= 0 && sh->material < d.material_count, NULL);

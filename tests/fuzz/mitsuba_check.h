@@ -2,7 +2,8 @@
    pt_scenefile_export_mitsuba: plain ASCII; one XML declaration, then elements that nest and
    close, under a single <scene>; comments without "--" inside; attribute values quoted, without
    '<', and '&' only as one of XML's five entities; every number of a float, integer, rgb,
-   point, vector, matrix or lookat element finite (no nan, no inf). Used by the fuzz harness and the tests. */
+   point, vector, matrix or lookat element finite (no nan, no inf). Used by the fuzz harness and
+   the tests. */
 #ifndef PT_MITSUBA_CHECK_H
 #define PT_MITSUBA_CHECK_H
 
