@@ -896,6 +896,15 @@ static const bad_case bad_cases[] = {
     {"indirect_paths 9", "%Hindirect_paths 9\n", "bad.scene:3: indirect_paths: expected an integer in [1, 8], got '9'"},
     {"bad guiding", "%Hguiding sometimes\n", "bad.scene:3: guiding: expected off, on or auto, got 'sometimes'"},
     {"guiding_budget 1", "%Hguiding_budget 1\n", "bad.scene:3: guiding_budget"},
+    {"point_light short", "%Hpoint_light 0 3 0 1 1\n", "bad.scene:3: point_light intensity: missing number (line ends early)"},
+    {"point_light negative", "%Hpoint_light 0 3 0 1 -1 1\n", "bad.scene:3: point_light intensity: colour components must be >= 0"},
+    {"point_light dark", "%Hpoint_light 0 3 0 0 0 0\n", "bad.scene:3: point_light intensity: all zero"},
+    {"spot_light aimed at itself", "%Hspot_light 1 2 3 1 2 3 1 1 1\n", "bad.scene:3: spot_light: the target equals the position"},
+    {"spot_light cutoff 95", "%Hspot_light 0 3 0 0 0 0 1 1 1 95\n", "bad.scene:3: spot_light cutoff_angle: must be in (0, 90] degrees, got '95'"},
+    {"spot_light beam > cutoff", "%Hspot_light 0 3 0 0 0 0 1 1 1 30 40\n", "bad.scene:3: spot_light beam_width: must be in (0, cutoff_angle = 30] degrees"},
+    {"spot_light extra", "%Hspot_light 0 3 0 0 0 0 1 1 1 30 20 10\n", "bad.scene:3: unexpected '10' after the end of the 'spot_light' statement"},
+    {"directional_light zero", "%Hdirectional_light 0 0 0 1 1 1\n", "bad.scene:3: directional_light: the direction has zero length"},
+    {"directional_light text", "%Hdirectional_light 0 down 0 1 1 1\n", "bad.scene:3: directional_light direction: 'down' is not a number"},
     {"singular scale", "%Hscale 1 0 1\n", "scale: every factor must have magnitude >= 1e-6"},
     {"rotate zero axis", "%Hrotate 0 0 0 45\n", "rotate: the axis has zero length"},
     {"overflowing transform", "%Hscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\nscale 1e7 1e7 1e7\n",
@@ -1017,7 +1026,8 @@ static void test_malformed(const char *work)
 
 static void test_scenes_load(const char *dir)
 {
-    static const char *const names[] = {"cornell", "cornell-diffuse", "direct-quad", "direct-sphere", "mirror", "glass", "checker", "mesh"};
+    static const char *const names[] = {"cornell", "cornell-diffuse", "direct-quad", "direct-sphere", "mirror", "glass", "checker", "mesh",
+                                        "lights", "lights-direct"};
     size_t i;
     for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
         char path[2048], err[1024] = "";
@@ -1097,7 +1107,7 @@ static uint32_t fuzz_rand(uint32_t n)
 }
 static void test_fuzz(const char *dir, const char *work, int rounds)
 {
-    static const char *const names[] = {"cornell", "direct-quad", "direct-sphere", "mirror", "checker", "mesh"};
+    static const char *const names[] = {"cornell", "direct-quad", "direct-sphere", "mirror", "checker", "mesh", "lights"};
     static const char *const junk[] = {"1e300", "-1e300", "nan", "inf", "-0", "0", "-1", "1e7", "1e-40", "x", "#", "",
                                        "99999999999999999999", "0x10", "mesh.obj", "white", "lamp", "sphere", "-5e6"};
     char *text = NULL, *buf = NULL, err[1024], pov[2048], detail[1200];
@@ -1377,6 +1387,7 @@ static int cmd_test(int argc, char **argv)
         test_compare(argv[2], argv[3], "checker", 64, 256, 8, 0.01);
         test_compare(argv[2], argv[3], "mirror", 96, 256, 8, 0.01); /* at 64x64 its edge pixels make +0.6 % */
         test_compare(argv[2], argv[3], "glass", 64, 256, 0, 0.01); /* 0: the scene's grid (1: the tiles light nothing) */
+        test_compare(argv[2], argv[3], "lights-direct", 64, 256, 0, 0.01); /* point, hard spot, directional light */
     } else
         skip_compare("povray is not installed (apt-get install povray)");
 #else
