@@ -30,6 +30,7 @@ checker           live       128  256   0.01     0.002   0.99    checker texture
 mirror            live       128  256   0.01     0.002   0.99    plane mirror, camera-mirror-diffuse + direct light (recipe: exact)
 glass             live       128  256   0.01     0.002   0.99    glass ball seen through, exact Fresnel (recipe: exact)
 mesh              live       128  256   0.01     0.006   0.99    OBJ mesh2 with vertex normals, direct only
+lights-direct     live       128  256   0.01     0.002   0.99    point, hard-cone spot and directional lights, direct only (recipe: exact)
 cornell-diffuse   ref        128  1024  0.02     0.03    0       global illumination vs stored high-radiosity reference (scenes/ref; recipe -1 % mean, 1.5 % per pixel)
 cornell           medium     128  1024  0.08     0.05    0       RTRL box with glass: loose, POV has no caustics without photons and medium radiosity is -3.8 % (recipe)
 '
@@ -79,6 +80,8 @@ mirror            scenes         64   16    1024  pixel   plane mirror
 glass             scenes         64   16    256   pixel   glass ball seen through, exact Fresnel
 mesh              scenes         64   16    256   pixel   OBJ mesh with vertex normals
 cornell-diffuse   scenes         64   16    512   pixel   global illumination
+lights-direct     scenes         64   16    256   pixel   point, hard spot and directional lights, direct only
+lights            scenes         64   16    512   pixel   point, soft spot and directional lights, indirect light
 cornell           scenes         64   16    512   region  RTRL box: glass ball, caustics (heavy-tailed)
 balls             bench/scenes   64   16    256   pixel   diffuse balls, global illumination
 many-lights       bench/scenes   64   16    512   pixel   five lights over four orders of power
