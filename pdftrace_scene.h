@@ -2965,7 +2965,7 @@ static void pt__mts_header(pt__mts *w)
 
 /* A point, spot or directional light, in world space (the transform in double): Mitsuba 3's
    `point` (intensity in W/sr), `spot` (its cone along +z of to_world, aimed by a lookat from
-   the position to position + axis; the same linear falloff in the angle from beam_width to
+   the position to a point on its axis; the same linear falloff in the angle from beam_width to
    cutoff_angle, in degrees) and `directional` (`direction` the way the light travels,
    irradiance in W/m^2): the same units and profiles as pdftrace's (docs/mitsuba.md). */
 static void pt__mts_light(pt__mts *w, const pt_scenefile_light *l)
@@ -2996,8 +2996,9 @@ static void pt__mts_light(pt__mts *w, const pt_scenefile_light *l)
             pt__mts_g(w, p[i]);
             pt__mts_put(w, i < 2 ? ", " : "\" target=\"");
         }
-        for (i = 0; i < 3; ++i) {
-            pt__mts_g(w, p[i] + a[i]);
+        for (i = 0; i < 3; ++i) { /* the target as far off as the position is large: Mitsuba's
+                                     scalar variants read it in float, which keeps the axis then */
+            pt__mts_g(w, p[i] + a[i] * (1.0 + fabs(p[0]) + fabs(p[1]) + fabs(p[2])));
             pt__mts_put(w, i < 2 ? ", " : "\" up=\"");
         }
         pt__mts_put(w, "%s\"/></transform>", k == 0 ? "1, 0, 0" : k == 1 ? "0, 1, 0" : "0, 0, 1");

@@ -351,7 +351,7 @@ static void mitsuba_refusals(test_ctx *t)
 
 /* Point, spot and directional lights in world space, as Mitsuba 3's point, spot and directional
    emitters: the position under a translation and rotation (composed in double), the spot's lookat
-   from the position to position + unit axis with an up not parallel to it, its cone (given, and
+   from the position to a point on the axis with an up not parallel to it, its cone (given, and
    the defaults 20 and 15 written out), the directional light's unit travel direction under a
    non-uniform scale (a vector: the scale applies, then it is normalised), the colours as given. */
 static void mitsuba_lights(test_ctx *t)
@@ -382,7 +382,7 @@ static void mitsuba_lights(test_ctx *t)
                      mts_numbers(at, "origin=\"", v, 3) && mts_numbers(at, "target=\"", v + 3, 3) && mts_numbers(at, "up=\"", v + 6, 3),
               "no spot light at line 9")) {
         /* (1, 0, 0) moved up 1, turned 90 degrees about z: (-1, 1, 0); the axis (-1, 0, 0) -> (0, -1, 0) */
-        dv3 o = dv(v[0], v[1], v[2]), a = dsub(dv(v[3], v[4], v[5]), o), up = dv(v[6], v[7], v[8]);
+        dv3 o = dv(v[0], v[1], v[2]), a = dnorm(dsub(dv(v[3], v[4], v[5]), o)), up = dv(v[6], v[7], v[8]);
         CHECK(t, fabs(o.x + 1) < 1e-15 && fabs(o.y - 1) < 1e-15 && fabs(o.z) < 1e-15, "origin (%.17g %.17g %.17g)", o.x, o.y, o.z);
         CHECK(t, fabs(a.x) < 1e-15 && fabs(a.y + 1) < 1e-15 && fabs(a.z) < 1e-15, "axis (%.17g %.17g %.17g)", a.x, a.y, a.z);
         CHECK(t, dlen(dcross(up, a)) > 0.5, "up (%g %g %g) nearly parallel to the axis", up.x, up.y, up.z);
@@ -391,7 +391,7 @@ static void mitsuba_lights(test_ctx *t)
     }
     at = mts_at_line(xml, "t.scene", 10);
     if (CHECK(t, at && mts_numbers(at, "origin=\"", v, 3) && mts_numbers(at, "target=\"", v + 3, 3), "no spot light at line 10")) {
-        dv3 a = dsub(dv(v[3], v[4], v[5]), dv(v[0], v[1], v[2])); /* (0, 0, 2) turned about z: still +z */
+        dv3 a = dnorm(dsub(dv(v[3], v[4], v[5]), dv(v[0], v[1], v[2]))); /* (0, 0, 2) turned about z: still +z */
         CHECK(t, fabs(a.x) < 1e-15 && fabs(a.y) < 1e-15 && fabs(a.z - 1) < 1e-15, "axis (%g %g %g)", a.x, a.y, a.z);
         CHECK(t, strstr(at, "<float name=\"cutoff_angle\" value=\"20\"/><float name=\"beam_width\" value=\"15\"/>") != NULL,
               "the default cone");
