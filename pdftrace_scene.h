@@ -116,15 +116,15 @@
    meshes as mesh2 with normal_vectors; a point light as a fade-trick point light of colour
    I/(2 pi fd^2), a hard-cone spot (beam = cutoff) as the same with `spotlight radius A falloff
    A tightness 0`, a directional light as a `parallel` light of colour E/pi placed outside the
-   scene's bounds (POV-Ray's parallel lights are shadowed only by what lies between the
-   surface and the plane through their location); `assumed_gamma 1.0`, `ambient_light 0`,
-   ambient 0. Not exportable (PT_ERROR_UNSUPPORTED with file:line): a thin-lens camera
-   (POV-Ray's focal blur stops adaptively after a few aperture samples: no exact twin), fuzzy
-   metal, emitting triangles, boxes or meshes, a spot light whose beam is narrower than its
-   cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle, pdftrace's linear in
-   the angle); and every scene pt_scenefile_build refuses (the exporter runs
-   the build first, so it never writes what pdftrace would not render, such as a sphere under
-   a non-uniform scale), or one that would need a non-finite number. The scene's file name is
+   scene's bounds (POV-Ray does not trace a parallel light's shadow rays to infinity: an
+   occluder behind its location casts at most part of its shadow); `assumed_gamma 1.0`,
+   `ambient_light 0`, ambient 0. Not exportable (PT_ERROR_UNSUPPORTED with file:line): a
+   thin-lens camera (POV-Ray's focal blur stops adaptively after a few aperture samples: no
+   exact twin), fuzzy metal, emitting triangles, boxes or meshes, a spot light whose beam is
+   narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
+   pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
+   runs the build first, so it never writes what pdftrace would not render, such as a sphere
+   under a non-uniform scale), or one that would need a non-finite number. The scene's file name is
    the only text from input in the output, in comments, escaped by pt_scenefile_escape.
 
    MITSUBA 3 EXPORT
@@ -2303,8 +2303,9 @@ static void pt__sf_spot_angles(const pt_light_desc *l, float *cutoff, float *bea
    radius = falloff: no smoothstep ramp), aimed along the axis from a point_at far enough away
    for its printed digits to keep the direction. A directional light of irradiance E is a
    parallel light of colour E/pi (POV's diffuse has no 1/pi: the recipe folds it into the
-   lights); POV-Ray traces its shadow rays only to the plane through its location, normal to
-   the light, so the location is put at least two bounds diagonals behind the scene's centre. */
+   lights); POV-Ray does not trace its shadow rays to infinity (an occluder behind the location
+   cast only part of its shadow, measured), so the location is put at least two bounds
+   diagonals behind the scene's centre, with every shape between it and any surface. */
 static void pt__pov_light(pt__pov *w, const pt_scenefile_light *l)
 {
     const double inv_pi = 0.31830988618379067154;
