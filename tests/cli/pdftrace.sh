@@ -144,7 +144,7 @@ t_bad_input() {
 
 # ---- --export-pov: alone it writes only the .pov; with -o it renders too
 t_export_pov() {
-    local dir=$W/pov
+    local dir=$W/pov status
     mkdir -p "$dir"
     if ! (cd "$dir" && "$P" "$S/mirror.scene" -q --export-pov m.pov) 2>"$W/err.txt"; then
         fail export_pov "failed: $(head -n 1 "$W/err.txt")"
@@ -160,7 +160,17 @@ t_export_pov() {
         fail export_pov "with -o: $(head -n 1 "$W/err.txt"); wrote $(ls "$dir" | tr '\n' ' ')"
         return
     fi
-    pass export_pov "alone: only the .pov; with -o: the .pov and the image"
+    rm -f "$dir"/*
+    # a soft-edged spot light has no POV-Ray twin: status 2, its file:line, nothing written
+    "$P" "$S/lights.scene" -q --export-pov "$dir/l.pov" 2>"$W/err.txt"
+    status=$?
+    if [ $status != 2 ] || [ "$(wc -l <"$W/err.txt")" != 1 ] ||
+        [[ $(head -n 1 "$W/err.txt") != *"lights.scene:25: POV-Ray export: a spot light with a beam of 12 degrees"* ]] ||
+        [ -n "$(ls -A "$dir")" ]; then
+        fail export_pov "lights.scene: status $status, '$(head -n 1 "$W/err.txt")', files: $(ls -A "$dir" | tr '\n' ' ')"
+        return
+    fi
+    pass export_pov "alone: only the .pov; with -o: the .pov and the image; a soft spot light refused"
 }
 
 # ---- --export-mitsuba: alone it writes the .xml and its PLY files only, with the command
