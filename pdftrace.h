@@ -2386,20 +2386,126 @@ static pt_vec3 pt__planar_point(const pt__prim *p, float u1, float u2)
     b1 = u2 * su;
     return pt_add(pt_add(pt_scale(p->p0, b0), pt_scale(p->p1, b1)), pt_scale(p->p2, 1.0f - b0 - b1));
 }
+/* Solid-angle sampling of a rectangular quad: the area-preserving map of its spherical rectangle
+   (Urena, Fajardo & King, "An Area-Preserving Parametrization for Spherical Rectangles", EGSR
+   2013), in double: density 1/S over the directions that meet the quad, S its solid angle. Where S
+   is outside [PT__SPHERICAL_MIN, PT__SPHERICAL_MAX] (pbrt-v4's limits: below, S = (sum of the four
+   angles) - 2 pi has lost its digits and area sampling is already close to 1/S; near a whole
+   hemisphere the map degenerates), and for quads that are not rectangles, the light is sampled by
+   area. Solid-angle sampling costs four arccosines per look-up and pays only where area sampling's
+   density varies much over the light, that is where the light is large next to its distance
+   (whatever its orientation: a point beside a ceiling light, near its plane, sees distances from
+   ~0 to its width): so it is used only where (half the quad's diagonal / the distance to its
+   centre)^2 is at least PT__SPHERICAL_FROM (bench/README.md, "Solid-angle sampling of quads"). The
+   choice depends only on the light and the shading point, so sample and value agree. */
+#define PT__SPHERICAL_MIN 3e-4
+#define PT__SPHERICAL_MAX 6.22
+#ifndef PT__SPHERICAL_FROM
+#define PT__SPHERICAL_FROM 0.3
+#endif
+typedef struct pt__sphrect {
+    double o[3], ex[3], ey[3], ez[3];
+    double x0, y0, z0, x1, y1, b0, b1, k, S;
+} pt__sphrect;
+static double pt__d3dot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void pt__d3unit(double *a, double x, double y, double z)
+{
+    double l = sqrt(x * x + y * y + z * z);
+    a[0] = x / l;
+    a[1] = y / l;
+    a[2] = z / l;
+}
+static double pt__acos_clamped(double c) { return acos(c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c)); }
+/* 1 when quad p seen from o is a rectangle whose solid angle is in range (r then set up). */
+static int pt__sphrect_init(pt__sphrect *r, const pt__prim *p, pt_vec3 o)
+{
+    double u[3], v[3], d[3], lu, lv, n[4][3], g[4];
+    int i;
+    {   /* is it large next to its distance? (float: only a threshold) */
+        pt_vec3 c = pt_sub(pt_madd(pt_madd(p->p0, p->p1, 0.5f), p->p2, 0.5f), o);
+        if (!(0.25f * (pt_length2(p->p1) + pt_length2(p->p2)) >= (float)PT__SPHERICAL_FROM * pt_length2(c))) return 0;
+    }
+    u[0] = p->p1.x; u[1] = p->p1.y; u[2] = p->p1.z;
+    v[0] = p->p2.x; v[1] = p->p2.y; v[2] = p->p2.z;
+    lu = sqrt(pt__d3dot(u, u));
+    lv = sqrt(pt__d3dot(v, v));
+    if (!(lu > 0.0 && lv > 0.0) || fabs(pt__d3dot(u, v)) > 1e-5 * lu * lv) return 0; /* not a rectangle */
+    for (i = 0; i < 3; ++i) {
+        r->ex[i] = u[i] / lu;
+        r->ey[i] = v[i] / lv;
+    }
+    pt__d3unit(r->ez, r->ex[1] * r->ey[2] - r->ex[2] * r->ey[1], r->ex[2] * r->ey[0] - r->ex[0] * r->ey[2],
+               r->ex[0] * r->ey[1] - r->ex[1] * r->ey[0]);
+    r->o[0] = o.x; r->o[1] = o.y; r->o[2] = o.z;
+    d[0] = (double)p->p0.x - o.x; d[1] = (double)p->p0.y - o.y; d[2] = (double)p->p0.z - o.z;
+    r->x0 = pt__d3dot(d, r->ex);
+    r->y0 = pt__d3dot(d, r->ey);
+    r->z0 = pt__d3dot(d, r->ez);
+    if (r->z0 > 0.0) { /* the rectangle's plane below o in its own frame */
+        for (i = 0; i < 3; ++i) r->ez[i] = -r->ez[i];
+        r->z0 = -r->z0;
+    }
+    if (!(r->z0 < 0.0)) return 0;
+    r->x1 = r->x0 + lu;
+    r->y1 = r->y0 + lv;
+    /* the normals of the planes through o and each edge, and the rectangle's inner angles */
+    pt__d3unit(n[0], 0.0, r->z0, -r->y0);
+    pt__d3unit(n[1], -r->z0, 0.0, r->x1);
+    pt__d3unit(n[2], 0.0, -r->z0, r->y1);
+    pt__d3unit(n[3], r->z0, 0.0, -r->x0);
+    for (i = 0; i < 4; ++i) g[i] = pt__acos_clamped(-pt__d3dot(n[i], n[(i + 1) & 3]));
+    r->S = g[0] + g[1] + g[2] + g[3] - 2.0 * 3.14159265358979323846;
+    if (!(r->S >= PT__SPHERICAL_MIN && r->S <= PT__SPHERICAL_MAX)) return 0;
+    r->b0 = n[0][2];
+    r->b1 = n[2][2];
+    r->k = 2.0 * 3.14159265358979323846 - g[2] - g[3];
+    return 1;
+}
+/* The point of the rectangle that (u1, u2) maps to (Urena et al. 2013, sec. 3-4). */
+static pt_vec3 pt__sphrect_point(const pt__sphrect *r, double u1, double u2)
+{
+    double au = u1 * r->S + r->k, sa = sin(au), fu, cu, xu, dd, h0, h1, hv, yv;
+    fu = sa != 0.0 ? (cos(au) * r->b0 - r->b1) / sa : 0.0;
+    if (!(fu == fu)) fu = 0.0;
+    cu = (fu > 0.0 ? 1.0 : -1.0) / sqrt(fu * fu + r->b0 * r->b0);
+    cu = cu < -1.0 ? -1.0 : (cu > 1.0 ? 1.0 : cu);
+    xu = 1.0 - cu * cu > 0.0 ? -(cu * r->z0) / sqrt(1.0 - cu * cu) : (cu > 0.0 ? r->x1 : r->x0);
+    xu = xu < r->x0 ? r->x0 : (xu > r->x1 ? r->x1 : xu);
+    dd = sqrt(xu * xu + r->z0 * r->z0);
+    h0 = r->y0 / sqrt(dd * dd + r->y0 * r->y0);
+    h1 = r->y1 / sqrt(dd * dd + r->y1 * r->y1);
+    hv = h0 + u2 * (h1 - h0);
+    yv = hv * hv < 1.0 - 1e-12 ? hv * dd / sqrt(1.0 - hv * hv) : r->y1;
+    yv = yv < r->y0 ? r->y0 : (yv > r->y1 ? r->y1 : yv);
+    return pt_v3((float)(r->o[0] + xu * r->ex[0] + yv * r->ey[0] + r->z0 * r->ez[0]),
+                 (float)(r->o[1] + xu * r->ex[1] + yv * r->ey[1] + r->z0 * r->ez[1]),
+                 (float)(r->o[2] + xu * r->ex[2] + yv * r->ey[2] + r->z0 * r->ez[2]));
+}
+/* The solid-angle density of a direction that meets quad or triangle p at distance t from o. */
+static float pt__planar_density_from(const pt__prim *p, float area, pt_vec3 o, float t, pt_vec3 w)
+{
+    pt__sphrect r;
+    if (p->type == PT__PRIM_QUAD && pt__sphrect_init(&r, p, o)) return (float)(1.0 / r.S);
+    return pt__planar_density(p->n, area, t, w);
+}
+
 /* Samples quad or triangle primitive p (of area `area`) from o. */
 static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided, pt_vec3 o, float u1, float u2,
                                    pt__light_sample *ls)
 {
     pt_vec3 q, v;
     float dist2, dist;
+    pt__sphrect r;
+    int sph;
     if (!pt__planar_faces(o, p->p0, p->n, two_sided)) return 0;
-    q = pt__planar_point(p, u1, u2);
+    sph = p->type == PT__PRIM_QUAD && pt__sphrect_init(&r, p, o);
+    q = sph ? pt__sphrect_point(&r, u1, u2) : pt__planar_point(p, u1, u2);
     v = pt_sub(q, o);
     dist2 = pt_length2(v);
     if (!(dist2 > 0.0f)) return 0;
     dist = sqrtf(dist2);
     ls->dir = pt_scale(v, 1.0f / dist);
-    ls->pdf = pt__planar_density(p->n, area, dist, ls->dir);
+    ls->pdf = sph ? (float)(1.0 / r.S) : pt__planar_density(p->n, area, dist, ls->dir);
     ls->dist = dist;
     ls->point = q;
     ls->normal = p->n;
@@ -2417,7 +2523,7 @@ static float pt__planar_light_value(const pt__prim *p, float area, int two_sided
     r.dir = w;
     pt__rayctx_init2(&rc, r, p->type == PT__PRIM_TRIANGLE);
     if (!pt__hit_prim(&rc, p, PT__INF, &t, bary)) return 0.0f;
-    return pt__planar_density(p->n, area, t, w);
+    return pt__planar_density_from(p, area, o, t, w);
 }
 /* A temporary primitive for the public quad and triangle PDFs (0 when it has no area). */
 static int pt__planar_make(pt__prim *p, int type, pt_vec3 a, pt_vec3 b, pt_vec3 c, float *area)
@@ -2465,7 +2571,7 @@ static float pt__light_prim_value_at(const pt_scene *s, const pt__prim *p, pt_ve
     int two = s->mats[p->material].two_sided;
     if (p->type == PT__PRIM_SPHERE) return pt__sphere_light_value(o, p->p0, p->p1.x, two, w);
     if (!pt__planar_faces(o, p->p0, p->n, two)) return 0.0f;
-    return pt__planar_density(p->n, s->lights[p->light].area, t, w);
+    return pt__planar_density_from(p, s->lights[p->light].area, o, t, w);
 }
 static uint32_t pt__pick_light(const pt_scene *s, float u)
 {

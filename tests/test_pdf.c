@@ -414,6 +414,101 @@ static void pdf_quad_light(test_ctx *t)
     agg_note(t, &a);
 }
 
+/* A rectangle (not axis-aligned) is sampled uniformly in solid angle (Urena et al. 2013) where it
+   looks large (tu_rect_spherical), by area elsewhere: from very close (S ~ 5.9), one unit away,
+   grazing (0.02 below its plane, beside an edge), far (S ~ 1e-3: area), farther (S ~ 1e-4, area),
+   and from behind (two-sided). The closed form is 1/S (S in double from two Van Oosterom-Strackee
+   triangles) where it is sampled by solid angle, the area density elsewhere. */
+static void pdf_spherical_rectangle(test_ctx *t)
+{
+    /* u = 1.1 (0.8, 0, 0.6) and v = 0.9 (0.36, -0.8, -0.48) are orthogonal; u x v points to about
+       (0.48, 0.6, -0.64) */
+    const pt_vec3 q = {-0.4f, 1.0f, 0.2f}, u = {0.88f, 0.0f, 0.66f}, v = {0.324f, -0.72f, -0.432f};
+    const dv3 c = dadd(dadd(dv_from(q), dscale(dv_from(u), 0.5)), dscale(dv_from(v), 0.5));
+    const dv3 n = dnorm(dcross(dv_from(u), dv_from(v)));
+    dv3 origins[6];
+    const char *names[6] = {"close", "one away", "grazing", "far", "farther", "behind"};
+    const int modes[6] = {LC_PLANAR, LC_CONE, LC_PLANAR, LC_CONE, LC_PLANAR, LC_SMALL};
+    agg a;
+    int oi;
+    origins[0] = dadd(c, dscale(n, 0.03));
+    origins[1] = dadd(dadd(c, dscale(n, 1.0)), dv(0.3, 0.1, 0.2));
+    origins[2] = dadd(dadd(dv_from(q), dscale(dv_from(u), 1.15)), dscale(n, 0.02));
+    origins[3] = dadd(c, dscale(dnorm(dadd(n, dv(0.2, -0.1, 0.1))), 30.0));
+    origins[4] = dadd(c, dscale(n, 100.0));
+    origins[5] = dsub(c, dscale(n, 0.7));
+    agg_init(&a);
+    for (oi = 0; oi < 6; oi++) {
+        char label[128];
+        tu_light L;
+        pt_vec3 of = dv_to(origins[oi]);
+        int two = oi == 5;
+        pt_pdf p = pt_pdf_quad_light(of, q, u, v, two);
+        double S;
+        memset(&L, 0, sizeof L);
+        L.kind = TU_QUAD;
+        L.p0 = dv_from(q);
+        L.p1 = dv_from(u);
+        L.p2 = dv_from(v);
+        L.two_sided = two;
+        S = tu_light_solid_angle(&L, dv_from(of));
+        snprintf(label, sizeof label, "rectangle, %s (S = %.3g sr, %s)", names[oi], S,
+                 tu_rect_spherical(&L, dv_from(of)) ? "solid angle" : "area");
+        CHECK(t, tu_rect_spherical(&L, dv_from(of)) == (oi < 3 || oi == 5), "%s: the case is not where it should be", label);
+        light_case(t, &a, label, &p, &L, dv_from(of), 1, 470 + oi, modes[oi]);
+    }
+    agg_note(t, &a);
+}
+
+/* The rectangle's solid-angle sampler paired with its area density (the Jacobian of the wrong
+   measure): sample and value agree and the mass is 1, so only the chi-square can see it. */
+static int rect_as_area_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf);
+static float rect_as_area_value(void *user, pt_vec3 dir);
+typedef struct rect_user { pt_pdf sph; tu_light L; dv3 o; } rect_user;
+static float rect_area_density(const rect_user *r, pt_vec3 w)
+{
+    tu_light L = r->L;
+    int near;
+    L.p1 = dscale(L.p1, 1.0 + 1e-3); /* a skewed twin is not a rectangle: tu_light_density gives area */
+    L.p2 = dadd(L.p2, dscale(L.p1, 1e-3));
+    return (float)tu_light_density(&L, r->o, dv_from(w), &near);
+}
+static int rect_as_area_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
+{
+    const rect_user *r = (const rect_user *)user;
+    if (!pt_pdf_sample(&r->sph, rng, dir, pdf)) return 0;
+    *pdf = rect_area_density(r, *dir);
+    return *pdf > 0.0f;
+}
+static float rect_as_area_value(void *user, pt_vec3 dir) { return rect_area_density((const rect_user *)user, dir); }
+
+static void harness_rejects_rectangle_area_jacobian(test_ctx *t)
+{
+    rect_user r;
+    pt_pdf p;
+    tu_pdf_check c;
+    tu_pdf_result res;
+    char reason[768];
+    int failures;
+    memset(&r, 0, sizeof r);
+    r.L.kind = TU_QUAD;
+    r.L.p0 = dv(-0.6, 1.0, -0.5);
+    r.L.p1 = dv(1.2, 0.0, 0.0);
+    r.L.p2 = dv(0.0, 0.0, 1.0);
+    r.o = dv(0.1, 0.6, 0.05); /* 0.4 below: S ~ 2.6 sr, far from the area density's shape */
+    r.sph = pt_pdf_quad_light(dv_to(r.o), dv_to(r.L.p0), dv_to(r.L.p1), dv_to(r.L.p2), 0);
+    p = pt_pdf_callback(&r, rect_as_area_sample, rect_as_area_value);
+    c = base_check("WRONG: spherical-rectangle samples, area density", &p, 996);
+    tu_light_cone(&r.L, r.o, &c.axis, &c.omc);
+    c.support = tu_light_solid_angle(&r.L, r.o);
+    issue3(&c, 40, 81);
+    failures = tu_check_pdf_rejects(&c, &res, reason, sizeof reason);
+    CHECK(t, failures > 0, "solid-angle samples with the area density were not rejected (chi2 p = %.3g)", res.chi2_p);
+    CHECK(t, res.chi2_p < c.alpha, "chi-square p = %.3g not below alpha %.3g", res.chi2_p, c.alpha);
+    test_note(t, "rejected by %d check(s); chi2 %.0f, %d dof, p = %.3g; first: %.160s", failures, res.chi2, res.dof,
+              res.chi2_p, reason);
+}
+
 static void pdf_triangle_light(test_ctx *t)
 {
     /* (b - a) x (c - a) points to -y (first) and mostly -y (second, tilted). */
@@ -1507,6 +1602,8 @@ const test_case test_pdf_cases[] = {
     TEST_CASE(sphere_light_point_limit_path),
     TEST_CASE(sphere_light_small_cone_mean),
     TEST_CASE(pdf_quad_light),
+    TEST_CASE(pdf_spherical_rectangle),
+    TEST_CASE(harness_rejects_rectangle_area_jacobian),
     TEST_CASE(pdf_triangle_light),
     TEST_CASE(pdf_scene_lights),
     TEST_CASE(pdf_scene_lights_power),

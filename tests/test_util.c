@@ -283,8 +283,21 @@ double tu_light_density(const tu_light *L, dv3 o, dv3 w, int *near)
             if (dist < fabs(t) * 1e-6 / fmax(cos_l, 1e-12) + 1e-7 * fmax(e1, e2) || cos_l < 1e-6) *near = 1;
         }
         if (t <= 0.0 || margin < 0.0) return 0.0;
+        if (tu_rect_spherical(L, o)) return 1.0 / tu_light_solid_angle(L, o);
         return t * t / (cos_l * area);
     }
+}
+
+int tu_rect_spherical(const tu_light *L, dv3 o)
+{
+    dv3 c;
+    double d2, omega;
+    if (L->kind != TU_QUAD || fabs(ddot(L->p1, L->p2)) > 1e-5 * dlen(L->p1) * dlen(L->p2)) return 0;
+    c = dsub(dadd(dadd(L->p0, dscale(L->p1, 0.5)), dscale(L->p2, 0.5)), o);
+    d2 = ddot(c, c);
+    if (!(0.25 * (ddot(L->p1, L->p1) + ddot(L->p2, L->p2)) >= TU_SPHERICAL_FROM * d2)) return 0;
+    omega = tu_light_solid_angle(L, o);
+    return omega >= 3e-4 && omega <= 6.22;
 }
 
 double tu_light_solid_angle(const tu_light *L, dv3 o)
