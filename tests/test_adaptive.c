@@ -31,7 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define ADAPTIVE_Z_TESTS 128 /* 16 regions x (1 adaptive-vs-uniform + 7 skip comparisons) */
+#define ADAPTIVE_Z_TESTS 144 /* 16 regions x (1 adaptive-vs-uniform + 8 skip comparisons) */
 #define FAMILY_ALPHA 0.01
 
 static double z_limit(void) { return tu_z_two_sided(tu_sidak(FAMILY_ALPHA, ADAPTIVE_Z_TESTS)); }
@@ -923,8 +923,9 @@ static void skips_within_noise(test_ctx *t)
 {
     /* The skips that draw random numbers differently: no emitters (a sky-lit scene: MIS, light,
        mixture), delta vertex (mirror and glass: MIS, light), one-sided light facing away (mixture;
-       the ceiling and the light's back are behind it), and every skip at once (MIS). 7 comparisons
-       of 16 regions in the file's family. */
+       the ceiling and the light's back are behind it), every skip at once (MIS), and solid-angle
+       sampling of a large rectangular light close to a floor (MIS). 8 comparisons of 16 regions in
+       the file's family. */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 32, 24, 48), *sky;
     double worst = 0;
@@ -938,6 +939,26 @@ static void skips_within_noise(test_ctx *t)
     skip_case(t, s, &d, PT_SKIP_FACING_AWAY, 0, "facing away (mixture)", &worst);
     d.strategy = PT_STRATEGY_MIS;
     skip_case(t, s, &d, PT_SKIP_ALL, 0, "all (MIS)", &worst);
+    pt_scene_destroy(s);
+
+    /* solid-angle quads: a 2 x 2 light 0.8 above a floor, so every floor point samples it by
+       solid angle, and the general path by area */
+    s = pt_scene_create();
+    if (!CHECK(t, s != NULL, "panel scene")) return;
+    {
+        int white = pt_scene_add_lambertian(s, pt_v3(0.6f, 0.6f, 0.6f)), lamp = pt_scene_add_emitter(s, pt_v3(2, 2, 2), 0);
+        int rc = pt_scene_add_quad(s, pt_v3(-3, 0, -3), pt_v3(0, 0, 6), pt_v3(6, 0, 0), white);
+        rc |= pt_scene_add_quad(s, pt_v3(-1, 0.8f, -1), pt_v3(2, 0, 0), pt_v3(0, 0, 2), lamp); /* faces down */
+        if (!CHECK(t, rc >= 0 && pt_scene_commit(s) == PT_OK, "panel scene: %s", pt_scene_error_message(s))) {
+            pt_scene_destroy(s);
+            return;
+        }
+    }
+    d = tu_base_desc(32, 24, 16, 13);
+    d.camera.look_from = pt_v3(0, 0.6f, -2.5f);
+    d.camera.look_at = pt_v3(0, 0.2f, 0);
+    d.max_depth = 3;
+    skip_case(t, s, &d, PT_SKIP_SOLID_ANGLE_QUADS, 0, "solid-angle quads (MIS)", &worst);
     pt_scene_destroy(s);
 
     /* no emitters: an open scene (floor, two spheres) under a uniform sky of radiance 1 */
@@ -965,7 +986,7 @@ static void skips_within_noise(test_ctx *t)
         skip_case(t, sky, &d, PT_SKIP_NO_EMITTERS, 0, nm[k], &worst);
     }
     pt_scene_destroy(sky);
-    test_note(t, "7 comparisons of 16 regions, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over %d)", worst, z_limit(),
+    test_note(t, "8 comparisons of 16 regions, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over %d)", worst, z_limit(),
               ADAPTIVE_Z_TESTS);
 }
 
