@@ -2488,11 +2488,97 @@ static pt_vec3 pt__sphrect_point(const pt__sphrect *r, double u1, double u2)
                  (float)(r->o[1] + xu * r->ex[1] + yv * r->ey[1] + r->z0 * r->ez[1]),
                  (float)(r->o[2] + xu * r->ex[2] + yv * r->ey[2] + r->z0 * r->ez[2]));
 }
+
+/* Solid-angle sampling of a triangle light (Arvo, "Stratified Sampling of Spherical Triangles",
+   SIGGRAPH 1995), in double, under the rule of rectangles above: where (half its longest edge /
+   the distance to its centroid)^2 is at least PT__SPHERICAL_FROM and its solid angle S is in
+   [PT__SPHERICAL_MIN, PT__SPHERICAL_MAX]; density 1/S. */
+typedef struct pt__sphtri {
+    double o[3], A[3], B[3], C[3], alpha, cos_c, S;
+} pt__sphtri;
+static int pt__d3unit_or0(double *a, const double *v)
+{
+    double l = sqrt(pt__d3dot(v, v));
+    if (!(l > 0.0) || !(l < HUGE_VAL)) return 0;
+    a[0] = v[0] / l;
+    a[1] = v[1] / l;
+    a[2] = v[2] / l;
+    return 1;
+}
+static void pt__d3cross(double *out, const double *a, const double *b)
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+static int pt__sphtri_init(pt__sphtri *r, const pt__prim *p, pt_vec3 o)
+{
+    double v[3], nab[3], nbc[3], nca[3], beta, gamma;
+    const pt_vec3 *P[3];
+    int i;
+    {   /* is it large next to its distance? (float: only a threshold) */
+        pt_vec3 c = pt_sub(pt_scale(pt_add(pt_add(p->p0, p->p1), p->p2), 1.0f / 3.0f), o);
+        float e = pt__maxf(pt_length2(pt_sub(p->p1, p->p0)),
+                           pt__maxf(pt_length2(pt_sub(p->p2, p->p1)), pt_length2(pt_sub(p->p0, p->p2))));
+        if (!(0.25f * e >= (float)PT__SPHERICAL_FROM * pt_length2(c))) return 0;
+    }
+    P[0] = &p->p0; P[1] = &p->p1; P[2] = &p->p2;
+    r->o[0] = o.x; r->o[1] = o.y; r->o[2] = o.z;
+    for (i = 0; i < 3; ++i) {
+        double *d = i == 0 ? r->A : i == 1 ? r->B : r->C;
+        v[0] = (double)P[i]->x - o.x; v[1] = (double)P[i]->y - o.y; v[2] = (double)P[i]->z - o.z;
+        if (!pt__d3unit_or0(d, v)) return 0;
+    }
+    /* the angles at the vertices, between the planes through o and each edge */
+    pt__d3cross(v, r->A, r->B);
+    if (!pt__d3unit_or0(nab, v)) return 0;
+    pt__d3cross(v, r->B, r->C);
+    if (!pt__d3unit_or0(nbc, v)) return 0;
+    pt__d3cross(v, r->C, r->A);
+    if (!pt__d3unit_or0(nca, v)) return 0;
+    r->alpha = pt__acos_clamped(-pt__d3dot(nab, nca));
+    beta = pt__acos_clamped(-pt__d3dot(nbc, nab));
+    gamma = pt__acos_clamped(-pt__d3dot(nca, nbc));
+    r->S = r->alpha + beta + gamma - 3.14159265358979323846;
+    r->cos_c = pt__d3dot(r->A, r->B);
+    return r->S >= PT__SPHERICAL_MIN && r->S <= PT__SPHERICAL_MAX;
+}
+/* The point of triangle p that (u1, u2) maps to: a direction by Arvo's two steps (the sub-triangle
+   of area u1 S fixes the point C' on the arc AC; then z uniform in cos along the arc BC'), then its
+   hit with the triangle's plane. */
+static pt_vec3 pt__sphtri_point(const pt__sphtri *r, const pt__prim *p, double u1, double u2)
+{
+    double ap = u1 * r->S, s = sin(ap - r->alpha), t = cos(ap - r->alpha), ca = cos(r->alpha), sa = sin(r->alpha);
+    double u = t - ca, v = s + sa * r->cos_c, den = (v * s + u * t) * sa, q, w[3], ch[3], dir[3], z, k, n[3], hit;
+    int i;
+    q = den != 0.0 ? ((v * t - u * s) * ca - v) / den : 1.0;
+    q = q < -1.0 ? -1.0 : (q > 1.0 ? 1.0 : q);
+    k = pt__d3dot(r->C, r->A);
+    for (i = 0; i < 3; ++i) w[i] = r->C[i] - k * r->A[i];
+    if (!pt__d3unit_or0(w, w)) { w[0] = w[1] = w[2] = 0.0; }
+    for (i = 0; i < 3; ++i) ch[i] = q * r->A[i] + sqrt(1.0 - q * q) * w[i];
+    z = 1.0 - u2 * (1.0 - pt__d3dot(ch, r->B));
+    z = z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
+    k = pt__d3dot(ch, r->B);
+    for (i = 0; i < 3; ++i) w[i] = ch[i] - k * r->B[i];
+    if (!pt__d3unit_or0(w, w)) { w[0] = w[1] = w[2] = 0.0; }
+    for (i = 0; i < 3; ++i) dir[i] = z * r->B[i] + sqrt(1.0 - z * z) * w[i];
+    n[0] = p->n.x; n[1] = p->n.y; n[2] = p->n.z;
+    w[0] = (double)p->p0.x - r->o[0]; w[1] = (double)p->p0.y - r->o[1]; w[2] = (double)p->p0.z - r->o[2];
+    k = pt__d3dot(n, dir);
+    hit = k != 0.0 ? pt__d3dot(n, w) / k : 0.0;
+    return pt_v3((float)(r->o[0] + hit * dir[0]), (float)(r->o[1] + hit * dir[1]), (float)(r->o[2] + hit * dir[2]));
+}
+
 /* The solid-angle density of a direction that meets quad or triangle p at distance t from o. */
 static float pt__planar_density_from(const pt__prim *p, float area, pt_vec3 o, float t, pt_vec3 w, int sph)
 {
-    pt__sphrect r;
-    if (sph && p->type == PT__PRIM_QUAD && pt__sphrect_init(&r, p, o)) return (float)(1.0 / r.S);
+    if (sph) {
+        pt__sphrect r;
+        pt__sphtri tr;
+        if (p->type == PT__PRIM_QUAD && pt__sphrect_init(&r, p, o)) return (float)(1.0 / r.S);
+        if (p->type == PT__PRIM_TRIANGLE && pt__sphtri_init(&tr, p, o)) return (float)(1.0 / tr.S);
+    }
     return pt__planar_density(p->n, area, t, w);
 }
 
@@ -2502,16 +2588,25 @@ static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided,
 {
     pt_vec3 q, v;
     float dist2, dist;
+    double S = 0.0;
     pt__sphrect r;
+    pt__sphtri tr;
     if (!pt__planar_faces(o, p->p0, p->n, two_sided)) return 0;
-    sph = sph && p->type == PT__PRIM_QUAD && pt__sphrect_init(&r, p, o);
-    q = sph ? pt__sphrect_point(&r, u1, u2) : pt__planar_point(p, u1, u2);
+    if (sph && p->type == PT__PRIM_QUAD && pt__sphrect_init(&r, p, o)) {
+        q = pt__sphrect_point(&r, u1, u2);
+        S = r.S;
+    } else if (sph && p->type == PT__PRIM_TRIANGLE && pt__sphtri_init(&tr, p, o)) {
+        q = pt__sphtri_point(&tr, p, u1, u2);
+        S = tr.S;
+    } else {
+        q = pt__planar_point(p, u1, u2);
+    }
     v = pt_sub(q, o);
     dist2 = pt_length2(v);
     if (!(dist2 > 0.0f)) return 0;
     dist = sqrtf(dist2);
     ls->dir = pt_scale(v, 1.0f / dist);
-    ls->pdf = sph ? (float)(1.0 / r.S) : pt__planar_density(p->n, area, dist, ls->dir);
+    ls->pdf = S > 0.0 ? (float)(1.0 / S) : pt__planar_density(p->n, area, dist, ls->dir);
     ls->dist = dist;
     ls->point = q;
     ls->normal = p->n;

@@ -453,8 +453,8 @@ static void pdf_spherical_rectangle(test_ctx *t)
         L.two_sided = two;
         S = tu_light_solid_angle(&L, dv_from(of));
         snprintf(label, sizeof label, "rectangle, %s (S = %.3g sr, %s)", names[oi], S,
-                 tu_rect_spherical(&L, dv_from(of)) ? "solid angle" : "area");
-        CHECK(t, tu_rect_spherical(&L, dv_from(of)) == (oi < 3 || oi == 5), "%s: the case is not where it should be", label);
+                 tu_planar_spherical(&L, dv_from(of)) ? "solid angle" : "area");
+        CHECK(t, tu_planar_spherical(&L, dv_from(of)) == (oi < 3 || oi == 5), "%s: the case is not where it should be", label);
         light_case(t, &a, label, &p, &L, dv_from(of), 1, 470 + oi, modes[oi]);
     }
     agg_note(t, &a);
@@ -499,6 +499,99 @@ static void harness_rejects_rectangle_area_jacobian(test_ctx *t)
     r.sph = pt_pdf_quad_light(dv_to(r.o), dv_to(r.L.p0), dv_to(r.L.p1), dv_to(r.L.p2), 0);
     p = pt_pdf_callback(&r, rect_as_area_sample, rect_as_area_value);
     c = base_check("WRONG: spherical-rectangle samples, area density", &p, 996);
+    tu_light_cone(&r.L, r.o, &c.axis, &c.omc);
+    c.support = tu_light_solid_angle(&r.L, r.o);
+    issue3(&c, 40, 81);
+    failures = tu_check_pdf_rejects(&c, &res, reason, sizeof reason);
+    CHECK(t, failures > 0, "solid-angle samples with the area density were not rejected (chi2 p = %.3g)", res.chi2_p);
+    CHECK(t, res.chi2_p < c.alpha, "chi-square p = %.3g not below alpha %.3g", res.chi2_p, c.alpha);
+    test_note(t, "rejected by %d check(s); chi2 %.0f, %d dof, p = %.3g; first: %.160s", failures, res.chi2, res.dof,
+              res.chi2_p, reason);
+}
+
+/* Triangles are sampled uniformly in solid angle (Arvo 1995) where they look large
+   (tu_planar_spherical): from very close above the centroid, beside a vertex, grazing (near the
+   plane, next to an edge), one unit away, far (area), and from behind (two-sided). */
+static void pdf_spherical_triangle(test_ctx *t)
+{
+    const pt_vec3 a = {-0.6f, 1.1f, -0.4f}, b = {0.9f, 0.9f, -0.3f}, c = {-0.2f, 1.3f, 0.9f};
+    const dv3 g = dscale(dadd(dadd(dv_from(a), dv_from(b)), dv_from(c)), 1.0 / 3.0);
+    const dv3 n = dnorm(dcross(dsub(dv_from(b), dv_from(a)), dsub(dv_from(c), dv_from(a))));
+    dv3 origins[6];
+    const char *names[6] = {"close", "beside a vertex", "grazing", "one away", "far", "behind"};
+    const int modes[6] = {LC_PLANAR, LC_PLANAR, LC_PLANAR, LC_CONE, LC_CONE, LC_SMALL};
+    agg ag;
+    int oi;
+    origins[0] = dadd(g, dscale(n, 0.04));
+    origins[1] = dadd(dadd(dv_from(b), dscale(n, 0.1)), dv(0.05, 0.0, 0.02));
+    origins[2] = dadd(dadd(dscale(dadd(dv_from(a), dv_from(c)), 0.5), dscale(dnorm(dsub(dv_from(a), dv_from(b))), 0.1)), dscale(n, 0.01));
+    origins[3] = dadd(g, dscale(n, 1.0));
+    origins[4] = dadd(g, dscale(n, 40.0));
+    origins[5] = dsub(g, dscale(n, 0.5));
+    agg_init(&ag);
+    for (oi = 0; oi < 6; oi++) {
+        char label[128];
+        tu_light L;
+        pt_vec3 of = dv_to(origins[oi]);
+        int two = oi == 5;
+        pt_pdf p = pt_pdf_triangle_light(of, a, b, c, two);
+        double S;
+        memset(&L, 0, sizeof L);
+        L.kind = TU_TRIANGLE;
+        L.p0 = dv_from(a);
+        L.p1 = dv_from(b);
+        L.p2 = dv_from(c);
+        L.two_sided = two;
+        S = tu_light_solid_angle(&L, dv_from(of));
+        snprintf(label, sizeof label, "triangle, %s (S = %.3g sr, %s)", names[oi], S,
+                 tu_planar_spherical(&L, dv_from(of)) ? "solid angle" : "area");
+        CHECK(t, tu_planar_spherical(&L, dv_from(of)) == (oi != 4), "%s: the case is not where it should be", label);
+        light_case(t, &ag, label, &p, &L, dv_from(of), 1, 490 + oi, modes[oi]);
+    }
+    agg_note(t, &ag);
+}
+
+/* The triangle's solid-angle sampler paired with its area density: only the chi-square sees it. */
+typedef struct tri_user { pt_pdf sph; tu_light L; dv3 o; } tri_user;
+static float tri_area_density(const tri_user *r, pt_vec3 wf)
+{
+    dv3 w = dnorm(dv_from(wf)), e1 = dsub(r->L.p1, r->L.p0), e2 = dsub(r->L.p2, r->L.p0), N = dcross(e1, e2), x;
+    double den = ddot(N, w), tt, b1, b2, area = 0.5 * dlen(N);
+    if (den == 0.0) return 0.0f;
+    tt = ddot(N, dsub(r->L.p0, r->o)) / den;
+    if (!(tt > 0.0)) return 0.0f;
+    x = dsub(dadd(r->o, dscale(w, tt)), r->L.p0);
+    b1 = ddot(dcross(x, e2), N) / ddot(N, N);
+    b2 = ddot(dcross(e1, x), N) / ddot(N, N);
+    if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) return 0.0f;
+    return (float)(tt * tt / (fabs(den) / dlen(N) * area));
+}
+static int tri_as_area_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
+{
+    const tri_user *r = (const tri_user *)user;
+    if (!pt_pdf_sample(&r->sph, rng, dir, pdf)) return 0;
+    *pdf = tri_area_density(r, *dir);
+    return *pdf > 0.0f;
+}
+static float tri_as_area_value(void *user, pt_vec3 dir) { return tri_area_density((const tri_user *)user, dir); }
+
+static void harness_rejects_triangle_area_jacobian(test_ctx *t)
+{
+    tri_user r;
+    pt_pdf p;
+    tu_pdf_check c;
+    tu_pdf_result res;
+    char reason[768];
+    int failures;
+    memset(&r, 0, sizeof r);
+    r.L.kind = TU_TRIANGLE;
+    r.L.p0 = dv(-0.6, 1.0, -0.5);
+    r.L.p1 = dv(0.9, 1.0, -0.3);
+    r.L.p2 = dv(-0.3, 1.0, 0.9);
+    r.o = dv(0.0, 0.7, 0.0); /* 0.3 below: a large solid angle, far from the area density's shape */
+    r.sph = pt_pdf_triangle_light(dv_to(r.o), dv_to(r.L.p0), dv_to(r.L.p1), dv_to(r.L.p2), 0);
+    p = pt_pdf_callback(&r, tri_as_area_sample, tri_as_area_value);
+    c = base_check("WRONG: spherical-triangle samples, area density", &p, 997);
     tu_light_cone(&r.L, r.o, &c.axis, &c.omc);
     c.support = tu_light_solid_angle(&r.L, r.o);
     issue3(&c, 40, 81);
@@ -1604,6 +1697,8 @@ const test_case test_pdf_cases[] = {
     TEST_CASE(pdf_quad_light),
     TEST_CASE(pdf_spherical_rectangle),
     TEST_CASE(harness_rejects_rectangle_area_jacobian),
+    TEST_CASE(pdf_spherical_triangle),
+    TEST_CASE(harness_rejects_triangle_area_jacobian),
     TEST_CASE(pdf_triangle_light),
     TEST_CASE(pdf_scene_lights),
     TEST_CASE(pdf_scene_lights_power),

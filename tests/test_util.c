@@ -283,19 +283,28 @@ double tu_light_density(const tu_light *L, dv3 o, dv3 w, int *near)
             if (dist < fabs(t) * 1e-6 / fmax(cos_l, 1e-12) + 1e-7 * fmax(e1, e2) || cos_l < 1e-6) *near = 1;
         }
         if (t <= 0.0 || margin < 0.0) return 0.0;
-        if (tu_rect_spherical(L, o)) return 1.0 / tu_light_solid_angle(L, o);
+        if (tu_planar_spherical(L, o)) return 1.0 / tu_light_solid_angle(L, o);
         return t * t / (cos_l * area);
     }
 }
 
-int tu_rect_spherical(const tu_light *L, dv3 o)
+int tu_planar_spherical(const tu_light *L, dv3 o)
 {
     dv3 c;
-    double d2, omega;
-    if (L->kind != TU_QUAD || fabs(ddot(L->p1, L->p2)) > 1e-5 * dlen(L->p1) * dlen(L->p2)) return 0;
-    c = dsub(dadd(dadd(L->p0, dscale(L->p1, 0.5)), dscale(L->p2, 0.5)), o);
+    double d2, size2, omega;
+    if (L->kind == TU_QUAD) {
+        if (fabs(ddot(L->p1, L->p2)) > 1e-5 * dlen(L->p1) * dlen(L->p2)) return 0; /* not a rectangle */
+        c = dsub(dadd(dadd(L->p0, dscale(L->p1, 0.5)), dscale(L->p2, 0.5)), o);
+        size2 = 0.25 * (ddot(L->p1, L->p1) + ddot(L->p2, L->p2));
+    } else if (L->kind == TU_TRIANGLE) {
+        dv3 e0 = dsub(L->p1, L->p0), e1 = dsub(L->p2, L->p1), e2 = dsub(L->p0, L->p2);
+        c = dsub(dscale(dadd(dadd(L->p0, L->p1), L->p2), 1.0 / 3.0), o);
+        size2 = 0.25 * fmax(ddot(e0, e0), fmax(ddot(e1, e1), ddot(e2, e2)));
+    } else {
+        return 0;
+    }
     d2 = ddot(c, c);
-    if (!(0.25 * (ddot(L->p1, L->p1) + ddot(L->p2, L->p2)) >= TU_SPHERICAL_FROM * d2)) return 0;
+    if (!(size2 >= TU_SPHERICAL_FROM * d2)) return 0;
     omega = tu_light_solid_angle(L, o);
     return omega >= 3e-4 && omega <= 6.22;
 }

@@ -93,11 +93,12 @@ typedef struct tu_light {
    (a shading point on the surface of a sphere light, where either model is valid). */
 double tu_light_density(const tu_light *L, dv3 o, dv3 w, int *near);
 double tu_light_solid_angle(const tu_light *L, dv3 o); /* measure of {density > 0} */
-/* 1 when pdftrace samples quad light L from o uniformly in solid angle (pt__sphrect_init): a
-   rectangle with (half its diagonal / the distance to its centre)^2 >= TU_SPHERICAL_FROM
-   (pdftrace.h's PT__SPHERICAL_FROM) and a solid angle in [3e-4, 6.22]. */
+/* 1 when pdftrace samples planar light L from o uniformly in solid angle (pt__sphrect_init,
+   pt__sphtri_init): a rectangle with (half its diagonal / the distance to its centre)^2, or a
+   triangle with (half its longest edge / the distance to its centroid)^2, at least
+   TU_SPHERICAL_FROM (pdftrace.h's PT__SPHERICAL_FROM), and a solid angle in [3e-4, 6.22]. */
 #define TU_SPHERICAL_FROM 0.3
-int tu_rect_spherical(const tu_light *L, dv3 o);
+int tu_planar_spherical(const tu_light *L, dv3 o);
 void tu_light_cone(const tu_light *L, dv3 o, dv3 *axis, double *omc); /* a cone containing it */
 double tu_light_area(const tu_light *L);
 /* Where the ray o + t w first hits the light (t > 0), or -1. */
