@@ -106,6 +106,10 @@ static const bench_scene scenes[] = {
     {"caustic", "bench/scenes/caustic.scene", 8192, 0,
      "a glass ball on a diffuse floor under a small light: the floor caustic, found only by sampling through the glass",
      "not numeric: caustics need photons, which the exporter does not emit", 1},
+    {"close-quad", "bench/scenes/close-quad.scene", 8192, 1,
+     "a long ceiling panel 5 cm from the back wall: a large quad light seen from close by (solid-angle sampling), "
+     "diffuse, global illumination",
+     "numeric, loose (diffuse global illumination: radiosity, the recipe's 'Cornell box' row)", 0},
 };
 #define SCENE_COUNT ((int)(sizeof scenes / sizeof scenes[0]))
 
@@ -1717,6 +1721,14 @@ static const skip_case skip_cases[] = {
     /* light samples fall below the surface on the half of each ball that faces away */
     {"ZERO_BSDF_SHADOW", PT_SKIP_ZERO_BSDF_SHADOW, "bench/scenes/balls.scene", "balls", PT_STRATEGY_MIS, 0.0f,
      SKIP_EXACT, "no shadow ray to a light below the surface"},
+    /* solid-angle sampling of large rectangular lights; the general path samples them by area. The
+       close panel, where it is meant to pay, and Veach's door, whose lamp is large next to the
+       walls around it (elsewhere no shading point qualifies and the images are the same bit for
+       bit: bench/README.md) */
+    {"SOLID_ANGLE_QUADS", PT_SKIP_SOLID_ANGLE_QUADS, "bench/scenes/close-quad.scene", "close-quad", PT_STRATEGY_MIS, 0.0f,
+     SKIP_ESTIMATOR, "large rectangular lights sampled in solid angle, not by area"},
+    {"SOLID_ANGLE_QUADS", PT_SKIP_SOLID_ANGLE_QUADS, "bench/scenes/door.scene", "door", PT_STRATEGY_MIS, 0.0f,
+     SKIP_ESTIMATOR, "the same on Veach's door"},
 };
 #define SKIP_CASE_COUNT ((int)(sizeof skip_cases / sizeof skip_cases[0]))
 
