@@ -924,9 +924,14 @@ typedef struct pt_path_stats {
                                               is sampled uniformly in solid angle (section 2, spherical
                                               rectangles). General: every quad and triangle light by area
                                               (the same expectation, more variance near large lights) */
+#define PT_SKIP_LIGHT_TREE       (1u << 8) /* a scene with PT__LIGHT_TREE_MIN (16) or more emitting shapes
+                                              picks the light for next-event estimation by its light
+                                              tree (distance and orientation; section 2). General: by
+                                              power alone (the same expectation) */
 /* bits 1u << 1 and 1u << 5 were PT_SKIP_LIGHT_SELECTION and PT_SKIP_NO_TRIANGLES (removed) */
 #define PT_SKIP_ALL              (PT_SKIP_NO_EMITTERS | PT_SKIP_DELTA_VERTEX | PT_SKIP_FACING_AWAY | \
-                                  PT_SKIP_NO_TEXTURES | PT_SKIP_ZERO_BSDF_SHADOW | PT_SKIP_SOLID_ANGLE_QUADS)
+                                  PT_SKIP_NO_TEXTURES | PT_SKIP_ZERO_BSDF_SHADOW | PT_SKIP_SOLID_ANGLE_QUADS | \
+                                  PT_SKIP_LIGHT_TREE)
 
 /* ==========================================================================================
    8. RENDERING: tiles, threads, progressive passes, adaptive sampling, statistics
@@ -1347,6 +1352,18 @@ typedef struct pt__light {
     float area;
 } pt__light;
 
+/* A node of the light tree (section 2, "light tree"): the bounds, power and normal cone of the
+   lights below it. */
+typedef struct pt__lnode {
+    pt_vec3 lo, hi;
+    pt_vec3 axis;        /* the normals' cone: its axis (unit), */
+    float cos_o;         /* the cosine of its half-angle (-1: every direction), */
+    float cos_e;         /* and of the emission's angle beyond the normals (0: Lambertian, pi/2) */
+    float power;
+    uint32_t a, b;       /* children; a leaf: a = the light's index, b = PT__LNODE_LEAF */
+} pt__lnode;
+#define PT__LNODE_LEAF 0xffffffffu
+
 /* A delta light (pt_scene_add_light). */
 typedef struct pt__dlight {
     pt_light_desc desc;  /* as added, transformed, defaults resolved; position in the caller's
@@ -1416,6 +1433,9 @@ struct pt_scene {
     pt__light *lights;
     uint32_t light_count;
     double total_power;
+    pt__lnode *ltree;          /* the light tree (commit; NULL: fewer than PT__LIGHT_TREE_MIN lights) */
+    uint64_t *ltrail;          /* per light: the path from the root to its leaf, bit k = 1: child b */
+    uint32_t ltree_count;
     pt__dlight *dlights;       /* delta lights, in the order added */
     uint32_t dlight_count, dlight_cap;
     pt_transform xf;
@@ -2684,24 +2704,114 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
     }
     return lo;
 }
-/* Picks a light by power and samples it: ls->pdf is P_i * p_i(dir). */
+
+/* --- light tree: a light is picked by descending a binary tree over the lights, choosing each
+   child in proportion to a conservative estimate of what its lights can send to the shading point
+   (power, distance and orientation: Conty Estevez & Kulla, "Importance Sampling of Many Lights
+   with Adaptive Tree Splitting", 2018; the bound as in pbrt-v4's light BVH, without the receiver's
+   normal, so that the probability depends on the point alone). The probability of a light is the
+   product of the choices on its path (the scene's ltrail), so it can be evaluated for MIS. Scenes
+   with fewer than PT__LIGHT_TREE_MIN lights pick by power (bench/README.md, "Light tree"). */
+#ifndef PT__LIGHT_TREE_MIN
+#define PT__LIGHT_TREE_MIN 16u
+#endif
+#define PT__LIGHTS_SPHERICAL 1u /* mode bits of the functions below: solid-angle sampling of planar */
+#define PT__LIGHTS_TREE 2u      /* lights; the light tree (where the scene has one) */
+/* What node n's lights can send to p, up to a common factor; 0 only where none can light p. */
+static float pt__lnode_importance(const pt__lnode *n, pt_vec3 p)
+{
+    pt_vec3 c = pt_scale(pt_add(n->lo, n->hi), 0.5f), d = pt_sub(p, c);
+    float d2 = pt_length2(d), r2 = 0.25f * pt_length2(pt_sub(n->hi, n->lo)), cos_p = 1.0f;
+    if (n->cos_o > -1.0f && d2 > r2) {
+        /* theta_p = max(0, theta_w - theta_o - theta_b): the smallest angle between a normal in the
+           cone and a direction from the node's bounding sphere to p */
+        float dist = sqrtf(d2), cos_w = pt_dot(n->axis, d) / dist, sin_w = pt__safe_sqrt(1.0f - cos_w * cos_w);
+        float sin_o = pt__safe_sqrt(1.0f - n->cos_o * n->cos_o), sin_b2 = r2 / d2;
+        float cos_b = pt__safe_sqrt(1.0f - sin_b2), sin_b = sqrtf(sin_b2), cos_x = 1.0f, sin_x = 0.0f;
+        if (cos_w < n->cos_o) {
+            cos_x = cos_w * n->cos_o + sin_w * sin_o;
+            sin_x = sin_w * n->cos_o - cos_w * sin_o;
+        }
+        if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sin_b;
+        if (cos_p <= n->cos_e) return 0.0f;
+    }
+    /* (the distance clamped to the node's size: a point inside a cluster is not infinitely near) */
+    return n->power * cos_p / pt__maxf(d2, r2);
+}
+/* The probability of choosing child b at node n from p (< 0: neither child can light p). */
+static float pt__lnode_p_b(const pt_scene *s, const pt__lnode *n, pt_vec3 p)
+{
+    float ia = pt__lnode_importance(&s->ltree[n->a], p), ib = pt__lnode_importance(&s->ltree[n->b], p);
+    if (!(ia + ib > 0.0f) || !pt__isfinite(ia + ib)) return -1.0f;
+    return ib / (ia + ib);
+}
+static int pt__tree_pick(const pt_scene *s, pt_vec3 p, float u, uint32_t *light, float *pmf)
+{
+    const pt__lnode *n = &s->ltree[0];
+    float prob = 1.0f;
+    while (n->b != PT__LNODE_LEAF) {
+        float pb = pt__lnode_p_b(s, n, p);
+        if (pb < 0.0f) return 0;
+        if (u >= 1.0f - pb) { /* child b takes the top of [0, 1) */
+            u = pb > 0.0f ? pt__minf((u - (1.0f - pb)) / pb, 0.99999994f) : 0.0f;
+            prob *= pb;
+            n = &s->ltree[n->b];
+        } else {
+            u = pt__minf(u / (1.0f - pb), 0.99999994f);
+            prob *= 1.0f - pb;
+            n = &s->ltree[n->a];
+        }
+    }
+    *light = n->a;
+    *pmf = prob;
+    return prob > 0.0f;
+}
+/* The probability that light li is picked from p (mode: PT__LIGHTS_*). */
+static float pt__light_pmf(const pt_scene *s, pt_vec3 p, uint32_t li, unsigned mode)
+{
+    const pt__lnode *n;
+    uint64_t trail;
+    float prob = 1.0f;
+    if (!s->ltree || !(mode & PT__LIGHTS_TREE)) return s->lights[li].select_pdf;
+    n = &s->ltree[0];
+    trail = s->ltrail[li];
+    while (n->b != PT__LNODE_LEAF) {
+        float pb = pt__lnode_p_b(s, n, p);
+        if (pb < 0.0f) return 0.0f;
+        prob *= (trail & 1u) ? pb : 1.0f - pb;
+        n = &s->ltree[(trail & 1u) ? n->b : n->a];
+        trail >>= 1;
+    }
+    return prob;
+}
+
+/* Picks a light (by the tree, or by power) and samples it: ls->pdf is P_i * p_i(dir). */
 static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index, int sph)
+                             uint32_t *light_index, unsigned mode)
 {
     uint32_t li;
+    float pick;
     if (!s->light_count) return 0;
-    li = pt__pick_light(s, u0);
-    if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls, sph)) return 0;
-    ls->pdf *= s->lights[li].select_pdf;
+    if (s->ltree && (mode & PT__LIGHTS_TREE)) {
+        if (!pt__tree_pick(s, o, u0, &li, &pick)) return 0;
+    } else {
+        li = pt__pick_light(s, u0);
+        pick = s->lights[li].select_pdf;
+    }
+    if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls, (mode & PT__LIGHTS_SPHERICAL) != 0))
+        return 0;
+    ls->pdf *= pick;
     *light_index = li;
     return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
 }
-static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w, int sph)
+static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w, unsigned mode)
 {
     uint32_t i;
     float v = 0.0f;
-    for (i = 0; i < s->light_count; ++i)
-        v += s->lights[i].select_pdf * pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w, sph);
+    for (i = 0; i < s->light_count; ++i) {
+        float pv = pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w, (mode & PT__LIGHTS_SPHERICAL) != 0);
+        if (pv > 0.0f) v += pt__light_pmf(s, o, i, mode) * pv;
+    }
     return v;
 }
 
@@ -3562,7 +3672,7 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     }
     case PT_PDF_SCENE_LIGHTS:
         if (pdf->as.lights.scene && pdf->as.lights.scene->committed)
-            v = pt__lights_value(pdf->as.lights.scene, pt__to_local(pdf->as.lights.scene, pdf->origin), w, 1);
+            v = pt__lights_value(pdf->as.lights.scene, pt__to_local(pdf->as.lights.scene, pdf->origin), w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
         break;
     case PT_PDF_MATERIAL:
         if (pdf->as.material.scene && pdf->as.material.material >= 0 &&
@@ -3643,11 +3753,11 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         pt_vec3 o;
         if (!pdf->as.lights.scene || !pdf->as.lights.scene->committed) break;
         o = pt__to_local(pdf->as.lights.scene, pdf->origin);
-        ok = pt__lights_sample(pdf->as.lights.scene, o, u0, u1, u2, &ls, &li, 1);
+        ok = pt__lights_sample(pdf->as.lights.scene, o, u0, u1, u2, &ls, &li, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
         if (ok) {
             w = ls.dir;
             /* the density of the direction over all lights, not the picked one's alone */
-            p = pt__lights_value(pdf->as.lights.scene, o, w, 1);
+            p = pt__lights_value(pdf->as.lights.scene, o, w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
             ok = p > 0.0f;
         }
         break;
@@ -4105,6 +4215,8 @@ PTDEF void pt_scene_destroy(pt_scene *s)
     PT_FREE(s->normals);
     PT_FREE(s->bvh_mem);
     PT_FREE(s->lights);
+    PT_FREE(s->ltree);
+    PT_FREE(s->ltrail);
     PT_FREE(s->dlights);
     PT_FREE(s);
 }
@@ -6139,6 +6251,110 @@ static void pt__precision_check(pt_scene *s)
     }
 }
 
+/* --- the light tree (section 2): built over the light table by splitting the lights at the median
+   of their centres along the widest axis, so its depth is ceil(log2 n) (the trails fit 64 bits). */
+typedef struct pt__lkey { float key; uint32_t light; } pt__lkey;
+static int pt__lkey_cmp(const void *a, const void *b)
+{
+    const pt__lkey *x = (const pt__lkey *)a, *y = (const pt__lkey *)b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->light < y->light ? -1 : (x->light > y->light ? 1 : 0); /* deterministic */
+}
+/* The smallest cone holding cones a and b (pbrt-v4's DirectionCone union, in closed form). */
+static void pt__cone_union(pt__lnode *out, const pt__lnode *a, const pt__lnode *b)
+{
+    float ta, tb, td, to, tr;
+    pt_vec3 w;
+    out->cos_e = pt__minf(a->cos_e, b->cos_e); /* the wider of the two emission angles */
+    if (a->cos_o <= -1.0f || b->cos_o <= -1.0f) { out->axis = a->axis; out->cos_o = -1.0f; return; }
+    ta = acosf(pt__minf(1.0f, a->cos_o));
+    tb = acosf(pt__minf(1.0f, b->cos_o));
+    td = acosf(pt__minf(1.0f, pt__maxf(-1.0f, pt_dot(a->axis, b->axis))));
+    if (pt__minf(td + tb, PT__PI) <= ta) { out->axis = a->axis; out->cos_o = a->cos_o; return; }
+    if (pt__minf(td + ta, PT__PI) <= tb) { out->axis = b->axis; out->cos_o = b->cos_o; return; }
+    to = 0.5f * (ta + td + tb);
+    w = pt_cross(a->axis, b->axis);
+    if (to >= PT__PI || !(pt_length2(w) > 0.0f)) { out->axis = a->axis; out->cos_o = -1.0f; return; }
+    /* rotate a's axis toward b's by tr = to - ta, about their common normal (Rodrigues) */
+    tr = to - ta;
+    w = pt_normalize(w);
+    out->axis = pt_normalize(pt_add(pt_scale(a->axis, cosf(tr)), pt_scale(pt_cross(w, a->axis), sinf(tr))));
+    out->cos_o = cosf(to);
+}
+static uint32_t pt__ltree_node(pt_scene *s, pt__lkey *keys, uint32_t begin, uint32_t end, uint32_t depth, uint64_t trail)
+{
+    uint32_t i, n = s->ltree_count++, mid, a, b;
+    pt__lnode *node = &s->ltree[n];
+    if (end - begin == 1) {
+        const pt__light *l = &s->lights[keys[begin].light];
+        const pt__prim *p = &s->prims[l->prim];
+        pt__prim_bounds(p, &node->lo, &node->hi);
+        node->power = (float)l->power;
+        node->axis = p->type == PT__PRIM_SPHERE ? pt_v3(0, 0, 1) : p->n;
+        node->cos_o = p->type == PT__PRIM_SPHERE || s->mats[p->material].two_sided ? -1.0f : 1.0f;
+        node->cos_e = 0.0f; /* Lambertian emission: to 90 degrees from the normal */
+        node->a = keys[begin].light;
+        node->b = PT__LNODE_LEAF;
+        s->ltrail[keys[begin].light] = trail;
+        return n;
+    }
+    {   /* split at the median of the centres along the widest axis of their bounds */
+        pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_neg(lo), e;
+        int axis;
+        for (i = begin; i < end; ++i) {
+            pt_vec3 a0, a1, c;
+            pt__prim_bounds(&s->prims[s->lights[keys[i].light].prim], &a0, &a1);
+            c = pt_scale(pt_add(a0, a1), 0.5f);
+            lo = pt__vmin(lo, c);
+            hi = pt__vmax(hi, c);
+        }
+        e = pt_sub(hi, lo);
+        axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
+        for (i = begin; i < end; ++i) {
+            pt_vec3 a0, a1;
+            pt__prim_bounds(&s->prims[s->lights[keys[i].light].prim], &a0, &a1);
+            keys[i].key = axis == 0 ? a0.x + a1.x : axis == 1 ? a0.y + a1.y : a0.z + a1.z;
+        }
+        qsort(keys + begin, end - begin, sizeof *keys, pt__lkey_cmp);
+    }
+    mid = begin + (end - begin) / 2u;
+    a = pt__ltree_node(s, keys, begin, mid, depth + 1u, trail);
+    b = pt__ltree_node(s, keys, mid, end, depth + 1u, trail | ((uint64_t)1 << depth));
+    node = &s->ltree[n]; /* (s->ltree does not move: allocated whole) */
+    node->lo = pt__vmin(s->ltree[a].lo, s->ltree[b].lo);
+    node->hi = pt__vmax(s->ltree[a].hi, s->ltree[b].hi);
+    node->power = s->ltree[a].power + s->ltree[b].power;
+    pt__cone_union(node, &s->ltree[a], &s->ltree[b]);
+    node->a = a;
+    node->b = b;
+    return n;
+}
+static int pt__ltree_build(pt_scene *s)
+{
+    pt__lkey *keys;
+    uint32_t i;
+    PT_FREE(s->ltree);
+    PT_FREE(s->ltrail);
+    s->ltree = NULL;
+    s->ltrail = NULL;
+    s->ltree_count = 0;
+    if (s->light_count < PT__LIGHT_TREE_MIN) return PT_OK;
+    s->ltree = (pt__lnode *)PT_MALLOC(sizeof(pt__lnode) * (2u * (size_t)s->light_count - 1u));
+    s->ltrail = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * s->light_count);
+    keys = (pt__lkey *)PT_MALLOC(sizeof(pt__lkey) * s->light_count);
+    if (!s->ltree || !s->ltrail || !keys) {
+        PT_FREE(keys);
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory (light tree of %u lights)", (unsigned)s->light_count);
+    }
+    for (i = 0; i < s->light_count; ++i) {
+        keys[i].light = i;
+        keys[i].key = 0.0f;
+    }
+    pt__ltree_node(s, keys, 0, s->light_count, 0, 0);
+    PT_FREE(keys);
+    return PT_OK;
+}
+
 PTDEF int pt_scene_commit(pt_scene *s)
 {
     uint32_t i, nl = 0;
@@ -6197,6 +6413,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
         s->lights[s->light_count - 1].cdf = 1.0f;
     }
     s->total_power = total;
+    if ((rc = pt__ltree_build(s)) != PT_OK) return rc;
     /* features */
     f = s->features & (PT_FEATURE_SPHERES | PT_FEATURE_QUADS | PT_FEATURE_TRIANGLES | PT_FEATURE_MESHES |
                        PT_FEATURE_SHADING_NORMALS | PT_FEATURE_TRANSFORMS);
@@ -6525,6 +6742,12 @@ typedef struct pt__settings {
 
 /* Whether the skip `bit` is taken (not disabled by pt_render_desc.disable_skips). */
 #define PT__SKIP(cfg, bit) (((cfg)->general & (bit)) == 0u)
+/* The light-sampling mode (PT__LIGHTS_*) the skips allow. */
+static unsigned pt__lights_mode(const pt__settings *cfg)
+{
+    return (PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS) ? PT__LIGHTS_SPHERICAL : 0u) |
+           (PT__SKIP(cfg, PT_SKIP_LIGHT_TREE) ? PT__LIGHTS_TREE : 0u);
+}
 
 #define PT__MAX_SPLITS_LIMIT 65536 /* pt_render_desc.max_splits above this: invalid */
 #define PT__INDIRECT_PATHS_LIMIT PT_INDIRECT_PATHS_MAX /* above this: invalid (= PT__SPLIT_MAX_COPIES) */
@@ -6855,12 +7078,12 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
             if (use_light) {
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (!pt__lights_sample(s, v->o, u0, u1, u2, &ls, &li, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS))) return 0;
+                if (!pt__lights_sample(s, v->o, u0, u1, u2, &ls, &li, pt__lights_mode(cfg))) return 0;
                 wi = ls.dir;
             } else if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
             /* a rounded direction has no density for its own light: that light's share is the
                sample's own (ls.pdf, the pick probability included) */
-            p_total = cfg->light_weight * (pt__lights_value(s, v->o, wi, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS)) + (ls.rounded ? ls.pdf : 0.0f)) +
+            p_total = cfg->light_weight * (pt__lights_value(s, v->o, wi, pt__lights_mode(cfg)) + (ls.rounded ? ls.pdf : 0.0f)) +
                       (1.0f - cfg->light_weight) * pt__scatter_density_pg(v, wi, pg);
         } else {
             if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
@@ -7006,7 +7229,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             if (!prev_delta) {
                 if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
                 else if (cfg->strategy == PT_STRATEGY_MIS) {
-                    float pl = s->lights[prim->light].select_pdf *
+                    float pl = pt__light_pmf(s, prev_p, (uint32_t)prim->light, pt__lights_mode(cfg)) *
                                pt__light_prim_value_at(s, prim, prev_p, ray.dir, t, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS));
                     w = pt__power_heuristic(prev_pdf, pl);
                 }
@@ -7044,7 +7267,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             uint32_t li;
             float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
             pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-            if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS)))
+            if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li, pt__lights_mode(cfg)))
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
         if (!m->delta) {
@@ -7075,7 +7298,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS)))
+                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li, pt__lights_mode(cfg)))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
             /* the delta lights, under every strategy (a scene without them skips this) */

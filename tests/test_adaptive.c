@@ -31,7 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define ADAPTIVE_Z_TESTS 144 /* 16 regions x (1 adaptive-vs-uniform + 8 skip comparisons) */
+#define ADAPTIVE_Z_TESTS 160 /* 16 regions x (1 adaptive-vs-uniform + 9 skip comparisons) */
 #define FAMILY_ALPHA 0.01
 
 static double z_limit(void) { return tu_z_two_sided(tu_sidak(FAMILY_ALPHA, ADAPTIVE_Z_TESTS)); }
@@ -924,8 +924,8 @@ static void skips_within_noise(test_ctx *t)
     /* The skips that draw random numbers differently: no emitters (a sky-lit scene: MIS, light,
        mixture), delta vertex (mirror and glass: MIS, light), one-sided light facing away (mixture;
        the ceiling and the light's back are behind it), every skip at once (MIS), and solid-angle
-       sampling of a large rectangular light close to a floor (MIS). 8 comparisons of 16 regions in
-       the file's family. */
+       sampling of a large rectangular light close to a floor (MIS), and the light tree against
+       selection by power (40 small lights, MIS). 9 comparisons of 16 regions in the file's family. */
     pt_render_desc d;
     pt_scene *s = room_scene(&d, 32, 24, 48), *sky;
     double worst = 0;
@@ -961,6 +961,33 @@ static void skips_within_noise(test_ctx *t)
     skip_case(t, s, &d, PT_SKIP_SOLID_ANGLE_QUADS, 0, "solid-angle quads (MIS)", &worst);
     pt_scene_destroy(s);
 
+    /* the light tree: 40 small one-sided lights of different powers under a ceiling and on a wall */
+    s = pt_scene_create();
+    if (!CHECK(t, s != NULL, "many-lights scene")) return;
+    {
+        int white = pt_scene_add_lambertian(s, pt_v3(0.6f, 0.6f, 0.6f)), rc, j;
+        rc = pt_scene_add_quad(s, pt_v3(-3, 0, -3), pt_v3(0, 0, 6), pt_v3(6, 0, 0), white);
+        rc |= pt_scene_add_quad(s, pt_v3(-3, 0, 3), pt_v3(6, 0, 0), pt_v3(0, 3, 0), white);
+        for (j = 0; j < 40; j++) {
+            float L = 1.0f + (float)(j % 7) * 3.0f, x = -2.8f + 0.7f * (float)(j % 8);
+            int m = pt_scene_add_emitter(s, pt_v3(L, L, L), 0);
+            if (j < 24) rc |= pt_scene_add_quad(s, pt_v3(x, 2.9f, -2.5f + 0.9f * (float)(j / 8)), pt_v3(0.3f, 0, 0),
+                                                pt_v3(0, 0, 0.3f), m); /* faces down */
+            else rc |= pt_scene_add_quad(s, pt_v3(x, 0.4f + 0.8f * (float)((j - 24) / 8), 2.99f), pt_v3(0, 0.3f, 0),
+                                         pt_v3(0.3f, 0, 0), m); /* on the back wall, facing -z */
+        }
+        if (!CHECK(t, rc >= 0 && pt_scene_commit(s) == PT_OK, "many-lights scene: %s", pt_scene_error_message(s))) {
+            pt_scene_destroy(s);
+            return;
+        }
+    }
+    d = tu_base_desc(32, 24, 16, 17);
+    d.camera.look_from = pt_v3(0, 1.5f, -2.5f);
+    d.camera.look_at = pt_v3(0, 1.0f, 3);
+    d.max_depth = 3;
+    skip_case(t, s, &d, PT_SKIP_LIGHT_TREE, 0, "light tree (MIS)", &worst);
+    pt_scene_destroy(s);
+
     /* no emitters: an open scene (floor, two spheres) under a uniform sky of radiance 1 */
     sky = pt_scene_create();
     if (!CHECK(t, sky != NULL, "sky scene")) return;
@@ -986,7 +1013,7 @@ static void skips_within_noise(test_ctx *t)
         skip_case(t, sky, &d, PT_SKIP_NO_EMITTERS, 0, nm[k], &worst);
     }
     pt_scene_destroy(sky);
-    test_note(t, "8 comparisons of 16 regions, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over %d)", worst, z_limit(),
+    test_note(t, "9 comparisons of 16 regions, max |z| %.2f (limit %.2f: alpha 0.01 Sidak over %d)", worst, z_limit(),
               ADAPTIVE_Z_TESTS);
 }
 

@@ -185,7 +185,7 @@ typedef struct tu_pdf_result {
    suite.chi2_table test fails if an unfiltered run made more than the bound, and prints one row
    per chi-square case. */
 #define TU_SUITE_ALPHA 0.01
-#define TU_SUITE_COMPARISONS 480
+#define TU_SUITE_COMPARISONS 600
 double tu_suite_alpha(void);
 void tu_suite_count(int comparisons);
 long tu_suite_comparisons(void);
