@@ -139,7 +139,7 @@ static void print_help(void)
            "      --adaptive-neighbours-only  the same as --adaptive-mode neighbours\n"
            "      --disable-skips L  force the general path (for benchmarks): all, or a list of\n"
            "                         no-emitters,delta-vertex,facing-away,no-textures,zero-bsdf-shadow,\n"
-           "                         solid-angle-quads\n"
+           "                         solid-angle-quads,light-tree\n"
            "Display, for .png and .ppm:\n"
            "      --exposure EV      multiply by 2^EV (0); --tonemap T: clamp | aces | reinhard (clamp)\n"
            "Other:\n"
@@ -259,7 +259,8 @@ static int parse_choice(const char *opt, const char *text, const char *const *na
 static const struct { const char *name; unsigned bit; } skip_names[] = {
     { "no-emitters", PT_SKIP_NO_EMITTERS },   { "delta-vertex", PT_SKIP_DELTA_VERTEX },
     { "facing-away", PT_SKIP_FACING_AWAY },   { "no-textures", PT_SKIP_NO_TEXTURES },
-    { "zero-bsdf-shadow", PT_SKIP_ZERO_BSDF_SHADOW }, { "solid-angle-quads", PT_SKIP_SOLID_ANGLE_QUADS }
+    { "zero-bsdf-shadow", PT_SKIP_ZERO_BSDF_SHADOW }, { "solid-angle-quads", PT_SKIP_SOLID_ANGLE_QUADS },
+    { "light-tree", PT_SKIP_LIGHT_TREE }
 };
 
 /* "all", a comma-separated list of skip_names, or a number whose bits lie in PT_SKIP_ALL. */
