@@ -129,6 +129,9 @@
    - a rectangular light that is large next to its distance: sampled uniformly in solid angle
      (spherical rectangles, section 2) instead of by area. PT_SKIP_SOLID_ANGLE_QUADS (a better
      estimator rather than less work, measured the same way).
+   - many emitting shapes (16 or more): the light for next-event estimation is picked by a light
+     tree (power, distance, orientation; section 2) rather than by power alone.
+     PT_SKIP_LIGHT_TREE.
    - no point, spot or directional light: no delta-light estimate (one test per vertex; not a
      switchable skip, since the general path would add nothing).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
