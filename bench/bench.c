@@ -106,6 +106,14 @@ static const bench_scene scenes[] = {
     {"caustic", "bench/scenes/caustic.scene", 8192, 0,
      "a glass ball on a diffuse floor under a small light: the floor caustic, found only by sampling through the glass",
      "not numeric: caustics need photons, which the exporter does not emit", 1},
+    {"lamps", "bench/scenes/lamps.scene", 8192, 1,
+     "a room lit only by lights without a shape: the sun through a window, a spot light and a point-light bulb, "
+     "diffuse, global illumination",
+     "numeric, loose (diffuse global illumination; the spot is hard-edged, its exact POV-Ray twin)", 0},
+    {"many-tris", "bench/scenes/many-tris.scene", 8192, 1,
+     "a 40-unit hall lit by 1024 small emitting triangles in four brightnesses (the light tree), diffuse, "
+     "global illumination",
+     "numeric, loose (diffuse global illumination; each lamp exported as one spotlight, pov_light_grid 1)", 0},
     {"close-quad", "bench/scenes/close-quad.scene", 8192, 1,
      "a long ceiling panel 5 cm from the back wall: a large quad light seen from close by (solid-angle sampling), "
      "diffuse, global illumination",
@@ -1729,6 +1737,9 @@ static const skip_case skip_cases[] = {
      SKIP_ESTIMATOR, "large rectangular lights sampled in solid angle, not by area"},
     {"SOLID_ANGLE_QUADS", PT_SKIP_SOLID_ANGLE_QUADS, "bench/scenes/door.scene", "door", PT_STRATEGY_MIS, 0.0f,
      SKIP_ESTIMATOR, "the same on Veach's door"},
+    /* the light tree against picking by power, on the hall of 1024 lamps */
+    {"LIGHT_TREE", PT_SKIP_LIGHT_TREE, "bench/scenes/many-tris.scene", "many-tris", PT_STRATEGY_MIS, 0.0f,
+     SKIP_ESTIMATOR, "a light picked by the light tree, not by power alone"},
 };
 #define SKIP_CASE_COUNT ((int)(sizeof skip_cases / sizeof skip_cases[0]))
 
