@@ -6,12 +6,12 @@
    with the footprint mean of rho E / pi, E = I falloff cos(theta) / d^2 (point, spot) or E0 cos(theta)
    (directional). A delta light's estimate at a plane point has no variance (one shadow ray, always
    unoccluded), so a pixel's variance is that of E over its footprint only; the test is the same
-   z-test as test_analytic.c's (alpha = 0.001 per pixel, at least 99.5 % of the pixels; the image mean
-   within 3 standard errors). Three point lights of different powers test the pick by power; a
+   z-test as test_analytic.c's (alpha = 0.001 per pixel, at least 99.5 % of the pixels), and the image
+   mean within 3.5 standard errors. Three point lights of different powers test the pick by power; a
    point light beside a sphere light tests the two next-event estimates added together, under every
    strategy (MATERIAL and MIXTURE reach delta lights only through their own estimate).
-   False-failure rate: as test_analytic.c, per image ~0.0027 (the image-mean test); 16 images here:
-   ~4 %, of which the pixel tests add < 1e-4. */
+   False-failure rate: the image mean within 3.5 standard errors fails with probability 4.7e-4 per
+   image; 21 images here: ~1 %, to which the pixel tests (as test_analytic.c's) add < 1e-4. */
 #include "test_util.h"
 
 #include <stdio.h>
@@ -22,7 +22,7 @@
 #define IMAGE_H 48
 #define PIXEL_ALPHA 0.001
 #define ACCEPT_FRACTION 0.995
-#define IMAGE_Z 3.0
+#define IMAGE_Z 3.5
 
 static pt_light_desc desc_of(const tu_light *L, double I)
 {
@@ -175,6 +175,65 @@ static void image_point_beside_sphere_light(test_ctx *t)
     L[0].radius = 1.0;
     L[1] = point_at(-1.5, 1.1, 0.0);
     compare_every_strategy(t, "sphere + point", L, I, 2, spp_shaped, 505);
+}
+
+/* 24 small quad lights of different radiance over the plane: with 16 or more emitters the light for
+   next-event estimation is picked by the light tree, and a scattered ray that hits a light is
+   weighted with the tree's probability of that light (MIS). Every strategy against the sum of
+   Lambert's formula over the lights; and the same with the tree switched off (PT_SKIP_LIGHT_TREE). */
+static void image_light_tree(test_ctx *t)
+{
+    tu_plane_scene ps;
+    int i, strat, general;
+    double zpix = tu_z_two_sided(PIXEL_ALPHA);
+    memset(&ps, 0, sizeof ps);
+    ps.rho = 0.5;
+    ps.scene = pt_scene_create();
+    {
+        int floor_m = pt_scene_add_lambertian(ps.scene, pt_v3(0.5f, 0.5f, 0.5f)), rc;
+        rc = pt_scene_add_quad(ps.scene, pt_v3(-20, 0, -20), pt_v3(0, 0, 40), pt_v3(40, 0, 0), floor_m);
+        for (i = 0; i < 24 && rc >= 0; i++) {
+            tu_light *L = &ps.light[i];
+            float Le = 0.5f + 0.25f * (float)(i % 5);
+            int m = pt_scene_add_emitter(ps.scene, pt_v3(Le, Le, Le), 0);
+            memset(L, 0, sizeof *L);
+            L->kind = TU_QUAD; /* u x v = -y: faces the plane; heights 1.2 .. 2.3 */
+            L->p0 = dv(-1.8 + 0.6 * (i % 6), 1.2 + 0.15 * (i % 4) + 0.3 * (i / 12), -1.4 + 0.7 * (i / 6));
+            L->p1 = dv(0.25, 0, 0);
+            L->p2 = dv(0, 0, 0.25);
+            ps.radiance[i] = Le;
+            rc = pt_scene_add_quad(ps.scene, dv_to(L->p0), dv_to(L->p1), dv_to(L->p2), m);
+        }
+        ps.light_count = 24;
+        if (!CHECK(t, rc >= 0 && pt_scene_commit(ps.scene) == PT_OK && tu_plane_scene_finish(&ps, IMAGE_W, IMAGE_H),
+                   "scene: %s", pt_scene_error_message(ps.scene))) {
+            tu_plane_scene_destroy(&ps);
+            return;
+        }
+    }
+    for (general = 0; general < 2; general++)
+        for (strat = 0; strat < 4; strat++) {
+            pt_render_desc d;
+            tu_image_stats st;
+            if (general && strat != PT_STRATEGY_MIS) continue;
+            memset(&d, 0, sizeof d);
+            d.samples_per_pixel = strat == PT_STRATEGY_MATERIAL ? 1024 : 256;
+            d.strategy = (pt_strategy)strat;
+            d.light_weight = 0.5f;
+            d.seed = 707 + (uint64_t)strat + 10u * (uint64_t)general;
+            d.disable_skips = general ? PT_SKIP_LIGHT_TREE : 0u;
+            tu_plane_render_compare(&ps, &d, zpix, &st);
+            if (!CHECK(t, st.rc == PT_OK, "strategy %d: pt_render returned %d", strat, st.rc)) continue;
+            CHECK(t, st.nonfinite == 0, "strategy %d: %llu non-finite samples", strat, (unsigned long long)st.nonfinite);
+            CHECK(t, st.accepted >= ACCEPT_FRACTION * st.pixels,
+                  "%s, strategy %d: only %d of %d pixels pass the z-test; mean rel error %+.2e, mean z %+.2f",
+                  general ? "by power" : "tree", strat, st.accepted, st.pixels, st.mean_rel, st.mean_z);
+            CHECK(t, fabs(st.image_z) <= IMAGE_Z, "%s, strategy %d: image mean %.7f +- %.2g, reference %.7f (z = %+.2f)",
+                  general ? "by power" : "tree", strat, st.image_mean, st.image_se, st.image_ref, st.image_z);
+            if (strat == 0) test_note(t, "%s MIS: %.2f %% accepted, image z %+.2f", general ? "by power" : "tree",
+                                      100.0 * st.accepted / st.pixels, st.image_z);
+        }
+    tu_plane_scene_destroy(&ps);
 }
 
 static int add_expect_error(pt_scene *s, const pt_light_desc *d, const char *want)
@@ -347,6 +406,7 @@ const test_case test_lights_cases[] = {
     TEST_CASE(image_directional_light),
     TEST_CASE(image_three_point_lights),
     TEST_CASE(image_point_beside_sphere_light),
+    TEST_CASE(image_light_tree),
     TEST_CASE(api_errors),
     TEST_CASE(defaults_and_transform),
     TEST_CASE(threads_and_shadows),

@@ -228,7 +228,7 @@ int tu_render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_f
    footprint (the renderer jitters the camera ray uniformly over the pixel): computed by the midpoint
    rule on 8 x 8 camera rays per pixel, hit with the plane in double precision; its error is
    estimated by Richardson's rule from the 4 x 4 rule, |I_8 - I_4| / 3 (midpoint error ~ h^2). */
-#define TU_PLANE_MAX_LIGHTS 4
+#define TU_PLANE_MAX_LIGHTS 32
 typedef struct tu_plane_scene {
     pt_scene *scene;
     int light_count;
