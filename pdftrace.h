@@ -1358,12 +1358,14 @@ typedef struct pt__light {
 /* A node of the light tree (section 2, "light tree"): the bounds, power and normal cone of the
    lights below it. */
 typedef struct pt__lnode {
-    pt_vec3 lo, hi;
+    pt_vec3 centre;      /* of the lights' bounds, and the square of their half diagonal: the */
+    float r2;            /* bounding sphere the importance is computed from */
     pt_vec3 axis;        /* the normals' cone: its axis (unit), */
-    float cos_o;         /* the cosine of its half-angle (-1: every direction), */
-    float cos_e;         /* and of the emission's angle beyond the normals (0: Lambertian, pi/2) */
+    float cos_o, sin_o;  /* the cosine and sine of its half-angle (cos -1: every direction), */
+    float cos_e;         /* and the cosine of the emission's angle beyond the normals (0: pi/2) */
     float power;
     uint32_t a, b;       /* children; a leaf: a = the light's index, b = PT__LNODE_LEAF */
+    pt_vec3 lo, hi;      /* the bounds (building only) */
 } pt__lnode;
 #define PT__LNODE_LEAF 0xffffffffu
 
@@ -2723,23 +2725,23 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
 /* What node n's lights can send to p, up to a common factor; 0 only where none can light p. */
 static float pt__lnode_importance(const pt__lnode *n, pt_vec3 p)
 {
-    pt_vec3 c = pt_scale(pt_add(n->lo, n->hi), 0.5f), d = pt_sub(p, c);
-    float d2 = pt_length2(d), r2 = 0.25f * pt_length2(pt_sub(n->hi, n->lo)), cos_p = 1.0f;
-    if (n->cos_o > -1.0f && d2 > r2) {
+    pt_vec3 d = pt_sub(p, n->centre);
+    float d2 = pt_length2(d), cos_p = 1.0f;
+    if (n->cos_o > -1.0f && d2 > n->r2) {
         /* theta_p = max(0, theta_w - theta_o - theta_b): the smallest angle between a normal in the
            cone and a direction from the node's bounding sphere to p */
-        float dist = sqrtf(d2), cos_w = pt_dot(n->axis, d) / dist, sin_w = pt__safe_sqrt(1.0f - cos_w * cos_w);
-        float sin_o = pt__safe_sqrt(1.0f - n->cos_o * n->cos_o), sin_b2 = r2 / d2;
-        float cos_b = pt__safe_sqrt(1.0f - sin_b2), sin_b = sqrtf(sin_b2), cos_x = 1.0f, sin_x = 0.0f;
+        float inv = 1.0f / sqrtf(d2), cos_w = pt_dot(n->axis, d) * inv, sin_b2 = n->r2 * inv * inv;
+        float cos_b = sqrtf(1.0f - sin_b2), cos_x = 1.0f, sin_x = 0.0f;
         if (cos_w < n->cos_o) {
-            cos_x = cos_w * n->cos_o + sin_w * sin_o;
-            sin_x = sin_w * n->cos_o - cos_w * sin_o;
+            float sin_w = pt__safe_sqrt(1.0f - cos_w * cos_w);
+            cos_x = cos_w * n->cos_o + sin_w * n->sin_o;
+            sin_x = sin_w * n->cos_o - cos_w * n->sin_o;
         }
-        if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sin_b;
+        if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sqrtf(sin_b2);
         if (cos_p <= n->cos_e) return 0.0f;
     }
     /* (the distance clamped to the node's size: a point inside a cluster is not infinitely near) */
-    return n->power * cos_p / pt__maxf(d2, r2);
+    return n->power * cos_p / pt__maxf(d2, n->r2);
 }
 /* The probability of choosing child b at node n from p (< 0: neither child can light p). */
 static float pt__lnode_p_b(const pt_scene *s, const pt__lnode *n, pt_vec3 p)
@@ -6298,6 +6300,9 @@ static uint32_t pt__ltree_node(pt_scene *s, pt__lkey *keys, uint32_t begin, uint
         node->cos_e = 0.0f; /* Lambertian emission: to 90 degrees from the normal */
         node->a = keys[begin].light;
         node->b = PT__LNODE_LEAF;
+        node->centre = pt_scale(pt_add(node->lo, node->hi), 0.5f);
+        node->r2 = 0.25f * pt_length2(pt_sub(node->hi, node->lo));
+        node->sin_o = 0.0f;
         s->ltrail[keys[begin].light] = trail;
         return n;
     }
@@ -6330,6 +6335,9 @@ static uint32_t pt__ltree_node(pt_scene *s, pt__lkey *keys, uint32_t begin, uint
     pt__cone_union(node, &s->ltree[a], &s->ltree[b]);
     node->a = a;
     node->b = b;
+    node->centre = pt_scale(pt_add(node->lo, node->hi), 0.5f);
+    node->r2 = 0.25f * pt_length2(pt_sub(node->hi, node->lo));
+    node->sin_o = pt__safe_sqrt(1.0f - node->cos_o * node->cos_o);
     return n;
 }
 static int pt__ltree_build(pt_scene *s)
