@@ -217,7 +217,7 @@ static void image_light_tree(test_ctx *t)
             tu_image_stats st;
             if (general && strat != PT_STRATEGY_MIS) continue;
             memset(&d, 0, sizeof d);
-            d.samples_per_pixel = strat == PT_STRATEGY_MATERIAL ? 1024 : 256;
+            d.samples_per_pixel = strat == PT_STRATEGY_MATERIAL ? 1024 : 128;
             d.strategy = (pt_strategy)strat;
             d.light_weight = 0.5f;
             d.seed = 707 + (uint64_t)strat + 10u * (uint64_t)general;
