@@ -762,7 +762,7 @@ static void pdf_light_tree(test_ctx *t)
         c.expected_mass = -1.0; /* a one-sided light behind the point may be picked (the tree's bound is
                                    conservative) and its sample fails */
         issue3(&c, 24, 49);
-        c.n_samples = 150000; /* (each pt_pdf_value walks the tree for 24 lights: keep the suite's time) */
+        c.n_samples = 100000; /* (each pt_pdf_value walks the tree for 24 lights: keep the suite's time) */
         TU_CHECK_PDF(t, &c, &r);
         agg_add(&a, &r);
     }
@@ -782,7 +782,7 @@ static void pdf_light_tree(test_ctx *t)
         c = base_check("WRONG: light-tree samples, power-proportional density", &p, 998);
         c.expected_mass = -1.0;
         issue3(&c, 24, 49);
-        c.n_samples = 150000;
+        c.n_samples = 100000;
         failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
         CHECK(t, failures > 0, "the power density with the tree's samples was not rejected (chi2 p = %.3g)", r.chi2_p);
         test_note(t, "wrong PMF rejected by %d check(s), chi2 p = %.3g", failures, r.chi2_p);
