@@ -110,10 +110,10 @@ static const bench_scene scenes[] = {
      "a room lit only by lights without a shape: the sun through a window, a spot light and a point-light bulb, "
      "diffuse, global illumination",
      "numeric, loose (diffuse global illumination; the spot is hard-edged, its exact POV-Ray twin)", 0},
-    {"many-tris", "bench/scenes/many-tris.scene", 8192, 1,
+    {"many-tris", "bench/scenes/many-tris.scene", 8192, 0,
      "a 40-unit hall lit by 1024 small emitting triangles in four brightnesses (the light tree), diffuse, "
      "global illumination",
-     "numeric, loose (diffuse global illumination; each lamp exported as one spotlight, pov_light_grid 1)", 0},
+     "not exported: the POV-Ray exporter makes lights of emitting quads and spheres only (the lamps are triangles)", 0},
     {"close-quad", "bench/scenes/close-quad.scene", 8192, 1,
      "a long ceiling panel 5 cm from the back wall: a large quad light seen from close by (solid-angle sampling), "
      "diffuse, global illumination",
@@ -878,8 +878,9 @@ static int run_pov(const config *cfg, results *R, pov_results *P)
             o.light_grid = pl->grid;
             o.width = o.height = BENCH_SIZE;
             if (pt_scenefile_write_pov(&R->L[i].sd, pov, &o, err, sizeof err) != PT_OK) {
-                fprintf(stderr, "bench: POV-Ray export of %s: %s\n", scenes[i].name, err);
-                return 0;
+                /* a scene the exporter refuses (it says why): no POV-Ray rows for it */
+                printf("SKIP POV-Ray %s: %s\n", scenes[i].name, err);
+                break;
             }
             /* Repeat cheap renders (median of up to 5); a render is deterministic, only its time varies. */
             reps = 1;
