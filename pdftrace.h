@@ -723,8 +723,9 @@ PTDEF int pt_material_is_delta(const pt_scene *scene, int material);
 /* Lights without a shape: point, spot and directional lights (delta lights). A ray cannot hit
    one, so they are reached only by next-event estimation: at every vertex with a scattering
    density, under every strategy (PT_STRATEGY_MATERIAL and _MIXTURE included), one delta light
-   is picked in proportion to its power and a shadow ray is traced to it, with MIS weight 1 (no
-   other technique can find it). Shaped emitters keep their own light table and strategy. Delta
+   is picked in proportion to what it would give that point unshadowed (by power when there are
+   more than 16) and a shadow ray is traced to it, with MIS weight 1 (no other technique can find
+   it). Shaped emitters keep their own light table and strategy. Delta
    lights are not seen by the camera, have no density in pt_pdf_scene_lights and are not in
    pt_scene_info.emitter_count (pt_scene_info.delta_light_count). They are added under the
    scene's current transform (the position as a point, the direction as a vector, normalised).
@@ -4705,9 +4706,9 @@ static float pt__spot_falloff(const pt__dlight *l, pt_vec3 w)
     if (!(a < l->cutoff)) return 0.0f;
     return pt__minf(1.0f, (l->cutoff - a) * l->inv_transition);
 }
-/* Radiant power, to pick among delta lights: 4 pi I for a point, I times the solid angle of the
-   cone to the middle of the falloff for a spot, and E times the cross-section of the scene's
-   bounding sphere (radius r) for a directional light. */
+/* Radiant power, to pick among more than PT__DELTA_PICK_MAX delta lights: 4 pi I for a point, I
+   times the solid angle of the cone to the middle of the falloff for a spot, and E times the
+   cross-section of the scene's bounding sphere (radius r) for a directional light. */
 static double pt__dlight_power(const pt__dlight *l, double r)
 {
     double i = ((double)l->desc.intensity.x + (double)l->desc.intensity.y + (double)l->desc.intensity.z) / 3.0;
@@ -6915,10 +6916,31 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
 }
 
 /* Next-event estimation of the delta lights (pt_scene_add_light) at non-delta vertex v, under
-   every strategy, since no scattered ray can reach them: one light, picked by power (select_pdf
-   P), and one shadow ray; the contribution beta f L / P, with L = I falloff / d^2 (point, spot)
-   or E (directional), has MIS weight 1. A point light at the shading point itself (d = 0, an
-   integrand with no finite value) adds nothing. */
+   every strategy, since no scattered ray can reach them: one light and one shadow ray; the
+   contribution beta f L / P, with L = I falloff / d^2 (point, spot) or E (directional), has MIS
+   weight 1. With up to PT__DELTA_PICK_MAX delta lights the light is picked with probability P
+   proportional to what it would give v unshadowed, L cos(theta) at v's geometric normal (0 where
+   the material can reflect none of it, so leaving those out is exact): distance, orientation and
+   the spot's cone count, which picking by power cannot see (a sun whose power is taken over the
+   scene's cross-section takes most picks in a room it lights only through a window:
+   docs/design.md, "Lights without a shape"). With more, by power. A point light at the shading
+   point itself (d = 0, an integrand with no finite value) adds nothing. */
+#define PT__DELTA_PICK_MAX 16u
+static float pt__delta_weight(const pt__dlight *l, const pt__vertex *v)
+{
+    float c, i = (l->desc.intensity.x + l->desc.intensity.y + l->desc.intensity.z) * (1.0f / 3.0f);
+    pt_vec3 d;
+    float d2, inv;
+    if (l->desc.type == PT_LIGHT_DIRECTIONAL) return i * pt__maxf(0.0f, -pt_dot(v->ng, l->axis));
+    d = pt_sub(l->pos, v->p);
+    d2 = pt_length2(d);
+    if (!(d2 > 0.0f)) return 0.0f;
+    inv = 1.0f / sqrtf(d2);
+    c = pt_dot(v->ng, d) * inv;
+    if (!(c > 0.0f)) return 0.0f;
+    if (l->desc.type == PT_LIGHT_SPOT) i *= pt__spot_falloff(l, pt_scale(d, -inv));
+    return i * c / d2;
+}
 static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, pt_color beta,
                               int depth, pt__sampler *smp, int tri, pt_path_stats *st)
 {
@@ -6927,16 +6949,32 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
     pt_color f, Li;
     pt_ray sr;
     pt__rayctx src;
-    float tmax;
+    float tmax, pick = 1.0f;
     if (s->dlight_count > 1) {
         float u = pt__draw1(smp, PT__SET_DELTA_PICK(depth));
-        uint32_t lo = 0, hi = s->dlight_count - 1u;
-        while (lo < hi) { /* first light whose cdf exceeds u */
-            uint32_t mid = (lo + hi) / 2u;
-            if (s->dlights[mid].cdf > u) hi = mid;
-            else lo = mid + 1u;
+        if (s->dlight_count <= PT__DELTA_PICK_MAX) {
+            float w[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f;
+            uint32_t i, k = 0;
+            for (i = 0; i < s->dlight_count; ++i) sum += (w[i] = pt__delta_weight(&s->dlights[i], v));
+            if (!(sum > 0.0f) || !pt__isfinite(sum)) return pt_v3(0, 0, 0);
+            for (i = 0; i < s->dlight_count; ++i) /* the last light with weight whose range holds u */
+                if (w[i] > 0.0f) {
+                    k = i;
+                    acc += w[i];
+                    if (u * sum < acc) break;
+                }
+            l = &s->dlights[k];
+            pick = w[k] / sum;
+        } else {
+            uint32_t lo = 0, hi = s->dlight_count - 1u;
+            while (lo < hi) { /* first light whose cdf exceeds u */
+                uint32_t mid = (lo + hi) / 2u;
+                if (s->dlights[mid].cdf > u) hi = mid;
+                else lo = mid + 1u;
+            }
+            l = &s->dlights[lo];
+            pick = l->select_pdf;
         }
-        l = &s->dlights[lo];
     }
     sr.origin = v->o;
     if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
@@ -6962,7 +7000,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
     pt__rayctx_init2(&src, sr, tri);
     st->shadow_rays++;
     if (pt__scene_any(s, &src, tmax, 0xffffffffu)) return pt_v3(0, 0, 0);
-    return pt_mul(beta, pt_scale(pt_mul(f, Li), 1.0f / l->select_pdf));
+    return pt_mul(beta, pt_scale(pt_mul(f, Li), 1.0f / pick));
 }
 
 /* The scene-feature skips (PT_SKIP_*) appear below as PT__SKIP(cfg, bit) tests; with the bit
