@@ -18,8 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define IMAGE_W 48
-#define IMAGE_H 48
+#define IMAGE_W 32
+#define IMAGE_H 32
 #define PIXEL_ALPHA 0.001
 #define ACCEPT_FRACTION 0.995
 #define IMAGE_Z 3.5
