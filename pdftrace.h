@@ -342,7 +342,8 @@ typedef enum pt_pdf_type {
     PT_PDF_MATERIAL,           /* a non-delta material's scattering PDF */
     PT_PDF_MIXTURE,            /* sum_k w_k p_k */
     PT_PDF_CALLBACK,           /* user-defined */
-    PT_PDF_GUIDE               /* a learned guide's leaf (pt_pdf_guide) */
+    PT_PDF_GUIDE,              /* a learned guide's leaf (pt_pdf_guide) */
+    PT_PDF_ENVIRONMENT         /* a scene's environment light (pt_pdf_environment) */
 } pt_pdf_type;
 
 struct pt_pdf;
@@ -368,6 +369,7 @@ typedef struct pt_pdf {
         struct { int count; const struct pt_pdf *components; const float *weights; } mixture;
         struct { void *user; pt_pdf_sample_fn sample; pt_pdf_value_fn value; } callback;
         struct { const struct pt_guide *guide; uint32_t leaf; } guide;
+        struct { const struct pt_scene *scene; pt_color background; } environment;
     } as;
 } pt_pdf;
 
@@ -388,6 +390,12 @@ PTDEF pt_pdf pt_pdf_triangle_light(pt_vec3 origin, pt_vec3 a, pt_vec3 b, pt_vec3
    facing away from origin have no density, so the PDF may integrate to less than one there;
    sampling them fails (returns 0), which keeps every estimator that uses it unbiased. */
 PTDEF pt_pdf pt_pdf_scene_lights(const struct pt_scene *scene, pt_vec3 origin);
+/* The directional density with which a render samples the environment light of a committed
+   scene (pt_scene_set_environment) under a constant background radiance `background`
+   (pt_render_desc.background): the map's piecewise-constant density mixed with the uniform
+   sphere in proportion to their powers. No map and a black background: no density (sampling
+   fails, value 0). */
+PTDEF pt_pdf pt_pdf_environment(const struct pt_scene *scene, pt_color background);
 /* The scattering PDF of material `material` at a surface with unit normal `normal` (facing the
    viewer is not required), for outgoing direction wo (unit, pointing away from the surface).
    Delta materials have no PDF: sampling returns 0 and value is 0. */
@@ -552,7 +560,8 @@ enum {
     PT_FEATURE_MESHES          = 1 << 10,
     PT_FEATURE_SHADING_NORMALS = 1 << 11, /* some mesh has per-vertex normals */
     PT_FEATURE_TRANSFORMS      = 1 << 12, /* some shape was added under a non-identity transform */
-    PT_FEATURE_DELTA_LIGHTS    = 1 << 13  /* some point, spot or directional light (pt_scene_add_light) */
+    PT_FEATURE_DELTA_LIGHTS    = 1 << 13, /* some point, spot or directional light (pt_scene_add_light) */
+    PT_FEATURE_ENVIRONMENT     = 1 << 14  /* an environment map (pt_scene_set_environment) */
 };
 
 /* Traversal backends (pt_scene_set_backend, section 5b). */
@@ -589,6 +598,7 @@ typedef struct pt_scene_info {
                                      or than the spawn offset there (see pt_scene_commit) */
     char precision_warning[200];  /* "" when precision_warnings is 0, else what and where */
     uint32_t delta_light_count;   /* point, spot and directional lights (pt_scene_add_light) */
+    int environment_width, environment_height; /* the environment map's size (0 x 0: none) */
 } pt_scene_info;
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
@@ -760,6 +770,34 @@ PTDEF int pt_scene_add_light(pt_scene *scene, const pt_light_desc *light);
 /* The light as added (the transform applied, defaults resolved): PT_OK, or
    PT_ERROR_INVALID_ARGUMENT for a bad id or NULL. */
 PTDEF int pt_scene_get_light(const pt_scene *scene, int id, pt_light_desc *light);
+
+/* The environment light: radiance arriving from infinitely far away, L(w) = background +
+   scale x map(w), where background is pt_render_desc.background (a constant) and map an
+   equirectangular ("lat-long") image of linear RGB radiance. Seen from a direction w in the
+   map's own frame, u = atan2(w.x, -w.z) / (2 pi) (wrapped to [0, 1)) and v = acos(w.y) / pi,
+   so row 0 is the zenith (+y) and the map's centre column looks along -z (Mitsuba 3's `envmap`
+   convention); pixel (x, y) is centred at u = (x + 1/2) / W, v = (y + 1/2) / H and the map is
+   interpolated bilinearly between pixel centres, periodically in u and held constant beyond
+   the first and last rows' centres. The map is set under the scene's current transform, which
+   must be a rotation (a translation part is ignored): it turns the map's frame into the world.
+   Rays that leave the scene see L(w); next-event estimation samples it under every strategy
+   that samples lights (MIS, LIGHT, MIXTURE): the map by a piecewise-constant density over its
+   pixels, proportional to each pixel's mean luminance (the bilinear interpolant's exact mean
+   over the pixel) and uniform in solid angle within the pixel, so it has no sin(theta)
+   singularity at the poles; the constant background by uniform sphere sampling; the two
+   mixed in proportion to their powers. A scene with neither pays nothing for it. The
+   details and measurements: docs/design.md, "Environment light". */
+typedef struct pt_environment_desc {
+    const struct pt_image *map;  /* linear RGB, finite, >= 0, at least 2 x 2 pixels; copied. NULL:
+                                    no map (the environment is the background alone) */
+    float scale;                 /* multiplies the map; 0: 1; finite and > 0 otherwise */
+} pt_environment_desc;
+/* Sets (or, with desc NULL or desc->map NULL, removes) the scene's environment map. PT_OK, or
+   an error code with pt_scene_error_message naming the bad field. */
+PTDEF int pt_scene_set_environment(pt_scene *scene, const pt_environment_desc *desc);
+/* What a ray leaving the scene along unit world direction dir sees of the map, scale x map(dir)
+   (the background not included); (0, 0, 0) without a map or for a bad scene or direction. */
+PTDEF pt_color pt_scene_environment_radiance(const pt_scene *scene, pt_vec3 dir);
 
 /* Shading point passed to a user guide PDF (see pt_render_desc.guide). */
 typedef struct pt_shading_point {
@@ -1279,9 +1317,11 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #if defined(__GNUC__) || defined(__clang__)
 #define PT__HOT inline __attribute__((always_inline))
 #define PT__NOINLINE __attribute__((noinline)) /* rarely run: kept out of the hot caller's code */
+#define PT__UNLIKELY(x) __builtin_expect(!!(x), 0)
 #else
 #define PT__HOT inline
 #define PT__NOINLINE
+#define PT__UNLIKELY(x) (x)
 #endif
 
 #ifdef __cplusplus
@@ -1381,6 +1421,22 @@ typedef struct pt__dlight {
     float select_pdf, cdf;
 } pt__dlight;
 
+/* The environment map (pt_scene_set_environment) and its sampling tables: a pixel's cell is
+   the rectangle [x, x+1) / W by [y, y+1) / H of (u, v); its probability is row_pmf x the
+   conditional, stored as cell_density = P(cell) / (cell's solid angle). */
+typedef struct pt__env {
+    int w, h;
+    float *rgb;           /* w x h x 3, the scale applied */
+    float *row_cdf;       /* h + 1: the marginal over rows (0 .. 1) */
+    float *col_cdf;       /* h x (w + 1): each row's conditional over its columns */
+    float *cell_density;  /* w x h: solid-angle density of the map's sampling in each cell */
+    double *cos_edge;     /* h + 1: cos(theta) at each row edge, cos(pi y / H) */
+    float rot[3][3];      /* the map's frame into the world (a rotation) */
+    double mean;          /* the mean over the sphere of the channel-mean radiance */
+    float scale;          /* as given (pt_environment_desc.scale, resolved) */
+} pt__env;
+static void pt__env_free(pt__env *e);
+
 #ifdef PDFTRACE_EMBREE
 /* The user data of an Embree user geometry: the scene and its primID -> prims index map. */
 typedef struct pt__rtc_geom { const pt_scene *scene; const uint32_t *map; float pad; } pt__rtc_geom;
@@ -1444,6 +1500,7 @@ struct pt_scene {
     uint32_t ltree_count;
     pt__dlight *dlights;       /* delta lights, in the order added */
     uint32_t dlight_count, dlight_cap;
+    pt__env *env;              /* the environment map (NULL: none) */
     pt_transform xf;
     int xf_identity;
     int committed;
@@ -1541,6 +1598,7 @@ static pt_vec3 pt__vmax(pt_vec3 a, pt_vec3 b) { return pt_v3(pt__maxf(a.x, b.x),
 static float pt__vmaxabs(pt_vec3 v) { return pt__maxf(fabsf(v.x), pt__maxf(fabsf(v.y), fabsf(v.z))); }
 static float pt__vget(pt_vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 static int pt__is_black(pt_vec3 c) { return c.x <= 0.0f && c.y <= 0.0f && c.z <= 0.0f; }
+static int pt__color_ok(pt_color c) { return pt__vfinite(c) && c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f; }
 
 /* Waechter & Binder, Ray Tracing Gems ch. 6: move each coordinate by int(256 n_i) ulps in
    the direction of the normal (integer arithmetic on the float bits), or by n_i/65536 near
@@ -2821,6 +2879,129 @@ static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w, unsigned 
     return v;
 }
 
+/* --- environment light (pt_scene_set_environment): L(w) = background + map(w). The map is
+   sampled by a piecewise-constant density over its pixels' cells (the rectangles
+   [x, x+1)/W x [y, y+1)/H of (u, v)), each cell's probability proportional to the mean
+   luminance of the bilinear interpolant over it, and uniform in solid angle within the cell
+   (phi uniform, cos(theta) uniform): the density of a cell is P(cell) / (its solid angle), with
+   no 1/sin(theta) to blow up at the poles (the piecewise-constant 2-D distribution of pbrt,
+   Pharr, Jakob & Humphreys, 4th ed., sec. A.5, with the exact solid angle of each cell in place
+   of the sin(theta) at its centre). The background is sampled uniformly over the sphere; the
+   two are mixed in proportion to their powers. */
+#define PT__ENV_LIGHT 0xffffffffu /* the light index of an environment sample */
+static double pt__env_luminance(const float *c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+/* The map's (u, v) in [0, 1) x [0, 1] of world direction w (unit). theta by atan2: exact near the poles. */
+static void pt__env_uv(const pt__env *e, pt_vec3 w, double *u, double *v)
+{
+    double x = (double)e->rot[0][0] * w.x + (double)e->rot[1][0] * w.y + (double)e->rot[2][0] * w.z;
+    double y = (double)e->rot[0][1] * w.x + (double)e->rot[1][1] * w.y + (double)e->rot[2][1] * w.z;
+    double z = (double)e->rot[0][2] * w.x + (double)e->rot[1][2] * w.y + (double)e->rot[2][2] * w.z;
+    double uu = atan2(x, -z) * (0.5 / 3.14159265358979323846);
+    if (uu < 0.0) uu += 1.0;
+    *u = uu < 1.0 ? uu : 0.0;
+    *v = atan2(sqrt(x * x + z * z), y) * (1.0 / 3.14159265358979323846);
+}
+/* The map (scale applied) at (u, v): bilinear between pixel centres, periodic in u. */
+static pt_color pt__env_lookup(const pt__env *e, double u, double v)
+{
+    double fx = u * e->w - 0.5, fy = v * e->h - 0.5, x0f = floor(fx), y0f = floor(fy);
+    float tx = (float)(fx - x0f), ty = (float)(fy - y0f);
+    int x0 = (int)x0f, y0 = (int)y0f, x1, y1;
+    const float *a, *b, *c, *d;
+    if (x0 < 0) x0 += e->w;
+    if (x0 >= e->w) x0 -= e->w;
+    x1 = x0 + 1 < e->w ? x0 + 1 : 0;
+    y1 = y0 + 1;
+    if (y0 < 0) y0 = 0;
+    if (y0 > e->h - 1) y0 = e->h - 1;
+    if (y1 > e->h - 1) y1 = e->h - 1;
+    a = e->rgb + 3 * ((size_t)y0 * (size_t)e->w + (size_t)x0);
+    b = e->rgb + 3 * ((size_t)y0 * (size_t)e->w + (size_t)x1);
+    c = e->rgb + 3 * ((size_t)y1 * (size_t)e->w + (size_t)x0);
+    d = e->rgb + 3 * ((size_t)y1 * (size_t)e->w + (size_t)x1);
+    return pt_v3((1.0f - ty) * ((1.0f - tx) * a[0] + tx * b[0]) + ty * ((1.0f - tx) * c[0] + tx * d[0]),
+                 (1.0f - ty) * ((1.0f - tx) * a[1] + tx * b[1]) + ty * ((1.0f - tx) * c[1] + tx * d[1]),
+                 (1.0f - ty) * ((1.0f - tx) * a[2] + tx * b[2]) + ty * ((1.0f - tx) * c[2] + tx * d[2]));
+}
+static pt_color pt__env_map_radiance(const pt__env *e, pt_vec3 w)
+{
+    double u, v;
+    pt__env_uv(e, w, &u, &v);
+    return pt__env_lookup(e, u, v);
+}
+/* The map's sampling density (per sr) of world direction w. */
+static float pt__env_map_density(const pt__env *e, pt_vec3 w)
+{
+    double u, v;
+    int x, y;
+    pt__env_uv(e, w, &u, &v);
+    x = (int)(u * e->w);
+    y = (int)(v * e->h);
+    if (x > e->w - 1) x = e->w - 1;
+    if (y > e->h - 1) y = e->h - 1;
+    return e->cell_density[(size_t)y * (size_t)e->w + (size_t)x];
+}
+/* The index i of [cdf[i], cdf[i+1]) holding u (cdf: n + 1 entries from 0 to 1), never an empty
+   interval, and u's place in it, in [0, 1). */
+static int pt__cdf_find(const float *cdf, int n, float u, double *frac)
+{
+    int lo = 0, hi = n - 1;
+    while (lo < hi) { /* the first i with cdf[i + 1] > u */
+        int mid = (lo + hi) / 2;
+        if (cdf[mid + 1] > u) hi = mid;
+        else lo = mid + 1;
+    }
+    while (lo > 0 && !(cdf[lo + 1] > cdf[lo])) --lo; /* (u = 1 rounded: the last non-empty one) */
+    *frac = cdf[lo + 1] > cdf[lo] ? ((double)u - cdf[lo]) / ((double)cdf[lo + 1] - cdf[lo]) : 0.5;
+    if (*frac < 0.0) *frac = 0.0;
+    if (*frac >= 1.0) *frac = 0.99999999999999989;
+    return lo;
+}
+static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w)
+{
+    double fy, fx, c0, c1, cos_t, sin_t, phi, lx, ly, lz;
+    int y = pt__cdf_find(e->row_cdf, e->h, u1, &fy), x;
+    const float *cc = e->col_cdf + (size_t)y * (size_t)(e->w + 1);
+    if (!(cc[e->w] > 0.0f)) return 0;
+    x = pt__cdf_find(cc, e->w, u2, &fx);
+    c0 = e->cos_edge[y];
+    c1 = e->cos_edge[y + 1];
+    cos_t = c0 - fy * (c0 - c1);
+    sin_t = sqrt(pt__maxd(0.0, (1.0 - cos_t) * (1.0 + cos_t)));
+    phi = 2.0 * 3.14159265358979323846 * ((double)x + fx) / (double)e->w;
+    lx = sin_t * sin(phi);
+    ly = cos_t;
+    lz = -sin_t * cos(phi);
+    *w = pt_normalize(pt_v3((float)(e->rot[0][0] * lx + e->rot[0][1] * ly + e->rot[0][2] * lz),
+                            (float)(e->rot[1][0] * lx + e->rot[1][1] * ly + e->rot[1][2] * lz),
+                            (float)(e->rot[2][0] * lx + e->rot[2][1] * ly + e->rot[2][2] * lz)));
+    return 1;
+}
+/* The environment light's density: c_uniform / (4 pi) + (1 - c_uniform) p_map(w). */
+static float pt__env_density(const pt__env *e, float c_uniform, pt_vec3 w)
+{
+    float p = c_uniform * PT__INV_4PI;
+    if (e && c_uniform < 1.0f) p += (1.0f - c_uniform) * pt__env_map_density(e, w);
+    return p;
+}
+static int pt__env_sample(const pt__env *e, float c_uniform, float u1, float u2, pt_vec3 *w, float *pdf)
+{
+    if (u1 < c_uniform || !e) {
+        *w = pt_sample_uniform_sphere(pt__minf(u1 / c_uniform, 0.99999994f), u2);
+    } else if (!pt__env_map_sample(e, pt__minf((u1 - c_uniform) / (1.0f - c_uniform), 0.99999994f), u2, w)) {
+        return 0;
+    }
+    *pdf = pt__env_density(e, c_uniform, *w); /* (the density as evaluated, so MIS sees the same) */
+    return *pdf > 0.0f && pt__isfinite(*pdf);
+}
+/* The share of the uniform sphere in the environment light's density under background bg. */
+static float pt__env_uniform_share(const pt__env *e, pt_color bg)
+{
+    double b = ((double)bg.x + (double)bg.y + (double)bg.z) / 3.0, m = e ? e->mean : 0.0;
+    if (!(b > 0.0)) return 0.0f;
+    return m > 0.0 ? (float)(b / (b + m)) : 1.0f;
+}
+
 /* --- fuzzy metal lobe: the direction of r + f s, with r the unit mirror direction and s
    uniform in the unit ball (Shirley, "Ray Tracing in One Weekend" v3, sec. 10.6). Its
    density follows in closed form: along direction w at angle theta from r the ball covers
@@ -2892,6 +3073,22 @@ PTDEF pt_pdf pt_pdf_scene_lights(const pt_scene *scene, pt_vec3 origin)
     p.origin = origin;
     p.as.lights.scene = scene;
     return p;
+}
+PTDEF pt_pdf pt_pdf_environment(const pt_scene *scene, pt_color background)
+{
+    pt_pdf p = pt__pdf_blank(PT_PDF_ENVIRONMENT);
+    p.as.environment.scene = scene;
+    p.as.environment.background = background;
+    return p;
+}
+/* The environment light of pdf (PT_PDF_ENVIRONMENT): its map and uniform share; 0 if it has none. */
+static int pt__pdf_env(const pt_pdf *pdf, const pt__env **e, float *c_uniform)
+{
+    const pt_scene *s = pdf->as.environment.scene;
+    if (!s || !s->committed || !pt__color_ok(pdf->as.environment.background)) return 0;
+    *e = s->env;
+    *c_uniform = pt__env_uniform_share(s->env, pdf->as.environment.background);
+    return s->env ? s->env->mean > 0.0 || *c_uniform > 0.0f : *c_uniform > 0.0f;
 }
 PTDEF pt_pdf pt_pdf_material(const pt_scene *scene, int material, pt_vec3 normal, pt_vec3 wo)
 {
@@ -3642,6 +3839,11 @@ static int pt__pdf_validate_depth(const pt_pdf *pdf, int depth)
     case PT_PDF_GUIDE:
         return pdf->as.guide.guide && pdf->as.guide.leaf < pdf->as.guide.guide->leaf_count ? PT_OK
                                                                                             : PT_ERROR_INVALID_ARGUMENT;
+    case PT_PDF_ENVIRONMENT:
+        return pdf->as.environment.scene && pdf->as.environment.scene->committed &&
+                       pt__color_ok(pdf->as.environment.background)
+                   ? PT_OK
+                   : PT_ERROR_INVALID_ARGUMENT;
     default: return PT_ERROR_INVALID_ARGUMENT;
     }
 }
@@ -3702,6 +3904,12 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
         if (pdf->as.callback.value) v = pdf->as.callback.value(pdf->as.callback.user, w);
         break;
     case PT_PDF_GUIDE: v = pt__guide_value(pdf->as.guide.guide, pdf->as.guide.leaf, w); break;
+    case PT_PDF_ENVIRONMENT: {
+        const pt__env *e;
+        float c;
+        if (pt__pdf_env(pdf, &e, &c)) v = pt__env_density(e, c, w);
+        break;
+    }
     default: break;
     }
     return pt__isfinite(v) && v > 0.0f ? v : 0.0f;
@@ -3766,6 +3974,12 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
             p = pt__lights_value(pdf->as.lights.scene, o, w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
             ok = p > 0.0f;
         }
+        break;
+    }
+    case PT_PDF_ENVIRONMENT: {
+        float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng), c;
+        const pt__env *e;
+        ok = pt__pdf_env(pdf, &e, &c) && pt__env_sample(e, c, u1, u2, &w, &p);
         break;
     }
     case PT_PDF_MATERIAL: {
@@ -4224,6 +4438,7 @@ PTDEF void pt_scene_destroy(pt_scene *s)
     PT_FREE(s->ltree);
     PT_FREE(s->ltrail);
     PT_FREE(s->dlights);
+    pt__env_free(s->env);
     PT_FREE(s);
 }
 PTDEF const char *pt_scene_error_message(const pt_scene *s) { return s ? s->error : "scene is NULL"; }
@@ -4519,7 +4734,6 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
    interface. Delta materials (mirror, glass) have no density and are followed by the integrator.
    ------------------------------------------------------------------------------------------ */
 
-static int pt__color_ok(pt_color c) { return pt__vfinite(c) && c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f; }
 
 PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
 {
@@ -4695,6 +4909,162 @@ PTDEF int pt_scene_get_light(const pt_scene *s, int id, pt_light_desc *light)
     if (!s || !light || id < 0 || (uint32_t)id >= s->dlight_count) return PT_ERROR_INVALID_ARGUMENT;
     *light = s->dlights[id].desc;
     return PT_OK;
+}
+static void pt__env_free(pt__env *e)
+{
+    if (!e) return;
+    PT_FREE(e->rgb);
+    PT_FREE(e->row_cdf);
+    PT_FREE(e->col_cdf);
+    PT_FREE(e->cell_density);
+    PT_FREE(e->cos_edge);
+    PT_FREE(e);
+}
+/* The sampling tables of e (pixels set): each cell's weight is the mean luminance over it of
+   the bilinear interpolant, the pixel's luminance filtered by [1/8, 3/4, 1/8] in x (periodic)
+   and in y (held at the first and last rows); positive wherever the radiance is. */
+static void pt__env_tables(pt__env *e, double *lum, double *row_w)
+{
+    const int w = e->w, h = e->h;
+    const double k[3] = { 0.125, 0.75, 0.125 }, pi = 3.14159265358979323846;
+    double total = 0.0, acc, sum = 0.0;
+    int x, y, i, j;
+    for (y = 0; y < h; ++y)
+        for (x = 0; x < w; ++x) {
+            const float *c = e->rgb + 3 * ((size_t)y * (size_t)w + (size_t)x);
+            sum += ((double)c[0] + (double)c[1] + (double)c[2]) / 3.0 *
+                   (cos(pi * y / h) - cos(pi * (y + 1) / h)); /* (x 2 pi / w, below) */
+        }
+    e->mean = sum * (2.0 * pi / w) / (4.0 * pi);
+    for (y = 0; y <= h; ++y) e->cos_edge[y] = cos(pi * y / h);
+    for (y = 0; y < h; ++y) {
+        double rw = 0.0;
+        float *cc = e->col_cdf + (size_t)y * (size_t)(w + 1);
+        for (x = 0; x < w; ++x) {
+            double f = 0.0;
+            for (j = -1; j <= 1; ++j) {
+                int yy = y + j < 0 ? 0 : (y + j > h - 1 ? h - 1 : y + j);
+                for (i = -1; i <= 1; ++i) {
+                    int xx = (x + i + w) % w;
+                    f += k[j + 1] * k[i + 1] * pt__env_luminance(e->rgb + 3 * ((size_t)yy * (size_t)w + (size_t)xx));
+                }
+            }
+            lum[x] = f;
+            rw += f;
+        }
+        acc = 0.0;
+        cc[0] = 0.0f;
+        for (x = 0; x < w; ++x) {
+            acc += lum[x];
+            cc[x + 1] = rw > 0.0 ? (float)(acc / rw) : 0.0f;
+        }
+        if (rw > 0.0) cc[w] = 1.0f;
+        row_w[y] = rw * (e->cos_edge[y] - e->cos_edge[y + 1]);
+        total += row_w[y];
+    }
+    acc = 0.0;
+    e->row_cdf[0] = 0.0f;
+    for (y = 0; y < h; ++y) {
+        acc += row_w[y];
+        e->row_cdf[y + 1] = total > 0.0 ? (float)(acc / total) : 0.0f;
+    }
+    if (total > 0.0) e->row_cdf[h] = 1.0f;
+    /* each cell's density from the stored (float) tables, so that it is exactly what sampling does */
+    for (y = 0; y < h; ++y) {
+        const float *cc = e->col_cdf + (size_t)y * (size_t)(w + 1);
+        double omega = (2.0 * pi / w) * (e->cos_edge[y] - e->cos_edge[y + 1]);
+        double pr = (double)e->row_cdf[y + 1] - (double)e->row_cdf[y];
+        for (x = 0; x < w; ++x) {
+            double p = pr * ((double)cc[x + 1] - (double)cc[x]) / omega;
+            e->cell_density[(size_t)y * (size_t)w + (size_t)x] = p > 0.0 && p < 3.4e38 ? (float)p : 0.0f;
+        }
+    }
+}
+/* The rotation part of t, if it is one (orthonormal rows within 1e-4, determinant > 0). */
+static int pt__rotation_of(const pt_transform *t, float r[3][3])
+{
+    int i, j, k;
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) r[i][j] = t->m[i][j];
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) {
+            double d = 0.0;
+            for (k = 0; k < 3; ++k) d += (double)r[k][i] * r[k][j];
+            if (!(fabs(d - (i == j ? 1.0 : 0.0)) <= 1e-4)) return 0;
+        }
+    return pt__transform_det(t) > 0.0f;
+}
+PTDEF int pt_scene_set_environment(pt_scene *s, const pt_environment_desc *d)
+{
+    pt__env *e;
+    const pt_image *img;
+    size_t n, i;
+    double *tmp;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!d || !d->map) {
+        pt__env_free(s->env);
+        s->env = NULL;
+        s->committed = 0;
+        return PT_OK;
+    }
+    img = d->map;
+    if (img->width < 2 || img->height < 2 || img->width > (1 << 16) || img->height > (1 << 16) || !img->rgb)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "environment: map is %d x %d%s: it needs 2 .. 65536 pixels on each side, and pixels",
+                        img->width, img->height, img->rgb ? "" : " without pixels (rgb NULL)");
+    if (!pt__isfinite(d->scale) || d->scale < 0.0f)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "environment: scale = %g: must be finite and > 0 (0: 1)",
+                        (double)d->scale);
+    n = (size_t)img->width * (size_t)img->height;
+    for (i = 0; i < 3 * n; ++i)
+        if (!pt__isfinite(img->rgb[i]) || img->rgb[i] < 0.0f)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                            "environment: map pixel (%d, %d) channel %d = %g: must be finite and >= 0",
+                            (int)(i / 3 % (size_t)img->width), (int)(i / 3 / (size_t)img->width), (int)(i % 3),
+                            (double)img->rgb[i]);
+    e = (pt__env *)PT_MALLOC(sizeof *e);
+    if (!e) return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "environment: out of memory");
+    memset(e, 0, sizeof *e);
+    if (!pt__rotation_of(&s->xf, e->rot)) {
+        PT_FREE(e);
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "environment: the scene's current transform is not a rotation (an environment can only be turned)");
+    }
+    e->w = img->width;
+    e->h = img->height;
+    e->scale = d->scale == 0.0f ? 1.0f : d->scale;
+    e->rgb = (float *)PT_MALLOC(3 * n * sizeof(float));
+    e->row_cdf = (float *)PT_MALLOC((size_t)(e->h + 1) * sizeof(float));
+    e->col_cdf = (float *)PT_MALLOC((size_t)e->h * (size_t)(e->w + 1) * sizeof(float));
+    e->cell_density = (float *)PT_MALLOC(n * sizeof(float));
+    e->cos_edge = (double *)PT_MALLOC((size_t)(e->h + 1) * sizeof(double));
+    tmp = (double *)PT_MALLOC((size_t)(e->w + e->h) * sizeof(double));
+    if (!e->rgb || !e->row_cdf || !e->col_cdf || !e->cell_density || !e->cos_edge || !tmp) {
+        PT_FREE(tmp);
+        pt__env_free(e);
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "environment: out of memory (%d x %d map)", img->width, img->height);
+    }
+    for (i = 0; i < 3 * n; ++i) {
+        e->rgb[i] = img->rgb[i] * e->scale;
+        if (!pt__isfinite(e->rgb[i])) {
+            PT_FREE(tmp);
+            pt__env_free(e);
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "environment: scale = %g overflows the map's pixel %d",
+                            (double)d->scale, (int)(i / 3));
+        }
+    }
+    pt__env_tables(e, tmp, tmp + e->w);
+    PT_FREE(tmp);
+    pt__env_free(s->env);
+    s->env = e;
+    s->committed = 0;
+    return PT_OK;
+}
+PTDEF pt_color pt_scene_environment_radiance(const pt_scene *s, pt_vec3 dir)
+{
+    float len2 = pt_length2(dir);
+    if (!s || !s->env || !pt__vfinite(dir) || !(len2 > 0.0f)) return pt_v3(0, 0, 0);
+    return pt__env_map_radiance(s->env, pt_scale(dir, 1.0f / sqrtf(len2)));
 }
 /* A spot's falloff toward unit w (from the light): Mitsuba 3's `spot`, linear in the angle. The
    angle is atan2(|axis x w|, axis . w), exact for small angles too, where acos of a dot product is
@@ -6472,6 +6842,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
         s->dlights[s->dlight_count - 1u].cdf = 1.0f;
         f |= PT_FEATURE_DELTA_LIGHTS;
     }
+    if (s->env) f |= PT_FEATURE_ENVIRONMENT;
     s->features = f;
     s->committed = 1;
     return PT_OK;
@@ -6507,6 +6878,8 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     info->mesh_count = s->mesh_count;
     info->emitter_count = s->committed ? s->light_count : 0u;
     info->delta_light_count = s->dlight_count;
+    info->environment_width = s->env ? s->env->w : 0;
+    info->environment_height = s->env ? s->env->h : 0;
     info->material_count = s->mat_count;
     info->texture_count = s->tex_count;
     info->degenerate_triangles_skipped = s->degenerate_skipped;
@@ -6750,6 +7123,12 @@ typedef struct pt__settings {
     const pt_guide *learned;  /* path guiding (section 8): the guide sampled at non-delta vertices */
     pt_guide *recording;      /* the guide the paths' radiance is recorded into (training) */
     float learned_weight;     /* 1 - alpha: the guide's share of the scatter density */
+    /* the environment light (background and map; pt__settings_for_scene) */
+    const pt__env *env;       /* the scene's map, NULL: none */
+    int env_on;               /* some environment radiance: the environment is a light */
+    float env_pick;           /* the probability that light sampling picks the environment (0: off) */
+    float env_uniform;        /* the uniform sphere's share of the environment's density */
+    float lights_share;       /* 1 - env_pick: the shaped lights' share (exactly 1 when off) */
 } pt__settings;
 
 /* Whether the skip `bit` is taken (not disabled by pt_render_desc.disable_skips). */
@@ -6817,6 +7196,39 @@ static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c, char
     return PT_OK;
 }
 
+/* The environment light's part of cfg for scene s: it is picked among the shaped lights in
+   proportion to power, its power taken as that of a uniform radiance (the mean) falling on the
+   scene's bounding sphere of radius R, 4 pi^2 R^2 L (the convention of pbrt-v4's infinite
+   lights), kept within [0.001, 0.999] so neither is starved when both are present. */
+static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
+{
+    double bg = ((double)c->background.x + (double)c->background.y + (double)c->background.z) / 3.0;
+    double m = s->env ? s->env->mean : 0.0, phi, r;
+    pt_vec3 ext = pt_sub(s->hi, s->lo);
+    c->env = s->env;
+    c->env_on = bg + m > 0.0;
+    c->env_pick = 0.0f;
+    c->lights_share = 1.0f;
+    c->env_uniform = 0.0f;
+    if (!c->env_on) return;
+    c->env_uniform = pt__env_uniform_share(s->env, c->background);
+    if (!s->light_count) {
+        c->env_pick = 1.0f;
+        c->lights_share = 0.0f;
+        return;
+    }
+    r = s->prim_count ? 0.5 * sqrt((double)ext.x * ext.x + (double)ext.y * ext.y + (double)ext.z * ext.z) : 1.0;
+    if (!(r > 0.0) || !(r < 1e150)) r = 1.0;
+    phi = 4.0 * 9.8696044010893586 * r * r * (bg + m);
+    c->env_pick = (float)pt__mind(0.999, pt__maxd(0.001, phi / (phi + s->total_power)));
+    c->lights_share = 1.0f - c->env_pick;
+}
+/* What a ray leaving the scene along w sees: background + map(w). */
+static pt_color pt__env_radiance(const pt__settings *c, pt_vec3 w)
+{
+    return c->env ? pt_add(c->background, pt__env_map_radiance(c->env, w)) : c->background;
+}
+
 static float pt__power_heuristic(float a, float b)
 {
     float a2 = a * a, b2 = b * b;
@@ -6864,6 +7276,38 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
     }
 }
 
+/* Light sampling with the environment: it is picked with probability cfg->env_pick, the shaped
+   lights (pt__lights_sample) otherwise; ls->pdf is the pick's probability times the light's
+   density, and *light_index is PT__ENV_LIGHT for the environment. */
+static PT__HOT int pt__lights_sample_all(const pt_scene *s, const pt__settings *cfg, pt_vec3 o, float u0, float u1,
+                                         float u2, pt__light_sample *ls, uint32_t *light_index)
+{
+    if (PT__UNLIKELY(cfg->env_pick > 0.0f)) {
+        if (u0 < cfg->env_pick) {
+            if (!pt__env_sample(cfg->env, cfg->env_uniform, u1, u2, &ls->dir, &ls->pdf)) return 0;
+            ls->pdf *= cfg->env_pick;
+            ls->dist = PT__INF;
+            ls->point = ls->normal = pt_v3(0, 0, 0);
+            ls->rounded = 0;
+            *light_index = PT__ENV_LIGHT;
+            return ls->pdf > 0.0f;
+        }
+        u0 = pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f);
+        if (!pt__lights_sample(s, o, u0, u1, u2, ls, light_index, pt__lights_mode(cfg))) return 0;
+        ls->pdf *= cfg->lights_share;
+        return ls->pdf > 0.0f;
+    }
+    return pt__lights_sample(s, o, u0, u1, u2, ls, light_index, pt__lights_mode(cfg));
+}
+/* The density of pt__lights_sample_all: env_pick p_env + (1 - env_pick) sum_i P_i p_i. */
+static float pt__lights_value_all(const pt_scene *s, const pt__settings *cfg, pt_vec3 o, pt_vec3 w)
+{
+    float v = s->light_count ? pt__lights_value(s, o, w, pt__lights_mode(cfg)) : 0.0f;
+    if (PT__UNLIKELY(cfg->env_pick > 0.0f))
+        v = cfg->env_pick * pt__env_density(cfg->env, cfg->env_uniform, w) + cfg->lights_share * v;
+    return v;
+}
+
 /* Whether any light can be sampled from p at all; exact (and cheap) for one light. Called only
    with at least one light (PT_SKIP_NO_EMITTERS is the caller's). */
 static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
@@ -6908,6 +7352,18 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
     if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
     if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
         w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
+    if (li == PT__ENV_LIGHT) { /* the environment: a shadow ray to infinity */
+        pt_color Le = pt__env_radiance(cfg, ls->dir);
+        pt_ray sr;
+        pt__rayctx src;
+        if (pt__is_black(Le)) return pt_v3(0, 0, 0);
+        sr.origin = v->o;
+        sr.dir = ls->dir;
+        pt__rayctx_init2(&src, sr, tri);
+        st->shadow_rays++;
+        if (pt__scene_any(s, &src, PT__INF, 0xffffffffu)) return pt_v3(0, 0, 0);
+        return pt_mul(beta, pt_scale(pt_mul(f, Le), w / ls->pdf));
+    }
     if (!pt__light_visible(s, v, ls, li, tri, st)) return pt_v3(0, 0, 0);
     {
         const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
@@ -7028,11 +7484,6 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
    weight 1 roulette divides by 0.95 each time; with a guide, or MIXTURE, they split often. What
    it does to the error: docs/internals.md, "Splitting (the weight window)". */
 #define PT__SPLIT_BETA 2.0f
-#if defined(__GNUC__)
-#define PT__UNLIKELY(x) __builtin_expect(!!(x), 0)
-#else
-#define PT__UNLIKELY(x) (x)
-#endif
 #define PT__SPLIT_MAX_COPIES 8
 
 /* indirect_paths (pt_render_desc): a camera sample's path also splits at its first non-delta
@@ -7121,18 +7572,18 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         uint32_t li = 0;
         ls.rounded = 0;
         if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights &&
-            (!s->light_count || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v->o))) {
+            (!s->light_count || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v->o))) {
             u = pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_MIXTURE));
             use_light = u < cfg->light_weight;
             if (use_light) {
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (!pt__lights_sample(s, v->o, u0, u1, u2, &ls, &li, pt__lights_mode(cfg))) return 0;
+                if (!pt__lights_sample_all(s, cfg, v->o, u0, u1, u2, &ls, &li)) return 0;
                 wi = ls.dir;
             } else if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
             /* a rounded direction has no density for its own light: that light's share is the
                sample's own (ls.pdf, the pick probability included) */
-            p_total = cfg->light_weight * (pt__lights_value(s, v->o, wi, pt__lights_mode(cfg)) + (ls.rounded ? ls.pdf : 0.0f)) +
+            p_total = cfg->light_weight * (pt__lights_value_all(s, cfg, v->o, wi) + (ls.rounded ? ls.pdf : 0.0f)) +
                       (1.0f - cfg->light_weight) * pt__scatter_density_pg(v, wi, pg);
         } else {
             if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
@@ -7246,10 +7697,10 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
 {
     pt_color L = pt_v3(0, 0, 0), beta_in;
     int depth;
-    const int any_lights = s->light_count > 0 || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
+    const int any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
     const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0; /* else rays skip the triangle set-up */
     const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
-    const int pick = s->light_count != 1; /* the light choice's number is used (pt__pick_light) */
+    const int pick = s->light_count != 1 || cfg->env_pick > 0.0f; /* the light choice's number is used */
     pt__vertex v;
     pt__guide_rec recs[PT__GUIDE_PATH_RECORDS]; /* training: this call's non-delta vertices */
     int nrec = 0, rec_last = -1;
@@ -7266,7 +7717,22 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         int k;
         pt__rayctx_init2(&rc, ray, tri);
         if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) {
-            L = pt_add(L, pt_mul(beta, cfg->background));
+            if (PT__UNLIKELY(cfg->env_on)) { /* the environment light, weighted as emission is */
+                float w = 1.0f;
+                if (!prev_delta) {
+                    if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
+                    else if (cfg->strategy == PT_STRATEGY_MIS)
+                        w = pt__power_heuristic(prev_pdf,
+                                                cfg->env_pick * pt__env_density(cfg->env, cfg->env_uniform, ray.dir));
+                }
+                if (w > 0.0f) {
+                    pt_color e = pt_scale(pt_mul(beta, pt__env_radiance(cfg, ray.dir)), w);
+                    L = pt_add(L, e);
+                    if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
+                }
+            } else {
+                L = pt_add(L, pt_mul(beta, cfg->background)); /* (black: the scene has no environment) */
+            }
             break;
         }
         prim = &s->prims[pi];
@@ -7278,7 +7744,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             if (!prev_delta) {
                 if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
                 else if (cfg->strategy == PT_STRATEGY_MIS) {
-                    float pl = pt__light_pmf(s, prev_p, (uint32_t)prim->light, pt__lights_mode(cfg)) *
+                    float pl = cfg->lights_share * pt__light_pmf(s, prev_p, (uint32_t)prim->light, pt__lights_mode(cfg)) *
                                pt__light_prim_value_at(s, prim, prev_p, ray.dir, t, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS));
                     w = pt__power_heuristic(prev_pdf, pl);
                 }
@@ -7316,7 +7782,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             uint32_t li;
             float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
             pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-            if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li, pt__lights_mode(cfg)))
+            if (pt__lights_sample_all(s, cfg, v.o, u0, u1, u2, &ls, &li))
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
         if (!m->delta) {
@@ -7347,7 +7813,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (pt__lights_sample(s, v.o, u0, u1, u2, &ls, &li, pt__lights_mode(cfg)))
+                if (pt__lights_sample_all(s, cfg, v.o, u0, u1, u2, &ls, &li))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
             /* the delta lights, under every strategy (a scene without them skips this) */
@@ -7421,6 +7887,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
     if (!s || !d || !rng || !s->committed || pt__settings_from_desc(d, &cfg, NULL, 0) != PT_OK ||
         !pt__vfinite(ray.origin) || !pt__vfinite(ray.dir) || !(pt_length2(ray.dir) > 0.0f))
         return pt_v3(0, 0, 0);
+    pt__settings_for_scene(&cfg, s);
     if (!(fabsf(pt_length2(ray.dir) - 1.0f) <= 1e-6f)) ray.dir = pt_normalize(ray.dir); /* unit: as given */
     ray.origin = pt__to_local(s, ray.origin);
     memset(&local, 0, sizeof local);
@@ -7918,6 +8385,7 @@ static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt
                            "and a pixel can count at most 4294967295", d->samples_per_pixel, (unsigned long)most);
     }
     if ((rc = pt__settings_from_desc(d, cfg, err, n)) != PT_OK) return rc;
+    pt__settings_for_scene(cfg, s);
     if (!pt__isfinite(d->adaptive_threshold) || d->adaptive_threshold < 0.0f)
         return pt__msg(err, n, bad, "pt_render_desc.adaptive_threshold = %g: must be finite and >= 0 (0: off)",
                        (double)d->adaptive_threshold);

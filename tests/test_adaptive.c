@@ -921,8 +921,8 @@ static void skips_exact(test_ctx *t)
 
 static void skips_within_noise(test_ctx *t)
 {
-    /* The skips that draw random numbers differently: no emitters (a sky-lit scene: MIS, light,
-       mixture), delta vertex (mirror and glass: MIS, light), one-sided light facing away (mixture;
+    /* The skips that draw random numbers differently: no emitters (a scene lit by delta lights
+       alone, no emitting shape and no environment: MIS, light, mixture), delta vertex (mirror and glass: MIS, light), one-sided light facing away (mixture;
        the ceiling and the light's back are behind it), every skip at once (MIS), and solid-angle
        sampling of a large rectangular light close to a floor (MIS), and the light tree against
        selection by power (40 small lights, MIS). 9 comparisons of 16 regions in the file's family. */
@@ -988,7 +988,8 @@ static void skips_within_noise(test_ctx *t)
     skip_case(t, s, &d, PT_SKIP_LIGHT_TREE, 0, "light tree (MIS)", &worst);
     pt_scene_destroy(s);
 
-    /* no emitters: an open scene (floor, two spheres) under a uniform sky of radiance 1 */
+    /* no emitters: an open scene (floor, two spheres) lit by a sun and a lamp (delta lights; a sky
+       would be an environment light, which next-event estimation samples) */
     sky = pt_scene_create();
     if (!CHECK(t, sky != NULL, "sky scene")) return;
     {
@@ -996,6 +997,19 @@ static void skips_within_noise(test_ctx *t)
         int rc = pt_scene_add_quad(sky, pt_v3(-5, 0, -5), pt_v3(0, 0, 10), pt_v3(10, 0, 0), white);
         rc |= pt_scene_add_sphere(sky, pt_v3(-0.6f, 0.5f, 0), 0.5f, white);
         rc |= pt_scene_add_sphere(sky, pt_v3(0.6f, 0.5f, 0), 0.5f, pt_scene_add_metal(sky, pt_v3(0.8f, 0.8f, 0.8f), 0.3f));
+        {
+            pt_light_desc sun, lamp;
+            memset(&sun, 0, sizeof sun);
+            sun.type = PT_LIGHT_DIRECTIONAL;
+            sun.direction = pt_v3(0.3f, -1.0f, 0.4f);
+            sun.intensity = pt_v3(2, 2, 2);
+            lamp = sun;
+            lamp.type = PT_LIGHT_POINT;
+            lamp.position = pt_v3(-1.0f, 2.0f, -1.0f);
+            lamp.intensity = pt_v3(3, 3, 3);
+            rc |= pt_scene_add_light(sky, &sun);
+            rc |= pt_scene_add_light(sky, &lamp);
+        }
         if (!CHECK(t, rc >= 0 && pt_scene_commit(sky) == PT_OK, "sky scene: %s", pt_scene_error_message(sky))) {
             pt_scene_destroy(sky);
             return;
@@ -1004,7 +1018,6 @@ static void skips_within_noise(test_ctx *t)
     d = tu_base_desc(32, 24, 32, 11);
     d.camera.look_from = pt_v3(0, 1.2f, -4);
     d.camera.look_at = pt_v3(0, 0.4f, 0);
-    d.background = pt_v3(1, 1, 1);
     d.max_depth = 6;
     for (k = 0; k < 3; k++) {
         static const pt_strategy st[3] = { PT_STRATEGY_MIS, PT_STRATEGY_LIGHT, PT_STRATEGY_MIXTURE };

@@ -59,9 +59,9 @@ static void checker_parity(test_ctx *t)
 
 static void checker_in_render(test_ctx *t)
 {
-    /* A checkered Lambertian floor under a uniform sky of radiance 1, no emitters, one bounce: every
-       cosine-sampled ray escapes (nothing else in the scene), so each sample is exactly the albedo at
-       the hit point. Pixels whose whole footprint lies in one checker cell must equal that cell's
+    /* A checkered Lambertian floor under a uniform sky of radiance 1, no emitters, one bounce,
+       MATERIAL: every cosine-sampled ray escapes (nothing else in the scene), so each sample is
+       exactly the albedo at the hit point (MIS would also sample the sky as a light). Pixels whose whole footprint lies in one checker cell must equal that cell's
        colour; the footprint is traced through pt_camera_ray to the plane y = 0. */
     pt_scene *s = pt_scene_create();
     pt_color even = pt_v3(0.2f, 0.3f, 0.4f), odd = pt_v3(0.8f, 0.6f, 0.5f);
@@ -87,6 +87,7 @@ static void checker_in_render(test_ctx *t)
     d.camera.vfov_degrees = 50;
     d.max_depth = 1;
     d.background = pt_v3(1, 1, 1);
+    d.strategy = PT_STRATEGY_MATERIAL;
     d.threads = 1;
     rc = pt_film_init(&film, d.width, d.height);
     if (!CHECK(t, rc == PT_OK, "film")) { pt_scene_destroy(s); return; }
