@@ -38,6 +38,8 @@
 #                         generated 1M-triangle terrain), build time, memory, the AUTO crossover:
 #                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
 #                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
+#   make build/ptsky      the procedural sky tool (tools/sky.c; docs/sky.md)
+#   make sky-check        regenerate scenes/sky.pfm into $(BUILD)/sky.pfm with build/ptsky and cmp them
 #   make check-warnings   compile the examples and tools/pdftrace.c (and so the implementation)
 #                         with gcc and clang at -std=c99 -Wall -Wextra -pedantic -Werror, with
 #                         and without libpng and OpenEXR, and the headers as C++; first
@@ -200,6 +202,21 @@ $(BUILD)/cornell: PT_LDLIBS := $(PNG_LDLIBS) $(PT_LDLIBS)
 # The command-line renderer: PNG per PNG, OpenEXR per TOOL_EXR, Embree per EMBREE.
 $(BUILD)/pdftrace: tools/pdftrace.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(TOOL_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(TOOL_LDLIBS) $(PT_LDLIBS)
+
+# ptsky (tools/sky.c, docs/sky.md): a procedural sky map; PFM always, OpenEXR per TOOL_EXR
+# (the same test as TOOL_CPPFLAGS's, without PNG, which ptsky does not write).
+SKY_CPPFLAGS := $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_FLAGS)))
+SKY_LDLIBS   := $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_LIBS)))
+$(BUILD)/ptsky: tools/sky.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
+	$(CC) $(PT_CPPFLAGS) $(SKY_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(SKY_LDLIBS) $(PT_LDLIBS)
+
+# make sky-check: scenes/sky.pfm is byte for byte what build/ptsky makes from SKY_ARGS.
+SKY_ARGS := --size 256x128 --sun-elevation 38 --sun-azimuth 45 --turbidity 3 --sky-scale 0.025
+.PHONY: sky-check
+sky-check: $(BUILD)/ptsky
+	./$(BUILD)/ptsky $(BUILD)/sky.pfm $(SKY_ARGS)
+	cmp $(BUILD)/sky.pfm scenes/sky.pfm
+	@echo "sky-check: $(BUILD)/sky.pfm is identical to scenes/sky.pfm"
 
 RUN_PNG := $(if $(filter 1,$(PNG_ON)),-o $(OUT)/cornell.png)
 run: $(BUILD)/cornell | $(OUT)

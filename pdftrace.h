@@ -7689,6 +7689,19 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
     return L;
 }
 
+/* What a ray along w that leaves the scene with throughput beta gathers from the environment
+   light, weighted as emission found by a ray is (the strategies at the top of this section). */
+static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta, int prev_delta, float prev_pdf)
+{
+    float wt = 1.0f;
+    if (!prev_delta) {
+        if (cfg->strategy == PT_STRATEGY_LIGHT) return pt_v3(0, 0, 0);
+        if (cfg->strategy == PT_STRATEGY_MIS)
+            wt = pt__power_heuristic(prev_pdf, cfg->env_pick * pt__env_density(cfg->env, cfg->env_uniform, w));
+    }
+    return pt_scale(pt_mul(beta, pt__env_radiance(cfg, w)), wt);
+}
+
 /* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
    pt__trace). */
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
@@ -7717,19 +7730,10 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         int k;
         pt__rayctx_init2(&rc, ray, tri);
         if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) {
-            if (PT__UNLIKELY(cfg->env_on)) { /* the environment light, weighted as emission is */
-                float w = 1.0f;
-                if (!prev_delta) {
-                    if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
-                    else if (cfg->strategy == PT_STRATEGY_MIS)
-                        w = pt__power_heuristic(prev_pdf,
-                                                cfg->env_pick * pt__env_density(cfg->env, cfg->env_uniform, ray.dir));
-                }
-                if (w > 0.0f) {
-                    pt_color e = pt_scale(pt_mul(beta, pt__env_radiance(cfg, ray.dir)), w);
-                    L = pt_add(L, e);
-                    if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
-                }
+            if (PT__UNLIKELY(cfg->env_on)) {
+                pt_color e = pt__env_escape(cfg, ray.dir, beta, prev_delta, prev_pdf);
+                L = pt_add(L, e);
+                if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
             } else {
                 L = pt_add(L, pt_mul(beta, cfg->background)); /* (black: the scene has no environment) */
             }
