@@ -1198,6 +1198,13 @@ PTDEF pt_color pt_trace_path(const pt_scene *scene, const pt_render_desc *desc, 
 PTDEF int pt_write_pfm(const char *path, const pt_image *image);
 PTDEF int pt_write_ppm(const char *path, const pt_image *image);
 PTDEF int pt_write_pfm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
+/* Reads a PFM file (colour "PF" or greyscale "Pf", either byte order, rows stored bottom first)
+   into *out (overwritten, not freed: pass an empty or freed image; left empty on failure), row
+   0 at the top. Images over PDFTRACE_PFM_MAX_PIXELS (default 2^28) are refused before anything
+   is allocated for them. PT_OK, PT_ERROR_IO (missing, unreadable, not a PFM, truncated),
+   PT_ERROR_UNSUPPORTED (too large) or PT_ERROR_OUT_OF_MEMORY, with a one-line message naming
+   the file in err when it is not NULL. Values are returned as stored (NaN and Inf included). */
+PTDEF int pt_read_pfm(const char *path, pt_image *out, char *err, size_t err_size);
 PTDEF int pt_write_ppm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
 PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, clamped */
 
@@ -9375,6 +9382,82 @@ static int pt__pfm_body(FILE *f, const pt_image *img)
         }
     }
     return 1;
+}
+#ifndef PDFTRACE_PFM_MAX_PIXELS
+#define PDFTRACE_PFM_MAX_PIXELS (1u << 28)
+#endif
+/* One header token of a PFM (whitespace-separated); 0 at end of file or if it is too long. */
+static int pt__pfm_token(FILE *f, char *tok, size_t n)
+{
+    size_t k = 0;
+    int c;
+    do c = fgetc(f);
+    while (c == ' ' || c == '\t' || c == '\n' || c == '\r');
+    while (c != EOF && c != ' ' && c != '\t' && c != '\n' && c != '\r') {
+        if (k + 1 >= n) return 0;
+        tok[k++] = (char)c;
+        c = fgetc(f);
+    }
+    tok[k] = '\0';
+    return k > 0 && c != EOF; /* (one whitespace byte ends the last token, before the data) */
+}
+PTDEF int pt_read_pfm(const char *path, pt_image *out, char *err, size_t err_size)
+{
+    char magic[8], ws[16], hs[16], ss[64], *end;
+    long w, h;
+    double scale;
+    int channels, little, x, y, c, rc;
+    FILE *f;
+    unsigned char buf[12];
+    if (out) memset(out, 0, sizeof *out);
+    if (!path || !out) return pt__msg(err, err_size, PT_ERROR_INVALID_ARGUMENT, "pt_read_pfm: %s is NULL", path ? "out" : "path");
+    f = fopen(path, "rb");
+    if (!f) return pt__msg(err, err_size, PT_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (!pt__pfm_token(f, magic, sizeof magic) || (strcmp(magic, "PF") && strcmp(magic, "Pf")) ||
+        !pt__pfm_token(f, ws, sizeof ws) || !pt__pfm_token(f, hs, sizeof hs) || !pt__pfm_token(f, ss, sizeof ss)) {
+        fclose(f);
+        return pt__msg(err, err_size, PT_ERROR_IO, "%s: not a PFM file (no 'PF'/'Pf' header with width, height and scale)", path);
+    }
+    channels = magic[1] == 'F' ? 3 : 1;
+    w = strtol(ws, &end, 10);
+    if (*end || w <= 0 || w > 1000000) w = -1;
+    h = strtol(hs, &end, 10);
+    if (*end || h <= 0 || h > 1000000) h = -1;
+    scale = strtod(ss, &end);
+    if (w < 0 || h < 0 || *end || !(scale == scale) || scale == 0.0) {
+        fclose(f);
+        return pt__msg(err, err_size, PT_ERROR_IO, "%s: bad PFM header (width '%s', height '%s', scale '%s')", path, ws, hs, ss);
+    }
+    if ((unsigned long)w * (unsigned long)h > (unsigned long)PDFTRACE_PFM_MAX_PIXELS) {
+        fclose(f);
+        return pt__msg(err, err_size, PT_ERROR_UNSUPPORTED, "%s: %ld x %ld pixels: more than PDFTRACE_PFM_MAX_PIXELS (%lu)", path,
+                       w, h, (unsigned long)PDFTRACE_PFM_MAX_PIXELS);
+    }
+    little = scale < 0.0;
+    if ((rc = pt_image_init(out, (int)w, (int)h)) != PT_OK) {
+        fclose(f);
+        return pt__msg(err, err_size, rc, "%s: out of memory for %ld x %ld pixels", path, w, h);
+    }
+    for (y = (int)h - 1; y >= 0; --y) /* the bottom row first */
+        for (x = 0; x < (int)w; ++x) {
+            float *px = out->rgb + 3u * ((size_t)y * (size_t)w + (size_t)x);
+            if (fread(buf, 4, (size_t)channels, f) != (size_t)channels) {
+                fclose(f);
+                pt_image_free(out);
+                return pt__msg(err, err_size, PT_ERROR_IO, "%s: truncated: the data ends in row %d of %ld (from the bottom)", path,
+                               (int)h - 1 - y, h);
+            }
+            for (c = 0; c < channels; ++c) {
+                const unsigned char *b = buf + 4 * c;
+                uint32_t u = little ? (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24
+                                    : (uint32_t)b[3] | (uint32_t)b[2] << 8 | (uint32_t)b[1] << 16 | (uint32_t)b[0] << 24;
+                memcpy(&px[c], &u, 4);
+            }
+            if (channels == 1) px[1] = px[2] = px[0];
+        }
+    fclose(f);
+    if (err && err_size) err[0] = '\0';
+    return PT_OK;
 }
 static int pt__ppm_body(FILE *f, const pt_image *img)
 {
