@@ -61,6 +61,11 @@
        pt_light_desc sun = {0};                (optional: lights without a shape, section 4)
        sun.type = PT_LIGHT_DIRECTIONAL; sun.direction = pt_v3(1,-3,1); sun.intensity = pt_v3(2,2,2);
        pt_scene_add_light(s, &sun);
+       pt_image sky = {0};                     (optional: an HDR sky, section 4; row 0 the zenith)
+       if (pt_read_pfm("sky.pfm", &sky, NULL, 0) == PT_OK) {
+           pt_environment_desc env = {0}; env.map = &sky;
+           pt_scene_set_environment(s, &env); pt_image_free(&sky);   (the scene keeps a copy)
+       }
        if (pt_scene_commit(s) != PT_OK) puts(pt_scene_error_message(s));
        pt_render_desc d = {0};                 (zero means "default" for every field)
        d.width = 320; d.height = 240; d.samples_per_pixel = 64;
@@ -134,6 +139,8 @@
      PT_SKIP_LIGHT_TREE.
    - no point, spot or directional light: no delta-light estimate (one test per vertex; not a
      switchable skip, since the general path would add nothing).
+   - no environment map and a black background: no environment light (one test per light
+     sample and escaped ray; not switchable either, for the same reason).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
    watertight-triangle set-up, as the only path.
@@ -8740,16 +8747,22 @@ static const char *pt__guiding_pointless(const pt_scene *s, const pt_render_desc
     for (i = 0; i < s->mat_count; ++i)
         if (s->mats[i].scatters && !s->mats[i].delta) non_delta = 1;
     if (!non_delta) return "no material with a scattering density: nothing to guide";
-    if (!s->light_count && !s->dlight_count && pt__is_black(d->background))
-        return "no emitter and a black background: no light to learn";
+    if (!s->light_count && !s->dlight_count && pt__is_black(d->background) && !(s->env && s->env->mean > 0.0))
+        return "no emitter, environment or background: no light to learn";
     return NULL;
 }
 
-/* The fixed-point unit of a render's guide: 2^-24 of the brightest emission or background. */
+/* The fixed-point unit of a render's guide: 2^-24 of the brightest emission, background or
+   environment map pixel. */
 static float pt__guiding_unit(const pt_scene *s, const pt_render_desc *d)
 {
     float top = (d->background.x + d->background.y + d->background.z) / 3.0f;
     uint32_t i;
+    if (s->env) {
+        size_t k, n = (size_t)s->env->w * (size_t)s->env->h;
+        for (k = 0; k < n; ++k)
+            top = pt__maxf(top, (s->env->rgb[3 * k] + s->env->rgb[3 * k + 1] + s->env->rgb[3 * k + 2]) / 3.0f);
+    }
     for (i = 0; i < s->mat_count; ++i)
         if (s->mats[i].emits)
             top = pt__maxf(top, (s->mats[i].emission.x + s->mats[i].emission.y + s->mats[i].emission.z) / 3.0f);
