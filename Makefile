@@ -211,7 +211,7 @@ $(BUILD)/ptsky: tools/sky.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(SKY_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(SKY_LDLIBS) $(PT_LDLIBS)
 
 # make sky-check: scenes/sky.pfm is byte for byte what build/ptsky makes from SKY_ARGS.
-SKY_ARGS := --size 256x128 --sun-elevation 38 --sun-azimuth 45 --turbidity 3 --sky-scale 0.025
+SKY_ARGS := --size 256x128 --sun-elevation 38.671875 --sun-azimuth 45.703125 --turbidity 3 --sky-scale 0.025
 .PHONY: sky-check
 sky-check: $(BUILD)/ptsky
 	./$(BUILD)/ptsky $(BUILD)/sky.pfm $(SKY_ARGS)
