@@ -114,6 +114,10 @@ static const bench_scene scenes[] = {
      "a 40-unit hall lit by 1024 small emitting triangles in four brightnesses (the light tree), diffuse, "
      "global illumination",
      "not exported: the POV-Ray exporter makes lights of emitting quads and spheres only (the lamps are triangles)", 0},
+    {"sun-sky", "bench/scenes/sun-sky.scene", 8192, 0,
+     "objects on a ground plane under an HDR sky with a low sun (a lat-long map): the environment light",
+     "not numeric: POV-Ray lights a scene from its sky only through radiosity, and the sun would need a light source "
+     "of its own", 0},
     {"close-quad", "bench/scenes/close-quad.scene", 8192, 1,
      "a long ceiling panel 5 cm from the back wall: a large quad light seen from close by (solid-angle sampling), "
      "diffuse, global illumination",
@@ -1712,8 +1716,9 @@ typedef struct skip_case {
    pdftrace.h: no gain shown; see its top comment.) */
 static const skip_case skip_cases[] = {
     /* no emitters under the mixture: the general path keeps the light component, whose samples
-       fail and end the path (an estimator with more variance per sample, paths are shorter) */
-    {"NO_EMITTERS", PT_SKIP_NO_EMITTERS, "bench/scenes/sky.scene", "sky", PT_STRATEGY_MIXTURE, 0.5f, SKIP_ESTIMATOR,
+       fail and end the path (an estimator with more variance per sample, paths are shorter).
+       The lamps room has delta lights only: no emitting shape and no environment */
+    {"NO_EMITTERS", PT_SKIP_NO_EMITTERS, "bench/scenes/lamps.scene", "lamps", PT_STRATEGY_MIXTURE, 0.5f, SKIP_ESTIMATOR,
      "no light component or light sampling in a scene without emitters"},
     /* the general path samples a light at the delta vertex and evaluates the material toward
        it, which is zero: the same estimate, three more random numbers drawn */
