@@ -1807,6 +1807,398 @@ static void sphere_light_small_cone_mean(test_ctx *t)
               worst_mean, worst_max, worst_z, zb);
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* the environment light: pt_pdf_environment                                                   */
+
+/* The density pt_pdf_environment documents, in double from the map's pixels (the test's own):
+   p(w) = c / (4 pi) + (1 - c) f(cell of w) / F. A pixel's cell is [x, x+1)/W x [y, y+1)/H of the
+   map's (u, v); f is the mean over the cell (in u, v) of the bilinear radiance's Rec. 709
+   luminance, which is the pixel luminances filtered by [1/8, 3/4, 1/8] in u (periodic) and in v
+   (held at the first and last rows, as the radiance is beyond their centres); F = \int f dw =
+   sum f (2 pi / W)(cos(pi y / H) - cos(pi (y + 1) / H)), so that within a cell the density is
+   uniform in solid angle. c = b / (b + m) is the uniform sphere's share under a grey background b,
+   m the mean over the sphere of the map's channel-mean pixel values (the power share). */
+typedef struct env_ref {
+    int w, h;
+    double *f, *prow, *pcol; /* per cell: f; its row's probability; its probability within the row */
+    double F, c, support;    /* support: the solid angle where p > 0 */
+    double R[9];             /* map frame to world, row-major */
+} env_ref;
+
+static void env_ref_free(env_ref *r)
+{
+    free(r->f);
+    free(r->prow);
+    free(r->pcol);
+    memset(r, 0, sizeof *r);
+}
+
+/* R: NULL for the identity. background: grey. Returns 1 on success. */
+static int env_ref_init(env_ref *r, const pt_image *map, double scale, const double *R, double background)
+{
+    const int w = map->width, h = map->height;
+    static const double k[3] = { 0.125, 0.75, 0.125 };
+    double *lum = (double *)malloc(sizeof(double) * (size_t)w * (size_t)h), m = 0.0, sa_pos = 0.0;
+    int x, y, i, j;
+    memset(r, 0, sizeof *r);
+    r->w = w;
+    r->h = h;
+    r->f = (double *)calloc((size_t)w * (size_t)h, sizeof(double));
+    r->prow = (double *)calloc((size_t)h, sizeof(double));
+    r->pcol = (double *)calloc((size_t)w * (size_t)h, sizeof(double));
+    if (!lum || !r->f || !r->prow || !r->pcol) { free(lum); env_ref_free(r); return 0; }
+    for (i = 0; i < 9; i++) r->R[i] = R ? R[i] : (i % 4 == 0);
+    for (y = 0; y < h; y++) {
+        double omega = 2.0 * TU_PI / w * (cos(TU_PI * y / h) - cos(TU_PI * (y + 1) / h));
+        for (x = 0; x < w; x++) {
+            const float *p = map->rgb + 3 * ((size_t)y * (size_t)w + (size_t)x);
+            lum[y * w + x] = scale * (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]);
+            m += scale * ((double)p[0] + p[1] + p[2]) / 3.0 * omega / (4.0 * TU_PI);
+        }
+    }
+    for (y = 0; y < h; y++) {
+        double row = 0.0, dcos = cos(TU_PI * y / h) - cos(TU_PI * (y + 1) / h);
+        for (x = 0; x < w; x++) {
+            double f = 0.0;
+            for (j = -1; j <= 1; j++)
+                for (i = -1; i <= 1; i++) {
+                    int yy = y + j < 0 ? 0 : y + j > h - 1 ? h - 1 : y + j;
+                    f += k[j + 1] * k[i + 1] * lum[yy * w + (x + i + w) % w];
+                }
+            r->f[y * w + x] = f;
+            row += f;
+            if (f > 0.0) sa_pos += 2.0 * TU_PI / w * dcos;
+        }
+        for (x = 0; x < w; x++) r->pcol[y * w + x] = row > 0.0 ? r->f[y * w + x] / row : 0.0;
+        r->prow[y] = row * dcos * 2.0 * TU_PI / w;
+        r->F += r->prow[y];
+    }
+    for (y = 0; y < h; y++) r->prow[y] /= r->F;
+    r->c = background > 0.0 ? background / (background + m) : 0.0;
+    r->support = r->c > 0.0 ? 4.0 * TU_PI : sa_pos;
+    free(lum);
+    return 1;
+}
+
+static dv3 env_to_world(const double *R, dv3 d)
+{
+    return dv(R[0] * d.x + R[1] * d.y + R[2] * d.z, R[3] * d.x + R[4] * d.y + R[5] * d.z, R[6] * d.x + R[7] * d.y + R[8] * d.z);
+}
+static dv3 env_to_map(const double *R, dv3 w)
+{
+    return dv(R[0] * w.x + R[3] * w.y + R[6] * w.z, R[1] * w.x + R[4] * w.y + R[7] * w.z, R[2] * w.x + R[5] * w.y + R[8] * w.z);
+}
+
+/* The cell of world direction w, its distance (radians) to the cell's edge and sin(theta). */
+static int env_cell(const env_ref *r, dv3 w, double *edge, double *sin_t)
+{
+    dv3 d = env_to_map(r->R, w);
+    double u, v, fu, fv;
+    int x, y;
+    tu_env_uv(d, &u, &v);
+    x = (int)(u * r->w);
+    y = (int)(v * r->h);
+    if (x > r->w - 1) x = r->w - 1;
+    if (y > r->h - 1) y = r->h - 1;
+    fu = u * r->w - x;
+    fv = v * r->h - y;
+    *sin_t = sin(TU_PI * v);
+    *edge = fmin(fmin(fu, 1.0 - fu) * 2.0 * TU_PI / r->w * *sin_t, fmin(fv, 1.0 - fv) * TU_PI / r->h);
+    return y * r->w + x;
+}
+
+/* near: within 1e-6 rad of a cell's edge (float directions carry ~6e-8 rad, and pdftrace turns the
+   map with its float rotation), or in a cell whose probability the library's float tables (the
+   CDFs, in [0, 1], each entry within 6e-8) cannot give to 2e-4: a dim cell after a bright one. */
+static double ref_env(const void *ctx, dv3 w, int *near)
+{
+    const env_ref *r = (const env_ref *)ctx;
+    double edge, sin_t;
+    int cell = env_cell(r, w, &edge, &sin_t);
+    double f = r->f[cell], pr = r->prow[cell / r->w], pc = r->pcol[cell];
+    *near = edge < 1e-6 || (r->c < 1.0 && f > 0.0 && 6e-8 / pr + 6e-8 / pc > 2e-4);
+    return r->c / (4.0 * TU_PI) + (1.0 - r->c) * f / r->F;
+}
+
+/* A committed scene holding only the environment map (scale; under transform xf if not NULL). */
+static pt_scene *env_scene(test_ctx *t, const pt_image *map, float scale, const pt_transform *xf)
+{
+    pt_scene *s = pt_scene_create();
+    pt_environment_desc d;
+    int rc;
+    if (!CHECK(t, s != NULL, "scene")) return NULL;
+    d.map = map;
+    d.scale = scale;
+    if (xf) pt_scene_set_transform(s, xf);
+    rc = pt_scene_set_environment(s, &d);
+    rc = rc == PT_OK ? pt_scene_commit(s) : rc;
+    if (!CHECK(t, rc == PT_OK, "environment %d x %d: %s", map->width, map->height, pt_scene_error_message(s))) {
+        pt_scene_destroy(s);
+        return NULL;
+    }
+    return s;
+}
+
+/* A w x h map of grey value v (rgb malloc'd). */
+static int env_flat(pt_image *img, int w, int h, float v)
+{
+    size_t i;
+    img->width = w;
+    img->height = h;
+    img->rgb = (float *)malloc(sizeof(float) * 3 * (size_t)w * (size_t)h);
+    if (!img->rgb) return 0;
+    for (i = 0; i < 3 * (size_t)w * (size_t)h; i++) img->rgb[i] = v;
+    return 1;
+}
+static void env_set(pt_image *img, int x, int y, float r, float g, float b)
+{
+    float *p = img->rgb + 3 * ((size_t)y * (size_t)img->width + (size_t)x);
+    p[0] = r; p[1] = g; p[2] = b;
+}
+
+/* The cone about the centre of pixel (px, py) (map frame, turned by R) containing the 3 x 3
+   pixels' cells around it: 1 - cos of the largest angle to points along the block's edges. */
+static double env_block_cone(const env_ref *r, int px, int py, dv3 *axis)
+{
+    double omc = 0.0, u0 = (double)(px - 1) / r->w, u1 = (double)(px + 2) / r->w;
+    double v0 = fmax(0.0, (double)(py - 1) / r->h), v1 = fmin(1.0, (double)(py + 2) / r->h);
+    int i;
+    *axis = env_to_world(r->R, tu_env_dir((px + 0.5) / r->w, (py + 0.5) / r->h));
+    for (i = 0; i <= 256; i++) {
+        double s = i / 256.0, uu = u0 + s * (u1 - u0), vv = v0 + s * (v1 - v0);
+        dv3 e[4];
+        int k;
+        e[0] = tu_env_dir(uu, v0); e[1] = tu_env_dir(uu, v1); e[2] = tu_env_dir(u0, vv); e[3] = tu_env_dir(u1, vv);
+        for (k = 0; k < 4; k++) omc = fmax(omc, 1.0 - ddot(env_to_world(r->R, e[k]), *axis));
+    }
+    return fmin(2.0, omc * 1.02 + 1e-9);
+}
+
+/* One chi-square case of pt_pdf_environment against env_ref: the map scene s under a grey
+   background b; the histogram on the cone (axis, omc) with ns x nphi cells; E[1/p] against the
+   support unless check_inv is 0. */
+static void env_case(test_ctx *t, agg *a, const char *label, const pt_scene *s, const env_ref *ref, double b, dv3 axis,
+                     double omc, int ns, int nphi, int check_inv, uint64_t seed)
+{
+    pt_pdf p = pt_pdf_environment(s, pt_v3((float)b, (float)b, (float)b));
+    tu_pdf_check c = base_check(label, &p, seed);
+    tu_pdf_result r;
+    CHECK(t, pt_pdf_validate(&p) == PT_OK, "%s: pt_pdf_validate rejected it", label);
+    c.axis = axis;
+    c.omc = omc;
+    c.ns = ns;
+    c.nphi = nphi;
+    c.ref = ref_env;
+    c.ref_ctx = ref;
+    c.support = check_inv ? ref->support : -1.0;
+    TU_CHECK_PDF(t, &c, &r);
+    agg_add(a, &r);
+}
+
+/* pt_pdf_environment on: (a) a constant map (density 1/4pi); (b) one hot pixel in a black map, mid-
+   sphere and in the top row (the support is its 3 x 3 cells; histogram on a cone around them, so a
+   sample outside them is a hard failure), and in a field of 1e-6 (the dim cells' tiny probabilities
+   through float CDFs); (c) a sky with a sun covering a few pixels; (d) non-square maps, 7 x 3 (cells
+   of 60 degrees: the solid angle within a cell matters most) and 64 x 8; (e) the sky turned by a
+   rotation (with a translation, which is ignored); (f) the sky with a grey background (the uniform
+   sphere mixed in by power). Each against env_ref (relative 1e-3), 10^5 draws, cone-local
+   histograms about the map's zenith (rows in cos theta cut across the map's rows in theta, so the
+   density within a cell is tested, not only the cells' probabilities). E[1/p] against the support's
+   solid angle, except in the 1e-6 field, where it rests on ~8 draws in the dim cells. */
+static void pdf_environment(test_ctx *t)
+{
+    pt_image img[7];
+    pt_scene *s;
+    env_ref ref;
+    agg a;
+    pt_rng rng;
+    double R[9];
+    const dv3 up = dv(0, 1, 0);
+    int i, x, y;
+    memset(img, 0, sizeof img);
+    agg_init(&a);
+    if (!CHECK(t, env_flat(&img[0], 8, 4, 1.0f) && env_flat(&img[1], 16, 8, 0.0f) && env_flat(&img[2], 16, 8, 1e-6f) &&
+                      tu_env_sky(&img[3], 64, 32, tu_env_dir(0.3, 0.3), 0.08, 150.0) && env_flat(&img[4], 7, 3, 0.0f) &&
+                      env_flat(&img[5], 64, 8, 0.0f) && tu_env_sky(&img[6], 32, 16, tu_env_dir(0.7, 0.2), 0.12, 40.0),
+               "out of memory"))
+        goto done;
+    env_set(&img[1], 5, 3, 2.0f, 1.0f, 0.5f);
+    env_set(&img[2], 11, 4, 1.0f, 1.0f, 1.0f);
+    pt_rng_seed(&rng, 2024, 7);
+    for (i = 0; i < 7 * 3 * 3; i++) img[4].rgb[i] = (float)(0.05 + 2.0 * tu_rand(&rng));
+    for (y = 0; y < 8; y++)
+        for (x = 0; x < 64; x++) {
+            double u = (x + 0.5) / 64, v = (y + 0.5) / 8, L = 1.0 + 0.8 * sin(6.0 * TU_PI * u) * cos(2.0 * TU_PI * v);
+            env_set(&img[5], x, y, (float)L, (float)(0.5 * L), (float)(2.0 - L));
+        }
+    /* (a) constant */
+    if ((s = env_scene(t, &img[0], 0.0f, NULL)) && env_ref_init(&ref, &img[0], 1.0, NULL, 0.0)) {
+        env_case(t, &a, "environment, constant 8 x 4", s, &ref, 0.0, up, 2.0, 16, 32, 1, 3100);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+    /* (b) one hot pixel: in a black map (mid-sphere; then moved to the top row), in a 1e-6 field */
+    if ((s = env_scene(t, &img[1], 3.0f, NULL)) && env_ref_init(&ref, &img[1], 3.0, NULL, 0.0)) {
+        dv3 axis;
+        double omc = env_block_cone(&ref, 5, 3, &axis);
+        env_case(t, &a, "environment, one hot pixel of 16 x 8 (black)", s, &ref, 0.0, axis, omc, 16, 32, 1, 3101);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+    env_set(&img[1], 5, 3, 0.0f, 0.0f, 0.0f);
+    env_set(&img[1], 9, 0, 0.5f, 1.0f, 2.0f);
+    if ((s = env_scene(t, &img[1], 0.0f, NULL)) && env_ref_init(&ref, &img[1], 1.0, NULL, 0.0)) {
+        env_case(t, &a, "environment, one hot pixel in the top row (black)", s, &ref, 0.0, up, (1.0 - cos(TU_PI / 4.0)) * 1.02,
+                 16, 32, 1, 3102);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+    if ((s = env_scene(t, &img[2], 0.0f, NULL)) && env_ref_init(&ref, &img[2], 1.0, NULL, 0.0)) {
+        env_case(t, &a, "environment, one hot pixel in a 1e-6 field", s, &ref, 0.0, up, 2.0, 16, 32, 0, 3103);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+    /* (c) sky and sun */
+    if ((s = env_scene(t, &img[3], 0.0f, NULL)) && env_ref_init(&ref, &img[3], 1.0, NULL, 0.0)) {
+        env_case(t, &a, "environment, sky 64 x 32 with a sun", s, &ref, 0.0, up, 2.0, 16, 32, 1, 3104);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+    /* (d) non-square */
+    if ((s = env_scene(t, &img[4], 0.5f, NULL)) && env_ref_init(&ref, &img[4], 0.5, NULL, 0.0)) {
+        env_case(t, &a, "environment, random 7 x 3", s, &ref, 0.0, up, 2.0, 16, 35, 1, 3105);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+    if ((s = env_scene(t, &img[5], 0.0f, NULL)) && env_ref_init(&ref, &img[5], 1.0, NULL, 0.0)) {
+        env_case(t, &a, "environment, smooth 64 x 8", s, &ref, 0.0, up, 2.0, 16, 32, 1, 3106);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+    /* (e) turned: 35 degrees about (1, 0.5, 0.2), after a translation that must not matter */
+    {
+        pt_transform xf = pt_transform_mul(pt_transform_translate(pt_v3(2, -1, 3)), pt_transform_rotate(pt_v3(1, 0.5f, 0.2f), 35.0f));
+        tu_rotation(dv(1, 0.5, 0.2), 35.0, R, NULL);
+        if ((s = env_scene(t, &img[3], 0.0f, &xf)) && env_ref_init(&ref, &img[3], 1.0, R, 0.0)) {
+            env_case(t, &a, "environment, sky 64 x 32 turned 35 degrees", s, &ref, 0.0, env_to_world(R, up), 2.0, 16, 32, 1,
+                     3107);
+            env_ref_free(&ref);
+        }
+        if (s) pt_scene_destroy(s);
+    }
+    /* (f) with a background: c = b / (b + m) ~ 0.4 */
+    if ((s = env_scene(t, &img[6], 0.0f, NULL)) && env_ref_init(&ref, &img[6], 1.0, NULL, 0.6)) {
+        char label[96];
+        snprintf(label, sizeof label, "environment, sky 32 x 16 + background (uniform share %.2f)", ref.c);
+        CHECK(t, ref.c > 0.2 && ref.c < 0.8, "the background's share %.3g is not where the case wants it", ref.c);
+        env_case(t, &a, label, s, &ref, 0.6, up, 2.0, 16, 32, 1, 3108);
+        env_ref_free(&ref);
+    }
+    if (s) pt_scene_destroy(s);
+done:
+    for (i = 0; i < 7; i++) free(img[i].rgb);
+    agg_note(t, &a);
+}
+
+/* pt_pdf_environment's samples reported with a wrong density (a callback): the cell's probability
+   P (env_ref's) over a wrong solid angle. EQUAL_AREA takes every cell to be 4 pi / (W H); TEXTBOOK
+   is the (u, v)-uniform cell's density P W H / (2 pi^2 sin theta) at the direction's own theta,
+   right for samples uniform in (u, v) within the cell, wrong for these (uniform in solid angle):
+   it integrates to P over every cell, so sample, value, mass and success agree and only the shape
+   within the cells differs -- most where sin theta varies most across a cell, at the poles;
+   CENTRE takes sin theta at the cell's centre, h sin(centre) for a row's cos - cos = 2 sin(centre)
+   sin(h/2), h = pi / H: wrong by the same factor 2 sin(h/2) / h in every row, so it only scales
+   the density (0.955 on a 7 x 3 map, 0.9936 at H = 8, 0.9984 at H = 16): "near the poles" does
+   not make it worse, and at 10^5 draws it is visible only for small H. */
+enum { ENV_EQUAL_AREA, ENV_TEXTBOOK, ENV_CENTRE };
+typedef struct env_wrong { pt_pdf inner; const env_ref *ref; int kind; } env_wrong;
+static float env_wrong_density(const env_wrong *u, pt_vec3 wf)
+{
+    const env_ref *r = u->ref;
+    double edge, sin_t;
+    int cell = env_cell(r, dv_from(wf), &edge, &sin_t), y = cell / r->w;
+    double P = r->prow[y] * r->pcol[cell], WH = (double)r->w * r->h;
+    if (u->kind == ENV_EQUAL_AREA) return (float)(P * WH / (4.0 * TU_PI));
+    if (u->kind == ENV_CENTRE) return (float)(P * WH / (2.0 * TU_PI * TU_PI * sin(TU_PI * (y + 0.5) / r->h)));
+    return sin_t > 0.0 ? (float)(P * WH / (2.0 * TU_PI * TU_PI * sin_t)) : 0.0f;
+}
+static int env_wrong_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
+{
+    const env_wrong *u = (const env_wrong *)user;
+    if (!pt_pdf_sample(&u->inner, rng, dir, pdf)) return 0;
+    *pdf = env_wrong_density(u, *dir);
+    return *pdf > 0.0f;
+}
+static float env_wrong_value(void *user, pt_vec3 dir) { return env_wrong_density((const env_wrong *)user, dir); }
+
+/* Each wrong density must be rejected, and by the check that can see it: TEXTBOOK on a map lit
+   only around the zenith (its top two rows), by the chi-square alone (histogram on the lit cap);
+   on the random 7 x 3 map EQUAL_AREA (integral 1.12: the chi-square and the hard failure
+   "integrates to more than 1") and CENTRE (integral 2 sin(pi/6) / (pi/3) = 0.955: the chi-square
+   and the mass comparisons). 10^5 draws each. */
+static void harness_rejects_environment_jacobians(test_ctx *t)
+{
+    static const char *labels[3] = { "WRONG: environment, cells of equal solid angle 4 pi/(W H), 7 x 3",
+                                     "WRONG: environment, P W H/(2 pi^2 sin theta), cap of 32 x 16",
+                                     "WRONG: environment, P W H/(2 pi^2 sin theta_centre), 7 x 3" };
+    pt_image cap, rnd;
+    pt_rng rng;
+    int k, x, y;
+    memset(&cap, 0, sizeof cap);
+    memset(&rnd, 0, sizeof rnd);
+    if (!CHECK(t, env_flat(&cap, 32, 16, 0.0f) && env_flat(&rnd, 7, 3, 0.0f), "out of memory")) goto done;
+    for (y = 0; y < 2; y++)
+        for (x = 0; x < 32; x++) env_set(&cap, x, y, 1.0f, 1.0f, 1.0f);
+    pt_rng_seed(&rng, 2024, 7); /* the map of pdf_environment's case (d) */
+    for (k = 0; k < 7 * 3 * 3; k++) rnd.rgb[k] = (float)(0.05 + 2.0 * tu_rand(&rng));
+    for (k = 0; k < 3; k++) {
+        const int kind = k == 0 ? ENV_EQUAL_AREA : k == 1 ? ENV_TEXTBOOK : ENV_CENTRE;
+        const pt_image *map = kind == ENV_TEXTBOOK ? &cap : &rnd;
+        pt_scene *s = env_scene(t, map, 0.0f, NULL);
+        env_ref ref;
+        env_wrong u;
+        pt_pdf p;
+        tu_pdf_check c;
+        tu_pdf_result res;
+        char reason[768];
+        int failures;
+        if (!s) continue;
+        if (!CHECK(t, env_ref_init(&ref, map, 1.0, NULL, 0.0), "out of memory")) { pt_scene_destroy(s); continue; }
+        u.inner = pt_pdf_environment(s, pt_v3(0, 0, 0));
+        u.ref = &ref;
+        u.kind = kind;
+        p = pt_pdf_callback(&u, env_wrong_sample, env_wrong_value);
+        c = base_check(labels[k], &p, 3120 + (uint64_t)k);
+        c.axis = dv(0, 1, 0);
+        if (kind == ENV_TEXTBOOK) {
+            c.omc = (1.0 - cos(3.0 * TU_PI / 16.0)) * 1.02; /* rows 0-2: the support */
+        } else {
+            c.ns = 16;
+            c.nphi = 35;
+        }
+        failures = tu_check_pdf_rejects(&c, &res, reason, sizeof reason);
+        CHECK(t, failures > 0, "%s was not rejected (chi2 p = %.3g, integral %.5f)", labels[k], res.chi2_p, res.integral);
+        CHECK(t, res.chi2_p < c.alpha, "%s: chi-square p = %.3g not below alpha %.3g", labels[k], res.chi2_p, c.alpha);
+        if (kind == ENV_EQUAL_AREA)
+            CHECK(t, res.integral > 1.0 + TU_MASS_TOL, "%s: the hard failure 'integrates to more than 1' did not fire (%.5f)",
+                  labels[k], res.integral);
+        if (kind == ENV_CENTRE) {
+            double h = TU_PI / 3.0, want = 2.0 * sin(h / 2.0) / h;
+            CHECK(t, fabs(res.integral - want) < 1e-3 && fabs(res.mass - want) < 0.01,
+                  "%s: integral %.5f and Monte Carlo mass %.5f, expected the global scale 2 sin(h/2)/h = %.5f", labels[k],
+                  res.integral, res.mass, want);
+        }
+        test_note(t, "%s: %d failed checks, chi2 %.0f with %d dof (p = %.2g), integral %.4f",
+                  kind == ENV_EQUAL_AREA ? "equal-area" : kind == ENV_TEXTBOOK ? "textbook sin theta" : "sin theta at centre",
+                  failures, res.chi2, res.dof, res.chi2_p, res.integral);
+        env_ref_free(&ref);
+        pt_scene_destroy(s);
+    }
+done:
+    free(cap.rgb);
+    free(rnd.rgb);
+}
+
 const test_case test_pdf_cases[] = {
     TEST_CASE(warp_functions),
     TEST_CASE(pdf_uniform_sphere),
@@ -1833,5 +2225,7 @@ const test_case test_pdf_cases[] = {
     TEST_CASE(harness_rejects_scaled_pdf),
     TEST_CASE(harness_rejects_cosine_with_uniform_density),
     TEST_CASE(pdf_validate_and_degenerate),
+    TEST_CASE(pdf_environment),
+    TEST_CASE(harness_rejects_environment_jacobians),
     TEST_END
 };

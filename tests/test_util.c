@@ -1282,3 +1282,142 @@ char *tu_read_text(const char *path, size_t *len)
     if (text) *len = (size_t)n;
     return text;
 }
+
+/* ------------------------------------------------------------------------------------------ */
+/* environment maps                                                                            */
+
+void tu_rotation(dv3 axis, double deg, double *R, pt_transform *xf)
+{
+    dv3 a = dnorm(axis);
+    double th = deg * TU_PI / 180.0, c = cos(th), s = sin(th), k = 1.0 - c;
+    int i, j;
+    R[0] = a.x * a.x * k + c;       R[1] = a.x * a.y * k - a.z * s; R[2] = a.x * a.z * k + a.y * s;
+    R[3] = a.y * a.x * k + a.z * s; R[4] = a.y * a.y * k + c;       R[5] = a.y * a.z * k - a.x * s;
+    R[6] = a.z * a.x * k - a.y * s; R[7] = a.z * a.y * k + a.x * s; R[8] = a.z * a.z * k + c;
+    if (xf) {
+        *xf = pt_transform_identity();
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) xf->m[i][j] = (float)R[3 * i + j];
+    }
+}
+
+dv3 tu_env_dir(double u, double v)
+{
+    double phi = 2.0 * TU_PI * u, th = TU_PI * v;
+    return dv(sin(th) * sin(phi), cos(th), -sin(th) * cos(phi));
+}
+
+void tu_env_uv(dv3 d, double *u, double *v)
+{
+    double uu = atan2(d.x, -d.z) / (2.0 * TU_PI);
+    if (uu < 0.0) uu += 1.0;
+    *u = uu < 1.0 ? uu : 0.0;
+    *v = atan2(sqrt(d.x * d.x + d.z * d.z), d.y) / TU_PI;
+}
+
+int tu_env_sky(pt_image *img, int w, int h, dv3 sun, double sun_radius, double sun_radiance)
+{
+    static const double zenith[3] = { 0.15, 0.3, 0.8 }, horizon[3] = { 0.7, 0.8, 0.9 }, ground[3] = { 0.12, 0.1, 0.08 };
+    static const double tint[3] = { 1.0, 0.9, 0.7 };
+    double cos_r = cos(sun_radius);
+    int x, y, c;
+    img->width = w;
+    img->height = h;
+    img->rgb = (float *)malloc(sizeof(float) * 3 * (size_t)w * (size_t)h);
+    if (!img->rgb) return 0;
+    sun = dnorm(sun);
+    for (y = 0; y < h; y++) {
+        double v = (y + 0.5) / h, t = fmin(1.0, 2.0 * v);
+        for (x = 0; x < w; x++) {
+            dv3 d = tu_env_dir((x + 0.5) / w, v);
+            float *px = img->rgb + 3 * ((size_t)y * (size_t)w + (size_t)x);
+            for (c = 0; c < 3; c++) {
+                /* smooth: t^2 (3 - 2t) from zenith to horizon; the ground blends in below */
+                double s = t * t * (3.0 - 2.0 * t), L = zenith[c] + (horizon[c] - zenith[c]) * s;
+                if (v > 0.5) L = ground[c] + (horizon[c] - ground[c]) * exp(-40.0 * (v - 0.5));
+                if (ddot(d, sun) >= cos_r) L += sun_radiance * tint[c];
+                px[c] = (float)L;
+            }
+        }
+    }
+    return 1;
+}
+
+/* Gauss-Legendre nodes and weights on [0, 1] for 3 and 5 points. */
+static const double gl3_x[3] = { 0.11270166537925831, 0.5, 0.88729833462074169 };
+static const double gl3_w[3] = { 0.27777777777777778, 0.44444444444444444, 0.27777777777777778 };
+static const double gl5_x[5] = { 0.046910077030668004, 0.23076534494715845, 0.5, 0.76923465505284155, 0.95308992296933200 };
+static const double gl5_w[5] = { 0.11846344252809454, 0.23931433524968324, 0.28444444444444444, 0.23931433524968324,
+                                 0.11846344252809454 };
+
+static double env_channel(const pt_scene *s, const double *R, dv3 d, int channel)
+{
+    dv3 w = R ? dv(R[0] * d.x + R[1] * d.y + R[2] * d.z, R[3] * d.x + R[4] * d.y + R[5] * d.z,
+                   R[6] * d.x + R[7] * d.y + R[8] * d.z)
+              : d;
+    pt_color c = pt_scene_environment_radiance(s, dv_to(w));
+    return channel == 0 ? c.x : channel == 1 ? c.y : c.z;
+}
+
+double tu_env_irradiance(const pt_scene *s, int w, int h, const double *R, dv3 n, int channel, double *err)
+{
+    double e3 = 0.0, e5 = 0.0;
+    dv3 nm = R ? dv(R[0] * n.x + R[3] * n.y + R[6] * n.z, R[1] * n.x + R[4] * n.y + R[7] * n.z,
+                    R[2] * n.x + R[5] * n.y + R[8] * n.z)
+               : n; /* the normal in the map's frame, R^T n */
+    /* large patches (small maps) in su x sv parts, so that no part spans more than 1/32 of a turn */
+    const int su = (32 + w - 1) / w, sv = (16 + h - 1) / h;
+    int x, yi, a, b, k, piece;
+    /* which pixels are black (each pixel centre's radiance looked up once) */
+    char *lit = (char *)malloc((size_t)w * (size_t)h);
+    if (!lit) {
+        if (err) *err = INFINITY;
+        return NAN;
+    }
+    for (yi = 0; yi < h; yi++)
+        for (x = 0; x < w; x++) lit[yi * w + x] = env_channel(s, R, tu_env_dir((x + 0.5) / w, (yi + 0.5) / h), channel) != 0.0;
+    /* v segments: the cap [0, 1/2H], between row centres, the cap [1 - 1/2H, 1]; rows at their ends */
+    for (yi = 0; yi <= h; yi++) {
+        double v0 = yi == 0 ? 0.0 : (yi - 0.5) / h, v1 = yi == h ? 1.0 : (yi + 0.5) / h;
+        int r0 = yi == 0 ? 0 : yi - 1, r1 = yi == h ? h - 1 : yi;
+        for (x = 0; x < w; x++) {
+            double u0 = (x + 0.5) / w, u1 = (x + 1.5) / w;
+            /* the patch's four corner pixels all black: nothing to add */
+            if (!lit[r0 * w + x] && !lit[r0 * w + (x + 1) % w] && !lit[r1 * w + x] && !lit[r1 * w + (x + 1) % w]) continue;
+            for (k = 0; k < 2; k++) {
+                int m = k == 0 ? 3 : 5;
+                const double *gx = k == 0 ? gl3_x : gl5_x, *gw = k == 0 ? gl3_w : gl5_w;
+                double sum = 0.0;
+                for (a = 0; a < m * su; a++) {
+                    /* at this u the horizon n . d = 0 lies at theta = atan2(-n.y, n.x sin(phi) - n.z cos(phi))
+                       (mod pi): the v interval is split there, so that each piece is smooth */
+                    double u = u0 + (a / m + gx[a % m]) * (u1 - u0) / su, phi = 2.0 * TU_PI * u;
+                    double th = atan2(-nm.y, nm.x * sin(phi) - nm.z * cos(phi)), vh, cut[3];
+                    if (th < 0.0) th += TU_PI;
+                    vh = th / TU_PI;
+                    cut[0] = v0;
+                    cut[1] = vh > v0 && vh < v1 ? vh : v1;
+                    cut[2] = v1;
+                    for (piece = 0; piece < 2; piece++) {
+                        double p0 = cut[piece], p1 = cut[piece + 1], part = 0.0;
+                        if (!(p1 > p0)) continue;
+                        for (b = 0; b < m * sv; b++) {
+                            double v = p0 + (b / m + gx[b % m]) * (p1 - p0) / sv;
+                            dv3 d = tu_env_dir(u, v);
+                            double c = ddot(d, nm);
+                            /* d omega = 2 pi^2 sin(pi v) du dv */
+                            if (c > 0.0) part += gw[b % m] * env_channel(s, R, d, channel) * c * sin(TU_PI * v);
+                        }
+                        sum += gw[a % m] * part * (p1 - p0) / sv;
+                    }
+                }
+                sum *= 2.0 * TU_PI * TU_PI * (u1 - u0) / su;
+                if (k == 0) e3 += sum;
+                else e5 += sum;
+            }
+        }
+    }
+    free(lit);
+    if (err) *err = fabs(e5 - e3);
+    return e5;
+}
