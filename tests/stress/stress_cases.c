@@ -1794,6 +1794,125 @@ void st_delta_lights(st_ctx *c)
     st_delta_close_grazing(c);
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* the environment light: contrasts, zeros and small suns                                      */
+
+/* A w x h map of grey value v (rgb malloc'd), or NULL. */
+static float *st_env_flat(pt_image *img, int w, int h, float v)
+{
+    size_t i, n = 3 * (size_t)w * (size_t)h;
+    img->width = w;
+    img->height = h;
+    img->rgb = (float *)malloc(sizeof(float) * n);
+    if (img->rgb)
+        for (i = 0; i < n; i++) img->rgb[i] = v;
+    return img->rgb;
+}
+static void st_env_pixel(pt_image *img, int x, int y, float v)
+{
+    float *p = img->rgb + 3 * ((size_t)y * (size_t)img->width + (size_t)x);
+    p[0] = p[1] = p[2] = v;
+}
+
+/* One environment case: a Lambertian plane y = 0 (rho 0.5) under the map (and a grey background
+   bg), radiance at a plane point from N paths of pt_trace_path (direct light only) under LIGHT,
+   MIS and MIXTURE against rho E / pi, E = pi bg + the map's irradiance integrated from
+   pt_scene_environment_radiance (tu_env_irradiance); z beyond the float floor, one comparison
+   per strategy. Also the per-sample relative variance Var / E^2 of LIGHT and MIS, which the map's
+   importance sampling keeps small: uniform sampling of the sphere would give ~4 pi / Omega for
+   a light of solid angle Omega (1e5 for the 1e-4 sr sun); the bound is 20. */
+static void st_env_case(st_ctx *c, const char *cas, const pt_image *map, double bg, uint64_t seed, uint64_t *nonfinite)
+{
+    static const pt_strategy strats[3] = { PT_STRATEGY_LIGHT, PT_STRATEGY_MIS, PT_STRATEGY_MIXTURE };
+    const double rho = 0.5;
+    const long N = c->full ? 200000L : 4000L;
+    pt_scene *s = pt_scene_create();
+    pt_environment_desc d;
+    int white = pt_scene_add_lambertian(s, pt_v3((float)rho, (float)rho, (float)rho)), si, rc;
+    double E, qerr = 0.0, want, zmax = 0.0, rv = 0.0;
+    rc = pt_scene_add_quad(s, pt_v3(-10, 0, -10), pt_v3(0, 0, 20), pt_v3(20, 0, 0), white);
+    d.map = map;
+    d.scale = 0.0f;
+    rc = rc >= 0 ? pt_scene_set_environment(s, &d) : rc;
+    rc = rc >= 0 ? pt_scene_commit(s) : rc;
+    if (rc != PT_OK) {
+        st_row(c, 0, cas, "set up", "PT_OK", "%s", pt_scene_error_message(s));
+        pt_scene_destroy(s);
+        return;
+    }
+    E = TU_PI * bg + tu_env_irradiance(s, map->width, map->height, NULL, dv(0, 1, 0), 1, &qerr);
+    want = rho * E / TU_PI;
+    for (si = 0; si < 3; si++) {
+        pt_render_desc rd = tu_base_desc(1, 1, 1, 0);
+        pt_rng rng;
+        pt_ray r;
+        pt_path_stats ps;
+        tu_acc acc;
+        long n;
+        memset(&acc, 0, sizeof acc);
+        memset(&ps, 0, sizeof ps);
+        rd.max_depth = 1;
+        rd.rr_start_depth = -1;
+        rd.strategy = strats[si];
+        rd.light_weight = 0.5f;
+        rd.background = pt_v3((float)bg, (float)bg, (float)bg);
+        pt_rng_seed(&rng, seed + (uint64_t)si, 9);
+        r.origin = pt_v3(0.3f, 0.4f, 0.2f);
+        r.dir = pt_normalize(pt_sub(pt_v3(0.1f, 0, 0.05f), r.origin));
+        for (n = 0; n < N; n++) tu_acc_add(&acc, pt_trace_path(s, &rd, r, &rng, &ps).y);
+        *nonfinite += ps.nonfinite_samples;
+        zmax = fmax(zmax, tu_z_floor(acc.mean, want, tu_acc_se(&acc), TU_FLOAT_FLOOR * want + qerr * rho / TU_PI));
+        if (strats[si] != PT_STRATEGY_MIXTURE) rv = fmax(rv, tu_acc_var(&acc) / (want * want));
+    }
+    c->comparisons += 3;
+    st_row(c, zmax <= c->z_bound, cas, "plane radiance vs rho E/pi, LIGHT/MIS/MIXTURE: max|z|", st_zb(c), "%.2f (E = %.6g)",
+           zmax, E);
+    st_row(c, rv <= 20.0, cas, "relative variance Var/E^2 per sample, LIGHT and MIS", "<= 20", "%.3g", rv);
+    pt_scene_destroy(s);
+}
+
+/* Maps of 1e6:1 contrast and with zeros: one pixel of 1e6 in a field of 1 (64 x 32); black but for
+   one row, in the middle and at the zenith; suns (discs of pixels of radiance 1 / Omega, so that
+   their irradiance at normal incidence is ~1) of solid angle Omega = 1e-2, 1e-3 and (make stress)
+   1e-4 sr, 40 degrees from the zenith, on a black map of at least ~10 pixels per sun, under a
+   grey background sky of 0.2 (sampled uniformly, mixed with the map by power). The delta-light
+   case covers spot cones down to 0.01 degrees. */
+void st_environment(st_ctx *c)
+{
+    pt_image m;
+    uint64_t nonfinite = 0;
+    int k, x, y;
+    if (st_env_flat(&m, 64, 32, 1.0f)) {
+        st_env_pixel(&m, 20, 9, 1e6f);
+        st_env_case(c, "env: hot pixel 1e6 in a field of 1", &m, 0.0, 12000, &nonfinite);
+        free(m.rgb);
+    }
+    for (k = 0; k < 2; k++) {
+        if (!st_env_flat(&m, 64, 32, 0.0f)) break;
+        for (x = 0; x < 64; x++) st_env_pixel(&m, x, k == 0 ? 10 : 0, 1.0f);
+        st_env_case(c, k == 0 ? "env: one row lit (10 of 32)" : "env: one row lit (the top)", &m, 0.0, 12010 + 10 * (uint64_t)k,
+                    &nonfinite);
+        free(m.rgb);
+    }
+    for (k = 2; k <= (c->full ? 4 : 3); k++) {
+        double omega = pow(10.0, -k), r = acos(1.0 - omega / (2.0 * TU_PI));
+        int h = k == 4 ? 1024 : 256, count = 0;
+        dv3 sun = tu_env_dir(0.3, 40.0 / 180.0);
+        char cas[64];
+        if (!st_env_flat(&m, 2 * h, h, 0.0f)) break;
+        for (y = 0; y < h; y++)
+            for (x = 0; x < 2 * h; x++)
+                if (ddot(tu_env_dir((x + 0.5) / (2 * h), (y + 0.5) / h), sun) >= cos(r)) {
+                    st_env_pixel(&m, x, y, (float)(1.0 / omega));
+                    count++;
+                }
+        snprintf(cas, sizeof cas, "env: sun 1e-%d sr (%d pixels)", k, count);
+        st_env_case(c, cas, &m, 0.2, 12040 + 10 * (uint64_t)k, &nonfinite);
+        free(m.rgb);
+    }
+    st_row(c, nonfinite == 0, "env: all", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
+}
+
 void st_family(st_ctx *c)
 {
     char b[48];
