@@ -79,6 +79,12 @@
                                       (the sun), irradiance R G B (W/m^2) on a surface facing it
                                       (lights: pdftrace.h, pt_light_desc; they are not seen by
                                       the camera and are reached by shadow rays only)
+     environment FILE [SCALE]         an equirectangular environment map of linear RGB
+                                      radiance (pdftrace.h, pt_environment_desc), times SCALE
+                                      > 0 (default 1), added to the background; FILE as a mesh
+                                      path (below), PFM, or OpenEXR when the loader has a
+                                      reader for it (pt_scenefile_options.read_image); turned
+                                      by the transform in effect, which must be a rotation; once
      translate X Y Z | rotate AX AY AZ DEGREES | scale SX SY SZ | identity
                                       transforms for the shapes and lights that follow (a
                                       light's position as a point, its direction as a
@@ -97,9 +103,9 @@
    scene content: both exporters accept and ignore them.
 
    UNTRUSTED FILES (pt_scenefile_options; docs/scene-format.md has the details)
-   Only regular files are read (opened without blocking, checked with fstat). Mesh paths must
-   resolve (realpath) inside the scene's directory or an allowed one, else they are refused
-   before being opened. A file that is not OBJ is named, never quoted; messages write control
+   Only regular files are read (opened without blocking, checked with fstat). Mesh and
+   environment paths must resolve (realpath) inside the scene's directory or an allowed one,
+   else they are refused before being opened; a map file is read whole (at most 256 MB). A file that is not OBJ is named, never quoted; messages write control
    bytes as \xNN. Meshes may take mesh_memory bytes while loading (1 GiB) and `size` is
    refused above image_memory bytes of film and images (4 GiB).
 
@@ -120,7 +126,8 @@
    occluder behind its location casts at most part of its shadow); `assumed_gamma 1.0`,
    `ambient_light 0`, ambient 0. Not exportable (PT_ERROR_UNSUPPORTED with file:line): a
    thin-lens camera (POV-Ray's focal blur stops adaptively after a few aperture samples: no
-   exact twin), fuzzy metal, emitting triangles, boxes or meshes, a spot light whose beam is
+   exact twin), an environment map (POV-Ray's sky_sphere lights diffuse surfaces only through
+   radiosity, which misses a small bright sun), fuzzy metal, emitting triangles, boxes or meshes, a spot light whose beam is
    narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
    pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
    runs the build first, so it never writes what pdftrace would not render, such as a sphere
@@ -138,8 +145,11 @@
    binary little-endian PLY files "<xml without .xml>.N.ply" beside the XML (vertex normals
    kept, else face_normals); Lambertian as two-sided `diffuse`, a mirror as a two-sided
    `conductor` of material "none", glass as `dielectric`, an emitter as a one-sided `area`
-   light on its shape with a black bsdf, the background as a `constant` emitter, the point,
-   spot and directional lights as Mitsuba's `point`, `spot` (to_world a lookat along the axis)
+   light on its shape with a black bsdf, the background as a `constant` emitter, an
+   environment map as an `envmap` emitter (to_world the rotation) of a map resampled to 2H + 1
+   rows beside the XML ("<xml without .xml>.env.pfm"), which makes Mitsuba's row interpolation
+   pdftrace's exactly, with the background added to it (Mitsuba takes one environment emitter
+   per scene), the point, spot and directional lights as Mitsuba's `point`, `spot` (to_world a lookat along the axis)
    and `directional` emitters (the same units and falloff). Refused with
    file:line and the reason (PT_ERROR_UNSUPPORTED, nothing written): fuzzy metal, the 3-D
    checker, two-sided emitters, an albedo above 1, a dielectric of ior 1, and, as for
@@ -232,6 +242,12 @@ typedef struct pt_scenefile {
     pt_obj_mesh *meshes; int mesh_count; /* one per distinct OBJ file: mesh statements naming the
                                             same file share it (shapes[i].mesh) */
     uint64_t mesh_bytes;         /* bytes the meshes hold (positions, normals, indices) */
+    /* `environment FILE [SCALE]`: the map as read (linear RGB, row 0 the zenith; width 0: no
+       statement), its scale, and the transform in effect (the build requires a rotation) */
+    pt_image environment;
+    float environment_scale;
+    pt_transform environment_transform;
+    int environment_line;        /* line of the statement, for messages (0: none) */
 } pt_scenefile;
 
 /* What the loader may read and allocate. Zero fields take the defaults, so a zeroed struct
@@ -249,6 +265,11 @@ typedef struct pt_scenefile_options {
        directory or one of these directories; anything else is refused before it is opened. */
     const char *const *allowed_dirs;
     int allowed_dir_count;
+    /* Decodes an environment map that is not PFM from the file's bytes (data, size; name for
+       messages) into *out, as pt_read_exr_memory of pdftrace_exr.h does (pass it): PT_OK, or an
+       error code with a message in err. NULL: only PFM maps are read, and an .exr map is
+       refused as needing OpenEXR. */
+    int (*read_image)(const void *data, size_t size, const char *name, pt_image *out, char *err, size_t err_size);
 } pt_scenefile_options;
 
 /* Loads a scene file. On failure returns an error code, writes "file:line: message" to
@@ -285,7 +306,7 @@ PTDEF int pt_obj_load(const char *path, pt_obj_mesh *out, char *err, size_t err_
    Returns the first primitive's id, or an error code with a message in err. */
 PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char *err, size_t err_size);
 /* Builds a committed scene (the shapes, then the lights in the file's order, so lights[i] is
-   the scene's light i) and fills *render (size, spp, depth, strategy, sampler, indirect paths,
+   the scene's light i, then the environment map) and fills *render (size, spp, depth, strategy, sampler, indirect paths,
    seed, camera, background, guiding and its budget, alpha and memory bound; other fields zero)
    with the public API. On failure *scene is NULL. */
 PTDEF int pt_scenefile_build(const pt_scenefile *desc, pt_scene **scene, pt_render_desc *render, char *err,
@@ -323,9 +344,10 @@ typedef struct pt_mitsuba_options {
     int spp;                     /* 0: the scene's samples per pixel */
     int max_depth;               /* pdftrace's scattering events (written as this + 1); 0: the scene's */
 } pt_mitsuba_options;
-/* Writes the Mitsuba 3 scene (XML, scene format version 3.0.0) to path and its triangles
-   beside it as binary little-endian PLY files "<path without .xml>.N.ply", N = 0, 1, ...
-   (all through temporary files renamed into place; on failure none is left). opt may be
+/* Writes the Mitsuba 3 scene (XML, scene format version 3.0.0) to path, its triangles beside
+   it as binary little-endian PLY files "<path without .xml>.N.ply", N = 0, 1, ..., and its
+   environment map as "<path without .xml>.env.pfm" (all through temporary files renamed into
+   place; on failure none is left). opt may be
    NULL. The mapping and what is refused: MITSUBA 3 EXPORT above and docs/mitsuba.md.
    Refuses (writing nothing) every scene pt_scenefile_build refuses, with the build's
    message, the features Mitsuba has no exact twin for (with the statement's file:line), and
@@ -538,6 +560,7 @@ PTDEF void pt_scenefile_free(pt_scenefile *d)
         PT_FREE(d->meshes[i].indices);
     }
     PT_FREE(d->meshes);
+    pt_image_free(&d->environment);
     PT_FREE(d->shapes);
     PT_FREE(d->lights);
     PT_FREE(d->materials);
@@ -1119,7 +1142,8 @@ PTDEF int pt_scene_add_obj(pt_scene *scene, const char *path, int material, char
     return rc;
 }
 
-/* ---- Mesh paths: confined to the scene's directory and the allowed ones. */
+/* ---- Mesh and environment paths: confined to the scene's directory and the allowed ones.
+   Messages start with the statement's keyword (p->tok[0]: mesh, environment). */
 
 /* Normalises a path lexically, in place: collapses "//" and "/./" and removes "name/.."
    pairs ("/.." is "/"; a leading ".." of a relative path stays). */
@@ -1189,7 +1213,7 @@ static int pt__sf_resolve(const char *path, char *out)
     return 0;
 }
 
-/* Resolves, once, the directories mesh paths may lie in: the scene's, then the allowed ones. */
+/* Resolves, once, the directories input paths may lie in: the scene's, then the allowed ones. */
 static int pt__sf_roots(pt__sf_parser *p)
 {
     const pt_scenefile_options *o = p->opt;
@@ -1203,7 +1227,7 @@ static int pt__sf_roots(pt__sf_parser *p)
         char buf[PT__SF_PATH];
         if (!dir) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "pt_scenefile_options.allowed_dirs[%d] is NULL", i - 1);
         if (pt__sf_resolve(dir, buf) != 0)
-            return pt__sf_fail(p, PT_ERROR_IO, "mesh: cannot resolve the %s '%s': %s",
+            return pt__sf_fail(p, PT_ERROR_IO, "%s: cannot resolve the %s '%s': %s", p->tok[0],
                                i == 0 ? "scene's directory" : "allowed directory", dir, strerror(errno));
         p->roots[i] = (char *)PT_MALLOC(strlen(buf) + 1u);
         if (!p->roots[i]) return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
@@ -1220,14 +1244,15 @@ static int pt__sf_roots(pt__sf_parser *p)
 static int pt__sf_refuse(pt__sf_parser *p, const char *rel)
 {
     return pt__sf_fail(p, PT_ERROR_UNSUPPORTED,
-                       "mesh: no file '%s' inside the scene's directory%s (it is missing, or it leads out; other "
+                       "%s: no file '%s' inside the scene's directory%s (it is missing, or it leads out; other "
                        "directories need pt_scenefile_options.allowed_dirs, or pdftrace --allow-path DIR)",
-                       rel, p->root_count > 1 ? " or an allowed one" : "");
+                       p->tok[0], rel, p->root_count > 1 ? " or an allowed one" : "");
 }
 
-/* Opens the mesh file `rel` of the statement if it resolves inside the allowed directories;
-   shown receives the name for the OBJ file's messages (rel joined to base_dir). */
-static int pt__sf_open_mesh(pt__sf_parser *p, const char *rel, char *shown, size_t shown_size, pt__sf_in *in)
+/* Opens the file `rel` of the statement (a mesh or an environment map) if it resolves inside
+   the allowed directories; shown receives the name for the file's messages (rel joined to
+   base_dir). */
+static int pt__sf_open_input(pt__sf_parser *p, const char *rel, char *shown, size_t shown_size, pt__sf_in *in)
 {
     char joined[PT__SF_PATH], real[PT__SF_PATH];
     const char *why = "";
@@ -1238,7 +1263,7 @@ static int pt__sf_open_mesh(pt__sf_parser *p, const char *rel, char *shown, size
     if (rel[0] == '/') m = snprintf(joined, sizeof joined, "%s", rel);
     else m = snprintf(joined, sizeof joined, "%s/%s", p->roots[0], rel);
     if (n < 0 || (size_t)n >= shown_size || m < 0 || (size_t)m >= sizeof joined)
-        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "mesh: path too long");
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: path too long", p->tok[0]);
 #ifndef PT__SF_POSIX
     if (strchr(rel, '\\') || strchr(rel, ':')) return pt__sf_refuse(p, rel); /* no lexical view of those */
 #endif
@@ -1251,7 +1276,7 @@ static int pt__sf_open_mesh(pt__sf_parser *p, const char *rel, char *shown, size
     strcpy(real, joined);
 #endif
     rc = pt__sf_in_open(in, real, 1, &why);
-    if (rc != PT_OK) return pt__sf_fail(p, rc, "mesh: cannot read '%s': %s", rel, why);
+    if (rc != PT_OK) return pt__sf_fail(p, rc, "%s: cannot read '%s': %s", p->tok[0], rel, why);
     return PT_OK;
 }
 
@@ -1581,7 +1606,7 @@ static int pt__sf_mesh(pt__sf_parser *p)
     if ((rc = pt__sf_end(p)) != PT_OK) return rc;
     if (p->mesh_statements >= PT__SF_MAX_MESHES)
         return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many meshes (at most %d)", PT__SF_MAX_MESHES);
-    if ((rc = pt__sf_open_mesh(p, file, shown, sizeof shown, &in)) != PT_OK) return rc;
+    if ((rc = pt__sf_open_input(p, file, shown, sizeof shown, &in)) != PT_OK) return rc;
     for (i = 0; i < d->mesh_count; ++i)
         if (p->file_dev[i] == in.dev && p->file_ino[i] == in.ino) break;
     if (i < d->mesh_count) pt__sf_in_close(&in);
@@ -1656,6 +1681,145 @@ static int pt__sf_light(pt__sf_parser *p, const char *kw)
         d->lights = nl;
     }
     d->lights[d->light_count++] = l;
+    return PT_OK;
+}
+
+/* ---- PFM in memory, for the environment statement (its file comes through the confined
+   reader above): "PF" (RGB) or "Pf" (grey), then width, height and scale as text separated by
+   whitespace, one whitespace byte, then 4-byte floats row by row from the bottom row up,
+   little-endian when the scale is negative. Messages name the file and never quote it. */
+#define PT__SF_MAX_ENV_PIXELS (1u << 25) /* 8192 x 4096: 400 MB as float RGB */
+static int pt__sf_pfm_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+/* The header token at *pos (printable ASCII, at most n - 1 bytes) and the one whitespace byte
+   after it; 0 if there is none. */
+static int pt__sf_pfm_token(const char *t, size_t len, size_t *pos, char *tok, size_t n)
+{
+    size_t k = 0;
+    while (*pos < len && pt__sf_pfm_space(t[*pos])) ++*pos;
+    while (*pos < len && !pt__sf_pfm_space(t[*pos])) {
+        if (k + 1 >= n || t[*pos] < 0x21 || t[*pos] > 0x7e) return 0;
+        tok[k++] = t[(*pos)++];
+    }
+    tok[k] = '\0';
+    if (k == 0 || *pos >= len) return 0;
+    ++*pos;
+    return 1;
+}
+static int pt__sf_pfm(const char *t, size_t len, const char *name, pt_image *out, char *err, size_t err_size)
+{
+    char magic[4], ws[12], hs[12], ss[40], *end;
+    size_t pos = 0;
+    long w = 0, h = 0;
+    double scale = 0.0;
+    int ch, x, y, c, rc;
+    memset(out, 0, sizeof *out);
+    if (!pt__sf_pfm_token(t, len, &pos, magic, sizeof magic) || (strcmp(magic, "PF") && strcmp(magic, "Pf")) ||
+        !pt__sf_pfm_token(t, len, &pos, ws, sizeof ws) || !pt__sf_pfm_token(t, len, &pos, hs, sizeof hs) ||
+        !pt__sf_pfm_token(t, len, &pos, ss, sizeof ss))
+        return pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT,
+                            "not a PFM file (no 'PF' or 'Pf' header with width, height and scale)");
+    ch = magic[1] == 'F' ? 3 : 1;
+    w = strtol(ws, &end, 10);
+    if (*end) w = 0;
+    h = strtol(hs, &end, 10);
+    if (*end) h = 0;
+    scale = strtod(ss, &end);
+    if (*end || !pt__sf_finite(scale) || scale == 0.0 || w < 1 || h < 1 || w > 65536 || h > 65536)
+        return pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT,
+                            "bad PFM header (width and height 1..65536, a finite non-zero scale)");
+    if ((uint64_t)w * (uint64_t)h > PT__SF_MAX_ENV_PIXELS)
+        return pt__sf_failf(err, err_size, name, 0, PT_ERROR_UNSUPPORTED, "%ld x %ld pixels: an environment map may have %lu",
+                            w, h, (unsigned long)PT__SF_MAX_ENV_PIXELS);
+    if ((uint64_t)w * (uint64_t)h * (uint64_t)ch * 4u > (uint64_t)(len - pos))
+        return pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT,
+                            "truncated PFM: %ld x %ld pixels need %llu bytes of data, the file has %llu", w, h,
+                            (unsigned long long)((uint64_t)w * (uint64_t)h * (uint64_t)ch * 4u),
+                            (unsigned long long)(len - pos));
+    if ((rc = pt_image_init(out, (int)w, (int)h)) != PT_OK)
+        return pt__sf_failf(err, err_size, name, 0, rc, "out of memory for %ld x %ld pixels", w, h);
+    for (y = (int)h - 1; y >= 0; --y) /* the file's first row is the image's bottom one */
+        for (x = 0; x < (int)w; ++x) {
+            const unsigned char *px = (const unsigned char *)t + pos;
+            for (c = 0; c < 3; ++c) { /* grey: its one value in R, G and B */
+                const unsigned char *b = px + 4 * (c < ch ? c : 0);
+                uint32_t u = scale < 0.0 ? (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24
+                                         : (uint32_t)b[3] | (uint32_t)b[2] << 8 | (uint32_t)b[1] << 16 | (uint32_t)b[0] << 24;
+                memcpy(out->rgb + 3u * ((size_t)y * (size_t)w + (size_t)x) + (size_t)c, &u, 4);
+            }
+            pos += 4u * (size_t)ch;
+        }
+    return PT_OK;
+}
+
+/* 1 if path ends in ext (".pfm", ".exr"), whatever the case of its letters. */
+static int pt__sf_has_ext(const char *path, const char *ext)
+{
+    size_t n = strlen(path), k = strlen(ext), i;
+    if (n <= k) return 0;
+    for (i = 0; i < k; ++i) {
+        char c = path[n - k + i];
+        if ((c >= 'A' && c <= 'Z' ? (char)(c - 'A' + 'a') : c) != ext[i]) return 0;
+    }
+    return 1;
+}
+
+/* environment FILE [SCALE], once: the map is read now, from a path confined as a mesh's, and
+   decoded as PFM (a .pfm file) or by pt_scenefile_options.read_image (any other); the build
+   checks its pixels and that the transform in effect is a rotation (pt_scene_set_environment). */
+static int pt__sf_environment(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    const char *file = pt__sf_next(p), *why = "";
+    char shown[PT__SF_PATH], msg[768];
+    float scale = 1.0f;
+    pt__sf_in in;
+    pt_image img;
+    char *data = NULL;
+    size_t len = 0;
+    int rc, pfm;
+    if (!file) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "environment: missing image file name");
+    if (p->pos < p->ntok) {
+        if ((rc = pt__sf_num(p, "environment scale", &scale)) != PT_OK) return rc;
+        if (!(scale > 0.0f))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "environment scale: must be > 0, got '%s'", p->tok[p->pos - 1]);
+    }
+    if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+    if (d->environment_line)
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "environment: a second map (the first is at line %d; a scene has one)",
+                           d->environment_line);
+    pfm = pt__sf_has_ext(file, ".pfm");
+    if (!pfm && !(p->opt && p->opt->read_image))
+        return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "environment: '%s': %s", file,
+                           pt__sf_has_ext(file, ".exr")
+                               ? "this program was built without OpenEXR, so it reads PFM maps only "
+                                 "(pt_scenefile_options.read_image is NULL)"
+                               : "not a .pfm file, and this program reads no other format (an .exr map needs a build "
+                                 "with OpenEXR)");
+    if ((rc = pt__sf_open_input(p, file, shown, sizeof shown, &in)) != PT_OK) return rc;
+    if ((rc = pt__sf_in_read(&in, PT__SF_MAX_FILE, &data, &len, &why)) != PT_OK)
+        return pt__sf_fail(p, rc, "environment: cannot read '%s': %s", file, why);
+    msg[0] = '\0';
+    memset(&img, 0, sizeof img);
+    rc = pfm ? pt__sf_pfm(data, len, shown, &img, msg, sizeof msg) : p->opt->read_image(data, len, shown, &img, msg, sizeof msg);
+    PT_FREE(data);
+    if (rc == PT_OK && (img.width < 1 || img.height < 1 || !img.rgb)) {
+        pt_image_free(&img);
+        return pt__sf_fail(p, PT_ERROR_IO, "environment: '%s': the image reader returned no pixels", file);
+    }
+    if (rc == PT_OK && (uint64_t)img.width * (uint64_t)img.height > PT__SF_MAX_ENV_PIXELS) {
+        rc = pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "environment: '%s': %d x %d pixels: a map may have %lu", file, img.width,
+                         img.height, (unsigned long)PT__SF_MAX_ENV_PIXELS);
+        pt_image_free(&img);
+        return rc;
+    }
+    if (rc != PT_OK) {
+        pt_image_free(&img);
+        return pt__sf_fail(p, rc < 0 ? rc : PT_ERROR_IO, "environment: %s", msg[0] ? msg : "cannot decode the image");
+    }
+    d->environment = img;
+    d->environment_scale = scale;
+    d->environment_transform = p->xf;
+    d->environment_line = p->line;
     return PT_OK;
 }
 
@@ -1738,6 +1902,8 @@ static int pt__sf_statement(pt__sf_parser *p)
         if ((rc = pt__sf_mesh(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "point_light") || !strcmp(kw, "spot_light") || !strcmp(kw, "directional_light")) {
         if ((rc = pt__sf_light(p, kw)) != PT_OK) return rc;
+    } else if (!strcmp(kw, "environment")) {
+        if ((rc = pt__sf_environment(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "identity")) {
         p->xf = pt_transform_identity();
         pt__sf_xfd_identity(p->xfd);
@@ -1920,6 +2086,23 @@ static pt_transform pt__sf_local_xf(const pt_transform *tf, const double td[3][4
     return t;
 }
 
+/* The environment statement's map, under its transform without the translation (a map is
+   only turned; pt_scene_set_environment refuses anything but a rotation), with its message
+   at the statement's file:line. */
+static int pt__sf_build_environment(const pt_scenefile *d, pt_scene *s, char *err, size_t err_size)
+{
+    pt_transform t = d->environment_transform;
+    pt_environment_desc e;
+    int rc;
+    t.m[0][3] = t.m[1][3] = t.m[2][3] = 0.0f;
+    memset(&e, 0, sizeof e);
+    e.map = &d->environment;
+    e.scale = d->environment_scale;
+    if ((rc = pt_scene_set_transform(s, &t)) == PT_OK) rc = pt_scene_set_environment(s, &e);
+    if (rc != PT_OK) return pt__sf_failf(err, err_size, d->file, d->environment_line, rc, "%s", pt_scene_error_message(s));
+    return PT_OK;
+}
+
 PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_desc *r, char *err, size_t err_size)
 {
     double origin[3] = {0, 0, 0};
@@ -1991,6 +2174,7 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         id = pt_scene_add_light(s, &l->desc);
         if (id < 0) rc = pt__sf_failf(err, err_size, d->file, l->line, id, "%s", pt_scene_error_message(s));
     }
+    if (rc == PT_OK && d->environment.width > 0) rc = pt__sf_build_environment(d, s, err, err_size);
     if (rc == PT_OK) pt_scene_set_transform(s, NULL);
     if (rc == PT_OK && (rc = pt_scene_commit(s)) != PT_OK)
         rc = pt__sf_failf(err, err_size, d->file, 0, rc, "%s", pt_scene_error_message(s));
@@ -2434,6 +2618,11 @@ static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *er
         return pt__sf_failf(err, err_size, d->file, d->camera_line, PT_ERROR_UNSUPPORTED,
                             "POV-Ray export: a thin-lens camera (lens_radius %g) has no exact POV-Ray equivalent; "
                             "export with lens_radius 0", (double)d->camera.lens_radius);
+    if (d->environment.width > 0) /* measured: docs/povray.md, "Environment maps" */
+        return pt__sf_failf(err, err_size, d->file, d->environment_line, PT_ERROR_UNSUPPORTED,
+                            "POV-Ray export: an environment map has no POV-Ray equivalent as a light: POV-Ray's "
+                            "sky_sphere lights diffuse surfaces only through radiosity, a cached estimate from a "
+                            "few hundred rays per sample point that misses a small bright sun in the map");
     for (i = 0; i < d->shape_count; ++i) {
         const pt_scenefile_shape *s = &d->shapes[i];
         const pt_scenefile_material *m = &d->materials[s->material];
@@ -2561,7 +2750,8 @@ typedef struct pt__mts {
     pt__mts_ply *ply;         /* the PLY files, in the order the XML names them */
     int ply_count;
     char name[4 * sizeof(((pt_scenefile *)0)->file) * 4 + 1]; /* d->file, escaped for a comment */
-    char base[6 * PT__SF_PATH + 1];  /* the PLY names' common part (the XML's stem, no directory), XML-escaped */
+    char base[6 * PT__SF_PATH + 1];  /* the side files' common part (the XML's stem, no directory), XML-escaped */
+    pt_image env;             /* the environment map resampled for Mitsuba (pt__mts_env_map; width 0: none) */
 } pt__mts;
 
 static void pt__mts_put(pt__mts *w, const char *fmt, ...)
@@ -2897,8 +3087,75 @@ static void pt__mts_ply_shape(pt__mts *w, int job)
     pt__mts_shape_end(w, p->material);
 }
 
+/* The map's scale as the build resolves it (pt_environment_desc: 0 means 1). */
+static float pt__mts_env_scale(const pt_scenefile *d) { return d->environment_scale == 0.0f ? 1.0f : d->environment_scale; }
+
+/* The environment map as Mitsuba 3's envmap needs it. Both renderers put column x at
+   u = (x + 1/2) / W, interpolate bilinearly and wrap in u; but pdftrace's row y is the cell
+   centred at v = (y + 1/2) / H (held constant above the first centre and below the last),
+   where Mitsuba's rows are point samples from the zenith to the nadir, row k at v = k / (H' - 1)
+   (src/emitters/envmap.cpp, eval_spectrum). With H' = 2H + 1 rows, row 2y + 1 is pdftrace's
+   row y (at v = (y + 1/2) / H), row 2y for 0 < y < H the mean of its rows y - 1 and y (at v =
+   y / H, halfway between their centres), and rows 0 and 2H copies of its first and last: then
+   Mitsuba's interpolant, linear between its rows, equals pdftrace's, which is linear between
+   row centres, everywhere. A background is added to every pixel, divided by the scale that
+   Mitsuba applies: Mitsuba 3 takes one environment emitter per scene, so it cannot be a
+   `constant` emitter beside the map. Returns 0 when out of memory; a pixel that is not finite
+   marks the export bad (at the statement's line). */
+static int pt__mts_env_map(pt__mts *w)
+{
+    const pt_scenefile *d = w->d;
+    const pt_image *m = &d->environment;
+    int x, k, c, W = m->width, H = m->height;
+    float add[3], scale = pt__mts_env_scale(d);
+    if (pt_image_init(&w->env, W, 2 * H + 1) != PT_OK) return 0;
+    add[0] = d->background.x / scale;
+    add[1] = d->background.y / scale;
+    add[2] = d->background.z / scale;
+    for (k = 0; k <= 2 * H; ++k) {
+        int a = k % 2 ? (k - 1) / 2 : k / 2 - 1, b = k % 2 ? a : k / 2; /* the rows it takes */
+        if (a < 0) a = 0;
+        if (b > H - 1) b = H - 1;
+        for (x = 0; x < W; ++x)
+            for (c = 0; c < 3; ++c) {
+                float va = m->rgb[3u * ((size_t)a * (size_t)W + (size_t)x) + (size_t)c];
+                float vb = m->rgb[3u * ((size_t)b * (size_t)W + (size_t)x) + (size_t)c];
+                float v = (a == b ? va : 0.5f * va + 0.5f * vb) + add[c];
+                if (!pt__sf_isfinite(v)) {
+                    if (!w->bad) w->bad_line = d->environment_line;
+                    w->bad = 1;
+                    v = 0.0f;
+                }
+                w->env.rgb[3u * ((size_t)k * (size_t)W + (size_t)x) + (size_t)c] = v;
+            }
+    }
+    return 1;
+}
+
+/* The envmap emitter: the resampled map beside the XML ("<stem>.env.pfm"), its scale, and the
+   statement's rotation as to_world (the map's frame into the world, as pdftrace's; Mitsuba
+   looks a direction up through the inverse). */
+static void pt__mts_envmap(pt__mts *w)
+{
+    const pt_scenefile *d = w->d;
+    int i, j;
+    w->line = d->environment_line;
+    pt__mts_put(w, "  <!-- %s:%d -->\n", w->name, d->environment_line);
+    pt__mts_put(w, "  <emitter type=\"envmap\"><string name=\"filename\" value=\"%s.env.pfm\"/><float name=\"scale\" value=\"",
+                w->base);
+    pt__mts_f(w, pt__mts_env_scale(d));
+    pt__mts_put(w, "\"/><transform name=\"to_world\"><matrix value=\"");
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 4; ++j) {
+            pt__mts_f(w, j < 3 ? d->environment_transform.m[i][j] : 0.0f);
+            pt__mts_put(w, " ");
+        }
+    pt__mts_put(w, "0 0 0 1\"/></transform></emitter>\n");
+    w->line = 0;
+}
+
 /* The XML's head: the integrator, the sensor (with its sampler and film), the bsdfs of the
-   materials in use and the background. */
+   materials in use and the background (or the environment map, with the background in it). */
 static void pt__mts_header(pt__mts *w)
 {
     const pt_scenefile *d = w->d;
@@ -2957,7 +3214,8 @@ static void pt__mts_header(pt__mts *w)
     w->line = 0;
     for (i = 0; i < d->material_count; ++i)
         if (w->used[i]) pt__mts_bsdf(w, i);
-    if (!(d->background.x == 0 && d->background.y == 0 && d->background.z == 0)) { /* (a nan is written: refused) */
+    if (w->env.width > 0) pt__mts_envmap(w);
+    else if (!(d->background.x == 0 && d->background.y == 0 && d->background.z == 0)) { /* (a nan is written: refused) */
         pt__mts_put(w, "  <emitter type=\"constant\">");
         pt__mts_rgb(w, "radiance", d->background);
         pt__mts_put(w, "</emitter>\n");
@@ -3157,17 +3415,19 @@ static int pt__mts_plan(pt__mts *w)
     return 1;
 }
 
-/* "<path without .xml>.<job>.ply" into out (size bytes); 0 if it does not fit. */
+/* "<path without .xml>.<job>.ply" into out (size bytes), or with job < 0 the environment map's
+   "<path without .xml>.env.pfm"; 0 if it does not fit. */
 static int pt__mts_ply_path(const char *path, int job, char *out, size_t size)
 {
     size_t n = strlen(path);
     int k;
     if (n > 4 && !strcmp(path + n - 4, ".xml")) n -= 4;
-    k = snprintf(out, size, "%.*s.%d.ply", (int)n, path, job);
+    if (job < 0) k = snprintf(out, size, "%.*s.env.pfm", (int)n, path);
+    else k = snprintf(out, size, "%.*s.%d.ply", (int)n, path, job);
     return k > 0 && (size_t)k < size;
 }
 
-/* The PLY names' common part as the XML names them: the file part of the stem, XML-escaped.
+/* The side files' common part as the XML names them: the file part of the stem, XML-escaped.
    A byte the escape would alter (not just spell as an entity), or '$' (Mitsuba substitutes
    $name in attribute values), or '\' (a separator on Windows), would name another file:
    refused. */
@@ -3185,10 +3445,11 @@ static int pt__mts_base(pt__mts *w, const char *path, char *err, size_t err_size
     b = b ? b + 1 : stem;
     for (c = b; *c; ++c)
         if ((unsigned char)*c < 0x20u || (unsigned char)*c >= 0x7fu || *c == '$' || *c == '\\')
-            return pt__sf_failf(err, err_size, w->d->file, w->ply[0].line, PT_ERROR_UNSUPPORTED,
-                                "Mitsuba export: the scene needs PLY files named after the output, and its file name "
-                                "holds a byte the XML cannot name them with (a control byte, a byte >= 0x80, '$' or "
-                                "'\\'); choose another name");
+            return pt__sf_failf(err, err_size, w->d->file, w->ply_count ? w->ply[0].line : w->d->environment_line,
+                                PT_ERROR_UNSUPPORTED,
+                                "Mitsuba export: the scene needs files named after the output (PLY meshes, the "
+                                "environment map), and its file name holds a byte the XML cannot name them with (a "
+                                "control byte, a byte >= 0x80, '$' or '\\'); choose another name");
     pt_scenefile_escape(w->base, sizeof w->base, b, PT_SCENEFILE_ESCAPE_XML);
     return PT_OK;
 }
@@ -3209,12 +3470,19 @@ static int pt__mts_write_ply(pt__mts *w, const char *path, int job, char *err, s
     return pt_output_close(&out, !ferror(out.file), "PLY mesh", err, err_size);
 }
 
-/* The files: the PLY files first, then the XML; when one fails, the ones written are removed. */
+/* The files: the environment map and the PLY files first, then the XML; when one fails, the
+   ones written are removed. */
 static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_size)
 {
     char ply_path[PT__SF_PATH + 32];
     pt_output_file out;
-    int i, done = 0, rc = PT_OK;
+    int i, done = 0, env = 0, rc = PT_OK;
+    if (w->env.width > 0) {
+        if (!pt__mts_ply_path(path, -1, ply_path, sizeof ply_path))
+            return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
+        if ((rc = pt_write_pfm_ex(ply_path, &w->env, err, err_size)) != PT_OK) return rc;
+        env = 1;
+    }
     for (i = 0; i < w->ply_count && rc == PT_OK; ++i)
         if ((rc = pt__mts_write_ply(w, path, i, err, err_size)) == PT_OK) done = i + 1;
     if (rc == PT_OK && (rc = pt_output_open(&out, path, 1, "Mitsuba scene", err, err_size)) == PT_OK) {
@@ -3223,7 +3491,7 @@ static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_siz
         w->f = NULL;
         rc = pt_output_close(&out, !ferror(out.file), "Mitsuba scene", err, err_size);
     }
-    for (i = 0; rc != PT_OK && i < done; ++i)
+    for (i = env ? -1 : 0; rc != PT_OK && i < done; ++i)
         if (pt__mts_ply_path(path, i, ply_path, sizeof ply_path)) remove(ply_path);
     return rc;
 }
@@ -3256,7 +3524,11 @@ PTDEF int pt_scenefile_export_mitsuba(const pt_scenefile *d, const char *path, c
         rc = pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
         goto done;
     }
-    if (w.ply_count && (rc = pt__mts_base(&w, path, err, err_size)) != PT_OK) goto done;
+    if ((w.ply_count || d->environment.width > 0) && (rc = pt__mts_base(&w, path, err, err_size)) != PT_OK) goto done;
+    if (d->environment.width > 0 && !pt__mts_env_map(&w)) {
+        rc = pt__sf_failf(err, err_size, d->file, d->environment_line, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
+        goto done;
+    }
     memcpy(file, d->file, sizeof file); /* d->file is input: only safe bytes reach a comment */
     file[sizeof file - 1] = '\0';
     pt__mts_comment_text(w.name, sizeof w.name, file);
@@ -3266,13 +3538,15 @@ PTDEF int pt_scenefile_export_mitsuba(const pt_scenefile *d, const char *path, c
     if (w.bad) {
         rc = pt__sf_failf(err, err_size, d->file, w.bad_line, PT_ERROR_UNSUPPORTED,
                           "Mitsuba export: a number to be written is not finite (nan or inf), or a mesh has no "
-                          "triangle with an area in float");
+                          "triangle with an area in float, or an environment pixel plus the background over its "
+                          "scale is not finite");
         goto done;
     }
     rc = pt__mts_write(&w, path, err, err_size);
 done:
     PT_FREE(w.used);
     PT_FREE(w.ply);
+    pt_image_free(&w.env);
     return rc;
 }
 

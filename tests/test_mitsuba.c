@@ -1,7 +1,8 @@
 /* test_mitsuba.c - pdftrace_scene.h's Mitsuba 3 exporter: the numbers it writes (a quad's
    to_world, a box's faces against pdftrace's own normals, a sphere under a transform, the
    settings and their overrides, the point, spot and directional lights), the binary PLY files
-   beside the XML, every refusal with its file:line and nothing left behind, write errors,
+   beside the XML, the environment map resampled for Mitsuba's envmap (and, with Mitsuba, its
+   envmap against pdftrace's map in 2000 directions), every refusal with its file:line and nothing left behind, write errors,
    hostile file names, the project's scenes; and, with Mitsuba 3 importable, that Mitsuba loads
    and renders the exports without warnings. */
 #define _POSIX_C_SOURCE 200809L
@@ -588,6 +589,143 @@ static void mitsuba_renders_exports(test_ctx *t)
     tu_remove_tree(dir);
 }
 
+/* The map of mitsuba_environment: pixel (x, y) = ((1 + x + 3 y), (2 + x), (7 - y)) / 4. */
+static int mts_env_map(const char *dir, int w, int h)
+{
+    char path[600];
+    pt_image img = {0, 0, NULL};
+    int x, y, rc;
+    if (pt_image_init(&img, w, h) != PT_OK) return 0;
+    for (y = 0; y < h; ++y)
+        for (x = 0; x < w; ++x) {
+            float *p = img.rgb + 3 * (y * w + x);
+            p[0] = (float)(1 + x + 3 * y) / 4.0f;
+            p[1] = (float)(2 + x) / 4.0f;
+            p[2] = (float)(7 - y) / 4.0f;
+        }
+    snprintf(path, sizeof path, "%s/map.pfm", dir);
+    rc = pt_write_pfm(path, &img);
+    pt_image_free(&img);
+    return rc == PT_OK;
+}
+
+/* With Mitsuba importable: its envmap of the export xml, evaluated in 2000 random directions,
+   against pdftrace's background + map of the scene text; returns the largest relative
+   difference (-1: not run, -2: failed, with why). */
+static double mts_env_compare(const char *dir, const char *xml, const char *text, char *why, size_t n)
+{
+    char path[600], cmd[2048], *out;
+    pt_scenefile sf;
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_rng rng;
+    FILE *f;
+    size_t len = 0;
+    double worst = -2;
+    int k;
+    if (strchr(mts_python(), '\'')) return -1;
+    snprintf(cmd, sizeof cmd, "'%s' -c 'import mitsuba' >/dev/null 2>&1", mts_python());
+    if (system(cmd) != 0) return -1;
+    if (pt_scenefile_parse(text, strlen(text), "e.scene", dir, &sf, why, n) != PT_OK) return -2;
+    k = pt_scenefile_build(&sf, &scene, &rd, why, n);
+    pt_scenefile_free(&sf);
+    if (k != PT_OK) return -2;
+    snprintf(path, sizeof path, "%s/dirs.txt", dir);
+    f = fopen(path, "w");
+    pt_rng_seed(&rng, 7u, 1u);
+    for (k = 0; f && k < 2000; ++k) {
+        dv3 d = tu_rand_dir(&rng);
+        pt_color c = pt_scene_environment_radiance(scene, pt_v3((float)d.x, (float)d.y, (float)d.z));
+        fprintf(f, "%.9g %.9g %.9g %.9g %.9g %.9g\n", (double)(float)d.x, (double)(float)d.y, (double)(float)d.z,
+                (double)(c.x + rd.background.x), (double)(c.y + rd.background.y), (double)(c.z + rd.background.z));
+    }
+    pt_scene_destroy(scene);
+    if (!f || fclose(f) != 0) { snprintf(why, n, "cannot write %.400s", path); return -2; }
+    snprintf(path, sizeof path, "%s/cmp.py", dir);
+    f = fopen(path, "w");
+    if (!f) { snprintf(why, n, "cannot write %.400s", path); return -2; }
+    fputs("import sys, mitsuba as mi\nmi.set_variant('scalar_rgb')\n"
+          "em = [e for e in mi.load_file(sys.argv[1]).emitters()][0]\nworst = 0.0\n"
+          "for line in open(sys.argv[2]):\n    v = [float(x) for x in line.split()]\n"
+          "    si = mi.SurfaceInteraction3f()\n    si.wi = mi.Vector3f(-v[0], -v[1], -v[2])\n    c = em.eval(si)\n"
+          "    for k in range(3):\n        worst = max(worst, abs(c[k] - v[3 + k]) / v[3 + k])\n"
+          "print('worst %.9g' % worst)\n", f);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "'%s' '%s/cmp.py' '%s' '%s/dirs.txt' >'%s/cmp.txt' 2>&1", mts_python(), dir, xml, dir, dir);
+    k = system(cmd);
+    snprintf(path, sizeof path, "%s/cmp.txt", dir);
+    out = tu_read_text(path, &len);
+    if (k != 0 || !out || !strstr(out, "worst ")) snprintf(why, n, "Mitsuba said: %s", out ? out : "(nothing)");
+    else worst = atof(strstr(out, "worst ") + 6);
+    free(out);
+    return worst;
+}
+
+/* The environment statement as Mitsuba's envmap: the XML names "<stem>.env.pfm" with the
+   scale and the statement's rotation as to_world, and writes no constant emitter (Mitsuba takes
+   one environment emitter: the background goes into the map, divided by the scale); the map
+   has 2H + 1 rows, row 2y + 1 pdftrace's row y, row 2y the mean of its rows y - 1 and y, rows 0
+   and 2H its first and last (with a background and a rotation, then without). With Mitsuba
+   importable, its envmap in 2000 directions equals pdftrace's background + map (to float
+   rounding). */
+static void mitsuba_environment(test_ctx *t)
+{
+    char dir[64], xml[600], path[600], text[1024], err[1024], why[512];
+    const char *rotated = MTS_HEAD "background 0.1 0.2 0.3\nrotate 1 2 3 40\nenvironment map.pfm 1.5\nsphere 0 0 0 1 m\n";
+    pt_transform rot = pt_transform_rotate(pt_normalize(pt_v3(1, 2, 3)), 40.0f);
+    pt_image e = {0, 0, NULL};
+    double m[12], worst = -2;
+    char *x = NULL;
+    size_t len = 0;
+    int pass, rc, k, y, off = 0;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir) && mts_env_map(dir, 5, 3), "cannot write the map")) return;
+    snprintf(xml, sizeof xml, "%s/e.xml", dir);
+    snprintf(path, sizeof path, "%s/e.env.pfm", dir);
+    for (pass = 0; pass < 2; ++pass) { /* with a background, then without */
+        const float add[3] = {pass ? 0.0f : 0.1f / 1.5f, pass ? 0.0f : 0.2f / 1.5f, pass ? 0.0f : 0.3f / 1.5f};
+        snprintf(text, sizeof text, "%s", pass ? MTS_HEAD "environment map.pfm\nsphere 0 0 0 1 m\n" : rotated);
+        rc = mts_export(text, "e.scene", dir, xml, NULL, err, sizeof err);
+        if (!CHECK(t, rc == PT_OK, "export %d: %d '%s'", pass, rc, err)) break;
+        x = tu_read_text(xml, &len);
+        CHECK(t, x && strstr(x, "<emitter type=\"envmap\"><string name=\"filename\" value=\"e.env.pfm\"/>") &&
+                     strstr(x, pass ? "<float name=\"scale\" value=\"1\"/>" : "<float name=\"scale\" value=\"1.5\"/>") &&
+                     !strstr(x, "type=\"constant\"") && pt_mitsuba_check_text(x, len, why, sizeof why),
+              "pass %d: the envmap element: %s", pass, x ? x : "no XML");
+        if (pass == 0 && CHECK(t, x && mts_numbers(strstr(x, "type=\"envmap\""), "<matrix value=\"", m, 12), "no matrix"))
+            for (k = 0; k < 12; ++k) /* the scene's floats, written to read back as the same floats */
+                off += (float)m[k] != (k % 4 == 3 ? 0.0f : rot.m[k / 4][k % 4]);
+        CHECK(t, off == 0, "to_world is not the rotation");
+        free(x);
+        x = NULL;
+        if (!CHECK(t, pt_read_pfm(path, &e, err, sizeof err) == PT_OK && e.width == 5 && e.height == 7, "the map: %s %d x %d",
+                   err, e.width, e.height))
+            break;
+        for (y = 0; y < 7; ++y) /* pdftrace's rows a and b at Mitsuba's row y, then its pixel (3, y) */
+            for (k = 0; k < 3; ++k) {
+                int a = y % 2 ? (y - 1) / 2 : y / 2 - 1, b = y % 2 ? a : y / 2;
+                double va, vb, want, got = e.rgb[3 * (y * 5 + 3) + k];
+                a = a < 0 ? 0 : a;
+                b = b > 2 ? 2 : b;
+                va = k == 0 ? (1 + 3 + 3 * a) / 4.0 : k == 1 ? (2 + 3) / 4.0 : (7 - a) / 4.0;
+                vb = k == 0 ? (1 + 3 + 3 * b) / 4.0 : k == 1 ? (2 + 3) / 4.0 : (7 - b) / 4.0;
+                want = 0.5 * (va + vb) + add[k];
+                if (fabs(got - want) > 1e-6 * want) {
+                    CHECK(t, 0, "pass %d: row %d channel %d is %.9g, want %.9g", pass, y, k, got, want);
+                    ++off;
+                }
+            }
+        pt_image_free(&e);
+        if (pass == 0) worst = off == 0 ? mts_env_compare(dir, xml, rotated, why, sizeof why) : -2;
+    }
+    if (worst == -1) test_note(t, "rows and XML checked; Mitsuba not importable, its envmap not evaluated");
+    else if (CHECK(t, worst >= 0 && worst < 1e-4, "Mitsuba's envmap differs from pdftrace's by %.3g (%s)", worst,
+                   worst == -2 ? why : "relative"))
+        test_note(t, "Mitsuba's envmap in 2000 directions: largest relative difference %.2g", worst);
+    pt_image_free(&e);
+    free(x);
+    tu_remove_tree(dir);
+}
+
 const test_case test_mitsuba_cases[] = {
     TEST_CASE(mitsuba_quad_to_world),
     TEST_CASE(mitsuba_box_faces),
@@ -601,5 +739,6 @@ const test_case test_mitsuba_cases[] = {
     TEST_CASE(mitsuba_hostile_names),
     TEST_CASE(mitsuba_project_scenes),
     TEST_CASE(mitsuba_renders_exports),
+    TEST_CASE(mitsuba_environment),
     TEST_END
 };

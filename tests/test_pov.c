@@ -2,7 +2,8 @@
    from the scene never reaches the .pov unescaped, every number written is finite, every scene
    the build refuses is refused; and the output checker of the fuzz target (tests/fuzz/pov_check.h)
    rejects bad text; the point, hard-cone spot and directional lights as the recipe has them, and
-   the soft spot refused. With povray installed, exported scenes are rendered at a tiny size. */
+   the soft spot and an environment map refused. With povray installed, exported scenes are
+   rendered at a tiny size. */
 #define _POSIX_C_SOURCE 200809L
 #include "test_util.h"
 #include "pdftrace_scene.h"
@@ -395,6 +396,24 @@ static void pov_soft_spot_refused(test_ctx *t)
     remove("build/test-pov.pov");
 }
 
+/* An environment map is refused (POV-Ray's sky_sphere lights diffuse surfaces only through
+   radiosity: docs/povray.md, "Environment maps") at the statement's file:line; nothing written. */
+static void pov_environment_refused(test_ctx *t)
+{
+    const char *text = POV_HEAD "sphere 0 0 0 1 m\nrotate 0 1 0 30\nenvironment sky.pfm 0.5\n";
+    char err[1024];
+    pt_scenefile sf;
+    int rc;
+    if (!CHECK(t, pt_scenefile_parse(text, strlen(text), "env.scene", "scenes", &sf, err, sizeof err) == PT_OK, "%s", err))
+        return;
+    remove("build/test-pov.pov");
+    rc = pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "env.scene:7: POV-Ray export: an environment map", 47) == 0 &&
+                 strstr(err, "radiosity"), "export: %d '%s'", rc, err);
+    CHECK(t, !pov_exists("build/test-pov.pov") && !pov_exists("build/test-pov.pov.ptmp"), "the refused export wrote a file");
+    pt_scenefile_free(&sf);
+}
+
 const test_case test_pov_cases[] = {
     TEST_CASE(pov_path_injection),
     TEST_CASE(pov_nonfinite_refused),
@@ -406,5 +425,6 @@ const test_case test_pov_cases[] = {
     TEST_CASE(pov_exports_render),
     TEST_CASE(pov_lights),
     TEST_CASE(pov_soft_spot_refused),
+    TEST_CASE(pov_environment_refused),
     TEST_END
 };

@@ -1,9 +1,11 @@
 /* test_scenefile.c - pdftrace_scene.h: pt_obj_load and pt_scene_add_obj against the two-step path
    they replace (read the file, pt_obj_parse, pt_scene_add_mesh), the camera statement's depth of
    field, the guiding and light statements (lights against the same lights added through the
-   API, under transforms and far from the origin), and what an untrusted scene file can do: which files it may read (regular files inside
-   its directory), how much memory its meshes and its size may take, what its errors echo. The
-   other statements are tested by validation/ptv.c's runner and the fuzz corpus. */
+   API, under transforms and far from the origin), the environment statement (its map against
+   the file's pixels, its errors, a decoder given in the options), and what an untrusted scene
+   file can do: which files it may read (regular files inside its directory), how much memory
+   its meshes and its size may take, what its errors echo. The other statements are tested by
+   validation/ptv.c's runner and the fuzz corpus. */
 #define _POSIX_C_SOURCE 200809L /* mkfifo, symlink, alarm */
 #include "test_util.h"
 #include "pdftrace_scene.h"
@@ -855,6 +857,216 @@ done:
     pt_image_free(&img[1]);
 }
 
+/* ---- the environment statement */
+
+/* Writes a W x H PFM (little-endian, bottom row first) whose pixel (x, y), row 0 at the top,
+   is (1 + x + 10 y, 2 + x, 3 + y) / 8; 1 on success. */
+static int env_write_pfm(const char *dir, const char *name, int w, int h)
+{
+    char path[512];
+    FILE *f;
+    int x, y, ok;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    f = fopen(path, "wb");
+    if (!f) return 0;
+    ok = fprintf(f, "PF\n%d %d\n-1.0\n", w, h) > 0;
+    for (y = h - 1; y >= 0 && ok; --y)
+        for (x = 0; x < w && ok; ++x) {
+            float v[3];
+            unsigned char b[12];
+            int c, k;
+            v[0] = (float)(1 + x + 10 * y) / 8.0f;
+            v[1] = (float)(2 + x) / 8.0f;
+            v[2] = (float)(3 + y) / 8.0f;
+            for (c = 0; c < 3; ++c) {
+                uint32_t u;
+                memcpy(&u, &v[c], 4);
+                for (k = 0; k < 4; ++k) b[4 * c + k] = (unsigned char)(u >> (8 * k));
+            }
+            ok = fwrite(b, 1, 12, f) == 12;
+        }
+    return fclose(f) == 0 && ok;
+}
+
+/* The direction, in the map's own frame, of the centre of pixel (x, y) of a W x H map. */
+static pt_vec3 env_pixel_dir(int x, int y, int w, int h)
+{
+    double u = (x + 0.5) / w, v = (y + 0.5) / h, th = 3.14159265358979323846 * v, ph = 2.0 * 3.14159265358979323846 * u;
+    return pt_v3((float)(sin(th) * sin(ph)), (float)cos(th), (float)(-sin(th) * cos(ph)));
+}
+
+/* `environment FILE SCALE` under a rotation: the map is read (its pixels as written, row 0 the
+   zenith), the scale and the line are kept, and the built scene's map, at each pixel centre
+   turned by the rotation, is the pixel times the scale; a grey `Pf` file and big-endian data
+   (positive scale) read the same; the background stays the render's. */
+static void environment_statement(test_ctx *t)
+{
+    char dir[256], err[512];
+    const char *text = T_HEAD "background 0.1 0.2 0.3\nrotate 1 2 3 40\nenvironment map.pfm 1.5\nsphere 0 0 0 1 m\n";
+    pt_transform rot = pt_transform_rotate(pt_normalize(pt_v3(1, 2, 3)), 40.0f);
+    pt_scenefile sf;
+    pt_scene *scene = NULL;
+    pt_render_desc rd;
+    pt_scene_info info;
+    int rc, x, y, off = 0;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir) && env_write_pfm(dir, "map.pfm", 6, 3), "cannot write the map")) return;
+    rc = parse_text(text, dir, &sf, err, sizeof err);
+    if (!CHECK(t, rc == PT_OK, "parse: %d '%s'", rc, err)) goto done;
+    CHECK(t, sf.environment.width == 6 && sf.environment.height == 3 && sf.environment_scale == 1.5f &&
+                 sf.environment_line == 5, "map %d x %d, scale %g, line %d", sf.environment.width, sf.environment.height,
+          (double)sf.environment_scale, sf.environment_line);
+    CHECK(t, sf.environment.rgb && sf.environment.rgb[0] == 1.0f / 8 && sf.environment.rgb[3 * (2 * 6 + 5) + 1] == 7.0f / 8,
+          "pixels (0, 0) R %g and (5, 2) G %g", sf.environment.rgb ? (double)sf.environment.rgb[0] : -1.0,
+          sf.environment.rgb ? (double)sf.environment.rgb[3 * (2 * 6 + 5) + 1] : -1.0);
+    rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+    pt_scenefile_free(&sf);
+    if (!CHECK(t, rc == PT_OK, "build: %d '%s'", rc, err)) goto done;
+    pt_scene_get_info(scene, &info);
+    CHECK(t, info.environment_width == 6 && info.environment_height == 3 && (info.features & PT_FEATURE_ENVIRONMENT),
+          "the scene's map is %d x %d", info.environment_width, info.environment_height);
+    CHECK(t, rd.background.x == 0.1f && rd.background.z == 0.3f, "background %g %g %g", (double)rd.background.x,
+          (double)rd.background.y, (double)rd.background.z);
+    for (y = 0; y < 3; ++y)
+        for (x = 0; x < 6; ++x) {
+            pt_color c = pt_scene_environment_radiance(scene, pt_transform_vector(&rot, env_pixel_dir(x, y, 6, 3)));
+            double want[3];
+            want[0] = 1.5 * (1 + x + 10 * y) / 8.0;
+            want[1] = 1.5 * (2 + x) / 8.0;
+            want[2] = 1.5 * (3 + y) / 8.0;
+            off += fabs(c.x - want[0]) > 1e-4 * want[0] || fabs(c.y - want[1]) > 1e-4 * want[1] ||
+                   fabs(c.z - want[2]) > 1e-4 * want[2];
+        }
+    CHECK(t, off == 0, "%d of 18 pixel centres differ from scale x pixel", off);
+    test_note(t, "6 x 3 map under a rotation: 18 pixel centres = 1.5 x pixel");
+done:
+    pt_scene_destroy(scene);
+    tu_remove_tree(dir);
+}
+
+/* Grey ("Pf") and big-endian (positive scale) PFM maps read as the RGB little-endian one would. */
+static void environment_pfm_forms(test_ctx *t)
+{
+    static const unsigned char grey_be[] = {'P', 'f', '\n', '2', ' ', '2', '\n', '1', '.', '0', '\n',
+                                            0x3f, 0x80, 0, 0, 0x40, 0, 0, 0, 0x40, 0x40, 0, 0, 0x40, 0x80, 0, 0};
+    char dir[256], path[400], err[512];
+    pt_scenefile sf;
+    FILE *f;
+    int rc;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "no temporary directory")) return;
+    snprintf(path, sizeof path, "%s/g.pfm", dir);
+    f = fopen(path, "wb");
+    if (!CHECK(t, f && fwrite(grey_be, 1, sizeof grey_be, f) == sizeof grey_be && fclose(f) == 0, "cannot write %s", path))
+        goto done;
+    rc = parse_text(T_HEAD "environment g.pfm\nsphere 0 0 0 1 m\n", dir, &sf, err, sizeof err);
+    if (CHECK(t, rc == PT_OK, "%d '%s'", rc, err)) {
+        const float *p = sf.environment.rgb; /* the file's first row (1, 2) is the bottom one */
+        CHECK(t, sf.environment.width == 2 && sf.environment.height == 2 && p[0] == 3 && p[1] == 3 && p[2] == 3 &&
+                     p[3] == 4 && p[6] == 1 && p[9] == 2 && sf.environment_scale == 1.0f,
+              "read %g %g / %g %g, scale %g", (double)p[0], (double)p[3], (double)p[6], (double)p[9],
+              (double)sf.environment_scale);
+        pt_scenefile_free(&sf);
+    }
+done:
+    tu_remove_tree(dir);
+}
+
+/* The statement's errors, each "t.scene:LINE: ..." (at load, or for a transform that is not a
+   rotation and a bad pixel at build), and a map path confined as a mesh's. */
+static void environment_errors(test_ctx *t)
+{
+    static const struct { const char *text, *want; int build; } bad[] = {
+        {"environment missing.pfm\n", "t.scene:3: environment: no file 'missing.pfm' inside the scene's directory", 0},
+        {"environment text.pfm\n", "t.scene:3: environment: ", 0},
+        {"environment short.pfm\n", "t.scene:3: environment: ", 0},
+        {"environment map.pfm 0\n", "t.scene:3: environment scale: must be > 0, got '0'", 0},
+        {"environment map.pfm -1\n", "t.scene:3: environment scale: must be > 0, got '-1'", 0},
+        {"environment map.pfm nan\n", "t.scene:3: environment scale: 'nan' is not finite", 0},
+        {"environment map.pfm 1 2\n", "t.scene:3: unexpected '2' after the end of the 'environment' statement", 0},
+        {"environment\n", "t.scene:3: environment: missing image file name", 0},
+        {"environment map.pfm\nenvironment map.pfm\n", "t.scene:4: environment: a second map (the first is at line 3", 0},
+        {"environment map.exr\n", "t.scene:3: environment: 'map.exr': this program was built without OpenEXR", 0},
+        {"environment map.hdr\n", "t.scene:3: environment: 'map.hdr': not a .pfm file", 0},
+        {"environment ../map.pfm\n", "t.scene:3: environment: no file '../map.pfm' inside the scene's directory", 0},
+        {"environment /etc/passwd\n", "t.scene:3: environment: '/etc/passwd': not a .pfm file", 0},
+        {"scale 1 2 1\nenvironment map.pfm\n", "t.scene:4: environment: the scene's current transform is not a rotation", 1},
+        {"scale -1 1 1\nenvironment map.pfm\n", "t.scene:4: environment: the scene's current transform is not a rotation", 1},
+        {"environment neg.pfm\n", "t.scene:3: environment: map pixel (", 1},
+    };
+    static const unsigned char neg[] = {'P', 'f', '\n', '2', ' ', '2', '\n', '-', '1', '\n',
+                                        0, 0, 0x80, 0x3f, 0, 0, 0x80, 0xbf, 0, 0, 0x80, 0x3f, 0, 0, 0x80, 0x3f};
+    char top[256], dir[300], text[1024], err[512], path[400];
+    size_t i;
+    FILE *f;
+    if (!CHECK(t, tu_make_tmpdir(top, sizeof top), "no temporary directory")) return;
+    snprintf(dir, sizeof dir, "%s/scene", top);
+    snprintf(path, sizeof path, "%s/neg.pfm", dir);
+    if (!CHECK(t, mkdir(dir, 0700) == 0 && env_write_pfm(dir, "map.pfm", 4, 2) && env_write_pfm(top, "map.pfm", 4, 2) &&
+                      write_file(dir, "text.pfm", "secret text\n") && write_file(dir, "short.pfm", "PF\n4 2\n-1\nxyz"),
+               "setup"))
+        goto done;
+    f = fopen(path, "wb");
+    if (!CHECK(t, f && fwrite(neg, 1, sizeof neg, f) == sizeof neg && fclose(f) == 0, "cannot write %s", path)) goto done;
+    for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        pt_scenefile sf;
+        pt_scene *scene = NULL;
+        pt_render_desc rd;
+        int rc;
+        snprintf(text, sizeof text, T_HEAD "%sidentity\nsphere 0 0 0 1 m\n", bad[i].text);
+        rc = parse_text(text, dir, &sf, err, sizeof err);
+        if (bad[i].build && CHECK(t, rc == PT_OK, "'%s' should load: '%s'", bad[i].text, err)) {
+            rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+            CHECK(t, scene == NULL, "a refused build left a scene");
+            pt_scenefile_free(&sf);
+        } else if (rc == PT_OK)
+            pt_scenefile_free(&sf);
+        CHECK(t, rc < 0 && strncmp(err, bad[i].want, strlen(bad[i].want)) == 0 && !strstr(err, "secret"),
+              "'%.*s': %d '%s'", (int)strlen(bad[i].text) - 1, bad[i].text, rc, err);
+    }
+    test_note(t, "%d bad statements, each with its file:line", (int)(sizeof bad / sizeof bad[0]));
+done:
+    tu_remove_tree(top);
+}
+
+/* A decoder (pt_scenefile_options.read_image) reads every map that is not .pfm: it gets the
+   file's bytes and its name, and its message is reported at the statement's file:line. */
+static int env_fake_calls;
+static int env_fake_reader(const void *data, size_t size, const char *name, pt_image *out, char *err, size_t err_size)
+{
+    ++env_fake_calls;
+    if (size >= 4 && !memcmp(data, "good", 4) && strstr(name, "/a.exr") && pt_image_init(out, 4, 2) == PT_OK) {
+        size_t k;
+        for (k = 0; k < 24; ++k) out->rgb[k] = 0.25f;
+        return PT_OK;
+    }
+    snprintf(err, err_size, "%s: not an image the fake reader knows", name);
+    return PT_ERROR_IO;
+}
+static void environment_reader_hook(test_ctx *t)
+{
+    char dir[256], err[512];
+    pt_scenefile_options opt;
+    pt_scenefile sf;
+    const char *good = T_HEAD "environment a.exr 2\nsphere 0 0 0 1 m\n", *bad = T_HEAD "environment b.exr\nsphere 0 0 0 1 m\n";
+    int rc;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir) && write_file(dir, "a.exr", "good bytes") && write_file(dir, "b.exr", "bad"),
+               "setup"))
+        return;
+    memset(&opt, 0, sizeof opt);
+    opt.read_image = env_fake_reader;
+    env_fake_calls = 0;
+    rc = pt_scenefile_parse_ex(good, strlen(good), "t.scene", dir, &opt, &sf, err, sizeof err);
+    if (CHECK(t, rc == PT_OK && env_fake_calls == 1, "%d calls: %d '%s'", env_fake_calls, rc, err)) {
+        CHECK(t, sf.environment.width == 4 && sf.environment.rgb[23] == 0.25f && sf.environment_scale == 2.0f,
+              "the reader's image was not kept");
+        pt_scenefile_free(&sf);
+    }
+    rc = pt_scenefile_parse_ex(bad, strlen(bad), "t.scene", dir, &opt, &sf, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && !strncmp(err, "t.scene:3: environment: ", 24) && strstr(err, "not an image the fake reader"),
+          "%d '%s'", rc, err);
+    if (rc == PT_OK) pt_scenefile_free(&sf);
+    tu_remove_tree(dir);
+}
+
 const test_case test_scenefile_cases[] = {
     TEST_CASE(obj_load_matches_parse),
     TEST_CASE(add_obj_one_call),
@@ -875,5 +1087,9 @@ const test_case test_scenefile_cases[] = {
     TEST_CASE(light_statements),
     TEST_CASE(light_statement_errors),
     TEST_CASE(light_far_origin),
+    TEST_CASE(environment_statement),
+    TEST_CASE(environment_pfm_forms),
+    TEST_CASE(environment_errors),
+    TEST_CASE(environment_reader_hook),
     TEST_END
 };

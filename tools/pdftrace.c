@@ -65,7 +65,7 @@ typedef struct options {
     pt_display_desc display;     /* for the 8-bit outputs */
     double preview_every;        /* seconds; 0: off */
     int quiet;
-    const char *allowed_dirs[MAX_ALLOWED_DIRS]; /* --allow-path: more directories meshes may come from */
+    const char *allowed_dirs[MAX_ALLOWED_DIRS]; /* --allow-path: more directories meshes and maps may come from */
     pt_scenefile_options load;   /* what the scene file may read and allocate */
 } options;
 
@@ -148,7 +148,7 @@ static void print_help(void)
            "      --export-pov FILE  write the scene for POV-Ray 3.7 (renders too only with -o)\n"
            "      --export-mitsuba FILE.xml  write the scene for Mitsuba 3 (meshes as FILE.N.ply beside it;\n"
            "                         renders too only with -o)\n"
-           "      --allow-path DIR   meshes may also come from DIR (default: the scene's directory only)\n"
+           "      --allow-path DIR   meshes and environment maps may also come from DIR (default: none)\n"
            "      --mesh-memory MB, --image-memory MB  memory limits of the scene (1024, 4096)\n"
            "  -q, --quiet            no progress and no statistics\n"
            "  -h, --help, --version  this help; the version and the formats built in\n"
@@ -591,6 +591,9 @@ static int parse_options(int argc, char **argv, options *o)
 {
     int i, rc;
     memset(o, 0, sizeof *o);
+#ifdef PDFTRACE_OPENEXR
+    o->load.read_image = pt_read_exr_memory; /* `environment` maps in OpenEXR besides PFM */
+#endif
     o->backend = PT_BACKEND_AUTO;
     o->display.tonemap = PT_TONEMAP_CLAMP;
     for (i = 1; i < argc; i++) {

@@ -448,7 +448,12 @@ static int render_seeds(const pt_scenefile *sd, int w, int h, int spp, int k, pt
 static int load(const char *path, pt_scenefile *sd)
 {
     char err[1024];
-    if (pt_scenefile_load(path, sd, err, sizeof err) != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 0; }
+    pt_scenefile_options opt;
+    memset(&opt, 0, sizeof opt);
+#ifdef PTV_HAVE_EXR
+    opt.read_image = pt_read_exr_memory; /* `environment` maps in OpenEXR besides PFM */
+#endif
+    if (pt_scenefile_load_ex(path, &opt, sd, err, sizeof err) != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 0; }
     return 1;
 }
 

@@ -11,7 +11,8 @@
 # default output name; --preview-every rewrites the output while rendering and leaves the
 # final image as without it; the command line overrides a scene file's settings; --exposure
 # changes the 8-bit outputs only; -q prints nothing; --adaptive-mode and its alias; path guiding
-# (--guiding*, the scene file's guiding statements, --guide-at's picture, exports unchanged by them).
+# (--guiding*, the scene file's guiding statements, --guide-at's picture, exports unchanged by them);
+# the environment statement (a map renders and exports, its errors name file:line).
 set -u
 
 if [ $# -ne 3 ]; then
@@ -556,6 +557,61 @@ t_guiding() {
     fi
 }
 
+# ---- the environment statement: a map renders and exports to Mitsuba (the .xml and its
+# resampled .env.pfm), the POV-Ray export refuses it; a missing file, a file that is not PFM,
+# a transform that is not a rotation, a bad scale, a second map, a map outside the directory
+# (unless --allow-path) and an .exr without OpenEXR each give status 2 and file:line; with
+# OpenEXR, an .exr map (written by pdftrace itself) renders
+t_environment() {
+    local d=$W/env ok=1 head='camera look_from 0 0 -5 look_at 0 0 0\nmaterial m lambertian 0.5 0.5 0.5\nsphere 0 0 0 1 m\n'
+    local status
+    mkdir -p "$d/scene" "$d/shared" "$d/out"
+    cp "$S/sky.pfm" "$d/scene/sky.pfm"
+    cp "$S/sky.pfm" "$d/shared/sky.pfm"
+    printf "${head}rotate 0 1 0 30\nenvironment sky.pfm 0.5\n" >"$d/scene/good.scene"
+    "$P" "$d/scene/good.scene" -q --spp 2 --size 16x8 -o "$d/out/g.pfm" 2>"$W/err.txt" ||
+        { fail environment "good.scene: $(head -n 1 "$W/err.txt")"; ok=0; }
+    if ! (cd "$d/out" && "$P" "$d/scene/good.scene" -q --size 16x8 --export-mitsuba m.xml) 2>"$W/err.txt" ||
+        [ "$(ls "$d/out" | tr '\n' ' ')" != "g.pfm m.env.pfm m.xml " ] ||
+        ! grep -q '<emitter type="envmap"><string name="filename" value="m.env.pfm"/><float name="scale" value="0.5"/>' "$d/out/m.xml" ||
+        [ "$(head -c 11 "$d/out/m.env.pfm")" != "$(printf 'PF\n256 257')" ]; then
+        fail environment "Mitsuba export: '$(head -n 1 "$W/err.txt")', wrote $(ls "$d/out" | tr '\n' ' ')"
+        ok=0
+    fi
+    bad_case "environment: POV-Ray export" "$d/scene/good.scene" --export-pov x.pov || ok=0
+    grep -q "good.scene:5: POV-Ray export: an environment map has no POV-Ray equivalent" "$W/err.txt" ||
+        { fail environment "POV-Ray export: '$(cat "$W/err.txt")'"; ok=0; }
+    printf 'not a map\n' >"$d/scene/text.pfm"
+    local cases=("environment missing.pfm|3: environment: no file 'missing.pfm' inside the scene's directory"
+                 "environment text.pfm|3: environment: $d/scene/text.pfm: not a PFM file"
+                 "scale 1 2 1\nenvironment sky.pfm|4: environment: the scene's current transform is not a rotation"
+                 "environment sky.pfm 0|3: environment scale: must be > 0, got '0'"
+                 "environment sky.pfm -2|3: environment scale: must be > 0, got '-2'"
+                 "environment sky.pfm\nenvironment sky.pfm|4: environment: a second map (the first is at line 3"
+                 "environment ../shared/sky.pfm|3: environment: no file '../shared/sky.pfm' inside the scene's directory")
+    local c stmt want
+    for c in "${cases[@]}"; do
+        stmt=${c%%|*} want=${c#*|}
+        printf "camera look_from 0 0 -5 look_at 0 0 0\nmaterial m lambertian 0.5 0.5 0.5\n${stmt}\nidentity\nsphere 0 0 0 1 m\n" >"$d/scene/bad.scene"
+        bad_case "$stmt" "$d/scene/bad.scene" -o x.ppm || { ok=0; continue; }
+        grep -qF "bad.scene:$want" "$W/err.txt" || { fail environment "$stmt: '$(cat "$W/err.txt")', want 'bad.scene:$want'"; ok=0; }
+    done
+    printf "${head}environment ../shared/sky.pfm\n" >"$d/scene/allowed.scene"
+    "$P" "$d/scene/allowed.scene" -q --spp 1 --size 8x8 --allow-path "$d/shared" -o "$d/out/a.pfm" 2>"$W/err.txt" ||
+        { fail environment "--allow-path: $(cat "$W/err.txt")"; ok=0; }
+    printf "${head}environment map.exr\n" >"$d/scene/exr.scene"
+    if [ $have_exr = 1 ]; then # an .exr map: pdftrace's own 8 x 4 EXR image of the mirror scene
+        "$P" "$S/mirror.scene" -q --spp 1 --size 8x4 -o "$d/scene/map.exr" &&
+            "$P" "$d/scene/exr.scene" -q --spp 1 --size 8x8 -o "$d/out/e.pfm" 2>"$W/err.txt" ||
+            { fail environment "an .exr map: $(cat "$W/err.txt")"; ok=0; }
+    else
+        bad_case "environment map.exr (no OpenEXR)" "$d/scene/exr.scene" -o x.ppm || ok=0
+        grep -q "exr.scene:4: environment: 'map.exr': this program was built without OpenEXR" "$W/err.txt" ||
+            { fail environment "an .exr without OpenEXR: '$(cat "$W/err.txt")'"; ok=0; }
+    fi
+    [ $ok = 1 ] && pass environment "renders; Mitsuba export with its map; POV-Ray refused; 7 bad statements with file:line; --allow-path; .exr $([ $have_exr = 1 ] && echo read || echo refused)"
+}
+
 t_help
 t_png_exr
 t_precision_warning
@@ -569,6 +625,7 @@ t_adaptive_mode
 t_guiding
 t_display
 t_scene_limits
+t_environment
 t_signal
 t_output_is_input
 t_disk_full

@@ -171,18 +171,21 @@ static void fz_check_rays(const char *target, const pt_scene *s, pt_vec3 from, i
 
 /* ---- scene files */
 
-/* 1 when a `mesh` statement names a path with '/' (or none): such inputs are skipped. The
-   tokenizer is the loader's: blanks are space, \t, \v, \f, \r; '#' starts a comment. */
+/* 1 when a `mesh` or `environment` statement names a path with '/' (or none): such inputs
+   are skipped. The tokenizer is the loader's: blanks are space, \t, \v, \f, \r; '#' starts a
+   comment. */
 static int fz_unsafe_mesh_path(const char *text, size_t len)
 {
     size_t i = 0;
     while (i < len) {
-        size_t j = i, k;
+        size_t j = i, k, w = 0;
         while (j < len && text[j] != '\n') ++j;
         k = i;
         while (k < j && strchr(" \t\v\f\r", text[k]) && text[k]) ++k;
-        if (j - k >= 5 && memcmp(text + k, "mesh", 4) == 0 && strchr(" \t\v\f\r", text[k + 4]) && text[k + 4]) {
-            k += 4;
+        if (j - k >= 5 && memcmp(text + k, "mesh", 4) == 0) w = 4;
+        if (j - k >= 12 && memcmp(text + k, "environment", 11) == 0) w = 11;
+        if (w && strchr(" \t\v\f\r", text[k + w]) && text[k + w]) {
+            k += w;
             while (k < j && strchr(" \t\v\f\r", text[k]) && text[k]) ++k;
             while (k < j && !(strchr(" \t\v\f\r#", text[k]) && text[k])) {
                 if (text[k] == '/' || text[k] == '\\') return 1;
@@ -373,6 +376,10 @@ static void fz_mitsuba(const pt_scenefile *d, int build_rc)
         fz_note(T, "Mitsuba exported, text checked", NULL);
     }
     remove(xml);
+    snprintf(ply, sizeof ply, "%.500s.mitsuba.env.pfm", fz_pov_path());
+    FZ_CHECK(T, rc == PT_OK ? (d->environment.width > 0) == fz_exists(ply) : !fz_exists(ply),
+             "the environment map beside the Mitsuba export is missing, or there without a map");
+    remove(ply);
     for (k = 0; k <= d->shape_count; ++k) { /* at most one PLY file per shape */
         snprintf(ply, sizeof ply, "%.500s.mitsuba.%d.ply", fz_pov_path(), k);
         if (remove(ply) != 0) break;
