@@ -1444,6 +1444,8 @@ typedef struct pt__env {
     float *row_cdf;       /* h + 1: the marginal over rows (0 .. 1) */
     float *col_cdf;       /* h x (w + 1): each row's conditional over its columns */
     float *cell_density;  /* w x h: solid-angle density of the map's sampling in each cell */
+    int *row_guide;       /* h + 1, and h x (w + 1): guide tables of the cdfs (pt__cdf_find) */
+    int *col_guide;
     double *cos_edge;     /* h + 1: cos(theta) at each row edge, cos(pi y / H) */
     float rot[3][3];      /* the map's frame into the world (a rotation) */
     double mean;          /* the mean over the sphere of the channel-mean radiance */
@@ -2319,6 +2321,7 @@ typedef struct pt__light_sample {
     float dist;       /* distance to the light point */
     float pdf;        /* solid-angle density of dir for this light alone */
     pt_vec3 point, normal;
+    pt_color radiance; /* an environment sample's (background + map); unset for other lights */
     int rounded;      /* 1: dir is only the float rounding of a direction that meets the light
                          (a sphere narrower than float's angular resolution): a segment to
                          point is valid, a ray along dir misses and has density 0 */
@@ -2905,21 +2908,21 @@ static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w, unsigned 
 #define PT__ENV_LIGHT 0xffffffffu /* the light index of an environment sample */
 static double pt__env_luminance(const float *c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 /* The map's (u, v) in [0, 1) x [0, 1] of world direction w (unit). theta by atan2: exact near the poles. */
-static void pt__env_uv(const pt__env *e, pt_vec3 w, double *u, double *v)
+static void pt__env_uv(const pt__env *e, pt_vec3 w, float *u, float *v)
 {
-    double x = (double)e->rot[0][0] * w.x + (double)e->rot[1][0] * w.y + (double)e->rot[2][0] * w.z;
-    double y = (double)e->rot[0][1] * w.x + (double)e->rot[1][1] * w.y + (double)e->rot[2][1] * w.z;
-    double z = (double)e->rot[0][2] * w.x + (double)e->rot[1][2] * w.y + (double)e->rot[2][2] * w.z;
-    double uu = atan2(x, -z) * (0.5 / 3.14159265358979323846);
-    if (uu < 0.0) uu += 1.0;
-    *u = uu < 1.0 ? uu : 0.0;
-    *v = atan2(sqrt(x * x + z * z), y) * (1.0 / 3.14159265358979323846);
+    float x = e->rot[0][0] * w.x + e->rot[1][0] * w.y + e->rot[2][0] * w.z;
+    float y = e->rot[0][1] * w.x + e->rot[1][1] * w.y + e->rot[2][1] * w.z;
+    float z = e->rot[0][2] * w.x + e->rot[1][2] * w.y + e->rot[2][2] * w.z;
+    float uu = atan2f(x, -z) * (0.5f * PT__INV_PI);
+    if (uu < 0.0f) uu += 1.0f;
+    *u = uu < 1.0f ? uu : 0.0f;
+    *v = atan2f(sqrtf(x * x + z * z), y) * PT__INV_PI;
 }
 /* The map (scale applied) at (u, v): bilinear between pixel centres, periodic in u. */
-static pt_color pt__env_lookup(const pt__env *e, double u, double v)
+static pt_color pt__env_lookup(const pt__env *e, float u, float v)
 {
-    double fx = u * e->w - 0.5, fy = v * e->h - 0.5, x0f = floor(fx), y0f = floor(fy);
-    float tx = (float)(fx - x0f), ty = (float)(fy - y0f);
+    float fx = u * (float)e->w - 0.5f, fy = v * (float)e->h - 0.5f, x0f = floorf(fx), y0f = floorf(fy);
+    float tx = fx - x0f, ty = fy - y0f;
     int x0 = (int)x0f, y0 = (int)y0f, x1, y1;
     const float *a, *b, *c, *d;
     if (x0 < 0) x0 += e->w;
@@ -2937,29 +2940,39 @@ static pt_color pt__env_lookup(const pt__env *e, double u, double v)
                  (1.0f - ty) * ((1.0f - tx) * a[1] + tx * b[1]) + ty * ((1.0f - tx) * c[1] + tx * d[1]),
                  (1.0f - ty) * ((1.0f - tx) * a[2] + tx * b[2]) + ty * ((1.0f - tx) * c[2] + tx * d[2]));
 }
+/* The map's radiance along world direction w (unit) and, in *density, its sampling density
+   there (per sr), from one (u, v). */
+static pt_color pt__env_eval(const pt__env *e, pt_vec3 w, float *density)
+{
+    float u, v;
+    int x, y;
+    pt__env_uv(e, w, &u, &v);
+    x = (int)(u * (float)e->w);
+    y = (int)(v * (float)e->h);
+    if (x > e->w - 1) x = e->w - 1;
+    if (y > e->h - 1) y = e->h - 1;
+    *density = e->cell_density[(size_t)y * (size_t)e->w + (size_t)x];
+    return pt__env_lookup(e, u, v);
+}
 static pt_color pt__env_map_radiance(const pt__env *e, pt_vec3 w)
 {
-    double u, v;
+    float u, v;
     pt__env_uv(e, w, &u, &v);
     return pt__env_lookup(e, u, v);
 }
-/* The map's sampling density (per sr) of world direction w. */
-static float pt__env_map_density(const pt__env *e, pt_vec3 w)
-{
-    double u, v;
-    int x, y;
-    pt__env_uv(e, w, &u, &v);
-    x = (int)(u * e->w);
-    y = (int)(v * e->h);
-    if (x > e->w - 1) x = e->w - 1;
-    if (y > e->h - 1) y = e->h - 1;
-    return e->cell_density[(size_t)y * (size_t)e->w + (size_t)x];
-}
 /* The index i of [cdf[i], cdf[i+1]) holding u (cdf: n + 1 entries from 0 to 1), never an empty
-   interval, and u's place in it, in [0, 1). */
-static int pt__cdf_find(const float *cdf, int n, float u, double *frac)
+   interval, and u's place in it, in [0, 1). guide[k] (n + 1 entries) is the answer for
+   u = k / n, so the search starts in a bracket of a few intervals (the guide table of Chen &
+   Asau 1974); the bracket is widened where float rounding of u n put it off by one. */
+static int pt__cdf_find(const float *cdf, const int *guide, int n, float u, double *frac)
 {
-    int lo = 0, hi = n - 1;
+    int k = (int)(u * (float)n), lo, hi;
+    if (k > n - 1) k = n - 1;
+    if (k < 0) k = 0;
+    lo = guide[k];
+    hi = guide[k + 1];
+    while (lo > 0 && cdf[lo] > u) --lo;
+    while (hi < n - 1 && !(cdf[hi + 1] > u)) ++hi;
     while (lo < hi) { /* the first i with cdf[i + 1] > u */
         int mid = (lo + hi) / 2;
         if (cdf[mid + 1] > u) hi = mid;
@@ -2974,10 +2987,10 @@ static int pt__cdf_find(const float *cdf, int n, float u, double *frac)
 static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w)
 {
     double fy, fx, c0, c1, cos_t, sin_t, phi, lx, ly, lz;
-    int y = pt__cdf_find(e->row_cdf, e->h, u1, &fy), x;
+    int y = pt__cdf_find(e->row_cdf, e->row_guide, e->h, u1, &fy), x;
     const float *cc = e->col_cdf + (size_t)y * (size_t)(e->w + 1);
     if (!(cc[e->w] > 0.0f)) return 0;
-    x = pt__cdf_find(cc, e->w, u2, &fx);
+    x = pt__cdf_find(cc, e->col_guide + (size_t)y * (size_t)(e->w + 1), e->w, u2, &fx);
     c0 = e->cos_edge[y];
     c1 = e->cos_edge[y + 1];
     cos_t = c0 - fy * (c0 - c1);
@@ -2991,21 +3004,32 @@ static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w)
                             (float)(e->rot[2][0] * lx + e->rot[2][1] * ly + e->rot[2][2] * lz)));
     return 1;
 }
-/* The environment light's density: c_uniform / (4 pi) + (1 - c_uniform) p_map(w). */
+/* The environment light along w: the map's radiance (0 without one) and, in *density, the
+   light's density c_uniform / (4 pi) + (1 - c_uniform) p_map(w). */
+static pt_color pt__env_light_eval(const pt__env *e, float c_uniform, pt_vec3 w, float *density)
+{
+    float pm = 0.0f;
+    pt_color L = e ? pt__env_eval(e, w, &pm) : pt_v3(0, 0, 0);
+    *density = c_uniform * PT__INV_4PI + (1.0f - c_uniform) * pm;
+    return L;
+}
 static float pt__env_density(const pt__env *e, float c_uniform, pt_vec3 w)
 {
-    float p = c_uniform * PT__INV_4PI;
-    if (e && c_uniform < 1.0f) p += (1.0f - c_uniform) * pt__env_map_density(e, w);
+    float p;
+    (void)pt__env_light_eval(e, c_uniform, w, &p);
     return p;
 }
-static int pt__env_sample(const pt__env *e, float c_uniform, float u1, float u2, pt_vec3 *w, float *pdf)
+/* *Lmap (may be NULL) receives the map's radiance along the sampled direction. */
+static int pt__env_sample(const pt__env *e, float c_uniform, float u1, float u2, pt_vec3 *w, float *pdf, pt_color *Lmap)
 {
+    pt_color L;
     if (u1 < c_uniform || !e) {
         *w = pt_sample_uniform_sphere(pt__minf(u1 / c_uniform, 0.99999994f), u2);
     } else if (!pt__env_map_sample(e, pt__minf((u1 - c_uniform) / (1.0f - c_uniform), 0.99999994f), u2, w)) {
         return 0;
     }
-    *pdf = pt__env_density(e, c_uniform, *w); /* (the density as evaluated, so MIS sees the same) */
+    L = pt__env_light_eval(e, c_uniform, *w, pdf); /* (the density as evaluated, so MIS sees the same) */
+    if (Lmap) *Lmap = L;
     return *pdf > 0.0f && pt__isfinite(*pdf);
 }
 /* The share of the uniform sphere in the environment light's density under background bg. */
@@ -3993,7 +4017,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
     case PT_PDF_ENVIRONMENT: {
         float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng), c;
         const pt__env *e;
-        ok = pt__pdf_env(pdf, &e, &c) && pt__env_sample(e, c, u1, u2, &w, &p);
+        ok = pt__pdf_env(pdf, &e, &c) && pt__env_sample(e, c, u1, u2, &w, &p, NULL);
         break;
     }
     case PT_PDF_MATERIAL: {
@@ -4931,8 +4955,20 @@ static void pt__env_free(pt__env *e)
     PT_FREE(e->row_cdf);
     PT_FREE(e->col_cdf);
     PT_FREE(e->cell_density);
+    PT_FREE(e->row_guide);
+    PT_FREE(e->col_guide);
     PT_FREE(e->cos_edge);
     PT_FREE(e);
+}
+/* guide[k] = the first i in [0, n) with cdf[i + 1] > k / n (n - 1 if none), k = 0 .. n. */
+static void pt__cdf_guide(const float *cdf, int n, int *guide)
+{
+    int k, i = 0;
+    for (k = 0; k <= n; ++k) {
+        float u = (float)k / (float)n;
+        while (i < n - 1 && !(cdf[i + 1] > u)) ++i;
+        guide[k] = i;
+    }
 }
 /* The sampling tables of e (pixels set): each cell's weight is the mean luminance over it of
    the bilinear interpolant, the pixel's luminance filtered by [1/8, 3/4, 1/8] in x (periodic)
@@ -4983,6 +5019,9 @@ static void pt__env_tables(pt__env *e, double *lum, double *row_w)
         e->row_cdf[y + 1] = total > 0.0 ? (float)(acc / total) : 0.0f;
     }
     if (total > 0.0) e->row_cdf[h] = 1.0f;
+    pt__cdf_guide(e->row_cdf, h, e->row_guide);
+    for (y = 0; y < h; ++y)
+        pt__cdf_guide(e->col_cdf + (size_t)y * (size_t)(w + 1), w, e->col_guide + (size_t)y * (size_t)(w + 1));
     /* each cell's density from the stored (float) tables, so that it is exactly what sampling does */
     for (y = 0; y < h; ++y) {
         const float *cc = e->col_cdf + (size_t)y * (size_t)(w + 1);
@@ -5052,8 +5091,11 @@ PTDEF int pt_scene_set_environment(pt_scene *s, const pt_environment_desc *d)
     e->col_cdf = (float *)PT_MALLOC((size_t)e->h * (size_t)(e->w + 1) * sizeof(float));
     e->cell_density = (float *)PT_MALLOC(n * sizeof(float));
     e->cos_edge = (double *)PT_MALLOC((size_t)(e->h + 1) * sizeof(double));
+    e->row_guide = (int *)PT_MALLOC((size_t)(e->h + 1) * sizeof(int));
+    e->col_guide = (int *)PT_MALLOC((size_t)e->h * (size_t)(e->w + 1) * sizeof(int));
     tmp = (double *)PT_MALLOC((size_t)(e->w + e->h) * sizeof(double));
-    if (!e->rgb || !e->row_cdf || !e->col_cdf || !e->cell_density || !e->cos_edge || !tmp) {
+    if (!e->rgb || !e->row_cdf || !e->col_cdf || !e->cell_density || !e->cos_edge || !e->row_guide || !e->col_guide ||
+        !tmp) {
         PT_FREE(tmp);
         pt__env_free(e);
         return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "environment: out of memory (%d x %d map)", img->width, img->height);
@@ -7237,11 +7279,6 @@ static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
     c->env_pick = (float)pt__mind(0.999, pt__maxd(0.001, phi / (phi + s->total_power)));
     c->lights_share = 1.0f - c->env_pick;
 }
-/* What a ray leaving the scene along w sees: background + map(w). */
-static pt_color pt__env_radiance(const pt__settings *c, pt_vec3 w)
-{
-    return c->env ? pt_add(c->background, pt__env_map_radiance(c->env, w)) : c->background;
-}
 
 static float pt__power_heuristic(float a, float b)
 {
@@ -7298,7 +7335,9 @@ static PT__HOT int pt__lights_sample_all(const pt_scene *s, const pt__settings *
 {
     if (PT__UNLIKELY(cfg->env_pick > 0.0f)) {
         if (u0 < cfg->env_pick) {
-            if (!pt__env_sample(cfg->env, cfg->env_uniform, u1, u2, &ls->dir, &ls->pdf)) return 0;
+            pt_color Lmap;
+            if (!pt__env_sample(cfg->env, cfg->env_uniform, u1, u2, &ls->dir, &ls->pdf, &Lmap)) return 0;
+            ls->radiance = pt_add(cfg->background, Lmap);
             ls->pdf *= cfg->env_pick;
             ls->dist = PT__INF;
             ls->point = ls->normal = pt_v3(0, 0, 0);
@@ -7367,7 +7406,7 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
     if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
         w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     if (li == PT__ENV_LIGHT) { /* the environment: a shadow ray to infinity */
-        pt_color Le = pt__env_radiance(cfg, ls->dir);
+        pt_color Le = ls->radiance;
         pt_ray sr;
         pt__rayctx src;
         if (pt__is_black(Le)) return pt_v3(0, 0, 0);
@@ -7707,13 +7746,12 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
    light, weighted as emission found by a ray is (the strategies at the top of this section). */
 static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta, int prev_delta, float prev_pdf)
 {
-    float wt = 1.0f;
-    if (!prev_delta) {
-        if (cfg->strategy == PT_STRATEGY_LIGHT) return pt_v3(0, 0, 0);
-        if (cfg->strategy == PT_STRATEGY_MIS)
-            wt = pt__power_heuristic(prev_pdf, cfg->env_pick * pt__env_density(cfg->env, cfg->env_uniform, w));
-    }
-    return pt_scale(pt_mul(beta, pt__env_radiance(cfg, w)), wt);
+    float wt = 1.0f, p;
+    pt_color L;
+    if (!prev_delta && cfg->strategy == PT_STRATEGY_LIGHT) return pt_v3(0, 0, 0);
+    L = pt_add(cfg->background, pt__env_light_eval(cfg->env, cfg->env_uniform, w, &p));
+    if (!prev_delta && cfg->strategy == PT_STRATEGY_MIS) wt = pt__power_heuristic(prev_pdf, cfg->env_pick * p);
+    return pt_scale(pt_mul(beta, L), wt);
 }
 
 /* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
