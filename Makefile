@@ -343,6 +343,18 @@ bench-headline: $(BUILD)/bench
 bench-refs: $(BUILD)/bench
 	./$(BUILD)/bench refs
 
+# run_pair(A,B,NAME): runs commands A and B side by side, their outputs into $(BUILD)/NAME-a.log
+# and -b.log, prints both logs in that order, and fails if either failed.
+SAN_ENV := ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
+define run_pair
+@echo "$(1)  &  $(2)"; \
+	( $(1) ) > $(BUILD)/$(3)-a.log 2>&1 & pid=$$!; \
+	( $(2) ) > $(BUILD)/$(3)-b.log 2>&1; rb=$$?; \
+	wait $$pid; ra=$$?; \
+	cat $(BUILD)/$(3)-a.log $(BUILD)/$(3)-b.log; \
+	[ $$ra = 0 ] && [ $$rb = 0 ]
+endef
+
 # The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed, K skipped".
 # First the scene-file runner (malformed inputs, scenes/ loading, scenes/cornell.scene through
 # build/pdftrace = build/cornell's built-in box, and the fast POV-Ray comparisons when povray is
@@ -359,14 +371,10 @@ test: $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUI
 	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus
 	./$(BUILD)/fptrap scenes/*.scene
-	./$(BUILD)/test_runner
-	./$(BUILD)/test_runner_nothreads
-ifneq ($(SAN_CLANG_PATH),)
-	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan_clang
-else
-	@echo "SKIP the clang ASan+UBSan runner: $(SAN_CLANG) is not installed (apt-get install clang)"
-endif
-	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/test_runner_asan
+	@# the runners two at a time (most tests keep one core busy; the machine has two), each
+	@# pair's logs printed in order when both have ended, so the last line is the gcc ASan runner's
+	$(call run_pair,./$(BUILD)/test_runner_nothreads,$(if $(SAN_CLANG_PATH),$(SAN_ENV) ./$(BUILD)/test_runner_asan_clang,echo "SKIP the clang ASan+UBSan runner: $(SAN_CLANG) is not installed (apt-get install clang)"),pair1)
+	$(call run_pair,./$(BUILD)/test_runner,$(SAN_ENV) ./$(BUILD)/test_runner_asan,pair2)
 
 # ---- make stress: the numerical stress cases at full size (tests/stress/; the same cases run
 # small in the runner's `stress` section). Prints case | metric | bound | result; non-zero exit

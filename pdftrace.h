@@ -782,7 +782,7 @@ PTDEF int pt_scene_get_light(const pt_scene *scene, int id, pt_light_desc *light
    scale x map(w), where background is pt_render_desc.background (a constant) and map an
    equirectangular ("lat-long") image of linear RGB radiance. Seen from a direction w in the
    map's own frame, u = atan2(w.x, -w.z) / (2 pi) (wrapped to [0, 1)) and v = acos(w.y) / pi,
-   so row 0 is the zenith (+y) and the map's centre column looks along -z (Mitsuba 3's `envmap`
+   so row 0 is the zenith (+y) and the map's centre column looks along +z (Mitsuba 3's `envmap`
    convention); pixel (x, y) is centred at u = (x + 1/2) / W, v = (y + 1/2) / H and the map is
    interpolated bilinearly between pixel centres, periodically in u and held constant beyond
    the first and last rows' centres. The map is set under the scene's current transform, which
