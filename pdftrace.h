@@ -395,7 +395,8 @@ PTDEF pt_pdf pt_pdf_triangle_light(pt_vec3 origin, pt_vec3 a, pt_vec3 b, pt_vec3
 /* All emitters of a committed scene: light i is picked with probability P_i proportional to
    its power (mean radiance x area x pi, x2 if two-sided); value = sum_i P_i p_i(dir). Lights
    facing away from origin have no density, so the PDF may integrate to less than one there;
-   sampling them fails (returns 0), which keeps every estimator that uses it unbiased. */
+   sampling them fails (returns 0), which keeps every estimator that uses it unbiased. Emitting
+   shapes only: the environment light's density is pt_pdf_environment. */
 PTDEF pt_pdf pt_pdf_scene_lights(const struct pt_scene *scene, pt_vec3 origin);
 /* The directional density with which a render samples the environment light of a committed
    scene (pt_scene_set_environment) under a constant background radiance `background`
