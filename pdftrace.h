@@ -794,7 +794,7 @@ PTDEF int pt_scene_get_light(const pt_scene *scene, int id, pt_light_desc *light
    over the pixel) and uniform in solid angle within the pixel, so it has no sin(theta)
    singularity at the poles; the constant background by uniform sphere sampling; the two
    mixed in proportion to their powers. A scene with neither pays nothing for it. The
-   details and measurements: docs/design.md, "Environment light". */
+   details and measurements: docs/design.md, "The environment light". */
 typedef struct pt_environment_desc {
     const struct pt_image *map;  /* linear RGB, finite, >= 0, at least 2 x 2 pixels; copied. NULL:
                                     no map (the environment is the background alone) */
@@ -9478,7 +9478,8 @@ PTDEF int pt_read_pfm(const char *path, pt_image *out, char *err, size_t err_siz
     scale = strtod(ss, &end);
     if (w < 0 || h < 0 || *end || !(scale == scale) || scale == 0.0) {
         fclose(f);
-        return pt__msg(err, err_size, PT_ERROR_IO, "%s: bad PFM header (width '%s', height '%s', scale '%s')", path, ws, hs, ss);
+        return pt__msg(err, err_size, PT_ERROR_IO, "%s: bad PFM header (width and height 1 .. 1000000, a finite non-zero scale)",
+                       path); /* (the file's bytes are not quoted: it may be anyone's) */
     }
     if ((unsigned long)w * (unsigned long)h > (unsigned long)PDFTRACE_PFM_MAX_PIXELS) {
         fclose(f);

@@ -115,6 +115,80 @@ static void pfm_layout(test_ctx *t)
     tu_remove_tree(dir);
 }
 
+/* Writes n bytes to path; 1 on success. */
+static int write_bytes(const char *path, const void *data, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    int ok = f && fwrite(data, 1, n, f) == n;
+    if (f && fclose(f) != 0) ok = 0;
+    return ok;
+}
+
+static void pfm_read(test_ctx *t)
+{
+    /* pt_read_pfm: what pt_write_pfm wrote comes back bit for bit (NaN, Inf and -0 included); a
+       greyscale big-endian "Pf" file written here by hand; and each kind of bad file is refused
+       with the file named and the image left empty. */
+    char dir[64], path[160], err[256];
+    pt_image a, b;
+    int i, bad = 0, rc;
+    static const unsigned char grey[] = { 'P', 'f', '\n', '2', ' ', '1', '\n', '1', '.', '0', '\n',
+                                          0x3f, 0x80, 0x00, 0x00, 0xc0, 0x00, 0x00, 0x00 }; /* 1, -2 */
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    snprintf(path, sizeof path, "%s/a.pfm", dir);
+    if (CHECK(t, pt_image_init(&a, 7, 4) == PT_OK, "pt_image_init")) {
+        for (i = 0; i < 7 * 4 * 3; i++) a.rgb[i] = (float)i * 0.37f - 5.0f;
+        a.rgb[3] = (float)NAN;
+        a.rgb[4] = (float)INFINITY;
+        a.rgb[5] = -0.0f;
+        CHECK(t, pt_write_pfm(path, &a) == PT_OK, "pt_write_pfm");
+        rc = pt_read_pfm(path, &b, err, sizeof err);
+        if (CHECK(t, rc == PT_OK && b.width == 7 && b.height == 4, "pt_read_pfm: %d %s (%d x %d)", rc, err, b.width, b.height)) {
+            for (i = 0; i < 7 * 4 * 3; i++) bad += memcmp(&a.rgb[i], &b.rgb[i], sizeof(float)) != 0;
+            CHECK(t, bad == 0, "%d values differ after the round trip", bad);
+            CHECK(t, err[0] == '\0', "message '%s' after success", err);
+        }
+        pt_image_free(&b);
+    }
+    snprintf(path, sizeof path, "%s/grey.pfm", dir);
+    if (CHECK(t, write_bytes(path, grey, sizeof grey), "writing %s", path)) {
+        rc = pt_read_pfm(path, &b, err, sizeof err);
+        CHECK(t, rc == PT_OK && b.width == 2 && b.height == 1 && b.rgb[0] == 1.0f && b.rgb[2] == 1.0f &&
+                     b.rgb[3] == -2.0f && b.rgb[5] == -2.0f,
+              "big-endian greyscale: %d %s", rc, err);
+        pt_image_free(&b);
+    }
+    {
+        static const struct { const char *name, *bytes, *want; int code; } cases[] = {
+            { "text.pfm", "hello, not a float map\n", "not a PFM file", PT_ERROR_IO },
+            { "header.pfm", "PF\n3 x\n-1.0\n", "bad PFM header", PT_ERROR_IO },
+            { "zero.pfm", "PF\n3 2\n0\n", "bad PFM header", PT_ERROR_IO },
+            { "short.pfm", "PF\n3 2\n-1.0\n0123456789", "truncated", PT_ERROR_IO },
+            { "huge.pfm", "PF\n1000000 1000000\n-1.0\n", "PDFTRACE_PFM_MAX_PIXELS", PT_ERROR_UNSUPPORTED },
+            { "empty.pfm", "", "not a PFM file", PT_ERROR_IO },
+        };
+        size_t k;
+        for (k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+            snprintf(path, sizeof path, "%s/%s", dir, cases[k].name);
+            if (!CHECK(t, write_bytes(path, cases[k].bytes, strlen(cases[k].bytes)), "writing %s", path)) continue;
+            memset(&b, 0x55, sizeof b); /* (must come back empty) */
+            rc = pt_read_pfm(path, &b, err, sizeof err);
+            CHECK(t, rc == cases[k].code && strstr(err, cases[k].want) && strstr(err, cases[k].name) && !b.rgb &&
+                         b.width == 0 && b.height == 0,
+                  "%s: %d '%s'", cases[k].name, rc, err);
+        }
+    }
+    snprintf(path, sizeof path, "%s/missing.pfm", dir);
+    rc = pt_read_pfm(path, &b, err, sizeof err);
+    CHECK(t, rc == PT_ERROR_IO && strstr(err, "missing.pfm") && !b.rgb, "missing file: %d '%s'", rc, err);
+    CHECK(t, pt_read_pfm(NULL, &b, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT && strstr(err, "path"), "NULL path: '%s'", err);
+    CHECK(t, pt_read_pfm(path, NULL, err, sizeof err) == PT_ERROR_INVALID_ARGUMENT && strstr(err, "out"), "NULL out: '%s'", err);
+    pt_image_free(&a);
+    tu_remove_tree(dir);
+}
+
 static void ppm_srgb(test_ctx *t)
 {
     /* P6 with maxval 255, top row first; each byte = 255 * sRGB(clamp(x, 0, 1)) to within one unit
@@ -839,6 +913,7 @@ static void write_error_disk_full(test_ctx *t)
 
 const test_case test_output_cases[] = {
     TEST_CASE(pfm_layout),
+    TEST_CASE(pfm_read),
     TEST_CASE(ppm_srgb),
     TEST_CASE(srgb_encode_function),
     TEST_CASE(write_errors),
