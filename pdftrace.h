@@ -1414,14 +1414,15 @@ typedef struct pt__light {
 /* A node of the light tree (section 2, "light tree"): the bounds, power and normal cone of the
    lights below it. */
 typedef struct pt__lnode {
-    pt_vec3 centre;      /* of the lights' bounds, and the square of their half diagonal: the */
-    float r2;            /* bounding sphere the importance is computed from */
+    pt_vec3 lo, hi;      /* the lights' bounds */
+    pt_vec3 centre;      /* of the bounds, and the square of their half diagonal (the distance */
+    float r2;            /* term is clamped to it: a point among the lights is not infinitely near) */
     pt_vec3 axis;        /* the normals' cone: its axis (unit), */
     float cos_o, sin_o;  /* the cosine and sine of its half-angle (cos -1: every direction), */
-    float cos_e;         /* and the cosine of the emission's angle beyond the normals (0: pi/2) */
+    float cos_e;         /* the cosine of the emission's angle beyond the normals (0: pi/2), */
+    float pmin;          /* and the least of axis . x over the bounds */
     float power;
     uint32_t a, b;       /* children; a leaf: a = the light's index, b = PT__LNODE_LEAF */
-    pt_vec3 lo, hi;      /* the bounds (building only) */
 } pt__lnode;
 #define PT__LNODE_LEAF 0xffffffffu
 
@@ -2790,49 +2791,57 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
 /* --- light tree: a light is picked by descending a binary tree over the lights, choosing each
    child in proportion to a conservative estimate of what its lights can send to the shading point
    (power, distance and orientation: Conty Estevez & Kulla, "Importance Sampling of Many Lights
-   with Adaptive Tree Splitting", 2018; the bound as in pbrt-v4's light BVH, without the receiver's
-   normal, so that the probability depends on the point alone). The probability of a light is the
-   product of the choices on its path (the scene's ltrail), so it can be evaluated for MIS. Scenes
-   with fewer than PT__LIGHT_TREE_MIN lights pick by power (bench/README.md, "Light tree"). */
+   with Adaptive Tree Splitting", 2018, as in pbrt-v4's light BVH). The orientation bounds are
+   taken over the node's box rather than its bounding sphere, which keeps them tight for rows and
+   planes of lights, and include the receiver's normal where the caller knows it (the same normal
+   must be given to the sample and to the PMF). The probability of a light is the product of the
+   choices on its path (the scene's ltrail), so it can be evaluated for MIS. Scenes with fewer
+   than PT__LIGHT_TREE_MIN lights pick by power (bench/README.md, "Light tree"). */
 #ifndef PT__LIGHT_TREE_MIN
 #define PT__LIGHT_TREE_MIN 16u
 #endif
 #define PT__LIGHTS_SPHERICAL 1u /* mode bits of the functions below: solid-angle sampling of planar */
 #define PT__LIGHTS_TREE 2u      /* lights; the light tree (where the scene has one) */
-/* What node n's lights can send to p, up to a common factor; 0 only where none can light p. */
-static float pt__lnode_importance(const pt__lnode *n, pt_vec3 p)
+/* What node n's lights can send to p, up to a common factor; 0 only where none can light p. nr:
+   the receiver's normal, which nothing below its plane reaches, or the zero vector (no receiver
+   bound: a point alone, or a material that transmits). Cosines are bounded over the box: the
+   largest projection of a direction between p and the box on a normal is at most the largest
+   projection of the offset over the least distance. */
+static PT__HOT float pt__lnode_importance(const pt__lnode *n, pt_vec3 p, pt_vec3 nr)
 {
-    pt_vec3 d = pt_sub(p, n->centre);
-    float d2 = pt_length2(d), cos_p = 1.0f;
-    if (n->cos_o > -1.0f && d2 > n->r2) {
-        /* theta_p = max(0, theta_w - theta_o - theta_b): the smallest angle between a normal in the
-           cone and a direction from the node's bounding sphere to p */
-        float inv = 1.0f / sqrtf(d2), cos_w = pt_dot(n->axis, d) * inv, sin_b2 = n->r2 * inv * inv;
-        float cos_b = sqrtf(1.0f - sin_b2), cos_x = 1.0f, sin_x = 0.0f;
-        if (cos_w < n->cos_o) {
-            float sin_w = pt__safe_sqrt(1.0f - cos_w * cos_w);
-            cos_x = cos_w * n->cos_o + sin_w * n->sin_o;
-            sin_x = sin_w * n->cos_o - cos_w * n->sin_o;
-        }
-        if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sqrtf(sin_b2);
+    pt_vec3 q = pt__vmax(n->lo, pt__vmin(p, n->hi)), d = pt_sub(p, n->centre);
+    float dmin2 = pt_length2(pt_sub(p, q)), inv = dmin2 > 0.0f ? 1.0f / sqrtf(dmin2) : 0.0f;
+    float cos_p = 1.0f, cos_r = 1.0f;
+    if (n->cos_o > -1.0f) {
+        /* the emitters: theta' = max(0, theta_w - theta_o), theta_w the least angle between the
+           cone's axis and a direction from the box to p */
+        float num = pt_dot(n->axis, p) - n->pmin;
+        float cw = num > 0.0f ? (dmin2 > 0.0f ? pt__minf(1.0f, num * inv) : 1.0f) : 0.0f;
+        if (cw < n->cos_o) cos_p = cw * n->cos_o + pt__safe_sqrt(1.0f - cw * cw) * n->sin_o;
         if (cos_p <= n->cos_e) return 0.0f;
     }
-    /* (the distance clamped to the node's size: a point inside a cluster is not infinitely near) */
-    return n->power * cos_p / pt__maxf(d2, n->r2);
+    if (nr.x != 0.0f || nr.y != 0.0f || nr.z != 0.0f) {
+        /* the receiver: nothing on or below its plane */
+        float num = nr.x * (nr.x > 0.0f ? n->hi.x : n->lo.x) + nr.y * (nr.y > 0.0f ? n->hi.y : n->lo.y) +
+                    nr.z * (nr.z > 0.0f ? n->hi.z : n->lo.z) - pt_dot(nr, p);
+        if (num <= 0.0f) return 0.0f;
+        if (dmin2 > 0.0f) cos_r = pt__minf(1.0f, num * inv);
+    }
+    return n->power * cos_p * cos_r / pt__maxf(pt_length2(d), n->r2);
 }
 /* The probability of choosing child b at node n from p (< 0: neither child can light p). */
-static float pt__lnode_p_b(const pt_scene *s, const pt__lnode *n, pt_vec3 p)
+static PT__HOT float pt__lnode_p_b(const pt_scene *s, const pt__lnode *n, pt_vec3 p, pt_vec3 nr)
 {
-    float ia = pt__lnode_importance(&s->ltree[n->a], p), ib = pt__lnode_importance(&s->ltree[n->b], p);
+    float ia = pt__lnode_importance(&s->ltree[n->a], p, nr), ib = pt__lnode_importance(&s->ltree[n->b], p, nr);
     if (!(ia + ib > 0.0f) || !pt__isfinite(ia + ib)) return -1.0f;
     return ib / (ia + ib);
 }
-static int pt__tree_pick(const pt_scene *s, pt_vec3 p, float u, uint32_t *light, float *pmf)
+static PT__HOT int pt__tree_pick(const pt_scene *s, pt_vec3 p, pt_vec3 nr, float u, uint32_t *light, float *pmf)
 {
     const pt__lnode *n = &s->ltree[0];
     float prob = 1.0f;
     while (n->b != PT__LNODE_LEAF) {
-        float pb = pt__lnode_p_b(s, n, p);
+        float pb = pt__lnode_p_b(s, n, p, nr);
         if (pb < 0.0f) return 0;
         if (u >= 1.0f - pb) { /* child b takes the top of [0, 1) */
             u = pb > 0.0f ? pt__minf((u - (1.0f - pb)) / pb, 0.99999994f) : 0.0f;
@@ -2848,8 +2857,8 @@ static int pt__tree_pick(const pt_scene *s, pt_vec3 p, float u, uint32_t *light,
     *pmf = prob;
     return prob > 0.0f;
 }
-/* The probability that light li is picked from p (mode: PT__LIGHTS_*). */
-static float pt__light_pmf(const pt_scene *s, pt_vec3 p, uint32_t li, unsigned mode)
+/* The probability that light li is picked from p with receiver normal nr (mode: PT__LIGHTS_*). */
+static float pt__light_pmf(const pt_scene *s, pt_vec3 p, pt_vec3 nr, uint32_t li, unsigned mode)
 {
     const pt__lnode *n;
     uint64_t trail;
@@ -2858,7 +2867,7 @@ static float pt__light_pmf(const pt_scene *s, pt_vec3 p, uint32_t li, unsigned m
     n = &s->ltree[0];
     trail = s->ltrail[li];
     while (n->b != PT__LNODE_LEAF) {
-        float pb = pt__lnode_p_b(s, n, p);
+        float pb = pt__lnode_p_b(s, n, p, nr);
         if (pb < 0.0f) return 0.0f;
         prob *= (trail & 1u) ? pb : 1.0f - pb;
         n = &s->ltree[(trail & 1u) ? n->b : n->a];
@@ -2868,14 +2877,14 @@ static float pt__light_pmf(const pt_scene *s, pt_vec3 p, uint32_t li, unsigned m
 }
 
 /* Picks a light (by the tree, or by power) and samples it: ls->pdf is P_i * p_i(dir). */
-static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, float u1, float u2, pt__light_sample *ls,
-                             uint32_t *light_index, unsigned mode)
+static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, pt_vec3 nr, float u0, float u1, float u2,
+                                     pt__light_sample *ls, uint32_t *light_index, unsigned mode)
 {
     uint32_t li;
     float pick;
     if (!s->light_count) return 0;
     if (s->ltree && (mode & PT__LIGHTS_TREE)) {
-        if (!pt__tree_pick(s, o, u0, &li, &pick)) return 0;
+        if (!pt__tree_pick(s, o, nr, u0, &li, &pick)) return 0;
     } else {
         li = pt__pick_light(s, u0);
         pick = s->lights[li].select_pdf;
@@ -2886,13 +2895,13 @@ static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, float u0, flo
     *light_index = li;
     return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
 }
-static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 w, unsigned mode)
+static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 nr, pt_vec3 w, unsigned mode)
 {
     uint32_t i;
     float v = 0.0f;
     for (i = 0; i < s->light_count; ++i) {
         float pv = pt__light_prim_value(s, &s->prims[s->lights[i].prim], o, w, (mode & PT__LIGHTS_SPHERICAL) != 0);
-        if (pv > 0.0f) v += pt__light_pmf(s, o, i, mode) * pv;
+        if (pv > 0.0f) v += pt__light_pmf(s, o, nr, i, mode) * pv;
     }
     return v;
 }
@@ -3919,7 +3928,8 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     }
     case PT_PDF_SCENE_LIGHTS:
         if (pdf->as.lights.scene && pdf->as.lights.scene->committed)
-            v = pt__lights_value(pdf->as.lights.scene, pt__to_local(pdf->as.lights.scene, pdf->origin), w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
+            v = pt__lights_value(pdf->as.lights.scene, pt__to_local(pdf->as.lights.scene, pdf->origin), pt_v3(0.0f, 0.0f, 0.0f), w,
+                                 PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
         break;
     case PT_PDF_MATERIAL:
         if (pdf->as.material.scene && pdf->as.material.material >= 0 &&
@@ -4006,11 +4016,11 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         pt_vec3 o;
         if (!pdf->as.lights.scene || !pdf->as.lights.scene->committed) break;
         o = pt__to_local(pdf->as.lights.scene, pdf->origin);
-        ok = pt__lights_sample(pdf->as.lights.scene, o, u0, u1, u2, &ls, &li, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
+        ok = pt__lights_sample(pdf->as.lights.scene, o, pt_v3(0.0f, 0.0f, 0.0f), u0, u1, u2, &ls, &li, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
         if (ok) {
             w = ls.dir;
             /* the density of the direction over all lights, not the picked one's alone */
-            p = pt__lights_value(pdf->as.lights.scene, o, w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
+            p = pt__lights_value(pdf->as.lights.scene, o, pt_v3(0.0f, 0.0f, 0.0f), w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
             ok = p > 0.0f;
         }
         break;
@@ -6684,8 +6694,14 @@ static void pt__precision_check(pt_scene *s)
     }
 }
 
-/* --- the light tree (section 2): built over the light table by splitting the lights at the median
-   of their centres along the widest axis, so its depth is ceil(log2 n) (the trails fit 64 bits). */
+/* --- the light tree (section 2): built top-down over the light table. Each node's lights are
+   split where the surface area orientation heuristic is least (Conty Estevez & Kulla 2018; pbrt-v4's
+   SAOH): the sum over the two halves of power x the solid-angle measure of their normal cones x
+   the area of their bounds, tried at PT__LTREE_BUCKETS - 1 planes along each axis. This keeps
+   lights that face different ways apart, which the orientation bound needs. Where no plane
+   separates the centres, or the tree grows deep enough that a light's path might not fit the
+   64 bits of its trail, the node splits at the median instead (depth ceil(log2 n) from there). */
+#define PT__LTREE_BUCKETS 12
 typedef struct pt__lkey { float key; uint32_t light; } pt__lkey;
 static int pt__lkey_cmp(const void *a, const void *b)
 {
@@ -6693,7 +6709,8 @@ static int pt__lkey_cmp(const void *a, const void *b)
     if (x->key != y->key) return x->key < y->key ? -1 : 1;
     return x->light < y->light ? -1 : (x->light > y->light ? 1 : 0); /* deterministic */
 }
-/* The smallest cone holding cones a and b (pbrt-v4's DirectionCone union, in closed form). */
+/* The smallest cone holding cones a and b (pbrt-v4's DirectionCone union, in closed form; for
+   opposite axes, which pbrt-v4 bounds by the whole sphere, any axis at right angles will do). */
 static void pt__cone_union(pt__lnode *out, const pt__lnode *a, const pt__lnode *b)
 {
     float ta, tb, td, to, tr;
@@ -6706,71 +6723,156 @@ static void pt__cone_union(pt__lnode *out, const pt__lnode *a, const pt__lnode *
     if (pt__minf(td + tb, PT__PI) <= ta) { out->axis = a->axis; out->cos_o = a->cos_o; return; }
     if (pt__minf(td + ta, PT__PI) <= tb) { out->axis = b->axis; out->cos_o = b->cos_o; return; }
     to = 0.5f * (ta + td + tb);
-    w = pt_cross(a->axis, b->axis);
-    if (to >= PT__PI || !(pt_length2(w) > 0.0f)) { out->axis = a->axis; out->cos_o = -1.0f; return; }
+    if (to >= PT__PI) { out->axis = a->axis; out->cos_o = -1.0f; return; }
     /* rotate a's axis toward b's by tr = to - ta, about their common normal (Rodrigues) */
     tr = to - ta;
+    w = pt_cross(a->axis, b->axis);
+    if (!(pt_length2(w) > 1e-12f)) w = pt_cross(a->axis, fabsf(a->axis.x) < 0.9f ? pt_v3(1, 0, 0) : pt_v3(0, 1, 0));
     w = pt_normalize(w);
     out->axis = pt_normalize(pt_add(pt_scale(a->axis, cosf(tr)), pt_scale(pt_cross(w, a->axis), sinf(tr))));
     out->cos_o = cosf(to);
 }
-static uint32_t pt__ltree_node(pt_scene *s, pt__lkey *keys, uint32_t begin, uint32_t end, uint32_t depth, uint64_t trail)
+/* A light's own node: its bounds, power and normal cone. */
+static void pt__lnode_of_light(const pt_scene *s, uint32_t li, pt__lnode *node)
 {
-    uint32_t i, n = s->ltree_count++, mid, a, b;
+    const pt__light *l = &s->lights[li];
+    const pt__prim *p = &s->prims[l->prim];
+    pt__prim_bounds(p, &node->lo, &node->hi);
+    node->power = (float)l->power;
+    node->axis = p->type == PT__PRIM_SPHERE ? pt_v3(0, 0, 1) : p->n;
+    node->cos_o = p->type == PT__PRIM_SPHERE || s->mats[p->material].two_sided ? -1.0f : 1.0f;
+    node->cos_e = 0.0f; /* Lambertian emission: to 90 degrees from the normal */
+    node->a = li;
+    node->b = PT__LNODE_LEAF;
+}
+/* Adds node x (a light or a group) to the group g (g->a: how many lights g holds, 0: empty). */
+static void pt__lnode_grow(pt__lnode *g, const pt__lnode *x, uint32_t count)
+{
+    if (!g->a) {
+        *g = *x;
+        g->a = 0u;
+    } else {
+        pt__lnode u;
+        pt__cone_union(&u, g, x);
+        g->axis = u.axis;
+        g->cos_o = u.cos_o;
+        g->cos_e = u.cos_e;
+        g->lo = pt__vmin(g->lo, x->lo);
+        g->hi = pt__vmax(g->hi, x->hi);
+        g->power += x->power;
+    }
+    g->a += count;
+}
+/* The SAOH cost of a group: power x the normal cone's measure x the bounds' area (pbrt-v4,
+   LightBounds and EvaluateCost; the measure is Conty Estevez & Kulla's M_omega). */
+static double pt__lnode_cost(const pt__lnode *g)
+{
+    const double pi = 3.14159265358979323846;
+    double to = g->cos_o <= -1.0f ? pi : acos((double)pt__minf(1.0f, g->cos_o));
+    double te = acos((double)pt__maxf(-1.0f, pt__minf(1.0f, g->cos_e))), tw = to + te < pi ? to + te : pi;
+    double m = 2.0 * pi * (1.0 - cos(to)) +
+               pi / 2.0 * (2.0 * tw * sin(to) - cos(to - 2.0 * tw) - 2.0 * to * sin(to) + cos(to));
+    pt_vec3 e = pt_sub(g->hi, g->lo);
+    double area = 2.0 * ((double)e.x * e.y + (double)e.y * e.z + (double)e.z * e.x);
+    return (double)g->power * m * area;
+}
+static float pt__vcomp(pt_vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+static int pt__ltree_bucket(float centre2, float lo, float width)
+{
+    int k = (int)((float)PT__LTREE_BUCKETS * (0.5f * centre2 - lo) / width);
+    return k < 0 ? 0 : (k > PT__LTREE_BUCKETS - 1 ? PT__LTREE_BUCKETS - 1 : k);
+}
+/* Where to split keys[begin, end) (sorted on return along the chosen axis): the first index of
+   the second half. */
+static uint32_t pt__ltree_split(const pt__lnode *info, pt__lkey *keys, uint32_t begin, uint32_t end, uint32_t depth)
+{
+    pt_vec3 clo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), chi = pt_neg(clo), blo = clo, bhi = chi;
+    uint32_t i, n = end - begin, lg = 0;
+    int axis, k, best_axis = -1, best_k = 0;
+    double best = 0.0;
+    float emax;
+    while (lg < 32u && ((uint64_t)1 << lg) < n) lg++;
+    for (i = begin; i < end; ++i) {
+        const pt__lnode *x = &info[keys[i].light];
+        pt_vec3 c = pt_scale(pt_add(x->lo, x->hi), 0.5f);
+        clo = pt__vmin(clo, c);
+        chi = pt__vmax(chi, c);
+        blo = pt__vmin(blo, x->lo);
+        bhi = pt__vmax(bhi, x->hi);
+    }
+    emax = pt__vmaxabs(pt_sub(bhi, blo));
+    for (axis = 0; axis < 3 && depth + lg < 60u; ++axis) {
+        pt__lnode bucket[PT__LTREE_BUCKETS], below[PT__LTREE_BUCKETS], above;
+        float lo = pt__vcomp(clo, axis), width = pt__vcomp(chi, axis) - lo;
+        float extent = pt__vcomp(bhi, axis) - pt__vcomp(blo, axis);
+        if (!(width > 0.0f)) continue;
+        memset(bucket, 0, sizeof bucket);
+        for (i = begin; i < end; ++i) {
+            const pt__lnode *x = &info[keys[i].light];
+            pt__lnode_grow(&bucket[pt__ltree_bucket(pt__vcomp(x->lo, axis) + pt__vcomp(x->hi, axis), lo, width)], x, 1u);
+        }
+        memset(below, 0, sizeof below);
+        for (k = 0; k < PT__LTREE_BUCKETS; ++k) {
+            if (k) below[k] = below[k - 1];
+            if (bucket[k].a) pt__lnode_grow(&below[k], &bucket[k], bucket[k].a);
+        }
+        memset(&above, 0, sizeof above);
+        for (k = PT__LTREE_BUCKETS - 1; k >= 1; --k) {
+            double c;
+            if (bucket[k].a) pt__lnode_grow(&above, &bucket[k], bucket[k].a);
+            if (!above.a || !below[k - 1].a) continue;
+            /* (pbrt-v4's regularisation: splits across thin axes cost more) */
+            c = (pt__lnode_cost(&below[k - 1]) + pt__lnode_cost(&above)) * (double)(emax / pt__maxf(extent, emax * 1e-6f));
+            if (best_axis < 0 || c <= best) { best = c; best_axis = axis; best_k = k; }
+        }
+    }
+    axis = best_axis;
+    if (axis < 0) { /* the median along the widest spread of the centres */
+        pt_vec3 e = pt_sub(chi, clo);
+        axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
+    }
+    for (i = begin; i < end; ++i)
+        keys[i].key = pt__vcomp(info[keys[i].light].lo, axis) + pt__vcomp(info[keys[i].light].hi, axis);
+    qsort(keys + begin, n, sizeof *keys, pt__lkey_cmp);
+    if (best_axis >= 0) {
+        float lo = pt__vcomp(clo, axis), width = pt__vcomp(chi, axis) - lo;
+        for (i = begin; i < end && pt__ltree_bucket(keys[i].key, lo, width) < best_k; ++i) {}
+        if (i > begin && i < end) return i;
+    }
+    return begin + n / 2u;
+}
+static uint32_t pt__ltree_node(pt_scene *s, const pt__lnode *info, pt__lkey *keys, uint32_t begin, uint32_t end,
+                               uint32_t depth, uint64_t trail)
+{
+    uint32_t n = s->ltree_count++, mid, a, b;
     pt__lnode *node = &s->ltree[n];
     if (end - begin == 1) {
-        const pt__light *l = &s->lights[keys[begin].light];
-        const pt__prim *p = &s->prims[l->prim];
-        pt__prim_bounds(p, &node->lo, &node->hi);
-        node->power = (float)l->power;
-        node->axis = p->type == PT__PRIM_SPHERE ? pt_v3(0, 0, 1) : p->n;
-        node->cos_o = p->type == PT__PRIM_SPHERE || s->mats[p->material].two_sided ? -1.0f : 1.0f;
-        node->cos_e = 0.0f; /* Lambertian emission: to 90 degrees from the normal */
-        node->a = keys[begin].light;
-        node->b = PT__LNODE_LEAF;
-        node->centre = pt_scale(pt_add(node->lo, node->hi), 0.5f);
-        node->r2 = 0.25f * pt_length2(pt_sub(node->hi, node->lo));
-        node->sin_o = 0.0f;
+        *node = info[keys[begin].light];
         s->ltrail[keys[begin].light] = trail;
-        return n;
+    } else {
+        mid = pt__ltree_split(info, keys, begin, end, depth);
+        a = pt__ltree_node(s, info, keys, begin, mid, depth + 1u, trail);
+        b = pt__ltree_node(s, info, keys, mid, end, depth + 1u, trail | ((uint64_t)1 << depth));
+        node = &s->ltree[n]; /* (s->ltree does not move: allocated whole) */
+        node->lo = pt__vmin(s->ltree[a].lo, s->ltree[b].lo);
+        node->hi = pt__vmax(s->ltree[a].hi, s->ltree[b].hi);
+        node->power = s->ltree[a].power + s->ltree[b].power;
+        pt__cone_union(node, &s->ltree[a], &s->ltree[b]);
+        node->a = a;
+        node->b = b;
     }
-    {   /* split at the median of the centres along the widest axis of their bounds */
-        pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_neg(lo), e;
-        int axis;
-        for (i = begin; i < end; ++i) {
-            pt_vec3 a0, a1, c;
-            pt__prim_bounds(&s->prims[s->lights[keys[i].light].prim], &a0, &a1);
-            c = pt_scale(pt_add(a0, a1), 0.5f);
-            lo = pt__vmin(lo, c);
-            hi = pt__vmax(hi, c);
-        }
-        e = pt_sub(hi, lo);
-        axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
-        for (i = begin; i < end; ++i) {
-            pt_vec3 a0, a1;
-            pt__prim_bounds(&s->prims[s->lights[keys[i].light].prim], &a0, &a1);
-            keys[i].key = axis == 0 ? a0.x + a1.x : axis == 1 ? a0.y + a1.y : a0.z + a1.z;
-        }
-        qsort(keys + begin, end - begin, sizeof *keys, pt__lkey_cmp);
-    }
-    mid = begin + (end - begin) / 2u;
-    a = pt__ltree_node(s, keys, begin, mid, depth + 1u, trail);
-    b = pt__ltree_node(s, keys, mid, end, depth + 1u, trail | ((uint64_t)1 << depth));
-    node = &s->ltree[n]; /* (s->ltree does not move: allocated whole) */
-    node->lo = pt__vmin(s->ltree[a].lo, s->ltree[b].lo);
-    node->hi = pt__vmax(s->ltree[a].hi, s->ltree[b].hi);
-    node->power = s->ltree[a].power + s->ltree[b].power;
-    pt__cone_union(node, &s->ltree[a], &s->ltree[b]);
-    node->a = a;
-    node->b = b;
     node->centre = pt_scale(pt_add(node->lo, node->hi), 0.5f);
     node->r2 = 0.25f * pt_length2(pt_sub(node->hi, node->lo));
     node->sin_o = pt__safe_sqrt(1.0f - node->cos_o * node->cos_o);
+    node->pmin = node->axis.x * (node->axis.x > 0.0f ? node->lo.x : node->hi.x) +
+                 node->axis.y * (node->axis.y > 0.0f ? node->lo.y : node->hi.y) +
+                 node->axis.z * (node->axis.z > 0.0f ? node->lo.z : node->hi.z);
     return n;
 }
 static int pt__ltree_build(pt_scene *s)
 {
     pt__lkey *keys;
+    pt__lnode *info;
     uint32_t i;
     PT_FREE(s->ltree);
     PT_FREE(s->ltrail);
@@ -6781,16 +6883,20 @@ static int pt__ltree_build(pt_scene *s)
     s->ltree = (pt__lnode *)PT_MALLOC(sizeof(pt__lnode) * (2u * (size_t)s->light_count - 1u));
     s->ltrail = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * s->light_count);
     keys = (pt__lkey *)PT_MALLOC(sizeof(pt__lkey) * s->light_count);
-    if (!s->ltree || !s->ltrail || !keys) {
+    info = (pt__lnode *)PT_MALLOC(sizeof(pt__lnode) * s->light_count);
+    if (!s->ltree || !s->ltrail || !keys || !info) {
         PT_FREE(keys);
+        PT_FREE(info);
         return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory (light tree of %u lights)", (unsigned)s->light_count);
     }
     for (i = 0; i < s->light_count; ++i) {
         keys[i].light = i;
         keys[i].key = 0.0f;
+        pt__lnode_of_light(s, i, &info[i]);
     }
-    pt__ltree_node(s, keys, 0, s->light_count, 0, 0);
+    pt__ltree_node(s, info, keys, 0, s->light_count, 0, 0);
     PT_FREE(keys);
+    PT_FREE(info);
     return PT_OK;
 }
 
@@ -7328,11 +7434,19 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
     }
 }
 
+/* The receiver normal of the light tree's choice at vertex v (pt__lnode_importance): none of
+   these materials reflects light from below ng (pt__material_eval); any other material gets none. */
+static pt_vec3 pt__receiver_normal(const pt__vertex *v)
+{
+    if (v->m->type == PT_MATERIAL_LAMBERTIAN || v->m->type == PT_MATERIAL_METAL) return v->ng;
+    return pt_v3(0.0f, 0.0f, 0.0f);
+}
+
 /* Light sampling with the environment: it is picked with probability cfg->env_pick, the shaped
    lights (pt__lights_sample) otherwise; ls->pdf is the pick's probability times the light's
    density, and *light_index is PT__ENV_LIGHT for the environment. */
-static PT__HOT int pt__lights_sample_all(const pt_scene *s, const pt__settings *cfg, pt_vec3 o, float u0, float u1,
-                                         float u2, pt__light_sample *ls, uint32_t *light_index)
+static PT__HOT int pt__lights_sample_all(const pt_scene *s, const pt__settings *cfg, pt_vec3 o, pt_vec3 nr, float u0,
+                                         float u1, float u2, pt__light_sample *ls, uint32_t *light_index)
 {
     if (PT__UNLIKELY(cfg->env_pick > 0.0f)) {
         if (u0 < cfg->env_pick) {
@@ -7347,16 +7461,16 @@ static PT__HOT int pt__lights_sample_all(const pt_scene *s, const pt__settings *
             return ls->pdf > 0.0f;
         }
         u0 = pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f);
-        if (!pt__lights_sample(s, o, u0, u1, u2, ls, light_index, pt__lights_mode(cfg))) return 0;
+        if (!pt__lights_sample(s, o, nr, u0, u1, u2, ls, light_index, pt__lights_mode(cfg))) return 0;
         ls->pdf *= cfg->lights_share;
         return ls->pdf > 0.0f;
     }
-    return pt__lights_sample(s, o, u0, u1, u2, ls, light_index, pt__lights_mode(cfg));
+    return pt__lights_sample(s, o, nr, u0, u1, u2, ls, light_index, pt__lights_mode(cfg));
 }
 /* The density of pt__lights_sample_all: env_pick p_env + (1 - env_pick) sum_i P_i p_i. */
-static float pt__lights_value_all(const pt_scene *s, const pt__settings *cfg, pt_vec3 o, pt_vec3 w)
+static float pt__lights_value_all(const pt_scene *s, const pt__settings *cfg, pt_vec3 o, pt_vec3 nr, pt_vec3 w)
 {
-    float v = s->light_count ? pt__lights_value(s, o, w, pt__lights_mode(cfg)) : 0.0f;
+    float v = s->light_count ? pt__lights_value(s, o, nr, w, pt__lights_mode(cfg)) : 0.0f;
     if (PT__UNLIKELY(cfg->env_pick > 0.0f))
         v = cfg->env_pick * pt__env_density(cfg->env, cfg->env_uniform, w) + cfg->lights_share * v;
     return v;
@@ -7632,12 +7746,13 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
             if (use_light) {
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (!pt__lights_sample_all(s, cfg, v->o, u0, u1, u2, &ls, &li)) return 0;
+                if (!pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &ls, &li)) return 0;
                 wi = ls.dir;
             } else if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
             /* a rounded direction has no density for its own light: that light's share is the
                sample's own (ls.pdf, the pick probability included) */
-            p_total = cfg->light_weight * (pt__lights_value_all(s, cfg, v->o, wi) + (ls.rounded ? ls.pdf : 0.0f)) +
+            p_total = cfg->light_weight *
+                          (pt__lights_value_all(s, cfg, v->o, pt__receiver_normal(v), wi) + (ls.rounded ? ls.pdf : 0.0f)) +
                       (1.0f - cfg->light_weight) * pt__scatter_density_pg(v, wi, pg);
         } else {
             if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
@@ -7672,7 +7787,8 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
 }
 
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
-                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt__sampler *smp, pt_path_stats *st,
+                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n, pt__sampler *smp,
+                               pt_path_stats *st,
                                pt__splits *sp);
 
 /* Training a guide (section 8, "Guiding"): a non-delta vertex that continued along w with
@@ -7725,7 +7841,7 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
         st->split_paths++;
         pt_color Lc = pt_v3(0, 0, 0);
         if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2, &Lc, st)) {
-            pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, cs, st, sp);
+            pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, pt__receiver_normal(v), cs, st, sp);
             st->bounce_rays++;
             L = pt_add(L, Li);
             if (PT__UNLIKELY(cfg->recording != NULL) && !pd2) {
@@ -7758,7 +7874,8 @@ static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta
 /* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
    pt__trace). */
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
-                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt__sampler *smp, pt_path_stats *st,
+                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n, pt__sampler *smp,
+                               pt_path_stats *st,
                                pt__splits *sp)
 {
     pt_color L = pt_v3(0, 0, 0), beta_in;
@@ -7801,7 +7918,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             if (!prev_delta) {
                 if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
                 else if (cfg->strategy == PT_STRATEGY_MIS) {
-                    float pl = cfg->lights_share * pt__light_pmf(s, prev_p, (uint32_t)prim->light, pt__lights_mode(cfg)) *
+                    float pl = cfg->lights_share * pt__light_pmf(s, prev_p, prev_n, (uint32_t)prim->light, pt__lights_mode(cfg)) *
                                pt__light_prim_value_at(s, prim, prev_p, ray.dir, t, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS));
                     w = pt__power_heuristic(prev_pdf, pl);
                 }
@@ -7839,7 +7956,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             uint32_t li;
             float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
             pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-            if (pt__lights_sample_all(s, cfg, v.o, u0, u1, u2, &ls, &li))
+            if (pt__lights_sample_all(s, cfg, v.o, pt_v3(0.0f, 0.0f, 0.0f), u0, u1, u2, &ls, &li))
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
         if (!m->delta) {
@@ -7870,7 +7987,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-                if (pt__lights_sample_all(s, cfg, v.o, u0, u1, u2, &ls, &li))
+                if (pt__lights_sample_all(s, cfg, v.o, pt__receiver_normal(&v), u0, u1, u2, &ls, &li))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
             }
             /* the delta lights, under every strategy (a scene without them skips this) */
@@ -7901,6 +8018,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             }
         }
         prev_p = v.o;
+        prev_n = pt__receiver_normal(&v);
         st->bounce_rays++;
     }
     if (nrec) pt__guide_record_path(cfg->recording, recs, nrec, L);
@@ -7920,7 +8038,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     sp.left = cfg->max_splits;
     sp.first = cfg->indirect_paths;
     st->camera_rays++;
-    return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 1, 0.0f, ray.origin, smp, st, &sp), 1.0f / k);
+    return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 1, 0.0f, ray.origin, pt_v3(0.0f, 0.0f, 0.0f), smp, st, &sp), 1.0f / k);
 }
 
 /* One camera sample with the per-sample NaN/Inf guard. */
