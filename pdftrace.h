@@ -1425,6 +1425,14 @@ typedef struct pt__lnode {
     uint32_t a, b;       /* children; a leaf: a = the light's index, b = PT__LNODE_LEAF */
 } pt__lnode;
 #define PT__LNODE_LEAF 0xffffffffu
+/* The light tree as the sampler walks it: each node holds up to four children side by side (the
+   binary tree's grandchildren), so one SSE pass bounds all four (section 2, "light tree"). */
+typedef struct pt__lnode4 {
+    float lo[3][4], hi[3][4], centre[3][4], axis[3][4]; /* per axis, per child: as in pt__lnode */
+    float r2[4], cos_o[4], sin_o[4], cos_e[4], pmin[4], power[4]; /* an empty child has power 0 */
+    uint32_t child[4];  /* a node's index, or PT__LCHILD_LIGHT | a light's index */
+} pt__lnode4;
+#define PT__LCHILD_LIGHT 0x80000000u
 
 /* A delta light (pt_scene_add_light). */
 typedef struct pt__dlight {
@@ -1513,8 +1521,8 @@ struct pt_scene {
     pt__light *lights;
     uint32_t light_count;
     double total_power;
-    pt__lnode *ltree;          /* the light tree (commit; NULL: fewer than PT__LIGHT_TREE_MIN lights) */
-    uint64_t *ltrail;          /* per light: the path from the root to its leaf, bit k = 1: child b */
+    pt__lnode4 *ltree;         /* the light tree (commit; NULL: fewer than PT__LIGHT_TREE_MIN lights) */
+    uint64_t *ltrail;          /* per light: its path from the root, two bits (the child) per level */
     uint32_t ltree_count;
     pt__dlight *dlights;       /* delta lights, in the order added */
     uint32_t dlight_count, dlight_cap;
@@ -2802,78 +2810,145 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
 #endif
 #define PT__LIGHTS_SPHERICAL 1u /* mode bits of the functions below: solid-angle sampling of planar */
 #define PT__LIGHTS_TREE 2u      /* lights; the light tree (where the scene has one) */
-/* What node n's lights can send to p, up to a common factor; 0 only where none can light p. nr:
-   the receiver's normal, which nothing below its plane reaches, or the zero vector (no receiver
-   bound: a point alone, or a material that transmits). Cosines are bounded over the box: the
-   largest projection of a direction between p and the box on a normal is at most the largest
-   projection of the offset over the least distance. */
-static PT__HOT float pt__lnode_importance(const pt__lnode *n, pt_vec3 p, pt_vec3 nr)
+/* What each of node n's children can send to p, up to a common factor, into imp[4]; 0 only
+   where nothing can light p. nr: the receiver's normal, which nothing below its plane reaches
+   (has_nr 0: no receiver bound, for a point alone or a material that transmits). Cosines are
+   bounded over each child's box: the projection of a direction between p and the box on a
+   normal is at most the largest projection of their offset over their least distance. The SSE
+   version and the scalar one do the same float operations in the same order, so they agree to
+   the bit (no division by zero in any lane: fptrap). */
+#ifdef PT__SSE
+static PT__HOT void pt__lnode4_importance(const pt__lnode4 *n, pt_vec3 p, pt_vec3 nr, int has_nr, float *imp)
 {
-    pt_vec3 q = pt__vmax(n->lo, pt__vmin(p, n->hi)), d = pt_sub(p, n->centre);
-    float dmin2 = pt_length2(pt_sub(p, q)), inv = dmin2 > 0.0f ? 1.0f / sqrtf(dmin2) : 0.0f;
-    float cos_p = 1.0f, cos_r = 1.0f;
-    if (n->cos_o > -1.0f) {
-        /* the emitters: theta' = max(0, theta_w - theta_o), theta_w the least angle between the
-           cone's axis and a direction from the box to p */
-        float num = pt_dot(n->axis, p) - n->pmin;
-        float cw = num > 0.0f ? (dmin2 > 0.0f ? pt__minf(1.0f, num * inv) : 1.0f) : 0.0f;
-        if (cw < n->cos_o) cos_p = cw * n->cos_o + pt__safe_sqrt(1.0f - cw * cw) * n->sin_o;
-        if (cos_p <= n->cos_e) return 0.0f;
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z);
+    const __m128 lx = _mm_loadu_ps(n->lo[0]), ly = _mm_loadu_ps(n->lo[1]), lz = _mm_loadu_ps(n->lo[2]);
+    const __m128 hx = _mm_loadu_ps(n->hi[0]), hy = _mm_loadu_ps(n->hi[1]), hz = _mm_loadu_ps(n->hi[2]);
+    const __m128 cos_o = _mm_loadu_ps(n->cos_o);
+    __m128 dx = _mm_sub_ps(px, _mm_max_ps(lx, _mm_min_ps(px, hx)));
+    __m128 dy = _mm_sub_ps(py, _mm_max_ps(ly, _mm_min_ps(py, hy)));
+    __m128 dz = _mm_sub_ps(pz, _mm_max_ps(lz, _mm_min_ps(pz, hz)));
+    __m128 dmin2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    __m128 apart = _mm_cmpgt_ps(dmin2, zero);
+    __m128 inv = _mm_and_ps(apart, _mm_div_ps(one, _mm_sqrt_ps(_mm_or_ps(_mm_and_ps(apart, dmin2), _mm_andnot_ps(apart, one)))));
+    __m128 num, side, tilted, cone, cos_p, cos_r = one, dead, rd2;
+    /* 1 / the distance to the centre, clamped to the child's size (a point among its lights is not
+       infinitely near) */
+    dx = _mm_sub_ps(px, _mm_loadu_ps(n->centre[0]));
+    dy = _mm_sub_ps(py, _mm_loadu_ps(n->centre[1]));
+    dz = _mm_sub_ps(pz, _mm_loadu_ps(n->centre[2]));
+    rd2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    rd2 = _mm_div_ps(one, _mm_max_ps(_mm_max_ps(rd2, _mm_loadu_ps(n->r2)), _mm_set1_ps(FLT_MIN)));
+    /* the emitters: cos theta' = cos max(0, theta_w - theta_o), theta_w the least angle between
+       the cone's axis and a direction from the box to p; with cos theta_w = num / dmin, the
+       sine is sqrt(dmin^2 - num^2) / dmin */
+    num = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(n->axis[0]), px), _mm_mul_ps(_mm_loadu_ps(n->axis[1]), py)),
+                                _mm_mul_ps(_mm_loadu_ps(n->axis[2]), pz)), _mm_loadu_ps(n->pmin));
+    num = _mm_max_ps(num, zero);
+    side = _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(dmin2, _mm_mul_ps(num, num)), zero));
+    tilted = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(num, cos_o), _mm_mul_ps(side, _mm_loadu_ps(n->sin_o))), inv);
+    cone = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(cos_o, _mm_set1_ps(-1.0f)), apart), _mm_cmplt_ps(_mm_mul_ps(num, inv), cos_o));
+    cos_p = _mm_or_ps(_mm_and_ps(cone, tilted), _mm_andnot_ps(cone, one));
+    dead = _mm_and_ps(_mm_cmpgt_ps(cos_o, _mm_set1_ps(-1.0f)), _mm_cmple_ps(cos_p, _mm_loadu_ps(n->cos_e)));
+    if (has_nr) { /* the receiver: nothing on or below its plane */
+        __m128 r = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(nr.x), nr.x > 0.0f ? hx : lx),
+                                                    _mm_mul_ps(_mm_set1_ps(nr.y), nr.y > 0.0f ? hy : ly)),
+                                         _mm_mul_ps(_mm_set1_ps(nr.z), nr.z > 0.0f ? hz : lz)),
+                              _mm_set1_ps(pt_dot(nr, p)));
+        dead = _mm_or_ps(dead, _mm_cmple_ps(r, zero));
+        cos_r = _mm_or_ps(_mm_and_ps(apart, _mm_min_ps(one, _mm_mul_ps(r, inv))), _mm_andnot_ps(apart, one));
     }
-    if (nr.x != 0.0f || nr.y != 0.0f || nr.z != 0.0f) {
-        /* the receiver: nothing on or below its plane */
-        float num = nr.x * (nr.x > 0.0f ? n->hi.x : n->lo.x) + nr.y * (nr.y > 0.0f ? n->hi.y : n->lo.y) +
-                    nr.z * (nr.z > 0.0f ? n->hi.z : n->lo.z) - pt_dot(nr, p);
-        if (num <= 0.0f) return 0.0f;
-        if (dmin2 > 0.0f) cos_r = pt__minf(1.0f, num * inv);
-    }
-    return n->power * cos_p * cos_r / pt__maxf(pt_length2(d), n->r2);
+    _mm_storeu_ps(imp, _mm_andnot_ps(dead, _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(_mm_loadu_ps(n->power), cos_p), cos_r), rd2)));
 }
-/* The probability of choosing child b at node n from p (< 0: neither child can light p). */
-static PT__HOT float pt__lnode_p_b(const pt_scene *s, const pt__lnode *n, pt_vec3 p, pt_vec3 nr)
+#else
+static void pt__lnode4_importance(const pt__lnode4 *n, pt_vec3 p, pt_vec3 nr, int has_nr, float *imp)
 {
-    float ia = pt__lnode_importance(&s->ltree[n->a], p, nr), ib = pt__lnode_importance(&s->ltree[n->b], p, nr);
-    if (!(ia + ib > 0.0f) || !pt__isfinite(ia + ib)) return -1.0f;
-    return ib / (ia + ib);
+    int k;
+    for (k = 0; k < 4; ++k) {
+        pt_vec3 d;
+        float dx = p.x - pt__maxf(n->lo[0][k], pt__minf(p.x, n->hi[0][k]));
+        float dy = p.y - pt__maxf(n->lo[1][k], pt__minf(p.y, n->hi[1][k]));
+        float dz = p.z - pt__maxf(n->lo[2][k], pt__minf(p.z, n->hi[2][k]));
+        float dmin2 = dx * dx + dy * dy + dz * dz, inv = dmin2 > 0.0f ? 1.0f / sqrtf(dmin2) : 0.0f;
+        float cos_p = 1.0f, cos_r = 1.0f, rd2;
+        d = pt_sub(p, pt_v3(n->centre[0][k], n->centre[1][k], n->centre[2][k]));
+        rd2 = 1.0f / pt__maxf(pt__maxf(pt_length2(d), n->r2[k]), FLT_MIN);
+        imp[k] = 0.0f;
+        if (n->cos_o[k] > -1.0f) {
+            float num = pt__maxf(n->axis[0][k] * p.x + n->axis[1][k] * p.y + n->axis[2][k] * p.z - n->pmin[k], 0.0f);
+            if (dmin2 > 0.0f && num * inv < n->cos_o[k])
+                cos_p = (num * n->cos_o[k] + pt__safe_sqrt(dmin2 - num * num) * n->sin_o[k]) * inv;
+            if (cos_p <= n->cos_e[k]) continue;
+        }
+        if (has_nr) {
+            float r = nr.x * (nr.x > 0.0f ? n->hi[0][k] : n->lo[0][k]) + nr.y * (nr.y > 0.0f ? n->hi[1][k] : n->lo[1][k]) +
+                      nr.z * (nr.z > 0.0f ? n->hi[2][k] : n->lo[2][k]) - pt_dot(nr, p);
+            if (r <= 0.0f) continue;
+            cos_r = dmin2 > 0.0f ? pt__minf(1.0f, r * inv) : 1.0f;
+        }
+        imp[k] = n->power[k] * cos_p * cos_r * rd2;
+    }
 }
+#endif
+/* One level of the descent from node n: the children's importances, their running sums c (c[3]
+   the total) and 0 when no child can light p. */
+static PT__HOT int pt__lnode4_level(const pt__lnode4 *n, pt_vec3 p, pt_vec3 nr, int has_nr, float *imp, float *c)
+{
+    pt__lnode4_importance(n, p, nr, has_nr, imp);
+    c[0] = imp[0];
+    c[1] = c[0] + imp[1];
+    c[2] = c[1] + imp[2];
+    c[3] = c[2] + imp[3];
+    return c[3] > 0.0f && pt__isfinite(c[3]);
+}
+static int pt__has_normal(pt_vec3 nr) { return nr.x != 0.0f || nr.y != 0.0f || nr.z != 0.0f; }
 static PT__HOT int pt__tree_pick(const pt_scene *s, pt_vec3 p, pt_vec3 nr, float u, uint32_t *light, float *pmf)
 {
-    const pt__lnode *n = &s->ltree[0];
-    float prob = 1.0f;
-    while (n->b != PT__LNODE_LEAF) {
-        float pb = pt__lnode_p_b(s, n, p, nr);
-        if (pb < 0.0f) return 0;
-        if (u >= 1.0f - pb) { /* child b takes the top of [0, 1) */
-            u = pb > 0.0f ? pt__minf((u - (1.0f - pb)) / pb, 0.99999994f) : 0.0f;
-            prob *= pb;
-            n = &s->ltree[n->b];
-        } else {
-            u = pt__minf(u / (1.0f - pb), 0.99999994f);
-            prob *= 1.0f - pb;
-            n = &s->ltree[n->a];
+    const pt__lnode4 *n = &s->ltree[0];
+    const int has_nr = pt__has_normal(nr);
+    float prob = 1.0f, imp[4], c[4];
+    for (;;) {
+        float t, below;
+        int k;
+        uint32_t child;
+        if (!pt__lnode4_level(n, p, nr, has_nr, imp, c)) return 0;
+        /* the first child whose running sum exceeds u x total: the number of sums at most that (a
+           child that cannot light p adds nothing, so it is passed over); where rounding puts u x
+           total at or past the total, the last child that can light p */
+        t = u * c[3];
+        k = (c[0] <= t) + (c[1] <= t) + (c[2] <= t) + (c[3] <= t);
+        if (PT__UNLIKELY(k > 3)) for (k = 3; !(imp[k] > 0.0f); --k) {}
+        below = k ? c[k - 1] : 0.0f;
+        prob *= imp[k] / c[3];
+        u = pt__minf((t - below) / imp[k], 0.99999994f);
+        child = n->child[k];
+        if (child & PT__LCHILD_LIGHT) {
+            *light = child & ~PT__LCHILD_LIGHT;
+            *pmf = prob;
+            return prob > 0.0f;
         }
+        n = &s->ltree[child];
     }
-    *light = n->a;
-    *pmf = prob;
-    return prob > 0.0f;
 }
 /* The probability that light li is picked from p with receiver normal nr (mode: PT__LIGHTS_*). */
 static float pt__light_pmf(const pt_scene *s, pt_vec3 p, pt_vec3 nr, uint32_t li, unsigned mode)
 {
-    const pt__lnode *n;
+    const pt__lnode4 *n;
+    const int has_nr = pt__has_normal(nr);
     uint64_t trail;
-    float prob = 1.0f;
+    float prob = 1.0f, imp[4], c[4];
     if (!s->ltree || !(mode & PT__LIGHTS_TREE)) return s->lights[li].select_pdf;
     n = &s->ltree[0];
     trail = s->ltrail[li];
-    while (n->b != PT__LNODE_LEAF) {
-        float pb = pt__lnode_p_b(s, n, p, nr);
-        if (pb < 0.0f) return 0.0f;
-        prob *= (trail & 1u) ? pb : 1.0f - pb;
-        n = &s->ltree[(trail & 1u) ? n->b : n->a];
-        trail >>= 1;
+    for (;;) {
+        uint32_t k = (uint32_t)(trail & 3u), child;
+        if (!pt__lnode4_level(n, p, nr, has_nr, imp, c)) return 0.0f;
+        prob *= imp[k] / c[3];
+        child = n->child[k];
+        if (child & PT__LCHILD_LIGHT) return prob;
+        n = &s->ltree[child];
+        trail >>= 2;
     }
-    return prob;
 }
 
 /* Picks a light (by the tree, or by power) and samples it: ls->pdf is P_i * p_i(dir). */
@@ -6841,23 +6916,23 @@ static uint32_t pt__ltree_split(const pt__lnode *info, pt__lkey *keys, uint32_t 
     }
     return begin + n / 2u;
 }
-static uint32_t pt__ltree_node(pt_scene *s, const pt__lnode *info, pt__lkey *keys, uint32_t begin, uint32_t end,
-                               uint32_t depth, uint64_t trail)
+/* Builds the binary tree over keys[begin, end) into bin; returns the node's index. */
+static uint32_t pt__ltree_node(pt__lnode *bin, uint32_t *count, const pt__lnode *info, pt__lkey *keys, uint32_t begin,
+                               uint32_t end, uint32_t depth)
 {
-    uint32_t n = s->ltree_count++, mid, a, b;
-    pt__lnode *node = &s->ltree[n];
+    uint32_t n = (*count)++, mid, a, b;
+    pt__lnode *node = &bin[n];
     if (end - begin == 1) {
         *node = info[keys[begin].light];
-        s->ltrail[keys[begin].light] = trail;
     } else {
         mid = pt__ltree_split(info, keys, begin, end, depth);
-        a = pt__ltree_node(s, info, keys, begin, mid, depth + 1u, trail);
-        b = pt__ltree_node(s, info, keys, mid, end, depth + 1u, trail | ((uint64_t)1 << depth));
-        node = &s->ltree[n]; /* (s->ltree does not move: allocated whole) */
-        node->lo = pt__vmin(s->ltree[a].lo, s->ltree[b].lo);
-        node->hi = pt__vmax(s->ltree[a].hi, s->ltree[b].hi);
-        node->power = s->ltree[a].power + s->ltree[b].power;
-        pt__cone_union(node, &s->ltree[a], &s->ltree[b]);
+        a = pt__ltree_node(bin, count, info, keys, begin, mid, depth + 1u);
+        b = pt__ltree_node(bin, count, info, keys, mid, end, depth + 1u);
+        node = &bin[n];
+        node->lo = pt__vmin(bin[a].lo, bin[b].lo);
+        node->hi = pt__vmax(bin[a].hi, bin[b].hi);
+        node->power = bin[a].power + bin[b].power;
+        pt__cone_union(node, &bin[a], &bin[b]);
         node->a = a;
         node->b = b;
     }
@@ -6869,34 +6944,108 @@ static uint32_t pt__ltree_node(pt_scene *s, const pt__lnode *info, pt__lkey *key
                  node->axis.z * (node->axis.z > 0.0f ? node->lo.z : node->hi.z);
     return n;
 }
+/* The children of the 4-wide node made from binary node b: b's grandchildren, or a child of b
+   itself where it is a light. */
+static int pt__ltree_quad(const pt__lnode *bin, uint32_t b, uint32_t *list)
+{
+    int i, n = 0;
+    const uint32_t kids[2] = {bin[b].a, bin[b].b};
+    for (i = 0; i < 2; ++i) {
+        const pt__lnode *c = &bin[kids[i]];
+        if (c->b == PT__LNODE_LEAF) {
+            list[n++] = kids[i];
+        } else {
+            list[n++] = c->a;
+            list[n++] = c->b;
+        }
+    }
+    return n;
+}
+static uint32_t pt__ltree_quad_count(const pt__lnode *bin, uint32_t b)
+{
+    uint32_t list[4], total = 1;
+    int i, n = pt__ltree_quad(bin, b, list);
+    for (i = 0; i < n; ++i)
+        if (bin[list[i]].b != PT__LNODE_LEAF) total += pt__ltree_quad_count(bin, list[i]);
+    return total;
+}
+/* Makes s->ltree's node for binary node b at 4-wide depth `depth`; a light's trail gets its
+   child's lane in bits 2 depth and 2 depth + 1 (depth < 32: the binary tree is at most 62 deep). */
+static uint32_t pt__ltree_collapse(pt_scene *s, const pt__lnode *bin, uint32_t b, uint32_t depth, uint64_t trail)
+{
+    uint32_t m = s->ltree_count++, list[4];
+    int k, n = pt__ltree_quad(bin, b, list);
+    pt__lnode4 *node = &s->ltree[m];
+    memset(node, 0, sizeof *node);
+    for (k = 0; k < 4; ++k) { /* empty children: no power, no cone */
+        node->r2[k] = 1.0f;
+        node->cos_o[k] = -1.0f;
+        node->child[k] = PT__LCHILD_LIGHT;
+    }
+    for (k = 0; k < n; ++k) {
+        const pt__lnode *x = &bin[list[k]];
+        uint64_t t = trail | ((uint64_t)k << (2u * depth));
+        node->lo[0][k] = x->lo.x;
+        node->lo[1][k] = x->lo.y;
+        node->lo[2][k] = x->lo.z;
+        node->hi[0][k] = x->hi.x;
+        node->hi[1][k] = x->hi.y;
+        node->hi[2][k] = x->hi.z;
+        node->centre[0][k] = x->centre.x;
+        node->centre[1][k] = x->centre.y;
+        node->centre[2][k] = x->centre.z;
+        node->axis[0][k] = x->axis.x;
+        node->axis[1][k] = x->axis.y;
+        node->axis[2][k] = x->axis.z;
+        node->r2[k] = x->r2;
+        node->cos_o[k] = x->cos_o;
+        node->sin_o[k] = x->sin_o;
+        node->cos_e[k] = x->cos_e;
+        node->pmin[k] = x->pmin;
+        node->power[k] = x->power;
+        if (x->b == PT__LNODE_LEAF) {
+            node->child[k] = PT__LCHILD_LIGHT | x->a;
+            s->ltrail[x->a] = t;
+        } else {
+            uint32_t c = pt__ltree_collapse(s, bin, list[k], depth + 1u, t);
+            s->ltree[m].child[k] = c; /* (s->ltree does not move: allocated whole) */
+        }
+    }
+    return m;
+}
 static int pt__ltree_build(pt_scene *s)
 {
     pt__lkey *keys;
-    pt__lnode *info;
-    uint32_t i;
+    pt__lnode *info, *bin;
+    uint32_t i, count = 0;
     PT_FREE(s->ltree);
     PT_FREE(s->ltrail);
     s->ltree = NULL;
     s->ltrail = NULL;
     s->ltree_count = 0;
     if (s->light_count < PT__LIGHT_TREE_MIN) return PT_OK;
-    s->ltree = (pt__lnode *)PT_MALLOC(sizeof(pt__lnode) * (2u * (size_t)s->light_count - 1u));
     s->ltrail = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * s->light_count);
     keys = (pt__lkey *)PT_MALLOC(sizeof(pt__lkey) * s->light_count);
     info = (pt__lnode *)PT_MALLOC(sizeof(pt__lnode) * s->light_count);
-    if (!s->ltree || !s->ltrail || !keys || !info) {
-        PT_FREE(keys);
-        PT_FREE(info);
-        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory (light tree of %u lights)", (unsigned)s->light_count);
+    bin = (pt__lnode *)PT_MALLOC(sizeof(pt__lnode) * (2u * (size_t)s->light_count - 1u));
+    if (s->ltrail && keys && info && bin) {
+        for (i = 0; i < s->light_count; ++i) {
+            keys[i].light = i;
+            keys[i].key = 0.0f;
+            pt__lnode_of_light(s, i, &info[i]);
+        }
+        pt__ltree_node(bin, &count, info, keys, 0, s->light_count, 0);
+        s->ltree = (pt__lnode4 *)PT_MALLOC(sizeof(pt__lnode4) * pt__ltree_quad_count(bin, 0));
+        if (s->ltree) pt__ltree_collapse(s, bin, 0, 0, 0);
     }
-    for (i = 0; i < s->light_count; ++i) {
-        keys[i].light = i;
-        keys[i].key = 0.0f;
-        pt__lnode_of_light(s, i, &info[i]);
-    }
-    pt__ltree_node(s, info, keys, 0, s->light_count, 0, 0);
     PT_FREE(keys);
     PT_FREE(info);
+    PT_FREE(bin);
+    if (!s->ltree) {
+        PT_FREE(s->ltrail);
+        s->ltrail = NULL;
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory (light tree of %u lights)", (unsigned)s->light_count);
+    }
     return PT_OK;
 }
 

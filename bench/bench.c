@@ -1821,6 +1821,7 @@ static double equal_error_ratio(const double *pr, const double *v_on, const doub
    the general path kept at weight 1 / (1 - light_weight)), which few samples miss, so their
    equal-error ratio drifts toward 1 at low spp (FACING_AWAY on the Cornell box: 0.96 at 8
    spp x 17 pairs, 0.85 at 16 x 31, 0.78 at 128 x 31). */
+static int find_scene(const char *name);
 static int run_skips(const config *cfg, results *R, skip_results *S)
 {
     const double t_exact = cfg->quick ? 0.06 : 0.2, t_est = cfg->quick ? 0.18 : 0.5;
@@ -1852,6 +1853,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         int spp = 1, r, i, b, n_mean = 0, idx[SKIP_REPS_MAX];
         uint64_t rs = 0x5c1b5ULL + (uint64_t)c;
         size_t p;
+        if (find_scene(sk->scene_name) >= 0 && !cfg->scene_on[find_scene(sk->scene_name)]) continue; /* --scenes */
         memset(&bs, 0, sizeof bs);
         memset(&fst, 0, sizeof fst);
         bs.name = sk->scene_name;
