@@ -135,7 +135,8 @@
      (spherical rectangles, section 2) instead of by area. PT_SKIP_SOLID_ANGLE_QUADS (a better
      estimator rather than less work, measured the same way).
    - many emitting shapes (16 or more): the light for next-event estimation is picked by a light
-     tree (power, distance, orientation; section 2) rather than by power alone.
+     tree (power, distance, the lights' orientation and the receiver's; section 2) rather than
+     by power alone.
      PT_SKIP_LIGHT_TREE.
    - no point, spot or directional light: no delta-light estimate (one test per vertex; not a
      switchable skip, since the general path would add nothing).
@@ -371,7 +372,7 @@ typedef struct pt_pdf {
         struct { pt_vec3 center; float radius; int two_sided; } sphere;
         struct { pt_vec3 q, u, v; int two_sided; } quad;
         struct { pt_vec3 a, b, c; int two_sided; } triangle;
-        struct { const struct pt_scene *scene; } lights;
+        struct { const struct pt_scene *scene; pt_vec3 normal; } lights; /* normal: unit, or 0 */
         struct { const struct pt_scene *scene; int material; pt_vec3 normal, wo; } material;
         struct { int count; const struct pt_pdf *components; const float *weights; } mixture;
         struct { void *user; pt_pdf_sample_fn sample; pt_pdf_value_fn value; } callback;
@@ -398,6 +399,11 @@ PTDEF pt_pdf pt_pdf_triangle_light(pt_vec3 origin, pt_vec3 a, pt_vec3 b, pt_vec3
    sampling them fails (returns 0), which keeps every estimator that uses it unbiased. Emitting
    shapes only: the environment light's density is pt_pdf_environment. */
 PTDEF pt_pdf pt_pdf_scene_lights(const struct pt_scene *scene, pt_vec3 origin);
+/* The same at a point of a surface that reflects only on the side of `normal` (world, any
+   length; the zero vector: none, as pt_pdf_scene_lights): no light is picked for its part
+   below that plane, which sharpens the light tree's choice (a render does this at every
+   vertex of a reflecting material). */
+PTDEF pt_pdf pt_pdf_scene_lights_at(const struct pt_scene *scene, pt_vec3 origin, pt_vec3 normal);
 /* The directional density with which a render samples the environment light of a committed
    scene (pt_scene_set_environment) under a constant background radiance `background`
    (pt_render_desc.background): the map's piecewise-constant density mixed with the uniform
@@ -2796,9 +2802,9 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
     return lo;
 }
 
-/* --- light tree: a light is picked by descending a binary tree over the lights, choosing each
-   child in proportion to a conservative estimate of what its lights can send to the shading point
-   (power, distance and orientation: Conty Estevez & Kulla, "Importance Sampling of Many Lights
+/* --- light tree: a light is picked by descending a tree over the lights (four children per
+   node), choosing each child in proportion to a conservative estimate of what its lights can send
+   to the shading point (power, distance and orientation: Conty Estevez & Kulla, "Importance Sampling of Many Lights
    with Adaptive Tree Splitting", 2018, as in pbrt-v4's light BVH). The orientation bounds are
    taken over the node's box rather than its bounding sphere, which keeps them tight for rows and
    planes of lights, and include the receiver's normal where the caller knows it (the same normal
@@ -3195,6 +3201,14 @@ PTDEF pt_pdf pt_pdf_scene_lights(const pt_scene *scene, pt_vec3 origin)
     pt_pdf p = pt__pdf_blank(PT_PDF_SCENE_LIGHTS);
     p.origin = origin;
     p.as.lights.scene = scene;
+    p.as.lights.normal = pt_v3(0.0f, 0.0f, 0.0f);
+    return p;
+}
+PTDEF pt_pdf pt_pdf_scene_lights_at(const pt_scene *scene, pt_vec3 origin, pt_vec3 normal)
+{
+    pt_pdf p = pt_pdf_scene_lights(scene, origin);
+    float l2 = pt_length2(normal);
+    if (l2 > 0.0f && pt__isfinite(l2)) p.as.lights.normal = pt_scale(normal, 1.0f / sqrtf(l2));
     return p;
 }
 PTDEF pt_pdf pt_pdf_environment(const pt_scene *scene, pt_color background)
@@ -4003,8 +4017,8 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     }
     case PT_PDF_SCENE_LIGHTS:
         if (pdf->as.lights.scene && pdf->as.lights.scene->committed)
-            v = pt__lights_value(pdf->as.lights.scene, pt__to_local(pdf->as.lights.scene, pdf->origin), pt_v3(0.0f, 0.0f, 0.0f), w,
-                                 PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
+            v = pt__lights_value(pdf->as.lights.scene, pt__to_local(pdf->as.lights.scene, pdf->origin),
+                                 pdf->as.lights.normal, w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
         break;
     case PT_PDF_MATERIAL:
         if (pdf->as.material.scene && pdf->as.material.material >= 0 &&
@@ -4091,11 +4105,12 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         pt_vec3 o;
         if (!pdf->as.lights.scene || !pdf->as.lights.scene->committed) break;
         o = pt__to_local(pdf->as.lights.scene, pdf->origin);
-        ok = pt__lights_sample(pdf->as.lights.scene, o, pt_v3(0.0f, 0.0f, 0.0f), u0, u1, u2, &ls, &li, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
+        ok = pt__lights_sample(pdf->as.lights.scene, o, pdf->as.lights.normal, u0, u1, u2, &ls, &li,
+                               PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
         if (ok) {
             w = ls.dir;
             /* the density of the direction over all lights, not the picked one's alone */
-            p = pt__lights_value(pdf->as.lights.scene, o, pt_v3(0.0f, 0.0f, 0.0f), w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
+            p = pt__lights_value(pdf->as.lights.scene, o, pdf->as.lights.normal, w, PT__LIGHTS_SPHERICAL | PT__LIGHTS_TREE);
             ok = p > 0.0f;
         }
         break;
@@ -7583,7 +7598,7 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
     }
 }
 
-/* The receiver normal of the light tree's choice at vertex v (pt__lnode_importance): none of
+/* The receiver normal of the light tree's choice at vertex v (pt__lnode4_importance): none of
    these materials reflects light from below ng (pt__material_eval); any other material gets none. */
 static pt_vec3 pt__receiver_normal(const pt__vertex *v)
 {

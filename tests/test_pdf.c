@@ -672,9 +672,11 @@ static int which_light(const scene_ref *s, dv3 o, dv3 w)
    spanning 1 : 40. The
    combined density sum_i P_i(o) p_i(w) of pt_pdf_scene_lights (P_i the tree's probability at o) by
    chi-square from below the grid, near a corner of it, and from above it (the grid faces away:
-   only the spheres, two-sided quads and some triangles can be picked). Then the tree's samples
-   paired with the power-proportional density (a PMF that ignores distance and orientation) must be
-   rejected. */
+   only the spheres, two-sided quads and some triangles can be picked), and with a receiver normal
+   (pt_pdf_scene_lights_at: the tree leaves out what lies below the surface) at each of them. Then
+   the tree's samples paired with the power-proportional density (a PMF that ignores distance and
+   orientation) must be rejected, and so must the samples drawn with a normal paired with the
+   density without it. */
 typedef struct tree_light { int kind; pt_vec3 a, b, c; float r, L; int two; } tree_light;
 #define TREE_LIGHTS 24
 static int tree_lights(tree_light *tl)
@@ -707,6 +709,16 @@ static double tree_light_power(const tree_light *l)
     return l->L * 0.5 * pt_length(pt_cross(pt_sub(l->b, l->a), pt_sub(l->c, l->a))) * TU_PI;
 }
 typedef struct power_user { pt_pdf tree; const tree_light *tl; int n; double total; pt_vec3 o; } power_user;
+/* Samples of one PDF with the density of another (a deliberately wrong pair). */
+typedef struct pdf_pair { pt_pdf sampled, claimed; } pdf_pair;
+static int pair_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
+{
+    const pdf_pair *u = (const pdf_pair *)user;
+    if (!pt_pdf_sample(&u->sampled, rng, dir, pdf)) return 0;
+    *pdf = pt_pdf_value(&u->claimed, *dir);
+    return *pdf > 0.0f;
+}
+static float pair_value(void *user, pt_vec3 dir) { return pt_pdf_value(&((const pdf_pair *)user)->claimed, dir); }
 static float power_density(const power_user *u, pt_vec3 w)
 {
     double v = 0.0;
@@ -735,6 +747,7 @@ static void pdf_light_tree(test_ctx *t)
     pt_scene *s = pt_scene_create();
     const pt_vec3 origins[3] = {{-0.4f, 0.5f, 0.3f}, {2.2f, 2.6f, 1.4f}, {0.1f, 4.5f, 0.2f}};
     const char *names[3] = {"below the grid", "near a corner of the grid", "above the grid (it faces away)"};
+    const pt_vec3 normals[3] = {{0.0f, 1.0f, 0.0f}, {1.0f, -0.2f, 0.0f}, {0.3f, -1.0f, 0.2f}};
     int n = tree_lights(tl), i, rc = 0;
     double total = 0.0;
     agg a;
@@ -750,12 +763,12 @@ static void pdf_light_tree(test_ctx *t)
         pt_scene_destroy(s);
         return;
     }
-    for (i = 0; i < 3; i++) {
+    for (i = 0; i < 6; i++) {
         char label[96];
-        pt_pdf p = pt_pdf_scene_lights(s, origins[i]);
+        pt_pdf p = i < 3 ? pt_pdf_scene_lights(s, origins[i]) : pt_pdf_scene_lights_at(s, origins[i - 3], normals[i - 3]);
         tu_pdf_check c;
         tu_pdf_result r;
-        snprintf(label, sizeof label, "light tree, %s", names[i]);
+        snprintf(label, sizeof label, "light tree, %s%s", names[i % 3], i < 3 ? "" : ", with a normal");
         c = base_check(label, &p, 620 + (uint64_t)i);
         c.expected_mass = -1.0; /* a one-sided light behind the point may be picked (the tree's bound is
                                    conservative) and its sample fails */
@@ -784,6 +797,24 @@ static void pdf_light_tree(test_ctx *t)
         failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
         CHECK(t, failures > 0, "the power density with the tree's samples was not rejected (chi2 p = %.3g)", r.chi2_p);
         test_note(t, "wrong PMF rejected by %d check(s), chi2 p = %.3g", failures, r.chi2_p);
+    }
+    {   /* samples picked with the receiver's normal, the density of the pick without it */
+        pdf_pair u;
+        pt_pdf p;
+        tu_pdf_check c;
+        tu_pdf_result r;
+        char reason[768];
+        int failures;
+        u.sampled = pt_pdf_scene_lights_at(s, origins[1], normals[1]);
+        u.claimed = pt_pdf_scene_lights(s, origins[1]);
+        p = pt_pdf_callback(&u, pair_sample, pair_value);
+        c = base_check("WRONG: light-tree samples with a normal, density without it", &p, 999);
+        c.expected_mass = -1.0;
+        issue3(&c, 12, 25);
+        c.n_samples = 50000;
+        failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
+        CHECK(t, failures > 0, "the density without the normal was not rejected (chi2 p = %.3g)", r.chi2_p);
+        test_note(t, "PMF without the normal rejected by %d check(s), chi2 p = %.3g", failures, r.chi2_p);
     }
     agg_note(t, &a);
     pt_scene_destroy(s);

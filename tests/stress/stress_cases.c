@@ -998,6 +998,53 @@ void st_light_geometry(st_ctx *c)
         st_strategies_vs(c, cas, s, &cam, W, c->full ? 256 : 64, 0, 1.0, 2, 500 + 10 * (uint64_t)pi, &nonfinite);
         pt_scene_destroy(s);
     }
+    /* (a') the same furnace built of 96 one-sided quads facing in (4 x 4 on each side: the light
+       tree picks among them, its bounds taken over boxes of every size at these scales); the
+       radiance inside is again Le / (1 - rho) = 1 */
+    for (pi = 1; pi < 4; pi++) {
+        st_place pl;
+        pt_scene *s = pt_scene_create();
+        pt_material_desc md;
+        int m, f, i, j, rc = 0;
+        char cas[64];
+        pl.s = ss[pi];
+        pl.off = pi == 3 ? dv(1e6, -1e6, 1e6) : dv(0, 0, 0);
+        pl.name = pi == 1 ? "x1e-6" : pi == 2 ? "x1e+6" : "x1e+3 at 1e6";
+        memset(&md, 0, sizeof md);
+        md.type = PT_MATERIAL_LAMBERTIAN;
+        md.albedo = pt_v3(0.5f, 0.5f, 0.5f);
+        md.emission = pt_v3(0.5f, 0.5f, 0.5f);
+        m = pt_scene_add_material(s, &md);
+        for (f = 0; f < 6; f++) {
+            /* side f: axis a at -1 (f even) or +1 (f odd); tiles span the other two axes, u x v
+               pointing into the box */
+            const int a = f / 2, b = (a + 1) % 3, cc = (a + 2) % 3, sgn = (f % 2) ? 1 : -1;
+            for (i = 0; i < 4; i++)
+                for (j = 0; j < 4; j++) {
+                    double q[3], u[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+                    q[a] = sgn;
+                    q[b] = -1.0 + 0.5 * i;
+                    q[cc] = -1.0 + 0.5 * j;
+                    /* e_b x e_c = +e_a: into the box on side -1; swapped on side +1 */
+                    if (sgn < 0) { u[b] = 0.5; v[cc] = 0.5; }
+                    else { u[cc] = 0.5; v[b] = 0.5; }
+                    if (pt_scene_add_quad(s, sp_p(&pl, q[0], q[1], q[2]), sp_v(&pl, u[0], u[1], u[2]),
+                                          sp_v(&pl, v[0], v[1], v[2]), m) < 0) rc = -1;
+                }
+        }
+        if (rc < 0 || pt_scene_commit(s) != PT_OK) {
+            st_row(c, 0, "emitting tiles", "built", "PT_OK", "%s", pt_scene_error_message(s));
+            pt_scene_destroy(s);
+            continue;
+        }
+        memset(&cam, 0, sizeof cam);
+        cam.look_from = sp_p(&pl, -0.5, -0.3, -0.6);
+        cam.look_at = sp_p(&pl, 1, 1, 1);
+        cam.vfov_degrees = 100;
+        snprintf(cas, sizeof cas, "96 emitting tiles %s", pl.name);
+        st_strategies_vs(c, cas, s, &cam, W, c->full ? 256 : 64, 0, 1.0, 2, 540 + 10 * (uint64_t)pi, &nonfinite);
+        pt_scene_destroy(s);
+    }
     /* (b) lights at the horizon: a one-sided sphere light centred on the floor (half below it)
        and a quad light standing on the floor, emitting along it; the floor sees both down to
        its horizon */
