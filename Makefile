@@ -562,6 +562,20 @@ check-warnings: | $(BUILD)
 	else \
 	    echo "SKIP the PDFTRACE_PNG variants: pkg-config finds no libpng (apt-get install libpng-dev)"; \
 	fi; \
+	if [ -n "$(MPI_FOUND)" ]; then \
+	    for cc in $(WARN_CC); do \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_MPI tools/pdftrace.c bench/mpi_gather.c (pdftrace_mpi.h)"; \
+	        $$cc $(WARN_CFLAGS) -I. -DPDFTRACE_MPI $(MPI_CFLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-mpi.o; \
+	        $$cc $(WARN_CFLAGS) -I. $(MPI_CFLAGS) $(PT_THREADS) -c bench/mpi_gather.c -o $(BUILD)/warn-$$cc-mpi-gather.o; \
+	    done; \
+	    for cxx in $(WARN_CXX); do \
+	        echo "$$cxx $(WARN_CXXFLAGS) pdftrace_mpi.h as C++"; \
+	        printf '#define PDFTRACE_IMPLEMENTATION\n#define PDFTRACE_MPI_IMPLEMENTATION\n#include "pdftrace_mpi.h"\n' | \
+	            $$cxx $(WARN_CXXFLAGS) -I. $(MPI_CFLAGS) $(PT_THREADS) -c - -o $(BUILD)/warn-$$cxx-mpi.o; \
+	    done; \
+	else \
+	    echo "SKIP the PDFTRACE_MPI variants: no $(MPICC) ($(MPI_INSTALL))"; \
+	fi; \
 	echo "the family headers' implementations in files of their own, linked with the core's:"; \
 	for cc in $(WARN_CC); do \
 	    printf '#define PDFTRACE_SCENE_IMPLEMENTATION\n#include "pdftrace_scene.h"\n' | \

@@ -34,6 +34,7 @@
        pdftrace_scene.h   PDFTRACE_SCENE_IMPLEMENTATION   scene files, OBJ meshes, POV-Ray and Mitsuba export
        pdftrace_exr.h     PDFTRACE_EXR_IMPLEMENTATION     OpenEXR output and input (OpenEXRCore)
        pdftrace_png.h     PDFTRACE_PNG_IMPLEMENTATION     PNG output (libpng)
+       pdftrace_mpi.h     PDFTRACE_MPI_IMPLEMENTATION     a render split over MPI ranks (section 8's merge hook)
 
    OPTIONS (define before including the implementation)
    =======
@@ -105,8 +106,8 @@
    5c. Commit and ray queries (implementation only; declared in section 3)
    6. Camera
    7. Integrator (strategies, Russian roulette, splitting)
-   8. Rendering (tiles, threads, passes, adaptive sampling, guiding's training, statistics; the
-      film and images)
+   8. Rendering (tiles, threads, passes, adaptive sampling, guiding's training, splitting a render
+      over processes, statistics; the film and images)
    9. Output (sRGB, PFM and PPM writers)
    The measurements behind the implementation's tuned choices: docs/internals.md.
 
