@@ -114,7 +114,8 @@ TSANFLAGS ?= -O1 -g -fsanitize=thread
 TSAN_TESTS ?= render.threads_bit_identical render.progressive_equals_single render.cancellation_and_progress \
               render.concurrent_renders render.render_counts adaptive.threads_bit_identical \
               sampler.render_deterministic materials.furnace_spheres embree.embree_fp_state \
-              guide.render_threads_bit_identical guide.guide_order_independent lights.env_threads
+              guide.render_threads_bit_identical guide.guide_order_independent lights.env_threads \
+              split.split_adaptive_equals_whole
 
 # check-warnings: the compilers and flags it uses.
 WARN_CC      ?= gcc clang

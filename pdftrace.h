@@ -1123,7 +1123,8 @@ typedef struct pt_render_desc {
        to the film in part order (pt_film_add) gives the whole render's film bit for bit, for every
        sampler, strategy and splitting setting. Adaptive sampling needs merge: its decisions are
        made from the merged film, the same on every part. With merge, part 0's film ends holding
-       the whole render; without, and on the other parts, each film gets its own part's samples.
+       the whole render; without, on the other parts, and after a cancel, each film gets its own
+       part's samples (a cancel on one part leaves the others waiting in the hook).
        Not with guiding (PT_ERROR_UNSUPPORTED: section 8 says why). */
     int split_parts;             /* 0 or 1: the whole render; at most 65536 */
     int split_part;              /* 0 .. split_parts - 1 */
@@ -9001,8 +9002,9 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
         run.split = &split;
     if (result == PT_OK) {
         result = pt__render_passes(&ps, &ad, d, &run);
-        if (run.split && (result == PT_OK || result == PT_ERROR_CANCELLED) && !pt__split_finish(&split, d, film))
-            run.merge_failed = 1;
+        if (run.split && result == PT_OK && !pt__split_finish(&split, d, film)) run.merge_failed = 1;
+        if (run.split && result == PT_ERROR_CANCELLED) /* its own samples only: the other parts are elsewhere */
+            pt__film_add_raw(film, &split.part, split.np);
         if (run.merge_failed) result = pt__msg(err, en, PT_ERROR_IO, "pt_render: the merge hook of a split render failed");
         pt__render_end_stats(&ad, d, film, &run);
 #ifndef PDFTRACE_NO_THREADS
