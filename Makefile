@@ -21,6 +21,13 @@
 #                         1 on (an error without libpng)
 #   make TOOL_EXR=0|1 ... OpenEXR output in build/pdftrace: auto (default) when pkg-config finds
 #                         OpenEXR, unless OPENEXR=0 is given on the command line; 0 off, 1 on
+#   make MPI=1 ...        build build/pdftrace with PDFTRACE_MPI (pdftrace_mpi.h): it then runs under
+#                         mpirun, one render split over the ranks, bit-identical to one process
+#                         (docs/mpi.md; needs libopenmpi-dev, or MPICH with MPI_CFLAGS/MPI_LIBS). Default 0.
+#   make mpi-test         build $(BUILD)/pdftrace_mpi and compare 1, 2 and 3 ranks on localhost byte for
+#                         byte, and the failing-rank cases (tests/mpi/mpi_test.sh; SKIP without MPI)
+#   make bench-mpi        1 rank x 2 threads against 2 ranks x 1 thread, and the gather's time as the
+#                         image grows (bench/mpi.sh, bench/mpi_gather.c -> $(BUILD)/bench-mpi/; needs MPI)
 #   make EMBREE=1 ...     build the examples and test runners with PDFTRACE_EMBREE (Embree 3
 #                         traversal, pdftrace.h section 5b; needs libembree-dev). Default 0.
 #                         Either or both: make OPENEXR=1 EMBREE=1 test (use a separate BUILD=
@@ -107,7 +114,8 @@ TSANFLAGS ?= -O1 -g -fsanitize=thread
 TSAN_TESTS ?= render.threads_bit_identical render.progressive_equals_single render.cancellation_and_progress \
               render.concurrent_renders render.render_counts adaptive.threads_bit_identical \
               sampler.render_deterministic materials.furnace_spheres embree.embree_fp_state \
-              guide.render_threads_bit_identical guide.guide_order_independent lights.env_threads
+              guide.render_threads_bit_identical guide.guide_order_independent lights.env_threads \
+              split.split_adaptive_equals_whole
 
 # check-warnings: the compilers and flags it uses.
 WARN_CC      ?= gcc clang
@@ -157,6 +165,21 @@ PNG_FLAGS := $(if $(PNG_FOUND),-DPDFTRACE_PNG $(shell pkg-config --cflags libpng
 PNG_LIBS  := $(if $(PNG_FOUND),$(shell pkg-config --libs libpng))
 PNG_CPPFLAGS := $(if $(filter 1,$(PNG_ON)),$(PNG_FLAGS))
 PNG_LDLIBS   := $(if $(filter 1,$(PNG_ON)),$(PNG_LIBS))
+# MPI (pdftrace_mpi.h): compile and link flags from Open MPI's mpicc wrapper (MPICH: set
+# MPI_CFLAGS and MPI_LIBS from `mpicc -show`). MPI=1 puts them into build/pdftrace; make mpi-test
+# builds $(BUILD)/pdftrace_mpi with them whatever MPI says.
+MPI        ?= 0
+MPICC      ?= mpicc
+MPIRUN     ?= mpirun
+MPI_FOUND  := $(shell command -v $(MPICC) >/dev/null 2>&1 && command -v $(MPIRUN) >/dev/null 2>&1 && echo 1)
+MPI_CFLAGS ?= $(patsubst -I%,-isystem %,$(shell $(MPICC) --showme:compile 2>/dev/null))
+MPI_LIBS   ?= $(shell $(MPICC) --showme:link 2>/dev/null)
+MPI_INSTALL := apt-get install -y libopenmpi-dev openmpi-bin
+ifeq ($(MPI),1)
+$(if $(MPI_FOUND),,$(error MPI=1: no $(MPICC) and $(MPIRUN) ($(MPI_INSTALL))))
+else ifneq ($(MPI),0)
+$(error MPI must be 0 or 1, not '$(MPI)')
+endif
 # build/pdftrace's OpenEXR output: auto = when pkg-config finds OpenEXR, unless OPENEXR=0 is
 # given on the command line (OPENEXR's own default, 0, is for the test runners and examples).
 TOOL_EXR  ?= $(if $(filter command line,$(origin OPENEXR)),$(OPENEXR),auto)
@@ -173,9 +196,15 @@ endif
 # (with OPENEXR=1 the EXR flags are in PT_CPPFLAGS already)
 TOOL_CPPFLAGS := $(PNG_CPPFLAGS) $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_FLAGS)))
 TOOL_LDLIBS   := $(PNG_LDLIBS) $(if $(filter 1,$(TOOL_EXR_ON)),$(if $(filter 1,$(OPENEXR)),,$(EXR_LIBS)))
+TOOL_MPI_CPPFLAGS := $(TOOL_CPPFLAGS) -DPDFTRACE_MPI $(MPI_CFLAGS)
+TOOL_MPI_LDLIBS   := $(TOOL_LDLIBS) $(MPI_LIBS)
+ifeq ($(MPI),1)
+TOOL_CPPFLAGS := $(TOOL_MPI_CPPFLAGS)
+TOOL_LDLIBS   := $(TOOL_MPI_LDLIBS)
+endif
 # Rebuild the examples and runners when an option changes (the file is rewritten only then).
 OPT_STAMP := $(BUILD)/options
-OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON) TOOL_EXR=$(TOOL_EXR_ON)
+OPT_VALUE := OPENEXR=$(OPENEXR) EMBREE=$(EMBREE) PNG=$(PNG_ON) TOOL_EXR=$(TOOL_EXR_ON) MPI=$(MPI)
 
 EXAMPLES     := minimal cornell custom_pdf
 EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
@@ -202,6 +231,33 @@ $(BUILD)/cornell: PT_LDLIBS := $(PNG_LDLIBS) $(PT_LDLIBS)
 # The command-line renderer: PNG per PNG, OpenEXR per TOOL_EXR, Embree per EMBREE.
 $(BUILD)/pdftrace: tools/pdftrace.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
 	$(CC) $(PT_CPPFLAGS) $(TOOL_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(TOOL_LDLIBS) $(PT_LDLIBS)
+
+# The command with MPI, whatever MPI says (make mpi-test, make bench-mpi).
+$(BUILD)/pdftrace_mpi: tools/pdftrace.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
+	@test -n "$(MPI_FOUND)" || { echo "$@: needs MPI ($(MPI_INSTALL))" >&2; exit 1; }
+	$(CC) $(PT_CPPFLAGS) $(TOOL_MPI_CPPFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(TOOL_MPI_LDLIBS) $(PT_LDLIBS)
+
+# make mpi-test: tests/mpi/mpi_test.sh (prints SKIP, and succeeds, without MPI).
+.PHONY: mpi-test bench-mpi
+mpi-test:
+ifeq ($(MPI_FOUND),1)
+	$(MAKE) --no-print-directory $(BUILD)/pdftrace_mpi
+	MPIRUN=$(MPIRUN) tests/mpi/mpi_test.sh $(BUILD)/pdftrace_mpi scenes $(BUILD)/mpi-work
+else
+	@echo "SKIP mpi-test: no MPI ($(MPICC) and $(MPIRUN) not found; as root: $(MPI_INSTALL))"
+endif
+
+# make bench-mpi: bench/mpi.sh (the command at 1 x 2 and 2 x 1) and bench/mpi_gather.c.
+$(BUILD)/bench_mpi_gather: bench/mpi_gather.c $(PT_HEADERS) | $(BUILD)
+	@test -n "$(MPI_FOUND)" || { echo "$@: needs MPI ($(MPI_INSTALL))" >&2; exit 1; }
+	$(CC) -I. $(MPI_CFLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(MPI_LIBS) -lm
+bench-mpi:
+ifeq ($(MPI_FOUND),1)
+	$(MAKE) --no-print-directory $(BUILD)/pdftrace_mpi $(BUILD)/bench_mpi_gather
+	MPIRUN=$(MPIRUN) bench/mpi.sh $(BUILD)/pdftrace_mpi $(BUILD)/bench_mpi_gather $(BUILD)/bench-mpi
+else
+	@echo "SKIP bench-mpi: no MPI ($(MPICC) and $(MPIRUN) not found; as root: $(MPI_INSTALL))"
+endif
 
 # ptsky (tools/sky.c, docs/sky.md): a procedural sky map; PFM always, OpenEXR per TOOL_EXR
 # (the same test as TOOL_CPPFLAGS's, without PNG, which ptsky does not write).
@@ -506,6 +562,20 @@ check-warnings: | $(BUILD)
 	    done; \
 	else \
 	    echo "SKIP the PDFTRACE_PNG variants: pkg-config finds no libpng (apt-get install libpng-dev)"; \
+	fi; \
+	if [ -n "$(MPI_FOUND)" ]; then \
+	    for cc in $(WARN_CC); do \
+	        echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_MPI tools/pdftrace.c bench/mpi_gather.c (pdftrace_mpi.h)"; \
+	        $$cc $(WARN_CFLAGS) -I. -DPDFTRACE_MPI $(MPI_CFLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool-mpi.o; \
+	        $$cc $(WARN_CFLAGS) -I. $(MPI_CFLAGS) $(PT_THREADS) -c bench/mpi_gather.c -o $(BUILD)/warn-$$cc-mpi-gather.o; \
+	    done; \
+	    for cxx in $(WARN_CXX); do \
+	        echo "$$cxx $(WARN_CXXFLAGS) pdftrace_mpi.h as C++"; \
+	        printf '#define PDFTRACE_IMPLEMENTATION\n#define PDFTRACE_MPI_IMPLEMENTATION\n#include "pdftrace_mpi.h"\n' | \
+	            $$cxx $(WARN_CXXFLAGS) -I. $(MPI_CFLAGS) $(PT_THREADS) -c - -o $(BUILD)/warn-$$cxx-mpi.o; \
+	    done; \
+	else \
+	    echo "SKIP the PDFTRACE_MPI variants: no $(MPICC) ($(MPI_INSTALL))"; \
 	fi; \
 	echo "the family headers' implementations in files of their own, linked with the core's:"; \
 	for cc in $(WARN_CC); do \

@@ -34,6 +34,7 @@
        pdftrace_scene.h   PDFTRACE_SCENE_IMPLEMENTATION   scene files, OBJ meshes, POV-Ray and Mitsuba export
        pdftrace_exr.h     PDFTRACE_EXR_IMPLEMENTATION     OpenEXR output and input (OpenEXRCore)
        pdftrace_png.h     PDFTRACE_PNG_IMPLEMENTATION     PNG output (libpng)
+       pdftrace_mpi.h     PDFTRACE_MPI_IMPLEMENTATION     a render split over MPI ranks (section 8's merge hook)
 
    OPTIONS (define before including the implementation)
    =======
@@ -105,8 +106,8 @@
    5c. Commit and ray queries (implementation only; declared in section 3)
    6. Camera
    7. Integrator (strategies, Russian roulette, splitting)
-   8. Rendering (tiles, threads, passes, adaptive sampling, guiding's training, statistics; the
-      film and images)
+   8. Rendering (tiles, threads, passes, adaptive sampling, guiding's training, splitting a render
+      over processes, statistics; the film and images)
    9. Output (sRGB, PFM and PPM writers)
    The measurements behind the implementation's tuned choices: docs/internals.md.
 
@@ -1029,6 +1030,17 @@ typedef enum pt_guiding {
                              pays, else render the rest unguided */
 } pt_guiding;
 
+/* Splitting a render (pt_render_desc.split_parts; section 8, "Splitting a render"). A merge hook
+   combines a buffer that every part of a split render holds at the same point of the render (the
+   same size on every part) in part order: it must leave in `buffer` of part 0, and of every part
+   when `everyone` is 1, the result of
+       acc = part 0's buffer; for p = 1 .. N-1: add(ctx, acc, part p's buffer)
+   (add combines exactly, so any grouping of those calls that keeps the order, e.g. a tree, gives
+   the same bytes). It returns 0, or non-zero when it failed (the render then fails on this part; a
+   distributed driver should end the job, since the other parts wait in the hook). */
+typedef void (*pt_merge_add_fn)(void *ctx, void *acc, const void *part);
+typedef int (*pt_merge_fn)(void *user, void *buffer, size_t bytes, int everyone, pt_merge_add_fn add, void *ctx);
+
 /* The most copies pt_render_desc.indirect_paths may ask for. */
 #define PT_INDIRECT_PATHS_MAX 8
 
@@ -1109,6 +1121,21 @@ typedef struct pt_render_desc {
                                     render trains (on from what it holds) and leaves trained, to be
                                     inspected or reused (one never updated takes the render's
                                     fixed-point unit); NULL: the render makes its own */
+    /* Splitting a render over processes or machines (section 8, "Splitting a render"; the MPI
+       driver in tools/pdftrace.c): with split_parts = N > 1 the call renders part split_part of
+       the render, the samples k of pixel i with (i + k) mod N = split_part (the same sample
+       indices, hence the same random numbers and Sobol points, as the whole render). Every part
+       must get the same scene, desc (but split_part) and film contents. Adding the parts' samples
+       to the film in part order (pt_film_add) gives the whole render's film bit for bit, for every
+       sampler, strategy and splitting setting. Adaptive sampling needs merge: its decisions are
+       made from the merged film, the same on every part. With merge, part 0's film ends holding
+       the whole render; without, on the other parts, and after a cancel, each film gets its own
+       part's samples (a cancel on one part leaves the others waiting in the hook).
+       Not with guiding (PT_ERROR_UNSUPPORTED: section 8 says why). */
+    int split_parts;             /* 0 or 1: the whole render; at most 65536 */
+    int split_part;              /* 0 .. split_parts - 1 */
+    pt_merge_fn merge;           /* optional: the hook that combines the parts (see pt_merge_fn) */
+    void *merge_user;
 } pt_render_desc;
 
 typedef struct pt_render_stats {
@@ -1140,17 +1167,25 @@ typedef struct pt_render_stats {
                                     "pt_render_desc.width = 0: must be > 0" */
 } pt_render_stats;
 
-/* The film accumulates per pixel, in double precision, the sum and the sum of squares of the
-   samples and their count, and the sum of the odd-numbered samples alone (the "B" half-buffer;
-   the even-numbered "A" half is sum - sum_odd): 76 bytes per pixel. Rendering into a film that
-   already holds samples continues with new sample indices, so renders can be resumed and
-   refined. */
+/* The film accumulates per pixel the sum and the sum of squares of the samples and their count,
+   and the sum of the odd-numbered samples alone (the "B" half-buffer; the even-numbered "A" half
+   is sum - sum_odd): 148 bytes per pixel. Each sum is kept as two doubles, sum + low, added with
+   error-free transformations (TwoSum, Knuth TAOCP vol. 2, 4.2.2), so it is the exact sum of the
+   samples (float values, squared exactly in double) and sum is that exact sum rounded once: the
+   film does not depend on the order or grouping in which samples and films are added, which is
+   what lets a render be split (section 8, "Splitting a render"). Exact while a pixel's smallest
+   non-zero sample is above 2^-80 of its sum (squares: 2^-56 of the sum of squares); below that
+   the low word rounds, and the grouping could change sum's last bit with odds of about 2^-50.
+   Rendering into a film that already holds samples continues with new sample indices, so renders
+   can be resumed and refined. */
 typedef struct pt_film {
     int width, height;
-    double *sum;      /* 3 per pixel, row 0 at the top */
+    double *sum;      /* 3 per pixel, row 0 at the top: the sums rounded to double */
     double *sum_sq;   /* 3 per pixel */
     uint32_t *count;  /* samples per pixel */
     double *sum_odd;  /* 3 per pixel: the samples with an odd sample index k */
+    double *low;      /* 9 per pixel: what sum, sum_sq and sum_odd (3 each, in that order) leave out
+                         of the exact sums; a film made by hand may leave it 0 */
 } pt_film;
 
 /* An image: linear RGB, as pt_film_resolve makes it and the writers (section 9) take it. */
@@ -1162,6 +1197,12 @@ typedef struct pt_image {
 PTDEF int pt_film_init(pt_film *film, int width, int height);
 PTDEF void pt_film_free(pt_film *film);
 PTDEF void pt_film_clear(pt_film *film);
+/* dst += src, pixel by pixel (exactly: see pt_film; the films must be the same size). The merge of
+   a split render's parts, in part order. PT_ERROR_INVALID_ARGUMENT if a pixel's count would pass
+   4294967295 (dst is then unchanged). */
+PTDEF int pt_film_add(pt_film *dst, const pt_film *src);
+/* Adds one sample of value v with sample index k to pixel (x, y), as pt_render does. */
+PTDEF int pt_film_add_sample(pt_film *film, int x, int y, uint32_t k, pt_color v);
 /* Per-pixel mean into *image (allocated or reallocated to the film's size). */
 PTDEF int pt_film_resolve(const pt_film *film, pt_image *image);
 /* Mean of pixel (x, y) and the variance of that mean (sample variance / count). */
@@ -8279,6 +8320,58 @@ static int pt__cpu_count(void)
     return 1;
 }
 
+/* Exact sums: a sum is kept as hi + lo, hi the exact sum rounded to double (pt_film). TwoSum
+   (Knuth, TAOCP vol. 2, 4.2.2; Moller 1965) gives s = fl(a + b) and the exact error e with
+   a + b = s + e in round-to-nearest, whatever the magnitudes; adding x (or another hi + lo) is a
+   TwoSum, an addition of the small parts (exact while they fit one double: see pt_film), and a
+   TwoSum that rounds the total once more into hi and keeps the rest in lo. */
+static void pt__two_sum(double a, double b, double *s, double *e)
+{
+    double t = a + b, bv = t - a;
+    *e = (a - (t - bv)) + (b - bv);
+    *s = t;
+}
+static void pt__dd_add(double *hi, double *lo, double x)
+{
+    double s, e;
+    pt__two_sum(*hi, x, &s, &e);
+    pt__two_sum(s, e + *lo, hi, lo);
+}
+static void pt__dd_add_dd(double *hi, double *lo, double x_hi, double x_lo)
+{
+    double s, e;
+    pt__two_sum(*hi, x_hi, &s, &e);
+    pt__two_sum(s, e + (*lo + x_lo), hi, lo);
+}
+/* Sample L with index k into one pixel's sums (sum, sum_sq, sum_odd: 3 each; lo: their 9 low words). */
+static void pt__film_sample(double *sum, double *sq, double *odd, double *lo, uint32_t k, pt_color L)
+{
+    const double v[3] = { L.x, L.y, L.z };
+    int c;
+    for (c = 0; c < 3; ++c) {
+        pt__dd_add(&sum[c], &lo[c], v[c]);
+        pt__dd_add(&sq[c], &lo[3 + c], v[c] * v[c]); /* exact: a float's square fits a double */
+        if (k & 1u) pt__dd_add(&odd[c], &lo[6 + c], v[c]);
+    }
+}
+
+/* dst += src over np pixels (either may be a view into a merge buffer; a NULL low counts as 0). */
+static void pt__film_add_raw(pt_film *dst, const pt_film *src, size_t np)
+{
+    size_t i;
+    int c;
+    for (i = 0; i < np; ++i) {
+        double *lo = dst->low + 9u * i;
+        const double *sl = src->low ? src->low + 9u * i : NULL;
+        for (c = 0; c < 3; ++c) {
+            size_t j = 3u * i + (size_t)c;
+            pt__dd_add_dd(&dst->sum[j], &lo[c], src->sum[j], sl ? sl[c] : 0.0);
+            pt__dd_add_dd(&dst->sum_sq[j], &lo[3 + c], src->sum_sq[j], sl ? sl[3 + c] : 0.0);
+            pt__dd_add_dd(&dst->sum_odd[j], &lo[6 + c], src->sum_odd[j], sl ? sl[6 + c] : 0.0);
+        }
+        dst->count[i] += src->count[i];
+    }
+}
 typedef struct pt__pass {
     const pt_scene *scene;
     const pt__settings *cfg;
@@ -8292,6 +8385,10 @@ typedef struct pt__pass {
     const uint32_t *chunk_first; /* adaptive: job i renders the pixels (raster order) chunk_first[i] to
                                    chunk_first[i + 1] - 1 instead of tile i; NULL: tiles */
     double *pixel_rays;         /* adaptive: rays each pixel traced in this render; NULL: not counted */
+    uint32_t *whole;            /* split render: per pixel the whole render's sample count so far, the
+                                   next sample index (film holds this part's samples only); NULL: the
+                                   film's own count */
+    uint32_t parts, part;       /* split render: this part's samples are k with (pixel + k) % parts == part */
     pt_path_stats *tile_stats;  /* one per tile */
     uint64_t *tile_samples;     /* one per tile */
     unsigned char *tile_done;   /* one per tile */
@@ -8333,9 +8430,11 @@ static void pt__render_tile(void *data, int job)
     for (y = y0; y < y1; ++y) {
         for (x = y == y0 ? xa : x0; x < (y == y1 - 1 ? xb : x1); ++x) {
             uint32_t pix = (uint32_t)y * (uint32_t)film->width + (uint32_t)x;
-            uint32_t base = film->count[pix], n = ps->pixel_spp ? ps->pixel_spp[pix] : (uint32_t)ps->spp;
+            uint32_t base = ps->whole ? ps->whole[pix] : film->count[pix];
+            uint32_t n = ps->pixel_spp ? ps->pixel_spp[pix] : (uint32_t)ps->spp, mine = 0;
             uint64_t rays0 = st.camera_rays + st.bounce_rays + st.shadow_rays;
             double *sum = film->sum + 3u * pix, *sq = film->sum_sq + 3u * pix, *odd = film->sum_odd + 3u * pix;
+            double *lo = film->low + 9u * pix;
             uint64_t pixel_key;
             if (n == 0) continue;
             pixel_key = sobol ? pt__sobol_pixel_key(ps->seed, pix) : 0u;
@@ -8345,18 +8444,19 @@ static void pt__render_tile(void *data, int job)
                 float jx, jy, l1, l2;
                 pt_ray r;
                 pt_color L;
+                if (ps->parts > 1u && ((uint64_t)pix + index_k) % ps->parts != ps->part) continue;
+                mine++;
                 pt__sampler_init(&smp, ps->cfg->sampler, ps->seed, pix, index_k, pixel_key, &cache);
                 pt__draw2(&smp, PT__SET_PIXEL, &jx, &jy);
                 if (smp.sobol && !(ps->cam->lens_radius > 0.0f)) l1 = l2 = 0.5f; /* pinhole: unused */
                 else pt__draw2(&smp, PT__SET_LENS, &l1, &l2);
                 r = pt__camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
                 L = pt__sample(ps->scene, ps->cfg, r, &smp, &st);
-                sum[0] += L.x; sum[1] += L.y; sum[2] += L.z;
-                sq[0] += (double)L.x * L.x; sq[1] += (double)L.y * L.y; sq[2] += (double)L.z * L.z;
-                if (index_k & 1u) { odd[0] += L.x; odd[1] += L.y; odd[2] += L.z; }
+                pt__film_sample(sum, sq, odd, lo, index_k, L);
             }
-            film->count[pix] = base + n;
-            taken += n;
+            film->count[pix] += mine;
+            if (ps->whole) ps->whole[pix] = base + n;
+            taken += mine;
             if (ps->pixel_rays)
                 ps->pixel_rays[pix] += (double)(st.camera_rays + st.bounce_rays + st.shadow_rays - rays0);
         }
@@ -8492,7 +8592,7 @@ static int pt__run_pass(pt__pass *ps, int jobs, int threads, const pt_render_des
    sampling".
    Every decision is taken between passes on the calling thread from the film and the rays
    counted per pixel, so the image stays independent of the thread count and job order.
-   Memory: 124 bytes per pixel during an adaptive render, besides the film (200 with the
+   Memory: 124 bytes per pixel during an adaptive render, besides the film (272 with the
    pilot's film). */
 /* Adaptive sampling state of one pt_render call. */
 typedef struct pt__adaptive {
@@ -8708,7 +8808,7 @@ static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt
         return pt__msg(err, n, bad, "pt_render_desc.threads = %d: must be >= 0 (0: all cores)", d->threads);
     if (d->tile_size < 0)
         return pt__msg(err, n, bad, "pt_render_desc.tile_size = %d: must be >= 0 (0: a default)", d->tile_size);
-    if (film && (!film->sum || !film->sum_sq || !film->count || !film->sum_odd))
+    if (film && (!film->sum || !film->sum_sq || !film->count || !film->sum_odd || !film->low))
         return pt__msg(err, n, bad, "pt_render: the film is not initialised (pt_film_init)");
     if (film && (film->width != d->width || film->height != d->height))
         return pt__msg(err, n, bad, "pt_render_desc.width x height = %d x %d: the film is %d x %d", d->width, d->height,
@@ -8743,6 +8843,15 @@ static int pt__render_check(const pt_scene *s, const pt_render_desc *d, const pt
     if (d->adaptive_neighbours_only && d->adaptive_mode == PT_ADAPTIVE_OWN_SAMPLES)
         return pt__msg(err, n, bad, "pt_render_desc.adaptive_mode = PT_ADAPTIVE_OWN_SAMPLES: "
                        "adaptive_neighbours_only = 1 asks for PT_ADAPTIVE_NEIGHBOURS");
+    if (d->split_parts < 0 || d->split_parts > 65536)
+        return pt__msg(err, n, bad, "pt_render_desc.split_parts = %d: must be in 0 .. 65536 (0 or 1: not split)",
+                       d->split_parts);
+    if (d->split_part < 0 || d->split_part >= (d->split_parts > 1 ? d->split_parts : 1))
+        return pt__msg(err, n, bad, "pt_render_desc.split_part = %d: must be in 0 .. %d (split_parts - 1)",
+                       d->split_part, (d->split_parts > 1 ? d->split_parts : 1) - 1);
+    if (d->split_parts > 1 && d->adaptive_threshold != 0.0f && !d->merge)
+        return pt__msg(err, n, bad, "pt_render_desc.merge = NULL: a split render with adaptive sampling "
+                       "(split_parts = %d) needs the merge hook to plan from the merged film", d->split_parts);
     if (s->has_origin && pt__vfinite(d->camera.look_from) && pt__vfinite(d->camera.look_at)) {
         pt_camera_desc local = d->camera; /* traced relative to the scene's origin (pt_scene_commit) */
         local.look_from = pt__to_local(s, local.look_from);
@@ -8764,7 +8873,175 @@ typedef struct pt__render_run {
     uint32_t added;             /* samples every pixel has been given by the passes so far */
     double t0;                  /* pt__now() when pt_render began */
     pt_render_stats total;
+    struct pt__split *split;    /* a split render's state (split_parts > 1); NULL: the whole render */
+    int merge_failed;           /* the merge hook returned non-zero */
 } pt__render_run;
+
+/* --- Splitting a render (pt_render_desc.split_parts = N > 1). Part p renders the samples k of
+   pixel i with (i + k) mod N = p: the whole render's sample indices, so the same random numbers
+   (and Sobol points: the sequence is dealt out, not re-scrambled), and every pass of the whole
+   render is the same pass on every part with about 1/N of its samples in each pixel (dealing by
+   i + k rather than by ranges of k balances even the passes of one sample per pixel that adaptive
+   sampling's small steps make). The part renders into a film of its own (`part`); the sample
+   index of pixel i is the whole render's count (`whole`), which every part knows, since which
+   samples a pass takes is decided the same way on every part. Because the film's sums are exact
+   (pt_film), the parts' films added in order equal the whole render's film bit for bit.
+   Decisions: adaptive sampling plans from the merged film (the pilot's, or the film's so far)
+   and the merged ray counts: the merge hook combines the parts' films (everyone = 1) at every
+   check, so every part makes the same plan as the whole render; at the end the parts' films are
+   combined into part 0's (everyone = 0). What cannot be split: guiding (PT_GUIDING_ON and AUTO).
+   Its training records are integer sums and would merge exactly, but its tree refinement,
+   AUTO's decision and the guided render would need the guide merged after every iteration, and
+   the hook for that is not written: pt_render refuses it rather than train per part (a guide per
+   part would make the image depend on the number of parts). --- */
+typedef struct pt__split {
+    pt_film part;               /* this part's samples of the film (the pilot's: ad->pilot_film) */
+    uint32_t *whole;            /* per pixel: the whole render's count in the film */
+    uint32_t *pilot_whole;      /* per pixel: the whole render's count in the pilot's film */
+    pt_film merged;             /* re-planning checks: the caller's film plus every part's samples */
+    const pt_film *film;        /* the caller's film (its contents when the render began) */
+    double *rays;               /* the merged ray counts per pixel (views into buf) */
+    unsigned char *buf;         /* the merge buffer: a film's arrays, then rays if any, then counts */
+    size_t np;
+} pt__split;
+
+typedef struct pt__merge_ctx { size_t np; int rays; } pt__merge_ctx;
+/* A film's arrays and (with rays) a ray count per pixel as views into a merge buffer. */
+static void pt__merge_view(const pt__merge_ctx *c, unsigned char *buf, pt_film *f, double **rays)
+{
+    double *dbl = (double *)(void *)buf;
+    size_t np = c->np;
+    f->sum = dbl;
+    f->sum_sq = dbl + 3u * np;
+    f->sum_odd = dbl + 6u * np;
+    f->low = dbl + 9u * np;
+    *rays = c->rays ? dbl + 18u * np : NULL;
+    f->count = (uint32_t *)(void *)(dbl + (c->rays ? 19u : 18u) * np);
+}
+static size_t pt__merge_bytes(const pt__merge_ctx *c)
+{
+    return c->np * ((c->rays ? 19u : 18u) * sizeof(double) + sizeof(uint32_t));
+}
+static void pt__merge_add(void *ctx, void *acc, const void *part)
+{
+    const pt__merge_ctx *c = (const pt__merge_ctx *)ctx;
+    pt_film a, b;
+    double *ra, *rb;
+    size_t i;
+    pt__merge_view(c, (unsigned char *)acc, &a, &ra);
+    pt__merge_view(c, (unsigned char *)(uintptr_t)part, &b, &rb);
+    pt__film_add_raw(&a, &b, c->np);
+    if (ra)
+        for (i = 0; i < c->np; ++i) ra[i] += rb[i]; /* integer counts: exact in double */
+}
+/* Packs film f (and rays, if not NULL) into the buffer, has the hook combine it over the parts and
+   leaves views of the result in *out and *rays_out. Returns 0 if the hook failed. */
+static int pt__split_merge(pt__split *sp, const pt_render_desc *d, const pt_film *f, const double *rays,
+                           int everyone, pt_film *out, double **rays_out)
+{
+    pt__merge_ctx c;
+    pt_film v;
+    double *rv;
+    size_t np = sp->np;
+    c.np = np;
+    c.rays = rays != NULL;
+    pt__merge_view(&c, sp->buf, &v, &rv);
+    memcpy(v.sum, f->sum, sizeof(double) * 3u * np);
+    memcpy(v.sum_sq, f->sum_sq, sizeof(double) * 3u * np);
+    memcpy(v.sum_odd, f->sum_odd, sizeof(double) * 3u * np);
+    memcpy(v.low, f->low, sizeof(double) * 9u * np);
+    memcpy(v.count, f->count, sizeof(uint32_t) * np);
+    if (rays) memcpy(rv, rays, sizeof(double) * np);
+    if (d->merge(d->merge_user, sp->buf, pt__merge_bytes(&c), everyone, pt__merge_add, &c) != 0) return 0;
+    v.width = f->width;
+    v.height = f->height;
+    *out = v;
+    if (rays_out) *rays_out = rv;
+    return 1;
+}
+static void pt__split_free(pt__split *sp)
+{
+    pt_film_free(&sp->part);
+    pt_film_free(&sp->merged);
+    PT_FREE(sp->whole);
+    PT_FREE(sp->pilot_whole);
+    PT_FREE(sp->buf);
+}
+/* Sets a split render up after pt__render_setup: the part's film and the whole render's counts
+   take the place of the film in the pass (of the pilot's film: its counts start at 0). */
+static int pt__split_init(pt__split *sp, const pt_render_desc *d, pt_film *film, pt__pass *ps, pt__adaptive *ad)
+{
+    pt__merge_ctx c;
+    size_t np = (size_t)d->width * (size_t)d->height;
+    memset(sp, 0, sizeof *sp);
+    sp->np = c.np = np;
+    c.rays = 1;
+    if (pt_film_init(&sp->part, d->width, d->height) != PT_OK) return 0;
+    sp->whole = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    sp->pilot_whole = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    sp->buf = d->merge ? (unsigned char *)PT_MALLOC(pt__merge_bytes(&c)) : NULL;
+    if (!sp->whole || !sp->pilot_whole || (d->merge && !sp->buf)) return 0;
+    if (d->merge && d->adaptive_threshold != 0.0f && pt_film_init(&sp->merged, d->width, d->height) != PT_OK) return 0;
+    sp->film = film;
+    memcpy(sp->whole, film->count, sizeof(uint32_t) * np);
+    memset(sp->pilot_whole, 0, sizeof(uint32_t) * np);
+    ps->parts = (uint32_t)d->split_parts;
+    ps->part = (uint32_t)d->split_part;
+    if (ad->pilot) {
+        ad->film = &sp->part;
+        ps->whole = sp->pilot_whole;
+    } else {
+        ps->film = &sp->part;
+        ps->whole = sp->whole;
+    }
+    return 1;
+}
+/* An adaptive check of a split render: from the merged pilot (merged into the pilot's film, which
+   takes no more samples) or from the caller's film plus every part's samples so far, with the
+   merged ray counts. Returns 0 if the hook failed. */
+static int pt__split_check(pt__split *sp, pt__adaptive *ad, const pt_render_desc *d, int pilot)
+{
+    const pt_film *film = sp->film;
+    pt_film m, counts;
+    double *rays, *own = ad->rays;
+    if (pilot) {
+        if (!pt__split_merge(sp, d, &ad->pilot_film, ad->rays, 1, &m, &rays)) return 0;
+        memcpy(ad->pilot_film.sum, m.sum, sizeof(double) * 3u * sp->np);
+        memcpy(ad->pilot_film.sum_sq, m.sum_sq, sizeof(double) * 3u * sp->np);
+        memcpy(ad->pilot_film.sum_odd, m.sum_odd, sizeof(double) * 3u * sp->np);
+        memcpy(ad->pilot_film.low, m.low, sizeof(double) * 9u * sp->np);
+        memcpy(ad->pilot_film.count, m.count, sizeof(uint32_t) * sp->np);
+        memcpy(ad->rays, rays, sizeof(double) * sp->np);
+        counts = sp->part; /* the film's counts: the whole render's */
+        counts.count = sp->whole;
+        pt__adaptive_check(ad, &counts);
+        return 1;
+    }
+    if (!pt__split_merge(sp, d, &sp->part, ad->rays, 1, &m, &rays)) return 0;
+    memcpy(sp->merged.sum, film->sum, sizeof(double) * 3u * sp->np);
+    memcpy(sp->merged.sum_sq, film->sum_sq, sizeof(double) * 3u * sp->np);
+    memcpy(sp->merged.sum_odd, film->sum_odd, sizeof(double) * 3u * sp->np);
+    memcpy(sp->merged.low, film->low, sizeof(double) * 9u * sp->np);
+    memcpy(sp->merged.count, film->count, sizeof(uint32_t) * sp->np);
+    pt__film_add_raw(&sp->merged, &m, sp->np);
+    ad->rays = rays;
+    pt__adaptive_check(ad, &sp->merged);
+    ad->rays = own;
+    return 1;
+}
+/* The end of a split render: part 0's film += every part's samples (with the hook), else each
+   film += its own part's. Returns 0 if the hook failed. */
+static int pt__split_finish(pt__split *sp, const pt_render_desc *d, pt_film *film)
+{
+    pt_film m;
+    if (!d->merge) {
+        pt__film_add_raw(film, &sp->part, sp->np);
+        return 1;
+    }
+    if (!pt__split_merge(sp, d, &sp->part, NULL, 0, &m, NULL)) return 0;
+    pt__film_add_raw(film, d->split_part == 0 ? &m : &sp->part, sp->np);
+    return 1;
+}
 
 /* Adaptive sampling's state for one render: its settings with their defaults, and its
    per-pixel arrays (the film's counts at the start copied). Returns 0 when out of memory
@@ -8937,10 +9214,13 @@ static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_des
             if (!ps->pixel_spp && ad->pilot) { /* the pilot is done: plan once from it, then render the film */
                 ps->film = ad->film;
                 ps->seed = d->seed;
-                pt__adaptive_check(ad, ps->film);
+                if (!r->split) pt__adaptive_check(ad, ps->film);
+                else if ((ps->whole = r->split->whole), !pt__split_check(r->split, ad, d, 1)) r->merge_failed = 1;
             } else if (!ps->pixel_spp || (!ad->pilot && (pass + 1) % ad->check_passes == 0)) {
-                pt__adaptive_check(ad, ps->film);
+                if (!r->split) pt__adaptive_check(ad, ps->film);
+                else if (!pt__split_check(r->split, ad, d, 0)) r->merge_failed = 1;
             }
+            if (r->merge_failed) return PT_ERROR_IO;
             r->jobs = pt__adaptive_plan(ad, ps, r->job_list);
         }
     }
@@ -8981,10 +9261,12 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
     pt__pass ps;
     pt__adaptive ad;
     pt__render_run run;
+    pt__split split;
     int rc, result;
     char *err = stats ? stats->error : NULL; /* per call: several threads may render one scene */
     size_t en = stats ? sizeof stats->error : 0u;
     memset(&run, 0, sizeof run);
+    memset(&split, 0, sizeof split);
     run.t0 = pt__now();
     run.used = 1;
     run.adaptive = d ? d->adaptive_threshold != 0.0f : 0;
@@ -8995,8 +9277,17 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
     cfg.recording = recording;
     cfg.learned_weight = learned_weight;
     result = pt__render_setup(s, d, film, &cfg, &cam, &ps, &ad, &run, err, en);
+    if (result == PT_OK && d->split_parts > 1 && !pt__split_init(&split, d, film, &ps, &ad))
+        result = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for a split render (%d x %d pixels)",
+                         d->width, d->height);
+    else if (result == PT_OK && d->split_parts > 1)
+        run.split = &split;
     if (result == PT_OK) {
         result = pt__render_passes(&ps, &ad, d, &run);
+        if (run.split && result == PT_OK && !pt__split_finish(&split, d, film)) run.merge_failed = 1;
+        if (run.split && result == PT_ERROR_CANCELLED) /* its own samples only: the other parts are elsewhere */
+            pt__film_add_raw(film, &split.part, split.np);
+        if (run.merge_failed) result = pt__msg(err, en, PT_ERROR_IO, "pt_render: the merge hook of a split render failed");
         pt__render_end_stats(&ad, d, film, &run);
 #ifndef PDFTRACE_NO_THREADS
         pthread_mutex_destroy(&ps.lock);
@@ -9007,6 +9298,7 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
     PT_FREE(ps.tile_done);
     PT_FREE(run.job_list);
     pt__adaptive_free(&ad);
+    pt__split_free(&split);
     if (result != PT_OK && result != PT_ERROR_CANCELLED) return result;
     run.total.samples = run.done;
     run.total.seconds = pt__now() - run.t0;
@@ -9055,6 +9347,9 @@ static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
     if (d->guiding_max_mib < 0 || d->guiding_max_mib > 1048576)
         return pt__msg(err, n, bad, "pt_render_desc.guiding_max_mib = %d: must be in 1 .. 1048576 (0: %d)",
                        d->guiding_max_mib, PT__GUIDING_MIB);
+    if (d->guiding != PT_GUIDING_OFF && d->split_parts > 1)
+        return pt__msg(err, n, PT_ERROR_UNSUPPORTED, "pt_render_desc.guiding = %d: a split render (split_parts = %d) "
+                       "cannot guide yet (section 8, \"Splitting a render\")", (int)d->guiding, d->split_parts);
     if (d->guiding != PT_GUIDING_OFF && d->guide)
         return pt__msg(err, n, bad, "pt_render_desc.guiding = %d: not with a user guide (pt_render_desc.guide)",
                        (int)d->guiding);
@@ -9350,7 +9645,8 @@ PTDEF int pt_film_init(pt_film *f, int w, int h)
     f->sum_sq = (double *)PT_MALLOC(sizeof(double) * 3u * n);
     f->count = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * n);
     f->sum_odd = (double *)PT_MALLOC(sizeof(double) * 3u * n);
-    if (!f->sum || !f->sum_sq || !f->count || !f->sum_odd) {
+    f->low = (double *)PT_MALLOC(sizeof(double) * 9u * n);
+    if (!f->sum || !f->sum_sq || !f->count || !f->sum_odd || !f->low) {
         pt_film_free(f);
         return PT_ERROR_OUT_OF_MEMORY;
     }
@@ -9366,6 +9662,7 @@ PTDEF void pt_film_free(pt_film *f)
     PT_FREE(f->sum_sq);
     PT_FREE(f->count);
     PT_FREE(f->sum_odd);
+    PT_FREE(f->low);
     memset(f, 0, sizeof *f);
 }
 PTDEF void pt_film_clear(pt_film *f)
@@ -9376,6 +9673,32 @@ PTDEF void pt_film_clear(pt_film *f)
     memset(f->sum_sq, 0, sizeof(double) * 3u * n);
     memset(f->count, 0, sizeof(uint32_t) * n);
     memset(f->sum_odd, 0, sizeof(double) * 3u * n);
+    if (f->low) memset(f->low, 0, sizeof(double) * 9u * n);
+}
+static int pt__film_ok(const pt_film *f, size_t *n)
+{
+    return f && f->sum && f->sum_sq && f->count && f->sum_odd && f->low && pt__pixels(f->width, f->height, n);
+}
+PTDEF int pt_film_add(pt_film *dst, const pt_film *src)
+{
+    size_t n, m, i;
+    if (!pt__film_ok(dst, &n) || !src || !src->sum || !src->sum_sq || !src->count || !src->sum_odd ||
+        !pt__pixels(src->width, src->height, &m) || src->width != dst->width || src->height != dst->height)
+        return PT_ERROR_INVALID_ARGUMENT;
+    for (i = 0; i < n; ++i)
+        if (src->count[i] > 0xffffffffu - dst->count[i]) return PT_ERROR_INVALID_ARGUMENT;
+    pt__film_add_raw(dst, src, n);
+    return PT_OK;
+}
+PTDEF int pt_film_add_sample(pt_film *f, int x, int y, uint32_t k, pt_color v)
+{
+    size_t n, i;
+    if (!pt__film_ok(f, &n) || x < 0 || y < 0 || x >= f->width || y >= f->height) return PT_ERROR_INVALID_ARGUMENT;
+    i = (size_t)y * (size_t)f->width + (size_t)x;
+    if (f->count[i] == 0xffffffffu) return PT_ERROR_INVALID_ARGUMENT;
+    pt__film_sample(f->sum + 3u * i, f->sum_sq + 3u * i, f->sum_odd + 3u * i, f->low + 9u * i, k, v);
+    f->count[i]++;
+    return PT_OK;
 }
 PTDEF int pt_image_init(pt_image *img, int w, int h)
 {

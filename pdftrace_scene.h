@@ -253,7 +253,7 @@ typedef struct pt_scenefile {
 /* What the loader may read and allocate. Zero fields take the defaults, so a zeroed struct
    (or a NULL pointer) gives the defaults everywhere. */
 #define PT_SCENEFILE_MESH_MEMORY_DEFAULT ((uint64_t)1 << 30)  /* 1 GiB */
-#define PT_SCENEFILE_IMAGE_MEMORY_DEFAULT ((uint64_t)4 << 30) /* 4 GiB: about 6500 x 6500 pixels */
+#define PT_SCENEFILE_IMAGE_MEMORY_DEFAULT ((uint64_t)4 << 30) /* 4 GiB: about 5000 x 5000 pixels */
 typedef struct pt_scenefile_options {
     /* Bytes the loader may use for meshes: the parsed meshes kept, plus the OBJ text and the
        working arrays of the one being parsed. 0: PT_SCENEFILE_MESH_MEMORY_DEFAULT. */
@@ -285,8 +285,8 @@ PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, 
                              pt_scenefile *out, char *err, size_t err_size);
 PTDEF int pt_scenefile_parse_ex(const char *text, size_t length, const char *name, const char *base_dir,
                                 const pt_scenefile_options *opt, pt_scenefile *out, char *err, size_t err_size);
-/* Bytes a render of a width x height image needs for its pt_film (three double sums and a
-   count per pixel) and two float RGB images (the resolved one and its display copy). */
+/* Bytes a render of a width x height image needs for its pt_film (three exact sums of two
+   doubles each, 3 channels, and a count per pixel) and two float RGB images (the resolved one and its display copy). */
 PTDEF uint64_t pt_scenefile_image_bytes(int width, int height);
 PTDEF void pt_scenefile_free(pt_scenefile *desc);
 /* Parses a Wavefront OBJ file held in memory (the subset the `mesh` statement reads) into
@@ -1928,7 +1928,7 @@ static int pt__sf_line(void *ctx, char *line, int number)
 PTDEF uint64_t pt_scenefile_image_bytes(int width, int height)
 {
     uint64_t n = width > 0 && height > 0 ? (uint64_t)width * (uint64_t)height : 0u;
-    return n * (9u * sizeof(double) + sizeof(uint32_t) + 6u * sizeof(float));
+    return n * (18u * sizeof(double) + sizeof(uint32_t) + 6u * sizeof(float));
 }
 
 PTDEF int pt_scenefile_parse(const char *text, size_t length, const char *name, const char *base_dir,

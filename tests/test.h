@@ -62,6 +62,7 @@ extern const test_case test_bvh_cases[];
 extern const test_case test_render_cases[];
 extern const test_case test_adaptive_cases[]; /* adaptive sampling and PT_SKIP_* switches */
 extern const test_case test_sampler_cases[];  /* pt_render_desc.sampler: PT_SAMPLER_SOBOL */
+extern const test_case test_split_cases[];    /* splitting a render: pt_render_desc.split_parts, pt_film_add */
 extern const test_case test_guide_cases[];    /* path guiding: pt_guide, PT_PDF_GUIDE, pt_render_desc.guiding */
 extern const test_case test_output_cases[];
 extern const test_case test_exr_cases[];    /* OpenEXR (one skipped test without PDFTRACE_OPENEXR) */

@@ -590,15 +590,7 @@ static void rebuild_samples(const pt_scene *s, const pt_render_desc *d, const pt
         float jx = pt_rng_float(&rng), jy = pt_rng_float(&rng);
         float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
         pt_color L = pt_trace_path(s, d, pt_camera_ray(cam, (float)x + jx, (float)y + jy, l1, l2), &rng, NULL);
-        double v[3];
-        int c;
-        v[0] = L.x; v[1] = L.y; v[2] = L.z;
-        for (c = 0; c < 3; c++) {
-            g->sum[3 * pix + c] += v[c];
-            g->sum_sq[3 * pix + c] += v[c] * v[c];
-            if (k & 1u) g->sum_odd[3 * pix + c] += v[c];
-        }
-        g->count[pix]++;
+        pt_film_add_sample(g, x, y, k, L);
     }
 }
 
@@ -789,15 +781,7 @@ static void threshold_zero_is_uniform(test_ctx *t)
                         float l1 = pt_rng_float(&rng), l2 = pt_rng_float(&rng);
                         pt_ray r = pt_camera_ray(&cam, (float)x + jx, (float)y + jy, l1, l2);
                         pt_color L = pt_trace_path(s, &d, r, &rng, NULL);
-                        double v[3];
-                        int c;
-                        v[0] = L.x; v[1] = L.y; v[2] = L.z;
-                        for (c = 0; c < 3; c++) {
-                            g.sum[3 * pix + c] += v[c];
-                            g.sum_sq[3 * pix + c] += v[c] * v[c];
-                            if (k & 1) g.sum_odd[3 * pix + c] += v[c];
-                        }
-                        g.count[pix]++;
+                        pt_film_add_sample(&g, x, y, (uint32_t)k, L);
                     }
                 }
             CHECK(t, tu_film_equal(&f, &g), "the render differs from the sample-by-sample rebuild");

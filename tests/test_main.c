@@ -95,6 +95,7 @@ int main(int argc, char **argv)
         { "render", test_render_cases },
         { "adaptive", test_adaptive_cases },
         { "sampler", test_sampler_cases },
+        { "split", test_split_cases },
         { "guide", test_guide_cases },
         { "output", test_output_cases },
         { "exr", test_exr_cases },

@@ -300,8 +300,8 @@ static void size_memory_up_front(test_ctx *t)
     char err[512];
     pt_scenefile sf;
     int rc = parse_text("size 16384 16384\n" T_HEAD "sphere 0 0 0 1 m\n", NULL, &sf, err, sizeof err);
-    /* 16384^2 pixels x (9 doubles + 1 count + 6 floats) = 26843545600 bytes */
-    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "t.scene:1: size:", 16) == 0 && strstr(err, "26843545600"),
+    /* 16384^2 pixels x (18 doubles + 1 count + 6 floats) = 46170898432 bytes */
+    CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "t.scene:1: size:", 16) == 0 && strstr(err, "46170898432"),
           "%d '%s'", rc, err);
     if (rc == PT_OK) pt_scenefile_free(&sf);
     rc = parse_text("size 4096 4096\n" T_HEAD "sphere 0 0 0 1 m\n", NULL, &sf, err, sizeof err);

@@ -1000,7 +1000,8 @@ int tu_film_equal(const pt_film *a, const pt_film *b)
     return memcmp(a->sum, b->sum, n * 3 * sizeof(double)) == 0 &&
            memcmp(a->sum_sq, b->sum_sq, n * 3 * sizeof(double)) == 0 &&
            memcmp(a->count, b->count, n * sizeof(uint32_t)) == 0 &&
-           memcmp(a->sum_odd, b->sum_odd, n * 3 * sizeof(double)) == 0;
+           memcmp(a->sum_odd, b->sum_odd, n * 3 * sizeof(double)) == 0 &&
+           (!a->low || !b->low || memcmp(a->low, b->low, n * 9 * sizeof(double)) == 0);
 }
 
 /* ------------------------------------------------------------------------------------------ */

@@ -214,7 +214,7 @@ typedef struct tu_region { double mean[3], se[3]; int pixels; } tu_region;
 /* Splits the film into rx * ry regions (row-major, region 0 top-left) and computes each region's
    mean and its standard error from pt_film_pixel's per-pixel variance of the mean. */
 int tu_film_regions(const pt_film *f, int rx, int ry, tu_region *out);
-int tu_film_equal(const pt_film *a, const pt_film *b); /* bit-identical sums, squares, counts, half-buffers */
+int tu_film_equal(const pt_film *a, const pt_film *b); /* bit-identical sums, squares, counts, half-buffers, low words */
 /* pt_film_init + pt_render, checking PT_OK and zero NaN/Inf samples (st may be NULL). Returns 1 on
    PT_OK; the caller frees the film, as the tests did with their own copies. */
 int tu_render_into(test_ctx *t, const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *st,

@@ -9,7 +9,13 @@
    output that cannot be written gives one line on stderr and exit status 2, and no file is
    written. A failure once rendering has started gives exit status 1.
    Built with -DPDFTRACE_PNG (pdftrace_png.h, libpng) and -DPDFTRACE_OPENEXR (pdftrace_exr.h,
-   OpenEXRCore) when those libraries are present: the Makefile's PNG and TOOL_EXR. */
+   OpenEXRCore) when those libraries are present: the Makefile's PNG and TOOL_EXR.
+   Built with -DPDFTRACE_MPI (make MPI=1; pdftrace_mpi.h) it also runs under mpirun: every rank
+   loads the scene and renders its share of the samples (pt_render_desc.split_parts), rank 0
+   gathers the films in rank order and writes the outputs, which are byte for byte those of a
+   one-process render (docs/mpi.md). Until rendering starts every failure is agreed on by all
+   ranks: the first failing rank prints its one line ("pdftrace: rank R: ...") and every rank
+   exits with its status; a failure once ranks may wait on each other ends the job (MPI_Abort). */
 #include <errno.h>
 #include <float.h>
 #include <signal.h>
@@ -30,6 +36,10 @@
 #ifdef PDFTRACE_OPENEXR
 #define PDFTRACE_EXR_IMPLEMENTATION
 #include "pdftrace_exr.h"
+#endif
+#ifdef PDFTRACE_MPI
+#define PDFTRACE_MPI_IMPLEMENTATION
+#include "pdftrace_mpi.h"
 #endif
 
 #define MAX_OUTPUTS 16
@@ -76,9 +86,31 @@ enum { PARSED = 0, PARSED_EXIT = 1, PARSE_FAILED = 2 }; /* PARSED_EXIT: --help o
    --------------------------------------------------------------------------------------- */
 
 /* One line on stderr, "pdftrace: <message>". Returns PARSE_FAILED so that checks can `return fail(...)`. */
+/* Under MPI with several ranks (g_ranks > 1), messages before rendering are held (g_held: the
+   first one) until the ranks agree on who failed (mpi_gate); warnings come from rank 0 only. */
+static int g_rank = 0, g_ranks = 1, g_hold = 0;
+static char g_held[1024];
+#ifdef PDFTRACE_MPI
+static pt_mpi g_mpi;
+#endif
+
 static int fail(const char *fmt, ...)
 {
     va_list ap;
+    if (g_ranks > 1) {
+        char line[1024];
+        va_start(ap, fmt);
+        vsnprintf(line, sizeof line, fmt, ap);
+        va_end(ap);
+        if (strncmp(line, "warning:", 8) == 0) {
+            if (g_rank == 0) fprintf(stderr, "pdftrace: %s\n", line);
+        } else if (g_hold) {
+            if (!g_held[0]) memcpy(g_held, line, sizeof line);
+        } else {
+            fprintf(stderr, "pdftrace: rank %d: %s\n", g_rank, line);
+        }
+        return PARSE_FAILED;
+    }
     fputs("pdftrace: ", stderr);
     va_start(ap, fmt);
     vfprintf(stderr, fmt, ap);
@@ -162,8 +194,13 @@ static void print_help(void)
 
 static void print_version(void)
 {
-    printf("pdftrace %d.%d.%d (PNG %s, OpenEXR %s, Embree %s)\n", PDFTRACE_VERSION_MAJOR, PDFTRACE_VERSION_MINOR,
-           PDFTRACE_VERSION_PATCH, have_png() ? "yes" : "no", have_exr() ? "yes" : "no", have_embree() ? "yes" : "no");
+#ifdef PDFTRACE_MPI
+    const char *mpi = "yes";
+#else
+    const char *mpi = "no";
+#endif
+    printf("pdftrace %d.%d.%d (PNG %s, OpenEXR %s, Embree %s, MPI %s)\n", PDFTRACE_VERSION_MAJOR, PDFTRACE_VERSION_MINOR,
+           PDFTRACE_VERSION_PATCH, have_png() ? "yes" : "no", have_exr() ? "yes" : "no", have_embree() ? "yes" : "no", mpi);
 }
 
 /* ---------------------------------------------------------------------------------------
@@ -803,10 +840,12 @@ static int on_pass(void *user, const pt_progress *p)
     progress_state *ps = (progress_state *)user;
     if (!ps->o->quiet) {
         /* plain lines: at a new 10 % step at most once a second, else every 10 s */
-        int tenth = p->samples_total ? (int)(10 * p->samples_done / p->samples_total) : 10;
+        uint64_t done = p->samples_done * (uint64_t)g_ranks; /* rank 0's share, of about 1/g_ranks */
+        int tenth = p->samples_total ? (int)(10 * (done < p->samples_total ? done : p->samples_total) / p->samples_total) : 10;
         double since = p->seconds - ps->last_line;
         if (ps->tty || (tenth > ps->last_tenth && since >= 1.0) || since >= 10.0) {
-            if (p->pass < p->pass_count) show_progress(ps, p->samples_done, p->samples_total, p->seconds, 0);
+            if (p->pass < p->pass_count)
+                show_progress(ps, done < p->samples_total ? done : p->samples_total, p->samples_total, p->seconds, 0);
             ps->last_tenth = tenth;
             ps->last_line = p->seconds;
         }
@@ -874,6 +913,11 @@ static void print_stats(const options *o, const pt_scene *scene, const pt_render
            (unsigned long long)st->bounce_rays, (unsigned long long)st->shadow_rays, (unsigned long long)rays);
     printf("rays/s     %.3f M\n", (double)rays / secs * 1e-6);
     printf("NaN/Inf    %llu samples (caught and zeroed)\n", (unsigned long long)st->nonfinite_samples);
+#ifdef PDFTRACE_MPI
+    if (g_ranks > 1)
+        printf("mpi        %d ranks (counters summed over them); rank 0 received and merged %.1f MB in %.3f s "
+               "(waiting included)\n", g_ranks, (double)g_mpi.bytes_merged / 1e6, g_mpi.seconds);
+#endif
 }
 
 /* --guide-at: the guide's density at the point as a 2N x N latitude-longitude picture (pt_guide_image:
@@ -945,16 +989,29 @@ static int render(const options *o, const pt_scene *scene, pt_render_desc *d)
     }
     d->progress = on_pass;
     d->progress_user = &ps;
+#ifdef PDFTRACE_MPI
+    pt_mpi_split(&g_mpi, d);
+#endif
     rc = pt_render(scene, d, &film, &st);
+#ifdef PDFTRACE_MPI
+    if (rc == PT_OK && pt_mpi_stats_sum(&g_mpi, &st) != PT_OK) rc = PT_ERROR_IO;
+#endif
     if (!o->quiet && rc == PT_OK) show_progress(&ps, st.samples, st.samples, st.seconds, 1);
     if (ps.shown) fputc('\n', stderr);
     pt_image_free(&ps.preview);
     if (rc != PT_OK) {
         if (!ps.preview_failed)
             fail("rendering failed (%d x %d): %s", d->width, d->height, st.error[0] ? st.error : pt_result_string(rc));
+#ifdef PDFTRACE_MPI
+        if (g_ranks > 1) MPI_Abort(MPI_COMM_WORLD, EXIT_FAILURE); /* the other ranks may wait in the merge */
+#endif
         pt_film_free(&film);
         pt_guide_destroy(guide);
         return EXIT_FAILURE;
+    }
+    if (g_rank != 0) { /* its share is in rank 0's film */
+        pt_film_free(&film);
+        return EXIT_SUCCESS;
     }
     rc = pt_film_resolve(&film, &img);
     pt_film_free(&film);
@@ -1011,22 +1068,130 @@ static int check_outputs_not_input(const options *o)
     return PARSED;
 }
 
-int main(int argc, char **argv)
+/* ---------------------------------------------------------------------------------------
+   MPI: agreeing on failures before rendering, and that every rank renders the same thing
+   --------------------------------------------------------------------------------------- */
+
+/* Collective under MPI: every rank passes its status; the lowest failing rank prints its held
+   message; returns the largest status of all ranks (the same everywhere). */
+static int mpi_gate(int status)
+{
+#ifdef PDFTRACE_MPI
+    if (g_ranks > 1) {
+        int first = pt_mpi_agree(&g_mpi, status == EXIT_SUCCESS), worst = status;
+        if (first == g_rank) fprintf(stderr, "pdftrace: rank %d: %s\n", g_rank, g_held[0] ? g_held : "failed");
+        if (first == -2 || MPI_Allreduce(&status, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD) != MPI_SUCCESS)
+            MPI_Abort(MPI_COMM_WORLD, EXIT_FAILURE);
+        g_held[0] = '\0';
+        return worst;
+    }
+#endif
+    return status;
+}
+
+#ifdef PDFTRACE_MPI
+static uint64_t fnv1a(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = (const unsigned char *)data;
+    while (n--) h = (h ^ *p++) * 1099511628211ULL;
+    return h;
+}
+/* The scene file's bytes and the settings that decide the image. */
+static uint64_t render_fingerprint(const options *o, const pt_render_desc *d)
+{
+    uint64_t h = 14695981039346656037ULL;
+    const int ints[] = { d->width, d->height, d->samples_per_pixel, d->samples_per_pass, (int)d->strategy, d->max_depth,
+                         d->rr_start_depth, d->max_splits, d->indirect_paths, d->adaptive_min_spp, d->adaptive_check_passes,
+                         d->adaptive_neighbours_only, (int)d->adaptive_mode, (int)d->disable_skips, (int)d->sampler,
+                         d->tile_size };
+    const float floats[] = { d->light_weight, d->adaptive_threshold };
+    FILE *f = fopen(o->scene, "rb");
+    if (f) {
+        unsigned char buf[65536];
+        size_t n;
+        while ((n = fread(buf, 1, sizeof buf, f)) > 0) h = fnv1a(h, buf, n);
+        fclose(f);
+    }
+    h = fnv1a(h, ints, sizeof ints);
+    h = fnv1a(h, floats, sizeof floats);
+    return fnv1a(h, &d->seed, sizeof d->seed);
+}
+#endif
+
+/* Several ranks: what cannot be split is refused, and every rank must render rank 0's scene with
+   rank 0's settings (collective: every rank calls it). Returns the status. */
+static int mpi_check_render(const options *o, const pt_render_desc *d, int status)
+{
+#ifdef PDFTRACE_MPI
+    uint64_t mine = status == EXIT_SUCCESS ? render_fingerprint(o, d) : 0u, first = mine;
+    if (g_ranks <= 1) return status;
+    if (MPI_Bcast(&first, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD) != MPI_SUCCESS) MPI_Abort(MPI_COMM_WORLD, EXIT_FAILURE);
+    if (status != EXIT_SUCCESS) return status;
+    if (d->guiding != PT_GUIDING_OFF || o->guide_out.path) {
+        fail("%s: guiding cannot be split over MPI ranks yet (docs/mpi.md): run one rank, or --guiding off",
+             o->guide_out.path ? "--guide-at" : (o->given & GIVEN_GUIDING) ? "--guiding" : "the scene file's guiding");
+        return EXIT_USAGE;
+    }
+    if (o->preview_every > 0) {
+        fail("--preview-every: not under MPI with %d ranks (the film is gathered only at the end)", g_ranks);
+        return EXIT_USAGE;
+    }
+    if (mine != first) {
+        fail("%s: the scene file or the settings differ from rank 0's (every rank must render the same scene)", o->scene);
+        return EXIT_USAGE;
+    }
+#else
+    (void)o;
+    (void)d;
+#endif
+    return status;
+}
+
+static int run(int argc, char **argv)
 {
     options o;
     pt_scenefile sf;
     pt_scene *scene = NULL;
     pt_render_desc d;
     int rc = parse_options(argc, argv, &o), status;
-    if (rc == PARSED_EXIT) return EXIT_SUCCESS;
-    if (rc != PARSED) return EXIT_USAGE;
-    if (check_outputs_not_input(&o) != PARSED) return EXIT_USAGE;
+    status = rc == PARSED || rc == PARSED_EXIT ? EXIT_SUCCESS : EXIT_USAGE;
+    if (rc == PARSED && check_outputs_not_input(&o) != PARSED) status = EXIT_USAGE;
+    if ((status = mpi_gate(status)) != EXIT_SUCCESS || rc == PARSED_EXIT) return status;
+    if (g_rank != 0) { /* rank 0 writes the exports and the outputs, and reports */
+        o.pov = o.mitsuba = NULL;
+        o.quiet = 1;
+    }
     install_signal_handlers();
     memset(&sf, 0, sizeof sf);
     memset(&d, 0, sizeof d);
     status = load_scene(&o, &sf, &scene, &d);
+    status = mpi_gate(mpi_check_render(&o, &d, status));
+    g_hold = 0;
     if (status == EXIT_SUCCESS && (o.output_count > 0 || o.guide_out.path)) status = render(&o, scene, &d);
     pt_scene_destroy(scene);
     pt_scenefile_free(&sf);
+    return status;
+}
+
+int main(int argc, char **argv)
+{
+    int status;
+#ifdef PDFTRACE_MPI
+    int provided = 0; /* pt_render's threads never call MPI: the calling thread does, between passes */
+    if (MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+        fputs("pdftrace: MPI_Init_thread failed\n", stderr);
+        return EXIT_FAILURE;
+    }
+    pt_mpi_init(&g_mpi, MPI_COMM_WORLD);
+    g_rank = g_mpi.rank;
+    g_ranks = g_mpi.size;
+    g_hold = 1;
+    if (g_rank != 0 && !freopen("/dev/null", "w", stdout)) /* rank 0 alone prints */
+        fprintf(stderr, "pdftrace: rank %d: cannot silence stdout\n", g_rank);
+#endif
+    status = run(argc, argv);
+#ifdef PDFTRACE_MPI
+    MPI_Finalize();
+#endif
     return status;
 }

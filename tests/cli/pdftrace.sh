@@ -365,7 +365,7 @@ t_scene_limits() {
     local P_saved=$P
     P=$d/limited.sh
     bad_case "size 16384 16384" "$d/scene/huge.scene" -o "$W/bad/x.ppm" || ok=0
-    grep -q "huge.scene:1: size: a 16384 x 16384 render needs 26843545600 bytes" "$W/err.txt" ||
+    grep -q "huge.scene:1: size: a 16384 x 16384 render needs 46170898432 bytes" "$W/err.txt" ||
         { fail scene_limits "size: '$(cat "$W/err.txt")'"; ok=0; }
     bad_case "--size 16384x16384" "$S/mirror.scene" --size 16384x16384 -o "$W/bad/x.ppm" || ok=0
     P=$P_saved
