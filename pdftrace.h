@@ -772,6 +772,9 @@ PTDEF int pt_scene_add_rough_conductor(pt_scene *scene, pt_conductor conductor, 
 /* The Fresnel reflectance per channel of a conductor at cos(theta) (clamped to [0, 1]) of
    material `material` (PT_MATERIAL_ROUGH_CONDUCTOR; zero for other types or a bad id). */
 PTDEF pt_color pt_material_conductor_fresnel(const pt_scene *scene, int material, float cos_theta);
+/* The table's eta and k of a named metal (PT_CONDUCTOR_AU .. _AL): PT_OK; else
+   PT_ERROR_INVALID_ARGUMENT (NONE and CUSTOM have no table entry; NULL outputs). */
+PTDEF int pt_conductor_ior(pt_conductor conductor, pt_color *eta, pt_color *k);
 /* A 3D checker: colour `odd` where floor(x/s)+floor(y/s)+floor(z/s) is odd, `even` elsewhere
    (world space, s = scale > 0). Returns a texture id >= 1. */
 PTDEF int pt_scene_add_checker(pt_scene *scene, pt_color even, pt_color odd, float scale);
@@ -4874,6 +4877,15 @@ static const float pt__conductor_table[4][6] = {
     { 0.2004376970f, 0.9240334304f, 1.1022119527f, 3.9129485033f, 2.4528477015f, 2.1421879552f }, /* Cu */
     { 1.6574599595f, 0.8803689579f, 0.5212287346f, 9.2238691996f, 6.2695232477f, 4.8370012281f }  /* Al */
 };
+PTDEF int pt_conductor_ior(pt_conductor c, pt_color *eta, pt_color *k)
+{
+    const float *t;
+    if (!eta || !k || (int)c < (int)PT_CONDUCTOR_AU || (int)c > (int)PT_CONDUCTOR_AL) return PT_ERROR_INVALID_ARGUMENT;
+    t = pt__conductor_table[(int)c - (int)PT_CONDUCTOR_AU];
+    *eta = pt_v3(t[0], t[1], t[2]);
+    *k = pt_v3(t[3], t[4], t[5]);
+    return PT_OK;
+}
 static int pt__conductor_resolve(pt_scene *s, const pt_material_desc *d, pt__material *m)
 {
     if (!pt__isfinite(d->roughness) || d->roughness < 0.0f || d->roughness > 1.0f)
@@ -4894,9 +4906,7 @@ static int pt__conductor_resolve(pt_scene *s, const pt_material_desc *d, pt__mat
         m->eta = d->eta;
         m->k = d->k;
     } else if (d->conductor != PT_CONDUCTOR_NONE) {
-        const float *t = pt__conductor_table[(int)d->conductor - (int)PT_CONDUCTOR_AU];
-        m->eta = pt_v3(t[0], t[1], t[2]);
-        m->k = pt_v3(t[3], t[4], t[5]);
+        pt_conductor_ior(d->conductor, &m->eta, &m->k);
     }
     return PT_OK;
 }
