@@ -141,6 +141,9 @@
      switchable skip, since the general path would add nothing).
    - no environment map and a black background: no environment light (one test per light
      sample and escaped ray; not switchable either, for the same reason).
+   - no rough conductor (PT_FEATURE_MICROFACET): no microfacet code runs; the material
+     functions dispatch Lambertian first and the rough conductor last (not switchable: there
+     is no general path to force).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
    watertight-triangle set-up, as the only path.
@@ -703,8 +706,10 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
 /* ==========================================================================================
    4. MATERIALS AND TEXTURES
    Every material may also emit (emission > 0). Lambertian reflection is two-sided (a wall is
-   lit and seen from both sides); emission is one-sided (on the side of the geometric normal)
-   unless two_sided_emission is set.
+   lit and seen from both sides), as are the metals; emission is one-sided (on the side of the
+   geometric normal) unless two_sided_emission is set. The rough conductor is a GGX microfacet
+   BRDF sampled by its visible normals, a density that mixes with the light PDFs like
+   Lambertian's (docs/materials.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {

@@ -132,7 +132,9 @@
    `ambient_light 0`, ambient 0. Not exportable (PT_ERROR_UNSUPPORTED with file:line): a
    thin-lens camera (POV-Ray's focal blur stops adaptively after a few aperture samples: no
    exact twin), an environment map (POV-Ray's sky_sphere lights diffuse surfaces only through
-   radiosity, which misses a small bright sun), fuzzy metal, emitting triangles, boxes or meshes, a spot light whose beam is
+   radiosity, which misses a small bright sun), fuzzy metal, a rough conductor (POV-Ray has no
+   microfacet reflection nor conductor Fresnel; only metal none below alpha 1e-3, a coloured
+   mirror, is exported), emitting triangles, boxes or meshes, a spot light whose beam is
    narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
    pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
    runs the build first, so it never writes what pdftrace would not render, such as a sphere
@@ -149,7 +151,9 @@
    exact to_world (columns u/2, v/2, unit u x v, centre); spheres; triangles and meshes as
    binary little-endian PLY files "<xml without .xml>.N.ply" beside the XML (vertex normals
    kept, else face_normals); Lambertian as two-sided `diffuse`, a mirror as a two-sided
-   `conductor` of material "none", glass as `dielectric`, an emitter as a one-sided `area`
+   `conductor` of material "none", a rough conductor as a two-sided `roughconductor`
+   (distribution ggx, sample_visible true, alpha, RGB eta and k or material "none", the tint as
+   specular_reflectance; below alpha 1e-3 the smooth `conductor`), glass as `dielectric`, an emitter as a one-sided `area`
    light on its shape with a black bsdf, the background as a `constant` emitter, an
    environment map as an `envmap` emitter (to_world the rotation) of a map resampled to 2H + 1
    rows beside the XML ("<xml without .xml>.env.pfm"), which makes Mitsuba's row interpolation
