@@ -4871,9 +4871,9 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
    ------------------------------------------------------------------------------------------ */
 
 
-/* Rough conductor: below this GGX alpha the lobe is narrower than float directions resolve
-   consistently (D's relative rounding error ~ 1e-8 / alpha^2 rad-scale errors in the half vector
-   grow past 1e-2 near alpha 1e-5), so the material is the smooth Fresnel mirror (delta). */
+/* Rough conductor: below this GGX alpha the material is the smooth Fresnel mirror (delta). The
+   half vector of two float directions is off by ~1e-7 rad (more near grazing), which moves D by
+   about twice that over alpha, relative: 1e-4 here, past 1e-2 near alpha 1e-5 (docs/materials.md). */
 #define PT__GGX_MIN_ALPHA 1e-3f
 /* Named conductors: eta then k, per channel (pt_conductor's table). */
 static const float pt__conductor_table[4][6] = {
