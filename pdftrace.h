@@ -143,6 +143,9 @@
      switchable skip, since the general path would add nothing).
    - no environment map and a black background: no environment light (one test per light
      sample and escaped ray; not switchable either, for the same reason).
+   - no rough conductor (PT_FEATURE_MICROFACET): no microfacet code runs; the material
+     functions dispatch Lambertian first and the rough conductor last (not switchable: there
+     is no general path to force).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
    watertight-triangle set-up, as the only path.
@@ -576,7 +579,8 @@ enum {
     PT_FEATURE_SHADING_NORMALS = 1 << 11, /* some mesh has per-vertex normals */
     PT_FEATURE_TRANSFORMS      = 1 << 12, /* some shape was added under a non-identity transform */
     PT_FEATURE_DELTA_LIGHTS    = 1 << 13, /* some point, spot or directional light (pt_scene_add_light) */
-    PT_FEATURE_ENVIRONMENT     = 1 << 14  /* an environment map (pt_scene_set_environment) */
+    PT_FEATURE_ENVIRONMENT     = 1 << 14, /* an environment map (pt_scene_set_environment) */
+    PT_FEATURE_MICROFACET      = 1 << 15  /* some rough conductor with roughness >= 1e-3 */
 };
 
 /* Traversal backends (pt_scene_set_backend, section 5b). */
@@ -709,17 +713,42 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
 /* ==========================================================================================
    4. MATERIALS AND TEXTURES
    Every material may also emit (emission > 0). Lambertian reflection is two-sided (a wall is
-   lit and seen from both sides); emission is one-sided (on the side of the geometric normal)
-   unless two_sided_emission is set.
+   lit and seen from both sides), as are the metals; emission is one-sided (on the side of the
+   geometric normal) unless two_sided_emission is set. The rough conductor is a GGX microfacet
+   BRDF sampled by its visible normals, a density that mixes with the light PDFs like
+   Lambertian's (docs/materials.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {
     PT_MATERIAL_LAMBERTIAN = 0, /* pScatter = cos/pi, sampled by the cosine PDF */
     PT_MATERIAL_METAL,          /* mirror direction plus fuzz (a ball of radius fuzz around it);
-                                   fuzz = 0 is a delta mirror */
+                                   fuzz = 0 is a delta mirror. The lobe of "Ray Tracing in One
+                                   Weekend", kept for its scenes: it has a closed-form density
+                                   (so it mixes with light PDFs) but is not a physical BRDF (no
+                                   Fresnel, no masking, not reciprocal) and has no exact twin in
+                                   Mitsuba or POV-Ray; PT_MATERIAL_ROUGH_CONDUCTOR is the
+                                   physical rough metal */
     PT_MATERIAL_DIELECTRIC,     /* clear glass: exact unpolarised Fresnel, total internal reflection; delta */
-    PT_MATERIAL_EMITTER         /* emits `emission`, reflects nothing */
+    PT_MATERIAL_EMITTER,        /* emits `emission`, reflects nothing */
+    PT_MATERIAL_ROUGH_CONDUCTOR /* GGX microfacet metal (below): roughness, conductor, albedo tints it */
 } pt_material_type;
+
+/* The complex index of refraction eta + i k of a rough conductor, per RGB channel (relative to
+   the outside, a vacuum). NONE: Fresnel reflectance 1 at every angle (Mitsuba's material
+   "none"). The named metals are linear-sRGB reductions of measured spectra (the RGB values
+   renderers commonly tabulate from Mitsuba 0.5's spectral data; docs/materials.md):
+     Au  eta (0.1431, 0.3750, 1.4425)  k (3.9832, 2.3857, 1.6032)
+     Ag  eta (0.1553, 0.1167, 0.1384)  k (4.8283, 3.1222, 2.1470)
+     Cu  eta (0.2004, 0.9240, 1.1022)  k (3.9129, 2.4528, 2.1422)
+     Al  eta (1.6575, 0.8804, 0.5212)  k (9.2239, 6.2695, 4.8370) */
+typedef enum pt_conductor {
+    PT_CONDUCTOR_NONE = 0,
+    PT_CONDUCTOR_CUSTOM,        /* pt_material_desc.eta and .k */
+    PT_CONDUCTOR_AU,
+    PT_CONDUCTOR_AG,
+    PT_CONDUCTOR_CU,
+    PT_CONDUCTOR_AL
+} pt_conductor;
 
 typedef struct pt_material_desc {
     pt_material_type type;
@@ -729,6 +758,18 @@ typedef struct pt_material_desc {
     float ior;                  /* dielectric index of refraction; 0 means 1.5; else finite, >= 0.001 */
     pt_color emission;          /* emitted radiance */
     int two_sided_emission;
+    /* Rough conductor: BRDF f = albedo F(wo.h) D(h) G1(wo) G1(wi) / (4 cos_o cos_i), h the half
+       vector, D the isotropic GGX distribution (Trowbridge-Reitz; Walter et al. 2007), G1 Smith's
+       masking for it, F the exact unpolarised Fresnel reflectance of the conductor (Mitsuba 3's
+       `roughconductor` with distribution ggx, term for term). Sampled by the visible normals
+       (Heitz 2018) with density G1(wo) D(h) / (4 cos_o); directions the sampled microfacet
+       reflects below the surface fail, which is the model's single-scattering energy loss. */
+    float roughness;            /* GGX alpha (not a "perceptual" roughness), finite, in [0, 1]. Below
+                                   1e-3 (a lobe under 0.06 degrees) the material is the smooth
+                                   Fresnel mirror, a delta material; the switch changes images
+                                   only by that blur. 0: the mirror */
+    pt_conductor conductor;     /* 0: PT_CONDUCTOR_NONE */
+    pt_color eta, k;            /* PT_CONDUCTOR_CUSTOM: eta finite > 0, k finite >= 0 */
 } pt_material_desc;
 
 PTDEF int pt_scene_add_material(pt_scene *scene, const pt_material_desc *desc); /* id >= 0 */
@@ -738,6 +779,14 @@ PTDEF int pt_scene_add_lambertian(pt_scene *scene, pt_color albedo);
 PTDEF int pt_scene_add_metal(pt_scene *scene, pt_color albedo, float fuzz);
 PTDEF int pt_scene_add_dielectric(pt_scene *scene, float ior);
 PTDEF int pt_scene_add_emitter(pt_scene *scene, pt_color radiance, int two_sided);
+/* A rough conductor (tint: pt_material_desc.albedo; eta, k zero: not for PT_CONDUCTOR_CUSTOM). */
+PTDEF int pt_scene_add_rough_conductor(pt_scene *scene, pt_conductor conductor, float roughness, pt_color tint);
+/* The Fresnel reflectance per channel of a conductor at cos(theta) (clamped to [0, 1]) of
+   material `material` (PT_MATERIAL_ROUGH_CONDUCTOR; zero for other types or a bad id). */
+PTDEF pt_color pt_material_conductor_fresnel(const pt_scene *scene, int material, float cos_theta);
+/* The table's eta and k of a named metal (PT_CONDUCTOR_AU .. _AL): PT_OK; else
+   PT_ERROR_INVALID_ARGUMENT (NONE and CUSTOM have no table entry; NULL outputs). */
+PTDEF int pt_conductor_ior(pt_conductor conductor, pt_color *eta, pt_color *k);
 /* A 3D checker: colour `odd` where floor(x/s)+floor(y/s)+floor(z/s) is odd, `even` elsewhere
    (world space, s = scale > 0). Returns a texture id >= 1. */
 PTDEF int pt_scene_add_checker(pt_scene *scene, pt_color even, pt_color odd, float scale);
@@ -1447,6 +1496,9 @@ typedef struct pt__material {
     float fuzz, ior;
     pt_color emission;
     int two_sided, emits, delta, scatters;
+    float alpha, alpha2;  /* rough conductor: GGX alpha and alpha^2 */
+    int fresnel;          /* rough conductor: 0 for F = 1, else eta + i k */
+    pt_color eta, k;
 } pt__material;
 
 typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
@@ -3193,6 +3245,51 @@ static pt_vec3 pt__fuzz_sample(pt_vec3 r, float f, float u1, float u2, float u3)
 }
 static pt_vec3 pt__reflect(pt_vec3 wo, pt_vec3 n) { return pt_sub(pt_scale(n, 2.0f * pt_dot(wo, n)), wo); }
 
+/* --- GGX (Trowbridge-Reitz) microfacets of isotropic roughness a, in a local frame with the
+   normal along +z (Walter, Marschner, Li & Torrance, "Microfacet Models for Refraction through
+   Rough Surfaces", EGSR 2007; Heitz, "Understanding the Masking-Shadowing Function in
+   Microfacet-Based BRDFs", JCGT 3(2), 2014). For unit m, D(m) = a^2 / (pi (m_x^2 + m_y^2 +
+   a^2 m_z^2)^2), the usual 1 / (pi a^2 cos^4 (1 + tan^2 / a^2)^2) without tangents, so grazing
+   m and tiny a need no division by cos. Smith's G1(v) = 2 / (1 + sqrt(1 + a^2 tan^2)), written
+   2 v_z / (v_z + sqrt(v_z^2 + a^2 (v_x^2 + v_y^2))). */
+static float pt__ggx_d(pt_vec3 m, float a2)
+{
+    float s = m.x * m.x + m.y * m.y + a2 * m.z * m.z;
+    if (!(m.z > 0.0f) || !(s > 0.0f)) return 0.0f;
+    return a2 / (PT__PI * s * s);
+}
+static float pt__ggx_g1(pt_vec3 v, float a2)
+{
+    float z2 = v.z * v.z, d;
+    if (!(v.z > 0.0f)) return 0.0f;
+    d = v.z + sqrtf(z2 + a2 * (v.x * v.x + v.y * v.y));
+    return d > 0.0f ? 2.0f * v.z / d : 0.0f;
+}
+/* A microfacet normal drawn from the distribution of normals visible from v (v_z > 0):
+   D_v(m) = G1(v) max(0, v.m) D(m) / v_z (Heitz, "Sampling the GGX Distribution of Visible
+   Normals", JCGT 7(4), 2018: stretch v to the hemisphere configuration, sample the projected
+   disk, unstretch). */
+static pt_vec3 pt__ggx_sample_vn(pt_vec3 v, float a, float u1, float u2)
+{
+    pt_vec3 vh = pt_normalize(pt_v3(a * v.x, a * v.y, v.z)), t1, t2, nh;
+    float l2 = vh.x * vh.x + vh.y * vh.y, r = sqrtf(u1), phi = 2.0f * PT__PI * u2;
+    float p1 = r * cosf(phi), p2 = r * sinf(phi), s = 0.5f * (1.0f + vh.z);
+    t1 = l2 > 0.0f ? pt_scale(pt_v3(-vh.y, vh.x, 0.0f), 1.0f / sqrtf(l2)) : pt_v3(1.0f, 0.0f, 0.0f);
+    t2 = pt_cross(vh, t1);
+    p2 = (1.0f - s) * pt__safe_sqrt(1.0f - p1 * p1) + s * p2;
+    nh = pt_add(pt_add(pt_scale(t1, p1), pt_scale(t2, p2)), pt_scale(vh, pt__safe_sqrt(1.0f - p1 * p1 - p2 * p2)));
+    return pt_normalize(pt_v3(a * nh.x, a * nh.y, pt__maxf(0.0f, nh.z)));
+}
+/* The density of reflected directions wi = reflect(wo, m) for m ~ D_v(wo): D_v(m) / (4 wo.m)
+   = G1(wo) D(m) / (4 wo_z), m the half vector of wo and wi (both above the surface). */
+static float pt__ggx_reflect_density(pt_vec3 wo, pt_vec3 wi, float a2)
+{
+    pt_vec3 m;
+    if (!(wo.z > 0.0f) || !(wi.z > 0.0f)) return 0.0f;
+    m = pt_normalize(pt_add(wo, wi));
+    return pt__ggx_g1(wo, a2) * pt__ggx_d(m, a2) / (4.0f * wo.z);
+}
+
 /* Forward declarations of the material functions (section 4) used by the public PDFs. */
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
                                    float u3, pt_vec3 *dir, float *pdf);
@@ -4915,13 +5012,58 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
    ------------------------------------------------------------------------------------------ */
 
 
+/* Rough conductor: below this GGX alpha the material is the smooth Fresnel mirror (delta). The
+   half vector of two float directions is off by ~1e-7 rad (more near grazing), which moves D by
+   about twice that over alpha, relative: 1e-4 here, past 1e-2 near alpha 1e-5 (docs/materials.md). */
+#define PT__GGX_MIN_ALPHA 1e-3f
+/* Named conductors: eta then k, per channel (pt_conductor's table). */
+static const float pt__conductor_table[4][6] = {
+    { 0.1431189557f, 0.3749570432f, 1.4424785571f, 3.9831604247f, 2.3857207478f, 1.6032152899f }, /* Au */
+    { 0.1552646489f, 0.1167232965f, 0.1383806959f, 4.8283433224f, 3.1222459278f, 2.1469504455f }, /* Ag */
+    { 0.2004376970f, 0.9240334304f, 1.1022119527f, 3.9129485033f, 2.4528477015f, 2.1421879552f }, /* Cu */
+    { 1.6574599595f, 0.8803689579f, 0.5212287346f, 9.2238691996f, 6.2695232477f, 4.8370012281f }  /* Al */
+};
+PTDEF int pt_conductor_ior(pt_conductor c, pt_color *eta, pt_color *k)
+{
+    const float *t;
+    if (!eta || !k || (int)c < (int)PT_CONDUCTOR_AU || (int)c > (int)PT_CONDUCTOR_AL) return PT_ERROR_INVALID_ARGUMENT;
+    t = pt__conductor_table[(int)c - (int)PT_CONDUCTOR_AU];
+    *eta = pt_v3(t[0], t[1], t[2]);
+    *k = pt_v3(t[3], t[4], t[5]);
+    return PT_OK;
+}
+static int pt__conductor_resolve(pt_scene *s, const pt_material_desc *d, pt__material *m)
+{
+    if (!pt__isfinite(d->roughness) || d->roughness < 0.0f || d->roughness > 1.0f)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: roughness = %g: must be finite and in [0, 1]",
+                        (double)d->roughness);
+    if ((int)d->conductor < (int)PT_CONDUCTOR_NONE || (int)d->conductor > (int)PT_CONDUCTOR_AL)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: unknown conductor %d", (int)d->conductor);
+    m->alpha = d->roughness;
+    m->alpha2 = d->roughness * d->roughness;
+    m->fresnel = d->conductor != PT_CONDUCTOR_NONE;
+    if (d->conductor == PT_CONDUCTOR_CUSTOM) {
+        if (!pt__vfinite(d->eta) || !(d->eta.x > 0.0f) || !(d->eta.y > 0.0f) || !(d->eta.z > 0.0f))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: conductor eta = (%g, %g, %g): must be finite and > 0",
+                            (double)d->eta.x, (double)d->eta.y, (double)d->eta.z);
+        if (!pt__color_ok(d->k))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: conductor k = (%g, %g, %g): must be finite and >= 0",
+                            (double)d->k.x, (double)d->k.y, (double)d->k.z);
+        m->eta = d->eta;
+        m->k = d->k;
+    } else if (d->conductor != PT_CONDUCTOR_NONE) {
+        pt_conductor_ior(d->conductor, &m->eta, &m->k);
+    }
+    return PT_OK;
+}
+
 PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
 {
     pt__material m;
     if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!d) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: desc is NULL");
     memset(&m, 0, sizeof m);
-    if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_EMITTER)
+    if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_ROUGH_CONDUCTOR)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: unknown type %d", (int)d->type);
     if (!pt__color_ok(d->albedo))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: albedo must be finite and >= 0");
@@ -4934,6 +5076,10 @@ PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
     if (!pt__isfinite(d->ior) || d->ior < 0.0f || (d->ior > 0.0f && d->ior < 1e-3f))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
                         "material: ior = %g: must be 0 (meaning 1.5) or finite and >= 0.001", (double)d->ior);
+    if (d->type == PT_MATERIAL_ROUGH_CONDUCTOR) {
+        int rc = pt__conductor_resolve(s, d, &m);
+        if (rc != PT_OK) return rc;
+    }
     m.type = d->type;
     m.albedo = d->albedo;
     m.texture = d->albedo_texture;
@@ -4943,7 +5089,8 @@ PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
     m.two_sided = d->two_sided_emission != 0;
     m.emits = !pt__is_black(d->emission);
     m.scatters = d->type != PT_MATERIAL_EMITTER;
-    m.delta = d->type == PT_MATERIAL_DIELECTRIC || (d->type == PT_MATERIAL_METAL && m.fuzz == 0.0f);
+    m.delta = d->type == PT_MATERIAL_DIELECTRIC || (d->type == PT_MATERIAL_METAL && m.fuzz == 0.0f) ||
+              (d->type == PT_MATERIAL_ROUGH_CONDUCTOR && m.alpha < PT__GGX_MIN_ALPHA);
     if (!pt__grow((void **)&s->mats, &s->mat_cap, s->mat_count + 1u, sizeof(pt__material)))
         return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "material: out of memory");
     s->mats[s->mat_count] = m;
@@ -4982,6 +5129,16 @@ PTDEF int pt_scene_add_emitter(pt_scene *s, pt_color radiance, int two_sided)
     d.type = PT_MATERIAL_EMITTER;
     d.emission = radiance;
     d.two_sided_emission = two_sided;
+    return pt_scene_add_material(s, &d);
+}
+PTDEF int pt_scene_add_rough_conductor(pt_scene *s, pt_conductor conductor, float roughness, pt_color tint)
+{
+    pt_material_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_ROUGH_CONDUCTOR;
+    d.albedo = tint;
+    d.conductor = conductor;
+    d.roughness = roughness;
     return pt_scene_add_material(s, &d);
 }
 PTDEF int pt_scene_add_checker(pt_scene *s, pt_color even, pt_color odd, float scale)
@@ -5292,6 +5449,51 @@ static pt_color pt__albedo(const pt_scene *s, const pt__material *m, pt_vec3 p)
     return m->texture ? pt__checker(&s->texs[m->texture - 1], pt__to_world(s, p)) : m->albedo;
 }
 
+/* Exact unpolarised Fresnel reflectance of a conductor of relative index eta + i k at cos_i in
+   [0, 1], in the real form with a^2 + b^2 = |eta^2 - sin^2|  (Pharr, Jakob & Humphreys, PBR 3rd
+   ed., sec. 8.2.1): no complex arithmetic, and exact for k = 0 too. */
+static float pt__fresnel_conductor(float cos_i, float eta, float k)
+{
+    float c2 = cos_i * cos_i, s2 = 1.0f - c2, t = eta * eta - k * k - s2;
+    float ab2 = sqrtf(t * t + 4.0f * eta * eta * k * k), a = pt__safe_sqrt(0.5f * (ab2 + t));
+    float t1 = ab2 + c2, t2 = 2.0f * a * cos_i, rs = (t1 - t2) / (t1 + t2);
+    float t3 = ab2 * c2 + s2 * s2, t4 = t2 * s2, rp = rs * (t3 - t4) / (t3 + t4);
+    return 0.5f * (rs + rp);
+}
+static pt_color pt__conductor_fresnel_rgb(const pt__material *m, float cos_i)
+{
+    cos_i = pt__minf(1.0f, pt__maxf(0.0f, cos_i));
+    if (!m->fresnel) return pt_v3(1.0f, 1.0f, 1.0f);
+    return pt_v3(pt__fresnel_conductor(cos_i, m->eta.x, m->k.x), pt__fresnel_conductor(cos_i, m->eta.y, m->k.y),
+                 pt__fresnel_conductor(cos_i, m->eta.z, m->k.z));
+}
+PTDEF pt_color pt_material_conductor_fresnel(const pt_scene *s, int material, float cos_theta)
+{
+    if (!s || material < 0 || (uint32_t)material >= s->mat_count || !pt__isfinite(cos_theta) ||
+        s->mats[material].type != PT_MATERIAL_ROUGH_CONDUCTOR)
+        return pt_v3(0, 0, 0);
+    return pt__conductor_fresnel_rgb(&s->mats[material], cos_theta);
+}
+static pt_vec3 pt__onb_local(const pt_onb *b, pt_vec3 w) { return pt_v3(pt_dot(w, b->s), pt_dot(w, b->t), pt_dot(w, b->n)); }
+/* The rough conductor's A * pScatter = albedo F D G1(wo) G1(wi) / (4 cos_o) (pt_material_desc). */
+static pt_color pt__conductor_eval(const pt__material *m, pt_color tint, pt_vec3 ns, pt_vec3 wo, pt_vec3 wi)
+{
+    pt_onb b = pt__onb(ns);
+    pt_vec3 o = pt__onb_local(&b, wo), i = pt__onb_local(&b, wi), h;
+    float g;
+    if (!(o.z > 0.0f) || !(i.z > 0.0f)) return pt_v3(0, 0, 0);
+    h = pt_normalize(pt_add(o, i));
+    g = pt__ggx_d(h, m->alpha2) * pt__ggx_g1(o, m->alpha2) * pt__ggx_g1(i, m->alpha2) / (4.0f * o.z);
+    return pt_scale(pt_mul(tint, pt__conductor_fresnel_rgb(m, pt_dot(o, h))), g);
+}
+/* What a delta material's reflection multiplies the throughput by: the albedo, times the Fresnel
+   reflectance at cos_i for the rough conductor below PT__GGX_MIN_ALPHA. */
+static pt_color pt__delta_reflectance(const pt__material *m, pt_color albedo, float cos_i)
+{
+    if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR) return pt_mul(albedo, pt__conductor_fresnel_rgb(m, cos_i));
+    return albedo;
+}
+
 /* A * pScatter(wi) = BRDF * cos for a non-delta material, with ns and ng the shading and
    geometric normals already flipped to the side of wo. Directions below the geometric
    surface carry nothing. */
@@ -5305,6 +5507,7 @@ static PT__HOT pt_color pt__material_eval(const pt__material *m, pt_color albedo
     }
     if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f)
         return pt_scale(albedo, pt__fuzz_value(pt__reflect(wo, ns), m->fuzz, wi));
+    if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) return pt__conductor_eval(m, albedo, ns, wo, wi);
     return pt_v3(0, 0, 0);
 }
 /* The density with which the material samples wi (ns flipped to the side of wo). */
@@ -5312,6 +5515,10 @@ static float pt__material_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo,
 {
     if (m->type == PT_MATERIAL_LAMBERTIAN) return pt__maxf(0.0f, pt_dot(ns, wi)) * PT__INV_PI;
     if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f) return pt__fuzz_value(pt__reflect(wo, ns), m->fuzz, wi);
+    if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) {
+        pt_onb b = pt__onb(ns);
+        return pt__ggx_reflect_density(pt__onb_local(&b, wo), pt__onb_local(&b, wi), m->alpha2);
+    }
     return 0.0f;
 }
 static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float u1, float u2, float u3,
@@ -5327,6 +5534,20 @@ static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt
         pt_vec3 r = pt__reflect(wo, ns);
         *wi = pt__fuzz_sample(r, m->fuzz, u1, u2, u3);
         *pdf = pt__fuzz_value(r, m->fuzz, *wi);
+        return *pdf > 0.0f;
+    }
+    if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) {
+        /* a visible normal, reflected; below the surface the draw fails (the energy the
+           single-scattering model loses). The density is evaluated from the returned direction,
+           so it equals pt__material_density exactly. */
+        pt_onb b = pt__onb(ns);
+        pt_vec3 o = pt__onb_local(&b, wo), mn, i;
+        if (!(o.z > 0.0f)) return 0;
+        mn = pt__ggx_sample_vn(o, m->alpha, u1, u2);
+        i = pt__reflect(o, mn);
+        if (!(i.z > 0.0f)) return 0;
+        *wi = pt_normalize(pt_onb_to_world(&b, i));
+        *pdf = pt__material_density(m, ns, wo, *wi);
         return *pdf > 0.0f;
     }
     return 0;
@@ -7186,6 +7407,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
         if (m->scatters && !m->delta) f |= PT_FEATURE_NON_DELTA;
         if (m->delta) f |= PT_FEATURE_DELTA;
         if (m->type == PT_MATERIAL_DIELECTRIC) f |= PT_FEATURE_DIELECTRICS;
+        if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) f |= PT_FEATURE_MICROFACET;
         if (m->texture) f |= PT_FEATURE_TEXTURES;
     }
     if (s->dlight_count) {
@@ -7634,7 +7856,7 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
     } else {
         float u1, u2, u3, pm;
         pt__draw_scatter(smp, depth, &u1, &u2);
-        u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA), v->m->type != PT_MATERIAL_LAMBERTIAN);
+        u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA), v->m->type == PT_MATERIAL_METAL);
         return pt__material_sample_dir(v->m, v->ns, v->wo, u1, u2, u3, wi, &pm);
     }
 }
@@ -7934,7 +8156,7 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         } else {
             wi = pt__reflect(v->wo, v->ns);
             if (pt_dot(wi, v->ng) <= 0.0f) return 0;
-            *beta = pt_mul(*beta, v->albedo);
+            *beta = pt_mul(*beta, pt__delta_reflectance(m, v->albedo, pt_dot(v->wo, v->ns)));
         }
         *prev_delta = 1;
     } else {

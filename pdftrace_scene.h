@@ -59,6 +59,11 @@
                                       floor(x/s)+floor(y/s)+floor(z/s) is odd
      material NAME lambertian R G B | lambertian texture CHECKER
      material NAME metal R G B [fuzz F]
+     material NAME roughconductor ALPHA METAL [tint R G B]   GGX rough metal (pdftrace.h,
+                                      PT_MATERIAL_ROUGH_CONDUCTOR): ALPHA in [0, 1] (below 1e-3
+                                      the smooth Fresnel mirror), METAL one of Au Ag Cu Al
+                                      none (F = 1) or `eta R G B k R G B`; tint (default 1 1 1)
+                                      multiplies the Fresnel reflectance
      material NAME dielectric IOR
      material NAME emitter R G B [two_sided]
      sphere CX CY CZ RADIUS MATERIAL
@@ -127,7 +132,9 @@
    `ambient_light 0`, ambient 0. Not exportable (PT_ERROR_UNSUPPORTED with file:line): a
    thin-lens camera (POV-Ray's focal blur stops adaptively after a few aperture samples: no
    exact twin), an environment map (POV-Ray's sky_sphere lights diffuse surfaces only through
-   radiosity, which misses a small bright sun), fuzzy metal, emitting triangles, boxes or meshes, a spot light whose beam is
+   radiosity, which misses a small bright sun), fuzzy metal, a rough conductor (POV-Ray has no
+   microfacet reflection nor conductor Fresnel; only metal none below alpha 1e-3, a coloured
+   mirror, is exported), emitting triangles, boxes or meshes, a spot light whose beam is
    narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
    pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
    runs the build first, so it never writes what pdftrace would not render, such as a sphere
@@ -144,7 +151,9 @@
    exact to_world (columns u/2, v/2, unit u x v, centre); spheres; triangles and meshes as
    binary little-endian PLY files "<xml without .xml>.N.ply" beside the XML (vertex normals
    kept, else face_normals); Lambertian as two-sided `diffuse`, a mirror as a two-sided
-   `conductor` of material "none", glass as `dielectric`, an emitter as a one-sided `area`
+   `conductor` of material "none", a rough conductor as a two-sided `roughconductor`
+   (distribution ggx, sample_visible true, alpha, RGB eta and k or material "none", the tint as
+   specular_reflectance; below alpha 1e-3 the smooth `conductor`), glass as `dielectric`, an emitter as a one-sided `area`
    light on its shape with a black bsdf, the background as a `constant` emitter, an
    environment map as an `envmap` emitter (to_world the rotation) of a map resampled to 2H + 1
    rows beside the XML ("<xml without .xml>.env.pfm"), which makes Mitsuba's row interpolation
@@ -188,6 +197,9 @@ typedef struct pt_scenefile_material {
     float fuzz, ior;
     pt_color emission;           /* emitter */
     int two_sided;
+    float roughness;             /* roughconductor: GGX alpha; albedo is its tint */
+    pt_conductor conductor;
+    pt_color eta, k;             /* PT_CONDUCTOR_CUSTOM */
 } pt_scenefile_material;
 
 typedef struct pt_obj_mesh {
@@ -1511,7 +1523,40 @@ static int pt__sf_checker(pt__sf_parser *p)
     return PT_OK;
 }
 
-/* material NAME TYPE ...: lambertian, metal, dielectric or emitter. */
+/* roughconductor ALPHA METAL [tint R G B], METAL: Au Ag Cu Al none | eta R G B k R G B */
+static int pt__sf_roughconductor(pt__sf_parser *p, pt_scenefile_material *m)
+{
+    static const char *const names[4] = { "Au", "Ag", "Cu", "Al" };
+    const char *metal;
+    int rc, i;
+    m->type = PT_MATERIAL_ROUGH_CONDUCTOR;
+    m->albedo = pt_v3(1.0f, 1.0f, 1.0f);
+    if ((rc = pt__sf_num(p, "roughconductor alpha", &m->roughness)) != PT_OK) return rc;
+    if (!(m->roughness >= 0.0f && m->roughness <= 1.0f))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughconductor alpha: must be in [0, 1] (GGX alpha)");
+    metal = pt__sf_next(p);
+    if (!metal) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughconductor: missing metal (Au, Ag, Cu, Al, none, or eta R G B k R G B)");
+    m->conductor = PT_CONDUCTOR_NONE;
+    for (i = 0; i < 4; ++i)
+        if (!strcmp(metal, names[i])) m->conductor = (pt_conductor)((int)PT_CONDUCTOR_AU + i);
+    if (!strcmp(metal, "eta")) {
+        m->conductor = PT_CONDUCTOR_CUSTOM;
+        if ((rc = pt__sf_color(p, "roughconductor eta", &m->eta)) != PT_OK) return rc;
+        if (!(m->eta.x > 0.0f && m->eta.y > 0.0f && m->eta.z > 0.0f))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughconductor eta: must be > 0");
+        metal = pt__sf_next(p);
+        if (!metal || strcmp(metal, "k")) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughconductor: expected 'k R G B' after eta");
+        if ((rc = pt__sf_color(p, "roughconductor k", &m->k)) != PT_OK) return rc;
+    } else if (m->conductor == PT_CONDUCTOR_NONE && strcmp(metal, "none"))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughconductor: unknown metal (Au, Ag, Cu, Al, none, or eta R G B k R G B)");
+    if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "tint")) {
+        p->pos++;
+        if ((rc = pt__sf_color(p, "roughconductor tint", &m->albedo)) != PT_OK) return rc;
+    }
+    return PT_OK;
+}
+
+/* material NAME TYPE ...: lambertian, metal, roughconductor, dielectric or emitter. */
 static int pt__sf_material(pt__sf_parser *p)
 {
     pt_scenefile *d = p->d;
@@ -1523,7 +1568,7 @@ static int pt__sf_material(pt__sf_parser *p)
     strcpy(m.name, name);
     m.checker = -1;
     type = pt__sf_next(p);
-    if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, dielectric, emitter)", name);
+    if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, roughconductor, dielectric, emitter)", name);
     if (!strcmp(type, "lambertian")) {
         m.type = PT_MATERIAL_LAMBERTIAN;
         if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "texture")) {
@@ -1542,6 +1587,8 @@ static int pt__sf_material(pt__sf_parser *p)
             if ((rc = pt__sf_num(p, "metal fuzz", &m.fuzz)) != PT_OK) return rc;
             if (m.fuzz < 0 || m.fuzz > 1) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "metal fuzz: must be in [0, 1]");
         }
+    } else if (!strcmp(type, "roughconductor")) {
+        if ((rc = pt__sf_roughconductor(p, &m)) != PT_OK) return rc;
     } else if (!strcmp(type, "dielectric")) {
         m.type = PT_MATERIAL_DIELECTRIC;
         if ((rc = pt__sf_num(p, "dielectric ior", &m.ior)) != PT_OK) return rc;
@@ -1551,7 +1598,7 @@ static int pt__sf_material(pt__sf_parser *p)
         if ((rc = pt__sf_color(p, "emitter radiance", &m.emission)) != PT_OK) return rc;
         if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "two_sided")) { p->pos++; m.two_sided = 1; }
     } else
-        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, dielectric, emitter)", name, type);
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, roughconductor, dielectric, emitter)", name, type);
     if ((rc = pt__sf_end(p)) != PT_OK) return rc;
     if (d->material_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many materials");
     {
@@ -2135,6 +2182,10 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         md.ior = m->ior;
         md.emission = m->emission;
         md.two_sided_emission = m->two_sided;
+        md.roughness = m->roughness;
+        md.conductor = m->conductor;
+        md.eta = m->eta;
+        md.k = m->k;
         mat[i] = pt_scene_add_material(s, &md);
         if (mat[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, mat[i], "material %s: %s", m->name, pt_scene_error_message(s));
     }
@@ -2321,6 +2372,7 @@ static void pt__pov_texture(pt__pov *w, int material)
         }
         break;
     case PT_MATERIAL_METAL:
+    case PT_MATERIAL_ROUGH_CONDUCTOR: /* only the coloured mirror (alpha < 1e-3, metal none) gets here */
         pt__pov_put(w, "texture { pigment { rgb 0 } finish { diffuse 0 reflection { ");
         pt__pov_rgb(w, m->albedo, 1.0);
         pt__pov_put(w, " } } }");
@@ -2629,6 +2681,11 @@ static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *er
         if (m->type == PT_MATERIAL_METAL && m->fuzz > 0)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: fuzzy metal (material %s) has no POV-Ray equivalent", m->name);
+        if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR && (m->roughness >= 1e-3f || m->conductor != PT_CONDUCTOR_NONE))
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: a rough conductor (material %s) has no POV-Ray equivalent: POV-Ray has no "
+                                "microfacet reflection (no GGX distribution or masking) and no conductor Fresnel term; "
+                                "only alpha < 1e-3 with metal none (a coloured mirror) is exported", m->name);
         if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
@@ -2819,6 +2876,32 @@ static void pt__mts_comment_text(char *out, size_t size, const char *text)
     out[n] = '\0';
 }
 
+/* A rough conductor: two-sided (pdftrace's materials are) `roughconductor` with distribution ggx,
+   sample_visible true, alpha, eta and k as RGB (the named metals too: pdftrace's own table, not
+   Mitsuba's spectral data) or material "none", and the tint as specular_reflectance; below alpha
+   1e-3, where pdftrace renders the smooth Fresnel mirror, the smooth `conductor`. */
+static void pt__mts_conductor(pt__mts *w, const pt_scenefile_material *m, int i)
+{
+    int smooth = m->roughness < 1e-3f;
+    pt__mts_put(w, "  <bsdf type=\"twosided\" id=\"mat%d\"><bsdf type=\"%s\">", i, smooth ? "conductor" : "roughconductor");
+    if (!smooth) {
+        pt__mts_put(w, "<string name=\"distribution\" value=\"ggx\"/><boolean name=\"sample_visible\" value=\"true\"/>"
+                       "<float name=\"alpha\" value=\"");
+        pt__mts_f(w, m->roughness);
+        pt__mts_put(w, "\"/>");
+    }
+    if (m->conductor == PT_CONDUCTOR_NONE) {
+        pt__mts_put(w, "<string name=\"material\" value=\"none\"/>");
+    } else {
+        pt_color eta = m->eta, k = m->k;
+        if (m->conductor != PT_CONDUCTOR_CUSTOM) pt_conductor_ior(m->conductor, &eta, &k);
+        pt__mts_rgb(w, "eta", eta);
+        pt__mts_rgb(w, "k", k);
+    }
+    pt__mts_rgb(w, "specular_reflectance", m->albedo);
+    pt__mts_put(w, "</bsdf></bsdf>\n");
+}
+
 /* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse, a mirror as a
    two-sided conductor without Fresnel (material "none": reflectance = specular_reflectance),
    glass as a smooth dielectric in vacuum, an emitter as black diffuse (it reflects nothing). */
@@ -2841,6 +2924,9 @@ static void pt__mts_bsdf(pt__mts *w, int i)
                        "value=\"none\"/>", i);
         pt__mts_rgb(w, "specular_reflectance", m->albedo);
         pt__mts_put(w, "</bsdf></bsdf>\n");
+        break;
+    case PT_MATERIAL_ROUGH_CONDUCTOR:
+        pt__mts_conductor(w, m, i);
         break;
     case PT_MATERIAL_DIELECTRIC:
         pt__mts_put(w, "  <bsdf type=\"dielectric\" id=\"mat%d\"><float name=\"int_ior\" value=\"", i);
@@ -3332,7 +3418,8 @@ static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *er
         else if (m->type == PT_MATERIAL_LAMBERTIAN && m->checker >= 0)
             why = "the 3-D checker texture (material %s) has no exact Mitsuba equivalent (Mitsuba's checkerboard "
                   "is a 2-D texture over a shape's (u, v) coordinates)";
-        else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_METAL) &&
+        else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_METAL ||
+                  m->type == PT_MATERIAL_ROUGH_CONDUCTOR) &&
                  (m->albedo.x > 1 || m->albedo.y > 1 || m->albedo.z > 1))
             why = "an albedo above 1 (material %s): Mitsuba accepts RGB reflectances in [0, 1] only";
         else if (m->type == PT_MATERIAL_DIELECTRIC && m->ior == 1.0f)

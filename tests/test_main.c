@@ -91,6 +91,7 @@ int main(int argc, char **argv)
         { "pdf", test_pdf_cases },
         { "geometry", test_geometry_cases },
         { "materials", test_materials_cases },
+        { "microfacet", test_microfacet_cases },
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
         { "adaptive", test_adaptive_cases },

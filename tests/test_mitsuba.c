@@ -330,6 +330,7 @@ static void mitsuba_refusals(test_ctx *t)
         {"material e emitter 1 1 1 two_sided\ntriangle 0 0 0 1 0 0 0 1 0 m\nquad 0 0 0 1 0 0 0 1 0 e\n", 7, "two-sided emitter"},
         {"material w lambertian 1.5 0.5 0.5\nsphere 0 0 0 1 w\n", 6, "albedo above 1"},
         {"material g dielectric 1\nsphere 0 0 0 1 g\n", 6, "ior 1"},
+        {"material r roughconductor 0.3 Au tint 1.2 1 1\nsphere 0 0 0 1 r\n", 6, "albedo above 1"},
         {"triangle 0 0 0 1 0 0 0 1 0 m\nscale 1 3 1\nsphere 0 0 0 1 m\n", 7, "similarity"},
     };
     char dir[64], path[600], err[1024], list[256];
@@ -347,6 +348,41 @@ static void mitsuba_refusals(test_ctx *t)
         CHECK(t, tu_dir_entries(dir, list, sizeof list) == 0, "case %d left %s", (int)i, list);
     }
     test_note(t, "%d refusals", (int)(sizeof cases / sizeof cases[0]));
+    tu_remove_tree(dir);
+}
+
+/* Rough conductors: two-sided roughconductor, ggx, sample_visible, alpha, the metal's eta and k from
+   pdftrace's table (pt_conductor_ior) or material none, the tint as specular_reflectance; below
+   alpha 1e-3 the smooth conductor pdftrace renders. */
+static void mitsuba_rough_conductor(test_ctx *t)
+{
+    char dir[64];
+    char *xml;
+    const char *p;
+    double v[3] = { 0, 0, 0 };
+    pt_color eta, k;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    xml = mts_xml_of(t, MTS_HEAD "material a roughconductor 0.25 Au tint 0.9 0.8 0.7\nmaterial b roughconductor 0.5 none\n"
+                                 "material c roughconductor 0.0005 eta 1.5 1 0.5 k 3 2 1\n"
+                                 "sphere 0 0 0 1 a\nsphere 3 0 0 1 b\nsphere -3 0 0 1 c\n", dir, NULL);
+    if (xml) {
+        p = strstr(xml, "<bsdf type=\"twosided\" id=\"mat2\"><bsdf type=\"roughconductor\"><string name=\"distribution\" "
+                        "value=\"ggx\"/><boolean name=\"sample_visible\" value=\"true\"/><float name=\"alpha\" value=\"0.25\"/>");
+        CHECK(t, p != NULL, "material a: no two-sided ggx roughconductor with sample_visible and alpha 0.25");
+        CHECK(t, pt_conductor_ior(PT_CONDUCTOR_AU, &eta, &k) == PT_OK, "pt_conductor_ior(AU)");
+        CHECK(t, mts_numbers(p, "name=\"eta\" value=\"", v, 3) && (float)v[0] == eta.x && (float)v[1] == eta.y && (float)v[2] == eta.z,
+              "material a: eta %g %g %g, want %g %g %g", v[0], v[1], v[2], eta.x, eta.y, eta.z);
+        CHECK(t, mts_numbers(p, "name=\"k\" value=\"", v, 3) && (float)v[0] == k.x && (float)v[1] == k.y && (float)v[2] == k.z,
+              "material a: k %g %g %g", v[0], v[1], v[2]);
+        CHECK(t, mts_numbers(p, "name=\"specular_reflectance\" value=\"", v, 3) && (float)v[0] == 0.9f && (float)v[2] == 0.7f, "material a: tint");
+        p = strstr(xml, "id=\"mat3\"");
+        CHECK(t, p && strstr(p, "<string name=\"material\" value=\"none\"/>") && strstr(p, "roughconductor") &&
+                     strstr(p, "roughconductor") < strstr(p, "</bsdf></bsdf>"), "material b: %.200s", p ? p : "(missing)");
+        p = strstr(xml, "id=\"mat4\"");
+        CHECK(t, p && !strncmp(p, "id=\"mat4\"><bsdf type=\"conductor\"><rgb name=\"eta\" value=\"1.5, 1, 0.5\"/>", 60),
+              "material c (alpha 5e-4, the smooth conductor): %.120s", p ? p : "(missing)");
+        free(xml);
+    }
     tu_remove_tree(dir);
 }
 
@@ -734,6 +770,7 @@ const test_case test_mitsuba_cases[] = {
     TEST_CASE(mitsuba_ply_files),
     TEST_CASE(mitsuba_lights),
     TEST_CASE(mitsuba_refusals),
+    TEST_CASE(mitsuba_rough_conductor),
     TEST_CASE(mitsuba_nonfinite_refused),
     TEST_CASE(mitsuba_unwritable),
     TEST_CASE(mitsuba_hostile_names),

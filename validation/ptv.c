@@ -889,6 +889,13 @@ static const bad_case bad_cases[] = {
     {"no shapes", "%H", "bad.scene: no shapes"},
     {"negative colour", "%Hmaterial n lambertian 0.5 -0.1 0.5\n", "colour components must be >= 0"},
     {"duplicate name", "%Hmaterial m metal 1 1 1\n", "name 'm' is already defined"},
+    {"roughconductor alpha above 1", "%Hmaterial r roughconductor 1.5 Au\n", "bad.scene:3: roughconductor alpha: must be in [0, 1]"},
+    {"roughconductor unknown metal", "%Hmaterial r roughconductor 0.2 Pt\n", "bad.scene:3: roughconductor: unknown metal"},
+    {"roughconductor no metal", "%Hmaterial r roughconductor 0.2\n", "bad.scene:3: roughconductor: missing metal"},
+    {"roughconductor eta 0", "%Hmaterial r roughconductor 0.2 eta 0 1 1 k 1 1 1\n", "bad.scene:3: roughconductor eta: must be > 0"},
+    {"roughconductor eta without k", "%Hmaterial r roughconductor 0.2 eta 1 1 1 1 1 1\n", "bad.scene:3: roughconductor: expected 'k R G B'"},
+    {"roughconductor negative k", "%Hmaterial r roughconductor 0.2 eta 1 1 1 k 1 -1 1\n", "bad.scene:3: roughconductor k"},
+    {"roughconductor negative tint", "%Hmaterial r roughconductor 0.2 Cu tint 1 -1 1\n", "bad.scene:3: roughconductor tint"},
     {"bad name", "%Hmaterial 9lives lambertian 1 1 1\n", "bad name '9lives'"},
     {"unknown material type", "%Hmaterial n plastic 1 1 1\n", "unknown type 'plastic'"},
     {"undefined checker", "%Hmaterial n lambertian texture nope\n", "checker 'nope' is not defined"},
@@ -1032,7 +1039,7 @@ static void test_malformed(const char *work)
 static void test_scenes_load(const char *dir)
 {
     static const char *const names[] = {"cornell", "cornell-diffuse", "direct-quad", "direct-sphere", "mirror", "glass", "checker", "mesh",
-                                        "lights", "lights-direct", "env"};
+                                        "lights", "lights-direct", "env", "rough-metal"};
     size_t i;
     for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
         char path[2048], err[1024] = "";

@@ -1960,6 +1960,75 @@ void st_environment(st_ctx *c)
     st_row(c, nonfinite == 0, "env: all", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
 }
 
+/* Rough conductors from roughness 1e-4 (the delta mirror below 1e-3) to 1, incidence from 0 to
+   89.99 degrees. A white (F = 1, tint 1) conductor sphere under a uniform background of 1, one ray
+   meeting it at angle theta: under MATERIAL every sample is F G1(wi) <= 1 (the visible-normal
+   sampler's weight); MIS as well, for NaN/Inf. The material PDF at those angles
+   (and exactly tangent, cos 0): every draw finite with a positive density equal to pt_pdf_value. */
+void st_microfacet(st_ctx *c)
+{
+    static const float rough[7] = { 1e-4f, 9.9e-4f, 1e-3f, 1e-2f, 0.1f, 0.5f, 1.0f };
+    static const double angle[7] = { 0.0, 45.0, 80.0, 89.0, 89.9, 89.99, 90.0 };
+    const int n = c->full ? 20000 : 2000;
+    uint64_t nonfinite = 0;
+    int ri, ai, i;
+    for (ri = 0; ri < 7; ri++) {
+        pt_scene *s = pt_scene_create();
+        int m = s ? pt_scene_add_rough_conductor(s, PT_CONDUCTOR_NONE, rough[ri], pt_v3(1, 1, 1)) : -1;
+        double worst_max = 0.0;
+        long bad_draws = 0, draws = 0;
+        char cas[64];
+        snprintf(cas, sizeof cas, "microfacet: alpha %g", (double)rough[ri]);
+        if (m < 0 || pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m) < 0 || pt_scene_commit(s) != PT_OK) {
+            st_row(c, 0, cas, "scene", "builds", "%s", s ? pt_scene_error_message(s) : "out of memory");
+            pt_scene_destroy(s);
+            continue;
+        }
+        for (ai = 0; ai < 7; ai++) {
+            double th = angle[ai] * TU_PI / 180.0;
+            pt_vec3 nrm = pt_v3(0, 0, 1), wo = dv_to(dnorm(dv(sin(th), 0.0, cos(th))));
+            pt_pdf p = pt_pdf_material(s, m, nrm, wo);
+            pt_rng rng;
+            int strat;
+            pt_rng_seed(&rng, 13000 + (uint64_t)(ri * 10 + ai), 1);
+            for (i = 0; i < n; i++) {
+                pt_vec3 d;
+                float pv, v;
+                if (!pt_pdf_sample(&p, &rng, &d, &pv)) continue;
+                draws++;
+                v = pt_pdf_value(&p, d);
+                if (!(pv > 0.0f) || !isfinite(pv) || v != pv || !isfinite(d.x + d.y + d.z)) bad_draws++;
+            }
+            if (ai == 6) continue; /* a ray cannot meet the sphere at exactly 90 degrees */
+            for (strat = 0; strat < 2; strat++) {
+                pt_render_desc d = tu_base_desc(1, 1, 1, 0);
+                pt_path_stats st;
+                pt_ray ray;
+                double sum = 0.0, mx = 0.0;
+                memset(&st, 0, sizeof st);
+                d.background = pt_v3(1, 1, 1);
+                d.strategy = strat == 0 ? PT_STRATEGY_MATERIAL : PT_STRATEGY_MIS;
+                d.rr_start_depth = -1;
+                ray.origin = pt_v3((float)sin(th), 0.0f, 10.0f);
+                ray.dir = pt_v3(0, 0, -1);
+                for (i = 0; i < n; i++) {
+                    pt_color L = pt_trace_path(s, &d, ray, &rng, &st);
+                    sum += L.x;
+                    mx = fmax(mx, fmax(L.x, fmax(L.y, L.z)));
+                }
+                nonfinite += st.nonfinite_samples;
+                if (strat == 0) worst_max = fmax(worst_max, mx);
+                if (strat == 0 && sum / n > 1.0 + 1e-5) worst_max = fmax(worst_max, sum / n);
+            }
+        }
+        st_row(c, worst_max <= 1.0 + 1e-5, cas, "largest MATERIAL sample, 0 .. 89.99 degrees", "<= 1", "%.6f", worst_max);
+        st_row(c, bad_draws == 0, cas, "PDF draws (0 .. 90 degrees) non-finite or != pt_pdf_value", "0", "%ld of %ld", bad_draws,
+               draws);
+        pt_scene_destroy(s);
+    }
+    st_row(c, nonfinite == 0, "microfacet: all", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
+}
+
 void st_family(st_ctx *c)
 {
     char b[48];
