@@ -375,7 +375,8 @@ typedef struct pt_pdf {
         struct { const struct pt_scene *scene; int material; pt_vec3 normal, wo; } material;
         struct { int count; const struct pt_pdf *components; const float *weights; } mixture;
         struct { void *user; pt_pdf_sample_fn sample; pt_pdf_value_fn value; } callback;
-        struct { const struct pt_guide *guide; uint32_t leaf; } guide;
+        struct { const struct pt_guide *guide; uint32_t leaf; pt_vec3 fold; } guide; /* fold: 0 or the
+                                                                                   hemisphere's normal */
         struct { const struct pt_scene *scene; pt_color background; } environment;
     } as;
 } pt_pdf;
@@ -473,6 +474,11 @@ PTDEF int pt_guide_get_info(const pt_guide *guide, pt_guide_info *info);
 /* The guide's density at point (the leaf holding it): PT_PDF_GUIDE. The guide must outlive it and
    not be updated while it is used. A NULL guide gives a PDF with no density. */
 PTDEF pt_pdf pt_pdf_guide(const pt_guide *guide, pt_vec3 point);
+/* The guide at point folded onto the hemisphere of unit_normal: a direction below it is mirrored
+   through the tangent plane, so the density of w above is p(w) + p(w - 2 (w.n) n) and zero below.
+   Every draw then leaves on the side of the normal (for a surface that only reflects, no sample is
+   wasted below it), at the cost of a second look-up per evaluation. PT_PDF_GUIDE. */
+PTDEF pt_pdf pt_pdf_guide_hemisphere(const pt_guide *guide, pt_vec3 point, pt_vec3 unit_normal);
 /* The guide's density at point as a latitude-longitude picture (column: phi from 0 to 2 pi about
    +z, starting at +x; row: theta from 0 at +z at the top to pi), each pixel's value in all three
    channels: the density of the direction at its centre, per steradian. *image is allocated or
@@ -3178,6 +3184,8 @@ typedef struct pt__guide_leaf {
     pt__dtree sampling, building;
     uint64_t records;  /* records since the last update (added atomically) */
     int trained;       /* the sampling tree holds learned data (else it is uniform) */
+    float flux;        /* the last update's mean record: an estimate of the integral of L_i over the
+                          sphere at the leaf (Russian roulette's expected contribution) */
 } pt__guide_leaf;
 
 typedef struct pt__guide_node {
@@ -3422,6 +3430,41 @@ static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2
     return *p > 0.0f;
 }
 
+/* The folded guide (pt_pdf_guide_hemisphere): fold n = 0 is the whole sphere. */
+static pt_vec3 pt__guide_mirror(pt_vec3 w, pt_vec3 n) { return pt_sub(w, pt_scale(n, 2.0f * pt_dot(w, n))); }
+static float pt__guide_value_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, pt_vec3 w)
+{
+    float c = pt_dot(w, n), x, y;
+    const pt__dtree *t;
+    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return pt__guide_value(g, leaf, w);
+    if (!(c > 0.0f) || !g || leaf >= g->leaf_count) return 0.0f;
+    t = &g->leaves[leaf].sampling;
+    pt__guide_dir_to_square(w, &x, &y);
+    /* an axis normal mirrors the square without a second atan2: z flips x, x and y turn phi */
+    if (n.x == 0.0f && n.y == 0.0f)
+        return (pt__dtree_density(t, x, y) + pt__dtree_density(t, pt__minf(1.0f - x, 0.99999994f), y)) * PT__INV_4PI;
+    if ((n.y == 0.0f && n.z == 0.0f) || (n.x == 0.0f && n.z == 0.0f)) {
+        float m = (n.x != 0.0f ? 0.5f : 1.0f) - y;
+        m = m < 0.0f ? m + 1.0f : (m >= 1.0f ? 0.0f : m);
+        return (pt__dtree_density(t, x, y) + pt__dtree_density(t, x, m)) * PT__INV_4PI;
+    }
+    return (pt__dtree_density(t, x, y) + pt__guide_value(g, leaf, pt__guide_mirror(w, n)) * 4.0f * PT__PI) * PT__INV_4PI;
+}
+/* A draw of the guide, mirrored above n if it fell below; *p: the folded density of the direction
+   returned (exact: as pt__guide_sample's, the draw moved off a cell's edge first). */
+static int pt__guide_sample_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, float u1, float u2, pt_vec3 *w, float *p,
+                                 int exact)
+{
+    float c;
+    if (!pt__guide_sample(g, leaf, u1, u2, w, p, exact)) return 0;
+    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return 1;
+    c = pt_dot(*w, n);
+    if (c == 0.0f) return 0;
+    if (c < 0.0f) *w = pt__guide_mirror(*w, n);
+    *p = pt__guide_value_fold(g, leaf, n, *w);
+    return *p > 0.0f;
+}
+
 /* A record is spread over the directional cells that a square the size of its own cell overlaps,
    in proportion to the overlap (the directional box filter of Mueller, "Practical Path Guiding in
    Production", SIGGRAPH 2019 course notes), so that one record informs its neighbours too and a
@@ -3583,6 +3626,7 @@ static int pt__guide_split(pt_guide *g, uint32_t i)
     memset(l, 0, sizeof *l);
     if (!pt__dtree_copy(&l->sampling, &g->leaves[old].sampling)) return 0;
     l->trained = g->leaves[old].trained;
+    l->flux = g->leaves[old].flux;
     g->leaves[old].records /= 2u;
     l->records = g->leaves[old].records;
     g->leaf_count++;
@@ -3638,6 +3682,7 @@ static int pt__guide_update(pt_guide *g)
             l->sampling = s;
             l->trained = 1;
         }
+        if (l->records) l->flux = (float)((double)(e[0] + e[1] + e[2] + e[3]) * g->unit / (double)l->records);
     }
     for (i = 0; i < g->node_count; ++i) { /* (nodes appended by a split are visited too) */
         uint32_t leaf;
@@ -3799,6 +3844,14 @@ PTDEF pt_pdf pt_pdf_guide(const pt_guide *g, pt_vec3 point)
     p.origin = point;
     p.as.guide.guide = g;
     p.as.guide.leaf = g && pt__vfinite(point) ? pt__guide_leaf_at(g, pt__guide_local(g, point)) : 0u;
+    p.as.guide.fold = pt_v3(0, 0, 0);
+    return p;
+}
+PTDEF pt_pdf pt_pdf_guide_hemisphere(const pt_guide *g, pt_vec3 point, pt_vec3 n)
+{
+    pt_pdf p = pt_pdf_guide(g, point);
+    if (!pt__vfinite(n) || !(pt_length2(n) > 0.0f)) p.as.guide.guide = NULL; /* (no density) */
+    else p.as.guide.fold = pt_normalize(n);
     return p;
 }
 
@@ -3942,7 +3995,7 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     case PT_PDF_CALLBACK:
         if (pdf->as.callback.value) v = pdf->as.callback.value(pdf->as.callback.user, w);
         break;
-    case PT_PDF_GUIDE: v = pt__guide_value(pdf->as.guide.guide, pdf->as.guide.leaf, w); break;
+    case PT_PDF_GUIDE: v = pt__guide_value_fold(pdf->as.guide.guide, pdf->as.guide.leaf, pdf->as.guide.fold, w); break;
     case PT_PDF_ENVIRONMENT: {
         const pt__env *e;
         float c;
@@ -4062,7 +4115,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         break;
     case PT_PDF_GUIDE: {
         float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-        ok = pt__guide_sample(pdf->as.guide.guide, pdf->as.guide.leaf, u1, u2, &w, &p, 1);
+        ok = pt__guide_sample_fold(pdf->as.guide.guide, pdf->as.guide.leaf, pdf->as.guide.fold, u1, u2, &w, &p, 1);
         break;
     }
     default: break;
@@ -7297,6 +7350,8 @@ typedef struct pt__vertex {
     int has_guide;
     float g;
     pt_pdf guide;
+    float rr_e, rr_ref; /* guided roulette: the expected contribution of going on per unit throughput
+                           (0: unknown) and the path's reference (pt__trace_from) */
 } pt__vertex;
 
 /* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
@@ -7317,7 +7372,8 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
         if (v->guide.type == PT_PDF_GUIDE) { /* the learned guide, from the scattering numbers */
             float u1, u2;
             pt__draw_scatter(smp, depth, &u1, &u2);
-            return pt__guide_sample(v->guide.as.guide.guide, v->guide.as.guide.leaf, u1, u2, wi, pg, 0);
+            return pt__guide_sample_fold(v->guide.as.guide.guide, v->guide.as.guide.leaf, v->guide.as.guide.fold, u1, u2,
+                                         wi, pg, 0);
         }
         return pt__pdf_sample_depth(&v->guide, pt__sampler_rng(smp), wi, pg, 0, 1);
     } else {
@@ -7538,6 +7594,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
    weight 1 roulette divides by 0.95 each time; with a guide, or MIXTURE, they split often. What
    it does to the error: docs/internals.md, "Splitting (the weight window)". */
 #define PT__SPLIT_BETA 2.0f
+#define PT__GUIDE_RR_WINDOW 10.0f /* guided roulette: q >= min(0.95, 10 b e / ref) (bench/README.md) */
 #define PT__SPLIT_MAX_COPIES 8
 
 /* indirect_paths (pt_render_desc): a camera sample's path also splits at its first non-delta
@@ -7559,6 +7616,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
    has been reached). */
 typedef struct pt__splits {
     int left, first;
+    float rr_ref; /* guided roulette: the path's expected value at its first guided vertex (0: none yet) */
 } pt__splits;
 
 /* How many copies the path continues as from a non-delta vertex reached with throughput beta_in:
@@ -7664,7 +7722,11 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
     ray->origin = *prev_delta ? pt__offset_origin(v->p, v->ng, wi, h->magnitude) : v->o;
     ray->dir = wi;
     if (depth + 1 >= cfg->rr_start) {
-        float q = pt__minf(0.95f, sqrtf(cfg->rr_gain * pt_max_component(beta_in)));
+        float b = pt_max_component(beta_in), q = pt__minf(0.95f, sqrtf(cfg->rr_gain * b));
+        /* with a learned guide, q also follows the expected contribution b e of going on against
+           the path's reference (adjoint-driven roulette, Vorba & Krivanek 2016, without its
+           splitting): only ever raised, so a poor estimate costs rays, not fireflies */
+        if (v->rr_e > 0.0f && v->rr_ref > 0.0f) q = pt__maxf(q, pt__minf(0.95f, PT__GUIDE_RR_WINDOW * b * v->rr_e / v->rr_ref));
         if (!(q > 0.0f) || pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_RR)) >= q) return 0;
         *beta = pt_scale(*beta, 1.0f / q);
     }
@@ -7773,6 +7835,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
     v.has_guide = 0; /* (every other field is set at each vertex before it is read; v.guide only
                         when has_guide is) */
     v.g = 0.0f;
+    v.rr_e = v.rr_ref = 0.0f;
     for (depth = depth0;; ++depth) {
         pt__rayctx rc;
         uint32_t pi;
@@ -7844,6 +7907,8 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         }
         if (!m->delta) {
             v.has_guide = 0;
+            v.rr_e = 0.0f; /* (set at a guided vertex; delta vertices keep the last one's: the light
+                              through glass is what the vertex before it learned) */
             if (cfg->guide) {
                 pt_shading_point sp;
                 sp.position = pt__to_world(s, v.p);
@@ -7856,9 +7921,11 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             } else if (cfg->learned) { /* path guiding: the learned guide's leaf, once it has data */
                 uint32_t leaf = pt__guide_leaf_at(cfg->learned, v.p);
                 if (cfg->learned->leaves[leaf].trained) {
-                    v.guide = pt__pdf_blank(PT_PDF_GUIDE);
+                    v.guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
                     v.guide.as.guide.guide = cfg->learned;
                     v.guide.as.guide.leaf = leaf;
+                    v.guide.as.guide.fold = v.ng; /* non-delta materials reflect only (pt__continue) */
+                    v.rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v.albedo) * (0.5f / PT__PI);
                     v.g = cfg->learned_weight;
                     v.has_guide = 1;
                     st->guided_vertices++;
@@ -7875,6 +7942,10 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             }
             /* the delta lights, under every strategy (a scene without them skips this) */
             if (PT__UNLIKELY(s->dlight_count != 0)) L = pt_add(L, pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st));
+            if (v.rr_e > 0.0f && !(sp->rr_ref > 0.0f)) /* the first guided vertex: what the path has so far
+                                                          and what going on should add */
+                sp->rr_ref = pt_max_component(L) + pt_max_component(beta) * v.rr_e;
+            v.rr_ref = sp->rr_ref;
         }
         /* the continuation: split copies first (each ends before the next starts), then this path */
         if (!m->delta &&
@@ -7919,6 +7990,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     pt__splits sp;
     sp.left = cfg->max_splits;
     sp.first = cfg->indirect_paths;
+    sp.rr_ref = 0.0f;
     st->camera_rays++;
     return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 1, 0.0f, ray.origin, smp, st, &sp), 1.0f / k);
 }

@@ -495,15 +495,64 @@ static void guide_chi2_mixture(test_ctx *t)
     pt_guide_destroy(g);
 }
 
+static void guide_chi2_folded(test_ctx *t)
+{
+    /* (e) the peaked guide folded onto a hemisphere (pt_pdf_guide_hemisphere): about the axis
+       normal -x (the mirror taken in the square) and a tilted normal (the mirror taken on the
+       direction), each a chi-square on a 64 x 64 grid over the peaked case's rectangle, 3 x 10^5 draws. The density must be
+       zero below the normal and p(w) + p(mirror w) above, and every draw must leave above. */
+    static const float normals[2][3] = { { -1.0f, 0.0f, 0.0f }, { -0.8f, 0.5f, 0.33f } };
+    pt_guide *g = new_guide(0, 0);
+    zoom z = make_zoom(&PEAK_RECT);
+    tu_domain dom;
+    int k;
+    if (!CHECK(t, g != NULL, "pt_guide_create")) return;
+    if (!CHECK(t, train_peaked(g, 4, 100000, 206), "training")) { pt_guide_destroy(g); return; }
+    zoom_domain(&dom, &z);
+    for (k = 0; k < 2; k++) {
+        pt_vec3 n = pt_normalize(pt_v3(normals[k][0], normals[k][1], normals[k][2]));
+        pt_pdf whole = pt_pdf_guide(g, pt_v3(0, 0, 0)), p = pt_pdf_guide_hemisphere(g, pt_v3(0, 0, 0), n);
+        tu_pdf_check c;
+        tu_pdf_result r;
+        pt_rng rng;
+        long i, below = 0, bad_value = 0;
+        pt_rng_seed(&rng, 7106 + (uint64_t)k, 3);
+        CHECK(t, pt_pdf_validate(&p) == PT_OK, "pt_pdf_validate of a folded guide");
+        for (i = 0; i < 20000; i++) { /* the density against its definition, above and below */
+            pt_vec3 w = pt_normalize(dv_to(tu_rand_dir(&rng))), m;
+            float c0 = pt_dot(w, n), want;
+            m = pt_sub(w, pt_scale(n, 2.0f * c0));
+            want = c0 > 0.0f ? pt_pdf_value(&whole, w) + pt_pdf_value(&whole, m) : 0.0f;
+            if (!(fabsf(pt_pdf_value(&p, w) - want) <= 1e-3f * want + 1e-6f)) bad_value++;
+        }
+        for (i = 0; i < 20000; i++) {
+            pt_vec3 w;
+            float pv;
+            if (pt_pdf_sample(&p, &rng, &w, &pv) && !(pt_dot(w, n) > 0.0f)) below++;
+        }
+        CHECK(t, bad_value == 0, "folded guide %d: %ld of 20000 densities differ from p(w) + p(mirror w) (0 below)", k, bad_value);
+        CHECK(t, below == 0, "folded guide %d: %ld of 20000 draws below the normal", k, below);
+        c = guide_check(k == 0 ? "guide: peaked, folded about -x" : "guide: peaked, folded about a tilted normal", &p, &dom,
+                        7107 + (uint64_t)k);
+        c.n_samples = 300000;
+        c.ns = 64;
+        c.nphi = 64;
+        TU_CHECK_PDF(t, &c, &r);
+        check_result(t, k == 0 ? "folded -x" : "folded tilted", &r);
+    }
+    pt_guide_destroy(g);
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* 2. the harness rejects wrong guide densities                                                */
 
-typedef struct wrong_guide { const pt_pdf *inner; int mode; } wrong_guide;
+typedef struct wrong_guide { const pt_pdf *inner, *whole; int mode; } wrong_guide;
 
 static float wrong_guide_value(void *user, pt_vec3 dir)
 {
     const wrong_guide *w = (const wrong_guide *)user;
     if (w->mode == 0) return pt_pdf_value(w->inner, dir) * (float)FOUR_PI; /* density over the square: no 1/(4 pi) */
+    if (w->mode == 2) return pt_pdf_value(w->whole, dir);                  /* a fold's draws, the unfolded density */
     return (float)(1.0 / FOUR_PI);                                         /* uniform over the sphere */
 }
 static int wrong_guide_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
@@ -541,6 +590,7 @@ static void harness_rejects_wrong_guide(test_ctx *t)
         char reason[768];
         int failures;
         w.inner = &inner;
+        w.whole = &inner;
         w.mode = k;
         p = pt_pdf_callback(&w, wrong_guide_sample, wrong_guide_value);
         c = guide_check(k == 0 ? "WRONG: guide samples, density x 4 pi (no Jacobian)" : "WRONG: guide samples, density 1/(4 pi)", &p,
@@ -562,6 +612,40 @@ static void harness_rejects_wrong_guide(test_ctx *t)
         test_note(t, "%s: rejected by %d checks; chi2 %.0f, %d dof, p = %.3g; integral %.4f; first: %.120s", k == 0 ? "A" : "B",
                   failures, r.chi2, r.dof, r.chi2_p, r.integral, reason);
     }
+    pt_guide_destroy(g);
+}
+
+static void harness_rejects_unfolded_density(test_ctx *t)
+{
+    /* C: draws of the flat guide folded about a tilted normal, reported with the unfolded density
+       p(w) (the mirror's share dropped): half the folded density over the hemisphere the draws
+       cover, so the chi-square must reject it. 2 x 10^5 draws on the flat case's grid. */
+    pt_guide *g = new_guide(0, 0);
+    zoom z = make_zoom(&FULL_SQUARE);
+    tu_domain dom;
+    pt_pdf whole, folded, p;
+    wrong_guide w;
+    tu_pdf_check c;
+    tu_pdf_result r;
+    char reason[768];
+    int failures;
+    if (!CHECK(t, g != NULL, "pt_guide_create")) return;
+    if (!CHECK(t, train_flat(g, 2, 100000, 207), "training")) { pt_guide_destroy(g); return; }
+    whole = pt_pdf_guide(g, pt_v3(0, 0, 0));
+    folded = pt_pdf_guide_hemisphere(g, pt_v3(0, 0, 0), pt_normalize(pt_v3(0.3f, -0.4f, 0.87f)));
+    w.inner = &folded;
+    w.whole = &whole;
+    w.mode = 2;
+    p = pt_pdf_callback(&w, wrong_guide_sample, wrong_guide_value);
+    zoom_domain(&dom, &z);
+    c = guide_check("WRONG: folded guide samples, unfolded density", &p, &dom, 7112);
+    c.n_samples = 200000;
+    c.n_mass = 50000;
+    c.ns = 32;
+    failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
+    CHECK(t, failures > 0, "%s was not rejected (chi2 p = %.3g, integral %.6f)", c.label, r.chi2_p, r.integral);
+    CHECK(t, r.chi2_p < c.alpha, "%s: chi-square p = %.3g not below alpha %.3g", c.label, r.chi2_p, c.alpha);
+    test_note(t, "C: rejected by %d checks; integral %.4f; first: %.120s", failures, r.integral, reason);
     pt_guide_destroy(g);
 }
 
@@ -1511,7 +1595,9 @@ const test_case test_guide_cases[] = {
     TEST_CASE(guide_chi2_hot_cell),
     TEST_CASE(guide_deep_cells_sample),
     TEST_CASE(guide_chi2_mixture),
+    TEST_CASE(guide_chi2_folded),
     TEST_CASE(harness_rejects_wrong_guide),
+    TEST_CASE(harness_rejects_unfolded_density),
     TEST_CASE(sample_value_and_normalisation),
     TEST_CASE(guide_image_matches_value),
     TEST_CASE(guide_order_independent),
