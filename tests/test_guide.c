@@ -17,8 +17,8 @@
    comparison at tu_suite_alpha()); the deliberately wrong guide densities are not counted in it
    (they must be rejected). The other statistical tests state their own families at alpha = 0.01
    (Sidak over their comparisons) or fixed z limits: sample_value_and_normalisation (alpha 0.01)
-   and render_unbiased (two families: image means at |z| <= 3, alpha 0.008; regions at alpha
-   0.01). The rest are exact: bit-identical guides and films, error codes and messages, counts. */
+   and render_unbiased and render_unbiased_glass (two families each: image means at |z| <= 3,
+   alpha 0.008; regions at alpha 0.01). The rest are exact: bit-identical guides and films, error codes and messages, counts. */
 #include "test_util.h"
 
 #ifndef PDFTRACE_NO_THREADS
@@ -953,6 +953,33 @@ static pt_scene *small_box(pt_render_desc *d, float light)
     return s;
 }
 
+/* small_box with a glass ball (ior 1.5) and a grey Lambertian ball on its floor. */
+static pt_scene *small_box_with_balls(pt_render_desc *d, int *glass, int *matte)
+{
+    pt_scene *s = pt_scene_create();
+    int red, white, lamp, rc;
+    if (!s) return NULL;
+    red = pt_scene_add_lambertian(s, pt_v3(0.65f, 0.05f, 0.05f));
+    white = pt_scene_add_lambertian(s, pt_v3(0.73f, 0.73f, 0.73f));
+    lamp = pt_scene_add_emitter(s, pt_v3(12.0f, 12.0f, 12.0f), 0);
+    *glass = pt_scene_add_dielectric(s, 0.0f);
+    *matte = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    rc = pt_scene_add_quad(s, pt_v3(1, 0, 0), pt_v3(0, 1, 0), pt_v3(0, 0, 1), white);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 0), pt_v3(0, 1, 0), pt_v3(0, 0, 1), red);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 0), pt_v3(1, 0, 0), pt_v3(0, 0, 1), white);
+    rc |= pt_scene_add_quad(s, pt_v3(1, 1, 1), pt_v3(-1, 0, 0), pt_v3(0, 0, -1), white);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 1), pt_v3(1, 0, 0), pt_v3(0, 1, 0), white);
+    rc |= pt_scene_add_quad(s, pt_v3(0.62f, 0.999f, 0.6f), pt_v3(-0.24f, 0, 0), pt_v3(0, 0, -0.2f), lamp); /* faces -y */
+    rc |= pt_scene_add_sphere(s, pt_v3(0.65f, 0.2f, 0.45f), 0.2f, *glass);
+    rc |= pt_scene_add_sphere(s, pt_v3(0.3f, 0.15f, 0.6f), 0.15f, *matte);
+    if (rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    d->camera.look_from = pt_v3(0.5f, 0.5f, -1.4f);
+    d->camera.look_at = pt_v3(0.5f, 0.5f, 0.0f);
+    d->camera.vfov_degrees = 40;
+    d->max_depth = 8;
+    return s;
+}
+
 static void render_threads_bit_identical(test_ctx *t)
 {
     /* Guiding ON, 48 x 48, 32 spp (3 training iterations of 1, 2, 4 spp, then 25 guided): the film
@@ -1127,6 +1154,56 @@ static void render_unbiased(test_ctx *t)
     pt_film_free(&ff);
     pt_scene_destroy(s);
     pt_scene_destroy(fs);
+}
+
+static void render_unbiased_glass(test_ctx *t)
+{
+    /* The small box with a glass ball and a diffuse ball added (vertices with normals off the axes,
+       where the guide is folded about a tilted normal, and delta vertices, where guided roulette
+       keeps the last guided vertex's estimate), 32 x 32, 256 spp, guiding ON against OFF,
+       independent seeds: the image means per channel within 3 standard errors (3 comparisons,
+       family alpha 0.008) and the 4 x 4 region means per channel at alpha 0.01 Sidak over 48, as
+       in render_unbiased (its own families). */
+    pt_render_desc d = tu_base_desc(32, 32, 256, 0);
+    pt_film fg, fu;
+    pt_render_stats sg, su;
+    tu_region rg[16], ru[16], ag, au;
+    double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 48)), worst_region = 0.0, worst_image = 0.0;
+    int i, c, glass, matte;
+    pt_scene *s = small_box_with_balls(&d, &glass, &matte);
+    memset(&fg, 0, sizeof fg);
+    memset(&fu, 0, sizeof fu);
+    if (!CHECK(t, s != NULL, "scene with balls")) return;
+    d.guiding = PT_GUIDING_ON;
+    d.seed = 7011;
+    if (tu_render_into(t, s, &d, &fg, &sg, "guided") && (d.guiding = PT_GUIDING_OFF, d.seed = 7012, 1) &&
+        tu_render_into(t, s, &d, &fu, &su, "unguided")) {
+        CHECK(t, sg.guiding_used == 1, "guiding not used: '%s'", sg.guiding_note);
+        CHECK(t, sg.nonfinite_samples == 0 && su.nonfinite_samples == 0, "NaN/Inf samples: %llu guided, %llu unguided",
+              (unsigned long long)sg.nonfinite_samples, (unsigned long long)su.nonfinite_samples);
+        tu_film_regions(&fg, 4, 4, rg);
+        tu_film_regions(&fu, 4, 4, ru);
+        tu_film_regions(&fg, 1, 1, &ag);
+        tu_film_regions(&fu, 1, 1, &au);
+        for (c = 0; c < 3; c++) {
+            double z = fabs(ag.mean[c] - au.mean[c]) / sqrt(ag.se[c] * ag.se[c] + au.se[c] * au.se[c]);
+            worst_image = fmax(worst_image, z);
+            CHECK(t, z <= 3.0, "image mean, channel %d: guided %.5f +- %.5f, unguided %.5f +- %.5f (|z| = %.2f > 3)", c,
+                  ag.mean[c], ag.se[c], au.mean[c], au.se[c], z);
+            for (i = 0; i < 16; i++) {
+                double zr = fabs(rg[i].mean[c] - ru[i].mean[c]) / sqrt(rg[i].se[c] * rg[i].se[c] + ru[i].se[c] * ru[i].se[c]);
+                worst_region = fmax(worst_region, zr);
+                CHECK(t, zr <= zlim, "region %d channel %d: guided %.5f +- %.5f, unguided %.5f +- %.5f (|z| = %.2f > %.2f)", i,
+                      c, rg[i].mean[c], rg[i].se[c], ru[i].mean[c], ru[i].se[c], zr, zlim);
+            }
+        }
+        test_note(t, "image mean guided %.4f +- %.4f vs %.4f +- %.4f (green), worst |z| %.2f (limit 3); regions worst |z| %.2f "
+                     "(limit %.2f)",
+                  ag.mean[1], ag.se[1], au.mean[1], au.se[1], worst_image, worst_region, zlim);
+    }
+    pt_film_free(&fg);
+    pt_film_free(&fu);
+    pt_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -1603,6 +1680,7 @@ const test_case test_guide_cases[] = {
     TEST_CASE(guide_order_independent),
     TEST_CASE(render_threads_bit_identical),
     TEST_CASE(render_unbiased),
+    TEST_CASE(render_unbiased_glass),
     TEST_CASE(guide_api_errors),
     TEST_CASE(guide_memory_bound),
     TEST_CASE(render_desc_errors),
