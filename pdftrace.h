@@ -3432,36 +3432,54 @@ static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2
 
 /* The folded guide (pt_pdf_guide_hemisphere): fold n = 0 is the whole sphere. */
 static pt_vec3 pt__guide_mirror(pt_vec3 w, pt_vec3 n) { return pt_sub(w, pt_scale(n, 2.0f * pt_dot(w, n))); }
+/* The density over the square at the mirror of the square's point (x, y) through the plane of n,
+   for an axis normal (z flips x; x and y turn phi), without a second atan2; -1 for another n. */
+static float pt__guide_mirror_density(const pt__dtree *t, pt_vec3 n, float x, float y)
+{
+    float m;
+    if (n.x == 0.0f && n.y == 0.0f) return pt__dtree_density(t, pt__minf(1.0f - x, 0.99999994f), y);
+    if (!((n.y == 0.0f && n.z == 0.0f) || (n.x == 0.0f && n.z == 0.0f))) return -1.0f;
+    m = (n.x != 0.0f ? 0.5f : 1.0f) - y;
+    m = m < 0.0f ? m + 1.0f : (m >= 1.0f ? 0.0f : m);
+    return pt__dtree_density(t, x, m);
+}
 static float pt__guide_value_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, pt_vec3 w)
 {
-    float c = pt_dot(w, n), x, y;
+    float c = pt_dot(w, n), x, y, dm;
     const pt__dtree *t;
     if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return pt__guide_value(g, leaf, w);
     if (!(c > 0.0f) || !g || leaf >= g->leaf_count) return 0.0f;
     t = &g->leaves[leaf].sampling;
     pt__guide_dir_to_square(w, &x, &y);
-    /* an axis normal mirrors the square without a second atan2: z flips x, x and y turn phi */
-    if (n.x == 0.0f && n.y == 0.0f)
-        return (pt__dtree_density(t, x, y) + pt__dtree_density(t, pt__minf(1.0f - x, 0.99999994f), y)) * PT__INV_4PI;
-    if ((n.y == 0.0f && n.z == 0.0f) || (n.x == 0.0f && n.z == 0.0f)) {
-        float m = (n.x != 0.0f ? 0.5f : 1.0f) - y;
-        m = m < 0.0f ? m + 1.0f : (m >= 1.0f ? 0.0f : m);
-        return (pt__dtree_density(t, x, y) + pt__dtree_density(t, x, m)) * PT__INV_4PI;
-    }
-    return (pt__dtree_density(t, x, y) + pt__guide_value(g, leaf, pt__guide_mirror(w, n)) * 4.0f * PT__PI) * PT__INV_4PI;
+    dm = pt__guide_mirror_density(t, n, x, y);
+    if (dm < 0.0f) return pt__dtree_density(t, x, y) * PT__INV_4PI + pt__guide_value(g, leaf, pt__guide_mirror(w, n));
+    return (pt__dtree_density(t, x, y) + dm) * PT__INV_4PI;
 }
 /* A draw of the guide, mirrored above n if it fell below; *p: the folded density of the direction
    returned (exact: as pt__guide_sample's, the draw moved off a cell's edge first). */
 static int pt__guide_sample_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, float u1, float u2, pt_vec3 *w, float *p,
                                  int exact)
 {
-    float c;
-    if (!pt__guide_sample(g, leaf, u1, u2, w, p, exact)) return 0;
-    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return 1;
+    float c, d, dm;
+    double x, y, cell[3];
+    if (exact || (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f)) {
+        if (!pt__guide_sample(g, leaf, u1, u2, w, p, exact)) return 0;
+        if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return 1;
+        c = pt_dot(*w, n);
+        if (c == 0.0f) return 0;
+        if (c < 0.0f) *w = pt__guide_mirror(*w, n);
+        *p = pt__guide_value_fold(g, leaf, n, *w);
+        return *p > 0.0f;
+    }
+    /* the integrator's: the drawn cell's density plus its mirror's, from the square's point */
+    if (!g || leaf >= g->leaf_count) return 0;
+    d = pt__dtree_sample(&g->leaves[leaf].sampling, u1, u2, &x, &y, cell);
+    *w = pt__guide_square_to_dir(x, y);
     c = pt_dot(*w, n);
     if (c == 0.0f) return 0;
+    dm = pt__guide_mirror_density(&g->leaves[leaf].sampling, n, (float)x, (float)y);
+    *p = dm >= 0.0f ? (d + dm) * PT__INV_4PI : d * PT__INV_4PI + pt__guide_value(g, leaf, pt__guide_mirror(*w, n));
     if (c < 0.0f) *w = pt__guide_mirror(*w, n);
-    *p = pt__guide_value_fold(g, leaf, n, *w);
     return *p > 0.0f;
 }
 
