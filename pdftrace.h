@@ -1103,7 +1103,7 @@ typedef struct pt_render_desc {
     float guiding_budget;        /* the share of samples_per_pixel training may take, in (0, 1); 0:
                                     0.25. Iterations 1, 2, ..., 2^(T-1) spp: the most T with
                                     2^T - 1 <= budget x samples_per_pixel; T < 2: no guiding */
-    float guiding_alpha;         /* the material's share of the guided mixture, in (0, 1); 0: 0.5 */
+    float guiding_alpha;         /* the material's share of the guided mixture, in (0, 1); 0: 0.7 */
     int guiding_max_mib;         /* the guide's memory bound in MiB, >= 1; 0: 64 */
     pt_guide *guiding_guide;     /* optional: a guide from pt_guide_create_for_scene(scene) that the
                                     render trains (on from what it holds) and leaves trained, to be
@@ -8838,7 +8838,7 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
    guide look-ups (counts, not clocks: the decision is deterministic); only if the guide pays does
    training go on, and the rest is guided. --- */
 #define PT__GUIDING_BUDGET 0.25f
-#define PT__GUIDING_ALPHA 0.5f
+#define PT__GUIDING_ALPHA 0.7f
 #define PT__GUIDING_MIB 64
 #define PT__GUIDING_MAX_ITERATIONS 16
 #define PT__GUIDING_AUTO_GAIN 1.5 /* AUTO guides above this measured gain: from half an iteration, a
