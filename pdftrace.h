@@ -160,7 +160,9 @@
    learns where it comes from while rendering: a pt_guide (section 2; Mueller, Gross & Novak 2017)
    records the radiance the paths of training iterations of 1, 2, 4, ... samples per pixel bring
    back, and the material side of every strategy becomes alpha p_material + (1 - alpha) p_guide
-   at non-delta vertices, its density used everywhere (MIS weights included). Every sample stays
+   at non-delta vertices, its density used everywhere (MIS weights included); the guide is folded
+   onto the surface's side (pt_pdf_guide_hemisphere), and Russian roulette follows the radiance
+   each of its leaves learned, so that paths carrying indirect light live on. Every sample stays
    in the image with equal weight, so the image is unbiased and bit-identical at any thread count.
    PT_GUIDING_AUTO measures, in the last training iteration, whether the guide pays and goes on
    unguided if not; scenes where guiding cannot help (no non-delta material, no light) skip it.
@@ -349,7 +351,7 @@ typedef enum pt_pdf_type {
     PT_PDF_MATERIAL,           /* a non-delta material's scattering PDF */
     PT_PDF_MIXTURE,            /* sum_k w_k p_k */
     PT_PDF_CALLBACK,           /* user-defined */
-    PT_PDF_GUIDE,              /* a learned guide's leaf (pt_pdf_guide) */
+    PT_PDF_GUIDE,              /* a learned guide's leaf (pt_pdf_guide, pt_pdf_guide_hemisphere) */
     PT_PDF_ENVIRONMENT         /* a scene's environment light (pt_pdf_environment) */
 } pt_pdf_type;
 
