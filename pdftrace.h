@@ -7825,6 +7825,23 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
     return L;
 }
 
+/* Path guiding at non-delta vertex v: the learned guide's leaf, once it has data, folded about the
+   geometric normal (non-delta materials reflect only: pt__continue), and guided roulette's
+   estimate of what going on adds per unit throughput. */
+static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_stats *st)
+{
+    uint32_t leaf = pt__guide_leaf_at(cfg->learned, v->p);
+    if (!cfg->learned->leaves[leaf].trained) return;
+    v->guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
+    v->guide.as.guide.guide = cfg->learned;
+    v->guide.as.guide.leaf = leaf;
+    v->guide.as.guide.fold = v->ng;
+    v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
+    v->g = cfg->learned_weight;
+    v->has_guide = 1;
+    st->guided_vertices++;
+}
+
 /* What a ray along w that leaves the scene with throughput beta gathers from the environment
    light, weighted as emission found by a ray is (the strategies at the top of this section). */
 static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta, int prev_delta, float prev_pdf)
@@ -7938,18 +7955,8 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 sp.depth = depth;
                 v.g = cfg->guide_weight;
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
-            } else if (cfg->learned) { /* path guiding: the learned guide's leaf, once it has data */
-                uint32_t leaf = pt__guide_leaf_at(cfg->learned, v.p);
-                if (cfg->learned->leaves[leaf].trained) {
-                    v.guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
-                    v.guide.as.guide.guide = cfg->learned;
-                    v.guide.as.guide.leaf = leaf;
-                    v.guide.as.guide.fold = v.ng; /* non-delta materials reflect only (pt__continue) */
-                    v.rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v.albedo) * (0.5f / PT__PI);
-                    v.g = cfg->learned_weight;
-                    v.has_guide = 1;
-                    st->guided_vertices++;
-                }
+            } else if (cfg->learned) {
+                pt__vertex_learned(cfg, &v, st);
             }
             /* next-event estimation (LIGHT and MIS) */
             if (nee) {
