@@ -165,7 +165,9 @@
    learns where it comes from while rendering: a pt_guide (section 2; Mueller, Gross & Novak 2017)
    records the radiance the paths of training iterations of 1, 2, 4, ... samples per pixel bring
    back, and the material side of every strategy becomes alpha p_material + (1 - alpha) p_guide
-   at non-delta vertices, its density used everywhere (MIS weights included). Every sample stays
+   at non-delta vertices, its density used everywhere (MIS weights included); the guide is folded
+   onto the surface's side (pt_pdf_guide_hemisphere), and Russian roulette follows the radiance
+   each of its leaves learned, so that paths carrying indirect light live on. Every sample stays
    in the image with equal weight, so the image is unbiased and bit-identical at any thread count.
    PT_GUIDING_AUTO measures, in the last training iteration, whether the guide pays and goes on
    unguided if not; scenes where guiding cannot help (no non-delta material, no light) skip it.
@@ -354,7 +356,7 @@ typedef enum pt_pdf_type {
     PT_PDF_MATERIAL,           /* a non-delta material's scattering PDF */
     PT_PDF_MIXTURE,            /* sum_k w_k p_k */
     PT_PDF_CALLBACK,           /* user-defined */
-    PT_PDF_GUIDE,              /* a learned guide's leaf (pt_pdf_guide) */
+    PT_PDF_GUIDE,              /* a learned guide's leaf (pt_pdf_guide, pt_pdf_guide_hemisphere) */
     PT_PDF_ENVIRONMENT         /* a scene's environment light (pt_pdf_environment) */
 } pt_pdf_type;
 
@@ -380,7 +382,8 @@ typedef struct pt_pdf {
         struct { const struct pt_scene *scene; int material; pt_vec3 normal, wo; } material;
         struct { int count; const struct pt_pdf *components; const float *weights; } mixture;
         struct { void *user; pt_pdf_sample_fn sample; pt_pdf_value_fn value; } callback;
-        struct { const struct pt_guide *guide; uint32_t leaf; } guide;
+        struct { const struct pt_guide *guide; uint32_t leaf; pt_vec3 fold; } guide; /* fold: 0 or the
+                                                                                   hemisphere's normal */
         struct { const struct pt_scene *scene; pt_color background; } environment;
     } as;
 } pt_pdf;
@@ -483,6 +486,11 @@ PTDEF int pt_guide_get_info(const pt_guide *guide, pt_guide_info *info);
 /* The guide's density at point (the leaf holding it): PT_PDF_GUIDE. The guide must outlive it and
    not be updated while it is used. A NULL guide gives a PDF with no density. */
 PTDEF pt_pdf pt_pdf_guide(const pt_guide *guide, pt_vec3 point);
+/* The guide at point folded onto the hemisphere of unit_normal: a direction below it is mirrored
+   through the tangent plane, so the density of w above is p(w) + p(w - 2 (w.n) n) and zero below.
+   Every draw then leaves on the side of the normal (for a surface that only reflects, no sample is
+   wasted below it), at the cost of a second look-up per evaluation. PT_PDF_GUIDE. */
+PTDEF pt_pdf pt_pdf_guide_hemisphere(const pt_guide *guide, pt_vec3 point, pt_vec3 unit_normal);
 /* The guide's density at point as a latitude-longitude picture (column: phi from 0 to 2 pi about
    +z, starting at +x; row: theta from 0 at +z at the top to pi), each pixel's value in all three
    channels: the density of the direction at its centre, per steradian. *image is allocated or
@@ -1164,7 +1172,7 @@ typedef struct pt_render_desc {
     float guiding_budget;        /* the share of samples_per_pixel training may take, in (0, 1); 0:
                                     0.25. Iterations 1, 2, ..., 2^(T-1) spp: the most T with
                                     2^T - 1 <= budget x samples_per_pixel; T < 2: no guiding */
-    float guiding_alpha;         /* the material's share of the guided mixture, in (0, 1); 0: 0.5 */
+    float guiding_alpha;         /* the material's share of the guided mixture, in (0, 1); 0: 0.7 */
     int guiding_max_mib;         /* the guide's memory bound in MiB, >= 1; 0: 64 */
     pt_guide *guiding_guide;     /* optional: a guide from pt_guide_create_for_scene(scene) that the
                                     render trains (on from what it holds) and leaves trained, to be
@@ -3414,6 +3422,8 @@ typedef struct pt__guide_leaf {
     pt__dtree sampling, building;
     uint64_t records;  /* records since the last update (added atomically) */
     int trained;       /* the sampling tree holds learned data (else it is uniform) */
+    float flux;        /* the last update's mean record: an estimate of the integral of L_i over the
+                          sphere at the leaf (Russian roulette's expected contribution) */
 } pt__guide_leaf;
 
 typedef struct pt__guide_node {
@@ -3658,6 +3668,59 @@ static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2
     return *p > 0.0f;
 }
 
+/* The folded guide (pt_pdf_guide_hemisphere): fold n = 0 is the whole sphere. */
+static pt_vec3 pt__guide_mirror(pt_vec3 w, pt_vec3 n) { return pt_sub(w, pt_scale(n, 2.0f * pt_dot(w, n))); }
+/* The density over the square at the mirror of the square's point (x, y) through the plane of n,
+   for an axis normal (z flips x; x and y turn phi), without a second atan2; -1 for another n. */
+static float pt__guide_mirror_density(const pt__dtree *t, pt_vec3 n, float x, float y)
+{
+    float m;
+    if (n.x == 0.0f && n.y == 0.0f) return pt__dtree_density(t, pt__minf(1.0f - x, 0.99999994f), y);
+    if (!((n.y == 0.0f && n.z == 0.0f) || (n.x == 0.0f && n.z == 0.0f))) return -1.0f;
+    m = (n.x != 0.0f ? 0.5f : 1.0f) - y;
+    m = m < 0.0f ? m + 1.0f : (m >= 1.0f ? 0.0f : m);
+    return pt__dtree_density(t, x, m);
+}
+static float pt__guide_value_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, pt_vec3 w)
+{
+    float c = pt_dot(w, n), x, y, dm;
+    const pt__dtree *t;
+    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return pt__guide_value(g, leaf, w);
+    if (!(c > 0.0f) || !g || leaf >= g->leaf_count) return 0.0f;
+    t = &g->leaves[leaf].sampling;
+    pt__guide_dir_to_square(w, &x, &y);
+    dm = pt__guide_mirror_density(t, n, x, y);
+    if (dm < 0.0f) return pt__dtree_density(t, x, y) * PT__INV_4PI + pt__guide_value(g, leaf, pt__guide_mirror(w, n));
+    return (pt__dtree_density(t, x, y) + dm) * PT__INV_4PI;
+}
+/* A draw of the guide, mirrored above n if it fell below; *p: the folded density of the direction
+   returned (exact: as pt__guide_sample's, the draw moved off a cell's edge first). */
+static int pt__guide_sample_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, float u1, float u2, pt_vec3 *w, float *p,
+                                 int exact)
+{
+    float c, d, dm;
+    double x, y, cell[3];
+    if (exact || (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f)) {
+        if (!pt__guide_sample(g, leaf, u1, u2, w, p, exact)) return 0;
+        if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return 1;
+        c = pt_dot(*w, n);
+        if (c == 0.0f) return 0;
+        if (c < 0.0f) *w = pt__guide_mirror(*w, n);
+        *p = pt__guide_value_fold(g, leaf, n, *w);
+        return *p > 0.0f;
+    }
+    /* the integrator's: the drawn cell's density plus its mirror's, from the square's point */
+    if (!g || leaf >= g->leaf_count) return 0;
+    d = pt__dtree_sample(&g->leaves[leaf].sampling, u1, u2, &x, &y, cell);
+    *w = pt__guide_square_to_dir(x, y);
+    c = pt_dot(*w, n);
+    if (c == 0.0f) return 0;
+    dm = pt__guide_mirror_density(&g->leaves[leaf].sampling, n, (float)x, (float)y);
+    *p = dm >= 0.0f ? (d + dm) * PT__INV_4PI : d * PT__INV_4PI + pt__guide_value(g, leaf, pt__guide_mirror(*w, n));
+    if (c < 0.0f) *w = pt__guide_mirror(*w, n);
+    return *p > 0.0f;
+}
+
 /* A record is spread over the directional cells that a square the size of its own cell overlaps,
    in proportion to the overlap (the directional box filter of Mueller, "Practical Path Guiding in
    Production", SIGGRAPH 2019 course notes), so that one record informs its neighbours too and a
@@ -3819,6 +3882,7 @@ static int pt__guide_split(pt_guide *g, uint32_t i)
     memset(l, 0, sizeof *l);
     if (!pt__dtree_copy(&l->sampling, &g->leaves[old].sampling)) return 0;
     l->trained = g->leaves[old].trained;
+    l->flux = g->leaves[old].flux;
     g->leaves[old].records /= 2u;
     l->records = g->leaves[old].records;
     g->leaf_count++;
@@ -3874,6 +3938,7 @@ static int pt__guide_update(pt_guide *g)
             l->sampling = s;
             l->trained = 1;
         }
+        if (l->records) l->flux = (float)((double)(e[0] + e[1] + e[2] + e[3]) * g->unit / (double)l->records);
     }
     for (i = 0; i < g->node_count; ++i) { /* (nodes appended by a split are visited too) */
         uint32_t leaf;
@@ -4035,6 +4100,14 @@ PTDEF pt_pdf pt_pdf_guide(const pt_guide *g, pt_vec3 point)
     p.origin = point;
     p.as.guide.guide = g;
     p.as.guide.leaf = g && pt__vfinite(point) ? pt__guide_leaf_at(g, pt__guide_local(g, point)) : 0u;
+    p.as.guide.fold = pt_v3(0, 0, 0);
+    return p;
+}
+PTDEF pt_pdf pt_pdf_guide_hemisphere(const pt_guide *g, pt_vec3 point, pt_vec3 n)
+{
+    pt_pdf p = pt_pdf_guide(g, point);
+    if (!pt__vfinite(n) || !(pt_length2(n) > 0.0f)) p.as.guide.guide = NULL; /* (no density) */
+    else p.as.guide.fold = pt_normalize(n);
     return p;
 }
 
@@ -4179,7 +4252,7 @@ static float pt__pdf_value_depth(const pt_pdf *pdf, pt_vec3 w, int depth)
     case PT_PDF_CALLBACK:
         if (pdf->as.callback.value) v = pdf->as.callback.value(pdf->as.callback.user, w);
         break;
-    case PT_PDF_GUIDE: v = pt__guide_value(pdf->as.guide.guide, pdf->as.guide.leaf, w); break;
+    case PT_PDF_GUIDE: v = pt__guide_value_fold(pdf->as.guide.guide, pdf->as.guide.leaf, pdf->as.guide.fold, w); break;
     case PT_PDF_ENVIRONMENT: {
         const pt__env *e;
         float c;
@@ -4300,7 +4373,7 @@ static int pt__pdf_sample_depth(const pt_pdf *pdf, pt_rng *rng, pt_vec3 *dir, fl
         break;
     case PT_PDF_GUIDE: {
         float u1 = pt_rng_float(rng), u2 = pt_rng_float(rng);
-        ok = pt__guide_sample(pdf->as.guide.guide, pdf->as.guide.leaf, u1, u2, &w, &p, 1);
+        ok = pt__guide_sample_fold(pdf->as.guide.guide, pdf->as.guide.leaf, pdf->as.guide.fold, u1, u2, &w, &p, 1);
         break;
     }
     default: break;
@@ -7830,6 +7903,8 @@ typedef struct pt__vertex {
     int has_guide;
     float g;
     pt_pdf guide;
+    float rr_e, rr_ref; /* guided roulette: the expected contribution of going on per unit throughput
+                           (0: unknown) and the path's reference (pt__trace_from) */
 } pt__vertex;
 
 /* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
@@ -7850,7 +7925,8 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
         if (v->guide.type == PT_PDF_GUIDE) { /* the learned guide, from the scattering numbers */
             float u1, u2;
             pt__draw_scatter(smp, depth, &u1, &u2);
-            return pt__guide_sample(v->guide.as.guide.guide, v->guide.as.guide.leaf, u1, u2, wi, pg, 0);
+            return pt__guide_sample_fold(v->guide.as.guide.guide, v->guide.as.guide.leaf, v->guide.as.guide.fold, u1, u2,
+                                         wi, pg, 0);
         }
         return pt__pdf_sample_depth(&v->guide, pt__sampler_rng(smp), wi, pg, 0, 1);
     } else {
@@ -8079,6 +8155,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
    weight 1 roulette divides by 0.95 each time; with a guide, or MIXTURE, they split often. What
    it does to the error: docs/internals.md, "Splitting (the weight window)". */
 #define PT__SPLIT_BETA 2.0f
+#define PT__GUIDE_RR_WINDOW 10.0f /* guided roulette: q >= min(0.95, 10 b e / ref) (bench/README.md) */
 #define PT__SPLIT_MAX_COPIES 8
 
 /* indirect_paths (pt_render_desc): a camera sample's path also splits at its first non-delta
@@ -8100,6 +8177,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
    has been reached). */
 typedef struct pt__splits {
     int left, first;
+    float rr_ref; /* guided roulette: the path's expected value at its first guided vertex (0: none yet) */
 } pt__splits;
 
 /* How many copies the path continues as from a non-delta vertex reached with throughput beta_in:
@@ -8206,7 +8284,11 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
     ray->origin = *prev_delta ? pt__offset_origin(v->p, v->ng, wi, h->magnitude) : v->o;
     ray->dir = wi;
     if (depth + 1 >= cfg->rr_start) {
-        float q = pt__minf(0.95f, sqrtf(cfg->rr_gain * pt_max_component(beta_in)));
+        float b = pt_max_component(beta_in), q = pt__minf(0.95f, sqrtf(cfg->rr_gain * b));
+        /* with a learned guide, q also follows the expected contribution b e of going on against
+           the path's reference (adjoint-driven roulette, Vorba & Krivanek 2016, without its
+           splitting): only ever raised, so a poor estimate costs rays, not fireflies */
+        if (v->rr_e > 0.0f && v->rr_ref > 0.0f) q = pt__maxf(q, pt__minf(0.95f, PT__GUIDE_RR_WINDOW * b * v->rr_e / v->rr_ref));
         if (!(q > 0.0f) || pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_RR)) >= q) return 0;
         *beta = pt_scale(*beta, 1.0f / q);
     }
@@ -8286,6 +8368,23 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
     return L;
 }
 
+/* Path guiding at non-delta vertex v: the learned guide's leaf, once it has data, folded about the
+   geometric normal (non-delta materials reflect only: pt__continue), and guided roulette's
+   estimate of what going on adds per unit throughput. */
+static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_stats *st)
+{
+    uint32_t leaf = pt__guide_leaf_at(cfg->learned, v->p);
+    if (!cfg->learned->leaves[leaf].trained) return;
+    v->guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
+    v->guide.as.guide.guide = cfg->learned;
+    v->guide.as.guide.leaf = leaf;
+    v->guide.as.guide.fold = v->ng;
+    v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
+    v->g = cfg->learned_weight;
+    v->has_guide = 1;
+    st->guided_vertices++;
+}
+
 /* What a ray along w that leaves the scene with throughput beta gathers from the environment
    light, weighted as emission found by a ray is (the strategies at the top of this section). */
 static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta, int prev_delta, float prev_pdf)
@@ -8317,6 +8416,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
     v.has_guide = 0; /* (every other field is set at each vertex before it is read; v.guide only
                         when has_guide is) */
     v.g = 0.0f;
+    v.rr_e = v.rr_ref = 0.0f;
     for (depth = depth0;; ++depth) {
         pt__rayctx rc;
         uint32_t pi;
@@ -8388,6 +8488,8 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         }
         if (!m->delta) {
             v.has_guide = 0;
+            v.rr_e = 0.0f; /* (set at a guided vertex; delta vertices keep the last one's: the light
+                              through glass is what the vertex before it learned) */
             if (cfg->guide) {
                 pt_shading_point sp;
                 sp.position = pt__to_world(s, v.p);
@@ -8397,16 +8499,8 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 sp.depth = depth;
                 v.g = cfg->guide_weight;
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
-            } else if (cfg->learned) { /* path guiding: the learned guide's leaf, once it has data */
-                uint32_t leaf = pt__guide_leaf_at(cfg->learned, v.p);
-                if (cfg->learned->leaves[leaf].trained) {
-                    v.guide = pt__pdf_blank(PT_PDF_GUIDE);
-                    v.guide.as.guide.guide = cfg->learned;
-                    v.guide.as.guide.leaf = leaf;
-                    v.g = cfg->learned_weight;
-                    v.has_guide = 1;
-                    st->guided_vertices++;
-                }
+            } else if (cfg->learned) {
+                pt__vertex_learned(cfg, &v, st);
             }
             /* next-event estimation (LIGHT and MIS) */
             if (nee) {
@@ -8419,6 +8513,10 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             }
             /* the delta lights, under every strategy (a scene without them skips this) */
             if (PT__UNLIKELY(s->dlight_count != 0)) L = pt_add(L, pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st));
+            if (v.rr_e > 0.0f && !(sp->rr_ref > 0.0f)) /* the first guided vertex: what the path has so far
+                                                          and what going on should add */
+                sp->rr_ref = pt_max_component(L) + pt_max_component(beta) * v.rr_e;
+            v.rr_ref = sp->rr_ref;
         }
         /* the continuation: split copies first (each ends before the next starts), then this path */
         if (!m->delta &&
@@ -8464,6 +8562,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     pt__splits sp;
     sp.left = cfg->max_splits;
     sp.first = cfg->indirect_paths;
+    sp.rr_ref = 0.0f;
     st->camera_rays++;
     return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 1, 0.0f, ray.origin, pt_v3(0.0f, 0.0f, 0.0f), smp, st, &sp), 1.0f / k);
 }
@@ -9544,7 +9643,7 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
    guide look-ups (counts, not clocks: the decision is deterministic); only if the guide pays does
    training go on, and the rest is guided. --- */
 #define PT__GUIDING_BUDGET 0.25f
-#define PT__GUIDING_ALPHA 0.5f
+#define PT__GUIDING_ALPHA 0.7f
 #define PT__GUIDING_MIB 64
 #define PT__GUIDING_MAX_ITERATIONS 16
 #define PT__GUIDING_AUTO_GAIN 1.5 /* AUTO guides above this measured gain: from half an iteration, a

@@ -48,7 +48,7 @@
                                       rest guided only if training measured a gain (default off)
      guiding_budget F                 the share of spp training may take, 0 < F < 1 (0.25)
      guiding_alpha F                  the material's share of the guided mixture alpha
-                                      p_material + (1 - alpha) p_guide, 0 < F < 1 (0.5)
+                                      p_material + (1 - alpha) p_guide, 0 < F < 1 (0.7)
      guiding_memory MIB               the guide's memory bound in MiB, 1..1048576 (64)
      background R G B                 radiance of rays leaving the scene (default 0 0 0)
      camera look_from X Y Z look_at X Y Z [up X Y Z] [vfov DEGREES]      (required, once)

@@ -2320,7 +2320,7 @@ static void write_guiding_summary(FILE *f, const config *cfg, const results *R)
     fprintf(f, "## Path guiding at equal time\n\n"
                "Guided strategies (`pt_render_desc.guiding`, with pt_render's defaults: up to a quarter of the "
                "samples train the guide in iterations of 1, 2, 4, … spp, the rest are rendered with the final "
-               "guide, every sample counts in the image; material share alpha 0.5):");
+               "guide, every sample counts in the image; material share alpha 0.7):");
     for (j = 0; j < STRATEGY_COUNT; ++j)
         if (strategies[j].guiding != PT_GUIDING_OFF)
             fprintf(f, " `%s` (MIS, %s numbers, %s)", strategies[j].name,

@@ -17,8 +17,8 @@
    comparison at tu_suite_alpha()); the deliberately wrong guide densities are not counted in it
    (they must be rejected). The other statistical tests state their own families at alpha = 0.01
    (Sidak over their comparisons) or fixed z limits: sample_value_and_normalisation (alpha 0.01)
-   and render_unbiased (two families: image means at |z| <= 3, alpha 0.008; regions at alpha
-   0.01). The rest are exact: bit-identical guides and films, error codes and messages, counts. */
+   and render_unbiased and render_unbiased_glass (two families each: image means at |z| <= 3,
+   alpha 0.008; regions at alpha 0.01). The rest are exact: bit-identical guides and films, error codes and messages, counts. */
 #include "test_util.h"
 
 #ifndef PDFTRACE_NO_THREADS
@@ -495,15 +495,64 @@ static void guide_chi2_mixture(test_ctx *t)
     pt_guide_destroy(g);
 }
 
+static void guide_chi2_folded(test_ctx *t)
+{
+    /* (e) the peaked guide folded onto a hemisphere (pt_pdf_guide_hemisphere): about the axis
+       normal -x (the mirror taken in the square) and a tilted normal (the mirror taken on the
+       direction), each a chi-square on a 64 x 64 grid over the peaked case's rectangle, 3 x 10^5 draws. The density must be
+       zero below the normal and p(w) + p(mirror w) above, and every draw must leave above. */
+    static const float normals[2][3] = { { -1.0f, 0.0f, 0.0f }, { -0.8f, 0.5f, 0.33f } };
+    pt_guide *g = new_guide(0, 0);
+    zoom z = make_zoom(&PEAK_RECT);
+    tu_domain dom;
+    int k;
+    if (!CHECK(t, g != NULL, "pt_guide_create")) return;
+    if (!CHECK(t, train_peaked(g, 4, 100000, 206), "training")) { pt_guide_destroy(g); return; }
+    zoom_domain(&dom, &z);
+    for (k = 0; k < 2; k++) {
+        pt_vec3 n = pt_normalize(pt_v3(normals[k][0], normals[k][1], normals[k][2]));
+        pt_pdf whole = pt_pdf_guide(g, pt_v3(0, 0, 0)), p = pt_pdf_guide_hemisphere(g, pt_v3(0, 0, 0), n);
+        tu_pdf_check c;
+        tu_pdf_result r;
+        pt_rng rng;
+        long i, below = 0, bad_value = 0;
+        pt_rng_seed(&rng, 7106 + (uint64_t)k, 3);
+        CHECK(t, pt_pdf_validate(&p) == PT_OK, "pt_pdf_validate of a folded guide");
+        for (i = 0; i < 20000; i++) { /* the density against its definition, above and below */
+            pt_vec3 w = pt_normalize(dv_to(tu_rand_dir(&rng))), m;
+            float c0 = pt_dot(w, n), want;
+            m = pt_sub(w, pt_scale(n, 2.0f * c0));
+            want = c0 > 0.0f ? pt_pdf_value(&whole, w) + pt_pdf_value(&whole, m) : 0.0f;
+            if (!(fabsf(pt_pdf_value(&p, w) - want) <= 1e-3f * want + 1e-6f)) bad_value++;
+        }
+        for (i = 0; i < 20000; i++) {
+            pt_vec3 w;
+            float pv;
+            if (pt_pdf_sample(&p, &rng, &w, &pv) && !(pt_dot(w, n) > 0.0f)) below++;
+        }
+        CHECK(t, bad_value == 0, "folded guide %d: %ld of 20000 densities differ from p(w) + p(mirror w) (0 below)", k, bad_value);
+        CHECK(t, below == 0, "folded guide %d: %ld of 20000 draws below the normal", k, below);
+        c = guide_check(k == 0 ? "guide: peaked, folded about -x" : "guide: peaked, folded about a tilted normal", &p, &dom,
+                        7107 + (uint64_t)k);
+        c.n_samples = 300000;
+        c.ns = 64;
+        c.nphi = 64;
+        TU_CHECK_PDF(t, &c, &r);
+        check_result(t, k == 0 ? "folded -x" : "folded tilted", &r);
+    }
+    pt_guide_destroy(g);
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* 2. the harness rejects wrong guide densities                                                */
 
-typedef struct wrong_guide { const pt_pdf *inner; int mode; } wrong_guide;
+typedef struct wrong_guide { const pt_pdf *inner, *whole; int mode; } wrong_guide;
 
 static float wrong_guide_value(void *user, pt_vec3 dir)
 {
     const wrong_guide *w = (const wrong_guide *)user;
     if (w->mode == 0) return pt_pdf_value(w->inner, dir) * (float)FOUR_PI; /* density over the square: no 1/(4 pi) */
+    if (w->mode == 2) return pt_pdf_value(w->whole, dir);                  /* a fold's draws, the unfolded density */
     return (float)(1.0 / FOUR_PI);                                         /* uniform over the sphere */
 }
 static int wrong_guide_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
@@ -541,6 +590,7 @@ static void harness_rejects_wrong_guide(test_ctx *t)
         char reason[768];
         int failures;
         w.inner = &inner;
+        w.whole = &inner;
         w.mode = k;
         p = pt_pdf_callback(&w, wrong_guide_sample, wrong_guide_value);
         c = guide_check(k == 0 ? "WRONG: guide samples, density x 4 pi (no Jacobian)" : "WRONG: guide samples, density 1/(4 pi)", &p,
@@ -562,6 +612,40 @@ static void harness_rejects_wrong_guide(test_ctx *t)
         test_note(t, "%s: rejected by %d checks; chi2 %.0f, %d dof, p = %.3g; integral %.4f; first: %.120s", k == 0 ? "A" : "B",
                   failures, r.chi2, r.dof, r.chi2_p, r.integral, reason);
     }
+    pt_guide_destroy(g);
+}
+
+static void harness_rejects_unfolded_density(test_ctx *t)
+{
+    /* C: draws of the flat guide folded about a tilted normal, reported with the unfolded density
+       p(w) (the mirror's share dropped): half the folded density over the hemisphere the draws
+       cover, so the chi-square must reject it. 2 x 10^5 draws on the flat case's grid. */
+    pt_guide *g = new_guide(0, 0);
+    zoom z = make_zoom(&FULL_SQUARE);
+    tu_domain dom;
+    pt_pdf whole, folded, p;
+    wrong_guide w;
+    tu_pdf_check c;
+    tu_pdf_result r;
+    char reason[768];
+    int failures;
+    if (!CHECK(t, g != NULL, "pt_guide_create")) return;
+    if (!CHECK(t, train_flat(g, 2, 100000, 207), "training")) { pt_guide_destroy(g); return; }
+    whole = pt_pdf_guide(g, pt_v3(0, 0, 0));
+    folded = pt_pdf_guide_hemisphere(g, pt_v3(0, 0, 0), pt_normalize(pt_v3(0.3f, -0.4f, 0.87f)));
+    w.inner = &folded;
+    w.whole = &whole;
+    w.mode = 2;
+    p = pt_pdf_callback(&w, wrong_guide_sample, wrong_guide_value);
+    zoom_domain(&dom, &z);
+    c = guide_check("WRONG: folded guide samples, unfolded density", &p, &dom, 7112);
+    c.n_samples = 200000;
+    c.n_mass = 50000;
+    c.ns = 32;
+    failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
+    CHECK(t, failures > 0, "%s was not rejected (chi2 p = %.3g, integral %.6f)", c.label, r.chi2_p, r.integral);
+    CHECK(t, r.chi2_p < c.alpha, "%s: chi-square p = %.3g not below alpha %.3g", c.label, r.chi2_p, c.alpha);
+    test_note(t, "C: rejected by %d checks; integral %.4f; first: %.120s", failures, r.integral, reason);
     pt_guide_destroy(g);
 }
 
@@ -869,6 +953,33 @@ static pt_scene *small_box(pt_render_desc *d, float light)
     return s;
 }
 
+/* small_box with a glass ball (ior 1.5) and a grey Lambertian ball on its floor. */
+static pt_scene *small_box_with_balls(pt_render_desc *d, int *glass, int *matte)
+{
+    pt_scene *s = pt_scene_create();
+    int red, white, lamp, rc;
+    if (!s) return NULL;
+    red = pt_scene_add_lambertian(s, pt_v3(0.65f, 0.05f, 0.05f));
+    white = pt_scene_add_lambertian(s, pt_v3(0.73f, 0.73f, 0.73f));
+    lamp = pt_scene_add_emitter(s, pt_v3(12.0f, 12.0f, 12.0f), 0);
+    *glass = pt_scene_add_dielectric(s, 0.0f);
+    *matte = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    rc = pt_scene_add_quad(s, pt_v3(1, 0, 0), pt_v3(0, 1, 0), pt_v3(0, 0, 1), white);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 0), pt_v3(0, 1, 0), pt_v3(0, 0, 1), red);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 0), pt_v3(1, 0, 0), pt_v3(0, 0, 1), white);
+    rc |= pt_scene_add_quad(s, pt_v3(1, 1, 1), pt_v3(-1, 0, 0), pt_v3(0, 0, -1), white);
+    rc |= pt_scene_add_quad(s, pt_v3(0, 0, 1), pt_v3(1, 0, 0), pt_v3(0, 1, 0), white);
+    rc |= pt_scene_add_quad(s, pt_v3(0.62f, 0.999f, 0.6f), pt_v3(-0.24f, 0, 0), pt_v3(0, 0, -0.2f), lamp); /* faces -y */
+    rc |= pt_scene_add_sphere(s, pt_v3(0.65f, 0.2f, 0.45f), 0.2f, *glass);
+    rc |= pt_scene_add_sphere(s, pt_v3(0.3f, 0.15f, 0.6f), 0.15f, *matte);
+    if (rc < 0 || pt_scene_commit(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    d->camera.look_from = pt_v3(0.5f, 0.5f, -1.4f);
+    d->camera.look_at = pt_v3(0.5f, 0.5f, 0.0f);
+    d->camera.vfov_degrees = 40;
+    d->max_depth = 8;
+    return s;
+}
+
 static void render_threads_bit_identical(test_ctx *t)
 {
     /* Guiding ON, 48 x 48, 32 spp (3 training iterations of 1, 2, 4 spp, then 25 guided): the film
@@ -1043,6 +1154,56 @@ static void render_unbiased(test_ctx *t)
     pt_film_free(&ff);
     pt_scene_destroy(s);
     pt_scene_destroy(fs);
+}
+
+static void render_unbiased_glass(test_ctx *t)
+{
+    /* The small box with a glass ball and a diffuse ball added (vertices with normals off the axes,
+       where the guide is folded about a tilted normal, and delta vertices, where guided roulette
+       keeps the last guided vertex's estimate), 32 x 32, 256 spp, guiding ON against OFF,
+       independent seeds: the image means per channel within 3 standard errors (3 comparisons,
+       family alpha 0.008) and the 4 x 4 region means per channel at alpha 0.01 Sidak over 48, as
+       in render_unbiased (its own families). */
+    pt_render_desc d = tu_base_desc(32, 32, 256, 0);
+    pt_film fg, fu;
+    pt_render_stats sg, su;
+    tu_region rg[16], ru[16], ag, au;
+    double zlim = tu_z_two_sided(tu_sidak(FAMILY_ALPHA, 48)), worst_region = 0.0, worst_image = 0.0;
+    int i, c, glass, matte;
+    pt_scene *s = small_box_with_balls(&d, &glass, &matte);
+    memset(&fg, 0, sizeof fg);
+    memset(&fu, 0, sizeof fu);
+    if (!CHECK(t, s != NULL, "scene with balls")) return;
+    d.guiding = PT_GUIDING_ON;
+    d.seed = 7011;
+    if (tu_render_into(t, s, &d, &fg, &sg, "guided") && (d.guiding = PT_GUIDING_OFF, d.seed = 7012, 1) &&
+        tu_render_into(t, s, &d, &fu, &su, "unguided")) {
+        CHECK(t, sg.guiding_used == 1, "guiding not used: '%s'", sg.guiding_note);
+        CHECK(t, sg.nonfinite_samples == 0 && su.nonfinite_samples == 0, "NaN/Inf samples: %llu guided, %llu unguided",
+              (unsigned long long)sg.nonfinite_samples, (unsigned long long)su.nonfinite_samples);
+        tu_film_regions(&fg, 4, 4, rg);
+        tu_film_regions(&fu, 4, 4, ru);
+        tu_film_regions(&fg, 1, 1, &ag);
+        tu_film_regions(&fu, 1, 1, &au);
+        for (c = 0; c < 3; c++) {
+            double z = fabs(ag.mean[c] - au.mean[c]) / sqrt(ag.se[c] * ag.se[c] + au.se[c] * au.se[c]);
+            worst_image = fmax(worst_image, z);
+            CHECK(t, z <= 3.0, "image mean, channel %d: guided %.5f +- %.5f, unguided %.5f +- %.5f (|z| = %.2f > 3)", c,
+                  ag.mean[c], ag.se[c], au.mean[c], au.se[c], z);
+            for (i = 0; i < 16; i++) {
+                double zr = fabs(rg[i].mean[c] - ru[i].mean[c]) / sqrt(rg[i].se[c] * rg[i].se[c] + ru[i].se[c] * ru[i].se[c]);
+                worst_region = fmax(worst_region, zr);
+                CHECK(t, zr <= zlim, "region %d channel %d: guided %.5f +- %.5f, unguided %.5f +- %.5f (|z| = %.2f > %.2f)", i,
+                      c, rg[i].mean[c], rg[i].se[c], ru[i].mean[c], ru[i].se[c], zr, zlim);
+            }
+        }
+        test_note(t, "image mean guided %.4f +- %.4f vs %.4f +- %.4f (green), worst |z| %.2f (limit 3); regions worst |z| %.2f "
+                     "(limit %.2f)",
+                  ag.mean[1], ag.se[1], au.mean[1], au.se[1], worst_image, worst_region, zlim);
+    }
+    pt_film_free(&fg);
+    pt_film_free(&fu);
+    pt_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -1511,12 +1672,15 @@ const test_case test_guide_cases[] = {
     TEST_CASE(guide_chi2_hot_cell),
     TEST_CASE(guide_deep_cells_sample),
     TEST_CASE(guide_chi2_mixture),
+    TEST_CASE(guide_chi2_folded),
     TEST_CASE(harness_rejects_wrong_guide),
+    TEST_CASE(harness_rejects_unfolded_density),
     TEST_CASE(sample_value_and_normalisation),
     TEST_CASE(guide_image_matches_value),
     TEST_CASE(guide_order_independent),
     TEST_CASE(render_threads_bit_identical),
     TEST_CASE(render_unbiased),
+    TEST_CASE(render_unbiased_glass),
     TEST_CASE(guide_api_errors),
     TEST_CASE(guide_memory_bound),
     TEST_CASE(render_desc_errors),

@@ -163,7 +163,7 @@ static void print_help(void)
            "      --backend B        auto | builtin | embree: ray traversal (auto)\n"
            "      --guiding G        off | on | auto: path guiding (auto: only where training pays)\n"
            "      --guiding-budget F, --guiding-alpha F  in (0, 1): training's share of spp (0.25),\n"
-           "                         the material's in the guided mixture (0.5); --guiding-memory MIB (64)\n"
+           "                         the material's in the guided mixture (0.7); --guiding-memory MIB (64)\n"
            "      --adaptive T       adaptive sampling toward RMS relative error T, e.g. 0.05\n"
            "      --adaptive-mode M  pilot (unbiased) | own-samples | neighbours (biased) (pilot)\n"
            "      --adaptive-min-spp N  the pilot's spp, or the least a pixel gets (max(16, spp/16))\n"
