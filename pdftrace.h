@@ -7941,7 +7941,9 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
    these materials reflects light from below ng (pt__material_eval); any other material gets none. */
 static pt_vec3 pt__receiver_normal(const pt__vertex *v)
 {
-    if (v->m->type == PT_MATERIAL_LAMBERTIAN || v->m->type == PT_MATERIAL_METAL) return v->ng;
+    if (v->m->type == PT_MATERIAL_LAMBERTIAN || v->m->type == PT_MATERIAL_METAL ||
+        v->m->type == PT_MATERIAL_ROUGH_CONDUCTOR)
+        return v->ng;
     return pt_v3(0.0f, 0.0f, 0.0f);
 }
 
