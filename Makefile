@@ -211,7 +211,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h tests/fuzz/mitsuba_check.h
 
-.PHONY: all run run-all test cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs validate-mitsuba validate-mitsuba-ci mitsuba-install bench bench-quick bench-headline bench-refs bench-bvh stress install uninstall install-check FORCE
+.PHONY: all run run-all test test-bins cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs validate-mitsuba validate-mitsuba-ci mitsuba-install bench bench-quick bench-headline bench-refs bench-bvh stress install uninstall install-check FORCE
 
 all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
@@ -399,38 +399,42 @@ bench-headline: $(BUILD)/bench
 bench-refs: $(BUILD)/bench
 	./$(BUILD)/bench refs
 
-# run_pair(A,B,NAME): runs commands A and B side by side, their outputs into $(BUILD)/NAME-a.log
-# and -b.log, prints both logs in that order, and fails if either failed.
+# make test builds its programs TEST_JOBS at a time, then runs the runners TEST_JOBS at a time
+# through tests/run_jobs.sh (the machine this targets has two cores): the scene-file runner
+# (malformed inputs, scenes/ loading, scenes/cornell.scene through build/pdftrace = build/cornell's
+# built-in box, and the fast POV-Ray comparisons when povray is installed), the pdftrace command's
+# tests (tests/cli/pdftrace.sh: outputs, errors, help, --export-pov, --preview-every, overrides),
+# the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
+# ASan+UBSan), the FP-trap renders of the scene suite, and the unit-test runners: plain, without
+# threads, and under ASan+UBSan (gcc, and clang when installed), each sanitizer runner in two
+# parts (the pdf section, the rest) so the two cores end together. The jobs are listed longest
+# first; the logs are printed in that order, and the last line adds up every job's
+# "N passed, M failed, K skipped".
+TEST_JOBS ?= 2
 SAN_ENV := ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
-define run_pair
-@echo "$(1)  &  $(2)"; \
-	( $(1) ) > $(BUILD)/$(3)-a.log 2>&1 & pid=$$!; \
-	( $(2) ) > $(BUILD)/$(3)-b.log 2>&1; rb=$$?; \
-	wait $$pid; ra=$$?; \
-	cat $(BUILD)/$(3)-a.log $(BUILD)/$(3)-b.log; \
-	[ $$ra = 0 ] && [ $$rb = 0 ]
-endef
-
-# The sanitizer run comes last, so the last line of `make test` is its "N passed, M failed, K skipped".
-# First the scene-file runner (malformed inputs, scenes/ loading, scenes/cornell.scene through
-# build/pdftrace = build/cornell's built-in box, and the fast POV-Ray comparisons when povray is
-# installed), then the pdftrace command's tests (tests/cli/pdftrace.sh: outputs, errors, help,
-# --export-pov, --preview-every, overrides).
-# Then the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
-# ASan+UBSan) and the FP-trap renders of the scene suite.
-test: $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads \
+TEST_BINS := $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads \
       $(BUILD)/test_runner_asan $(if $(SAN_CLANG_PATH),$(BUILD)/test_runner_asan_clang) $(BUILD)/fuzz_replay \
       $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
+CLANG_SAN_JOBS := $(if $(SAN_CLANG_PATH),\
+    asan-clang-rest '$(SAN_ENV) ./$(BUILD)/test_runner_asan_clang --skip pdf.',\
+    asan-clang 'echo "SKIP the clang ASan+UBSan runner: $(SAN_CLANG) is not installed (apt-get install clang)"; echo "0 passed, 0 failed, 1 skipped"')
+test-bins: $(TEST_BINS)
+
+test:
+	@$(MAKE) --no-print-directory -j$(TEST_JOBS) test-bins
 	mkdir -p $(BUILD)/ptv-work
-	./$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/pdftrace $(BUILD)/cornell
-	tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/ptv-work/cli
-	PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus
-	ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus
-	./$(BUILD)/fptrap scenes/*.scene
-	@# the runners two at a time (most tests keep one core busy; the machine has two), each
-	@# pair's logs printed in order when both have ended, so the last line is the gcc ASan runner's
-	$(call run_pair,./$(BUILD)/test_runner_nothreads,$(if $(SAN_CLANG_PATH),$(SAN_ENV) ./$(BUILD)/test_runner_asan_clang,echo "SKIP the clang ASan+UBSan runner: $(SAN_CLANG) is not installed (apt-get install clang)"),pair1)
-	$(call run_pair,./$(BUILD)/test_runner,$(SAN_ENV) ./$(BUILD)/test_runner_asan,pair2)
+	tests/run_jobs.sh $(TEST_JOBS) $(BUILD)/test-logs \
+	    asan-gcc-rest '$(SAN_ENV) ./$(BUILD)/test_runner_asan --skip pdf.' \
+	    nothreads './$(BUILD)/test_runner_nothreads' \
+	    $(CLANG_SAN_JOBS) \
+	    plain './$(BUILD)/test_runner' \
+	    asan-gcc-pdf '$(SAN_ENV) ./$(BUILD)/test_runner_asan pdf.' \
+	    $(if $(SAN_CLANG_PATH),asan-clang-pdf '$(SAN_ENV) ./$(BUILD)/test_runner_asan_clang pdf.') \
+	    scenes './$(BUILD)/ptv test scenes $(BUILD)/ptv-work $(BUILD)/pdftrace $(BUILD)/cornell' \
+	    fuzz-asan '$(SAN_ENV) ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus' \
+	    cli 'tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/cli-work' \
+	    fuzz 'PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus' \
+	    fptrap './$(BUILD)/fptrap scenes/*.scene'
 
 # ---- make stress: the numerical stress cases at full size (tests/stress/; the same cases run
 # small in the runner's `stress` section). Prints case | metric | bound | result; non-zero exit

@@ -1,8 +1,9 @@
 #define _POSIX_C_SOURCE 200809L
 /* test_main.c - the pdftrace unit-test runner.
 
-   Usage: test_runner [filter]
-   Runs every test whose "section.name" contains filter (all tests without one). Prints one line
+   Usage: test_runner [FILTER]... [--skip SUBSTRING]...
+   Runs every test whose "section.name" contains one of the FILTERs (all tests without one) and
+   none of the --skip substrings ("--skip pdf." leaves out the pdf section). Prints one line
    per test, "PASS name (details)", "SKIP name: reason (details)" or "FAIL name: reason
    (file:line)", a summary per section, and as its last line "N passed, M failed, K skipped".
    A skipped test is not a pass; one with failed checks is a failure. Exit code 0 iff no test
@@ -83,6 +84,23 @@ typedef struct section {
     const test_case *cases;
 } section;
 
+/* Whether the command line selects test `full`: it contains a filter (or there is none) and no
+   --skip substring. */
+static int selected(const char *full, int argc, char **argv)
+{
+    int i, filters = 0, matched = 0;
+    for (i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--skip") == 0) {
+            if (i + 1 < argc && strstr(full, argv[i + 1])) return 0;
+            i++;
+        } else {
+            filters++;
+            matched |= strstr(full, argv[i]) != NULL;
+        }
+    }
+    return filters == 0 || matched;
+}
+
 int main(int argc, char **argv)
 {
     static const section sections[] = {
@@ -111,11 +129,14 @@ int main(int argc, char **argv)
         { "mitsuba", test_mitsuba_cases },
         { "suite", test_suite_cases },
     };
-    const char *filter = argc > 1 ? argv[1] : NULL;
     int passed = 0, failed = 0, skipped = 0;
     size_t s;
     double start = now_seconds();
 
+    if (argc > 1 && strcmp(argv[argc - 1], "--skip") == 0) {
+        fprintf(stderr, "usage: %s [FILTER]... [--skip SUBSTRING]...: --skip needs a substring\n", argv[0]);
+        return 2;
+    }
     setvbuf(stdout, NULL, _IOLBF, 0);
     for (s = 0; s < sizeof sections / sizeof sections[0]; s++) {
         const test_case *c;
@@ -126,7 +147,7 @@ int main(int argc, char **argv)
             test_ctx t;
             double t0, dt;
             snprintf(full, sizeof full, "%s.%s", sections[s].name, c->name);
-            if (filter && !strstr(full, filter)) continue;
+            if (!selected(full, argc, argv)) continue;
             memset(&t, 0, sizeof t);
             t0 = now_seconds();
             c->fn(&t);

@@ -30,14 +30,26 @@ static int pov_render(const char *dir, const char *pov, int w, int h)
     return n > 0 && (size_t)n < sizeof cmd && system(cmd) == 0;
 }
 
-/* Parses text as name, exports it to build/test-pov.pov; returns the export's code. */
+/* build/test-pov-PID followed by suffix: the runners of make test run side by side, each with its
+   own files. Returns a static buffer (one of four, used round robin). */
+static const char *pov_path(const char *suffix)
+{
+    static char buf[4][64];
+    static int next;
+    char *b = buf[next];
+    next = (next + 1) % 4;
+    snprintf(b, sizeof buf[0], "build/test-pov-%ld%s", (long)getpid(), suffix);
+    return b;
+}
+
+/* Parses text as name, exports it to pov_path(".pov"); returns the export's code. */
 static int pov_export_text(const char *text, const char *name, char *err, size_t err_size)
 {
     pt_scenefile sf;
     int rc = pt_scenefile_parse(text, strlen(text), name, NULL, &sf, err, err_size);
     if (rc != PT_OK) return 1; /* not a PT_ code: the parse itself failed */
-    remove("build/test-pov.pov");
-    rc = pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, err_size);
+    remove(pov_path(".pov"));
+    rc = pt_scenefile_write_pov(&sf, pov_path(".pov"), NULL, err, err_size);
     pt_scenefile_free(&sf);
     return rc;
 }
@@ -100,8 +112,8 @@ static void pov_nonfinite_refused(test_ctx *t)
     char err[1024];
     int rc = pov_export_text(text, "inf.scene", err, sizeof err);
     CHECK(t, rc < 0 && strncmp(err, "inf.scene:10:", 13) == 0, "export: %d '%s'", rc, err);
-    CHECK(t, !pov_exists("build/test-pov.pov"), "the refused export wrote a file");
-    CHECK(t, !pov_exists("build/test-pov.pov.ptmp"), "the refused export left its temporary file");
+    CHECK(t, !pov_exists(pov_path(".pov")), "the refused export wrote a file");
+    CHECK(t, !pov_exists(pov_path(".pov.ptmp")), "the refused export left its temporary file");
 }
 
 /* A sphere under `scale 1 3 1` is refused by the build; the exporter wrote a unit sphere. */
@@ -110,10 +122,10 @@ static void pov_ellipsoid_refused(test_ctx *t)
     char err[1024];
     int rc = pov_export_text(POV_HEAD "scale 1 3 1\nsphere 0 0 0 1 m\n", "ell.scene", err, sizeof err);
     CHECK(t, rc < 0 && strncmp(err, "ell.scene:6:", 12) == 0, "export: %d '%s'", rc, err);
-    CHECK(t, !pov_exists("build/test-pov.pov"), "the refused export wrote a file");
+    CHECK(t, !pov_exists(pov_path(".pov")), "the refused export wrote a file");
     rc = pov_export_text(POV_HEAD "scale 2 2 2\nsphere 0 0 0 1 m\n", "ok.scene", err, sizeof err);
     CHECK(t, rc == PT_OK, "a uniformly scaled sphere: %d '%s'", rc, err);
-    remove("build/test-pov.pov");
+    remove(pov_path(".pov"));
 }
 
 /* A camera the renderer refuses (look_at == look_from, set through the API: the parser refuses
@@ -127,10 +139,10 @@ static void pov_bad_camera_refused(test_ctx *t)
     if (!CHECK(t, pt_scenefile_parse(text, strlen(text), "cam.scene", NULL, &sf, err, sizeof err) == PT_OK, "%s", err))
         return;
     sf.camera.look_at = sf.camera.look_from;
-    remove("build/test-pov.pov");
-    rc = pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err);
+    remove(pov_path(".pov"));
+    rc = pt_scenefile_write_pov(&sf, pov_path(".pov"), NULL, err, sizeof err);
     CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strncmp(err, "cam.scene:2:", 12) == 0, "export: %d '%s'", rc, err);
-    CHECK(t, !pov_exists("build/test-pov.pov"), "the refused export wrote a file");
+    CHECK(t, !pov_exists(pov_path(".pov")), "the refused export wrote a file");
     pt_scenefile_free(&sf);
 }
 
@@ -158,24 +170,24 @@ static void pov_refuses_what_build_refuses(test_ctx *t)
             continue;
         brc = pt_scenefile_build(&sf, &s, &rd, err, sizeof err);
         pt_scene_destroy(s);
-        remove("build/test-pov.pov");
-        rc = pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err);
+        remove(pov_path(".pov"));
+        rc = pt_scenefile_write_pov(&sf, pov_path(".pov"), NULL, err, sizeof err);
         test_note(t, "case %d: build %s", (int)i, brc == PT_OK ? "accepts" : "refuses");
-        CHECK(t, brc == PT_OK || (rc < 0 && strncmp(err, "b.scene:", 8) == 0 && !pov_exists("build/test-pov.pov")),
+        CHECK(t, brc == PT_OK || (rc < 0 && strncmp(err, "b.scene:", 8) == 0 && !pov_exists(pov_path(".pov"))),
               "case %d: build %d, export %d '%s'", (int)i, brc, rc, err);
         pt_scenefile_free(&sf);
     }
     snprintf(text, sizeof text, POV_HEAD "sphere 0 0 0 1 m\n");
     if (CHECK(t, pt_scenefile_parse(text, strlen(text), "nan.scene", NULL, &sf, err, sizeof err) == PT_OK, "%s", err)) {
         sf.background.y = (float)nan("");
-        remove("build/test-pov.pov");
-        CHECK(t, pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err) == PT_ERROR_UNSUPPORTED &&
-                     strstr(err, "not finite") && !pov_exists("build/test-pov.pov"),
+        remove(pov_path(".pov"));
+        CHECK(t, pt_scenefile_write_pov(&sf, pov_path(".pov"), NULL, err, sizeof err) == PT_ERROR_UNSUPPORTED &&
+                     strstr(err, "not finite") && !pov_exists(pov_path(".pov")),
               "a nan background: '%s'", err);
         sf.background.y = 0;
         sf.camera.look_from.x = (float)HUGE_VAL;
-        CHECK(t, pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err) < 0 &&
-                     strncmp(err, "nan.scene:2:", 12) == 0 && !pov_exists("build/test-pov.pov"),
+        CHECK(t, pt_scenefile_write_pov(&sf, pov_path(".pov"), NULL, err, sizeof err) < 0 &&
+                     strncmp(err, "nan.scene:2:", 12) == 0 && !pov_exists(pov_path(".pov")),
               "an infinite camera: '%s'", err);
         pt_scenefile_free(&sf);
     }
@@ -200,13 +212,13 @@ static void pov_checker_catches_bad_text(test_ctx *t)
         pt_scenefile sf;
         char *text;
         if (!CHECK(t, pt_scenefile_load(scenes[i], &sf, err, sizeof err) == PT_OK, "%s", err)) continue;
-        CHECK(t, pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err) == PT_OK, "%s", err);
+        CHECK(t, pt_scenefile_write_pov(&sf, pov_path(".pov"), NULL, err, sizeof err) == PT_OK, "%s", err);
         pt_scenefile_free(&sf);
-        text = tu_read_text("build/test-pov.pov", &len);
+        text = tu_read_text(pov_path(".pov"), &len);
         CHECK(t, text && pt_pov_check_text(text, len, why, sizeof why), "%s: %s", scenes[i], text ? why : "no file");
         free(text);
     }
-    remove("build/test-pov.pov");
+    remove(pov_path(".pov"));
 }
 
 /* pt_scenefile_escape: every byte 1..255 through both modes. */
@@ -318,7 +330,7 @@ static void pov_lights(test_ctx *t)
     size_t len = 0;
     int rc = pov_export_text(text, "l.scene", err, sizeof err), i;
     if (!CHECK(t, rc == PT_OK, "export: %d '%s'", rc, err)) return;
-    out = tu_read_text("build/test-pov.pov", &len);
+    out = tu_read_text(pov_path(".pov"), &len);
     if (!CHECK(t, out != NULL, "no file")) return;
     CHECK(t, pt_pov_check_text(out, len, why, sizeof why), "checker: %s", why);
     l = pov_light_at(out, 7);
@@ -359,15 +371,16 @@ static void pov_lights(test_ctx *t)
     CHECK(t, l && !strstr(l + 1, "light_source"), "more than three light sources");
     free(out);
     if (have_povray()) {
-        char dir[256];
+        char dir[256], rel[64];
         snprintf(dir, sizeof dir, "build/test-pov-lights-%ld", (long)getpid());
+        snprintf(rel, sizeof rel, "../test-pov-%ld-lights.pov", (long)getpid()); /* pov_path("-lights.pov") from dir */
         mkdir(dir, 0755);
-        CHECK(t, rename("build/test-pov.pov", "build/test-pov-lights.pov") == 0, "rename");
-        CHECK(t, pov_render(dir, "../test-pov-lights.pov", 4, 4), "povray failed on the lights (see %s/povray.log)", dir);
-        remove("build/test-pov-lights.pov");
+        CHECK(t, rename(pov_path(".pov"), pov_path("-lights.pov")) == 0, "rename");
+        CHECK(t, pov_render(dir, rel, 4, 4), "povray failed on the lights (see %s/povray.log)", dir);
+        remove(pov_path("-lights.pov"));
     } else
         test_note(t, "povray not installed: render not tried");
-    remove("build/test-pov.pov");
+    remove(pov_path(".pov"));
 }
 
 /* A spot whose beam is narrower than its cutoff (given, or the default 3/4) has no exact POV-Ray
@@ -389,11 +402,11 @@ static void pov_soft_spot_refused(test_ctx *t)
         CHECK(t, rc == PT_ERROR_UNSUPPORTED && !strncmp(err, want, strlen(want)) && strstr(err, "smoothstep") &&
                      strstr(err, "beam"),
               "case %d: %d '%s'", (int)i, rc, err);
-        CHECK(t, !pov_exists("build/test-pov.pov") && !pov_exists("build/test-pov.pov.ptmp"), "case %d wrote a file", (int)i);
+        CHECK(t, !pov_exists(pov_path(".pov")) && !pov_exists(pov_path(".pov.ptmp")), "case %d wrote a file", (int)i);
     }
     snprintf(text, sizeof text, POV_HEAD "sphere 0 0 0 1 m\nspot_light 0 3 0  0 0 0  5 5 5  40 40\n");
     CHECK(t, pov_export_text(text, "s.scene", err, sizeof err) == PT_OK, "a hard cone: '%s'", err);
-    remove("build/test-pov.pov");
+    remove(pov_path(".pov"));
 }
 
 /* An environment map is refused (POV-Ray's sky_sphere lights diffuse surfaces only through
@@ -406,11 +419,11 @@ static void pov_environment_refused(test_ctx *t)
     int rc;
     if (!CHECK(t, pt_scenefile_parse(text, strlen(text), "env.scene", "scenes", &sf, err, sizeof err) == PT_OK, "%s", err))
         return;
-    remove("build/test-pov.pov");
-    rc = pt_scenefile_write_pov(&sf, "build/test-pov.pov", NULL, err, sizeof err);
+    remove(pov_path(".pov"));
+    rc = pt_scenefile_write_pov(&sf, pov_path(".pov"), NULL, err, sizeof err);
     CHECK(t, rc == PT_ERROR_UNSUPPORTED && strncmp(err, "env.scene:7: POV-Ray export: an environment map", 47) == 0 &&
                  strstr(err, "radiosity"), "export: %d '%s'", rc, err);
-    CHECK(t, !pov_exists("build/test-pov.pov") && !pov_exists("build/test-pov.pov.ptmp"), "the refused export wrote a file");
+    CHECK(t, !pov_exists(pov_path(".pov")) && !pov_exists(pov_path(".pov.ptmp")), "the refused export wrote a file");
     pt_scenefile_free(&sf);
 }
 

@@ -104,9 +104,10 @@ static void add_obj_errors(test_ctx *t)
     pt_scene *s = pt_scene_create();
     pt_scene_info info;
     char err[512];
-    const char *tmp = "build/test-scenefile-nofaces.obj";
+    char tmp[64];
     FILE *f;
     int mat, rc;
+    snprintf(tmp, sizeof tmp, "build/test-scenefile-nofaces-%ld.obj", (long)getpid()); /* runners run side by side */
     if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
     mat = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
     rc = pt_scene_add_obj(s, "scenes/no-such-mesh.obj", mat, err, sizeof err);
@@ -204,10 +205,11 @@ static void camera_depth_of_field_errors(test_ctx *t)
         {" lens_radius", "dof.scene:4:"},
     };
     char text[1024], err[512];
-    const char *pov = "build/test-scenefile-dof.pov";
+    char pov[64];
     pt_scenefile sf;
     size_t i;
     int rc;
+    snprintf(pov, sizeof pov, "build/test-scenefile-dof-%ld.pov", (long)getpid()); /* runners run side by side */
     for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         snprintf(text, sizeof text, "size 24 16\nspp 4\nmax_depth 3\ncamera look_from 0 1 -6 look_at 0 1 0%s\n", bad[i].lens);
         rc = pt_scenefile_parse(text, strlen(text), "dof.scene", NULL, &sf, err, sizeof err);
