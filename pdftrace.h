@@ -143,8 +143,8 @@
      switchable skip, since the general path would add nothing).
    - no environment map and a black background: no environment light (one test per light
      sample and escaped ray; not switchable either, for the same reason).
-   - no rough conductor (PT_FEATURE_MICROFACET): no microfacet code runs; the material
-     functions dispatch Lambertian first and the rough conductor last (not switchable: there
+   - no rough conductor or plastic (PT_FEATURE_MICROFACET): no microfacet code runs; the material
+     functions dispatch Lambertian first and the rough materials last (not switchable: there
      is no general path to force).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
@@ -724,7 +724,8 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
    lit and seen from both sides), as are the metals; emission is one-sided (on the side of the
    geometric normal) unless two_sided_emission is set. The rough conductor is a GGX microfacet
    BRDF sampled by its visible normals, a density that mixes with the light PDFs like
-   Lambertian's (docs/materials.md).
+   Lambertian's; the rough plastic is a Lambertian base under a GGX dielectric coat (Mitsuba 3's
+   roughplastic), sampled by a mixture of the two (docs/materials.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {
@@ -765,7 +766,8 @@ typedef struct pt_material_desc {
     pt_color albedo;            /* Lambertian, metal (ignored by dielectric, which is clear) */
     int albedo_texture;         /* 0: use albedo; else an id from pt_scene_add_checker */
     float fuzz;                 /* metal, clamped to [0, 1] */
-    float ior;                  /* dielectric index of refraction; 0 means 1.5; else finite, >= 0.001 */
+    float ior;                  /* dielectric (and rough plastic coat) index of refraction; 0 means
+                                   1.5; else finite, >= 0.001 (the coat's > 1) */
     pt_color emission;          /* emitted radiance */
     int two_sided_emission;
     /* Rough conductor: BRDF f = albedo F(wo.h) D(h) G1(wo) G1(wi) / (4 cos_o cos_i), h the half
@@ -5103,7 +5105,7 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
 
 /* ------------------------------------------------------------------------------------------
    4. Materials and textures: the material table (Lambertian, metal with an optional fuzz lobe,
-   clear dielectric, emitter), the 3D checker, and what the integrator asks of a material: its
+   clear dielectric, emitter, rough conductor, rough plastic with its coat tables), the 3D checker, and what the integrator asks of a material: its
    A * pScatter for a direction (BRDF times cosine), the density with which it samples a
    direction, a sampled direction, and the exact unpolarised Fresnel reflectance of a dielectric
    interface. Delta materials (mirror, glass) have no density and are followed by the integrator.
