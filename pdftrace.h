@@ -143,8 +143,8 @@
      switchable skip, since the general path would add nothing).
    - no environment map and a black background: no environment light (one test per light
      sample and escaped ray; not switchable either, for the same reason).
-   - no rough conductor (PT_FEATURE_MICROFACET): no microfacet code runs; the material
-     functions dispatch Lambertian first and the rough conductor last (not switchable: there
+   - no rough conductor or plastic (PT_FEATURE_MICROFACET): no microfacet code runs; the material
+     functions dispatch Lambertian first and the rough materials last (not switchable: there
      is no general path to force).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
@@ -588,7 +588,7 @@ enum {
     PT_FEATURE_TRANSFORMS      = 1 << 12, /* some shape was added under a non-identity transform */
     PT_FEATURE_DELTA_LIGHTS    = 1 << 13, /* some point, spot or directional light (pt_scene_add_light) */
     PT_FEATURE_ENVIRONMENT     = 1 << 14, /* an environment map (pt_scene_set_environment) */
-    PT_FEATURE_MICROFACET      = 1 << 15  /* some rough conductor with roughness >= 1e-3 */
+    PT_FEATURE_MICROFACET      = 1 << 15  /* some rough conductor with roughness >= 1e-3, or rough plastic */
 };
 
 /* Traversal backends (pt_scene_set_backend, section 5b). */
@@ -724,7 +724,8 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
    lit and seen from both sides), as are the metals; emission is one-sided (on the side of the
    geometric normal) unless two_sided_emission is set. The rough conductor is a GGX microfacet
    BRDF sampled by its visible normals, a density that mixes with the light PDFs like
-   Lambertian's (docs/materials.md).
+   Lambertian's; the rough plastic is a Lambertian base under a GGX dielectric coat (Mitsuba 3's
+   roughplastic), sampled by a mixture of the two (docs/materials.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {
@@ -738,7 +739,9 @@ typedef enum pt_material_type {
                                    physical rough metal */
     PT_MATERIAL_DIELECTRIC,     /* clear glass: exact unpolarised Fresnel, total internal reflection; delta */
     PT_MATERIAL_EMITTER,        /* emits `emission`, reflects nothing */
-    PT_MATERIAL_ROUGH_CONDUCTOR /* GGX microfacet metal (below): roughness, conductor, albedo tints it */
+    PT_MATERIAL_ROUGH_CONDUCTOR, /* GGX microfacet metal (below): roughness, conductor, albedo tints it */
+    PT_MATERIAL_ROUGH_PLASTIC   /* a Lambertian base (albedo) under a GGX dielectric coat (below):
+                                   roughness, ior, nonlinear; Mitsuba 3's `roughplastic` */
 } pt_material_type;
 
 /* The complex index of refraction eta + i k of a rough conductor, per RGB channel (relative to
@@ -763,7 +766,8 @@ typedef struct pt_material_desc {
     pt_color albedo;            /* Lambertian, metal (ignored by dielectric, which is clear) */
     int albedo_texture;         /* 0: use albedo; else an id from pt_scene_add_checker */
     float fuzz;                 /* metal, clamped to [0, 1] */
-    float ior;                  /* dielectric index of refraction; 0 means 1.5; else finite, >= 0.001 */
+    float ior;                  /* dielectric (and rough plastic coat) index of refraction; 0 means
+                                   1.5; else finite, >= 0.001 (the coat's > 1) */
     pt_color emission;          /* emitted radiance */
     int two_sided_emission;
     /* Rough conductor: BRDF f = albedo F(wo.h) D(h) G1(wo) G1(wi) / (4 cos_o cos_i), h the half
@@ -778,6 +782,16 @@ typedef struct pt_material_desc {
                                    only by that blur. 0: the mirror */
     pt_conductor conductor;     /* 0: PT_CONDUCTOR_NONE */
     pt_color eta, k;            /* PT_CONDUCTOR_CUSTOM: eta finite > 0, k finite >= 0 */
+    /* Rough plastic: Mitsuba 3's `roughplastic` (distribution ggx, visible normals), term for
+       term: f cos_i = F(wo.h) D(h) G1(wo) G1(wi) / (4 cos_o)
+                     + rho / (1 - R_int) T(cos_o) T(cos_i) cos_i / (pi ior^2),
+       rho the albedo (in [0, 1]; rho R_int in the denominator when `nonlinear`), T the coat's
+       transmittance into the layer and R_int its diffuse internal reflectance, both integrated
+       at commit as Mitsuba does (docs/materials.md). roughness: the coat's GGX alpha in [0, 1]
+       (below 1e-3 the coat is rendered at alpha 1e-3, a lobe under 0.06 degrees: the smooth coat
+       up to that blur); ior: the coat's index (0 means 1.5; else finite, > 1). Reflects on the
+       side of wo only; sampled by a mixture of the visible normals and the cosine lobe. */
+    int nonlinear;              /* rough plastic: the base's colour shifted by internal scattering */
 } pt_material_desc;
 
 PTDEF int pt_scene_add_material(pt_scene *scene, const pt_material_desc *desc); /* id >= 0 */
@@ -789,6 +803,8 @@ PTDEF int pt_scene_add_dielectric(pt_scene *scene, float ior);
 PTDEF int pt_scene_add_emitter(pt_scene *scene, pt_color radiance, int two_sided);
 /* A rough conductor (tint: pt_material_desc.albedo; eta, k zero: not for PT_CONDUCTOR_CUSTOM). */
 PTDEF int pt_scene_add_rough_conductor(pt_scene *scene, pt_conductor conductor, float roughness, pt_color tint);
+/* A rough plastic (Mitsuba's roughplastic, linear colours): albedo in [0, 1], GGX roughness, coat ior (0: 1.5). */
+PTDEF int pt_scene_add_rough_plastic(pt_scene *scene, pt_color albedo, float roughness, float ior);
 /* The Fresnel reflectance per channel of a conductor at cos(theta) (clamped to [0, 1]) of
    material `material` (PT_MATERIAL_ROUGH_CONDUCTOR; zero for other types or a bad id). */
 PTDEF pt_color pt_material_conductor_fresnel(const pt_scene *scene, int material, float cos_theta);
@@ -1507,6 +1523,12 @@ typedef struct pt__material {
     float alpha, alpha2;  /* rough conductor: GGX alpha and alpha^2 */
     int fresnel;          /* rough conductor: 0 for F = 1, else eta + i k */
     pt_color eta, k;
+    /* rough plastic (section 4, "coated plastic"): the coat's index, 1/ior^2, its diffuse internal
+       reflectance, the specular share of the sampling mixture, nonlinear, and the coat's
+       transmittance at cos = k / (PT__COAT_RES - 1) */
+    float coat_ior, coat_inv_ior2, coat_rint, coat_wspec;
+    int nonlinear;
+    float coat_t[64];
 } pt__material;
 
 typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
@@ -3276,17 +3298,22 @@ static float pt__ggx_g1(pt_vec3 v, float a2)
 /* A microfacet normal drawn from the distribution of normals visible from v (v_z > 0):
    D_v(m) = G1(v) max(0, v.m) D(m) / v_z (Heitz, "Sampling the GGX Distribution of Visible
    Normals", JCGT 7(4), 2018: stretch v to the hemisphere configuration, sample the projected
-   disk, unstretch). */
-static pt_vec3 pt__ggx_sample_vn(pt_vec3 v, float a, float u1, float u2)
+   disk, unstretch). pt__ggx_vn_disk: the normal of a point (p1, p2) of the unit disk, p1 across
+   the plane of v and the normal; pt__ggx_sample_vn: the disk point from polar coordinates. */
+static pt_vec3 pt__ggx_vn_disk(pt_vec3 v, float a, float p1, float p2)
 {
     pt_vec3 vh = pt_normalize(pt_v3(a * v.x, a * v.y, v.z)), t1, t2, nh;
-    float l2 = vh.x * vh.x + vh.y * vh.y, r = sqrtf(u1), phi = 2.0f * PT__PI * u2;
-    float p1 = r * cosf(phi), p2 = r * sinf(phi), s = 0.5f * (1.0f + vh.z);
+    float l2 = vh.x * vh.x + vh.y * vh.y, s = 0.5f * (1.0f + vh.z);
     t1 = l2 > 0.0f ? pt_scale(pt_v3(-vh.y, vh.x, 0.0f), 1.0f / sqrtf(l2)) : pt_v3(1.0f, 0.0f, 0.0f);
     t2 = pt_cross(vh, t1);
     p2 = (1.0f - s) * pt__safe_sqrt(1.0f - p1 * p1) + s * p2;
     nh = pt_add(pt_add(pt_scale(t1, p1), pt_scale(t2, p2)), pt_scale(vh, pt__safe_sqrt(1.0f - p1 * p1 - p2 * p2)));
     return pt_normalize(pt_v3(a * nh.x, a * nh.y, pt__maxf(0.0f, nh.z)));
+}
+static pt_vec3 pt__ggx_sample_vn(pt_vec3 v, float a, float u1, float u2)
+{
+    float r = sqrtf(u1), phi = 2.0f * PT__PI * u2;
+    return pt__ggx_vn_disk(v, a, r * cosf(phi), r * sinf(phi));
 }
 /* The density of reflected directions wi = reflect(wo, m) for m ~ D_v(wo): D_v(m) / (4 wo.m)
    = G1(wo) D(m) / (4 wo_z), m the half vector of wo and wi (both above the surface). */
@@ -5078,7 +5105,7 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
 
 /* ------------------------------------------------------------------------------------------
    4. Materials and textures: the material table (Lambertian, metal with an optional fuzz lobe,
-   clear dielectric, emitter), the 3D checker, and what the integrator asks of a material: its
+   clear dielectric, emitter, rough conductor, rough plastic with its coat tables), the 3D checker, and what the integrator asks of a material: its
    A * pScatter for a direction (BRDF times cosine), the density with which it samples a
    direction, a sampled direction, and the exact unpolarised Fresnel reflectance of a dielectric
    interface. Delta materials (mirror, glass) have no density and are followed by the integrator.
@@ -5130,13 +5157,127 @@ static int pt__conductor_resolve(pt_scene *s, const pt_material_desc *d, pt__mat
     return PT_OK;
 }
 
+/* --- coated plastic: a Lambertian base under a GGX dielectric coat, the model of Mitsuba 3's
+   `roughplastic` (its src/bsdfs/roughplastic.cpp, and eval_transmittance and eval_reflectance
+   of include/mitsuba/render/microfacet.h, read for the model and its constants; Weidlich &
+   Wilkie, "Arbitrarily Layered Micro-Facet Surfaces", GRAPHITE 2007, for the layering).
+   T(mu), the coat's transmittance into the layer from a direction of cosine mu: the mean over
+   normals m visible from it (Heitz 2018) of (1 - F(w.m)) G1(t, m), t the refracted direction,
+   counted only below the surface. Tabulated at mu_k = max(1e-6, k / 63), k = 0 .. 63, read by
+   linear interpolation in mu. R_int, the layer's diffuse internal reflectance: 2/64 sum_k mu_k
+   R(mu_k), R(mu) the mean of F G1(r, m) from inside (relative index 1/ior), r the reflected
+   direction, counted only above: Mitsuba's own discrete mean, kept so that the model is the
+   same term for term. Both means are Gauss-Legendre rules over the visible-normal sampler's unit
+   square mapped onto the visible normals through the concentric disk (Shirley & Chiu 1997), as
+   Mitsuba's sampler maps it: n x n nodes, n = 32 for T and 128 for R (whose integrand has the
+   kink of total internal reflection). The rule's own error (up to 4e-4 in T at normal incidence) is
+   part of the model, so both renderers' tables agree to float rounding (docs/materials.md). */
+#define PT__COAT_RES 64
+static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t);
+/* Gauss-Legendre nodes and weights of order n on [0, 1] (Newton's method on P_n). */
+static void pt__gauss_legendre(int n, double *x, double *w)
+{
+    int i, j, it;
+    for (i = 0; i < n; ++i) {
+        double z = cos(3.14159265358979323846 * ((double)i + 0.75) / ((double)n + 0.5)), dp = 1.0;
+        for (it = 0; it < 64; ++it) {
+            double p1 = 1.0, p0 = 0.0, dz;
+            for (j = 1; j <= n; ++j) {
+                double pm = p0;
+                p0 = p1;
+                p1 = ((2.0 * j - 1.0) * z * p0 - (j - 1.0) * pm) / j;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1.0);
+            dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-15) break;
+        }
+        x[i] = 0.5 * (1.0 - z);
+        w[i] = 1.0 / ((1.0 - z * z) * dp * dp);
+    }
+}
+/* The coat seen from each direction of the table, mu_k = max(1e-6, k / 63): from outside
+   (inside = 0) the mean of (1 - F) G1 of the refracted direction, from inside the mean of F G1 of
+   the reflected one, by the n x n rule (n even, at most 128). The rule is symmetric and u1 -> 1 - u1
+   mirrors the disk point, and so the normal, across the plane of v and the normal, where the
+   integrand is even: half the rows, counted twice. */
+static void pt__coat_means(const pt__material *mat, int inside, int n, double *out)
+{
+    double x[128], w[128];
+    float a = mat->alpha, a2 = mat->alpha2, eta = inside ? mat->coat_ior : 1.0f / mat->coat_ior;
+    pt_vec3 v[PT__COAT_RES];
+    int i, j, k;
+    pt__gauss_legendre(n, x, w);
+    for (k = 0; k < PT__COAT_RES; ++k) {
+        float mu = pt__maxf(1e-6f, (float)k / (float)(PT__COAT_RES - 1));
+        v[k] = pt_v3(pt__safe_sqrt(1.0f - mu * mu), 0.0f, mu);
+        out[k] = 0.0;
+    }
+    for (i = 0; i < n / 2; ++i)
+        for (j = 0; j < n; ++j) {
+            float p1, p2;
+            double wt = 2.0 * w[i] * w[j];
+            pt__concentric_disk((float)x[i], (float)x[j], &p1, &p2);
+            for (k = 0; k < PT__COAT_RES; ++k) {
+                pt_vec3 m = pt__ggx_vn_disk(v[k], a, p1, p2), t;
+                float c = pt__minf(1.0f, pt__maxf(0.0f, pt_dot(v[k], m))), ct = 0.0f;
+                float F = pt__fresnel_dielectric(c, eta, &ct);
+                if (inside) {
+                    t = pt__reflect(v[k], m);
+                    if (t.z > 0.0f) out[k] += wt * F * pt__ggx_g1(t, a2);
+                } else if (F < 1.0f) {
+                    t = pt_add(pt_scale(v[k], -eta), pt_scale(m, eta * c - ct));
+                    if (t.z < 0.0f) out[k] += wt * (1.0f - F) * pt__ggx_g1(pt_v3(t.x, t.y, -t.z), a2);
+                }
+            }
+        }
+}
+static void pt__coat_tables(pt__material *m)
+{
+    double t[PT__COAT_RES], r[PT__COAT_RES], rint = 0.0;
+    int k;
+    pt__coat_means(m, 0, 32, t);
+    pt__coat_means(m, 1, 128, r);
+    for (k = 0; k < PT__COAT_RES; ++k) {
+        m->coat_t[k] = (float)t[k];
+        rint += (double)pt__maxf(1e-6f, (float)k / (float)(PT__COAT_RES - 1)) * r[k];
+    }
+    m->coat_rint = (float)(2.0 * rint / PT__COAT_RES);
+}
+static int pt__plastic_resolve(pt_scene *s, const pt_material_desc *d, pt__material *m)
+{
+    pt_color lo = d->albedo, hi = d->albedo;
+    if (!pt__isfinite(d->roughness) || d->roughness < 0.0f || d->roughness > 1.0f)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: roughness = %g: must be finite and in [0, 1]",
+                        (double)d->roughness);
+    if (d->ior != 0.0f && !(d->ior > 1.0f))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: rough plastic ior = %g: must be > 1 (0 means 1.5)",
+                        (double)d->ior);
+    if (d->albedo_texture) {
+        lo = s->texs[d->albedo_texture - 1].even;
+        hi = s->texs[d->albedo_texture - 1].odd;
+    }
+    if (pt_max_component(lo) > 1.0f || pt_max_component(hi) > 1.0f)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: rough plastic albedo above 1: the base reflects at most "
+                                                      "what reaches it (and 1 - albedo R_int must stay > 0)");
+    m->alpha = pt__maxf(d->roughness, PT__GGX_MIN_ALPHA);
+    m->alpha2 = m->alpha * m->alpha;
+    m->coat_ior = d->ior > 0.0f ? d->ior : 1.5f;
+    m->coat_inv_ior2 = 1.0f / (m->coat_ior * m->coat_ior);
+    m->nonlinear = d->nonlinear != 0;
+    /* Mitsuba's specular sampling weight s / (d + s): s = 1 (no specular tint), d the mean albedo */
+    m->coat_wspec = 1.0f / (1.0f + (lo.x + lo.y + lo.z + hi.x + hi.y + hi.z) / 6.0f);
+    pt__coat_tables(m);
+    return PT_OK;
+}
+
 PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
 {
     pt__material m;
     if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!d) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: desc is NULL");
     memset(&m, 0, sizeof m);
-    if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_ROUGH_CONDUCTOR)
+    if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_ROUGH_PLASTIC)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: unknown type %d", (int)d->type);
     if (!pt__color_ok(d->albedo))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: albedo must be finite and >= 0");
@@ -5151,6 +5292,10 @@ PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
                         "material: ior = %g: must be 0 (meaning 1.5) or finite and >= 0.001", (double)d->ior);
     if (d->type == PT_MATERIAL_ROUGH_CONDUCTOR) {
         int rc = pt__conductor_resolve(s, d, &m);
+        if (rc != PT_OK) return rc;
+    }
+    if (d->type == PT_MATERIAL_ROUGH_PLASTIC) {
+        int rc = pt__plastic_resolve(s, d, &m);
         if (rc != PT_OK) return rc;
     }
     m.type = d->type;
@@ -5212,6 +5357,16 @@ PTDEF int pt_scene_add_rough_conductor(pt_scene *s, pt_conductor conductor, floa
     d.albedo = tint;
     d.conductor = conductor;
     d.roughness = roughness;
+    return pt_scene_add_material(s, &d);
+}
+PTDEF int pt_scene_add_rough_plastic(pt_scene *s, pt_color albedo, float roughness, float ior)
+{
+    pt_material_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_ROUGH_PLASTIC;
+    d.albedo = albedo;
+    d.roughness = roughness;
+    d.ior = ior;
     return pt_scene_add_material(s, &d);
 }
 PTDEF int pt_scene_add_checker(pt_scene *s, pt_color even, pt_color odd, float scale)
@@ -5559,6 +5714,70 @@ static pt_color pt__conductor_eval(const pt__material *m, pt_color tint, pt_vec3
     g = pt__ggx_d(h, m->alpha2) * pt__ggx_g1(o, m->alpha2) * pt__ggx_g1(i, m->alpha2) / (4.0f * o.z);
     return pt_scale(pt_mul(tint, pt__conductor_fresnel_rgb(m, pt_dot(o, h))), g);
 }
+/* The coat's transmittance at cosine mu (the table, linear in mu) and the specular share of the
+   sampling mixture seen from a direction of transmittance t: Mitsuba's weight w moved by the
+   coat's reflectance there, (1 - t) w / ((1 - t) w + t (1 - w)). */
+static float pt__coat_t(const pt__material *m, float mu)
+{
+    float x = pt__minf(1.0f, pt__maxf(0.0f, mu)) * (float)(PT__COAT_RES - 1);
+    int i = (int)x;
+    if (i > PT__COAT_RES - 2) i = PT__COAT_RES - 2;
+    return m->coat_t[i] + (x - (float)i) * (m->coat_t[i + 1] - m->coat_t[i]);
+}
+static float pt__coat_spec_share(const pt__material *m, float mu_o)
+{
+    float t = pt__coat_t(m, mu_o), sp = (1.0f - t) * m->coat_wspec, df = t * (1.0f - m->coat_wspec);
+    return sp + df > 0.0f ? sp / (sp + df) : 1.0f;
+}
+/* The rough plastic's A * pScatter (pt_material_desc): the coat's GGX reflection plus the base
+   seen through it. */
+static pt_color pt__plastic_eval(const pt__material *m, pt_color rho, pt_vec3 ns, pt_vec3 wo, pt_vec3 wi)
+{
+    pt_onb b = pt__onb(ns);
+    pt_vec3 o = pt__onb_local(&b, wo), i = pt__onb_local(&b, wi), h;
+    float ct = 0.0f, F, spec, k;
+    pt_color diff;
+    if (!(o.z > 0.0f) || !(i.z > 0.0f)) return pt_v3(0, 0, 0);
+    h = pt_normalize(pt_add(o, i));
+    F = pt__fresnel_dielectric(pt__minf(1.0f, pt__maxf(0.0f, pt_dot(o, h))), 1.0f / m->coat_ior, &ct);
+    spec = F * pt__ggx_d(h, m->alpha2) * pt__ggx_g1(o, m->alpha2) * pt__ggx_g1(i, m->alpha2) / (4.0f * o.z);
+    k = pt__coat_t(m, o.z) * pt__coat_t(m, i.z) * i.z * m->coat_inv_ior2 * PT__INV_PI;
+    if (m->nonlinear)
+        diff = pt_v3(rho.x / (1.0f - rho.x * m->coat_rint), rho.y / (1.0f - rho.y * m->coat_rint),
+                     rho.z / (1.0f - rho.z * m->coat_rint));
+    else
+        diff = pt_scale(rho, 1.0f / (1.0f - m->coat_rint));
+    return pt_add(pt_scale(diff, k), pt_v3(spec, spec, spec));
+}
+/* The mixture's density: the visible normals with the specular share, the cosine lobe otherwise. */
+static float pt__plastic_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo, pt_vec3 wi)
+{
+    pt_onb b = pt__onb(ns);
+    pt_vec3 o = pt__onb_local(&b, wo), i = pt__onb_local(&b, wi);
+    float ps;
+    if (!(o.z > 0.0f) || !(i.z > 0.0f)) return 0.0f;
+    ps = pt__coat_spec_share(m, o.z);
+    return ps * pt__ggx_reflect_density(o, i, m->alpha2) + (1.0f - ps) * i.z * PT__INV_PI;
+}
+/* One draw of the mixture: u1 picks the lobe and is stretched back onto [0, 1) for it. */
+static int pt__plastic_sample(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float u1, float u2, pt_vec3 *wi, float *pdf)
+{
+    pt_onb b = pt__onb(ns);
+    pt_vec3 o = pt__onb_local(&b, wo), i;
+    float ps;
+    if (!(o.z > 0.0f)) return 0;
+    ps = pt__coat_spec_share(m, o.z);
+    if (u1 < ps) {
+        i = pt__reflect(o, pt__ggx_sample_vn(o, m->alpha, pt__minf(u1 / ps, 0.99999994f), u2));
+    } else {
+        i = pt__cosine_hemisphere(pt__minf((u1 - ps) / (1.0f - ps), 0.99999994f), u2);
+    }
+    if (!(i.z > 0.0f)) return 0;
+    *wi = pt_normalize(pt_onb_to_world(&b, i));
+    *pdf = pt__plastic_density(m, ns, wo, *wi);
+    return *pdf > 0.0f;
+}
+
 /* What a delta material's reflection multiplies the throughput by: the albedo, times the Fresnel
    reflectance at cos_i for the rough conductor below PT__GGX_MIN_ALPHA. */
 static pt_color pt__delta_reflectance(const pt__material *m, pt_color albedo, float cos_i)
@@ -5581,6 +5800,7 @@ static PT__HOT pt_color pt__material_eval(const pt__material *m, pt_color albedo
     if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f)
         return pt_scale(albedo, pt__fuzz_value(pt__reflect(wo, ns), m->fuzz, wi));
     if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) return pt__conductor_eval(m, albedo, ns, wo, wi);
+    if (m->type == PT_MATERIAL_ROUGH_PLASTIC) return pt__plastic_eval(m, albedo, ns, wo, wi);
     return pt_v3(0, 0, 0);
 }
 /* The density with which the material samples wi (ns flipped to the side of wo). */
@@ -5592,6 +5812,7 @@ static float pt__material_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo,
         pt_onb b = pt__onb(ns);
         return pt__ggx_reflect_density(pt__onb_local(&b, wo), pt__onb_local(&b, wi), m->alpha2);
     }
+    if (m->type == PT_MATERIAL_ROUGH_PLASTIC) return pt__plastic_density(m, ns, wo, wi);
     return 0.0f;
 }
 static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float u1, float u2, float u3,
@@ -5623,6 +5844,7 @@ static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt
         *pdf = pt__material_density(m, ns, wo, *wi);
         return *pdf > 0.0f;
     }
+    if (m->type == PT_MATERIAL_ROUGH_PLASTIC) return pt__plastic_sample(m, ns, wo, u1, u2, wi, pdf);
     return 0;
 }
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
@@ -7480,7 +7702,8 @@ PTDEF int pt_scene_commit(pt_scene *s)
         if (m->scatters && !m->delta) f |= PT_FEATURE_NON_DELTA;
         if (m->delta) f |= PT_FEATURE_DELTA;
         if (m->type == PT_MATERIAL_DIELECTRIC) f |= PT_FEATURE_DIELECTRICS;
-        if (m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) f |= PT_FEATURE_MICROFACET;
+        if ((m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) || m->type == PT_MATERIAL_ROUGH_PLASTIC)
+            f |= PT_FEATURE_MICROFACET;
         if (m->texture) f |= PT_FEATURE_TEXTURES;
     }
     if (s->dlight_count) {
@@ -7942,7 +8165,7 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
 static pt_vec3 pt__receiver_normal(const pt__vertex *v)
 {
     if (v->m->type == PT_MATERIAL_LAMBERTIAN || v->m->type == PT_MATERIAL_METAL ||
-        v->m->type == PT_MATERIAL_ROUGH_CONDUCTOR)
+        v->m->type == PT_MATERIAL_ROUGH_CONDUCTOR || v->m->type == PT_MATERIAL_ROUGH_PLASTIC)
         return v->ng;
     return pt_v3(0.0f, 0.0f, 0.0f);
 }

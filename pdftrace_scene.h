@@ -64,6 +64,12 @@
                                       the smooth Fresnel mirror), METAL one of Au Ag Cu Al
                                       none (F = 1) or `eta R G B k R G B`; tint (default 1 1 1)
                                       multiplies the Fresnel reflectance
+     material NAME roughplastic ALPHA R G B | roughplastic ALPHA texture CHECKER
+            [ior IOR] [nonlinear]     a diffuse base of albedo R G B (each in [0, 1]) under a
+                                      GGX dielectric coat (pdftrace.h, PT_MATERIAL_ROUGH_PLASTIC;
+                                      Mitsuba 3's roughplastic): ALPHA in [0, 1] (below 1e-3 the
+                                      coat is rendered at 1e-3), IOR > 1 (default 1.5);
+                                      nonlinear: the colour shift of internal scattering
      material NAME dielectric IOR
      material NAME emitter R G B [two_sided]
      sphere CX CY CZ RADIUS MATERIAL
@@ -134,7 +140,8 @@
    exact twin), an environment map (POV-Ray's sky_sphere lights diffuse surfaces only through
    radiosity, which misses a small bright sun), fuzzy metal, a rough conductor (POV-Ray has no
    microfacet reflection nor conductor Fresnel; only metal none below alpha 1e-3, a coloured
-   mirror, is exported), emitting triangles, boxes or meshes, a spot light whose beam is
+   mirror, is exported), a rough plastic (no microfacet reflection nor layered coat in POV-Ray),
+   emitting triangles, boxes or meshes, a spot light whose beam is
    narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
    pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
    runs the build first, so it never writes what pdftrace would not render, such as a sphere
@@ -153,7 +160,9 @@
    kept, else face_normals); Lambertian as two-sided `diffuse`, a mirror as a two-sided
    `conductor` of material "none", a rough conductor as a two-sided `roughconductor`
    (distribution ggx, sample_visible true, alpha, RGB eta and k or material "none", the tint as
-   specular_reflectance; below alpha 1e-3 the smooth `conductor`), glass as `dielectric`, an emitter as a one-sided `area`
+   specular_reflectance; below alpha 1e-3 the smooth `conductor`), a rough plastic as a two-sided
+   `roughplastic` (ggx, sample_visible, alpha at least 1e-3, int_ior, ext_ior 1,
+   diffuse_reflectance, nonlinear), glass as `dielectric`, an emitter as a one-sided `area`
    light on its shape with a black bsdf, the background as a `constant` emitter, an
    environment map as an `envmap` emitter (to_world the rotation) of a map resampled to 2H + 1
    rows beside the XML ("<xml without .xml>.env.pfm"), which makes Mitsuba's row interpolation
@@ -200,6 +209,7 @@ typedef struct pt_scenefile_material {
     float roughness;             /* roughconductor: GGX alpha; albedo is its tint */
     pt_conductor conductor;
     pt_color eta, k;             /* PT_CONDUCTOR_CUSTOM */
+    int nonlinear;               /* roughplastic (roughness, ior; albedo or checker: the base) */
 } pt_scenefile_material;
 
 typedef struct pt_obj_mesh {
@@ -1556,7 +1566,46 @@ static int pt__sf_roughconductor(pt__sf_parser *p, pt_scenefile_material *m)
     return PT_OK;
 }
 
-/* material NAME TYPE ...: lambertian, metal, roughconductor, dielectric or emitter. */
+/* roughplastic ALPHA R G B | ALPHA texture CHECKER, then [ior IOR] [nonlinear] in any order */
+static int pt__sf_roughplastic(pt__sf_parser *p, pt_scenefile_material *m)
+{
+    int rc;
+    m->type = PT_MATERIAL_ROUGH_PLASTIC;
+    if ((rc = pt__sf_num(p, "roughplastic alpha", &m->roughness)) != PT_OK) return rc;
+    if (!(m->roughness >= 0.0f && m->roughness <= 1.0f))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughplastic alpha: must be in [0, 1] (GGX alpha)");
+    if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "texture")) {
+        const char *t;
+        p->pos++;
+        t = pt__sf_next(p);
+        if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughplastic: missing checker name after 'texture'");
+        m->checker = pt__sf_find_checker(p->d, t);
+        if (m->checker < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughplastic: checker '%s' is not defined", t);
+        if (pt_max_component(p->d->checkers[m->checker].even) > 1.0f || pt_max_component(p->d->checkers[m->checker].odd) > 1.0f)
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughplastic: checker '%s' has a colour above 1 (the base's albedo must be in [0, 1])", t);
+        m->albedo = pt_v3(0.5f, 0.5f, 0.5f);
+    } else {
+        if ((rc = pt__sf_color(p, "roughplastic albedo", &m->albedo)) != PT_OK) return rc;
+        if (m->albedo.x > 1.0f || m->albedo.y > 1.0f || m->albedo.z > 1.0f)
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughplastic albedo: must be in [0, 1]");
+    }
+    m->ior = 1.5f;
+    while (p->pos < p->ntok) {
+        if (!strcmp(p->tok[p->pos], "ior")) {
+            p->pos++;
+            if ((rc = pt__sf_num(p, "roughplastic ior", &m->ior)) != PT_OK) return rc;
+            if (!(m->ior > 1.0f && m->ior <= 10.0f))
+                return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughplastic ior: must be in (1, 10]");
+        } else if (!strcmp(p->tok[p->pos], "nonlinear")) {
+            p->pos++;
+            m->nonlinear = 1;
+        } else
+            break; /* pt__sf_end reports it */
+    }
+    return PT_OK;
+}
+
+/* material NAME TYPE ...: lambertian, metal, roughconductor, roughplastic, dielectric or emitter. */
 static int pt__sf_material(pt__sf_parser *p)
 {
     pt_scenefile *d = p->d;
@@ -1568,7 +1617,7 @@ static int pt__sf_material(pt__sf_parser *p)
     strcpy(m.name, name);
     m.checker = -1;
     type = pt__sf_next(p);
-    if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, roughconductor, dielectric, emitter)", name);
+    if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, roughconductor, roughplastic, dielectric, emitter)", name);
     if (!strcmp(type, "lambertian")) {
         m.type = PT_MATERIAL_LAMBERTIAN;
         if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "texture")) {
@@ -1589,6 +1638,8 @@ static int pt__sf_material(pt__sf_parser *p)
         }
     } else if (!strcmp(type, "roughconductor")) {
         if ((rc = pt__sf_roughconductor(p, &m)) != PT_OK) return rc;
+    } else if (!strcmp(type, "roughplastic")) {
+        if ((rc = pt__sf_roughplastic(p, &m)) != PT_OK) return rc;
     } else if (!strcmp(type, "dielectric")) {
         m.type = PT_MATERIAL_DIELECTRIC;
         if ((rc = pt__sf_num(p, "dielectric ior", &m.ior)) != PT_OK) return rc;
@@ -1598,7 +1649,7 @@ static int pt__sf_material(pt__sf_parser *p)
         if ((rc = pt__sf_color(p, "emitter radiance", &m.emission)) != PT_OK) return rc;
         if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "two_sided")) { p->pos++; m.two_sided = 1; }
     } else
-        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, roughconductor, dielectric, emitter)", name, type);
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, roughconductor, roughplastic, dielectric, emitter)", name, type);
     if ((rc = pt__sf_end(p)) != PT_OK) return rc;
     if (d->material_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many materials");
     {
@@ -2186,6 +2237,7 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         md.conductor = m->conductor;
         md.eta = m->eta;
         md.k = m->k;
+        md.nonlinear = m->nonlinear;
         mat[i] = pt_scene_add_material(s, &md);
         if (mat[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, mat[i], "material %s: %s", m->name, pt_scene_error_message(s));
     }
@@ -2686,6 +2738,11 @@ static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *er
                                 "POV-Ray export: a rough conductor (material %s) has no POV-Ray equivalent: POV-Ray has no "
                                 "microfacet reflection (no GGX distribution or masking) and no conductor Fresnel term; "
                                 "only alpha < 1e-3 with metal none (a coloured mirror) is exported", m->name);
+        if (m->type == PT_MATERIAL_ROUGH_PLASTIC)
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: a rough plastic (material %s) has no POV-Ray equivalent: POV-Ray has no "
+                                "microfacet reflection and no layered coat (its phong and specular highlights have no Fresnel "
+                                "term and take no energy from the diffuse base), so no setting is a numeric twin", m->name);
         if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
@@ -2902,6 +2959,21 @@ static void pt__mts_conductor(pt__mts *w, const pt_scenefile_material *m, int i)
     pt__mts_put(w, "</bsdf></bsdf>\n");
 }
 
+/* A rough plastic: two-sided `roughplastic` with distribution ggx, sample_visible true, alpha (at
+   least 1e-3, the coat pdftrace renders), int_ior, ext_ior 1, diffuse_reflectance and nonlinear;
+   Mitsuba's specular_reflectance stays at its default, 1 (pdftrace's coat has no tint). */
+static void pt__mts_plastic(pt__mts *w, const pt_scenefile_material *m, int i)
+{
+    pt__mts_put(w, "  <bsdf type=\"twosided\" id=\"mat%d\"><bsdf type=\"roughplastic\"><string name=\"distribution\" "
+                   "value=\"ggx\"/><boolean name=\"sample_visible\" value=\"true\"/><float name=\"alpha\" value=\"", i);
+    pt__mts_f(w, m->roughness > 1e-3f ? m->roughness : 1e-3f);
+    pt__mts_put(w, "\"/><float name=\"int_ior\" value=\"");
+    pt__mts_f(w, m->ior > 0.0f ? m->ior : 1.5f);
+    pt__mts_put(w, "\"/><float name=\"ext_ior\" value=\"1\"/>");
+    pt__mts_rgb(w, "diffuse_reflectance", m->albedo);
+    pt__mts_put(w, "<boolean name=\"nonlinear\" value=\"%s\"/></bsdf></bsdf>\n", m->nonlinear ? "true" : "false");
+}
+
 /* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse, a mirror as a
    two-sided conductor without Fresnel (material "none": reflectance = specular_reflectance),
    glass as a smooth dielectric in vacuum, an emitter as black diffuse (it reflects nothing). */
@@ -2927,6 +2999,9 @@ static void pt__mts_bsdf(pt__mts *w, int i)
         break;
     case PT_MATERIAL_ROUGH_CONDUCTOR:
         pt__mts_conductor(w, m, i);
+        break;
+    case PT_MATERIAL_ROUGH_PLASTIC:
+        pt__mts_plastic(w, m, i);
         break;
     case PT_MATERIAL_DIELECTRIC:
         pt__mts_put(w, "  <bsdf type=\"dielectric\" id=\"mat%d\"><float name=\"int_ior\" value=\"", i);
@@ -3415,7 +3490,7 @@ static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *er
         if (m->type == PT_MATERIAL_METAL && m->fuzz > 0)
             why = "fuzzy metal (material %s) has no exact Mitsuba equivalent (its rough conductors are microfacet "
                   "models, not pdftrace's mirror direction jittered in a ball)";
-        else if (m->type == PT_MATERIAL_LAMBERTIAN && m->checker >= 0)
+        else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_ROUGH_PLASTIC) && m->checker >= 0)
             why = "the 3-D checker texture (material %s) has no exact Mitsuba equivalent (Mitsuba's checkerboard "
                   "is a 2-D texture over a shape's (u, v) coordinates)";
         else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_METAL ||

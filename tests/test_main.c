@@ -110,6 +110,7 @@ int main(int argc, char **argv)
         { "geometry", test_geometry_cases },
         { "materials", test_materials_cases },
         { "microfacet", test_microfacet_cases },
+        { "plastic", test_plastic_cases },
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
         { "adaptive", test_adaptive_cases },

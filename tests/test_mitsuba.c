@@ -331,6 +331,8 @@ static void mitsuba_refusals(test_ctx *t)
         {"material w lambertian 1.5 0.5 0.5\nsphere 0 0 0 1 w\n", 6, "albedo above 1"},
         {"material g dielectric 1\nsphere 0 0 0 1 g\n", 6, "ior 1"},
         {"material r roughconductor 0.3 Au tint 1.2 1 1\nsphere 0 0 0 1 r\n", 6, "albedo above 1"},
+        {"checker c 0.5 0.5 0.5 0 0 0 0.5\nmaterial p roughplastic 0.2 texture c\ntriangle 0 0 0 1 0 0 0 1 0 m\nsphere 0 0 0 1 p\n",
+         8, "3-D checker"},
         {"triangle 0 0 0 1 0 0 0 1 0 m\nscale 1 3 1\nsphere 0 0 0 1 m\n", 7, "similarity"},
     };
     char dir[64], path[600], err[1024], list[256];
@@ -381,6 +383,38 @@ static void mitsuba_rough_conductor(test_ctx *t)
         p = strstr(xml, "id=\"mat4\"");
         CHECK(t, p && !strncmp(p, "id=\"mat4\"><bsdf type=\"conductor\"><rgb name=\"eta\" value=\"1.5, 1, 0.5\"/>", 60),
               "material c (alpha 5e-4, the smooth conductor): %.120s", p ? p : "(missing)");
+        free(xml);
+    }
+    tu_remove_tree(dir);
+}
+
+/* Rough plastics: two-sided roughplastic, ggx, sample_visible, alpha (at least 1e-3: the coat
+   pdftrace renders), int_ior, ext_ior 1, diffuse_reflectance, nonlinear; no specular_reflectance. */
+static void mitsuba_rough_plastic(test_ctx *t)
+{
+    char dir[64];
+    char *xml;
+    const char *p, *e;
+    double v[3] = { 0, 0, 0 };
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    xml = mts_xml_of(t, MTS_HEAD "material a roughplastic 0.25 0.9 0.8 0.7 ior 1.7 nonlinear\n"
+                                 "material b roughplastic 0.0001 0.1 0.2 0.3\nsphere 0 0 0 1 a\nsphere 3 0 0 1 b\n", dir, NULL);
+    if (xml) {
+        p = strstr(xml, "<bsdf type=\"twosided\" id=\"mat2\"><bsdf type=\"roughplastic\"><string name=\"distribution\" "
+                        "value=\"ggx\"/><boolean name=\"sample_visible\" value=\"true\"/><float name=\"alpha\" value=\"0.25\"/>");
+        CHECK(t, p != NULL, "material a: no two-sided ggx roughplastic with sample_visible and alpha 0.25");
+        e = p ? strstr(p, "</bsdf></bsdf>") : NULL;
+        CHECK(t, p && mts_numbers(p, "name=\"int_ior\" value=\"", v, 1) && (float)v[0] == 1.7f, "material a: int_ior %g", v[0]);
+        CHECK(t, p && strstr(p, "<float name=\"ext_ior\" value=\"1\"/>") && strstr(p, "<float name=\"ext_ior\" value=\"1\"/>") < e,
+              "material a: ext_ior 1");
+        CHECK(t, p && mts_numbers(p, "name=\"diffuse_reflectance\" value=\"", v, 3) && (float)v[0] == 0.9f && (float)v[1] == 0.8f &&
+                     (float)v[2] == 0.7f, "material a: diffuse_reflectance %g %g %g", v[0], v[1], v[2]);
+        CHECK(t, p && strstr(p, "<boolean name=\"nonlinear\" value=\"true\"/>") && strstr(p, "<boolean name=\"nonlinear\" value=\"true\"/>") < e,
+              "material a: nonlinear");
+        CHECK(t, p && (!strstr(p, "specular_reflectance") || strstr(p, "specular_reflectance") > e), "material a: a specular_reflectance");
+        p = strstr(xml, "id=\"mat3\"");
+        CHECK(t, p && mts_numbers(p, "name=\"alpha\" value=\"", v, 1) && (float)v[0] == 1e-3f && strstr(p, "value=\"false\""),
+              "material b (alpha 1e-4): alpha %g, want 1e-3 and nonlinear false", v[0]);
         free(xml);
     }
     tu_remove_tree(dir);
@@ -771,6 +805,7 @@ const test_case test_mitsuba_cases[] = {
     TEST_CASE(mitsuba_lights),
     TEST_CASE(mitsuba_refusals),
     TEST_CASE(mitsuba_rough_conductor),
+    TEST_CASE(mitsuba_rough_plastic),
     TEST_CASE(mitsuba_nonfinite_refused),
     TEST_CASE(mitsuba_unwritable),
     TEST_CASE(mitsuba_hostile_names),

@@ -2029,6 +2029,84 @@ void st_microfacet(st_ctx *c)
     st_row(c, nonfinite == 0, "microfacet: all", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
 }
 
+/* Rough plastics from roughness 1e-4 (rendered at 1e-3) to 1 and coat indices from 1.0001 to 3,
+   incidence from 0 to 89.99 degrees (and exactly tangent for the PDF). The material PDF: every
+   draw finite with a positive density equal to pt_pdf_value. A white base (albedo 1) on a sphere
+   under a uniform background of 1, one ray at angle theta, MATERIAL and MIS: no NaN/Inf, and the
+   mean over the angles (each the directional albedo, <= 1 for this model: test_plastic.c) not
+   above 1 (one-sided z). The mixture's weight f cos / p has no bound of 1 (a coat facet can
+   reflect more than the coat's mean share predicts); the largest is reported. */
+void st_plastic(st_ctx *c)
+{
+    static const float rough[8] = { 1e-4f, 1e-3f, 1e-2f, 0.1f, 0.5f, 1.0f, 0.1f, 1e-4f };
+    static const float iors[8] = { 1.5f, 1.5f, 1.5f, 1.5f, 1.5f, 1.5f, 1.0001f, 3.0f };
+    static const double angle[7] = { 0.0, 45.0, 80.0, 89.0, 89.9, 89.99, 90.0 };
+    const int n = c->full ? 20000 : 1000;
+    uint64_t nonfinite = 0;
+    int ri, ai, i;
+    for (ri = 0; ri < 8; ri++) {
+        pt_scene *s = pt_scene_create();
+        int m = s ? pt_scene_add_rough_plastic(s, pt_v3(1, 1, 1), rough[ri], iors[ri]) : -1;
+        double worst_max = 0.0, sum = 0.0, sum2 = 0.0, mean, se, z;
+        long bad_draws = 0, draws = 0, paths = 0;
+        char cas[64];
+        snprintf(cas, sizeof cas, "plastic: alpha %g, ior %g", (double)rough[ri], (double)iors[ri]);
+        if (m < 0 || pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m) < 0 || pt_scene_commit(s) != PT_OK) {
+            st_row(c, 0, cas, "scene", "builds", "%s", s ? pt_scene_error_message(s) : "out of memory");
+            pt_scene_destroy(s);
+            continue;
+        }
+        for (ai = 0; ai < 7; ai++) {
+            double th = angle[ai] * TU_PI / 180.0;
+            pt_vec3 nrm = pt_v3(0, 0, 1), wo = dv_to(dnorm(dv(sin(th), 0.0, cos(th))));
+            pt_pdf p = pt_pdf_material(s, m, nrm, wo);
+            pt_rng rng;
+            int strat;
+            pt_rng_seed(&rng, 14000 + (uint64_t)(ri * 10 + ai), 1);
+            for (i = 0; i < n; i++) {
+                pt_vec3 d;
+                float pv, v;
+                if (!pt_pdf_sample(&p, &rng, &d, &pv)) continue;
+                draws++;
+                v = pt_pdf_value(&p, d);
+                if (!(pv > 0.0f) || !isfinite(pv) || v != pv || !isfinite(d.x + d.y + d.z)) bad_draws++;
+            }
+            if (ai == 6) continue; /* a ray cannot meet the sphere at exactly 90 degrees */
+            for (strat = 0; strat < 2; strat++) {
+                pt_render_desc d = tu_base_desc(1, 1, 1, 0);
+                pt_path_stats st;
+                pt_ray ray;
+                memset(&st, 0, sizeof st);
+                d.background = pt_v3(1, 1, 1);
+                d.strategy = strat == 0 ? PT_STRATEGY_MATERIAL : PT_STRATEGY_MIS;
+                d.rr_start_depth = -1;
+                ray.origin = pt_v3((float)sin(th), 0.0f, 10.0f);
+                ray.dir = pt_v3(0, 0, -1);
+                for (i = 0; i < n; i++) {
+                    pt_color L = pt_trace_path(s, &d, ray, &rng, &st);
+                    if (strat == 0) {
+                        sum += L.x;
+                        sum2 += (double)L.x * L.x;
+                        paths++;
+                        worst_max = fmax(worst_max, fmax(L.x, fmax(L.y, L.z)));
+                    }
+                }
+                nonfinite += st.nonfinite_samples;
+            }
+        }
+        mean = sum / (double)paths;
+        se = sqrt(fmax(0.0, sum2 / (double)paths - mean * mean) / (double)(paths - 1));
+        z = se > 0.0 ? (mean - 1.0) / se : (mean > 1.0 ? 1e30 : 0.0);
+        c->comparisons += 1;
+        st_row(c, z <= c->z_bound, cas, "white base, MATERIAL mean albedo over 0 .. 89.99 degrees: z above 1", st_zb(c),
+               "%.4f (z %.2f; largest sample %.3g)", mean, z, worst_max);
+        st_row(c, bad_draws == 0, cas, "PDF draws (0 .. 90 degrees) non-finite or != pt_pdf_value", "0", "%ld of %ld", bad_draws,
+               draws);
+        pt_scene_destroy(s);
+    }
+    st_row(c, nonfinite == 0, "plastic: all", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
+}
+
 void st_family(st_ctx *c)
 {
     char b[48];
