@@ -41,8 +41,15 @@
    PDFTRACE_NO_THREADS     build without pthreads; rendering runs on the calling thread
                            unless the host passes its own parallel-for (pt_render_desc).
    PDFTRACE_STATIC         make every public function static to the implementing file.
-   PDFTRACE_NO_SIMD        scalar BVH traversal even where SSE2 is available (same results;
-                           the SSE2 code is used on x86-64 and wherever __SSE2__ is defined).
+   PDFTRACE_NO_SIMD        scalar BVH traversal only, even where SSE2 is available (same results;
+                           the SSE2 code is compiled on x86-64 and wherever __SSE2__ is defined).
+   PDFTRACE_SIMD (environment variable, read at each pt_scene_commit): scalar, sse2, avx2 or
+                           avx512 caps the built-in BVH's SIMD level, chosen at run time from what
+                           the CPU has (pt_simd_level; pt_simd_set_cap is the same cap in the API).
+                           Every level gives the same hits and images bit for bit.
+   PDFTRACE_AVX512_WIDTH   children per BVH node at the AVX-512 level: 8 (default, as AVX2) or 16.
+   PDFTRACE_NO_WIDE_BVH    no AVX2/AVX-512 code (gcc and clang on x86 compile it by default with
+                           per-function target attributes; other compilers never do).
    PDFTRACE_EMBREE         trace rays with Embree 3 (section 5b; include path embree3/,
                            link -lembree3); PDFTRACE_EMBREE4 selects Embree 4 (untested).
                            PDFTRACE_EMBREE_MIN_PRIMS, PDFTRACE_EMBREE_SMALL_PRIMS: AUTO's
@@ -599,7 +606,7 @@ typedef enum pt_simd_level {
     PT_SIMD_SCALAR = 0,           /* portable C (the only level with PDFTRACE_NO_SIMD) */
     PT_SIMD_SSE2 = 1,             /* 4-wide nodes and leaf blocks (x86-64's baseline) */
     PT_SIMD_AVX2 = 2,             /* 8-wide nodes (gcc or clang on x86; leaf blocks as SSE2) */
-    PT_SIMD_AVX512 = 3            /* AVX-512F: 16-wide nodes (gcc or clang on x86) */
+    PT_SIMD_AVX512 = 3            /* AVX-512F: 8-wide nodes, or 16 with PDFTRACE_AVX512_WIDTH=16 */
 } pt_simd_level;
 
 /* Traversal backends (pt_scene_set_backend, section 5b). */
@@ -1446,7 +1453,8 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #include <emmintrin.h>
 #define PT__SSE 1
 #endif
-/* Wider BVH nodes, chosen at run time (pt_simd_level): 8 children with AVX2, 16 with AVX-512F.
+/* Wider BVH nodes, chosen at run time (pt_simd_level): 8 children with AVX2 and AVX-512F (16
+   with PDFTRACE_AVX512_WIDTH=16).
    Only gcc and clang on x86 compile them (per-function target attributes and
    __builtin_cpu_supports); other compilers and architectures get the SSE2 or scalar code. */
 #if defined(PT__SSE) && !defined(PDFTRACE_NO_WIDE_BVH) && (defined(__GNUC__) || defined(__clang__)) && \
@@ -5726,8 +5734,14 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
    the sign of the direction. Box tests widen the exit distance by 1 + 2 gamma(3) (Ize,
    "Robust BVH Ray Traversal", JCGT 2(2), 2013) and node boxes are padded outwards, so rays
    lying in a bounding plane are not culled. Everything is deterministic: the tree depends
-   only on the scene, the traversal only on the ray. Without SSE2 (or with PDFTRACE_NO_SIMD)
-   the same layout is traversed by scalar code with the same results.
+   only on the scene, the traversal only on the ray. Without SSE2 (or with PDFTRACE_NO_SIMD, or
+   at PT_SIMD_SCALAR) the same layout is traversed by scalar code with the same results.
+   With AVX2 (chosen at run time: pt_simd_level) the same binary tree is also collapsed into
+   8-wide nodes (16-wide with PDFTRACE_AVX512_WIDTH=16 at the AVX-512 level) over the same
+   leaves, and only their box tests are wider. Each width visits leaves in its own order, so the
+   closest hit is defined without it: every leaf block is tested against the ray's own tmax and
+   hits are ordered by t, then by public primitive id (leaves hold each kind in id order), so that
+   every level returns the same primitive, t and barycentrics bit for bit.
    ------------------------------------------------------------------------------------------ */
 
 #ifndef PT__BVH_BINS
@@ -5936,6 +5950,8 @@ static size_t pt__leaf_units(uint32_t tri, uint32_t quad, uint32_t other)
     return 1u + 10u * (size_t)((tri + 3u) / 4u) + 15u * (size_t)((quad + 3u) / 4u) + 5u * (size_t)((other + 3u) / 4u);
 }
 
+static int pt__leaf_kind(int type) { return type == PT__PRIM_TRIANGLE ? 0 : type == PT__PRIM_QUAD ? 1 : 2; }
+
 /* Writes a binary leaf into the pool (its primitives reordered: triangles, quads, others) and
    returns the child reference. Blocks are padded with copies of their lane 0. */
 static uint32_t pt__emit_leaf(pt__bvh_build *b, const pt__bnode *leaf)
@@ -5952,6 +5968,13 @@ static uint32_t pt__emit_leaf(pt__bvh_build *b, const pt__bnode *leaf)
                 (kind == 2 && type != PT__PRIM_TRIANGLE && type != PT__PRIM_QUAD))
                 tmp[n++] = b->idx[i];
         }
+    for (i = 1; i < n; ++i) { /* each kind by public id: a block's lowest lane at a tie is the shape added first */
+        uint32_t v = tmp[i];
+        int kv = pt__leaf_kind(b->prims[v].type);
+        for (j = i; j > 0 && pt__leaf_kind(b->prims[tmp[j - 1]].type) == kv && b->prims[tmp[j - 1]].id > b->prims[v].id; --j)
+            tmp[j] = tmp[j - 1];
+        tmp[j] = v;
+    }
     for (i = 0; i < n; ++i) b->idx[begin + i] = tmp[i];
     pt__leaf_kinds(b, leaf, &nt, &nq, &no);
     h->u[0] = (nt + 3u) / 4u; h->u[1] = (nq + 3u) / 4u; h->u[2] = (no + 3u) / 4u; h->u[3] = 0;
@@ -6042,8 +6065,8 @@ static uint32_t pt__bvh_collapse(pt__bvh_build *b, uint32_t bi, uint32_t depth)
 /* Run-time SIMD dispatch (pt_simd_level): the CPU's level from __builtin_cpu_supports (which
    also checks that the OS saves the wider registers), capped by pt_simd_set_cap and PDFTRACE_SIMD
    at each commit. Without gcc or clang on x86 the SSE2 level (or the scalar one) is all. */
-#ifndef PT__BVH_AVX512_WIDTH
-#define PT__BVH_AVX512_WIDTH 16u
+#ifndef PDFTRACE_AVX512_WIDTH
+#define PDFTRACE_AVX512_WIDTH 8 /* 16-wide nodes did not pay (bench/README.md, "SIMD levels") */
 #endif
 #if defined(__GNUC__) || defined(__clang__)
 static int pt__simd_cap = PT_SIMD_AVX512;
@@ -6170,7 +6193,7 @@ static void pt__bvh_free(pt_scene *s)
    tree and leaves as the 4-wide ones. */
 static int pt__bvh_build_wide(pt_scene *s, pt__bvh_build *b, uint32_t inner)
 {
-    unsigned w = s->simd >= PT_SIMD_AVX512 ? PT__BVH_AVX512_WIDTH : s->simd >= PT_SIMD_AVX2 ? 8u : 4u;
+    unsigned w = s->simd >= PT_SIMD_AVX512 && PDFTRACE_AVX512_WIDTH == 16 ? 16u : s->simd >= PT_SIMD_AVX2 ? 8u : 4u;
     size_t stride = w == 16u ? sizeof(pt__node16) : sizeof(pt__node8);
     s->bvh_width = 4;
     if (w == 4u) return PT_OK;
@@ -6650,7 +6673,8 @@ static PT__HOT int pt__sphere4_hit(const pt__trav *tv, const pt__sphere4 *q, flo
 }
 
 
-/* The nearest hit found so far. Hits are ordered by (t, primitive index), so that the result
+/* The nearest hit found so far. Hits are ordered by t, then by public primitive id (at an exact
+   tie, e.g. a ray through the edge two faces share, the shape added first), so that the result
    does not depend on the order leaves are visited in: each node width visits them in its own. */
 typedef struct pt__best {
     float t;
@@ -6659,9 +6683,9 @@ typedef struct pt__best {
     float bary[3];
 } pt__best;
 
-static PT__HOT void pt__best_offer(pt__best *b, float t, uint32_t prim, const float *bary)
+static PT__HOT void pt__best_offer(const pt_scene *s, pt__best *b, float t, uint32_t prim, const float *bary)
 {
-    if (b->found && (t > b->t || (t == b->t && prim > b->prim))) return;
+    if (b->found && (t > b->t || (t == b->t && s->prims[prim].id >= s->prims[b->prim].id))) return;
     b->t = t; b->prim = prim; b->found = 1;
     b->bary[0] = bary[0]; b->bary[1] = bary[1]; b->bary[2] = bary[2];
 }
@@ -6679,19 +6703,19 @@ static PT__HOT void pt__leaf_closest(const pt_scene *s, const pt__trav *tv, uint
         const pt__tri4 *q = (const pt__tri4 *)(const void *)blk;
         float t, bb[3];
         int l = pt__tri4_hit(tv, q, tmax0, &t, bb, 0); /* bb is written only on a hit */
-        if (l >= 0) pt__best_offer(b, t, q->prim[l], bb);
+        if (l >= 0) pt__best_offer(s, b, t, q->prim[l], bb);
     }
     for (j = 0; j < h->u[1]; ++j, blk += sizeof(pt__quad4)) {
         const pt__quad4 *q = (const pt__quad4 *)(const void *)blk;
         float t;
         int l = pt__quad4_hit(tv, s, q, tmax0, &t, 0);
-        if (l >= 0) pt__best_offer(b, t, q->prim[l], no_bary);
+        if (l >= 0) pt__best_offer(s, b, t, q->prim[l], no_bary);
     }
     for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
         const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
         float t;
         int l = pt__sphere4_hit(tv, q, tmax0, &t, 0);
-        if (l >= 0) pt__best_offer(b, t, q->prim[l], no_bary);
+        if (l >= 0) pt__best_offer(s, b, t, q->prim[l], no_bary);
     }
 }
 
