@@ -5734,14 +5734,8 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
    the sign of the direction. Box tests widen the exit distance by 1 + 2 gamma(3) (Ize,
    "Robust BVH Ray Traversal", JCGT 2(2), 2013) and node boxes are padded outwards, so rays
    lying in a bounding plane are not culled. Everything is deterministic: the tree depends
-   only on the scene, the traversal only on the ray. Without SSE2 (or with PDFTRACE_NO_SIMD, or
-   at PT_SIMD_SCALAR) the same layout is traversed by scalar code with the same results.
-   With AVX2 (chosen at run time: pt_simd_level) the same binary tree is also collapsed into
-   8-wide nodes (16-wide with PDFTRACE_AVX512_WIDTH=16 at the AVX-512 level) over the same
-   leaves, and only their box tests are wider. Each width visits leaves in its own order, so the
-   closest hit is defined without it: every leaf block is tested against the ray's own tmax and
-   hits are ordered by t, then by public primitive id (leaves hold each kind in id order), so that
-   every level returns the same primitive, t and barycentrics bit for bit.
+   only on the scene, the traversal only on the ray. Without SSE2 (or at PT_SIMD_SCALAR) the
+   same layout is traversed by scalar code, with AVX2 by 8-wide nodes, with the same results.
    ------------------------------------------------------------------------------------------ */
 
 #ifndef PT__BVH_BINS
@@ -6064,7 +6058,13 @@ static uint32_t pt__bvh_collapse(pt__bvh_build *b, uint32_t bi, uint32_t depth)
 
 /* Run-time SIMD dispatch (pt_simd_level): the CPU's level from __builtin_cpu_supports (which
    also checks that the OS saves the wider registers), capped by pt_simd_set_cap and PDFTRACE_SIMD
-   at each commit. Without gcc or clang on x86 the SSE2 level (or the scalar one) is all. */
+   at each commit. Without gcc or clang on x86 the SSE2 level (or the scalar one) is all.
+   With AVX2 the same binary tree is also collapsed into 8-wide nodes (16-wide with
+   PDFTRACE_AVX512_WIDTH=16 at the AVX-512 level) over the same leaves; only the box tests are
+   wider. Each width visits leaves in its own order, so the closest hit is defined without it:
+   every leaf block is tested against the ray's own tmax, and hits are ordered by t, then by
+   public primitive id (leaves hold each kind in id order): every level returns the same
+   primitive, t and barycentrics bit for bit. */
 #ifndef PDFTRACE_AVX512_WIDTH
 #define PDFTRACE_AVX512_WIDTH 8 /* 16-wide nodes did not pay (bench/README.md, "SIMD levels") */
 #endif
@@ -6701,7 +6701,7 @@ static PT__HOT void pt__leaf_closest(const pt_scene *s, const pt__trav *tv, uint
     uint32_t j;
     for (j = 0; j < h->u[0]; ++j, blk += sizeof(pt__tri4)) {
         const pt__tri4 *q = (const pt__tri4 *)(const void *)blk;
-        float t, bb[3];
+        float t = 0.0f, bb[3] = { 0.0f, 0.0f, 0.0f };
         int l = pt__tri4_hit(tv, q, tmax0, &t, bb, 0); /* bb is written only on a hit */
         if (l >= 0) pt__best_offer(s, b, t, q->prim[l], bb);
     }
@@ -6928,8 +6928,11 @@ static PT__HOT uint32_t pt__wide_push(const uint32_t *child, unsigned mask, cons
 PT__WIDE_TRAVERSAL(pt__bvh_trace8, PT__TARGET_AVX2, 8, pt__node8, __m256, _mm256_set1_ps, _mm256_loadu_ps,
                    _mm256_sub_ps, _mm256_mul_ps, _mm256_max_ps, _mm256_min_ps, _mm256_storeu_ps, PT__LE8)
 #define PT__LE16(a, b) _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ)
+/* the zero-masked forms under a full mask: g++ 12 warns about the plain ones' undefined pass-through */
+#define PT__MAX16(a, b) _mm512_maskz_max_ps((__mmask16)0xffff, a, b)
+#define PT__MIN16(a, b) _mm512_maskz_min_ps((__mmask16)0xffff, a, b)
 PT__WIDE_TRAVERSAL(pt__bvh_trace16, PT__TARGET_AVX512, 16, pt__node16, __m512, _mm512_set1_ps, _mm512_loadu_ps,
-                   _mm512_sub_ps, _mm512_mul_ps, _mm512_max_ps, _mm512_min_ps, _mm512_storeu_ps, PT__LE16)
+                   _mm512_sub_ps, _mm512_mul_ps, PT__MAX16, PT__MIN16, _mm512_storeu_ps, PT__LE16)
 #endif
 
 /* Closest hit: returns 1 and the primitive index (into s->prims), t and barycentrics. The node
