@@ -45,6 +45,8 @@
 #                         generated 1M-triangle terrain), build time, memory, the AUTO crossover:
 #                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
 #                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
+#   make bench-simd       rays/s of the built-in BVH at each SIMD level this CPU has, one thread:
+#                         bench/bvh.c --levels -> bench/out/simd.md and simd.csv (~5 min)
 #   make build/ptsky      the procedural sky tool (tools/sky.c; docs/sky.md)
 #   make sky-check        regenerate scenes/sky.pfm into $(BUILD)/sky.pfm with build/ptsky and cmp them
 #   make check-warnings   compile the examples and tools/pdftrace.c (and so the implementation)
@@ -211,7 +213,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h tests/fuzz/mitsuba_check.h
 
-.PHONY: all run run-all test test-bins cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs validate-mitsuba validate-mitsuba-ci mitsuba-install bench bench-quick bench-headline bench-refs bench-bvh stress install uninstall install-check FORCE
+.PHONY: all run run-all test test-bins cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs validate-mitsuba validate-mitsuba-ci mitsuba-install bench bench-quick bench-headline bench-refs bench-bvh bench-simd stress install uninstall install-check FORCE
 
 all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
@@ -475,6 +477,10 @@ $(BUILD)/bench_bvh: bench/bvh.c $(PT_HEADERS) | $(BUILD)
 
 bench-bvh: $(BUILD)/bench_bvh
 	./$(BUILD)/bench_bvh $(BENCH_BVH_ARGS) bench/out
+
+# rays/s of the built-in BVH at each SIMD level (scalar, SSE2 4-wide, AVX2 8-wide, AVX-512 16-wide)
+bench-simd: $(BUILD)/bench_bvh
+	./$(BUILD)/bench_bvh --levels $(BENCH_BVH_ARGS) bench/out
 
 # ---- warnings: each example is a complete program with the implementation included.
 # The PDFTRACE_STATIC build is checked too (its functions are marked unused under gcc/clang,

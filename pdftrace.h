@@ -41,8 +41,15 @@
    PDFTRACE_NO_THREADS     build without pthreads; rendering runs on the calling thread
                            unless the host passes its own parallel-for (pt_render_desc).
    PDFTRACE_STATIC         make every public function static to the implementing file.
-   PDFTRACE_NO_SIMD        scalar BVH traversal even where SSE2 is available (same results;
-                           the SSE2 code is used on x86-64 and wherever __SSE2__ is defined).
+   PDFTRACE_NO_SIMD        scalar BVH traversal only, even where SSE2 is available (same results;
+                           the SSE2 code is compiled on x86-64 and wherever __SSE2__ is defined).
+   PDFTRACE_SIMD (environment variable, read at each pt_scene_commit): scalar, sse2, avx2 or
+                           avx512 caps the built-in BVH's SIMD level, chosen at run time from what
+                           the CPU has (pt_simd_level; pt_simd_set_cap is the same cap in the API).
+                           Every level gives the same hits and images bit for bit.
+   PDFTRACE_AVX512_WIDTH   children per BVH node at the AVX-512 level: 8 (default, as AVX2) or 16.
+   PDFTRACE_NO_WIDE_BVH    no AVX2/AVX-512 code (gcc and clang on x86 compile it by default with
+                           per-function target attributes; other compilers never do).
    PDFTRACE_EMBREE         trace rays with Embree 3 (section 5b; include path embree3/,
                            link -lembree3); PDFTRACE_EMBREE4 selects Embree 4 (untested).
                            PDFTRACE_EMBREE_MIN_PRIMS, PDFTRACE_EMBREE_SMALL_PRIMS: AUTO's
@@ -591,6 +598,17 @@ enum {
     PT_FEATURE_MICROFACET      = 1 << 15  /* some rough conductor with roughness >= 1e-3, or rough plastic */
 };
 
+/* SIMD levels of the built-in BVH's traversal (section 5), chosen at run time at each commit:
+   the highest the CPU supports, capped by pt_simd_set_cap and by the environment variable
+   PDFTRACE_SIMD (scalar, sse2, avx2 or avx512). Every level finds the same hits bit for bit, so
+   renders are identical at every level; only the speed differs. */
+typedef enum pt_simd_level {
+    PT_SIMD_SCALAR = 0,           /* portable C (the only level with PDFTRACE_NO_SIMD) */
+    PT_SIMD_SSE2 = 1,             /* 4-wide nodes and leaf blocks (x86-64's baseline) */
+    PT_SIMD_AVX2 = 2,             /* 8-wide nodes (gcc or clang on x86; leaf blocks as SSE2) */
+    PT_SIMD_AVX512 = 3            /* AVX-512F: 8-wide nodes, or 16 with PDFTRACE_AVX512_WIDTH=16 */
+} pt_simd_level;
+
 /* Traversal backends (pt_scene_set_backend, section 5b). */
 typedef enum pt_backend {
     PT_BACKEND_AUTO = 0,          /* Embree for large scenes when compiled in, else built-in */
@@ -626,6 +644,8 @@ typedef struct pt_scene_info {
     char precision_warning[200];  /* "" when precision_warnings is 0, else what and where */
     uint32_t delta_light_count;   /* point, spot and directional lights (pt_scene_add_light) */
     int environment_width, environment_height; /* the environment map's size (0 x 0: none) */
+    pt_simd_level simd_level;     /* the level the last commit chose (pt_simd_get_level) */
+    unsigned bvh_width;           /* children per node the built-in traversal uses: 4, 8 or 16 */
 } pt_scene_info;
 
 PTDEF pt_scene *pt_scene_create(void);      /* NULL when out of memory */
@@ -943,6 +963,19 @@ PTDEF int pt_scene_set_backend(pt_scene *scene, pt_backend backend);
    A configuration Embree refuses makes an EMBREE commit fail with Embree's error (AUTO falls
    back to the built-in BVH). Without PDFTRACE_EMBREE: PT_ERROR_UNSUPPORTED. */
 PTDEF int pt_scene_set_embree_config(pt_scene *scene, const char *config);
+
+/* Run-time SIMD dispatch of the built-in BVH (pt_simd_level). pt_simd_cpu_level: the highest
+   level this CPU and build support. pt_simd_set_cap: the highest level later commits may use
+   (process-wide; default PT_SIMD_AVX512, i.e. no cap); PT_ERROR_INVALID_ARGUMENT for a value
+   out of range. Set it before committing scenes on other threads. pt_simd_get_level: the level
+   the next commit chooses, the least of the CPU's, the cap and PDFTRACE_SIMD (an unknown
+   PDFTRACE_SIMD makes pt_scene_commit fail with a message naming it). A committed scene keeps
+   its level (pt_scene_info.simd_level). pt_simd_level_name: "scalar", "sse2", "avx2",
+   "avx512" (NULL out of range). */
+PTDEF pt_simd_level pt_simd_cpu_level(void);
+PTDEF int pt_simd_set_cap(pt_simd_level cap);
+PTDEF pt_simd_level pt_simd_get_level(void);
+PTDEF const char *pt_simd_level_name(pt_simd_level level);
 
 /* AUTO uses Embree (when compiled in) for scenes with at least PDFTRACE_EMBREE_MIN_PRIMS
    primitives, and the built-in BVH below. PDFTRACE_EMBREE_SMALL_PRIMS (default 0: off) also
@@ -1436,6 +1469,17 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #include <emmintrin.h>
 #define PT__SSE 1
 #endif
+/* Wider BVH nodes, chosen at run time (pt_simd_level): 8 children with AVX2 and AVX-512F (16
+   with PDFTRACE_AVX512_WIDTH=16).
+   Only gcc and clang on x86 compile them (per-function target attributes and
+   __builtin_cpu_supports); other compilers and architectures get the SSE2 or scalar code. */
+#if defined(PT__SSE) && !defined(PDFTRACE_NO_WIDE_BVH) && (defined(__GNUC__) || defined(__clang__)) && \
+    (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define PT__WIDE 1
+#define PT__TARGET_AVX2 __attribute__((target("avx2")))
+#define PT__TARGET_AVX512 __attribute__((target("avx512f")))
+#endif
 
 #ifndef PT_ASSERT
 #include <assert.h>
@@ -1616,6 +1660,15 @@ typedef struct pt__node4 {
     uint32_t child[4];/* node index, or PT__BVH_LEAF | offset of the leaf in the pool */
     uint32_t pad[4];  /* 128 bytes: two cache lines */
 } pt__node4;
+/* Wider nodes over the same leaves (pt_simd_level): 8 and 16 children, rows as in pt__node4. */
+typedef struct pt__node8 {
+    float box[6][8];
+    uint32_t child[8];
+} pt__node8;
+typedef struct pt__node16 {
+    float box[6][16];
+    uint32_t child[16];
+} pt__node16;
 typedef struct pt__leaf16 {
     uint32_t u[4];    /* leaf header: triangle, quad, sphere blocks, 0 */
 } pt__leaf16;
@@ -1647,6 +1700,10 @@ struct pt_scene {
     pt__leaf16 *pool;
     uint32_t node_count, bvh_depth;
     size_t bvh_bytes;
+    int simd;                  /* pt_simd_level chosen at the last commit */
+    unsigned bvh_width;        /* 4, or 8 / 16: the wide nodes (over the same leaves) traversal uses */
+    void *wide_mem, *wide;     /* the wide nodes' allocation, and the nodes in it (aligned to 64) */
+    uint32_t wide_count;
     pt__light *lights;
     uint32_t light_count;
     double total_power;
@@ -4811,6 +4868,7 @@ PTDEF void pt_scene_destroy(pt_scene *s)
     PT_FREE(s->texs);
     PT_FREE(s->normals);
     PT_FREE(s->bvh_mem);
+    PT_FREE(s->wide_mem);
     PT_FREE(s->lights);
     PT_FREE(s->ltree);
     PT_FREE(s->ltrail);
@@ -5898,8 +5956,8 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
    the sign of the direction. Box tests widen the exit distance by 1 + 2 gamma(3) (Ize,
    "Robust BVH Ray Traversal", JCGT 2(2), 2013) and node boxes are padded outwards, so rays
    lying in a bounding plane are not culled. Everything is deterministic: the tree depends
-   only on the scene, the traversal only on the ray. Without SSE2 (or with PDFTRACE_NO_SIMD)
-   the same layout is traversed by scalar code with the same results.
+   only on the scene, the traversal only on the ray. Without SSE2 (or at PT_SIMD_SCALAR) the
+   same layout is traversed by scalar code, with AVX2 by 8-wide nodes, with the same results.
    ------------------------------------------------------------------------------------------ */
 
 #ifndef PT__BVH_BINS
@@ -5920,6 +5978,7 @@ static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t)
 #endif
 #define PT__BVH_SAH_DEPTH 40      /* below this depth splits are by median: depth stays bounded */
 #define PT__BVH_STACK 256         /* > 3 x the deepest tree (40 SAH + 32 median levels) */
+#define PT__BVH_MAX_DEPTH 73      /* levels of any collapsed tree: at most the binary tree's */
 #define PT__BVH_LEAF 0x80000000u  /* child reference: PT__BVH_LEAF | offset of the leaf in the pool (16-byte units) */
 #define PT__BVH_OFFSET_MASK 0x7fffffffu
 /* SAH costs relative to one block test (four triangles): a node visit costs about half a
@@ -5951,6 +6010,7 @@ typedef struct pt__bvh_build {
     pt__leaf16 *pool;
     uint32_t n4_count, depth4;
     size_t pool_used;
+    uint32_t *leaf_ref;         /* per binary leaf: its child reference (the wide nodes share the leaves) */
 } pt__bvh_build;
 
 static void pt__prim_bounds(const pt__prim *p, pt_vec3 *lo, pt_vec3 *hi)
@@ -6106,6 +6166,8 @@ static size_t pt__leaf_units(uint32_t tri, uint32_t quad, uint32_t other)
     return 1u + 10u * (size_t)((tri + 3u) / 4u) + 15u * (size_t)((quad + 3u) / 4u) + 5u * (size_t)((other + 3u) / 4u);
 }
 
+static int pt__leaf_kind(int type) { return type == PT__PRIM_TRIANGLE ? 0 : type == PT__PRIM_QUAD ? 1 : 2; }
+
 /* Writes a binary leaf into the pool (its primitives reordered: triangles, quads, others) and
    returns the child reference. Blocks are padded with copies of their lane 0. */
 static uint32_t pt__emit_leaf(pt__bvh_build *b, const pt__bnode *leaf)
@@ -6122,6 +6184,13 @@ static uint32_t pt__emit_leaf(pt__bvh_build *b, const pt__bnode *leaf)
                 (kind == 2 && type != PT__PRIM_TRIANGLE && type != PT__PRIM_QUAD))
                 tmp[n++] = b->idx[i];
         }
+    for (i = 1; i < n; ++i) { /* each kind by public id: a block's lowest lane at a tie is the shape added first */
+        uint32_t v = tmp[i];
+        int kv = pt__leaf_kind(b->prims[v].type);
+        for (j = i; j > 0 && pt__leaf_kind(b->prims[tmp[j - 1]].type) == kv && b->prims[tmp[j - 1]].id > b->prims[v].id; --j)
+            tmp[j] = tmp[j - 1];
+        tmp[j] = v;
+    }
     for (i = 0; i < n; ++i) b->idx[begin + i] = tmp[i];
     pt__leaf_kinds(b, leaf, &nt, &nq, &no);
     h->u[0] = (nt + 3u) / 4u; h->u[1] = (nq + 3u) / 4u; h->u[2] = (no + 3u) / 4u; h->u[3] = 0;
@@ -6203,7 +6272,125 @@ static uint32_t pt__bvh_collapse(pt__bvh_build *b, uint32_t bi, uint32_t depth)
     }
     for (i = 0; i < nk; ++i) {
         uint32_t ref = b->nodes[kids[i]].count ? pt__emit_leaf(b, &b->nodes[kids[i]]) : pt__bvh_collapse(b, kids[i], depth + 1u);
+        if (b->nodes[kids[i]].count) b->leaf_ref[kids[i]] = ref;
         b->n4[ni].child[i] = ref; /* b->n4 does not move: allocated for the worst case */
+    }
+    return ni;
+}
+
+/* Run-time SIMD dispatch (pt_simd_level): the CPU's level from __builtin_cpu_supports (which
+   also checks that the OS saves the wider registers), capped by pt_simd_set_cap and PDFTRACE_SIMD
+   at each commit. Without gcc or clang on x86 the SSE2 level (or the scalar one) is all.
+   With AVX2 the same binary tree is also collapsed into 8-wide nodes (16-wide with
+   PDFTRACE_AVX512_WIDTH=16 at the AVX-512 level) over the same leaves; only the box tests are
+   wider. Each width visits leaves in its own order, so the closest hit is defined without it:
+   every leaf block is tested against the ray's own tmax, and hits are ordered by t, then by
+   public primitive id (leaves hold each kind in id order): every level returns the same
+   primitive, t and barycentrics bit for bit. */
+#ifndef PDFTRACE_AVX512_WIDTH
+#define PDFTRACE_AVX512_WIDTH 8 /* 16-wide nodes did not pay (bench/README.md, "SIMD levels") */
+#endif
+#if defined(__GNUC__) || defined(__clang__)
+static int pt__simd_cap = PT_SIMD_AVX512;
+#define PT__SIMD_CAP_LOAD() __atomic_load_n(&pt__simd_cap, __ATOMIC_RELAXED)
+#define PT__SIMD_CAP_STORE(v) __atomic_store_n(&pt__simd_cap, (v), __ATOMIC_RELAXED)
+#else
+static volatile int pt__simd_cap = PT_SIMD_AVX512;
+#define PT__SIMD_CAP_LOAD() pt__simd_cap
+#define PT__SIMD_CAP_STORE(v) (pt__simd_cap = (v))
+#endif
+static const char *const pt__simd_names[4] = { "scalar", "sse2", "avx2", "avx512" };
+
+PTDEF pt_simd_level pt_simd_cpu_level(void)
+{
+#if defined(PT__WIDE)
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f")) return PT_SIMD_AVX512;
+    if (__builtin_cpu_supports("avx2")) return PT_SIMD_AVX2;
+    return PT_SIMD_SSE2;
+#elif defined(PT__SSE)
+    return PT_SIMD_SSE2;
+#else
+    return PT_SIMD_SCALAR;
+#endif
+}
+PTDEF int pt_simd_set_cap(pt_simd_level cap)
+{
+    if ((int)cap < PT_SIMD_SCALAR || (int)cap > PT_SIMD_AVX512) return PT_ERROR_INVALID_ARGUMENT;
+    PT__SIMD_CAP_STORE((int)cap);
+    return PT_OK;
+}
+PTDEF const char *pt_simd_level_name(pt_simd_level level)
+{
+    return (int)level >= PT_SIMD_SCALAR && (int)level <= PT_SIMD_AVX512 ? pt__simd_names[level] : NULL;
+}
+/* PDFTRACE_SIMD as a level: PT_SIMD_AVX512 (no cap) when unset or empty, -1 when unknown. */
+static int pt__simd_env(void)
+{
+    const char *v = getenv("PDFTRACE_SIMD");
+    int k;
+    if (!v || !*v) return PT_SIMD_AVX512;
+    for (k = 0; k < 4; ++k)
+        if (!strcmp(v, pt__simd_names[k])) return k;
+    return -1;
+}
+PTDEF pt_simd_level pt_simd_get_level(void)
+{
+    int level = (int)pt_simd_cpu_level(), cap = PT__SIMD_CAP_LOAD(), env = pt__simd_env();
+    if (cap < level) level = cap;
+    if (env >= 0 && env < level) level = env;
+    return (pt_simd_level)level;
+}
+/* The level of a commit (s->simd); an unknown PDFTRACE_SIMD is an error. */
+static int pt__simd_choose(pt_scene *s)
+{
+    if (pt__simd_env() < 0)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "commit: PDFTRACE_SIMD=\"%.40s\" is not a SIMD level (scalar, sse2, avx2 or avx512)",
+                        getenv("PDFTRACE_SIMD"));
+    s->simd = (int)pt_simd_get_level();
+    return PT_OK;
+}
+
+/* Collapses the binary subtree at `bi` into a node of up to w (8 or 16) children, as
+   pt__bvh_collapse does into four, over the leaves it emitted (b->leaf_ref). The node's rows are
+   box[6][w] then child[w], at `stride` bytes per node from `nodes`. */
+static uint32_t pt__bvh_collapse_wide(pt__bvh_build *b, uint32_t bi, unsigned w, char *nodes, size_t stride,
+                                      uint32_t *count)
+{
+    uint32_t kids[16], nk = 0, ni = (*count)++, i;
+    float *box = (float *)(void *)(nodes + stride * ni);
+    uint32_t *child = (uint32_t *)(void *)(box + 6u * w);
+    if (b->nodes[bi].count) kids[nk++] = bi;
+    else { kids[nk++] = bi + 1u; kids[nk++] = b->nodes[bi].index; }
+    while (nk < w) { /* open the inner child of largest surface area */
+        int best = -1;
+        float best_area = -1.0f;
+        for (i = 0; i < nk; ++i) {
+            const pt__bnode *c = &b->nodes[kids[i]];
+            float a;
+            if (c->count) continue;
+            a = pt__half_area(pt_v3(c->lo[0], c->lo[1], c->lo[2]), pt_v3(c->hi[0], c->hi[1], c->hi[2]));
+            if (a > best_area) { best_area = a; best = (int)i; }
+        }
+        if (best < 0) break;
+        {
+            uint32_t c = kids[best];
+            kids[best] = c + 1u;
+            kids[nk++] = b->nodes[c].index;
+        }
+    }
+    for (i = 0; i < w; ++i) {
+        unsigned a;
+        for (a = 0; a < 3; ++a) { /* an empty slot: an inverted box no ray enters, the empty leaf */
+            box[2u * a * w + i] = i < nk ? b->nodes[kids[i]].lo[a] : HUGE_VALF;
+            box[(2u * a + 1u) * w + i] = i < nk ? b->nodes[kids[i]].hi[a] : -HUGE_VALF;
+        }
+        child[i] = PT__BVH_LEAF;
+    }
+    for (i = 0; i < nk; ++i) {
+        uint32_t ref = b->nodes[kids[i]].count ? b->leaf_ref[kids[i]] : pt__bvh_collapse_wide(b, kids[i], w, nodes, stride, count);
+        child = (uint32_t *)(void *)(nodes + stride * ni + 6u * w * sizeof(float));
+        child[i] = ref;
     }
     return ni;
 }
@@ -6211,6 +6398,10 @@ static uint32_t pt__bvh_collapse(pt__bvh_build *b, uint32_t bi, uint32_t depth)
 /* Releases the built-in BVH (also when Embree traces the scene instead). */
 static void pt__bvh_free(pt_scene *s)
 {
+    PT_FREE(s->wide_mem);
+    s->wide_mem = s->wide = NULL;
+    s->wide_count = 0;
+    s->bvh_width = 4;
     PT_FREE(s->bvh_mem);
     s->bvh_mem = NULL;
     s->nodes = NULL;
@@ -6218,6 +6409,23 @@ static void pt__bvh_free(pt_scene *s)
     s->node_count = 0;
     s->bvh_depth = 0;
     s->bvh_bytes = 0;
+}
+
+/* The wide nodes for the scene's SIMD level (none below AVX2), derived from the same binary
+   tree and leaves as the 4-wide ones. */
+static int pt__bvh_build_wide(pt_scene *s, pt__bvh_build *b, uint32_t inner)
+{
+    unsigned w = s->simd >= PT_SIMD_AVX512 && PDFTRACE_AVX512_WIDTH == 16 ? 16u : s->simd >= PT_SIMD_AVX2 ? 8u : 4u;
+    size_t stride = w == 16u ? sizeof(pt__node16) : sizeof(pt__node8);
+    s->bvh_width = 4;
+    if (w == 4u) return PT_OK;
+    s->wide_mem = PT_MALLOC(64u + stride * ((size_t)inner + 1u));
+    if (!s->wide_mem) return PT_ERROR_OUT_OF_MEMORY;
+    s->wide = (char *)s->wide_mem + (64u - (size_t)((uintptr_t)s->wide_mem & 63u)) % 64u;
+    s->wide_count = 0;
+    pt__bvh_collapse_wide(b, 0, w, (char *)s->wide, stride, &s->wide_count);
+    s->bvh_width = w;
+    return PT_OK;
 }
 
 static int pt__bvh_build_scene(pt_scene *s)
@@ -6238,7 +6446,8 @@ static int pt__bvh_build_scene(pt_scene *s)
     b.idx = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * n);
     b.max_leaf = n <= PT__BVH_SMALL_SCENE ? 1u : PT__BVH_MAX_LEAF;
     b.nodes = (pt__bnode *)PT_MALLOC(sizeof(pt__bnode) * (2u * (size_t)n));
-    if (!b.lo || !b.hi || !b.c || !b.idx || !b.nodes) goto oom;
+    b.leaf_ref = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * (2u * (size_t)n));
+    if (!b.lo || !b.hi || !b.c || !b.idx || !b.nodes || !b.leaf_ref) goto oom;
     for (i = 0; i < n; ++i) {
         pt__prim_bounds(&s->prims[i], &b.lo[i], &b.hi[i]);
         b.c[i] = pt_scale(pt_add(b.lo[i], b.hi[i]), 0.5f);
@@ -6272,6 +6481,8 @@ static int pt__bvh_build_scene(pt_scene *s)
     b.pool_used = 1u;
     pt__bvh_collapse(&b, 0, 0);
     PT_ASSERT(b.n4_count <= inner + 1u && b.pool_used == units);
+    if (pt__bvh_build_wide(s, &b, inner) != PT_OK) goto oom;
+    bytes += s->wide_mem ? (size_t)s->wide_count * (s->bvh_width == 16 ? sizeof(pt__node16) : sizeof(pt__node8)) : 0u;
     s->lo = pt_v3(b.nodes[0].lo[0], b.nodes[0].lo[1], b.nodes[0].lo[2]);
     s->hi = pt_v3(b.nodes[0].hi[0], b.nodes[0].hi[1], b.nodes[0].hi[2]);
     for (i = 0; i < n; ++i) sorted[i] = s->prims[b.idx[i]];
@@ -6281,12 +6492,11 @@ static int pt__bvh_build_scene(pt_scene *s)
     s->node_count = b.n4_count;
     s->bvh_depth = b.depth4;
     s->bvh_bytes = bytes;
-    PT_FREE(b.idx); PT_FREE(b.nodes); PT_FREE(sorted);
+    PT_FREE(b.idx); PT_FREE(b.nodes); PT_FREE(b.leaf_ref); PT_FREE(sorted);
     return PT_OK;
 oom:
-    PT_FREE(b.lo); PT_FREE(b.hi); PT_FREE(b.c); PT_FREE(b.idx); PT_FREE(b.nodes); PT_FREE(sorted);
-    PT_FREE(s->bvh_mem);
-    s->bvh_mem = NULL;
+    PT_FREE(b.lo); PT_FREE(b.hi); PT_FREE(b.c); PT_FREE(b.idx); PT_FREE(b.nodes); PT_FREE(b.leaf_ref); PT_FREE(sorted);
+    pt__bvh_free(s);
     return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "commit: out of memory building the BVH (%u primitives)", (unsigned)n);
 }
 
@@ -6297,41 +6507,39 @@ typedef struct pt__trav {
     const pt__rayctx *rc;
     int near_row[3];      /* the far plane is in row near_row ^ 1 */
     int kx, ky, kz;
+    int sse;              /* the SSE2 code (PT_SIMD_SSE2 and up), or the scalar code (PT_SIMD_SCALAR) */
 #ifdef PT__SSE
     __m128 o4[3], inv4[3], d4[3];
     __m128 ok4[3], s4[3]; /* watertight test: origin and shear in the permuted axes */
-#else
-    float o[3], inv[3];
 #endif
+    float o[3], inv[3];   /* the scalar code's (and the wide box tests') */
 } pt__trav;
 
-static PT__HOT void pt__trav_init(pt__trav *tv, const pt__rayctx *rc)
+static PT__HOT void pt__trav_init(pt__trav *tv, const pt__rayctx *rc, int simd)
 {
     tv->rc = rc;
     tv->kx = rc->kx; tv->ky = rc->ky; tv->kz = rc->kz;
-#ifdef PT__SSE
+    tv->sse = simd >= PT_SIMD_SSE2;
     {
-        /* the scalar branch's values, three axes at once (no division by zero: FE_DIVBYZERO
-           traps in make fptrap-test) */
-        const __m128 one = _mm_set1_ps(1.0f), big = _mm_set1_ps(FLT_MAX), sign = _mm_set1_ps(-0.0f);
-        __m128 o = _mm_set_ps(0.0f, rc->o.z, rc->o.y, rc->o.x), d = _mm_set_ps(1.0f, rc->d.z, rc->d.y, rc->d.x);
-        __m128 zero_d = _mm_cmpeq_ps(d, _mm_setzero_ps()), inv, finite;
-        int neg;
-        inv = _mm_div_ps(one, _mm_or_ps(_mm_and_ps(zero_d, one), _mm_andnot_ps(zero_d, d)));
-        inv = _mm_or_ps(_mm_and_ps(zero_d, big), _mm_andnot_ps(zero_d, inv));
-        finite = _mm_cmple_ps(_mm_andnot_ps(sign, inv), big); /* false for inf and NaN */
-        inv = _mm_or_ps(_mm_and_ps(finite, inv), _mm_andnot_ps(finite, _mm_or_ps(_mm_and_ps(sign, inv), big)));
-        neg = _mm_movemask_ps(_mm_cmplt_ps(inv, _mm_setzero_ps()));
-        tv->near_row[0] = neg & 1; tv->near_row[1] = 2 + ((neg >> 1) & 1); tv->near_row[2] = 4 + ((neg >> 2) & 1);
-        tv->o4[0] = _mm_shuffle_ps(o, o, _MM_SHUFFLE(0, 0, 0, 0));
-        tv->o4[1] = _mm_shuffle_ps(o, o, _MM_SHUFFLE(1, 1, 1, 1));
-        tv->o4[2] = _mm_shuffle_ps(o, o, _MM_SHUFFLE(2, 2, 2, 2));
-        tv->inv4[0] = _mm_shuffle_ps(inv, inv, _MM_SHUFFLE(0, 0, 0, 0));
-        tv->inv4[1] = _mm_shuffle_ps(inv, inv, _MM_SHUFFLE(1, 1, 1, 1));
-        tv->inv4[2] = _mm_shuffle_ps(inv, inv, _MM_SHUFFLE(2, 2, 2, 2));
-        tv->d4[0] = _mm_shuffle_ps(d, d, _MM_SHUFFLE(0, 0, 0, 0));
-        tv->d4[1] = _mm_shuffle_ps(d, d, _MM_SHUFFLE(1, 1, 1, 1));
-        tv->d4[2] = _mm_shuffle_ps(d, d, _MM_SHUFFLE(2, 2, 2, 2));
+        int a;
+        const float d[3] = { rc->d.x, rc->d.y, rc->d.z };
+        tv->o[0] = rc->o.x; tv->o[1] = rc->o.y; tv->o[2] = rc->o.z;
+        for (a = 0; a < 3; ++a) {
+            tv->inv[a] = d[a] != 0.0f ? 1.0f / d[a] : FLT_MAX;
+            if (!(fabsf(tv->inv[a]) <= FLT_MAX)) tv->inv[a] = copysignf(FLT_MAX, tv->inv[a]);
+            tv->near_row[a] = 2 * a + (tv->inv[a] < 0.0f);
+        }
+    }
+#ifdef PT__SSE
+    if (!tv->sse) return;
+    {
+        int a;
+        const float d[3] = { rc->d.x, rc->d.y, rc->d.z };
+        for (a = 0; a < 3; ++a) { /* the scalar values, broadcast */
+            tv->o4[a] = _mm_set1_ps(tv->o[a]);
+            tv->inv4[a] = _mm_set1_ps(tv->inv[a]);
+            tv->d4[a] = _mm_set1_ps(d[a]);
+        }
     }
     if (rc->triangles) {
         const float *o = &rc->o.x;
@@ -6344,25 +6552,14 @@ static PT__HOT void pt__trav_init(pt__trav *tv, const pt__rayctx *rc)
     } else { /* no triangle blocks in the scene */
         tv->ok4[0] = tv->ok4[1] = tv->ok4[2] = tv->s4[0] = tv->s4[1] = tv->s4[2] = _mm_setzero_ps();
     }
-#else
-    {
-        int a;
-        const float d[3] = { rc->d.x, rc->d.y, rc->d.z };
-        tv->o[0] = rc->o.x; tv->o[1] = rc->o.y; tv->o[2] = rc->o.z;
-        for (a = 0; a < 3; ++a) {
-            tv->inv[a] = d[a] != 0.0f ? 1.0f / d[a] : FLT_MAX;
-            if (!(fabsf(tv->inv[a]) <= FLT_MAX)) tv->inv[a] = copysignf(FLT_MAX, tv->inv[a]);
-            tv->near_row[a] = 2 * a + (tv->inv[a] < 0.0f);
-        }
-    }
 #endif
 }
 
 /* Slab test of the four children: bit i of the result is set when the ray enters child i
    before tmax; tnear[i] receives its entry distance. */
-static PT__HOT unsigned pt__box4(const pt__node4 *n, const pt__trav *tv, float tmax, float *tnear)
-{
 #ifdef PT__SSE
+static PT__HOT unsigned pt__box4_sse(const pt__node4 *n, const pt__trav *tv, float tmax, float *tnear)
+{
     __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->near_row[0]]), tv->o4[0]), tv->inv4[0]);
     __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->near_row[1]]), tv->o4[1]), tv->inv4[1]);
     __m128 nz = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->box[tv->near_row[2]]), tv->o4[2]), tv->inv4[2]);
@@ -6374,7 +6571,10 @@ static PT__HOT unsigned pt__box4(const pt__node4 *n, const pt__trav *tv, float t
     t1 = _mm_min_ps(t1, _mm_set1_ps(tmax));
     _mm_storeu_ps(tnear, t0);
     return (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1));
-#else
+}
+#endif
+static PT__HOT unsigned pt__box4_scalar(const pt__node4 *n, const pt__trav *tv, float tmax, float *tnear)
+{
     unsigned mask = 0, i;
     for (i = 0; i < 4; ++i) {
         float nx = (n->box[tv->near_row[0]][i] - tv->o[0]) * tv->inv[0];
@@ -6389,7 +6589,13 @@ static PT__HOT unsigned pt__box4(const pt__node4 *n, const pt__trav *tv, float t
         if (t0 <= t1) mask |= 1u << i;
     }
     return mask;
+}
+static PT__HOT unsigned pt__box4(const pt__node4 *n, const pt__trav *tv, float tmax, float *tnear)
+{
+#ifdef PT__SSE
+    if (tv->sse) return pt__box4_sse(n, tv, tmax, tnear);
 #endif
+    return pt__box4_scalar(n, tv, tmax, tnear);
 }
 
 /* Index of the lowest set bit of a 4-bit mask (portable count-trailing-zeros). */
@@ -6404,11 +6610,12 @@ static PT__HOT int pt__tri4_lane(const pt__trav *tv, const pt__tri4 *q, int lane
 }
 
 /* The four triangles of a block against the ray: returns the lane of the nearest hit with
-   0 < t < tmax (the lowest lane at a tie, as a scalar loop would), or -1; fills *t and bary.
-   any != 0: returns the first lane found. */
-static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tmax, float *t_out, float *bary, int any)
-{
+   0 < t < tmax (the lowest lane at a tie), or -1; fills *t and bary. Every lane is tested
+   against the same tmax, so the result depends on the block and tmax alone (the traversal
+   relies on it: every width finds the same hit). any != 0: returns the first lane found. */
 #ifdef PT__SSE
+static PT__HOT int pt__tri4_hit_sse(const pt__trav *tv, const pt__tri4 *q, float tmax, float *t_out, float *bary, int any)
+{
     /* the scalar test's operations in the same order, four lanes at a time */
     const int kx = tv->kx, ky = tv->ky, kz = tv->kz;
     __m128 zero = _mm_setzero_ps(), tmax4 = _mm_set1_ps(tmax);
@@ -6471,9 +6678,9 @@ static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tma
             if (ts[lane] < best_t) { best_t = ts[lane]; best = lane; }
         } else if (zbits & (1 << lane)) {
             float tz, bz[3];
-            if (pt__tri4_lane(tv, q, lane, best_t, &tz, bz)) {
+            if (pt__tri4_lane(tv, q, lane, tmax, &tz, bz)) {
                 if (any) return lane;
-                best_t = tz; best = lane;
+                if (tz < best_t) { best_t = tz; best = lane; }
             }
         }
     }
@@ -6489,12 +6696,17 @@ static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tma
         pt__tri4_lane(tv, q, best, tmax, &tz, bary);
     }
     return best;
-#else
+}
+#endif
+static PT__HOT int pt__tri4_hit_scalar(const pt__trav *tv, const pt__tri4 *q, float tmax, float *t_out, float *bary, int any)
+{
     int lane, best = -1;
     float best_t = tmax, bb[3];
     for (lane = 0; lane < 4; ++lane) {
         float t;
-        if (pt__tri4_lane(tv, q, lane, best_t, &t, bb)) {
+        /* every lane against the block's tmax, as the SSE code: the triangle test's
+           rejection T >= tmax det rounds, so a smaller tmax could reject a nearer hit */
+        if (pt__tri4_lane(tv, q, lane, tmax, &t, bb) && (best < 0 || t < best_t)) {
             if (any) return lane;
             best_t = t; best = lane;
             bary[0] = bb[0]; bary[1] = bb[1]; bary[2] = bb[2];
@@ -6502,15 +6714,21 @@ static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tma
     }
     if (best >= 0) *t_out = best_t;
     return best;
+}
+static PT__HOT int pt__tri4_hit(const pt__trav *tv, const pt__tri4 *q, float tmax, float *t_out, float *bary, int any)
+{
+#ifdef PT__SSE
+    if (tv->sse) return pt__tri4_hit_sse(tv, q, tmax, t_out, bary, any);
 #endif
+    return pt__tri4_hit_scalar(tv, q, tmax, t_out, bary, any);
 }
 
 /* The four quads of a block (pt__hit_quad's operations, four lanes at a time): returns the
    lane of the nearest hit with 0 < t < tmax (lowest lane at a tie), or -1. */
-static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt__quad4 *q, float tmax, float *t_out,
+#ifdef PT__SSE
+static PT__HOT int pt__quad4_hit_sse(const pt__trav *tv, const pt_scene *s, const pt__quad4 *q, float tmax, float *t_out,
                                  int any)
 {
-#ifdef PT__SSE
     __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
     __m128 dx = tv->d4[0], dy = tv->d4[1], dz = tv->d4[2];
     __m128 nx = _mm_loadu_ps(q->v[3]), ny = _mm_loadu_ps(q->v[4]), nz = _mm_loadu_ps(q->v[5]);
@@ -6559,7 +6777,13 @@ static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt
     for (lane = 0; lane < 4; ++lane)
         if ((bits & (1 << lane)) && ts[lane] < best_t) { best_t = ts[lane]; best = lane; }
     (void)s;
-#else
+    if (best >= 0) *t_out = best_t;
+    return best;
+}
+#endif
+static PT__HOT int pt__quad4_hit_scalar(const pt__trav *tv, const pt_scene *s, const pt__quad4 *q, float tmax, float *t_out,
+                                 int any)
+{
     int lane, best = -1;
     float best_t = tmax;
     for (lane = 0; lane < 4; ++lane) {
@@ -6569,21 +6793,28 @@ static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt
             best_t = t; best = lane;
         }
     }
-#endif
     if (best >= 0) *t_out = best_t;
     return best;
+}
+static PT__HOT int pt__quad4_hit(const pt__trav *tv, const pt_scene *s, const pt__quad4 *q, float tmax, float *t_out,
+                                 int any)
+{
+#ifdef PT__SSE
+    if (tv->sse) return pt__quad4_hit_sse(tv, s, q, tmax, t_out, any);
+#endif
+    return pt__quad4_hit_scalar(tv, s, q, tmax, t_out, any);
 }
 
 /* The spheres of a block (pt__hit_sphere's operations, four lanes at a time; lanes of tiny or
    distant spheres, which pt__hit_sphere decides in double, go to it): returns the lane of the
    nearest hit with 0 < t < tmax (lowest lane at a tie), or -1. Blocks are padded with copies of
    lane 0. */
-static PT__HOT int pt__sphere4_hit(const pt__trav *tv, const pt__sphere4 *q, float tmax, float *t_out, int any)
+#ifdef PT__SSE
+static PT__HOT int pt__sphere4_hit_sse(const pt__trav *tv, const pt__sphere4 *q, float tmax, float *t_out, int any)
 {
     const pt__rayctx *rc = tv->rc;
     int lane, best = -1;
     float best_t = tmax;
-#ifdef PT__SSE
     float a = pt_dot(rc->d, rc->d), ts[4];
     __m128 zero = _mm_setzero_ps(), sign = _mm_set1_ps(-0.0f), a4, cx, cy, cz, r, fx, fy, fz, bp, ff, rr, k, lx, ly, lz;
     __m128 ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t;
@@ -6636,7 +6867,15 @@ static PT__HOT int pt__sphere4_hit(const pt__trav *tv, const pt__sphere4 *q, flo
             best_t = ts[lane]; best = lane;
         }
     }
-#else
+    if (best >= 0) *t_out = best_t;
+    return best;
+}
+#endif
+static PT__HOT int pt__sphere4_hit_scalar(const pt__trav *tv, const pt__sphere4 *q, float tmax, float *t_out, int any)
+{
+    const pt__rayctx *rc = tv->rc;
+    int lane, best = -1;
+    float best_t = tmax;
     for (lane = 0; lane < 4 && (lane == 0 || q->prim[lane] != q->prim[0]); ++lane) { /* to the padding */
         float t;
         if (pt__hit_sphere(rc, pt_v3(q->v[0][lane], q->v[1][lane], q->v[2][lane]), q->v[3][lane], best_t, &t)) {
@@ -6644,27 +6883,102 @@ static PT__HOT int pt__sphere4_hit(const pt__trav *tv, const pt__sphere4 *q, flo
             best_t = t; best = lane;
         }
     }
-#endif
     if (best >= 0) *t_out = best_t;
     return best;
 }
+static PT__HOT int pt__sphere4_hit(const pt__trav *tv, const pt__sphere4 *q, float tmax, float *t_out, int any)
+{
+#ifdef PT__SSE
+    if (tv->sse) return pt__sphere4_hit_sse(tv, q, tmax, t_out, any);
+#endif
+    return pt__sphere4_hit_scalar(tv, q, tmax, t_out, any);
+}
 
-/* Closest hit: returns 1 and the primitive index (into s->prims), t and barycentrics. */
-static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
-                           float *bary)
+
+/* The nearest hit found so far. Hits are ordered by t, then by public primitive id (at an exact
+   tie, e.g. a ray through the edge two faces share, the shape added first), so that the result
+   does not depend on the order leaves are visited in: each node width visits them in its own. */
+typedef struct pt__best {
+    float t;
+    uint32_t prim;
+    int found;
+    float bary[3];
+} pt__best;
+
+static PT__HOT void pt__best_offer(const pt_scene *s, pt__best *b, float t, uint32_t prim, const float *bary)
+{
+    if (b->found && (t > b->t || (t == b->t && s->prims[prim].id >= s->prims[b->prim].id))) return;
+    b->t = t; b->prim = prim; b->found = 1;
+    b->bary[0] = bary[0]; b->bary[1] = bary[1]; b->bary[2] = bary[2];
+}
+
+/* The blocks of a leaf against the ray. Every block is tested against the ray's own tmax0, not
+   the nearest hit so far: a block's result then depends on the block alone (the triangle test
+   rounds its tmax comparison), and the (t, primitive) order picks the same hit in any width. */
+static PT__HOT void pt__leaf_closest(const pt_scene *s, const pt__trav *tv, uint32_t ref, float tmax0, pt__best *b)
+{
+    static const float no_bary[3] = { 0.0f, 0.0f, 0.0f };
+    const pt__leaf16 *h = &s->pool[ref & PT__BVH_OFFSET_MASK];
+    const char *blk = (const char *)(h + 1);
+    uint32_t j;
+    for (j = 0; j < h->u[0]; ++j, blk += sizeof(pt__tri4)) {
+        const pt__tri4 *q = (const pt__tri4 *)(const void *)blk;
+        float t = 0.0f, bb[3] = { 0.0f, 0.0f, 0.0f };
+        int l = pt__tri4_hit(tv, q, tmax0, &t, bb, 0); /* bb is written only on a hit */
+        if (l >= 0) pt__best_offer(s, b, t, q->prim[l], bb);
+    }
+    for (j = 0; j < h->u[1]; ++j, blk += sizeof(pt__quad4)) {
+        const pt__quad4 *q = (const pt__quad4 *)(const void *)blk;
+        float t;
+        int l = pt__quad4_hit(tv, s, q, tmax0, &t, 0);
+        if (l >= 0) pt__best_offer(s, b, t, q->prim[l], no_bary);
+    }
+    for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
+        const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
+        float t;
+        int l = pt__sphere4_hit(tv, q, tmax0, &t, 0);
+        if (l >= 0) pt__best_offer(s, b, t, q->prim[l], no_bary);
+    }
+}
+
+/* Any hit in a leaf with 0 < t < tmax. Quad and sphere blocks that hold only primitive `skip`
+   (one-primitive leaves, PT__BVH_SMALL_SCENE) are not tested (see pt__bvh_any). */
+static PT__HOT int pt__leaf_any(const pt_scene *s, const pt__trav *tv, uint32_t ref, float tmax, uint32_t skip)
+{
+    const pt__leaf16 *h = &s->pool[ref & PT__BVH_OFFSET_MASK];
+    const char *blk = (const char *)(h + 1);
+    uint32_t j;
+    for (j = 0; j < h->u[0]; ++j, blk += sizeof(pt__tri4)) {
+        float t, bb[3];
+        if (pt__tri4_hit(tv, (const pt__tri4 *)(const void *)blk, tmax, &t, bb, 1) >= 0) return 1;
+    }
+    for (j = 0; j < h->u[1]; ++j, blk += sizeof(pt__quad4)) {
+        const pt__quad4 *q = (const pt__quad4 *)(const void *)blk;
+        float t;
+        if (q->prim[0] == skip && q->prim[1] == skip) continue; /* a block of the skipped primitive alone */
+        if (pt__quad4_hit(tv, s, q, tmax, &t, 1) >= 0) return 1;
+    }
+    for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
+        const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
+        float t;
+        if (q->prim[0] == skip && q->prim[1] == skip) continue;
+        if (pt__sphere4_hit(tv, q, tmax, &t, 1) >= 0) return 1;
+    }
+    return 0;
+}
+
+/* Closest hit through the 4-wide nodes (scalar or SSE2 box tests). */
+static void pt__bvh_closest4(const pt_scene *s, const pt__trav *tv, float tmax0, pt__best *b)
 {
     uint32_t stack_ref[PT__BVH_STACK];
-    float stack_t[PT__BVH_STACK];
-    int sp = 0, found = 0;
+    float stack_t[PT__BVH_STACK], tmax = tmax0;
+    int sp = 0;
     uint32_t ref = 0;
-    pt__trav tv;
-    if (!s->node_count) return 0;
-    pt__trav_init(&tv, rc);
     for (;;) {
         if (!(ref & PT__BVH_LEAF)) {
             const pt__node4 *n = &s->nodes[ref];
             float tn[4];
-            unsigned mask = pt__box4(n, &tv, tmax, tn);
+            unsigned mask = pt__box4(n, tv, tmax, tn);
             if (mask) {
                 /* one child hit (the common case): go there; two: the nearer now, the farther
                    on the stack; more: all on the stack, sorted so the nearest is on top */
@@ -6701,34 +7015,13 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
                 }
             }
         } else {
-            const pt__leaf16 *h = &s->pool[ref & PT__BVH_OFFSET_MASK];
-            const char *blk = (const char *)(h + 1);
-            uint32_t j;
-            for (j = 0; j < h->u[0]; ++j, blk += sizeof(pt__tri4)) {
-                const pt__tri4 *q = (const pt__tri4 *)(const void *)blk;
-                float t;
-                int l = pt__tri4_hit(&tv, q, tmax, &t, bary, 0); /* bary is written only on a hit */
-                if (l >= 0) { tmax = t; *prim = q->prim[l]; found = 1; }
-            }
-            for (j = 0; j < h->u[1]; ++j, blk += sizeof(pt__quad4)) {
-                const pt__quad4 *q = (const pt__quad4 *)(const void *)blk;
-                float t;
-                int l = pt__quad4_hit(&tv, s, q, tmax, &t, 0);
-                if (l >= 0) { tmax = t; *prim = q->prim[l]; found = 1; }
-            }
-            for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
-                const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
-                float t;
-                int l = pt__sphere4_hit(&tv, q, tmax, &t, 0);
-                if (l >= 0) { tmax = t; *prim = q->prim[l]; bary[0] = bary[1] = bary[2] = 0.0f; found = 1; }
-            }
+            pt__leaf_closest(s, tv, ref, tmax0, b);
+            if (b->found) tmax = b->t;
         }
-        /* next: the nearest stacked node still in front of the closest hit */
+        /* next: the nearest stacked node not behind the closest hit (a node at its distance
+           may hold a primitive of lower index at the same t) */
         for (;;) {
-            if (sp == 0) {
-                if (found) *t_out = tmax;
-                return found;
-            }
+            if (sp == 0) return;
             --sp;
             if (stack_t[sp] <= tmax) break;
         }
@@ -6736,23 +7029,17 @@ static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, 
     }
 }
 
-/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. Quad and sphere
-   blocks that hold only primitive `skip` (one-primitive leaves, PT__BVH_SMALL_SCENE) are not
-   tested: the shadow ray towards a point sampled on a light passes its own light (0xffffffff:
-   none). */
-static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
+/* Any hit through the 4-wide nodes. */
+static int pt__bvh_any4(const pt_scene *s, const pt__trav *tv, float tmax, uint32_t skip)
 {
     uint32_t stack_ref[PT__BVH_STACK];
     int sp = 0;
     uint32_t ref = 0;
-    pt__trav tv;
-    if (!s->node_count) return 0;
-    pt__trav_init(&tv, rc);
     for (;;) {
         if (!(ref & PT__BVH_LEAF)) {
             const pt__node4 *n = &s->nodes[ref];
             float tn[4];
-            unsigned mask = pt__box4(n, &tv, tmax, tn);
+            unsigned mask = pt__box4(n, tv, tmax, tn);
             if (mask) {
                 ref = n->child[pt__lowest_bit[mask]];
                 mask &= mask - 1u;
@@ -6763,30 +7050,149 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
                 }
                 continue;
             }
-        } else {
-            const pt__leaf16 *h = &s->pool[ref & PT__BVH_OFFSET_MASK];
-            const char *blk = (const char *)(h + 1);
-            uint32_t j;
-            for (j = 0; j < h->u[0]; ++j, blk += sizeof(pt__tri4)) {
-                float t, bb[3];
-                if (pt__tri4_hit(&tv, (const pt__tri4 *)(const void *)blk, tmax, &t, bb, 1) >= 0) return 1;
-            }
-            for (j = 0; j < h->u[1]; ++j, blk += sizeof(pt__quad4)) {
-                const pt__quad4 *q = (const pt__quad4 *)(const void *)blk;
-                float t;
-                if (q->prim[0] == skip && q->prim[1] == skip) continue; /* a block of the skipped primitive alone */
-                if (pt__quad4_hit(&tv, s, q, tmax, &t, 1) >= 0) return 1;
-            }
-            for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
-                const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
-                float t;
-                if (q->prim[0] == skip && q->prim[1] == skip) continue;
-                if (pt__sphere4_hit(&tv, q, tmax, &t, 1) >= 0) return 1;
-            }
+        } else if (pt__leaf_any(s, tv, ref, tmax, skip)) {
+            return 1;
         }
         if (sp == 0) return 0;
         ref = stack_ref[--sp];
     }
+}
+
+#ifdef PT__WIDE
+/* The wide traversals (8 children with AVX2, 16 with AVX-512F) are compiled for their
+   instruction set alone; the leaf tests they call stay SSE2 code outside them (not inlined: no
+   FMA contraction or other code generation can change a hit's bits). */
+static PT__NOINLINE void pt__leaf_closest_call(const pt_scene *s, const pt__trav *tv, uint32_t ref, float tmax0,
+                                               pt__best *b)
+{
+    pt__leaf_closest(s, tv, ref, tmax0, b);
+}
+static PT__NOINLINE int pt__leaf_any_call(const pt_scene *s, const pt__trav *tv, uint32_t ref, float tmax, uint32_t skip)
+{
+    return pt__leaf_any(s, tv, ref, tmax, skip);
+}
+
+/* Stacks the hit children of a wide node (mask: bit i for child i; tn: entry distances) and
+   returns the next node: the nearest child; with more than one, the others go on the stack
+   sorted farthest at the bottom (closest hit: sort = 1) or unsorted (any hit: sort = 0). */
+static PT__HOT uint32_t pt__wide_push(const uint32_t *child, unsigned mask, const float *tn, uint32_t *stack_ref,
+                                      float *stack_t, int *sp, int sort)
+{
+    int base = *sp, i, j;
+    unsigned i0 = (unsigned)__builtin_ctz(mask);
+    mask &= mask - 1u;
+    if (!mask) return child[i0];
+    if (!sort) {
+        while (mask) { stack_ref[(*sp)++] = child[__builtin_ctz(mask)]; mask &= mask - 1u; }
+        return child[i0];
+    }
+    stack_ref[*sp] = child[i0]; stack_t[*sp] = tn[i0]; (*sp)++;
+    while (mask) {
+        unsigned ik = (unsigned)__builtin_ctz(mask);
+        mask &= mask - 1u;
+        stack_ref[*sp] = child[ik]; stack_t[*sp] = tn[ik]; (*sp)++;
+    }
+    for (i = base + 1; i < *sp; ++i) { /* insertion sort, farthest at the bottom */
+        uint32_t rr = stack_ref[i];
+        float dd = stack_t[i];
+        for (j = i; j > base && stack_t[j - 1] < dd; --j) { stack_ref[j] = stack_ref[j - 1]; stack_t[j] = stack_t[j - 1]; }
+        stack_ref[j] = rr; stack_t[j] = dd;
+    }
+    return stack_ref[--(*sp)];
+}
+
+/* One traversal body per width: W children, vector type V, the box test's intrinsics. The slab
+   test is pt__box4's, W lanes at a time. closest != 0: nearest hit into *b (returns 0); else
+   any hit (returns 1 or 0). */
+#define PT__WIDE_TRAVERSAL(NAME, TARGET, W, NODE, V, SET1, LOADU, SUB, MUL, MAX, MIN, STOREU, LEMASK)                  \
+    TARGET static int NAME(const pt_scene *s, const pt__trav *tv, float tmax0, pt__best *b, uint32_t skip, int closest) \
+    {                                                                                                              \
+        uint32_t stack_ref[(W - 1) * PT__BVH_MAX_DEPTH + W];                                                       \
+        float stack_t[(W - 1) * PT__BVH_MAX_DEPTH + W], tn[W], tmax = tmax0;                                       \
+        const V ox = SET1(tv->o[0]), oy = SET1(tv->o[1]), oz = SET1(tv->o[2]);                                     \
+        const V ix = SET1(tv->inv[0]), iy = SET1(tv->inv[1]), iz = SET1(tv->inv[2]);                               \
+        const V zero = SET1(0.0f), widen = SET1(1.00000036f);                                                      \
+        const int r0 = tv->near_row[0], r1 = tv->near_row[1], r2 = tv->near_row[2];                                \
+        const NODE *nodes = (const NODE *)s->wide;                                                                 \
+        int sp = 0;                                                                                                \
+        uint32_t ref = 0;                                                                                          \
+        for (;;) {                                                                                                 \
+            if (!(ref & PT__BVH_LEAF)) {                                                                           \
+                const NODE *n = &nodes[ref];                                                                       \
+                V nx = MUL(SUB(LOADU(n->box[r0]), ox), ix), ny = MUL(SUB(LOADU(n->box[r1]), oy), iy);              \
+                V nz = MUL(SUB(LOADU(n->box[r2]), oz), iz), fx = MUL(SUB(LOADU(n->box[r0 ^ 1]), ox), ix);          \
+                V fy = MUL(SUB(LOADU(n->box[r1 ^ 1]), oy), iy), fz = MUL(SUB(LOADU(n->box[r2 ^ 1]), oz), iz);      \
+                V t0 = MAX(MAX(nx, ny), MAX(nz, zero));                                                            \
+                V t1 = MIN(MUL(MIN(MIN(fx, fy), fz), widen), SET1(tmax));                                          \
+                unsigned mask = (unsigned)LEMASK(t0, t1);                                                          \
+                if (mask) {                                                                                        \
+                    STOREU(tn, t0);                                                                                \
+                    PT_ASSERT(sp + W <= (W - 1) * PT__BVH_MAX_DEPTH + W);                                          \
+                    ref = pt__wide_push(n->child, mask, tn, stack_ref, stack_t, &sp, closest);                     \
+                    continue;                                                                                      \
+                }                                                                                                  \
+            } else if (closest) {                                                                                  \
+                pt__leaf_closest_call(s, tv, ref, tmax0, b);                                                       \
+                if (b->found) tmax = b->t;                                                                         \
+            } else if (pt__leaf_any_call(s, tv, ref, tmax, skip)) {                                                \
+                return 1;                                                                                          \
+            }                                                                                                      \
+            for (;;) {                                                                                             \
+                if (sp == 0) return 0;                                                                             \
+                --sp;                                                                                              \
+                if (!closest || stack_t[sp] <= tmax) break;                                                        \
+            }                                                                                                      \
+            ref = stack_ref[sp];                                                                                   \
+        }                                                                                                          \
+    }
+
+#define PT__LE8(a, b) _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ))
+PT__WIDE_TRAVERSAL(pt__bvh_trace8, PT__TARGET_AVX2, 8, pt__node8, __m256, _mm256_set1_ps, _mm256_loadu_ps,
+                   _mm256_sub_ps, _mm256_mul_ps, _mm256_max_ps, _mm256_min_ps, _mm256_storeu_ps, PT__LE8)
+#define PT__LE16(a, b) _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ)
+/* the zero-masked forms under a full mask: g++ 12 warns about the plain ones' undefined pass-through */
+#define PT__MAX16(a, b) _mm512_maskz_max_ps((__mmask16)0xffff, a, b)
+#define PT__MIN16(a, b) _mm512_maskz_min_ps((__mmask16)0xffff, a, b)
+PT__WIDE_TRAVERSAL(pt__bvh_trace16, PT__TARGET_AVX512, 16, pt__node16, __m512, _mm512_set1_ps, _mm512_loadu_ps,
+                   _mm512_sub_ps, _mm512_mul_ps, PT__MAX16, PT__MIN16, _mm512_storeu_ps, PT__LE16)
+#endif
+
+/* Closest hit: returns 1 and the primitive index (into s->prims), t and barycentrics. The node
+   width is the one the scene was committed with (pt_simd_level); every width finds the same hit. */
+static int pt__bvh_closest(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t *prim, float *t_out,
+                           float *bary)
+{
+    pt__trav tv;
+    pt__best b;
+    if (!s->node_count) return 0;
+    pt__trav_init(&tv, rc, s->simd);
+    b.found = 0; b.t = tmax; b.prim = 0;
+#ifdef PT__WIDE
+    if (s->bvh_width == 16) pt__bvh_trace16(s, &tv, tmax, &b, 0, 1);
+    else if (s->bvh_width == 8) pt__bvh_trace8(s, &tv, tmax, &b, 0, 1);
+    else
+#endif
+        pt__bvh_closest4(s, &tv, tmax, &b);
+    if (!b.found) return 0;
+    *prim = b.prim; *t_out = b.t;
+    bary[0] = b.bary[0]; bary[1] = b.bary[1]; bary[2] = b.bary[2];
+    return 1;
+}
+
+/* Any hit with 0 < t < tmax (shadow rays): stops at the first primitive found. Quad and sphere
+   blocks that hold only primitive `skip` (one-primitive leaves, PT__BVH_SMALL_SCENE) are not
+   tested: the shadow ray towards a point sampled on a light passes its own light (0xffffffff:
+   none). */
+static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint32_t skip)
+{
+    pt__trav tv;
+    if (!s->node_count) return 0;
+    pt__trav_init(&tv, rc, s->simd);
+#ifdef PT__WIDE
+    if (s->bvh_width == 16) return pt__bvh_trace16(s, &tv, tmax, NULL, skip, 0);
+    if (s->bvh_width == 8) return pt__bvh_trace8(s, &tv, tmax, NULL, skip, 0);
+#endif
+    return pt__bvh_any4(s, &tv, tmax, skip);
 }
 
 /* ------------------------------------------------------------------------------------------
@@ -7232,6 +7638,7 @@ static int pt__accel_build(pt_scene *s)
 {
     double t0 = pt__now();
     int rc;
+    if ((rc = pt__simd_choose(s)) != PT_OK) return rc;
 #ifdef PDFTRACE_EMBREE
     int want = s->backend_request;
     if (want == PT_BACKEND_AUTO) { /* the rule of section 5b (PDFTRACE_EMBREE_MIN_PRIMS) */
@@ -7771,6 +8178,8 @@ PTDEF int pt_scene_get_info(const pt_scene *s, pt_scene_info *info)
     info->degenerate_triangles_skipped = s->degenerate_skipped;
     info->bvh_node_count = s->node_count;
     info->bvh_max_depth = s->bvh_depth;
+    info->simd_level = (pt_simd_level)s->simd;
+    info->bvh_width = s->node_count ? s->bvh_width : 0u;
     info->total_emitted_power = s->total_power;
     info->bounds_min = s->lo;
     info->bounds_max = s->hi;

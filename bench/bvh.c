@@ -6,9 +6,11 @@
 
        make bench-bvh            (needs libembree-dev; writes bench/out/bvh.md and bvh.csv)
        build/bench_bvh [--quick] [--crossover] [--reps N] OUTDIR
+       build/bench_bvh --levels [--quick] [--reps N] OUTDIR     (make bench-simd)
            --quick      smaller scenes and images (a ~1 min check, not the figures)
            --crossover  only the crossover series
-           --reps N     repetitions per backend (default 7)
+           --levels     only the SIMD levels of the built-in BVH (below; writes simd.md, simd.csv)
+           --reps N     repetitions per backend or level (default 7)
 
    Method. Every scene is built twice from the same description, once per backend
    (pt_scene_set_backend before pt_scene_commit), and both are traced in the same process:
@@ -30,7 +32,15 @@
    measurement at least 500,000 rays: the batch traced several times); the
    smallest size from which Embree is faster (or within 3 %, a tie at this machine's noise)
    at every larger size is where PDFTRACE_EMBREE_MIN_PRIMS belongs; the report says at how
-   many sizes AUTO's choice is the faster backend or ties with it. */
+   many sizes AUTO's choice is the faster backend or ties with it.
+   Levels (--levels): the built-in BVH committed once per SIMD level this CPU has (pt_simd_set_cap
+   before pt_scene_commit: scalar, sse2 = 4-wide nodes, avx2 = 8-wide, avx512 = 16-wide: this
+   program is built with PDFTRACE_AVX512_WIDTH=16, so that avx512/avx2 compares the widths), on the
+   Cornell box, every bench/scenes/NAME.scene and the terrain; the batch above split into its
+   closest-hit rays (camera and bounce) and its shadow rays, each timed on one thread for every
+   level in turn, the order rotated every repetition. Reported: median rays/s per level and the
+   median of the paired ratios to sse2 (the 4-wide SSE2 traversal). Every level returns the same
+   hits (checked: the hit counts must agree). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,6 +49,9 @@
 #include <sys/stat.h>
 #include <dirent.h>
 
+#ifndef PDFTRACE_AVX512_WIDTH
+#define PDFTRACE_AVX512_WIDTH 16 /* --levels: the avx512 column measures 16-wide nodes (see above) */
+#endif
 #define PDFTRACE_IMPLEMENTATION
 #define PDFTRACE_SCENE_IMPLEMENTATION
 #include "pdftrace_scene.h"
@@ -377,10 +390,189 @@ static void print_result(FILE *f, const result *r)
             (r->autob == PT_BACKEND_EMBREE) == faster_e ? "pays" : "the slower one");
 }
 
+/* ---------------------------------------------------------------------------------------
+   SIMD levels of the built-in BVH (--levels)
+   --------------------------------------------------------------------------------------- */
+
+#define NLEV 4
+typedef struct lev_result {
+    char scene[64];
+    uint32_t prims;
+    int nlev;
+    size_t rays[2];                     /* closest, shadow */
+    double rps[2][NLEV][MAX_REPS];      /* rays/s: [closest, shadow][level][rep] */
+    double ratio[2][NLEV][MAX_REPS];    /* paired level / sse2 */
+    double wide[2][MAX_REPS];           /* paired avx512 / avx2 (16-wide / 8-wide nodes) */
+} lev_result;
+
+/* Traces the rays of the batch of one kind (shadow or not) `passes` times; returns seconds. */
+static double trace_kind(const pt_scene *s, const batch *b, int shadow, int passes, long *hits)
+{
+    size_t i;
+    int p;
+    long h = 0;
+    double t0 = now_s();
+    for (p = 0; p < passes; p++)
+        for (i = 0; i < b->n; i++) {
+            const bray *r = &b->rays[i];
+            if (r->shadow != shadow) continue;
+            if (shadow) h += pt_scene_occluded(s, r->r, r->tmax) == 1;
+            else {
+                pt_hit hit;
+                h += pt_scene_intersect(s, r->r, r->tmax, &hit) == 1;
+            }
+        }
+    *hits = h;
+    return now_s() - t0;
+}
+
+static void levels_scene(lev_result *res, pt_scene **sc, int nlev, const batch *b, int reps, size_t min_rays)
+{
+    int rep, k, kind;
+    pt_scene_info info;
+    res->nlev = nlev;
+    res->rays[0] = b->n - b->shadow;
+    res->rays[1] = b->shadow;
+    pt_scene_get_info(sc[0], &info);
+    res->prims = info.primitive_count;
+    for (rep = 0; rep < reps; rep++)
+        for (kind = 0; kind < 2; kind++) {
+            size_t n = res->rays[kind];
+            int passes = n ? (int)((min_rays + n - 1) / n) : 0;
+            long hits[NLEV];
+            if (!n) continue;
+            for (k = 0; k < nlev; k++) {
+                int lv = (rep + k) % nlev; /* rotate which level goes first */
+                double sec = trace_kind(sc[lv], b, kind, passes, &hits[lv]);
+                res->rps[kind][lv][rep] = (double)n * passes / sec;
+                fprintf(csv, "%s,%u,%s,%s,%d,%zu,%.6f,%.1f\n", res->scene, res->prims, pt_simd_level_name((pt_simd_level)lv),
+                        kind ? "occluded" : "closest", rep, n * (size_t)passes, sec, res->rps[kind][lv][rep]);
+            }
+            for (k = 0; k < nlev; k++) {
+                if (hits[k] != hits[0]) {
+                    fprintf(stderr, "bench_bvh: %s: level %s found %ld hits, scalar %ld\n", res->scene,
+                            pt_simd_level_name((pt_simd_level)k), hits[k], hits[0]);
+                    exit(1);
+                }
+                res->ratio[kind][k][rep] = nlev > 1 ? res->rps[kind][k][rep] / res->rps[kind][1][rep] : 1.0;
+            }
+            res->wide[kind][rep] = nlev > 3 ? res->rps[kind][3][rep] / res->rps[kind][2][rep] : 1.0;
+        }
+    fflush(csv);
+}
+
+/* The scene committed once per level (pt_simd_set_cap); sc[k] is level k's. */
+static void levels_commit(pt_scene **sc, int nlev, pt_scene *(*make)(const void *, pt_render_desc *), const void *arg,
+                          pt_render_desc *rd)
+{
+    int k, rc;
+    for (k = 0; k < nlev; k++) {
+        pt_scene_info info;
+        pt_simd_set_cap((pt_simd_level)k);
+        sc[k] = make(arg, rd);
+        if ((rc = pt_scene_set_backend(sc[k], PT_BACKEND_BUILTIN)) != PT_OK || (rc = pt_scene_commit(sc[k])) != PT_OK)
+            die("pt_scene_commit (levels)", rc, sc[k]);
+        pt_scene_get_info(sc[k], &info);
+        if ((int)info.simd_level != k) { fprintf(stderr, "bench_bvh: cap %d gave level %d\n", k, (int)info.simd_level); exit(1); }
+    }
+    pt_simd_set_cap(PT_SIMD_AVX512);
+}
+static pt_scene *make_file(const void *path, pt_render_desc *rd) { return file_scene((const char *)path, PT_BACKEND_BUILTIN, rd); }
+static pt_scene *make_terrain(const void *t, pt_render_desc *rd) { return terrain_scene((const terrain *)t, PT_BACKEND_BUILTIN, rd); }
+
+static void levels_print(FILE *md, const lev_result *r)
+{
+    int kind, k;
+    for (kind = 0; kind < 2; kind++) {
+        int reps = 0;
+        while (reps < MAX_REPS && r->rps[kind][0][reps] > 0) reps++;
+        if (!r->rays[kind] || !reps) continue;
+        fprintf(md, "| %s | %u | %s |", r->scene, r->prims, kind ? "occluded" : "closest");
+        for (k = 0; k < NLEV; k++) {
+            if (k < r->nlev) fprintf(md, " %.2f |", median(r->rps[kind][k], reps) * 1e-6);
+            else fprintf(md, " - |");
+        }
+        for (k = 0; k < NLEV; k++) {
+            if (k == 1) continue;
+            if (k < r->nlev) fprintf(md, " %.3f |", median(r->ratio[kind][k], reps));
+            else fprintf(md, " - |");
+        }
+        if (r->nlev > 3) fprintf(md, " %.3f |\n", median(r->wide[kind], reps));
+        else fprintf(md, " - |\n");
+    }
+}
+
+static int levels_main(const char *outdir, int quick, int reps)
+{
+    static lev_result res[24];
+    int nres = 0, nlev = (int)pt_simd_cpu_level() + 1, i;
+    char path[1024], names[24][256];
+    int nnames = 0;
+    double t_start = now_s();
+    size_t min_rays = quick ? 100000 : 400000;
+    FILE *md;
+    DIR *dir;
+    struct dirent *e;
+    snprintf(path, sizeof path, "%s/simd.csv", outdir);
+    if (!(csv = fopen(path, "w"))) { fprintf(stderr, "bench_bvh: cannot write %s\n", path); return 1; }
+    fprintf(csv, "scene,prims,level,kind,rep,rays,seconds,rays_per_s\n");
+    snprintf(names[nnames++], sizeof names[0], "scenes/cornell.scene");
+    if ((dir = opendir("bench/scenes")) != NULL) {
+        while ((e = readdir(dir)) != NULL && nnames < 20) {
+            size_t len = strlen(e->d_name);
+            if (len < 7 || strcmp(e->d_name + len - 6, ".scene") != 0) continue;
+            snprintf(names[nnames++], sizeof names[0], "bench/scenes/%s", e->d_name);
+        }
+        closedir(dir);
+    }
+    qsort(names + 1, (size_t)(nnames - 1), sizeof names[0], cmp_name);
+    for (i = 0; i <= nnames; i++) {
+        pt_scene *sc[NLEV];
+        pt_render_desc rd;
+        batch b;
+        terrain t;
+        lev_result *r = &res[nres++];
+        int k;
+        memset(r, 0, sizeof *r);
+        if (i < nnames) {
+            snprintf(r->scene, sizeof r->scene, "%s", names[i]);
+            levels_commit(sc, nlev, make_file, names[i], &rd);
+            make_batch(sc[0], &rd, quick ? 80 : 160, quick ? 60 : 120, &b);
+        } else {
+            terrain_make(quick ? 272 : 708, &t);
+            snprintf(r->scene, sizeof r->scene, "terrain-%u", t.nt);
+            levels_commit(sc, nlev, make_terrain, &t, &rd);
+            make_batch(sc[0], &rd, quick ? 160 : 320, quick ? 120 : 240, &b);
+        }
+        levels_scene(r, sc, nlev, &b, reps, min_rays);
+        fprintf(stderr, "levels: %s, %u prims: closest avx2/sse2 %.3f, occluded %.3f\n", r->scene, r->prims,
+                nlev > 2 ? median(r->ratio[0][2], reps) : 1.0, nlev > 2 ? median(r->ratio[1][2], reps) : 1.0);
+        for (k = 0; k < nlev; k++) pt_scene_destroy(sc[k]);
+        free(b.rays);
+        if (i == nnames) terrain_free(&t);
+    }
+    fclose(csv);
+    snprintf(path, sizeof path, "%s/simd.md", outdir);
+    if (!(md = fopen(path, "w"))) { fprintf(stderr, "bench_bvh: cannot write %s\n", path); return 1; }
+    fprintf(md, "# Built-in BVH per SIMD level (`make bench-simd`)\n\n");
+    fprintf(md, "Produced by bench/bvh.c --levels in %.0f s%s; method in its top comment. One thread, %d repetitions, "
+                "the levels' order rotated each repetition; medians of rays/s (M) and of the paired ratios to sse2 "
+                "(the 4-wide SSE2 traversal). closest: camera and bounce rays (pt_scene_intersect); occluded: shadow "
+                "rays (pt_scene_occluded). Levels this CPU has: scalar..%s.\n\n",
+            now_s() - t_start, quick ? " (--quick)" : "", reps, pt_simd_level_name((pt_simd_level)(nlev - 1)));
+    fprintf(md, "| scene | primitives | rays | scalar | sse2 | avx2 (8-wide) | avx512 (%d-wide) | scalar/sse2 | "
+                "avx2/sse2 | avx512/sse2 | avx512/avx2 |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            (int)PDFTRACE_AVX512_WIDTH);
+    for (i = 0; i < nres; i++) levels_print(md, &res[i]);
+    fclose(md);
+    fprintf(stderr, "wrote %s/simd.md and %s/simd.csv (%.0f s)\n", outdir, outdir, now_s() - t_start);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     const char *outdir = NULL;
-    int quick = 0, reps = 7, i, rc, cross_only = 0;
+    int quick = 0, reps = 7, i, rc, cross_only = 0, levels = 0;
     char path[1024];
     FILE *md;
     result res_cornell, res_mesh, cross[24], suite[32];
@@ -395,8 +587,9 @@ int main(int argc, char **argv)
     for (i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick")) quick = 1;
         else if (!strcmp(argv[i], "--crossover")) cross_only = 1;
+        else if (!strcmp(argv[i], "--levels")) levels = 1;
         else if (!strcmp(argv[i], "--reps") && i + 1 < argc) reps = atoi(argv[++i]);
-        else if (argv[i][0] == '-') { fprintf(stderr, "usage: bench_bvh [--quick] [--crossover] [--reps N] OUTDIR\n"); return 2; }
+        else if (argv[i][0] == '-') { fprintf(stderr, "usage: bench_bvh [--quick] [--crossover | --levels] [--reps N] OUTDIR\n"); return 2; }
         else outdir = argv[i];
     }
     if (!outdir || reps < 1 || reps > MAX_REPS) { fprintf(stderr, "usage: bench_bvh [--quick] [--reps N (1..%d)] OUTDIR\n", MAX_REPS); return 2; }
@@ -405,6 +598,7 @@ int main(int argc, char **argv)
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
 #endif
+    if (levels) return levels_main(outdir, quick, reps);
     snprintf(path, sizeof path, "%s/bvh.csv", outdir);
     csv = fopen(path, "w");
     if (!csv) { fprintf(stderr, "bench_bvh: cannot write %s\n", path); return 1; }

@@ -5,6 +5,7 @@
    pt_scene_intersect must agree with pt_scene_intersect_brute_force on 20000 rays each: the same
    hit/miss, t within 1e-5 relative, the same primitive (distinct primitives only at an exact tie)
    and material; and pt_scene_occluded must agree with both. Deterministic (fixed seeds). */
+#define _POSIX_C_SOURCE 200809L /* setenv, unsetenv: PDFTRACE_SIMD */
 #include "test_util.h"
 
 #include <stdio.h>
@@ -362,11 +363,183 @@ static void bvh_denormal_extent(test_ctx *t)
     }
 }
 
+
+/* ---- run-time SIMD levels (pt_simd_level) ----
+   Every level this CPU has, forced through PDFTRACE_SIMD, must give bit-identical hits (the whole
+   pt_hit), the same occlusion answers and bit-identical films to the scalar level: on the mixed
+   scene above with a light, on integer boxes hit along the axes, and on overlapping coplanar
+   quads (most of their hits are exact ties in t, often across leaves: the hit is the quad added
+   first at any width).
+   Also the API cap, a bad cap and a bad PDFTRACE_SIMD (a commit error naming it). */
+#define SL_RAYS 6000
+static float sl_rect[120][4]; /* the coplanar quads of scene 2: x0, y0, x1, y1 (primitive id = index) */
+static pt_scene *sl_scene(int kind)
+{
+    pt_scene *s = pt_scene_create();
+    pt_rng rng;
+    int m, i, rc = 0;
+    if (!s) return NULL;
+    pt_rng_seed(&rng, 3300u + (uint64_t)kind, 1u);
+    m = pt_scene_add_lambertian(s, pt_v3(0.6f, 0.5f, 0.4f));
+    for (i = 0; i < 120 && rc >= 0; i++) {
+        dv3 p = rand_in(&rng, 8);
+        if (kind == 0 && i % 3 == 0) rc = pt_scene_add_sphere(s, dv_to(p), (float)(0.05 + tu_rand(&rng)), m);
+        else if (kind == 0 && i % 3 == 1)
+            rc = pt_scene_add_triangle(s, dv_to(p), dv_to(dadd(p, dscale(tu_rand_dir(&rng), 0.5 + 2 * tu_rand(&rng)))),
+                                       dv_to(dadd(p, dscale(tu_rand_dir(&rng), 0.5 + 2 * tu_rand(&rng)))), m);
+        else if (kind == 0)
+            rc = pt_scene_add_quad(s, dv_to(p), dv_to(dscale(tu_rand_dir(&rng), 0.5 + 2 * tu_rand(&rng))),
+                                   dv_to(dscale(tu_rand_dir(&rng), 0.5 + 2 * tu_rand(&rng))), m);
+        else if (kind == 1 && i < 60) {
+            float x = (float)((int)(tu_rand(&rng) * 12) - 6), y = (float)((int)(tu_rand(&rng) * 12) - 6);
+            float z = (float)((int)(tu_rand(&rng) * 12) - 6);
+            rc = pt_scene_add_box(s, pt_v3(x, y, z), pt_v3(x + 1 + (float)(int)(3 * tu_rand(&rng)), y + 2, z + 1), m);
+        } else if (kind == 2) { /* quads in the plane z = 0, overlapping: equal t for every one a ray crosses */
+            float *q = sl_rect[i];
+            q[0] = (float)(int)(tu_rand(&rng) * 16) - 8; q[1] = (float)(int)(tu_rand(&rng) * 16) - 8;
+            /* sides 1, 2 or 4: the normal is exactly (0, 0, 1), so every quad's t is the same float */
+            q[2] = q[0] + (float)(1 << (int)(3 * tu_rand(&rng))); q[3] = q[1] + (float)(1 << (int)(3 * tu_rand(&rng)));
+            rc = pt_scene_add_quad(s, pt_v3(q[0], q[1], 0), pt_v3(q[2] - q[0], 0, 0), pt_v3(0, q[3] - q[1], 0), m);
+        }
+    }
+    if (kind == 0 && rc >= 0) rc = add_heightfield(s, 24, 9, dv(0, -7, 0), m);
+    if (kind == 0 && rc >= 0) rc = add_uv_sphere(s, dv(3, 2, -2), 2.0, 12, 16, m);
+    if (rc >= 0) rc = pt_scene_add_sphere(s, pt_v3(0, 12, 0), 2, pt_scene_add_emitter(s, pt_v3(20, 20, 20), 0));
+    if (rc < 0 || tb_commit_builtin(s) != PT_OK) { pt_scene_destroy(s); return NULL; }
+    return s;
+}
+
+/* Traces the fixed rays of scene `kind` into hits[] and occ[] (pt_hit zeroed first: compared whole). */
+static void sl_trace(const pt_scene *s, int kind, pt_hit *hits, int *occ)
+{
+    pt_rng rng;
+    int i;
+    pt_rng_seed(&rng, 3400u + (uint64_t)kind, 2u);
+    for (i = 0; i < SL_RAYS; i++) {
+        pt_ray r;
+        float tmax = i % 7 == 0 ? (float)(12 * tu_rand(&rng)) : INFINITY;
+        int axis = (int)(tu_rand(&rng) * 3);
+        r.origin = kind == 1 ? pt_v3((float)(int)(tu_rand(&rng) * 16) - 8, (float)(int)(tu_rand(&rng) * 16) - 7.5f, 9.5f)
+                             : dv_to(rand_in(&rng, 10));
+        if (kind == 2) r.origin.z = 5.0f;
+        {   /* towards a random point of the scene (axis-aligned for half the rays at the boxes) */
+            dv3 to = rand_in(&rng, 6);
+            if (kind == 2) to.z = 0;
+            r.dir = kind == 1 && i % 2 ? pt_v3(axis == 0 ? 1.0f : 0.0f, axis == 1 ? -1.0f : 0.0f, axis == 2 ? -1.0f : 0.0f)
+                                       : dv_to(dsub(to, dv_from(r.origin)));
+        }
+        memset(&hits[i], 0, sizeof hits[i]);
+        if (pt_scene_intersect(s, r, tmax, &hits[i]) != 1) memset(&hits[i], 0, sizeof hits[i]);
+        occ[i] = pt_scene_occluded(s, r, tmax);
+    }
+}
+
+static int sl_setenv(const char *v) { return v ? setenv("PDFTRACE_SIMD", v, 1) : unsetenv("PDFTRACE_SIMD"); }
+
+static void sl_render(test_ctx *t, const pt_scene *s, pt_film *f, const char *what)
+{
+    pt_render_desc d = tu_base_desc(24, 16, 2, 77);
+    d.camera.look_from = pt_v3(0, 4, 16);
+    d.camera.look_at = pt_v3(0, 0, 0);
+    d.max_depth = 6;
+    tu_render_into(t, s, &d, f, NULL, what);
+}
+
+static void bvh_simd_levels(test_ctx *t)
+{
+    static const unsigned width[4] = { 4, 4, 8, 16 };
+    const char *saved = getenv("PDFTRACE_SIMD");
+    char keep[64] = "";
+    int cpu = (int)pt_simd_cpu_level(), kind, level, hits = 0, ties = 0, overlaps = 0;
+    pt_hit *ref = (pt_hit *)malloc(sizeof(pt_hit) * SL_RAYS), *h = (pt_hit *)malloc(sizeof(pt_hit) * SL_RAYS);
+    int *ref_occ = (int *)malloc(sizeof(int) * SL_RAYS), *occ = (int *)malloc(sizeof(int) * SL_RAYS);
+    if (saved) snprintf(keep, sizeof keep, "%s", saved);
+    if (!CHECK(t, ref && h && ref_occ && occ, "out of memory")) goto done;
+    for (kind = 0; kind < 3; kind++) {
+        pt_film ref_film, film;
+        memset(&ref_film, 0, sizeof ref_film);
+        for (level = PT_SIMD_SCALAR; level <= cpu; level++) {
+            pt_scene *s;
+            pt_scene_info info;
+            int i, bad_hit = 0, bad_occ = 0, first = -1;
+            sl_setenv(pt_simd_level_name((pt_simd_level)level));
+            s = sl_scene(kind);
+            if (!CHECK(t, s != NULL, "scene %d at %s", kind, pt_simd_level_name((pt_simd_level)level))) continue;
+            pt_scene_get_info(s, &info);
+            CHECK(t, (int)info.simd_level == level && (info.bvh_width == width[level] || (level == PT_SIMD_AVX512 && info.bvh_width == 8)),
+                  "scene %d: PDFTRACE_SIMD=%s gave level %d, width %u", kind, pt_simd_level_name((pt_simd_level)level),
+                  (int)info.simd_level, info.bvh_width);
+            sl_trace(s, kind, level == PT_SIMD_SCALAR ? ref : h, level == PT_SIMD_SCALAR ? ref_occ : occ);
+            if (level == PT_SIMD_SCALAR) {
+                for (i = 0; i < SL_RAYS; i++) hits += ref[i].t > 0;
+                for (i = 0; kind == 2 && i < SL_RAYS; i++) { /* an exact tie goes to the quad added first */
+                    int q, first_q = -1, edge = 0;
+                    if (!(ref[i].t > 0) || ref[i].primitive >= 120) continue;
+                    for (q = 0; q < 120 && first_q < 0; q++) {
+                        float x = ref[i].point.x, y = ref[i].point.y, *r = sl_rect[q];
+                        if (fabsf(x - r[0]) < 1e-3f || fabsf(x - r[2]) < 1e-3f || fabsf(y - r[1]) < 1e-3f || fabsf(y - r[3]) < 1e-3f) edge = 1;
+                        else if (x > r[0] && x < r[2] && y > r[1] && y < r[3]) first_q = q;
+                    }
+                    if (!edge) {
+                        ties += first_q != (int)ref[i].primitive;
+                        overlaps++;
+                    }
+                }
+                sl_render(t, s, &ref_film, "scalar");
+            } else {
+                for (i = 0; i < SL_RAYS; i++) {
+                    if (memcmp(&ref[i], &h[i], sizeof h[i]) != 0 && bad_hit++ == 0) first = i;
+                    if (ref_occ[i] != occ[i]) bad_occ++;
+                }
+                CHECK(t, bad_hit == 0, "scene %d, %s: %d of %d closest hits differ from the scalar level's (first: ray %d, t %.9g prim %u against t %.9g prim %u)",
+                      kind, pt_simd_level_name((pt_simd_level)level), bad_hit, SL_RAYS, first, first >= 0 ? h[first].t : 0.0,
+                      first >= 0 ? (unsigned)h[first].primitive : 0u, first >= 0 ? ref[first].t : 0.0, first >= 0 ? (unsigned)ref[first].primitive : 0u);
+                CHECK(t, bad_occ == 0, "scene %d, %s: %d occlusion answers differ from the scalar level's", kind,
+                      pt_simd_level_name((pt_simd_level)level), bad_occ);
+                sl_render(t, s, &film, pt_simd_level_name((pt_simd_level)level));
+                CHECK(t, tu_film_equal(&ref_film, &film), "scene %d, %s: film differs from the scalar level's", kind,
+                      pt_simd_level_name((pt_simd_level)level));
+                pt_film_free(&film);
+            }
+            pt_scene_destroy(s);
+        }
+        pt_film_free(&ref_film);
+    }
+    CHECK(t, ties == 0 && overlaps > SL_RAYS / 4, "coplanar quads: %d of %d hits are not on the quad added first", ties, overlaps);
+    CHECK(t, hits > 3 * SL_RAYS / 2, "only %d of %d rays hit (test too weak)", hits, 3 * SL_RAYS);
+    /* the API cap and the errors */
+    sl_setenv(NULL);
+    CHECK(t, pt_simd_set_cap(PT_SIMD_SCALAR) == PT_OK && pt_simd_get_level() == PT_SIMD_SCALAR, "cap scalar: level %d",
+          (int)pt_simd_get_level());
+    CHECK(t, pt_simd_set_cap((pt_simd_level)4) == PT_ERROR_INVALID_ARGUMENT && pt_simd_get_level() == PT_SIMD_SCALAR,
+          "cap 4 accepted");
+    CHECK(t, pt_simd_set_cap(PT_SIMD_AVX512) == PT_OK && (int)pt_simd_get_level() == cpu, "no cap: level %d, cpu %d",
+          (int)pt_simd_get_level(), cpu);
+    CHECK(t, pt_simd_level_name((pt_simd_level)-1) == NULL, "name of level -1");
+    sl_setenv("avx3");
+    {
+        pt_scene *s = pt_scene_create();
+        int m = s ? pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f)) : -1, rc;
+        if (CHECK(t, s != NULL && m >= 0, "scene")) {
+            pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m);
+            rc = pt_scene_commit(s);
+            CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(pt_scene_error_message(s), "PDFTRACE_SIMD=\"avx3\"") != NULL,
+                  "PDFTRACE_SIMD=avx3: commit %d, \"%s\"", rc, pt_scene_error_message(s));
+        }
+        pt_scene_destroy(s);
+    }
+    test_note(t, "levels scalar..%s, %d hits of %d rays", pt_simd_level_name((pt_simd_level)cpu), hits, 3 * SL_RAYS);
+done:
+    sl_setenv(saved ? keep : NULL);
+    free(ref); free(h); free(ref_occ); free(occ);
+}
+
 const test_case test_bvh_cases[] = {
     TEST_CASE(bvh_random_scenes),
     TEST_CASE(bvh_axis_aligned),
     TEST_CASE(bvh_ray_along_max_bound),
     TEST_CASE(bvh_rebuild_after_change),
     TEST_CASE(bvh_denormal_extent),
+    TEST_CASE(bvh_simd_levels),
     TEST_END
 };
