@@ -47,7 +47,7 @@ int main(int argc, char **argv)
         { "watertight", st_watertight }, { "edges", st_edges }, { "lights", st_light_geometry },
         { "degenerate", st_degenerate }, { "slivers", st_slivers }, { "cornell", st_cornell_offset },
         { "guiding", st_guiding }, { "delta", st_delta_lights }, { "environment", st_environment },
-        { "microfacet", st_microfacet },
+        { "microfacet", st_microfacet }, { "roughglass", st_rough_dielectric },
     };
     const char *filter = NULL;
     int full = 1, a;
