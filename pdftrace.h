@@ -725,7 +725,8 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
    lit and seen from both sides), as are the metals; emission is one-sided (on the side of the
    geometric normal) unless two_sided_emission is set. The rough conductor is a GGX microfacet
    BRDF sampled by its visible normals, a density that mixes with the light PDFs like
-   Lambertian's (docs/materials.md).
+   Lambertian's; the rough dielectric is its glass twin, the only non-delta material that
+   scatters below the geometric surface (docs/materials.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {
