@@ -8574,6 +8574,18 @@ static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta
     return pt_scale(pt_mul(beta, L), wt);
 }
 
+/* Vertex v's spawn point on the side of ng and, for a transmitting material, the one below it
+   and the relative index seen from wo (pt__vertex). */
+static PT__HOT void pt__vertex_spawn(pt__vertex *v, const pt_hit *h)
+{
+    v->o = pt__offset_origin(v->p, v->ng, v->ng, h->magnitude);
+    v->eta = 1.0f;
+    if (PT__UNLIKELY(v->m->transmits)) {
+        v->ob = pt__offset_origin(v->p, v->ng, pt_neg(v->ng), h->magnitude);
+        v->eta = h->front_face ? v->m->ior : 1.0f / v->m->ior;
+    }
+}
+
 /* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
    pt__trace). */
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
@@ -8652,12 +8664,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             v.albedo = pt__checker(&ct, h.point);
         }
 
-        v.o = pt__offset_origin(v.p, v.ng, v.ng, h.magnitude);
-        v.eta = 1.0f;
-        if (PT__UNLIKELY(m->transmits)) {
-            v.ob = pt__offset_origin(v.p, v.ng, pt_neg(v.ng), h.magnitude);
-            v.eta = h.front_face ? m->ior : 1.0f / m->ior;
-        }
+        pt__vertex_spawn(&v, &h);
         if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
             /* general path: next-event estimation as at any vertex; a delta material reflects
                nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */
