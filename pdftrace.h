@@ -150,9 +150,10 @@
      switchable skip, since the general path would add nothing).
    - no environment map and a black background: no environment light (one test per light
      sample and escaped ray; not switchable either, for the same reason).
-   - no rough conductor or plastic (PT_FEATURE_MICROFACET): no microfacet code runs; the material
-     functions dispatch Lambertian first and the rough materials last (not switchable: there
-     is no general path to force).
+   - no rough conductor, rough dielectric or rough plastic (PT_FEATURE_MICROFACET): no microfacet
+     code runs; the material functions dispatch Lambertian first and the rough materials last,
+     and the transmitting vertex's other side (its spawn point below ng for transmitted rays and
+     shadow rays) is one flag test (not switchable: there is no general path to force).
    Bits 1u << 1 and 1u << 5 belonged to two skips that did not pay (PT_SKIP_LIGHT_SELECTION,
    PT_SKIP_NO_TRIANGLES) and are rejected. Rays in scenes without triangles still skip the
    watertight-triangle set-up, as the only path.
@@ -595,7 +596,7 @@ enum {
     PT_FEATURE_TRANSFORMS      = 1 << 12, /* some shape was added under a non-identity transform */
     PT_FEATURE_DELTA_LIGHTS    = 1 << 13, /* some point, spot or directional light (pt_scene_add_light) */
     PT_FEATURE_ENVIRONMENT     = 1 << 14, /* an environment map (pt_scene_set_environment) */
-    PT_FEATURE_MICROFACET      = 1 << 15  /* some rough conductor with roughness >= 1e-3, or rough plastic */
+    PT_FEATURE_MICROFACET      = 1 << 15  /* some rough conductor or dielectric that is not delta, or rough plastic */
 };
 
 /* SIMD levels of the built-in BVH's traversal (section 5), chosen at run time at each commit:
@@ -744,8 +745,9 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
    lit and seen from both sides), as are the metals; emission is one-sided (on the side of the
    geometric normal) unless two_sided_emission is set. The rough conductor is a GGX microfacet
    BRDF sampled by its visible normals, a density that mixes with the light PDFs like
-   Lambertian's; the rough plastic is a Lambertian base under a GGX dielectric coat (Mitsuba 3's
-   roughplastic), sampled by a mixture of the two (docs/materials.md).
+   Lambertian's; the rough dielectric is its glass twin, the only non-delta material that
+   scatters below the geometric surface; the rough plastic is a Lambertian base under a GGX
+   dielectric coat (Mitsuba 3's roughplastic), sampled by a mixture of the two (docs/materials.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {
@@ -760,8 +762,9 @@ typedef enum pt_material_type {
     PT_MATERIAL_DIELECTRIC,     /* clear glass: exact unpolarised Fresnel, total internal reflection; delta */
     PT_MATERIAL_EMITTER,        /* emits `emission`, reflects nothing */
     PT_MATERIAL_ROUGH_CONDUCTOR, /* GGX microfacet metal (below): roughness, conductor, albedo tints it */
-    PT_MATERIAL_ROUGH_PLASTIC   /* a Lambertian base (albedo) under a GGX dielectric coat (below):
+    PT_MATERIAL_ROUGH_PLASTIC,  /* a Lambertian base (albedo) under a GGX dielectric coat (below):
                                    roughness, ior, nonlinear; Mitsuba 3's `roughplastic` */
+    PT_MATERIAL_ROUGH_DIELECTRIC /* GGX microfacet glass (below): roughness, ior inside, ext_ior outside */
 } pt_material_type;
 
 /* The complex index of refraction eta + i k of a rough conductor, per RGB channel (relative to
@@ -812,6 +815,21 @@ typedef struct pt_material_desc {
        up to that blur); ior: the coat's index (0 means 1.5; else finite, > 1). Reflects on the
        side of wo only; sampled by a mixture of the visible normals and the cosine lobe. */
     int nonlinear;              /* rough plastic: the base's colour shifted by internal scattering */
+    /* Rough dielectric: the interface between ior (inside, the side the geometric normal points
+       away from) and ext_ior (outside), clear like PT_MATERIAL_DIELECTRIC (albedo ignored). With
+       eta = n_far / n_near seen from wo and m the microfacet normal (Walter et al. 2007, GGX, the
+       Smith G = G1(wo) G1(wi), F the exact dielectric Fresnel at wo.m):
+         reflection   A pScatter = F D(h) G / (4 cos_o)
+         transmission A pScatter = (1 - F) D(m) G |wo.m| |wi.m| / (cos_o (wo.m + eta wi.m)^2)
+       which is Walter's BTDF times cos_i times 1 / eta^2: transmitted radiance is scaled by
+       (n_near / n_far)^2 across the interface (the solid angle's compression), exactly as Mitsuba
+       3's `roughdielectric` and `dielectric` do in radiance mode, so a path that enters and leaves
+       an object carries no net factor. Sampled by the visible normals of wo (Heitz 2018), then
+       reflection with probability F(wo.m) else refraction; directions the microfacet sends to the
+       wrong side fail (the single-scattering loss). Below roughness 1e-3, or when roughness x
+       |eta - 1| < 1e-3 (the transmitted lobe narrower than 0.06 degrees), it is the smooth
+       interface: a delta material with the same 1 / eta^2 on transmission (docs/materials.md). */
+    float ext_ior;              /* rough dielectric: index outside; 0 means 1; else finite >= 0.001 */
 } pt_material_desc;
 
 PTDEF int pt_scene_add_material(pt_scene *scene, const pt_material_desc *desc); /* id >= 0 */
@@ -825,6 +843,8 @@ PTDEF int pt_scene_add_emitter(pt_scene *scene, pt_color radiance, int two_sided
 PTDEF int pt_scene_add_rough_conductor(pt_scene *scene, pt_conductor conductor, float roughness, pt_color tint);
 /* A rough plastic (Mitsuba's roughplastic, linear colours): albedo in [0, 1], GGX roughness, coat ior (0: 1.5). */
 PTDEF int pt_scene_add_rough_plastic(pt_scene *scene, pt_color albedo, float roughness, float ior);
+/* A rough dielectric of index ior inside (0: 1.5) under a vacuum (ext_ior 1). */
+PTDEF int pt_scene_add_rough_dielectric(pt_scene *scene, float ior, float roughness);
 /* The Fresnel reflectance per channel of a conductor at cos(theta) (clamped to [0, 1]) of
    material `material` (PT_MATERIAL_ROUGH_CONDUCTOR; zero for other types or a bad id). */
 PTDEF pt_color pt_material_conductor_fresnel(const pt_scene *scene, int material, float cos_theta);
@@ -1564,7 +1584,8 @@ typedef struct pt__material {
     float fuzz, ior;
     pt_color emission;
     int two_sided, emits, delta, scatters;
-    float alpha, alpha2;  /* rough conductor: GGX alpha and alpha^2 */
+    float alpha, alpha2;  /* rough conductor and dielectric: GGX alpha and alpha^2 */
+    int transmits;        /* a non-delta rough dielectric: scattered directions go below ng too */
     int fresnel;          /* rough conductor: 0 for F = 1, else eta + i k */
     pt_color eta, k;
     /* rough plastic (section 4, "coated plastic"): the coat's index, 1/ior^2, its diffuse internal
@@ -5329,13 +5350,33 @@ static int pt__plastic_resolve(pt_scene *s, const pt_material_desc *d, pt__mater
     return PT_OK;
 }
 
+/* Rough dielectric: roughness as the conductor's; ext_ior 0 (1) or like ior; the relative index
+   ior / ext_ior must be finite and positive. */
+static int pt__rough_dielectric_resolve(pt_scene *s, const pt_material_desc *d, pt__material *m)
+{
+    float ratio;
+    if (!pt__isfinite(d->roughness) || d->roughness < 0.0f || d->roughness > 1.0f)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: roughness = %g: must be finite and in [0, 1]",
+                        (double)d->roughness);
+    if (!pt__isfinite(d->ext_ior) || d->ext_ior < 0.0f || (d->ext_ior > 0.0f && d->ext_ior < 1e-3f))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT,
+                        "material: ext_ior = %g: must be 0 (meaning 1) or finite and >= 0.001", (double)d->ext_ior);
+    ratio = (d->ior > 0.0f ? d->ior : 1.5f) / (d->ext_ior > 0.0f ? d->ext_ior : 1.0f);
+    if (!pt__isfinite(ratio) || !(ratio > 0.0f))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: ior / ext_ior = %g: must be finite and > 0",
+                        (double)ratio);
+    m->alpha = d->roughness;
+    m->alpha2 = d->roughness * d->roughness;
+    return PT_OK;
+}
+
 PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
 {
     pt__material m;
     if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
     if (!d) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: desc is NULL");
     memset(&m, 0, sizeof m);
-    if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_ROUGH_PLASTIC)
+    if ((int)d->type < (int)PT_MATERIAL_LAMBERTIAN || (int)d->type > (int)PT_MATERIAL_ROUGH_DIELECTRIC)
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: unknown type %d", (int)d->type);
     if (!pt__color_ok(d->albedo))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "material: albedo must be finite and >= 0");
@@ -5356,17 +5397,25 @@ PTDEF int pt_scene_add_material(pt_scene *s, const pt_material_desc *d)
         int rc = pt__plastic_resolve(s, d, &m);
         if (rc != PT_OK) return rc;
     }
+    if (d->type == PT_MATERIAL_ROUGH_DIELECTRIC) {
+        int rc = pt__rough_dielectric_resolve(s, d, &m);
+        if (rc != PT_OK) return rc;
+    }
     m.type = d->type;
     m.albedo = d->albedo;
     m.texture = d->albedo_texture;
     m.fuzz = pt__minf(d->fuzz, 1.0f);
     m.ior = d->ior > 0.0f ? d->ior : 1.5f;
+    if (d->type == PT_MATERIAL_ROUGH_DIELECTRIC) m.ior /= d->ext_ior > 0.0f ? d->ext_ior : 1.0f; /* relative */
     m.emission = d->emission;
     m.two_sided = d->two_sided_emission != 0;
     m.emits = !pt__is_black(d->emission);
     m.scatters = d->type != PT_MATERIAL_EMITTER;
     m.delta = d->type == PT_MATERIAL_DIELECTRIC || (d->type == PT_MATERIAL_METAL && m.fuzz == 0.0f) ||
-              (d->type == PT_MATERIAL_ROUGH_CONDUCTOR && m.alpha < PT__GGX_MIN_ALPHA);
+              (d->type == PT_MATERIAL_ROUGH_CONDUCTOR && m.alpha < PT__GGX_MIN_ALPHA) ||
+              (d->type == PT_MATERIAL_ROUGH_DIELECTRIC &&
+               (m.alpha < PT__GGX_MIN_ALPHA || m.alpha * fabsf(m.ior - 1.0f) < PT__GGX_MIN_ALPHA));
+    m.transmits = d->type == PT_MATERIAL_ROUGH_DIELECTRIC && !m.delta;
     if (!pt__grow((void **)&s->mats, &s->mat_cap, s->mat_count + 1u, sizeof(pt__material)))
         return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "material: out of memory");
     s->mats[s->mat_count] = m;
@@ -5425,6 +5474,15 @@ PTDEF int pt_scene_add_rough_plastic(pt_scene *s, pt_color albedo, float roughne
     d.albedo = albedo;
     d.roughness = roughness;
     d.ior = ior;
+    return pt_scene_add_material(s, &d);
+}
+PTDEF int pt_scene_add_rough_dielectric(pt_scene *s, float ior, float roughness)
+{
+    pt_material_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_ROUGH_DIELECTRIC;
+    d.ior = ior;
+    d.roughness = roughness;
     return pt_scene_add_material(s, &d);
 }
 PTDEF int pt_scene_add_checker(pt_scene *s, pt_color even, pt_color odd, float scale)
@@ -5836,6 +5894,70 @@ static int pt__plastic_sample(const pt__material *m, pt_vec3 ns, pt_vec3 wo, flo
     return *pdf > 0.0f;
 }
 
+static float pt__fresnel_dielectric(float cos_i, float eta, float *cos_t);
+/* The rough dielectric in the local frame of the shading normal on wo's side (o.z > 0), eta =
+   n_far / n_near (pt_material_desc). A transmission's microfacet normal is the generalised half
+   vector m = +-(o + eta i) / |o + eta i| on the normal's side (Walter et al. 2007, eq. 16); it is
+   valid when o.m > 0 > i.m (each direction on its own side of the microfacet, as Smith's G1 of
+   Mitsuba 3 requires). Returns 0 when it is not (or o + eta i vanishes: eta 1 along -o). */
+static int pt__ggx_refract_half(pt_vec3 o, pt_vec3 i, float eta, pt_vec3 *m)
+{
+    pt_vec3 h = pt_add(o, pt_scale(i, eta));
+    float l2 = pt_length2(h);
+    if (!(l2 > 0.0f)) return 0;
+    h = pt_scale(h, 1.0f / sqrtf(l2));
+    if (h.z < 0.0f) h = pt_neg(h);
+    *m = h;
+    return pt_dot(o, h) > 0.0f && pt_dot(i, h) < 0.0f;
+}
+/* A pScatter (the BSDF times cos_i, 1 / eta^2 on transmission: pt_material_desc) and the density
+   of the visible-normal sampler (D_v(m) times F or 1 - F, times the Jacobian of m -> i: 1 / (4 o.m)
+   for reflection, eta^2 |i.m| / (o.m + eta i.m)^2 for refraction). *pdf may be NULL. */
+static float pt__rough_dielectric_local(const pt__material *m, float eta, pt_vec3 o, pt_vec3 i, float *pdf)
+{
+    pt_vec3 h, ib;
+    float F, ct = 0.0f, om, im, den, g1o;
+    if (pdf) *pdf = 0.0f;
+    if (!(o.z > 0.0f) || i.z == 0.0f || !(i.z == i.z)) return 0.0f;
+    g1o = pt__ggx_g1(o, m->alpha2);
+    if (i.z > 0.0f) {
+        float d;
+        h = pt_normalize(pt_add(o, i));
+        om = pt_dot(o, h);
+        F = pt__fresnel_dielectric(om, 1.0f / eta, &ct);
+        d = pt__ggx_d(h, m->alpha2) * g1o / (4.0f * o.z);
+        if (pdf) *pdf = F * d;
+        return F * d * pt__ggx_g1(i, m->alpha2);
+    }
+    if (!pt__ggx_refract_half(o, i, eta, &h)) return 0.0f;
+    om = pt_dot(o, h);
+    im = pt_dot(i, h);
+    F = pt__fresnel_dielectric(om, 1.0f / eta, &ct);
+    den = om + eta * im;
+    if (!(den * den > 0.0f)) return 0.0f;
+    ib = pt_v3(i.x, i.y, -i.z); /* G1 depends on the angle to the normal alone */
+    {
+        float t = (1.0f - F) * pt__ggx_d(h, m->alpha2) * g1o * om * -im / (o.z * den * den);
+        if (pdf) *pdf = t * eta * eta;
+        return t * pt__ggx_g1(ib, m->alpha2);
+    }
+}
+/* A visible normal of o, then reflection with probability F(o.m), else refraction through it.
+   Returns 0 when the direction leaves on the wrong side. */
+static int pt__rough_dielectric_sample_local(const pt__material *m, float eta, pt_vec3 o, float u1, float u2,
+                                             float u3, pt_vec3 *i)
+{
+    pt_vec3 mn = pt__ggx_sample_vn(o, m->alpha, u1, u2);
+    float c = pt_dot(o, mn), ct = 0.0f, F, r = 1.0f / eta;
+    if (!(c > 0.0f)) return 0;
+    F = pt__fresnel_dielectric(pt__minf(c, 1.0f), r, &ct);
+    if (u3 < F) {
+        *i = pt__reflect(o, mn);
+        return i->z > 0.0f;
+    }
+    *i = pt_add(pt_scale(o, -r), pt_scale(mn, r * c - ct));
+    return i->z < 0.0f;
+}
 /* What a delta material's reflection multiplies the throughput by: the albedo, times the Fresnel
    reflectance at cos_i for the rough conductor below PT__GGX_MIN_ALPHA. */
 static pt_color pt__delta_reflectance(const pt__material *m, pt_color albedo, float cos_i)
@@ -5848,8 +5970,18 @@ static pt_color pt__delta_reflectance(const pt__material *m, pt_color albedo, fl
    geometric normals already flipped to the side of wo. Directions below the geometric
    surface carry nothing. */
 static PT__HOT pt_color pt__material_eval(const pt__material *m, pt_color albedo, pt_vec3 ns, pt_vec3 ng, pt_vec3 wo,
-                                  pt_vec3 wi)
+                                  pt_vec3 wi, float eta)
 {
+    if (PT__UNLIKELY(m->transmits)) {
+        /* below ng only by transmission, and on the same side of ns as of ng (no light leaks
+           between the shading and the geometric surface) */
+        pt_onb b = pt__onb(ns);
+        float cg = pt_dot(ng, wi), cs;
+        pt_vec3 i = pt__onb_local(&b, wi);
+        cs = i.z;
+        if (!(cg * cs > 0.0f)) return pt_v3(0, 0, 0);
+        return pt_scale(pt_v3(1, 1, 1), pt__rough_dielectric_local(m, eta, pt__onb_local(&b, wo), i, NULL));
+    }
     if (pt_dot(ng, wi) <= 0.0f) return pt_v3(0, 0, 0);
     if (m->type == PT_MATERIAL_LAMBERTIAN) {
         float c = pt_dot(ns, wi);
@@ -5862,7 +5994,7 @@ static PT__HOT pt_color pt__material_eval(const pt__material *m, pt_color albedo
     return pt_v3(0, 0, 0);
 }
 /* The density with which the material samples wi (ns flipped to the side of wo). */
-static float pt__material_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo, pt_vec3 wi)
+static float pt__material_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo, pt_vec3 wi, float eta)
 {
     if (m->type == PT_MATERIAL_LAMBERTIAN) return pt__maxf(0.0f, pt_dot(ns, wi)) * PT__INV_PI;
     if (m->type == PT_MATERIAL_METAL && m->fuzz > 0.0f) return pt__fuzz_value(pt__reflect(wo, ns), m->fuzz, wi);
@@ -5871,10 +6003,16 @@ static float pt__material_density(const pt__material *m, pt_vec3 ns, pt_vec3 wo,
         return pt__ggx_reflect_density(pt__onb_local(&b, wo), pt__onb_local(&b, wi), m->alpha2);
     }
     if (m->type == PT_MATERIAL_ROUGH_PLASTIC) return pt__plastic_density(m, ns, wo, wi);
+    if (m->transmits) {
+        pt_onb b = pt__onb(ns);
+        float p;
+        pt__rough_dielectric_local(m, eta, pt__onb_local(&b, wo), pt__onb_local(&b, wi), &p);
+        return p;
+    }
     return 0.0f;
 }
-static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float u1, float u2, float u3,
-                                   pt_vec3 *wi, float *pdf)
+static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt_vec3 wo, float eta, float u1, float u2,
+                                           float u3, pt_vec3 *wi, float *pdf)
 {
     if (m->type == PT_MATERIAL_LAMBERTIAN) {
         pt_onb b = pt__onb(ns);
@@ -5899,26 +6037,38 @@ static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt
         i = pt__reflect(o, mn);
         if (!(i.z > 0.0f)) return 0;
         *wi = pt_normalize(pt_onb_to_world(&b, i));
-        *pdf = pt__material_density(m, ns, wo, *wi);
+        *pdf = pt__material_density(m, ns, wo, *wi, eta);
+        return *pdf > 0.0f;
+    }
+    if (m->transmits) {
+        pt_onb b = pt__onb(ns);
+        pt_vec3 o = pt__onb_local(&b, wo), i;
+        if (!(o.z > 0.0f) || !pt__rough_dielectric_sample_local(m, eta, o, u1, u2, u3, &i)) return 0;
+        *wi = pt_normalize(pt_onb_to_world(&b, i));
+        *pdf = pt__material_density(m, ns, wo, *wi, eta);
         return *pdf > 0.0f;
     }
     if (m->type == PT_MATERIAL_ROUGH_PLASTIC) return pt__plastic_sample(m, ns, wo, u1, u2, wi, pdf);
     return 0;
 }
+/* The public material PDF: n is the surface's outward normal (a rough dielectric's inside is
+   behind it), turned to wo's side here. */
 static int pt__material_pdf_sample(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, float u1, float u2,
                                    float u3, pt_vec3 *dir, float *pdf)
 {
     const pt__material *m = &s->mats[material];
-    if (pt_dot(n, wo) < 0.0f) n = pt_neg(n);
+    float eta = m->ior;
+    if (pt_dot(n, wo) < 0.0f) { n = pt_neg(n); eta = 1.0f / eta; }
     if (m->delta || !m->scatters) return 0;
-    return pt__material_sample_dir(m, n, wo, u1, u2, u3, dir, pdf);
+    return pt__material_sample_dir(m, n, wo, eta, u1, u2, u3, dir, pdf);
 }
 static float pt__material_pdf_value(const pt_scene *s, int material, pt_vec3 n, pt_vec3 wo, pt_vec3 w)
 {
     const pt__material *m = &s->mats[material];
-    if (pt_dot(n, wo) < 0.0f) n = pt_neg(n);
+    float eta = m->ior;
+    if (pt_dot(n, wo) < 0.0f) { n = pt_neg(n); eta = 1.0f / eta; }
     if (m->delta || !m->scatters) return 0.0f;
-    return pt__material_density(m, n, wo, w);
+    return pt__material_density(m, n, wo, w, eta);
 }
 
 /* Exact Fresnel reflectance of a dielectric interface for unpolarised light; eta = n_i/n_t.
@@ -8108,8 +8258,9 @@ PTDEF int pt_scene_commit(pt_scene *s)
         if (m->emits && m->two_sided) f |= PT_FEATURE_TWO_SIDED_EMITTERS;
         if (m->scatters && !m->delta) f |= PT_FEATURE_NON_DELTA;
         if (m->delta) f |= PT_FEATURE_DELTA;
-        if (m->type == PT_MATERIAL_DIELECTRIC) f |= PT_FEATURE_DIELECTRICS;
-        if ((m->type == PT_MATERIAL_ROUGH_CONDUCTOR && !m->delta) || m->type == PT_MATERIAL_ROUGH_PLASTIC)
+        if (m->type == PT_MATERIAL_DIELECTRIC || m->type == PT_MATERIAL_ROUGH_DIELECTRIC) f |= PT_FEATURE_DIELECTRICS;
+        if (((m->type == PT_MATERIAL_ROUGH_CONDUCTOR || m->type == PT_MATERIAL_ROUGH_DIELECTRIC) && !m->delta) ||
+            m->type == PT_MATERIAL_ROUGH_PLASTIC)
             f |= PT_FEATURE_MICROFACET;
         if (m->texture) f |= PT_FEATURE_TEXTURES;
     }
@@ -8531,6 +8682,9 @@ typedef struct pt__vertex {
     const pt__material *m;
     pt_vec3 p, o, ng, ns, wo; /* o: the spawn point on the side of ng, the origin of every ray and
                                  of every light computation at this vertex */
+    pt_vec3 ob;               /* m->transmits: the spawn point below ng, for transmitted and shadow
+                                 rays that leave below (pt__vertex_origin) */
+    float eta;                /* a rough dielectric's n_far / n_near seen from wo (else unused) */
     pt_color albedo;
     int has_guide;
     float g;
@@ -8542,7 +8696,7 @@ typedef struct pt__vertex {
 /* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
 static PT__HOT float pt__scatter_density_pg(const pt__vertex *v, pt_vec3 wi, float pg)
 {
-    float pm = pt__material_density(v->m, v->ns, v->wo, wi);
+    float pm = pt__material_density(v->m, v->ns, v->wo, wi, v->eta);
     if (!v->has_guide) return pm;
     return (1.0f - v->g) * pm + v->g * (pg >= 0.0f ? pg : pt_pdf_value(&v->guide, wi));
 }
@@ -8564,19 +8718,28 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
     } else {
         float u1, u2, u3, pm;
         pt__draw_scatter(smp, depth, &u1, &u2);
-        u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA), v->m->type == PT_MATERIAL_METAL);
-        return pt__material_sample_dir(v->m, v->ns, v->wo, u1, u2, u3, wi, &pm);
+        u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA),
+                          v->m->type == PT_MATERIAL_METAL || v->m->transmits);
+        return pt__material_sample_dir(v->m, v->ns, v->wo, v->eta, u1, u2, u3, wi, &pm);
     }
 }
 
 /* The receiver normal of the light tree's choice at vertex v (pt__lnode4_importance): none of
-   these materials reflects light from below ng (pt__material_eval); any other material gets none. */
+   these materials reflects light from below ng (pt__material_eval); any other material gets none
+   (the rough dielectric transmits light from below: no bound). */
 static pt_vec3 pt__receiver_normal(const pt__vertex *v)
 {
     if (v->m->type == PT_MATERIAL_LAMBERTIAN || v->m->type == PT_MATERIAL_METAL ||
         v->m->type == PT_MATERIAL_ROUGH_CONDUCTOR || v->m->type == PT_MATERIAL_ROUGH_PLASTIC)
         return v->ng;
     return pt_v3(0.0f, 0.0f, 0.0f);
+}
+
+/* Where a ray along w leaves vertex v: the spawn point on w's side of ng (below it only for a
+   transmitting material, whose non-delta directions and shadow rays may go there). */
+static PT__HOT pt_vec3 pt__vertex_origin(const pt__vertex *v, pt_vec3 w)
+{
+    return PT__UNLIKELY(v->m->transmits) && pt_dot(w, v->ng) < 0.0f ? v->ob : v->o;
 }
 
 /* Light sampling with the environment: it is picked with probability cfg->env_pick, the shaped
@@ -8634,7 +8797,7 @@ static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, con
     pt_ray sr;
     pt__rayctx src;
     pt_vec3 target;
-    sr.origin = v->o;
+    sr.origin = pt__vertex_origin(v, ls->dir);
     target = pt__offset_origin(ls->point, ls->normal, pt_neg(ls->dir),
                                          pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
     sr.dir = pt_sub(target, sr.origin);
@@ -8652,7 +8815,7 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
                                      const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
                                      pt_path_stats *st)
 {
-    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir);
+    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir, v->eta);
     float w = 1.0f;
     if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
     if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
@@ -8662,7 +8825,7 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
         pt_ray sr;
         pt__rayctx src;
         if (pt__is_black(Le)) return pt_v3(0, 0, 0);
-        sr.origin = v->o;
+        sr.origin = pt__vertex_origin(v, ls->dir);
         sr.dir = ls->dir;
         pt__rayctx_init2(&src, sr, tri);
         st->shadow_rays++;
@@ -8687,17 +8850,22 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    docs/design.md, "Lights without a shape"). With more, by power. A point light at the shading
    point itself (d = 0, an integrand with no finite value) adds nothing. */
 #define PT__DELTA_PICK_MAX 16u
-static float pt__delta_weight(const pt__dlight *l, const pt__vertex *v)
+static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l)
 {
     float c, i = (l->desc.intensity.x + l->desc.intensity.y + l->desc.intensity.z) * (1.0f / 3.0f);
     pt_vec3 d;
-    float d2, inv;
-    if (l->desc.type == PT_LIGHT_DIRECTIONAL) return i * pt__maxf(0.0f, -pt_dot(v->ng, l->axis));
+    float d2, inv, sg = 1.0f;
+    if (PT__UNLIKELY(v->m->transmits)) sg = 0.0f; /* |cos|: a transmitting vertex sees lights below ng too */
+    if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
+        c = -pt_dot(v->ng, l->axis);
+        return i * pt__maxf(0.0f, c) + (1.0f - sg) * i * pt__maxf(0.0f, -c);
+    }
     d = pt_sub(l->pos, v->p);
     d2 = pt_length2(d);
     if (!(d2 > 0.0f)) return 0.0f;
     inv = 1.0f / sqrtf(d2);
     c = pt_dot(v->ng, d) * inv;
+    if (sg == 0.0f) c = fabsf(c);
     if (!(c > 0.0f)) return 0.0f;
     if (l->desc.type == PT_LIGHT_SPOT) i *= pt__spot_falloff(l, pt_scale(d, -inv));
     return i * c / d2;
@@ -8716,7 +8884,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
         if (s->dlight_count <= PT__DELTA_PICK_MAX) {
             float w[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f;
             uint32_t i, k = 0;
-            for (i = 0; i < s->dlight_count; ++i) sum += (w[i] = pt__delta_weight(&s->dlights[i], v));
+            for (i = 0; i < s->dlight_count; ++i) sum += (w[i] = pt__delta_weight(v, &s->dlights[i]));
             if (!(sum > 0.0f) || !pt__isfinite(sum)) return pt_v3(0, 0, 0);
             for (i = 0; i < s->dlight_count; ++i) /* the last light with weight whose range holds u */
                 if (w[i] > 0.0f) {
@@ -8737,8 +8905,8 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
             pick = l->select_pdf;
         }
     }
-    sr.origin = v->o;
     if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
+        sr.origin = pt__vertex_origin(v, pt_neg(l->axis));
         sr.dir = wi = pt_neg(l->axis);
         Li = l->desc.intensity;
         tmax = PT__INF;
@@ -8752,11 +8920,12 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
             return pt_v3(0, 0, 0);
         Li = pt_scale(l->desc.intensity, fall / d2);
         wi = pt_scale(d, 1.0f / sqrtf(d2));
-        sr.dir = pt_sub(l->pos, v->o); /* the segment to the light, short of it (a light on a surface is
+        sr.origin = pt__vertex_origin(v, wi);
+        sr.dir = pt_sub(l->pos, sr.origin); /* the segment to the light, short of it (a light on a surface is
                                           not hidden by that surface) */
         tmax = 1.0f - 1e-4f;
     }
-    f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, wi);
+    f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, wi, v->eta);
     if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
     pt__rayctx_init2(&src, sr, tri);
     st->shadow_rays++;
@@ -8858,12 +9027,17 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
     *beta = beta_in;
     if (m->delta) {
         /* perfectly specular: follow the delta direction; no light PDF here */
-        if (m->type == PT_MATERIAL_DIELECTRIC) {
+        if (m->type == PT_MATERIAL_DIELECTRIC || m->type == PT_MATERIAL_ROUGH_DIELECTRIC) {
             float eta = h->front_face ? 1.0f / m->ior : m->ior, cos_t = 0.0f;
             float cos_i = pt__minf(1.0f, pt_dot(v->wo, v->ns));
             float F = pt__fresnel_dielectric(cos_i, eta, &cos_t);
             if (pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_FRESNEL)) < F) wi = pt__reflect(v->wo, v->ns);
-            else wi = pt_normalize(pt_add(pt_scale(v->wo, -eta), pt_scale(v->ns, eta * cos_i - cos_t)));
+            else {
+                wi = pt_normalize(pt_add(pt_scale(v->wo, -eta), pt_scale(v->ns, eta * cos_i - cos_t)));
+                /* the smooth limit of the rough dielectric scales transmitted radiance by
+                   (n_near / n_far)^2 as the rough one does (pt_material_desc) */
+                if (m->type == PT_MATERIAL_ROUGH_DIELECTRIC) *beta = pt_scale(*beta, eta * eta);
+            }
             /* weight F/F or (1-F)/(1-F) = 1: clear glass */
         } else {
             wi = pt__reflect(v->wo, v->ns);
@@ -8897,7 +9071,7 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
             if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
             p_total = pt__scatter_density_pg(v, wi, pg);
         }
-        f = pt__material_eval(m, v->albedo, v->ns, v->ng, v->wo, wi);
+        f = pt__material_eval(m, v->albedo, v->ns, v->ng, v->wo, wi, v->eta);
         if (pt__is_black(f) || !(p_total > 0.0f)) return 0;
         *beta = pt_mul(*beta, pt_scale(f, 1.0f / p_total));
         *prev_pdf = p_total;
@@ -8913,9 +9087,9 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
             }
         }
     }
-    /* non-delta directions always leave on the side of ng (pt__material_eval), so the spawn
-       point is v.o, the point that light sampling used */
-    ray->origin = *prev_delta ? pt__offset_origin(v->p, v->ng, wi, h->magnitude) : v->o;
+    /* non-delta directions leave on the side of ng (pt__material_eval) except a rough
+       dielectric's transmitted ones: the spawn point on wi's side, the one light sampling used */
+    ray->origin = *prev_delta ? pt__offset_origin(v->p, v->ng, wi, h->magnitude) : pt__vertex_origin(v, wi);
     ray->dir = wi;
     if (depth + 1 >= cfg->rr_start) {
         float b = pt_max_component(beta_in), q = pt__minf(0.95f, sqrtf(cfg->rr_gain * b));
@@ -9003,7 +9177,8 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
 }
 
 /* Path guiding at non-delta vertex v: the learned guide's leaf, once it has data, folded about the
-   geometric normal (non-delta materials reflect only: pt__continue), and guided roulette's
+   geometric normal (non-delta materials reflect only: pt__continue; a transmitting one keeps the
+   whole sphere, fold 0), and guided roulette's
    estimate of what going on adds per unit throughput. */
 static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_stats *st)
 {
@@ -9012,7 +9187,7 @@ static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_s
     v->guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
     v->guide.as.guide.guide = cfg->learned;
     v->guide.as.guide.leaf = leaf;
-    v->guide.as.guide.fold = v->ng;
+    v->guide.as.guide.fold = PT__UNLIKELY(v->m->transmits) ? pt_v3(0.0f, 0.0f, 0.0f) : v->ng;
     v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
     v->g = cfg->learned_weight;
     v->has_guide = 1;
@@ -9029,6 +9204,18 @@ static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta
     L = pt_add(cfg->background, pt__env_light_eval(cfg->env, cfg->env_uniform, w, &p));
     if (!prev_delta && cfg->strategy == PT_STRATEGY_MIS) wt = pt__power_heuristic(prev_pdf, cfg->env_pick * p);
     return pt_scale(pt_mul(beta, L), wt);
+}
+
+/* Vertex v's spawn point on the side of ng and, for a transmitting material, the one below it
+   and the relative index seen from wo (pt__vertex). */
+static PT__HOT void pt__vertex_spawn(pt__vertex *v, const pt_hit *h)
+{
+    v->o = pt__offset_origin(v->p, v->ng, v->ng, h->magnitude);
+    v->eta = 1.0f;
+    if (PT__UNLIKELY(v->m->transmits)) {
+        v->ob = pt__offset_origin(v->p, v->ng, pt_neg(v->ng), h->magnitude);
+        v->eta = h->front_face ? v->m->ior : 1.0f / v->m->ior;
+    }
 }
 
 /* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
@@ -9109,7 +9296,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             v.albedo = pt__checker(&ct, h.point);
         }
 
-        v.o = pt__offset_origin(v.p, v.ng, v.ng, h.magnitude);
+        pt__vertex_spawn(&v, &h);
         if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
             /* general path: next-event estimation as at any vertex; a delta material reflects
                nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */

@@ -71,6 +71,10 @@
                                       coat is rendered at 1e-3), IOR > 1 (default 1.5);
                                       nonlinear: the colour shift of internal scattering
      material NAME dielectric IOR
+     material NAME roughdielectric ALPHA IOR [ext_ior E]   GGX rough glass (pdftrace.h,
+                                      PT_MATERIAL_ROUGH_DIELECTRIC): ALPHA in [0, 1], IOR inside
+                                      and E outside (default 1) in [1, 10]; below alpha 1e-3 the
+                                      smooth interface
      material NAME emitter R G B [two_sided]
      sphere CX CY CZ RADIUS MATERIAL
      quad QX QY QZ UX UY UZ VX VY VZ MATERIAL      Q + a*u + b*v; normal (emitting side) u x v
@@ -141,7 +145,8 @@
    radiosity, which misses a small bright sun), fuzzy metal, a rough conductor (POV-Ray has no
    microfacet reflection nor conductor Fresnel; only metal none below alpha 1e-3, a coloured
    mirror, is exported), a rough plastic (no microfacet reflection nor layered coat in POV-Ray),
-   emitting triangles, boxes or meshes, a spot light whose beam is
+   a rough dielectric (no microfacet refraction either), emitting triangles, boxes or meshes, a
+   spot light whose beam is
    narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
    pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
    runs the build first, so it never writes what pdftrace would not render, such as a sphere
@@ -162,7 +167,9 @@
    (distribution ggx, sample_visible true, alpha, RGB eta and k or material "none", the tint as
    specular_reflectance; below alpha 1e-3 the smooth `conductor`), a rough plastic as a two-sided
    `roughplastic` (ggx, sample_visible, alpha at least 1e-3, int_ior, ext_ior 1,
-   diffuse_reflectance, nonlinear), glass as `dielectric`, an emitter as a one-sided `area`
+   diffuse_reflectance, nonlinear), glass as `dielectric`, a rough dielectric as
+   `roughdielectric` (ggx, sample_visible, alpha, int_ior and ext_ior; the smooth `dielectric`
+   below pdftrace's delta switch), an emitter as a one-sided `area`
    light on its shape with a black bsdf, the background as a `constant` emitter, an
    environment map as an `envmap` emitter (to_world the rotation) of a map resampled to 2H + 1
    rows beside the XML ("<xml without .xml>.env.pfm"), which makes Mitsuba's row interpolation
@@ -210,6 +217,7 @@ typedef struct pt_scenefile_material {
     pt_conductor conductor;
     pt_color eta, k;             /* PT_CONDUCTOR_CUSTOM */
     int nonlinear;               /* roughplastic (roughness, ior; albedo or checker: the base) */
+    float ext_ior;               /* roughdielectric: the index outside (ior is inside's) */
 } pt_scenefile_material;
 
 typedef struct pt_obj_mesh {
@@ -1605,7 +1613,28 @@ static int pt__sf_roughplastic(pt__sf_parser *p, pt_scenefile_material *m)
     return PT_OK;
 }
 
-/* material NAME TYPE ...: lambertian, metal, roughconductor, roughplastic, dielectric or emitter. */
+/* roughdielectric ALPHA IOR [ext_ior E] */
+static int pt__sf_roughdielectric(pt__sf_parser *p, pt_scenefile_material *m)
+{
+    int rc;
+    m->type = PT_MATERIAL_ROUGH_DIELECTRIC;
+    m->ext_ior = 1.0f;
+    if ((rc = pt__sf_num(p, "roughdielectric alpha", &m->roughness)) != PT_OK) return rc;
+    if (!(m->roughness >= 0.0f && m->roughness <= 1.0f))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughdielectric alpha: must be in [0, 1] (GGX alpha)");
+    if ((rc = pt__sf_num(p, "roughdielectric ior", &m->ior)) != PT_OK) return rc;
+    if (!(m->ior >= 1.0f && m->ior <= 10.0f))
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughdielectric ior: must be in [1, 10]");
+    if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "ext_ior")) {
+        p->pos++;
+        if ((rc = pt__sf_num(p, "roughdielectric ext_ior", &m->ext_ior)) != PT_OK) return rc;
+        if (!(m->ext_ior >= 1.0f && m->ext_ior <= 10.0f))
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "roughdielectric ext_ior: must be in [1, 10]");
+    }
+    return PT_OK;
+}
+
+/* material NAME TYPE ...: lambertian, metal, roughconductor, roughplastic, dielectric, roughdielectric or emitter. */
 static int pt__sf_material(pt__sf_parser *p)
 {
     pt_scenefile *d = p->d;
@@ -1617,7 +1646,7 @@ static int pt__sf_material(pt__sf_parser *p)
     strcpy(m.name, name);
     m.checker = -1;
     type = pt__sf_next(p);
-    if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, roughconductor, roughplastic, dielectric, emitter)", name);
+    if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, roughconductor, roughplastic, dielectric, roughdielectric, emitter)", name);
     if (!strcmp(type, "lambertian")) {
         m.type = PT_MATERIAL_LAMBERTIAN;
         if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "texture")) {
@@ -1640,6 +1669,8 @@ static int pt__sf_material(pt__sf_parser *p)
         if ((rc = pt__sf_roughconductor(p, &m)) != PT_OK) return rc;
     } else if (!strcmp(type, "roughplastic")) {
         if ((rc = pt__sf_roughplastic(p, &m)) != PT_OK) return rc;
+    } else if (!strcmp(type, "roughdielectric")) {
+        if ((rc = pt__sf_roughdielectric(p, &m)) != PT_OK) return rc;
     } else if (!strcmp(type, "dielectric")) {
         m.type = PT_MATERIAL_DIELECTRIC;
         if ((rc = pt__sf_num(p, "dielectric ior", &m.ior)) != PT_OK) return rc;
@@ -1649,7 +1680,7 @@ static int pt__sf_material(pt__sf_parser *p)
         if ((rc = pt__sf_color(p, "emitter radiance", &m.emission)) != PT_OK) return rc;
         if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "two_sided")) { p->pos++; m.two_sided = 1; }
     } else
-        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, roughconductor, roughplastic, dielectric, emitter)", name, type);
+        return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: unknown type '%s' (lambertian, metal, roughconductor, roughplastic, dielectric, roughdielectric, emitter)", name, type);
     if ((rc = pt__sf_end(p)) != PT_OK) return rc;
     if (d->material_count >= 65536) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "too many materials");
     {
@@ -2238,6 +2269,7 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         md.eta = m->eta;
         md.k = m->k;
         md.nonlinear = m->nonlinear;
+        md.ext_ior = m->ext_ior;
         mat[i] = pt_scene_add_material(s, &md);
         if (mat[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, mat[i], "material %s: %s", m->name, pt_scene_error_message(s));
     }
@@ -2743,6 +2775,12 @@ static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *er
                                 "POV-Ray export: a rough plastic (material %s) has no POV-Ray equivalent: POV-Ray has no "
                                 "microfacet reflection and no layered coat (its phong and specular highlights have no Fresnel "
                                 "term and take no energy from the diffuse base), so no setting is a numeric twin", m->name);
+        if (m->type == PT_MATERIAL_ROUGH_DIELECTRIC)
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: a rough dielectric (material %s) has no POV-Ray equivalent: POV-Ray has "
+                                "no microfacet reflection or refraction (its glass is a smooth interface, and its "
+                                "normal-perturbing `micronormals` are not a GGX distribution with masking), and its "
+                                "interiors assume an exterior of index 1; use dielectric for smooth glass", m->name);
         if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
@@ -2974,6 +3012,29 @@ static void pt__mts_plastic(pt__mts *w, const pt_scenefile_material *m, int i)
     pt__mts_put(w, "<boolean name=\"nonlinear\" value=\"%s\"/></bsdf></bsdf>\n", m->nonlinear ? "true" : "false");
 }
 
+/* A rough dielectric: `roughdielectric` with distribution ggx, sample_visible true, alpha, int_ior
+   and ext_ior written out (Mitsuba's ext_ior defaults to air's 1.000277). Its transmission scales
+   radiance by 1/eta^2 in radiance mode as pdftrace's does, so the twin is exact. Below pdftrace's
+   delta switch (alpha < 1e-3, or alpha |eta - 1| < 1e-3) the smooth `dielectric`, which scales
+   alike. Not two-sided: the inside is the side the normal points away from, in both. */
+static void pt__mts_rough_dielectric(pt__mts *w, const pt_scenefile_material *m, int i)
+{
+    float e = m->ext_ior > 0.0f ? m->ext_ior : 1.0f, n = m->ior > 0.0f ? m->ior : 1.5f;
+    int smooth = m->roughness < 1e-3f || m->roughness * fabsf(n / e - 1.0f) < 1e-3f;
+    pt__mts_put(w, "  <bsdf type=\"%s\" id=\"mat%d\">", smooth ? "dielectric" : "roughdielectric", i);
+    if (!smooth) {
+        pt__mts_put(w, "<string name=\"distribution\" value=\"ggx\"/><boolean name=\"sample_visible\" value=\"true\"/>"
+                       "<float name=\"alpha\" value=\"");
+        pt__mts_f(w, m->roughness);
+        pt__mts_put(w, "\"/>");
+    }
+    pt__mts_put(w, "<float name=\"int_ior\" value=\"");
+    pt__mts_f(w, n);
+    pt__mts_put(w, "\"/><float name=\"ext_ior\" value=\"");
+    pt__mts_f(w, e);
+    pt__mts_put(w, "\"/></bsdf>\n");
+}
+
 /* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse, a mirror as a
    two-sided conductor without Fresnel (material "none": reflectance = specular_reflectance),
    glass as a smooth dielectric in vacuum, an emitter as black diffuse (it reflects nothing). */
@@ -3002,6 +3063,9 @@ static void pt__mts_bsdf(pt__mts *w, int i)
         break;
     case PT_MATERIAL_ROUGH_PLASTIC:
         pt__mts_plastic(w, m, i);
+        break;
+    case PT_MATERIAL_ROUGH_DIELECTRIC:
+        pt__mts_rough_dielectric(w, m, i);
         break;
     case PT_MATERIAL_DIELECTRIC:
         pt__mts_put(w, "  <bsdf type=\"dielectric\" id=\"mat%d\"><float name=\"int_ior\" value=\"", i);
@@ -3500,6 +3564,9 @@ static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *er
         else if (m->type == PT_MATERIAL_DIELECTRIC && m->ior == 1.0f)
             why = "a dielectric of ior 1 (material %s): Mitsuba's dielectric needs an interior index that differs "
                   "from the exterior one (1)";
+        else if (m->type == PT_MATERIAL_ROUGH_DIELECTRIC && m->ior == m->ext_ior)
+            why = "a rough dielectric with ior = ext_ior (material %s): Mitsuba's dielectrics need an interior "
+                  "index that differs from the exterior one";
         else if (m->type == PT_MATERIAL_EMITTER && m->two_sided)
             why = "a two-sided emitter (material %s): Mitsuba's area lights emit on one side only, and a pair of "
                   "coincident back-to-back shapes is not exact (each ray hits either one)";

@@ -595,6 +595,509 @@ static void ggx_strategies_agree(test_ctx *t)
     pt_scene_destroy(s);
 }
 
+
+/* ==== the rough dielectric (PT_MATERIAL_ROUGH_DIELECTRIC) ====
+   The frame's normal n is on wo's side; eta = n_far / n_near (1.5 from outside, 1/1.5 from
+   inside, the public PDF told which by the outward normal it is given). The chi-square domain is
+   the microfacet normal: the unit square's left half is reflection (the half vector), its right half
+   transmission (the generalised half vector m ~ o + eta i), each in the coordinates of the
+   conductor's histogram (x = tan^2 / (alpha^2 + tan^2), azimuth). */
+typedef struct rd_ctx {
+    ggx_ctx g;
+    double eta;
+} rd_ctx;
+static double rd_fresnel(double c, double r) /* dielectric, n_i / n_t = r, cos_i = c > 0 */
+{
+    double s2 = r * r * (1.0 - c * c), ct, rs, rp;
+    if (s2 >= 1.0) return 1.0;
+    ct = sqrt(1.0 - s2);
+    rs = (r * c - ct) / (r * c + ct);
+    rp = (c - r * ct) / (c + r * ct);
+    return 0.5 * (rs * rs + rp * rp);
+}
+/* the generalised half vector of a transmission, on the normal's side; 0 if o.m > 0 > i.m fails */
+static int rd_half_t(const rd_ctx *c, dv3 i, dv3 *m)
+{
+    dv3 h = dadd(c->g.wo_l, dscale(i, c->eta));
+    if (dlen(h) <= 0.0) return 0;
+    h = dnorm(h);
+    if (h.z < 0.0) h = dscale(h, -1.0);
+    *m = h;
+    return ddot(c->g.wo_l, h) > 0.0 && ddot(i, h) < 0.0;
+}
+/* A pScatter (want_f) or the sampling density, in double */
+static double rd_eval(const rd_ctx *c, dv3 i, int want_f)
+{
+    const dv3 o = c->g.wo_l;
+    const double a2 = c->g.a2;
+    dv3 h;
+    double F, om, im, den, t;
+    if (i.z > 0.0) {
+        h = dnorm(dadd(o, i));
+        F = rd_fresnel(ddot(o, h), 1.0 / c->eta);
+        t = F * g_d(h, a2) * g_g1(o, a2) / (4.0 * o.z);
+        return want_f ? t * g_g1(i, a2) : t;
+    }
+    if (i.z == 0.0 || !rd_half_t(c, i, &h)) return 0.0;
+    om = ddot(o, h);
+    im = ddot(i, h);
+    F = rd_fresnel(om, 1.0 / c->eta);
+    den = om + c->eta * im;
+    t = (1.0 - F) * g_d(h, a2) * g_g1(o, a2) * om * -im / (o.z * den * den);
+    return want_f ? t * g_g1(dv(i.x, i.y, -i.z), a2) : t * c->eta * c->eta;
+}
+static double ref_rd(const void *ctx, dv3 w, int *near)
+{
+    const rd_ctx *c = (const rd_ctx *)ctx;
+    dv3 i = to_l(&c->g, w), s = i.z > 0.0 ? dadd(c->g.wo_l, i) : dadd(c->g.wo_l, dscale(i, c->eta));
+    /* float rounding: near the surface, and the (generalised) half vector of a cancellation */
+    *near = fabs(i.z) < 2e-2 || 4.8e-7 * fmax(1.0, c->eta) / (dlen(s) * c->g.a) > 2e-4;
+    if (i.z > 0.0) { /* reflection near the critical angle: F's slope is infinite there */
+        double om = ddot(c->g.wo_l, dnorm(s));
+        if (fabs((1.0 - om * om) / (c->eta * c->eta) - 1.0) < 0.05) *near = 1;
+    }
+    if (i.z < 0.0 && dlen(s) > 0.0) {
+        /* a microfacet seen edge-on (o.m -> 0: 1 - F and o.m carry o.m's rounding, relative), one
+           near total internal reflection (1 - F ~ cos_t, a cancellation), or one at m_z = 0 (where
+           the sign of o + eta i, and D, jump) */
+        dv3 m = dnorm(s);
+        double om = fabs(ddot(c->g.wo_l, m));
+        if (om < 2e-3 || (1.0 - om * om) / (c->eta * c->eta) > 0.95 || fabs(m.z) < 1e-3) *near = 1;
+    }
+    return rd_eval(c, i, 0);
+}
+static int rd_to_unit(const void *ctx, dv3 w, double *x, double *y)
+{
+    const rd_ctx *c = (const rd_ctx *)ctx;
+    dv3 i = to_l(&c->g, w), h;
+    double s, phi;
+    int t = i.z < 0.0;
+    if (i.z == 0.0) return 0;
+    if (!t) {
+        h = dnorm(dadd(c->g.wo_l, i));
+        if (h.z <= 0.0) return 0;
+    } else {
+        h = dadd(c->g.wo_l, dscale(i, c->eta));
+        if (dlen(h) <= 0.0) return 0;
+        h = dnorm(h);
+        if (h.z < 0.0) h = dscale(h, -1.0);
+    }
+    s = h.x * h.x + h.y * h.y;
+    /* X' = 1 - (1 - X)^(1/4): the tilted microfacets that still refract near total internal
+       reflection (a sliver X > 1 - 1e-4 at alpha 0.01) get a visible share of the cell */
+    *x = 0.5 * (t + fmin(1.0 - pow(1.0 - s / (s + c->g.a2 * h.z * h.z), 0.25), 1.0 - 1e-12));
+    phi = atan2(h.y, h.x);
+    if (phi < 0.0) phi += 2.0 * TU_PI;
+    *y = fmin(phi / (2.0 * TU_PI), 1.0 - 1e-12);
+    return 1;
+}
+static dv3 rd_from_unit(const void *ctx, double x, double y, double *jac)
+{
+    const rd_ctx *c = (const rd_ctx *)ctx;
+    const dv3 o = c->g.wo_l;
+    int t = x >= 0.5;
+    double Xp = 2.0 * x - t, X = 1.0 - pow(1.0 - Xp, 4.0), tt = c->g.a2 * X / (1.0 - X);
+    double cos_t = 1.0 / sqrt(1.0 + tt), sin_t = sqrt(tt / (1.0 + tt)), phi = 2.0 * TU_PI * y, oh;
+    /* d omega_m / dx dy: 2 (the half square) x 4 (1 - X')^3 x pi cos^3 alpha^2 / (1 - X)^2 */
+    double dm = 2.0 * 4.0 * pow(1.0 - Xp, 3.0) * TU_PI * cos_t * cos_t * cos_t * c->g.a2 / ((1.0 - X) * (1.0 - X));
+    dv3 h = dv(sin_t * cos(phi), sin_t * sin(phi), cos_t), i;
+    oh = ddot(o, h);
+    *jac = 0.0;
+    if (!t) {
+        i = dsub(dscale(h, 2.0 * oh), o);
+        if (i.z > 0.0 && oh > 0.0) *jac = 4.0 * oh * dm;
+    } else {
+        double r = 1.0 / c->eta, s2 = r * r * (1.0 - oh * oh), ct, im, den;
+        if (oh <= 0.0 || s2 >= 1.0) return dnorm(from_l(&c->g, dv(0.0, 0.0, -1.0))); /* no refraction: jac 0 */
+        ct = sqrt(1.0 - s2);
+        i = dadd(dscale(o, -r), dscale(h, r * oh - ct));
+        im = ddot(i, h);
+        den = oh + c->eta * im;
+        if (i.z < 0.0) *jac = den * den / (c->eta * c->eta * fabs(im)) * dm;
+    }
+    return dnorm(from_l(&c->g, i));
+}
+static double rd_propose(const void *ctx, pt_rng *r, dv3 *w)
+{
+    double jac;
+    *w = rd_from_unit(ctx, tu_rand(r), tu_rand(r), &jac);
+    return jac > 0.0 ? 1.0 / jac : 1e300;
+}
+/* n on wo's side; inside: wo is inside the glass (eta = 1 / ior) */
+static void rd_setup(rd_ctx *c, dv3 n, double theta_deg, double a, double ior, int inside)
+{
+    ggx_setup(&c->g, n, theta_deg, a);
+    c->eta = inside ? 1.0 / (double)(float)ior : (double)(float)ior;
+    if (inside) c->eta = 1.0 / (double)(float)ior;
+}
+static void rd_domain(tu_domain *dom, rd_ctx *c)
+{
+    dom->to_unit = rd_to_unit;
+    dom->from_unit = rd_from_unit;
+    dom->propose = rd_propose;
+    dom->ctx = c;
+}
+
+static void rough_dielectric_chi2(test_ctx *t)
+{
+    /* 4 roughnesses x 4 angles x {outside, inside}; each histogram holds both lobes */
+    static const double rough[4] = { 0.01, 0.1, 0.5, 1.0 }, angle[4] = { 0.0, 45.0, 80.0, 89.0 };
+    static char labels[32][96];
+    pt_scene *s = pt_scene_create();
+    int mats[4], ri, ai, side, rc = 0;
+    double min_p = 2.0;
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    for (ri = 0; ri < 4; ri++) {
+        mats[ri] = pt_scene_add_rough_dielectric(s, 1.5f, (float)rough[ri]);
+        rc |= mats[ri] < 0;
+    }
+    rc |= pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, mats[0]) < 0;
+    rc |= pt_scene_commit(s) != PT_OK;
+    if (!CHECK(t, rc == 0, "scene setup failed: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (ri = 0; ri < 4; ri++) {
+        CHECK(t, pt_material_is_delta(s, mats[ri]) == 0, "roughness %g reported delta", rough[ri]);
+        for (ai = 0; ai < 4; ai++)
+            for (side = 0; side < 2; side++) {
+                rd_ctx ctx;
+                tu_domain dom;
+                tu_pdf_check c;
+                tu_pdf_result r;
+                pt_pdf p;
+                char *label = labels[(ri * 4 + ai) * 2 + side];
+                rd_setup(&ctx, dnorm(dv(0.2, 1.0, -0.3)), angle[ai], rough[ri], 1.5, side);
+                /* the public PDF takes the outward normal: from inside it points away from wo */
+                p = pt_pdf_material(s, mats[ri], side ? dv_to(dscale(ctx.g.n, -1.0)) : dv_to(ctx.g.n), dv_to(ctx.g.wo));
+                snprintf(label, 96, "rough dielectric alpha %.2f, %.0f degrees, from %s", rough[ri], angle[ai],
+                         side ? "inside" : "outside");
+                rd_domain(&dom, &ctx);
+                memset(&c, 0, sizeof c);
+                c.label = label;
+                c.pdf = &p;
+                c.axis = ctx.g.n;
+                c.omc = 2.0;
+                c.domain = &dom;
+                c.expected_mass = -1.0; /* below 1: directions a microfacet sends to the wrong side fail */
+                c.support = -1.0;
+                c.ref = ref_rd;
+                c.ref_ctx = &ctx;
+                c.n_samples = 60000;
+                c.n_mass = 12000;
+                c.ns = 16;
+                c.nphi = 12;
+                c.seed = 2500 + (uint64_t)((ri * 4 + ai) * 2 + side);
+                c.alpha = tu_suite_alpha();
+                c.inv_z = 0.0;
+                TU_CHECK_PDF(t, &c, &r);
+                if (r.chi2_p < min_p) min_p = r.chi2_p;
+            }
+    }
+    test_note(t, "32 cases, 6 x 10^4 draws each, smallest chi-square p %.3g (alpha per comparison %.2g)", min_p,
+              tu_suite_alpha());
+    pt_scene_destroy(s);
+}
+
+/* WRONG: the rough dielectric's visible-normal samples reported with the plain NDF density
+   D(m) cos_m (F or 1 - F) |dm/di| */
+typedef struct rd_wrong { pt_pdf inner; rd_ctx *c; } rd_wrong;
+static float rd_ndf_density(const rd_ctx *c, pt_vec3 w)
+{
+    dv3 i = to_l(&c->g, dv_from(w)), h;
+    double F, om, im, den;
+    if (i.z > 0.0) {
+        h = dnorm(dadd(c->g.wo_l, i));
+        F = rd_fresnel(ddot(c->g.wo_l, h), 1.0 / c->eta);
+        return (float)(F * g_d(h, c->g.a2) * h.z / (4.0 * ddot(c->g.wo_l, h)));
+    }
+    if (i.z == 0.0 || !rd_half_t(c, i, &h)) return 0.0f;
+    om = ddot(c->g.wo_l, h);
+    im = ddot(i, h);
+    den = om + c->eta * im;
+    F = rd_fresnel(om, 1.0 / c->eta);
+    return (float)((1.0 - F) * g_d(h, c->g.a2) * h.z * c->eta * c->eta * -im / (den * den));
+}
+static int rd_wrong_sample(void *user, pt_rng *rng, pt_vec3 *dir, float *pdf)
+{
+    rd_wrong *u = (rd_wrong *)user;
+    if (!pt_pdf_sample(&u->inner, rng, dir, pdf)) return 0;
+    *pdf = rd_ndf_density(u->c, *dir);
+    if (!(*pdf > 0.0f)) { *dir = pt_v3(0, 0, 0); *pdf = 0.0f; return 0; }
+    return 1;
+}
+static float rd_wrong_value(void *user, pt_vec3 dir) { return rd_ndf_density(((rd_wrong *)user)->c, dir); }
+static void harness_rejects_rough_dielectric_ndf_density(test_ctx *t)
+{
+    pt_scene *s = pt_scene_create();
+    int m, failures;
+    rd_ctx ctx;
+    tu_domain dom;
+    tu_pdf_check c;
+    tu_pdf_result r;
+    rd_wrong u;
+    pt_pdf p;
+    char reason[768];
+    if (!CHECK(t, s != NULL, "pt_scene_create failed")) return;
+    m = pt_scene_add_rough_dielectric(s, 1.5f, 0.5f);
+    if (!CHECK(t, m >= 0 && pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, m) >= 0 && pt_scene_commit(s) == PT_OK, "scene: %s",
+               pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    rd_setup(&ctx, dv(0, 0, 1), 60.0, 0.5, 1.5, 0);
+    u.inner = pt_pdf_material(s, m, dv_to(ctx.g.n), dv_to(ctx.g.wo));
+    u.c = &ctx;
+    p = pt_pdf_callback(&u, rd_wrong_sample, rd_wrong_value);
+    rd_domain(&dom, &ctx);
+    memset(&c, 0, sizeof c);
+    c.label = "WRONG: rough dielectric visible-normal samples, NDF density";
+    c.pdf = &p;
+    c.axis = ctx.g.n;
+    c.omc = 2.0;
+    c.domain = &dom;
+    c.expected_mass = -1.0;
+    c.support = -1.0;
+    c.n_samples = 200000;
+    c.n_mass = 40000;
+    c.ns = 24;
+    c.nphi = 24;
+    c.seed = 2590;
+    c.alpha = tu_suite_alpha();
+    failures = tu_check_pdf_rejects(&c, &r, reason, sizeof reason);
+    CHECK(t, failures > 0, "the NDF density with visible-normal samples was not rejected (chi2 p = %.3g)", r.chi2_p);
+    CHECK(t, r.chi2_p < c.alpha, "chi-square p = %.3g not below alpha %.3g", r.chi2_p, c.alpha);
+    test_note(t, "rejected by %d check(s); chi2 %.0f, %d dof, p = %.3g; first: %.120s", failures, r.chi2, r.dof, r.chi2_p,
+              reason);
+    pt_scene_destroy(s);
+}
+
+/* \int A pScatter over the sphere, reflection (*R) and transmission (*T, as rendered: with the
+   1 / eta^2 of radiance), by the midpoint rule on the microfacet square of rd_from_unit (n x n per
+   half, x = 1 - (1 - v)^2 in each half, which with rd_from_unit's own substitution makes the
+   integrand vanish toward grazing microfacets as albedo_halfvector's does) */
+static void rd_albedo(const rd_ctx *c, int n, double *R, double *T)
+{
+    int half, a, b;
+    *R = *T = 0.0;
+    for (half = 0; half < 2; half++)
+        for (a = 0; a < n; a++) {
+            double v = (a + 0.5) / n, X = 1.0 - pow(1.0 - v, 2.0), dx = 2.0 * (1.0 - v), sum = 0.0;
+            for (b = 0; b < n; b++) {
+                double jac;
+                dv3 w = rd_from_unit(c, 0.5 * (X + half), (b + 0.5) / n, &jac);
+                if (jac > 0.0) sum += rd_eval(c, to_l(&c->g, w), 1) * jac * 0.5 * dx;
+            }
+            if (half) *T += sum / ((double)n * n);
+            else *R += sum / ((double)n * n);
+        }
+}
+
+static void rough_dielectric_furnace(test_ctx *t)
+{
+    /* A 2000 x 2000 quad of rough glass (the plane z = 0, outward normal +z) under a uniform
+       background 1: a ray meeting it at angle theta from above (outside) or below (inside) scatters
+       once and leaves, so its radiance is the albedo R + T of the model (T with 1 / eta^2). The
+       albedo is integrated numerically (two resolutions that must agree); z-tests at alpha 0.01,
+       Sidak over the comparisons. The energy R + eta^2 T must not exceed 1 and, at alpha 0.01,
+       must lose under 1e-3 (the single-scattering loss of a nearly smooth interface). */
+    static const double rough[4] = { 0.01, 0.1, 0.5, 1.0 }, angle[4] = { 0.0, 45.0, 80.0, 89.0 };
+    const int n_paths = 6000, comparisons = 2 * 4 * 4;
+    double zlim = tu_z_two_sided(1.0 - pow(0.99, 1.0 / comparisons)), worst = 0.0, worst_q = 0.0, min_e = 2.0, max_e = 0.0;
+    int ri, ai, side;
+    for (ri = 0; ri < 4; ri++) {
+        pt_scene *s = pt_scene_create();
+        int m, rc;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        m = pt_scene_add_rough_dielectric(s, 1.5f, (float)rough[ri]);
+        rc = m >= 0 && pt_scene_add_quad(s, pt_v3(-1000, -1000, 0), pt_v3(2000, 0, 0), pt_v3(0, 2000, 0), m) >= 0 &&
+             pt_scene_commit(s) == PT_OK;
+        if (!CHECK(t, rc, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+        for (ai = 0; ai < 4; ai++)
+            for (side = 0; side < 2; side++) {
+                double th = angle[ai] * TU_PI / 180.0, R1, T1, R2, T2, q, e, z;
+                rd_ctx c;
+                pt_render_desc d = tu_base_desc(1, 1, 1, 0);
+                pt_path_stats st;
+                pt_rng rng;
+                pt_ray ray;
+                tu_acc acc;
+                int i;
+                rd_setup(&c, dv(0, 0, side ? -1.0 : 1.0), angle[ai], rough[ri], 1.5, side);
+                /* from inside the total-internal-reflection edge is a jump of the integrand across the
+                   grid: the midpoint rule converges as 1/n there, so the two resolutions' difference
+                   is the quadrature's error bound and widens the z-test's floor */
+                rd_albedo(&c, 150, &R1, &T1);
+                rd_albedo(&c, 300, &R2, &T2);
+                q = R2 + T2;
+                worst_q = fmax(worst_q, fabs(q - (R1 + T1)));
+                CHECK(t, fabs(q - (R1 + T1)) < 1e-2 * q, "quadratures disagree: alpha %g, %g degrees, side %d: %.6f vs %.6f",
+                      rough[ri], angle[ai], side, R1 + T1, q);
+                e = R2 + T2 * c.eta * c.eta;
+                min_e = fmin(min_e, e);
+                max_e = fmax(max_e, e);
+                CHECK(t, e <= 1.0 + 1e-3 + fabs(q - (R1 + T1)) * c.eta * c.eta, "alpha %g, %g degrees, side %d: energy R + eta^2 T = %.5f > 1", rough[ri], angle[ai],
+                      side, e);
+                if (ri == 0 && ai < 2)
+                    CHECK(t, e > 0.999, "alpha 0.01, %g degrees, side %d: energy %.5f loses more than 1e-3", angle[ai], side, e);
+                memset(&st, 0, sizeof st);
+                memset(&acc, 0, sizeof acc);
+                d.background = pt_v3(1, 1, 1);
+                pt_rng_seed(&rng, 2600 + (uint64_t)(ri * 10 + ai), (uint64_t)side);
+                /* the ray meets the plane at the origin at angle theta, in the frame's (n, e1) plane */
+                ray.dir = dv_to(dscale(dadd(dscale(c.g.n, cos(th)), dscale(c.g.e1, sin(th))), -1.0));
+                ray.origin = pt_scale(ray.dir, -10.0f);
+                for (i = 0; i < n_paths; i++) tu_acc_add(&acc, pt_trace_path(s, &d, ray, &rng, &st).y);
+                CHECK(t, st.nonfinite_samples == 0, "alpha %g, %g degrees, side %d: %llu non-finite samples", rough[ri],
+                      angle[ai], side, (unsigned long long)st.nonfinite_samples);
+                z = tu_z_floor(acc.mean, q, tu_acc_se(&acc), 2e-3 * q + fabs(q - (R1 + T1)) + 1e-6);
+                worst = fmax(worst, z);
+                CHECK(t, z <= zlim, "alpha %g, %g degrees, from %s: albedo %.5f +- %.2g, quadrature %.5f (z %.2f > %.2f)",
+                      rough[ri], angle[ai], side ? "inside" : "outside", acc.mean, tu_acc_se(&acc), q, z, zlim);
+            }
+        pt_scene_destroy(s);
+    }
+    test_note(t, "%d comparisons, worst z %.2f (limit %.2f); quadratures agree to %.1e; energy R + eta^2 T in [%.4f, %.4f]",
+              comparisons, worst, zlim, worst_q, min_e, max_e);
+}
+
+static void rough_dielectric_smooth_limit(test_ctx *t)
+{
+    /* Through the delta switch (alpha 1e-3) the rough dielectric's furnace (the plane above, from
+       outside and inside at 0 and 45 degrees) stays at the smooth interface's R + T / eta^2 within
+       the lobe's blur; roughness 0 .. 1e-2, and ior near 1 (1.0005: delta by alpha |eta - 1|), no
+       NaN/Inf. */
+    static const float rough[6] = { 0.0f, 1e-4f, 9.99e-4f, 1e-3f, 3e-3f, 1e-2f };
+    static const double angle[2] = { 0.0, 30.0 }; /* (from inside, 30 is below the critical 41.8) */
+    int ri, ai, side;
+    double worst = 0.0;
+    for (ri = 0; ri < 7; ri++) {
+        pt_scene *s = pt_scene_create();
+        float ior = ri < 6 ? 1.5f : 1.0005f, a = ri < 6 ? rough[ri] : 0.5f;
+        int m, rc;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        m = pt_scene_add_rough_dielectric(s, ior, a);
+        rc = m >= 0 && pt_scene_add_quad(s, pt_v3(-1000, -1000, 0), pt_v3(2000, 0, 0), pt_v3(0, 2000, 0), m) >= 0 &&
+             pt_scene_commit(s) == PT_OK;
+        if (!CHECK(t, rc, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+        CHECK(t, pt_material_is_delta(s, m) == (a < 1e-3f || a * fabsf(ior - 1.0f) < 1e-3f), "roughness %g ior %g: delta %d", a, ior,
+              pt_material_is_delta(s, m));
+        for (ai = 0; ai < 2; ai++)
+            for (side = 0; side < 2; side++) {
+                double th = angle[ai] * TU_PI / 180.0, eta = side ? 1.0 / ior : ior, c = cos(th), F, want, sum = 0.0;
+                pt_render_desc d = tu_base_desc(1, 1, 1, 0);
+                pt_path_stats st;
+                pt_rng rng;
+                pt_ray ray;
+                int i, n = 4000;
+                F = rd_fresnel(c, 1.0 / eta);
+                want = F + (1.0 - F) / (eta * eta);
+                memset(&st, 0, sizeof st);
+                d.background = pt_v3(1, 1, 1);
+                pt_rng_seed(&rng, 2700 + (uint64_t)ri, (uint64_t)(ai * 2 + side));
+                ray.dir = pt_normalize(pt_v3((float)sin(th), 0.0f, side ? (float)c : -(float)c));
+                ray.origin = pt_scale(ray.dir, -10.0f);
+                for (i = 0; i < n; i++) sum += pt_trace_path(s, &d, ray, &rng, &st).y;
+                sum /= n;
+                CHECK(t, st.nonfinite_samples == 0, "roughness %g, %g degrees: %llu non-finite samples", a, angle[ai],
+                      (unsigned long long)st.nonfinite_samples);
+                worst = fmax(worst, fabs(sum - want) / want);
+                /* the sampled choice R/T is the noise: sd sqrt(F (1 - F)) |1 - 1/eta^2| / sqrt(n); 4.5 of
+                   it, plus the lobe's blur */
+                CHECK(t, fabs(sum - want) < 4.5 * sqrt(F * (1.0 - F) / n) * fabs(1.0 - 1.0 / (eta * eta)) + 2e-3 * want,
+                      "roughness %g ior %g, %g degrees, side %d: furnace %.6f, smooth %.6f", a, ior, angle[ai], side, sum, want);
+            }
+        pt_scene_destroy(s);
+    }
+    test_note(t, "roughness 0 .. 1e-2 through the delta switch, and ior 1.0005: within %.1e (relative) of the smooth "
+                 "interface; no NaN/Inf", worst);
+}
+
+static void rough_dielectric_api_errors(test_ctx *t)
+{
+    pt_scene *s = pt_scene_create();
+    pt_material_desc d;
+    pt_scene_info info;
+    int rc;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    memset(&d, 0, sizeof d);
+    d.type = PT_MATERIAL_ROUGH_DIELECTRIC;
+    rc = pt_scene_add_material(s, &d);
+    CHECK(t, rc >= 0 && pt_material_is_delta(s, rc) == 1, "zero-initialised rough dielectric: %d (want smooth glass)", rc);
+    d.roughness = 1.5f;
+    rc = pt_scene_add_material(s, &d);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(pt_scene_error_message(s), "roughness"), "roughness 1.5: %d", rc);
+    d.roughness = 0.2f;
+    d.ext_ior = -1.0f;
+    rc = pt_scene_add_material(s, &d);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(pt_scene_error_message(s), "ext_ior"), "ext_ior -1: %d '%s'", rc,
+          pt_scene_error_message(s));
+    d.ext_ior = 1.33f;
+    d.ior = 1e-3f;
+    rc = pt_scene_add_material(s, &d);
+    CHECK(t, rc >= 0, "ior 1e-3 under water refused: %s", pt_scene_error_message(s));
+    d.ior = NAN;
+    rc = pt_scene_add_material(s, &d);
+    CHECK(t, rc == PT_ERROR_INVALID_ARGUMENT && strstr(pt_scene_error_message(s), "ior"), "ior NaN: %d", rc);
+    rc = pt_scene_add_rough_dielectric(s, 1.5f, 0.3f);
+    CHECK(t, rc >= 0 && pt_material_is_delta(s, rc) == 0, "pt_scene_add_rough_dielectric: %d", rc);
+    CHECK(t, pt_scene_add_sphere(s, pt_v3(0, 0, 0), 1, rc) >= 0 && pt_scene_commit(s) == PT_OK, "commit");
+    pt_scene_get_info(s, &info);
+    CHECK(t, (info.features & PT_FEATURE_MICROFACET) != 0, "PT_FEATURE_MICROFACET not set for a rough dielectric");
+    pt_scene_destroy(s);
+}
+
+static void rough_dielectric_lights_below(test_ctx *t)
+{
+    /* The integrator's other side: a rough glass plane (z = 0) seen from above, lit from below it
+       by a quad light and a point light through transmission (and by a background of 0.2 from both
+       sides). MIS, MATERIAL, LIGHT and MIXTURE must agree (z-tests between MIS and each other,
+       alpha 0.01, Sidak over 9), and the light below must come through. Direct light only. */
+    pt_scene *s = pt_scene_create();
+    int g, light, k, st_i, rc;
+    double zlim = tu_z_two_sided(1.0 - pow(0.99, 1.0 / 9.0)), worst = 0.0;
+    if (!CHECK(t, s != NULL, "scene")) return;
+    g = pt_scene_add_rough_dielectric(s, 1.5f, 0.3f);
+    light = pt_scene_add_emitter(s, pt_v3(4, 4, 4), 0);
+    rc = pt_scene_add_quad(s, pt_v3(-5, -5, 0), pt_v3(10, 0, 0), pt_v3(0, 10, 0), g) >= 0;
+    rc &= pt_scene_add_quad(s, pt_v3(-0.5f, -0.5f, -2), pt_v3(1, 0, 0), pt_v3(0, 1, 0), light) >= 0; /* u x v = +z: faces the glass */
+    {
+        pt_light_desc ld;
+        memset(&ld, 0, sizeof ld);
+        ld.type = PT_LIGHT_POINT;
+        ld.position = pt_v3(1.0f, 0.5f, -1.0f);
+        ld.intensity = pt_v3(2, 2, 2);
+        rc &= pt_scene_add_light(s, &ld) >= 0;
+    }
+    rc &= pt_scene_commit(s) == PT_OK;
+    if (!CHECK(t, rc, "scene: %s", pt_scene_error_message(s))) { pt_scene_destroy(s); return; }
+    for (k = 0; k < 3; k++) {
+        pt_ray ray;
+        tu_acc acc[4];
+        ray.origin = pt_v3(0.3f * k, -0.2f, 2.0f);
+        ray.dir = pt_normalize(pt_sub(pt_v3(0.2f * k - 0.1f, 0.1f, 0), ray.origin));
+        for (st_i = 0; st_i < 4; st_i++) {
+            pt_render_desc d = tu_base_desc(1, 1, 1, 0);
+            pt_path_stats ps;
+            pt_rng rng;
+            int i;
+            memset(&ps, 0, sizeof ps);
+            memset(&acc[st_i], 0, sizeof acc[st_i]);
+            d.strategy = (pt_strategy)st_i;
+            d.max_depth = 1;
+            d.background = pt_v3(0.2f, 0.2f, 0.2f);
+            pt_rng_seed(&rng, 2800 + (uint64_t)k, (uint64_t)st_i);
+            for (i = 0; i < 40000; i++) tu_acc_add(&acc[st_i], pt_trace_path(s, &d, ray, &rng, &ps).x);
+            CHECK(t, ps.nonfinite_samples == 0, "ray %d strategy %d: non-finite samples", k, st_i);
+        }
+        for (st_i = 1; st_i < 4; st_i++) {
+            double se = sqrt(tu_acc_se(&acc[0]) * tu_acc_se(&acc[0]) + tu_acc_se(&acc[st_i]) * tu_acc_se(&acc[st_i]));
+            double z = se > 0 ? fabs(acc[0].mean - acc[st_i].mean) / se : 0.0;
+            worst = fmax(worst, z);
+            CHECK(t, z <= zlim, "ray %d: MIS %.5f, strategy %d %.5f (z %.2f > %.2f)", k, acc[0].mean, st_i, acc[st_i].mean, z,
+                  zlim);
+        }
+        /* above the plane only the background's reflection (< 0.2 x 0.2) could arrive without transmission */
+        CHECK(t, acc[0].mean > 0.1, "ray %d: %.4g: the light below does not come through", k, acc[0].mean);
+    }
+    test_note(t, "3 rays x 3 strategy pairs, worst z %.2f (limit %.2f)", worst, zlim);
+    pt_scene_destroy(s);
+}
+
 const test_case test_microfacet_cases[] = {
     TEST_CASE(ggx_conductor_chi2),
     TEST_CASE(harness_rejects_vndf_with_ndf_density),
@@ -603,5 +1106,11 @@ const test_case test_microfacet_cases[] = {
     TEST_CASE(ggx_mirror_limit),
     TEST_CASE(ggx_api_errors),
     TEST_CASE(ggx_strategies_agree),
+    TEST_CASE(rough_dielectric_chi2),
+    TEST_CASE(harness_rejects_rough_dielectric_ndf_density),
+    TEST_CASE(rough_dielectric_furnace),
+    TEST_CASE(rough_dielectric_smooth_limit),
+    TEST_CASE(rough_dielectric_api_errors),
+    TEST_CASE(rough_dielectric_lights_below),
     TEST_END
 };

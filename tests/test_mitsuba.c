@@ -333,6 +333,7 @@ static void mitsuba_refusals(test_ctx *t)
         {"material r roughconductor 0.3 Au tint 1.2 1 1\nsphere 0 0 0 1 r\n", 6, "albedo above 1"},
         {"checker c 0.5 0.5 0.5 0 0 0 0.5\nmaterial p roughplastic 0.2 texture c\ntriangle 0 0 0 1 0 0 0 1 0 m\nsphere 0 0 0 1 p\n",
          8, "3-D checker"},
+        {"material g roughdielectric 0.3 1.33 ext_ior 1.33\nsphere 0 0 0 1 g\n", 6, "ior = ext_ior"},
         {"triangle 0 0 0 1 0 0 0 1 0 m\nscale 1 3 1\nsphere 0 0 0 1 m\n", 7, "similarity"},
     };
     char dir[64], path[600], err[1024], list[256];
@@ -415,6 +416,36 @@ static void mitsuba_rough_plastic(test_ctx *t)
         p = strstr(xml, "id=\"mat3\"");
         CHECK(t, p && mts_numbers(p, "name=\"alpha\" value=\"", v, 1) && (float)v[0] == 1e-3f && strstr(p, "value=\"false\""),
               "material b (alpha 1e-4): alpha %g, want 1e-3 and nonlinear false", v[0]);
+        free(xml);
+    }
+    tu_remove_tree(dir);
+}
+
+/* Rough dielectrics: one-sided roughdielectric, ggx, sample_visible, alpha, int_ior and ext_ior
+   written out (Mitsuba's ext_ior default is air's, not 1); below pdftrace's delta switch (alpha
+   < 1e-3, or alpha |eta - 1| < 1e-3) the smooth dielectric (ior = ext_ior: mitsuba_refusals). */
+static void mitsuba_rough_dielectric(test_ctx *t)
+{
+    char dir[64];
+    char *xml;
+    const char *p;
+    if (!CHECK(t, tu_make_tmpdir(dir, sizeof dir), "mkdtemp")) return;
+    xml = mts_xml_of(t, MTS_HEAD "material a roughdielectric 0.25 1.5\nmaterial b roughdielectric 0.5 1.5 ext_ior 1.33\n"
+                                 "material c roughdielectric 0.0005 1.7\nmaterial d roughdielectric 0.5 1.001\n"
+                                 "sphere 0 0 0 1 a\nsphere 3 0 0 1 b\nsphere -3 0 0 1 c\nsphere 0 3 0 1 d\n", dir, NULL);
+    if (xml) {
+        p = strstr(xml, "<bsdf type=\"roughdielectric\" id=\"mat2\"><string name=\"distribution\" value=\"ggx\"/><boolean "
+                        "name=\"sample_visible\" value=\"true\"/><float name=\"alpha\" value=\"0.25\"/><float name=\"int_ior\" "
+                        "value=\"1.5\"/><float name=\"ext_ior\" value=\"1\"/></bsdf>");
+        CHECK(t, p != NULL, "material a: no ggx roughdielectric with sample_visible, alpha 0.25, int_ior 1.5, ext_ior 1");
+        p = strstr(xml, "id=\"mat3\"");
+        CHECK(t, p && strstr(p, "<float name=\"int_ior\" value=\"1.5\"/><float name=\"ext_ior\" value=\"1.33"),
+              "material b: %.200s", p ? p : "(missing)");
+        CHECK(t, strstr(xml, "<bsdf type=\"dielectric\" id=\"mat4\"><float name=\"int_ior\" value=\"1.7") != NULL,
+              "material c (alpha 5e-4): not the smooth dielectric");
+        CHECK(t, strstr(xml, "<bsdf type=\"dielectric\" id=\"mat5\"><float name=\"int_ior\" value=\"1.001") != NULL,
+              "material d (alpha 0.5, ior 1.001: delta): not the smooth dielectric");
+        CHECK(t, strstr(xml, "twosided\" id=\"mat2") == NULL, "material a exported two-sided");
         free(xml);
     }
     tu_remove_tree(dir);
@@ -806,6 +837,7 @@ const test_case test_mitsuba_cases[] = {
     TEST_CASE(mitsuba_refusals),
     TEST_CASE(mitsuba_rough_conductor),
     TEST_CASE(mitsuba_rough_plastic),
+    TEST_CASE(mitsuba_rough_dielectric),
     TEST_CASE(mitsuba_nonfinite_refused),
     TEST_CASE(mitsuba_unwritable),
     TEST_CASE(mitsuba_hostile_names),

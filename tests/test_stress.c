@@ -43,6 +43,7 @@ static void delta_lights(test_ctx *t) { run(t, st_delta_lights); }
 static void environment(test_ctx *t) { run(t, st_environment); }
 static void microfacet(test_ctx *t) { run(t, st_microfacet); }
 static void plastic(test_ctx *t) { run(t, st_plastic); }
+static void rough_dielectric(test_ctx *t) { run(t, st_rough_dielectric); }
 static void family(test_ctx *t) { run(t, st_family); }
 
 const test_case test_stress_cases[] = {
@@ -61,6 +62,7 @@ const test_case test_stress_cases[] = {
     TEST_CASE(environment),
     TEST_CASE(microfacet),
     TEST_CASE(plastic),
+    TEST_CASE(rough_dielectric),
     TEST_CASE(family),
     TEST_END
 };

@@ -903,6 +903,12 @@ static const bad_case bad_cases[] = {
     {"roughplastic no albedo", "%Hmaterial p roughplastic 0.2\n", "bad.scene:3: roughplastic albedo"},
     {"roughplastic unknown checker", "%Hmaterial p roughplastic 0.2 texture nope\n", "bad.scene:3: roughplastic: checker 'nope' is not defined"},
     {"roughplastic checker above 1", "%Hchecker c 0.1 0.1 0.1 1.2 1 1 1\nmaterial p roughplastic 0.2 texture c\n", "bad.scene:4: roughplastic: checker 'c' has a colour above 1"},
+    {"roughdielectric alpha above 1", "%Hmaterial r roughdielectric 2 1.5\n", "bad.scene:3: roughdielectric alpha: must be in [0, 1]"},
+    {"roughdielectric no ior", "%Hmaterial r roughdielectric 0.2\n", "bad.scene:3: roughdielectric ior"},
+    {"roughdielectric ior below 1", "%Hmaterial r roughdielectric 0.2 0.5\n", "bad.scene:3: roughdielectric ior: must be in [1, 10]"},
+    {"roughdielectric ext_ior missing", "%Hmaterial r roughdielectric 0.2 1.5 ext_ior\n", "bad.scene:3: roughdielectric ext_ior"},
+    {"roughdielectric ext_ior above 10", "%Hmaterial r roughdielectric 0.2 1.5 ext_ior 11\n", "bad.scene:3: roughdielectric ext_ior: must be in [1, 10]"},
+    {"roughdielectric trailing", "%Hmaterial r roughdielectric 0.2 1.5 1.33\n", "bad.scene:3:"},
     {"bad name", "%Hmaterial 9lives lambertian 1 1 1\n", "bad name '9lives'"},
     {"unknown material type", "%Hmaterial n plastic 1 1 1\n", "unknown type 'plastic'"},
     {"undefined checker", "%Hmaterial n lambertian texture nope\n", "checker 'nope' is not defined"},
@@ -1041,12 +1047,28 @@ static void test_malformed(const char *work)
         result(rc == PT_ERROR_UNSUPPORTED && access(pov, F_OK) != 0 && strstr(err, "bad.scene:4:") != NULL,
                "malformed scene", line);
     }
+    {
+        char pov[2048];
+        int rc;
+        snprintf(pov, sizeof pov, "%s/roughglass.pov", work);
+        remove(pov);
+        expand(text, sizeof text, "%Hmaterial g roughdielectric 0.2 1.5\nsphere 0 0 0 1 g\n");
+        rc = pt_scenefile_parse(text, strlen(text), "bad.scene", work, &sd, err, sizeof err);
+        if (rc == PT_OK) {
+            rc = pt_scenefile_write_pov(&sd, pov, NULL, err, sizeof err);
+            pt_scenefile_free(&sd);
+        }
+        snprintf(line, sizeof line, "rough dielectric (POV export) -> %s", err);
+        result(rc == PT_ERROR_UNSUPPORTED && access(pov, F_OK) != 0 && strstr(err, "bad.scene:4:") != NULL &&
+                   strstr(err, "rough dielectric") != NULL,
+               "malformed scene", line);
+    }
 }
 
 static void test_scenes_load(const char *dir)
 {
     static const char *const names[] = {"cornell", "cornell-diffuse", "direct-quad", "direct-sphere", "mirror", "glass", "checker", "mesh",
-                                        "lights", "lights-direct", "env", "rough-metal"};
+                                        "lights", "lights-direct", "env", "rough-metal", "rough-glass"};
     size_t i;
     for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
         char path[2048], err[1024] = "";

@@ -44,6 +44,7 @@ void st_delta_lights(st_ctx *c);     /* point/spot/directional lights at every s
 void st_environment(st_ctx *c);     /* environment maps: 1e6:1 contrast, zeros, suns of 1e-2 .. 1e-4 sr */
 void st_microfacet(st_ctx *c);       /* rough conductors: alpha 1e-4 .. 1, 0 .. 90 degrees; bounded weights, no NaN */
 void st_plastic(st_ctx *c);          /* rough plastics: alpha 1e-4 .. 1, ior 1.0001 .. 3, 0 .. 90 degrees; albedo <= 1, no NaN */
+void st_rough_dielectric(st_ctx *c); /* rough dielectrics: alpha 1e-4 .. 1, ior 1.001 .. 1.5, 0 .. 90 degrees both sides */
 void st_degenerate(st_ctx *c);       /* 4: degenerate input: errors or documented finite behaviour */
 void st_slivers(st_ctx *c);          /* fuzzed sliver triangles: intersect, brute force, occluded agree; t */
 void st_cornell_offset(st_ctx *c); /* 5: the Cornell box moved by 1e5 .. 1e7 renders as at the origin */

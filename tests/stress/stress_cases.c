@@ -2107,6 +2107,78 @@ void st_plastic(st_ctx *c)
     st_row(c, nonfinite == 0, "plastic: all", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
 }
 
+/* Rough dielectrics from roughness 1e-4 (the smooth interface below 1e-3) to 1, incidence 0 to
+   89.99 degrees from outside and inside, ior 1.5 and ior near 1 (1.001, 1.01: the transmitted lobe
+   alpha |eta - 1| wide, delta below 1e-3). A glass plane under a uniform background of 1, one ray
+   meeting it at angle theta: under MATERIAL a sample is G1(wi) (reflection) or G1(wi) / eta^2
+   (transmission), so at most max(1, 1 / eta^2); MIS as well, for NaN/Inf. The material PDF at those
+   angles (and exactly tangent): every draw finite with a positive density equal to pt_pdf_value. */
+void st_rough_dielectric(st_ctx *c)
+{
+    static const float rough[7] = { 1e-4f, 9.9e-4f, 1e-3f, 1e-2f, 0.1f, 0.5f, 1.0f };
+    static const float iors[3] = { 1.5f, 1.01f, 1.001f };
+    static const double angle[7] = { 0.0, 45.0, 80.0, 89.0, 89.9, 89.99, 90.0 };
+    const int n = c->full ? 10000 : 1000;
+    uint64_t nonfinite = 0;
+    int ri, ii, ai, side, i;
+    for (ii = 0; ii < 3; ii++)
+        for (ri = 0; ri < 7; ri++) {
+            pt_scene *s = pt_scene_create();
+            int m = s ? pt_scene_add_rough_dielectric(s, iors[ii], rough[ri]) : -1;
+            double worst = 0.0, bound = (double)iors[ii] * (double)iors[ii] * (1.0 + 1e-5);
+            long bad_draws = 0, draws = 0;
+            char cas[64];
+            snprintf(cas, sizeof cas, "rough glass: ior %g alpha %g", (double)iors[ii], (double)rough[ri]);
+            if (m < 0 || pt_scene_add_quad(s, pt_v3(-1e3f, -1e3f, 0), pt_v3(2e3f, 0, 0), pt_v3(0, 2e3f, 0), m) < 0 ||
+                pt_scene_commit(s) != PT_OK) {
+                st_row(c, 0, cas, "scene", "builds", "%s", s ? pt_scene_error_message(s) : "out of memory");
+                pt_scene_destroy(s);
+                continue;
+            }
+            for (ai = 0; ai < 7; ai++)
+                for (side = 0; side < 2; side++) {
+                    double th = angle[ai] * TU_PI / 180.0, sg = side ? -1.0 : 1.0;
+                    pt_vec3 wo = dv_to(dnorm(dv(sin(th), 0.0, sg * cos(th))));
+                    pt_pdf p = pt_pdf_material(s, m, pt_v3(0, 0, 1), wo);
+                    pt_rng rng;
+                    int strat;
+                    pt_rng_seed(&rng, 14000 + (uint64_t)((ii * 10 + ri) * 10 + ai), (uint64_t)side);
+                    for (i = 0; i < n; i++) {
+                        pt_vec3 d;
+                        float pv, v;
+                        if (!pt_pdf_sample(&p, &rng, &d, &pv)) continue;
+                        draws++;
+                        v = pt_pdf_value(&p, d);
+                        if (!(pv > 0.0f) || !isfinite(pv) || v != pv || !isfinite(d.x + d.y + d.z)) bad_draws++;
+                    }
+                    if (ai == 6) continue; /* a ray cannot meet the plane at exactly 90 degrees */
+                    for (strat = 0; strat < 2; strat++) {
+                        pt_render_desc d = tu_base_desc(1, 1, 1, 0);
+                        pt_path_stats st;
+                        pt_ray ray;
+                        double mx = 0.0;
+                        memset(&st, 0, sizeof st);
+                        d.background = pt_v3(1, 1, 1);
+                        d.strategy = strat == 0 ? PT_STRATEGY_MATERIAL : PT_STRATEGY_MIS;
+                        d.rr_start_depth = -1;
+                        ray.dir = pt_neg(wo);
+                        ray.origin = pt_scale(wo, 10.0f);
+                        for (i = 0; i < n; i++) {
+                            pt_color L = pt_trace_path(s, &d, ray, &rng, &st);
+                            mx = fmax(mx, fmax(L.x, fmax(L.y, L.z)));
+                        }
+                        nonfinite += st.nonfinite_samples;
+                        if (strat == 0) worst = fmax(worst, mx);
+                    }
+                }
+            st_row(c, worst <= bound, cas, "largest MATERIAL sample, 0 .. 89.99 degrees, both sides", "<= ior^2", "%.6f", worst);
+            st_row(c, bad_draws == 0, cas, "PDF draws (0 .. 90 degrees) non-finite or != pt_pdf_value", "0", "%ld of %ld",
+                   bad_draws, draws);
+            pt_scene_destroy(s);
+        }
+    st_row(c, nonfinite == 0, "rough glass: all", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
+}
+
 void st_family(st_ctx *c)
 {
     char b[48];

@@ -48,6 +48,7 @@ int main(int argc, char **argv)
         { "degenerate", st_degenerate }, { "slivers", st_slivers }, { "cornell", st_cornell_offset },
         { "guiding", st_guiding }, { "delta", st_delta_lights }, { "environment", st_environment },
         { "microfacet", st_microfacet }, { "plastic", st_plastic },
+        { "roughglass", st_rough_dielectric },
     };
     const char *filter = NULL;
     int full = 1, a;
