@@ -8427,18 +8427,23 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
     return L;
 }
 
-/* Path guiding at non-delta vertex v: the learned guide's leaf, once it has data, folded about the
-   geometric normal (non-delta materials reflect only: pt__continue), and guided roulette's
-   estimate of what going on adds per unit throughput. */
-static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_stats *st)
+/* Path guiding at non-delta vertex v (bounce `depth`): guided roulette's estimate of what going on
+   adds per unit throughput, from the learned guide's leaf once it has data, and, at the first
+   PT__GUIDE_SAMPLE_DEPTH bounces, the leaf's guide folded about the geometric normal (non-delta
+   materials reflect only: pt__continue). Deeper vertices sample the material alone: each guided
+   vertex pays two quadtree descents and an atan2, and the light the guide finds matters most
+   where the path's throughput is still high (bench/README.md, "Path guiding, step by step"). */
+#define PT__GUIDE_SAMPLE_DEPTH 2
+static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, int depth, pt_path_stats *st)
 {
     uint32_t leaf = pt__guide_leaf_at(cfg->learned, v->p);
     if (!cfg->learned->leaves[leaf].trained) return;
+    v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
+    if (depth >= PT__GUIDE_SAMPLE_DEPTH) return;
     v->guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
     v->guide.as.guide.guide = cfg->learned;
     v->guide.as.guide.leaf = leaf;
     v->guide.as.guide.fold = v->ng;
-    v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
     v->g = cfg->learned_weight;
     v->has_guide = 1;
     st->guided_vertices++;
@@ -8559,7 +8564,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 v.g = cfg->guide_weight;
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
             } else if (cfg->learned) {
-                pt__vertex_learned(cfg, &v, st);
+                pt__vertex_learned(cfg, &v, depth, st);
             }
             /* next-event estimation (LIGHT and MIS) */
             if (nee) {
@@ -9709,8 +9714,8 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
                                      guide that adds rare bright paths looks better than it is (the
                                      door measures 1.37 and is 0.5x; docs/design.md) */
 #define PT__GUIDING_AUTO_SHARE 0.25 /* ... measured within this share of the training budget */
-#define PT__GUIDING_LOOKUP_COST 1.6 /* AUTO's cost model: a guided vertex costs 1.6 rays (measured on
-                                       the Cornell box: docs/design.md, "Path guiding") */
+#define PT__GUIDING_LOOKUP_COST 2.0 /* AUTO's cost model: a guided vertex costs 2 rays (the door 1.6,
+                                       the Cornell box 2.1, training included: docs/design.md) */
 
 static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
 {
