@@ -3516,10 +3516,16 @@ PTDEF pt_pdf pt_pdf_callback(void *user, pt_pdf_sample_fn sample, pt_pdf_value_f
 #define PT__GUIDE_SPATIAL_MAX_DEPTH 48  /* spatial levels (16 halvings per axis) */
 #define PT__GUIDE_CLAMP_UNITS ((uint64_t)1 << 40)
 
+/* a sampling tree's node: its quadrants' probabilities and children side by side, so a level of
+   a descent reads one 32-byte node */
+typedef struct pt__dnode {
+    float prob[4];      /* P(quadrant | node), summing to 1 */
+    uint32_t child[4];  /* the quadrant's child node, 0: the quadrant is a leaf */
+} pt__dnode;
 typedef struct pt__dtree {
     uint32_t nodes, cap;
-    uint32_t *child;   /* 4 per node: the quadrant's child node, 0: the quadrant is a leaf */
-    float *prob;       /* sampling tree: 4 per node, P(quadrant | node), summing to 1 */
+    pt__dnode *node;   /* sampling tree */
+    uint32_t *child;   /* building tree: 4 per node, the quadrant's child node (0: a leaf) */
     uint64_t *energy;  /* building tree: 4 per node, sums of the records in fixed point */
 } pt__dtree;
 
@@ -3534,7 +3540,7 @@ typedef struct pt__guide_leaf {
 typedef struct pt__guide_node {
     int axis;          /* 0, 1, 2: split at the middle of that axis; -1: a leaf */
     int depth;         /* the root's is 0; a leaf at depth d splits along axis d mod 3 */
-    uint32_t a, b;     /* children (lower, upper half), or a = the leaf's index */
+    uint32_t child[2]; /* children (lower, upper half), or child[0] = the leaf's index */
 } pt__guide_node;
 
 struct pt_guide {
@@ -3570,18 +3576,23 @@ static void pt__guide_add(pt_guide *g, uint64_t *p, uint64_t v)
 }
 
 /* atan2 to 3e-9, faster than libm's (it was most of a guide look-up): the octant's
-   argument a in [0, 1], reduced to |a'| <= tan(pi/12) by atan(a) = pi/6 + atan((a sqrt3 - 1) /
-   (a + sqrt3)), then the odd Taylor series to a^11 (remainder below a^13 / 13 < 3e-9). */
+   argument a = lo/hi in [0, 1], reduced to |a'| <= tan(pi/12) by atan(a) = pi/6 + atan((a sqrt3
+   - 1) / (a + sqrt3)), taken as one division (lo sqrt3 - hi) / (lo + hi sqrt3), then the odd
+   Taylor series to a^11 (remainder below a^13 / 13 < 3e-9). Selects, not branches: directions
+   come in no order a predictor could learn. */
 static double pt__atan2d(double y, double x)
 {
-    double ax = fabs(x), ay = fabs(y), hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax, a, a2, r, base = 0.0;
+    const double ax = fabs(x), ay = fabs(y), hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax;
+    const int big = lo > 0.2679491924311227 * hi;
+    const double num = big ? lo * 1.7320508075688772 - hi : lo, den = big ? lo + hi * 1.7320508075688772 : hi;
+    double a, a2, r;
     if (!(hi > 0.0)) return 0.0;
-    a = lo / hi;
-    if (a > 0.2679491924311227) { a = (a * 1.7320508075688772 - 1.0) / (a + 1.7320508075688772); base = 0.5235987755982988; }
+    a = num / den;
     a2 = a * a;
-    r = base + a * (1.0 + a2 * (-1.0 / 3.0 + a2 * (0.2 + a2 * (-1.0 / 7.0 + a2 * (1.0 / 9.0 + a2 * (-1.0 / 11.0))))));
-    if (ay > ax) r = 1.5707963267948966 - r;
-    if (x < 0.0) r = 3.141592653589793 - r;
+    r = (big ? 0.5235987755982988 : 0.0) +
+        a * (1.0 + a2 * (-1.0 / 3.0 + a2 * (0.2 + a2 * (-1.0 / 7.0 + a2 * (1.0 / 9.0 + a2 * (-1.0 / 11.0))))));
+    r = ay > ax ? 1.5707963267948966 - r : r;
+    r = x < 0.0 ? 3.141592653589793 - r : r;
     return y < 0.0 ? -r : r;
 }
 
@@ -3621,13 +3632,40 @@ static float pt__dtree_density(const pt__dtree *t, float x, float y)
     int level;
     if (!t->nodes) return 1.0f;
     for (level = 0; level < PT__GUIDE_MAX_DEPTH; ++level) {
+        const pt__dnode *nd = t->node + n;
         int q = pt__guide_quadrant(&x, &y);
-        d *= 4.0f * t->prob[4u * n + (uint32_t)q];
-        if (!(d > 0.0f)) return 0.0f;
-        n = t->child[4u * n + (uint32_t)q];
-        if (!n) break;
+        d *= 4.0f * nd->prob[q];
+        n = nd->child[q];
+        if (!n || !(d > 0.0f)) break;
     }
-    return d;
+    return d > 0.0f ? d : 0.0f;
+}
+/* The densities at two points of the square (a direction and its mirror), the two descents
+   interleaved so that each hides the other's memory latency; each as pt__dtree_density's. */
+static void pt__dtree_density2(const pt__dtree *t, float x0, float y0, float x1, float y1, float *d0, float *d1)
+{
+    float a = 1.0f, b = 1.0f;
+    uint32_t n = 0, m = 0;
+    int level, go_a = 1, go_b = 1;
+    if (!t->nodes) { *d0 = *d1 = 1.0f; return; }
+    for (level = 0; level < PT__GUIDE_MAX_DEPTH && (go_a || go_b); ++level) {
+        if (go_a) {
+            const pt__dnode *nd = t->node + n;
+            int q = pt__guide_quadrant(&x0, &y0);
+            a *= 4.0f * nd->prob[q];
+            n = nd->child[q];
+            go_a = n && a > 0.0f;
+        }
+        if (go_b) {
+            const pt__dnode *nd = t->node + m;
+            int q = pt__guide_quadrant(&x1, &y1);
+            b *= 4.0f * nd->prob[q];
+            m = nd->child[q];
+            go_b = m && b > 0.0f;
+        }
+    }
+    *d0 = a > 0.0f ? a : 0.0f;
+    *d1 = b > 0.0f ? b : 0.0f;
 }
 
 /* Draws (x, y) from the sampling tree by warping (ux, uy) level by level (a column by its
@@ -3639,7 +3677,7 @@ static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, double *x,
     uint32_t n = 0;
     int level;
     for (level = 0; t->nodes && level < PT__GUIDE_MAX_DEPTH; ++level) {
-        const float *p = t->prob + 4u * n;
+        const float *p = t->node[n].prob;
         float left = p[0] + p[2], right = p[1] + p[3], top, bottom;
         int bx, by;
         if (!(left + right > 0.0f)) break;
@@ -3655,7 +3693,7 @@ static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, double *x,
         ox += (double)bx * size;
         oy += (double)by * size;
         d *= 4.0f * p[bx + 2 * by];
-        n = t->child[4u * n + (uint32_t)(bx + 2 * by)];
+        n = t->node[n].child[bx + 2 * by];
         if (!n) break;
     }
     *x = ox + (double)ux * size;
@@ -3668,75 +3706,80 @@ static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, double *x,
 
 static void pt__dtree_free(pt__dtree *t)
 {
+    PT_FREE(t->node);
     PT_FREE(t->child);
-    PT_FREE(t->prob);
     PT_FREE(t->energy);
     memset(t, 0, sizeof *t);
 }
-/* Appends a node (its quadrants leaves: zero sums, or probability 1/4 each) as *index; 0 when
-   out of memory. */
-static int pt__dtree_push(pt__dtree *t, int building, uint32_t *index)
+/* Appends a node to a building tree (its quadrants leaves with zero sums) as *index; 0 when out
+   of memory. */
+static int pt__dtree_push(pt__dtree *t, uint32_t *index)
 {
     uint32_t n;
     int q;
     if (t->nodes == t->cap) {
         uint32_t cap = t->cap ? 2u * t->cap : 4u;
         uint32_t *c = (uint32_t *)PT_REALLOC(t->child, sizeof(uint32_t) * 4u * cap);
+        uint64_t *e;
         if (!c) return 0;
         t->child = c;
-        if (building) {
-            uint64_t *e = (uint64_t *)PT_REALLOC(t->energy, sizeof(uint64_t) * 4u * cap);
-            if (!e) return 0;
-            t->energy = e;
-        } else {
-            float *p = (float *)PT_REALLOC(t->prob, sizeof(float) * 4u * cap);
-            if (!p) return 0;
-            t->prob = p;
-        }
+        e = (uint64_t *)PT_REALLOC(t->energy, sizeof(uint64_t) * 4u * cap);
+        if (!e) return 0;
+        t->energy = e;
         t->cap = cap;
     }
     n = t->nodes++;
     for (q = 0; q < 4; ++q) {
         t->child[4u * n + (uint32_t)q] = 0;
-        if (building) t->energy[4u * n + (uint32_t)q] = 0;
-        else t->prob[4u * n + (uint32_t)q] = 0.25f;
+        t->energy[4u * n + (uint32_t)q] = 0;
     }
     *index = n;
     return 1;
 }
+/* A copy of a sampling tree. */
 static int pt__dtree_copy(pt__dtree *dst, const pt__dtree *src)
 {
     memset(dst, 0, sizeof *dst);
     if (!src->nodes) return 1;
-    dst->child = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * 4u * src->nodes);
-    dst->prob = src->prob ? (float *)PT_MALLOC(sizeof(float) * 4u * src->nodes) : NULL;
-    dst->energy = src->energy ? (uint64_t *)PT_MALLOC(sizeof(uint64_t) * 4u * src->nodes) : NULL;
-    if (!dst->child || (src->prob && !dst->prob) || (src->energy && !dst->energy)) { pt__dtree_free(dst); return 0; }
-    memcpy(dst->child, src->child, sizeof(uint32_t) * 4u * src->nodes);
-    if (src->prob) memcpy(dst->prob, src->prob, sizeof(float) * 4u * src->nodes);
-    if (src->energy) memcpy(dst->energy, src->energy, sizeof(uint64_t) * 4u * src->nodes);
+    dst->node = (pt__dnode *)PT_MALLOC(sizeof(pt__dnode) * src->nodes);
+    if (!dst->node) return 0;
+    memcpy(dst->node, src->node, sizeof(pt__dnode) * src->nodes);
     dst->nodes = dst->cap = src->nodes;
     return 1;
 }
 static size_t pt__dtree_bytes(const pt__dtree *t)
 {
-    return (size_t)t->cap * 4u * (sizeof(uint32_t) + (t->prob ? sizeof(float) : 0u) + (t->energy ? sizeof(uint64_t) : 0u));
+    return (size_t)t->cap * (t->node ? sizeof(pt__dnode) : 0u) +
+           (size_t)t->cap * 4u * ((t->child ? sizeof(uint32_t) : 0u) + (t->energy ? sizeof(uint64_t) : 0u));
 }
 
-/* The spatial leaf holding p (coordinates of the guide's box; outside: clamped into it). */
+/* The spatial leaf holding p (coordinates of the guide's box; outside: clamped into it). A node
+   at depth d halves axis d mod 3 for the (d/3 + 1)-th time, so its side is bit 15 - d/3 of that
+   axis's 16-bit cell index: p becomes a 48-bit Morton code (x, y, z bits interleaved) once, and
+   the descent reads bit 47 - d, without a branch on the side. floor(c 2^16) keeps exactly the
+   bits that halving c in float would compare (x 2 and 2c - 1 are exact). */
+static uint64_t pt__guide_spread16(uint32_t v)
+{
+    uint64_t x = (uint64_t)(v & 0xffffu);
+    x = (x | (x << 16)) & 0x0000ff0000ffULL;
+    x = (x | (x << 8)) & 0x00f00f00f00fULL;
+    x = (x | (x << 4)) & 0x0c30c30c30c3ULL;
+    x = (x | (x << 2)) & 0x249249249249ULL;
+    return x;
+}
+static uint32_t pt__guide_cell16(float c)
+{
+    if (!(c < 1.0f)) return 0xffffu; /* (NaN too: the float descent took the upper half) */
+    return c > 0.0f ? (uint32_t)(c * 65536.0f) : 0u;
+}
 static uint32_t pt__guide_leaf_at(const pt_guide *g, pt_vec3 p)
 {
-    float c[3];
-    uint32_t n = 0;
-    c[0] = (p.x - g->lo.x) * g->inv_extent.x;
-    c[1] = (p.y - g->lo.y) * g->inv_extent.y;
-    c[2] = (p.z - g->lo.z) * g->inv_extent.z;
-    while (g->nodes[n].axis >= 0) {
-        int a = g->nodes[n].axis;
-        if (c[a] < 0.5f) { c[a] *= 2.0f; n = g->nodes[n].a; }
-        else { c[a] = 2.0f * c[a] - 1.0f; n = g->nodes[n].b; }
-    }
-    return g->nodes[n].a;
+    const uint64_t code = (pt__guide_spread16(pt__guide_cell16((p.x - g->lo.x) * g->inv_extent.x)) << 2) |
+                          (pt__guide_spread16(pt__guide_cell16((p.y - g->lo.y) * g->inv_extent.y)) << 1) |
+                          pt__guide_spread16(pt__guide_cell16((p.z - g->lo.z) * g->inv_extent.z));
+    const pt__guide_node *nd = g->nodes;
+    while (nd->axis >= 0) nd = g->nodes + nd->child[(code >> (47 - nd->depth)) & 1u];
+    return nd->child[0];
 }
 static pt_vec3 pt__guide_local(const pt_guide *g, pt_vec3 p) { return g->scene ? pt__to_local(g->scene, p) : p; }
 
@@ -3775,35 +3818,45 @@ static int pt__guide_sample(const pt_guide *g, uint32_t leaf, float u1, float u2
 
 /* The folded guide (pt_pdf_guide_hemisphere): fold n = 0 is the whole sphere. */
 static pt_vec3 pt__guide_mirror(pt_vec3 w, pt_vec3 n) { return pt_sub(w, pt_scale(n, 2.0f * pt_dot(w, n))); }
-/* The density over the square at the mirror of the square's point (x, y) through the plane of n,
-   for an axis normal (z flips x; x and y turn phi), without a second atan2; -1 for another n. */
-static float pt__guide_mirror_density(const pt__dtree *t, pt_vec3 n, float x, float y)
+/* The mirror of the square's point (x, y) through the plane of n, for an axis normal (z flips x;
+   x and y turn phi), without a second atan2; 0 for another n. */
+static int pt__guide_mirror_square(pt_vec3 n, float x, float y, float *mx, float *my)
 {
     float m;
-    if (n.x == 0.0f && n.y == 0.0f) return pt__dtree_density(t, pt__minf(1.0f - x, 0.99999994f), y);
-    if (!((n.y == 0.0f && n.z == 0.0f) || (n.x == 0.0f && n.z == 0.0f))) return -1.0f;
+    if (n.x == 0.0f && n.y == 0.0f) {
+        *mx = pt__minf(1.0f - x, 0.99999994f);
+        *my = y;
+        return 1;
+    }
+    if (!((n.y == 0.0f && n.z == 0.0f) || (n.x == 0.0f && n.z == 0.0f))) return 0;
     m = (n.x != 0.0f ? 0.5f : 1.0f) - y;
-    m = m < 0.0f ? m + 1.0f : (m >= 1.0f ? 0.0f : m);
-    return pt__dtree_density(t, x, m);
+    *mx = x;
+    *my = m < 0.0f ? m + 1.0f : (m >= 1.0f ? 0.0f : m);
+    return 1;
+}
+/* The density over the square at (x, y) plus that at its mirror through the plane of n (w: the
+   direction of (x, y), for a normal off the axes). */
+static float pt__guide_fold_density(const pt__dtree *t, pt_vec3 n, pt_vec3 w, float x, float y)
+{
+    float mx, my, d, dm;
+    if (!pt__guide_mirror_square(n, x, y, &mx, &my)) pt__guide_dir_to_square(pt__guide_mirror(w, n), &mx, &my);
+    pt__dtree_density2(t, x, y, mx, my, &d, &dm);
+    return d + dm;
 }
 static float pt__guide_value_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, pt_vec3 w)
 {
-    float c = pt_dot(w, n), x, y, dm;
-    const pt__dtree *t;
+    float c = pt_dot(w, n), x, y;
     if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) return pt__guide_value(g, leaf, w);
     if (!(c > 0.0f) || !g || leaf >= g->leaf_count) return 0.0f;
-    t = &g->leaves[leaf].sampling;
     pt__guide_dir_to_square(w, &x, &y);
-    dm = pt__guide_mirror_density(t, n, x, y);
-    if (dm < 0.0f) return pt__dtree_density(t, x, y) * PT__INV_4PI + pt__guide_value(g, leaf, pt__guide_mirror(w, n));
-    return (pt__dtree_density(t, x, y) + dm) * PT__INV_4PI;
+    return pt__guide_fold_density(&g->leaves[leaf].sampling, n, w, x, y) * PT__INV_4PI;
 }
 /* A draw of the guide, mirrored above n if it fell below; *p: the folded density of the direction
    returned (exact: as pt__guide_sample's, the draw moved off a cell's edge first). */
 static int pt__guide_sample_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, float u1, float u2, pt_vec3 *w, float *p,
                                  int exact)
 {
-    float c, d, dm;
+    float c, d, mx, my;
     double x, y, cell[3];
     if (exact || (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f)) {
         if (!pt__guide_sample(g, leaf, u1, u2, w, p, exact)) return 0;
@@ -3820,8 +3873,8 @@ static int pt__guide_sample_fold(const pt_guide *g, uint32_t leaf, pt_vec3 n, fl
     *w = pt__guide_square_to_dir(x, y);
     c = pt_dot(*w, n);
     if (c == 0.0f) return 0;
-    dm = pt__guide_mirror_density(&g->leaves[leaf].sampling, n, (float)x, (float)y);
-    *p = dm >= 0.0f ? (d + dm) * PT__INV_4PI : d * PT__INV_4PI + pt__guide_value(g, leaf, pt__guide_mirror(*w, n));
+    if (!pt__guide_mirror_square(n, (float)x, (float)y, &mx, &my)) pt__guide_dir_to_square(pt__guide_mirror(*w, n), &mx, &my);
+    *p = (d + pt__dtree_density(&g->leaves[leaf].sampling, mx, my)) * PT__INV_4PI;
     if (c < 0.0f) *w = pt__guide_mirror(*w, n);
     return *p > 0.0f;
 }
@@ -3908,15 +3961,16 @@ static int pt__dtree_to_sampling(const pt__dtree *b, pt__dtree *out)
 {
     uint32_t n;
     memset(out, 0, sizeof *out);
-    out->child = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * 4u * b->nodes);
-    out->prob = (float *)PT_MALLOC(sizeof(float) * 4u * b->nodes);
-    if (!out->child || !out->prob) { pt__dtree_free(out); return 0; }
-    memcpy(out->child, b->child, sizeof(uint32_t) * 4u * b->nodes);
+    out->node = (pt__dnode *)PT_MALLOC(sizeof(pt__dnode) * b->nodes);
+    if (!out->node) return 0;
     for (n = 0; n < b->nodes; ++n) {
         const uint64_t *e = b->energy + 4u * n;
         double sum = (double)e[0] + (double)e[1] + (double)e[2] + (double)e[3];
         int q;
-        for (q = 0; q < 4; ++q) out->prob[4u * n + (uint32_t)q] = sum > 0.0 ? (float)((double)e[q] / sum) : 0.25f;
+        for (q = 0; q < 4; ++q) {
+            out->node[n].prob[q] = sum > 0.0 ? (float)((double)e[q] / sum) : 0.25f;
+            out->node[n].child[q] = b->child[4u * n + (uint32_t)q];
+        }
     }
     out->nodes = out->cap = b->nodes;
     return 1;
@@ -3933,7 +3987,7 @@ static int pt__dtree_refine(const pt_guide *g, const pt__dtree *s, pt__dtree *b,
     int top = 0;
     uint32_t root;
     memset(b, 0, sizeof *b);
-    if (!pt__dtree_push(b, 1, &root)) return 0;
+    if (!pt__dtree_push(b, &root)) return 0;
     stack[top].s = 0;
     stack[top].has_s = s->nodes > 0;
     stack[top].b = root;
@@ -3944,15 +3998,15 @@ static int pt__dtree_refine(const pt_guide *g, const pt__dtree *s, pt__dtree *b,
         pt__refine_item it = stack[--top];
         int q;
         for (q = 0; q < 4; ++q) {
-            float fq = it.f * (it.has_s ? s->prob[4u * it.s + (uint32_t)q] : 0.25f);
+            float fq = it.f * (it.has_s ? s->node[it.s].prob[q] : 0.25f);
             uint32_t c;
             if (!(fq > g->desc.directional_threshold) || it.depth >= g->desc.max_directional_depth) continue;
             if (*budget == 0) { *at_bound = 1; continue; }
-            if (!pt__dtree_push(b, 1, &c)) return 0;
+            if (!pt__dtree_push(b, &c)) return 0;
             --*budget;
             b->child[4u * it.b + (uint32_t)q] = c;
-            stack[top].has_s = it.has_s && s->child[4u * it.s + (uint32_t)q] != 0;
-            stack[top].s = stack[top].has_s ? s->child[4u * it.s + (uint32_t)q] : 0;
+            stack[top].has_s = it.has_s && s->node[it.s].child[q] != 0;
+            stack[top].s = stack[top].has_s ? s->node[it.s].child[q] : 0;
             stack[top].b = c;
             stack[top].depth = it.depth + 1;
             stack[top].f = fq;
@@ -3967,7 +4021,7 @@ static int pt__dtree_refine(const pt_guide *g, const pt__dtree *s, pt__dtree *b,
    from the leaf's sampling tree, each with half its records. 0 when out of memory. */
 static int pt__guide_split(pt_guide *g, uint32_t i)
 {
-    uint32_t old = g->nodes[i].a, fresh = g->leaf_count;
+    uint32_t old = g->nodes[i].child[0], fresh = g->leaf_count;
     pt__guide_leaf *l;
     if (g->node_count + 2u > g->node_cap) {
         uint32_t cap = 2u * g->node_cap;
@@ -3993,13 +4047,13 @@ static int pt__guide_split(pt_guide *g, uint32_t i)
     g->leaf_count++;
     g->nodes[g->node_count].axis = -1;
     g->nodes[g->node_count].depth = g->nodes[i].depth + 1;
-    g->nodes[g->node_count].a = old;
-    g->nodes[g->node_count].b = 0;
+    g->nodes[g->node_count].child[0] = old;
+    g->nodes[g->node_count].child[1] = 0;
     g->nodes[g->node_count + 1u] = g->nodes[g->node_count];
-    g->nodes[g->node_count + 1u].a = fresh;
+    g->nodes[g->node_count + 1u].child[0] = fresh;
     g->nodes[i].axis = g->nodes[i].depth % 3;
-    g->nodes[i].a = g->node_count;
-    g->nodes[i].b = g->node_count + 1u;
+    g->nodes[i].child[0] = g->node_count;
+    g->nodes[i].child[1] = g->node_count + 1u;
     g->node_count += 2u;
     return 1;
 }
@@ -4048,7 +4102,7 @@ static int pt__guide_update(pt_guide *g)
     for (i = 0; i < g->node_count; ++i) { /* (nodes appended by a split are visited too) */
         uint32_t leaf;
         if (g->nodes[i].axis >= 0) continue;
-        leaf = g->nodes[i].a;
+        leaf = g->nodes[i].child[0];
         if (!((double)g->leaves[leaf].records > threshold) || g->nodes[i].depth >= PT__GUIDE_SPATIAL_MAX_DEPTH)
             continue;
         if (2u * (pt__guide_sampling_nodes(g) + g->leaves[leaf].sampling.nodes + 1u) > g->max_nodes) {
@@ -4107,7 +4161,7 @@ static int pt__guide_make(const pt_guide_desc *d, pt_vec3 lo, pt_vec3 hi, const 
     g->node_count = g->leaf_count = 1;
     g->nodes[0].axis = -1;
     g->nodes[0].depth = 0;
-    g->nodes[0].a = g->nodes[0].b = 0;
+    g->nodes[0].child[0] = g->nodes[0].child[1] = 0;
     memset(&g->leaves[0], 0, sizeof g->leaves[0]);
 #if !defined(PDFTRACE_NO_THREADS) && !defined(__GNUC__) && !defined(__clang__)
     pthread_mutex_init(&g->lock, NULL);
@@ -8817,9 +8871,10 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
 {
     pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir, v->eta);
     float w = 1.0f;
+    const int mis = cfg->strategy == PT_STRATEGY_MIS && !v->m->delta;
     if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
-    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta)
-        w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
+    /* (the MIS weight after the shadow ray: a guided density costs a tree descent, wasted on an
+       occluded light) */
     if (li == PT__ENV_LIGHT) { /* the environment: a shadow ray to infinity */
         pt_color Le = ls->radiance;
         pt_ray sr;
@@ -8830,9 +8885,11 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
         pt__rayctx_init2(&src, sr, tri);
         st->shadow_rays++;
         if (pt__scene_any(s, &src, PT__INF, 0xffffffffu)) return pt_v3(0, 0, 0);
+        if (mis) w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
         return pt_mul(beta, pt_scale(pt_mul(f, Le), w / ls->pdf));
     }
     if (!pt__light_visible(s, v, ls, li, tri, st)) return pt_v3(0, 0, 0);
+    if (mis) w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
     {
         const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
         return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
@@ -9176,19 +9233,24 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
     return L;
 }
 
-/* Path guiding at non-delta vertex v: the learned guide's leaf, once it has data, folded about the
-   geometric normal (non-delta materials reflect only: pt__continue; a transmitting one keeps the
-   whole sphere, fold 0), and guided roulette's
-   estimate of what going on adds per unit throughput. */
-static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_stats *st)
+/* Path guiding at non-delta vertex v (bounce `depth`): guided roulette's estimate of what going on
+   adds per unit throughput, from the learned guide's leaf once it has data, and, at the first
+   PT__GUIDE_SAMPLE_DEPTH bounces, the leaf's guide folded about the geometric normal (non-delta
+   materials reflect only: pt__continue; a transmitting one keeps the whole sphere, fold 0).
+   Deeper vertices sample the material alone: each guided vertex pays two quadtree descents and
+   an atan2, and the light the guide finds matters most where the path's throughput is still
+   high (bench/README.md, "Path guiding, step by step"). */
+#define PT__GUIDE_SAMPLE_DEPTH 2
+static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, int depth, pt_path_stats *st)
 {
     uint32_t leaf = pt__guide_leaf_at(cfg->learned, v->p);
     if (!cfg->learned->leaves[leaf].trained) return;
+    v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
+    if (depth >= PT__GUIDE_SAMPLE_DEPTH) return;
     v->guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
     v->guide.as.guide.guide = cfg->learned;
     v->guide.as.guide.leaf = leaf;
     v->guide.as.guide.fold = PT__UNLIKELY(v->m->transmits) ? pt_v3(0.0f, 0.0f, 0.0f) : v->ng;
-    v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
     v->g = cfg->learned_weight;
     v->has_guide = 1;
     st->guided_vertices++;
@@ -9321,7 +9383,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 v.g = cfg->guide_weight;
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
             } else if (cfg->learned) {
-                pt__vertex_learned(cfg, &v, st);
+                pt__vertex_learned(cfg, &v, depth, st);
             }
             /* next-event estimation (LIGHT and MIS) */
             if (nee) {
@@ -10471,8 +10533,8 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
                                      guide that adds rare bright paths looks better than it is (the
                                      door measures 1.37 and is 0.5x; docs/design.md) */
 #define PT__GUIDING_AUTO_SHARE 0.25 /* ... measured within this share of the training budget */
-#define PT__GUIDING_LOOKUP_COST 1.6 /* AUTO's cost model: a guided vertex costs 1.6 rays (measured on
-                                       the Cornell box: docs/design.md, "Path guiding") */
+#define PT__GUIDING_LOOKUP_COST 2.0 /* AUTO's cost model: a guided vertex costs 2 rays (the door 1.6,
+                                       the Cornell box 2.1, training included: docs/design.md) */
 
 static int pt__guiding_check(const pt_render_desc *d, char *err, size_t n)
 {

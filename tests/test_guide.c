@@ -795,6 +795,69 @@ static void guide_image_matches_value(test_ctx *t)
     pt_guide_destroy(g);
 }
 
+/* the direction spatial_leaves_are_local records along in quarter q (0..3) of axis a */
+static pt_vec3 quarter_dir(int a, int q)
+{
+    pt_vec3 w = pt_v3(0, 0, 0);
+    float *wc = &w.x;
+    wc[q < 2 ? a : (a + 1) % 3] = (q & 1) ? -1.0f : 1.0f;
+    return w;
+}
+static void spatial_leaves_are_local(test_ctx *t)
+{
+    /* The spatial tree halves the box along x, y, z at their middles, so once it has split twice
+       per axis a leaf lies in one quarter of each axis of [-1, 1]^3. For each axis a, records at
+       uniform points go along a direction of their quarter of a: +e_a, -e_a, +e_b, -e_b (b the
+       next axis; two rounds of 6 x 10^4 records, spatial threshold 300: hundreds of leaves); at
+       24 points per axis, a quarter's centre along a and random across, the guide must put at
+       least 8 times more density along its quarter's direction than along each of the other
+       three (a point looked up in a leaf of another quarter, or a leaf that mixed quarters, fails).
+       Exact for a given seed. */
+    int a, bad = 0, worst_axis = -1;
+    double worst = HUGE_VAL;
+    for (a = 0; a < 3; a++) {
+        pt_guide_desc gd;
+        pt_guide *g = NULL;
+        pt_rng rng;
+        int k, i, o;
+        memset(&gd, 0, sizeof gd);
+        gd.bounds_min = pt_v3(-1, -1, -1);
+        gd.bounds_max = pt_v3(1, 1, 1);
+        gd.spatial_threshold = 300.0f;
+        if (!CHECK(t, pt_guide_create(&gd, &g) == PT_OK, "pt_guide_create")) return;
+        pt_rng_seed(&rng, 907u + (uint64_t)a, 1u);
+        for (k = 0; k < 2; k++) {
+            for (i = 0; i < 60000; i++) {
+                pt_vec3 p = rand_point(&rng);
+                const float *pc = &p.x;
+                int quarter = (int)((pc[a] + 1.0f) * 2.0f);
+                pt_guide_record(g, p, quarter_dir(a, quarter > 3 ? 3 : quarter), 1.0f);
+            }
+            if (!CHECK(t, pt_guide_update(g) == PT_OK, "pt_guide_update")) { pt_guide_destroy(g); return; }
+        }
+        for (i = 0; i < 24; i++) {
+            pt_vec3 p = rand_point(&rng);
+            float *pc = &p.x;
+            int quarter = i % 4, ok = 1;
+            pt_pdf pdf;
+            double along;
+            pc[a] = -0.75f + 0.5f * (float)quarter;
+            pdf = pt_pdf_guide(g, p);
+            along = pt_pdf_value(&pdf, quarter_dir(a, quarter));
+            for (o = 0; o < 4; o++) {
+                double other = o == quarter ? 0.0 : pt_pdf_value(&pdf, quarter_dir(a, o));
+                if (!(along >= 8.0 * other)) ok = 0;
+                if (o != quarter && along / (other + 1e-30) < worst) { worst = along / (other + 1e-30); worst_axis = a; }
+            }
+            bad += !ok;
+        }
+        pt_guide_destroy(g);
+    }
+    CHECK(t, bad == 0, "%d of 72 points with less than 8x the density along their quarter's direction as along another's "
+          "(worst %.3g, axis %d)", bad, worst, worst_axis);
+    test_note(t, "worst ratio own / other quarter's direction %.3g (axis %d)", worst, worst_axis);
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* 4. determinism                                                                              */
 
@@ -1677,6 +1740,7 @@ const test_case test_guide_cases[] = {
     TEST_CASE(harness_rejects_unfolded_density),
     TEST_CASE(sample_value_and_normalisation),
     TEST_CASE(guide_image_matches_value),
+    TEST_CASE(spatial_leaves_are_local),
     TEST_CASE(guide_order_independent),
     TEST_CASE(render_threads_bit_identical),
     TEST_CASE(render_unbiased),
