@@ -189,11 +189,21 @@ typedef struct pt_scenefile_checker {
     float scale;
 } pt_scenefile_checker;
 
+/* An `image_texture` statement: the pixels as the build hands them to pt_scene_add_image_texture
+   (linear: an 8-bit PNG decoded from sRGB unless raw). */
+typedef struct pt_scenefile_image {
+    char name[PT_SCENEFILE_NAME_MAX];
+    pt_image image;
+    int raw;                     /* `raw`: a PNG's codes kept as they are (non-colour data) */
+    int line;                    /* line of the statement, for messages */
+} pt_scenefile_image;
+
 typedef struct pt_scenefile_material {
     char name[PT_SCENEFILE_NAME_MAX];
     pt_material_type type;
     pt_color albedo;             /* lambertian, metal */
     int checker;                 /* -1, or an index into pt_scenefile.checkers (lambertian) */
+    int image;                   /* -1, or an index into pt_scenefile.images (lambertian) */
     float fuzz, ior;
     pt_color emission;           /* emitter */
     int two_sided;
@@ -206,6 +216,8 @@ typedef struct pt_obj_mesh {
     float *positions;            /* 3 per vertex, object space */
     float *normals;              /* 3 per vertex, or NULL */
     uint32_t *indices;           /* 3 per triangle */
+    float *uvs;                  /* 2 per vertex (pt_mesh_desc.uvs: the file's vt as (u, 1 - v), as
+                                    Mitsuba 3 reads OBJ), or NULL */
     uint32_t vertex_count, triangle_count;
 } pt_obj_mesh;
 
@@ -248,6 +260,7 @@ typedef struct pt_scenefile {
     int pov_light_grid;          /* N: N x N spotlights per quad emitter */
     int pov_radiosity;           /* 0 none, 1 POV defaults, 2 medium, 3 high (docs/povray.md) */
     pt_scenefile_checker *checkers; int checker_count;
+    pt_scenefile_image *images; int image_count;
     pt_scenefile_material *materials; int material_count;
     pt_scenefile_shape *shapes; int shape_count;
     pt_scenefile_light *lights; int light_count; /* in the file's order (their ids in the scene) */
@@ -282,6 +295,10 @@ typedef struct pt_scenefile_options {
        error code with a message in err. NULL: only PFM maps are read, and an .exr map is
        refused as needing OpenEXR. */
     int (*read_image)(const void *data, size_t size, const char *name, pt_image *out, char *err, size_t err_size);
+    /* Decodes a .png image texture, as pt_read_png_memory of pdftrace_png.h does (pass it):
+       channels as their 8-bit codes / 255, which the loader decodes from sRGB unless the
+       statement says raw. NULL: a .png texture is refused as needing libpng. */
+    int (*read_png)(const void *data, size_t size, const char *name, pt_image *out, char *err, size_t err_size);
 } pt_scenefile_options;
 
 /* Loads a scene file. On failure returns an error code, writes "file:line: message" to
@@ -577,6 +594,11 @@ PTDEF void pt_scenefile_free(pt_scenefile *d)
     PT_FREE(d->lights);
     PT_FREE(d->materials);
     PT_FREE(d->checkers);
+    if (d->images) {
+        int i;
+        for (i = 0; i < d->image_count; ++i) pt_image_free(&d->images[i].image);
+    }
+    PT_FREE(d->images);
     memset(d, 0, sizeof *d);
 }
 
@@ -832,6 +854,13 @@ static int pt__sf_find_material(const pt_scenefile *d, const char *name)
         if (strcmp(d->materials[i].name, name) == 0) return i;
     return -1;
 }
+static int pt__sf_find_image(const pt_scenefile *d, const char *name)
+{
+    int i;
+    for (i = 0; i < d->image_count; ++i)
+        if (strcmp(d->images[i].name, name) == 0) return i;
+    return -1;
+}
 static int pt__sf_find_checker(const pt_scenefile *d, const char *name)
 {
     int i;
@@ -847,7 +876,7 @@ static int pt__sf_new_name(pt__sf_parser *p, const char *kind, const char **out)
         return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT,
                            "%s: bad name '%s' (letters, digits, _ and -, at most %d characters, not starting with a digit)",
                            kind, t, PT_SCENEFILE_NAME_MAX - 1);
-    if (pt__sf_find_material(p->d, t) >= 0 || pt__sf_find_checker(p->d, t) >= 0)
+    if (pt__sf_find_material(p->d, t) >= 0 || pt__sf_find_checker(p->d, t) >= 0 || pt__sf_find_image(p->d, t) >= 0)
         return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: name '%s' is already defined", kind, t);
     *out = t;
     return PT_OK;
@@ -867,9 +896,11 @@ static int pt__sf_material_ref(pt__sf_parser *p, int *out)
 typedef struct pt__obj {
     float *v; int nv, cv;       /* 3 floats per position */
     float *vn; int nn, cn;
+    float *vt; int nt, ct;      /* 3 floats per texture coordinate (u, v, unused) */
     pt_obj_mesh *m;
     uint32_t cap_vert, cap_tri;
     int with_normals;           /* -1 unknown, 0, 1 */
+    int with_uvs;               /* -1 unknown, 0, 1 */
     int statements;             /* statements read so far */
     uint64_t limit, used;       /* bytes the arrays may take, and take (their capacities) */
     int over_limit;             /* set when a growth was refused by the limit */
@@ -949,12 +980,12 @@ static long pt__obj_index(const char *t, size_t len, int count)
     if (v < 0 && -v <= count) return count + v;
     return -1;
 }
-static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm)
+static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm, const float *uv)
 {
     pt_obj_mesh *m = o->m;
     if (m->vertex_count == o->cap_vert) {
         uint32_t nc = o->cap_vert ? o->cap_vert * 2u : 1024u;
-        size_t per = 3u * sizeof(float) * (nrm ? 2u : 1u);
+        size_t per = 3u * sizeof(float) * (nrm ? 2u : 1u) + (uv ? 2u * sizeof(float) : 0u);
         float *np;
         if (!pt__obj_charge(o, (size_t)o->cap_vert * per, (size_t)nc * per)) return PT_ERROR_OUT_OF_MEMORY;
         np = (float *)PT_REALLOC(m->positions, (size_t)nc * 3u * sizeof(float));
@@ -965,10 +996,19 @@ static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm)
             if (!nn) return PT_ERROR_OUT_OF_MEMORY;
             m->normals = nn;
         }
+        if (uv) {
+            float *nu = (float *)PT_REALLOC(m->uvs, (size_t)nc * 2u * sizeof(float));
+            if (!nu) return PT_ERROR_OUT_OF_MEMORY;
+            m->uvs = nu;
+        }
         o->cap_vert = nc;
     }
     memcpy(m->positions + 3u * m->vertex_count, pos, 3u * sizeof(float));
     if (nrm) memcpy(m->normals + 3u * m->vertex_count, nrm, 3u * sizeof(float));
+    if (uv) { /* v flipped: OBJ's v runs up the image, pdftrace's (Mitsuba's) down from row 0 */
+        m->uvs[2u * m->vertex_count] = uv[0];
+        m->uvs[2u * m->vertex_count + 1u] = 1.0f - uv[1];
+    }
     m->vertex_count++;
     return PT_OK;
 }
@@ -1002,6 +1042,21 @@ static int pt__obj_line(void *ctx, char *line, int number)
         }
         return PT_OK;
     }
+    if (strcmp(tok[0], "vt") == 0) { /* vt u [v [w]]: v defaults to 0, w is ignored */
+        float uv[3] = {0, 0, 0};
+        int rc;
+        if (n < 2 || n > 4) return pt__obj_fail(o, number, "'vt' needs 1 to 3 numbers");
+        for (i = 1; i < n && i < 3; ++i) {
+            double x;
+            if (!pt__sf_parse_double(tok[i], &x) || !pt__sf_finite(x) || fabs(x) > PT__SF_MAX_VALUE)
+                return pt__obj_fail(o, number, "'%s' is not a finite number of magnitude <= 1e7", tok[i]);
+            uv[i - 1] = (float)x;
+        }
+        if ((uint32_t)o->nt >= PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many texture coordinates");
+        if ((rc = pt__obj_grow3(o, &o->vt, &o->ct, o->nt)) != PT_OK) return rc;
+        memcpy(o->vt + 3 * o->nt++, uv, sizeof uv);
+        return PT_OK;
+    }
     if (strcmp(tok[0], "f") == 0) {
         uint32_t first = o->m->vertex_count, k;
         int corners = n - 1;
@@ -1009,8 +1064,9 @@ static int pt__obj_line(void *ctx, char *line, int number)
         if (o->m->vertex_count + (uint32_t)corners > PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many face vertices");
         for (i = 1; i < n; ++i) {
             const char *t = tok[i], *s1 = strchr(t, '/'), *s2 = s1 ? strchr(s1 + 1, '/') : NULL;
-            long vi = pt__obj_index(t, s1 ? (size_t)(s1 - t) : strlen(t), o->nv), ni = -1;
+            long vi = pt__obj_index(t, s1 ? (size_t)(s1 - t) : strlen(t), o->nv), ni = -1, ti = -1;
             int has_n = s2 && s2[1] != '\0';
+            int has_t = s1 && s1[1] != '/' && s1[1] != '\0';
             int rc;
             if (vi < 0) return pt__obj_fail(o, number, "face vertex '%s': position index out of range (%d positions so far)", t, o->nv);
             if (s2 && !has_n) return pt__obj_fail(o, number, "face vertex '%s': empty normal index", t);
@@ -1021,7 +1077,15 @@ static int pt__obj_line(void *ctx, char *line, int number)
             if (o->with_normals < 0) o->with_normals = has_n;
             if (o->with_normals != has_n)
                 return pt__obj_fail(o, number, "face vertex '%s': some face vertices have normals and some do not", t);
-            rc = pt__obj_push_vertex(o, o->v + 3 * vi, has_n ? o->vn + 3 * ni : NULL);
+            if (has_t) {
+                ti = pt__obj_index(s1 + 1, s2 ? (size_t)(s2 - s1 - 1) : strlen(s1 + 1), o->nt);
+                if (ti < 0)
+                    return pt__obj_fail(o, number, "face vertex '%s': texture coordinate index out of range (%d so far)", t, o->nt);
+            }
+            if (o->with_uvs < 0) o->with_uvs = has_t;
+            if (o->with_uvs != has_t)
+                return pt__obj_fail(o, number, "face vertex '%s': some face vertices have texture coordinates and some do not", t);
+            rc = pt__obj_push_vertex(o, o->v + 3 * vi, has_n ? o->vn + 3 * ni : NULL, has_t ? o->vt + 3 * ti : NULL);
             if (rc != PT_OK) return rc;
         }
         for (k = 1; k + 1 < (uint32_t)corners; ++k) {
@@ -1042,7 +1106,7 @@ static int pt__obj_line(void *ctx, char *line, int number)
         }
         return PT_OK;
     }
-    if (!strcmp(tok[0], "vt") || !strcmp(tok[0], "o") || !strcmp(tok[0], "g") || !strcmp(tok[0], "s") ||
+    if (!strcmp(tok[0], "o") || !strcmp(tok[0], "g") || !strcmp(tok[0], "s") ||
         !strcmp(tok[0], "usemtl") || !strcmp(tok[0], "mtllib"))
         return PT_OK;
     return pt__obj_fail(o, number, "unsupported OBJ statement '%s' (v, vn, f, vt, o, g, s, usemtl, mtllib)", tok[0]);
@@ -1052,6 +1116,7 @@ PTDEF void pt_obj_mesh_free(pt_obj_mesh *m)
     if (!m) return;
     PT_FREE(m->positions);
     PT_FREE(m->normals);
+    PT_FREE(m->uvs);
     PT_FREE(m->indices);
     memset(m, 0, sizeof *m);
 }
@@ -1059,7 +1124,7 @@ PTDEF void pt_obj_mesh_free(pt_obj_mesh *m)
 /* Bytes a parsed mesh holds once its arrays are trimmed to their counts. */
 static uint64_t pt__obj_bytes(const pt_obj_mesh *m)
 {
-    return (uint64_t)m->vertex_count * 12u * (m->normals ? 2u : 1u) + (uint64_t)m->triangle_count * 12u;
+    return (uint64_t)m->vertex_count * (12u * (m->normals ? 2u : 1u) + (m->uvs ? 8u : 0u)) + (uint64_t)m->triangle_count * 12u;
 }
 
 /* pt_obj_parse with a limit on the bytes of its arrays; *over_limit tells that the limit, not
@@ -1072,6 +1137,7 @@ static int pt__obj_parse(const char *text, size_t length, const char *name, uint
     memset(&o, 0, sizeof o);
     o.m = out;
     o.with_normals = -1;
+    o.with_uvs = -1;
     o.limit = limit;
     o.file = name;
     o.err = err;
@@ -1082,6 +1148,7 @@ static int pt__obj_parse(const char *text, size_t length, const char *name, uint
     *over_limit = o.over_limit;
     PT_FREE(o.v);
     PT_FREE(o.vn);
+    PT_FREE(o.vt);
     if (rc != PT_OK) {
         pt_obj_mesh_free(out);
         return rc;
@@ -1091,6 +1158,7 @@ static int pt__obj_parse(const char *text, size_t length, const char *name, uint
         if (np) out->positions = (float *)np;
         if (out->normals && (nn = PT_REALLOC(out->normals, (size_t)out->vertex_count * 12u)) != NULL)
             out->normals = (float *)nn;
+        if (out->uvs && (nn = PT_REALLOC(out->uvs, (size_t)out->vertex_count * 8u)) != NULL) out->uvs = (float *)nn;
         if ((ni = PT_REALLOC(out->indices, (size_t)out->triangle_count * 12u)) != NULL) out->indices = (uint32_t *)ni;
     }
     return PT_OK;
@@ -1119,6 +1187,7 @@ PTDEF pt_mesh_desc pt_obj_mesh_desc(const pt_obj_mesh *m, int material)
     md.indices = m->indices;
     md.triangle_count = m->triangle_count;
     md.normals = m->normals;
+    md.uvs = m->uvs;
     return md;
 }
 
@@ -1567,6 +1636,7 @@ static int pt__sf_material(pt__sf_parser *p)
     memset(&m, 0, sizeof m);
     strcpy(m.name, name);
     m.checker = -1;
+    m.image = -1;
     type = pt__sf_next(p);
     if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, roughconductor, dielectric, emitter)", name);
     if (!strcmp(type, "lambertian")) {
@@ -1575,9 +1645,12 @@ static int pt__sf_material(pt__sf_parser *p)
             const char *t;
             p->pos++;
             t = pt__sf_next(p);
-            if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing checker name after 'texture'", name);
+            if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing texture name after 'texture'", name);
             m.checker = pt__sf_find_checker(d, t);
-            if (m.checker < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: checker '%s' is not defined", name, t);
+            m.image = pt__sf_find_image(d, t);
+            if (m.checker < 0 && m.image < 0)
+                return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: texture '%s' is not defined (checker or image_texture)",
+                                   name, t);
         } else if ((rc = pt__sf_color(p, "lambertian albedo", &m.albedo)) != PT_OK) return rc;
     } else if (!strcmp(type, "metal")) {
         m.type = PT_MATERIAL_METAL;
@@ -1870,6 +1943,78 @@ static int pt__sf_environment(pt__sf_parser *p)
     return PT_OK;
 }
 
+/* image_texture NAME FILE [raw]: FILE confined as a mesh's path, decoded as PFM (.pfm), PNG
+   (.png, by pt_scenefile_options.read_png; 8-bit sRGB codes decoded to linear unless raw) or
+   by read_image (any other, OpenEXR); PFM and EXR are linear already. Pixels must be finite
+   and >= 0, at most PT__SF_MAX_ENV_PIXELS of them. */
+static int pt__sf_image_texture(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    const char *name = NULL, *file, *why = "";
+    char shown[PT__SF_PATH], msg[768];
+    pt__sf_in in;
+    pt_scenefile_image t;
+    pt_scenefile_image *nt;
+    char *data = NULL;
+    size_t len = 0, i, n;
+    int rc, pfm, png;
+    int (*reader)(const void *, size_t, const char *, pt_image *, char *, size_t);
+    if ((rc = pt__sf_new_name(p, "image_texture", &name)) != PT_OK) return rc;
+    memset(&t, 0, sizeof t);
+    strcpy(t.name, name);
+    t.line = p->line;
+    file = pt__sf_next(p);
+    if (!file) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "image_texture %s: missing image file name", name);
+    if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "raw")) { p->pos++; t.raw = 1; }
+    if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+    pfm = pt__sf_has_ext(file, ".pfm");
+    png = pt__sf_has_ext(file, ".png");
+    reader = png ? (p->opt ? p->opt->read_png : NULL) : (p->opt ? p->opt->read_image : NULL);
+    if (!pfm && !reader)
+        return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "image_texture %s: '%s': %s", name, file,
+                           png ? "this program was built without libpng, so it reads no PNG textures "
+                                 "(pt_scenefile_options.read_png is NULL)"
+                               : "not a .pfm or .png file, and this program reads no other format (an .exr texture "
+                                 "needs a build with OpenEXR)");
+    if (d->image_count >= 4096) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "image_texture: too many textures (4096)");
+    if ((rc = pt__sf_open_input(p, file, shown, sizeof shown, &in)) != PT_OK) return rc;
+    if ((rc = pt__sf_in_read(&in, PT__SF_MAX_FILE, &data, &len, &why)) != PT_OK)
+        return pt__sf_fail(p, rc, "image_texture %s: cannot read '%s': %s", name, file, why);
+    msg[0] = '\0';
+    rc = pfm ? pt__sf_pfm(data, len, shown, &t.image, msg, sizeof msg) : reader(data, len, shown, &t.image, msg, sizeof msg);
+    PT_FREE(data);
+    if (rc != PT_OK) {
+        pt_image_free(&t.image);
+        return pt__sf_fail(p, rc < 0 ? rc : PT_ERROR_IO, "image_texture %s: %s", name, msg[0] ? msg : "cannot decode the image");
+    }
+    if (t.image.width < 1 || t.image.height < 1 || !t.image.rgb ||
+        (uint64_t)t.image.width * (uint64_t)t.image.height > PT__SF_MAX_ENV_PIXELS) {
+        rc = pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "image_texture %s: '%s': %d x %d pixels: a texture has 1 to %lu", name, file,
+                         t.image.width, t.image.height, (unsigned long)PT__SF_MAX_ENV_PIXELS);
+        pt_image_free(&t.image);
+        return rc;
+    }
+    n = 3u * (size_t)t.image.width * (size_t)t.image.height;
+    for (i = 0; i < n; ++i) {
+        float v = t.image.rgb[i];
+        if (!pt__sf_isfinite(v) || v < 0.0f) {
+            rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "image_texture %s: '%s': pixel (%d, %d) is not finite and >= 0",
+                             name, file, (int)((i / 3u) % (size_t)t.image.width), (int)((i / 3u) / (size_t)t.image.width));
+            pt_image_free(&t.image);
+            return rc;
+        }
+        if (png && !t.raw) t.image.rgb[i] = pt_srgb_decode(v);
+    }
+    nt = (pt_scenefile_image *)PT_REALLOC(d->images, (size_t)(d->image_count + 1) * sizeof *nt);
+    if (!nt) {
+        pt_image_free(&t.image);
+        return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+    }
+    d->images = nt;
+    d->images[d->image_count++] = t;
+    return PT_OK;
+}
+
 /* xfd = t xfd in double: a translation of 1e7 after a rotation keeps the object's small
    coordinates exact, where the float product rounds them to 1 unit. */
 static void pt__sf_xfd_identity(double x[3][4])
@@ -1951,6 +2096,8 @@ static int pt__sf_statement(pt__sf_parser *p)
         if ((rc = pt__sf_light(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "environment")) {
         if ((rc = pt__sf_environment(p)) != PT_OK) return rc;
+    } else if (!strcmp(kw, "image_texture")) {
+        if ((rc = pt__sf_image_texture(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "identity")) {
         p->xf = pt_transform_identity();
         pt__sf_xfd_identity(p->xfd);
@@ -2160,7 +2307,7 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
     if (scene) *scene = NULL;
     if (!d || !scene || !r) return PT_ERROR_INVALID_ARGUMENT;
     s = pt_scene_create();
-    tex = (int *)PT_MALLOC(((size_t)d->checker_count + 1u) * sizeof(int));
+    tex = (int *)PT_MALLOC(((size_t)d->checker_count + (size_t)d->image_count + 1u) * sizeof(int));
     mat = (int *)PT_MALLOC(((size_t)d->material_count + 1u) * sizeof(int));
     if (!s || !tex || !mat) {
         rc = pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_OUT_OF_MEMORY, "out of memory");
@@ -2171,13 +2318,20 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         tex[i] = pt_scene_add_checker(s, c->even, c->odd, c->scale);
         if (tex[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, tex[i], "checker %s: %s", c->name, pt_scene_error_message(s));
     }
+    for (i = 0; i < d->image_count && rc == PT_OK; ++i) { /* after the checkers in tex[] */
+        const pt_scenefile_image *im = &d->images[i];
+        int id = pt_scene_add_image_texture(s, &im->image);
+        tex[d->checker_count + i] = id;
+        if (id < 0)
+            rc = pt__sf_failf(err, err_size, d->file, im->line, id, "image_texture %s: %s", im->name, pt_scene_error_message(s));
+    }
     for (i = 0; i < d->material_count && rc == PT_OK; ++i) {
         const pt_scenefile_material *m = &d->materials[i];
         pt_material_desc md;
         memset(&md, 0, sizeof md);
         md.type = m->type;
         md.albedo = m->albedo;
-        md.albedo_texture = m->checker >= 0 ? tex[m->checker] : 0;
+        md.albedo_texture = m->checker >= 0 ? tex[m->checker] : m->image >= 0 ? tex[d->checker_count + m->image] : 0;
         md.fuzz = m->fuzz;
         md.ior = m->ior;
         md.emission = m->emission;

@@ -453,6 +453,9 @@ static int load(const char *path, pt_scenefile *sd)
 #ifdef PTV_HAVE_EXR
     opt.read_image = pt_read_exr_memory; /* `environment` maps in OpenEXR besides PFM */
 #endif
+#ifdef PTV_HAVE_PNG
+    opt.read_png = pt_read_png_memory; /* PNG image textures */
+#endif
     if (pt_scenefile_load_ex(path, &opt, sd, err, sizeof err) != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 0; }
     return 1;
 }
