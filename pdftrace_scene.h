@@ -2843,6 +2843,12 @@ static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *er
         if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
+        if (m->image >= 0)
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: an image texture (material %s) has no exact POV-Ray twin: POV-Ray's "
+                                "uv_mapping parameterises spheres about +y (pdftrace, as Mitsuba, about +z) and its "
+                                "image_map filtering is not pdftrace's bilinear lookup between texel centres; not "
+                                "approximated", m->name);
     }
     for (i = 0; i < d->light_count; ++i) {
         const pt_scenefile_light *l = &d->lights[i];
@@ -3056,7 +3062,18 @@ static void pt__mts_conductor(pt__mts *w, const pt_scenefile_material *m, int i)
     pt__mts_put(w, "</bsdf></bsdf>\n");
 }
 
-/* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse, a mirror as a
+/* Image texture `image` as Mitsuba 3's bitmap: the linear pixels pdftrace uses, written beside
+   the XML ("<stem>.tex.<image>.pfm", so Mitsuba decodes nothing), bilinear between texel
+   centres, repeated (pt_scene_add_image_texture: the same lookup); raw for non-colour data. */
+static void pt__mts_bitmap(pt__mts *w, const char *name, int image, int raw)
+{
+    pt__mts_put(w, "<texture type=\"bitmap\" name=\"%s\"><string name=\"filename\" value=\"%s.tex.%d.pfm\"/>"
+                   "<string name=\"filter_type\" value=\"bilinear\"/><string name=\"wrap_mode\" value=\"repeat\"/>"
+                   "<boolean name=\"raw\" value=\"%s\"/></texture>", name, w->base, image, raw ? "true" : "false");
+}
+
+/* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse (an image texture as
+   a bitmap), a mirror as a
    two-sided conductor without Fresnel (material "none": reflectance = specular_reflectance),
    glass as a smooth dielectric in vacuum, an emitter as black diffuse (it reflects nothing). */
 static void pt__mts_bsdf(pt__mts *w, int i)
@@ -3070,7 +3087,8 @@ static void pt__mts_bsdf(pt__mts *w, int i)
     switch (m->type) {
     case PT_MATERIAL_LAMBERTIAN:
         pt__mts_put(w, "  <bsdf type=\"twosided\" id=\"mat%d\"><bsdf type=\"diffuse\">", i);
-        pt__mts_rgb(w, "reflectance", m->albedo);
+        if (m->image >= 0) pt__mts_bitmap(w, "reflectance", m->image, 0);
+        else pt__mts_rgb(w, "reflectance", m->albedo);
         pt__mts_put(w, "</bsdf></bsdf>\n");
         break;
     case PT_MATERIAL_METAL:
@@ -3210,12 +3228,13 @@ static void pt__mts_ply_float(pt__mts *w, double x)
     memcpy(&u, &f, sizeof u);
     if (w->f) pt__mts_le32(w->f, u);
 }
-static void pt__mts_ply_header(pt__mts *w, uint32_t vertices, uint32_t faces, int normals)
+static void pt__mts_ply_header(pt__mts *w, uint32_t vertices, uint32_t faces, int normals, int uvs)
 {
     pt__mts_put(w, "ply\nformat binary_little_endian 1.0\ncomment written by pdftrace %d.%d.%d\n", PDFTRACE_VERSION_MAJOR,
                 PDFTRACE_VERSION_MINOR, PDFTRACE_VERSION_PATCH);
     pt__mts_put(w, "element vertex %lu\nproperty float x\nproperty float y\nproperty float z\n", (unsigned long)vertices);
     if (normals) pt__mts_put(w, "property float nx\nproperty float ny\nproperty float nz\n");
+    if (uvs) pt__mts_put(w, "property float u\nproperty float v\n"); /* Mitsuba's PLY reads them unflipped */
     pt__mts_put(w, "element face %lu\nproperty list uchar uint vertex_indices\nend_header\n", (unsigned long)faces);
 }
 static void pt__mts_ply_face(pt__mts *w, uint32_t a, uint32_t b, uint32_t c)
@@ -3264,7 +3283,7 @@ static void pt__mts_ply_mesh(pt__mts *w, const pt_scenefile_shape *s)
             if (!w->bad) w->bad_line = s->line;
             w->bad = 1;
         }
-        pt__mts_ply_header(w, m->vertex_count, faces, normals);
+        pt__mts_ply_header(w, m->vertex_count, faces, normals, m->uvs != NULL);
         for (k = 0; k < m->vertex_count; ++k) {
             double q[3];
             const float *pp = m->positions + 3u * k;
@@ -3276,6 +3295,10 @@ static void pt__mts_ply_mesh(pt__mts *w, const pt_scenefile_shape *s)
                 for (i = 0; i < 3; ++i) n[i] = it[i][0] * nn[0] + it[i][1] * nn[1] + it[i][2] * nn[2];
                 len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
                 for (i = 0; i < 3; ++i) pt__mts_ply_float(w, n[i] / len);
+            }
+            if (m->uvs) {
+                pt__mts_ply_float(w, m->uvs[2u * k]);
+                pt__mts_ply_float(w, m->uvs[2u * k + 1u]);
             }
         }
     }
@@ -3290,7 +3313,7 @@ static void pt__mts_ply_triangles(pt__mts *w, int material)
     int i, c, j;
     for (i = 0; i < d->shape_count; ++i)
         n += d->shapes[i].type == PT_SCENEFILE_TRIANGLE && d->shapes[i].material == material;
-    pt__mts_ply_header(w, 3u * n, n, 0);
+    pt__mts_ply_header(w, 3u * n, n, 0, 0);
     for (i = 0; i < d->shape_count; ++i) {
         const pt_scenefile_shape *s = &d->shapes[i];
         double x[3][4], q[3];
@@ -3550,6 +3573,14 @@ static void pt__mts_body(pt__mts *w)
 /* What the export refuses, before anything is written: every scene the build refuses (the
    build itself runs), a camera the renderer refuses, then what Mitsuba has no exact twin for
    (docs/mitsuba.md, with the measurements behind each). */
+/* The largest channel value of an image. */
+static float pt__mts_image_max(const pt_image *im)
+{
+    size_t i, n = 3u * (size_t)im->width * (size_t)im->height;
+    float m = 0.0f;
+    for (i = 0; i < n; ++i) m = im->rgb[i] > m ? im->rgb[i] : m;
+    return m;
+}
 static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *err, size_t err_size)
 {
     pt_scene *scene = NULL;
@@ -3572,6 +3603,8 @@ static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *er
         else if (m->type == PT_MATERIAL_LAMBERTIAN && m->checker >= 0)
             why = "the 3-D checker texture (material %s) has no exact Mitsuba equivalent (Mitsuba's checkerboard "
                   "is a 2-D texture over a shape's (u, v) coordinates)";
+        else if (m->image >= 0 && pt__mts_image_max(&d->images[m->image].image) > 1.0f)
+            why = "an image texture with a value above 1 (material %s): Mitsuba accepts RGB reflectances in [0, 1] only";
         else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_METAL ||
                   m->type == PT_MATERIAL_ROUGH_CONDUCTOR) &&
                  (m->albedo.x > 1 || m->albedo.y > 1 || m->albedo.z > 1))
@@ -3657,13 +3690,15 @@ static int pt__mts_plan(pt__mts *w)
 }
 
 /* "<path without .xml>.<job>.ply" into out (size bytes), or with job < 0 the environment map's
-   "<path without .xml>.env.pfm"; 0 if it does not fit. */
+   "<path without .xml>.env.pfm", with job <= -2 image texture -2 - job's "<...>.tex.N.pfm"; 0 if
+   it does not fit. */
 static int pt__mts_ply_path(const char *path, int job, char *out, size_t size)
 {
     size_t n = strlen(path);
     int k;
     if (n > 4 && !strcmp(path + n - 4, ".xml")) n -= 4;
-    if (job < 0) k = snprintf(out, size, "%.*s.env.pfm", (int)n, path);
+    if (job <= -2) k = snprintf(out, size, "%.*s.tex.%d.pfm", (int)n, path, -2 - job);
+    else if (job < 0) k = snprintf(out, size, "%.*s.env.pfm", (int)n, path);
     else k = snprintf(out, size, "%.*s.%d.ply", (int)n, path, job);
     return k > 0 && (size_t)k < size;
 }
@@ -3717,12 +3752,18 @@ static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_siz
 {
     char ply_path[PT__SF_PATH + 32];
     pt_output_file out;
-    int i, done = 0, env = 0, rc = PT_OK;
+    int i, done = 0, env = 0, tex = 0, rc = PT_OK;
     if (w->env.width > 0) {
         if (!pt__mts_ply_path(path, -1, ply_path, sizeof ply_path))
             return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
         if ((rc = pt_write_pfm_ex(ply_path, &w->env, err, err_size)) != PT_OK) return rc;
         env = 1;
+    }
+    for (i = 0; i < w->d->image_count && rc == PT_OK; ++i) {
+        if (!pt__mts_ply_path(path, -2 - i, ply_path, sizeof ply_path))
+            rc = pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
+        else if ((rc = pt_write_pfm_ex(ply_path, &w->d->images[i].image, err, err_size)) == PT_OK)
+            tex = i + 1;
     }
     for (i = 0; i < w->ply_count && rc == PT_OK; ++i)
         if ((rc = pt__mts_write_ply(w, path, i, err, err_size)) == PT_OK) done = i + 1;
@@ -3734,6 +3775,8 @@ static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_siz
     }
     for (i = env ? -1 : 0; rc != PT_OK && i < done; ++i)
         if (pt__mts_ply_path(path, i, ply_path, sizeof ply_path)) remove(ply_path);
+    for (i = 0; rc != PT_OK && i < tex; ++i)
+        if (pt__mts_ply_path(path, -2 - i, ply_path, sizeof ply_path)) remove(ply_path);
     return rc;
 }
 
@@ -3765,7 +3808,9 @@ PTDEF int pt_scenefile_export_mitsuba(const pt_scenefile *d, const char *path, c
         rc = pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
         goto done;
     }
-    if ((w.ply_count || d->environment.width > 0) && (rc = pt__mts_base(&w, path, err, err_size)) != PT_OK) goto done;
+    if ((w.ply_count || d->environment.width > 0 || d->image_count > 0) &&
+        (rc = pt__mts_base(&w, path, err, err_size)) != PT_OK)
+        goto done;
     if (d->environment.width > 0 && !pt__mts_env_map(&w)) {
         rc = pt__sf_failf(err, err_size, d->file, d->environment_line, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
         goto done;

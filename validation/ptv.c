@@ -1042,7 +1042,7 @@ static void test_malformed(const char *work)
 static void test_scenes_load(const char *dir)
 {
     static const char *const names[] = {"cornell", "cornell-diffuse", "direct-quad", "direct-sphere", "mirror", "glass", "checker", "mesh",
-                                        "lights", "lights-direct", "env", "rough-metal"};
+                                        "lights", "lights-direct", "env", "rough-metal", "textured"};
     size_t i;
     for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
         char path[2048], err[1024] = "";
