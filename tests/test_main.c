@@ -92,6 +92,7 @@ int main(int argc, char **argv)
         { "geometry", test_geometry_cases },
         { "materials", test_materials_cases },
         { "microfacet", test_microfacet_cases },
+        { "textures", test_textures_cases },
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
         { "adaptive", test_adaptive_cases },
