@@ -130,6 +130,7 @@
    - one-sided emitters facing away from the shading point (single-emitter scenes):
      the light component is dropped from the mixture for that vertex. PT_SKIP_FACING_AWAY.
    - no texture on a material: albedo is read directly from it. PT_SKIP_NO_TEXTURES, exact.
+     A hit's (u, v) is computed only at a material with an image texture (pt_hit.u, .v).
    - a light sample the material does not reflect (below the surface): no shadow ray.
      PT_SKIP_ZERO_BSDF_SHADOW, exact.
    - a rectangular light that is large next to its distance: sampled uniformly in solid angle
@@ -735,7 +736,9 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
    lit and seen from both sides), as are the metals; emission is one-sided (on the side of the
    geometric normal) unless two_sided_emission is set. The rough conductor is a GGX microfacet
    BRDF sampled by its visible normals, a density that mixes with the light PDFs like
-   Lambertian's (docs/materials.md).
+   Lambertian's (docs/materials.md). A material's albedo may come from a texture: the 3-D
+   checker at the world point, or an image at the hit's surface coordinates (pt_hit.u, .v;
+   docs/textures.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {
@@ -5154,7 +5157,8 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
 
 /* ------------------------------------------------------------------------------------------
    4. Materials and textures: the material table (Lambertian, metal with an optional fuzz lobe,
-   clear dielectric, emitter), the 3D checker, and what the integrator asks of a material: its
+   clear dielectric, emitter), the 3D checker and image textures (bilinear between texel
+   centres, repeated; looked up at the hit's (u, v)), and what the integrator asks of a material: its
    A * pScatter for a direction (BRDF times cosine), the density with which it samples a
    direction, a sampled direction, and the exact unpolarised Fresnel reflectance of a dielectric
    interface. Delta materials (mirror, glass) have no density and are followed by the integrator.

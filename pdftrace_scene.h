@@ -57,7 +57,14 @@
                                       (default |look_at - look_from|)
      checker NAME R G B R G B SCALE   a texture: the second colour where
                                       floor(x/s)+floor(y/s)+floor(z/s) is odd
-     material NAME lambertian R G B | lambertian texture CHECKER
+     image_texture NAME FILE [raw]    an image looked up at the surface's (u, v) (pdftrace.h,
+                                      pt_scene_add_image_texture: bilinear, repeated; pt_hit
+                                      has each shape's (u, v)); FILE as a mesh path: PFM or
+                                      OpenEXR (linear), or PNG (8-bit sRGB, decoded to linear;
+                                      raw: codes / 255 as they are, for non-colour data) when the
+                                      loader has a reader for it (pt_scenefile_options.read_png,
+                                      read_image); pixels finite and >= 0
+     material NAME lambertian R G B | lambertian texture CHECKER_OR_IMAGE
      material NAME metal R G B [fuzz F]
      material NAME roughconductor ALPHA METAL [tint R G B]   GGX rough metal (pdftrace.h,
                                       PT_MATERIAL_ROUGH_CONDUCTOR): ALPHA in [0, 1] (below 1e-3
@@ -70,7 +77,8 @@
      quad QX QY QZ UX UY UZ VX VY VZ MATERIAL      Q + a*u + b*v; normal (emitting side) u x v
      triangle AX AY AZ BX BY BZ CX CY CZ MATERIAL
      box LOX LOY LOZ HIX HIY HIZ MATERIAL
-     mesh PATH MATERIAL               Wavefront OBJ (v, vn, f; faces fanned into triangles),
+     mesh PATH MATERIAL               Wavefront OBJ (v, vn, vt, f; faces fanned into triangles;
+                                      vt read as (u, 1 - v), as Mitsuba 3 reads OBJ),
                                       PATH relative to the scene file's directory and
                                       inside it (below); a file is read once
      point_light X Y Z R G B          a point light of intensity R G B (W/sr)
@@ -134,7 +142,8 @@
    exact twin), an environment map (POV-Ray's sky_sphere lights diffuse surfaces only through
    radiosity, which misses a small bright sun), fuzzy metal, a rough conductor (POV-Ray has no
    microfacet reflection nor conductor Fresnel; only metal none below alpha 1e-3, a coloured
-   mirror, is exported), emitting triangles, boxes or meshes, a spot light whose beam is
+   mirror, is exported), an image texture (POV-Ray's uv_mapping and image_map filtering are not
+   pdftrace's), emitting triangles, boxes or meshes, a spot light whose beam is
    narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
    pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
    runs the build first, so it never writes what pdftrace would not render, such as a sphere
@@ -154,14 +163,16 @@
    `conductor` of material "none", a rough conductor as a two-sided `roughconductor`
    (distribution ggx, sample_visible true, alpha, RGB eta and k or material "none", the tint as
    specular_reflectance; below alpha 1e-3 the smooth `conductor`), glass as `dielectric`, an emitter as a one-sided `area`
-   light on its shape with a black bsdf, the background as a `constant` emitter, an
+   light on its shape with a black bsdf, an image texture as a `bitmap` (filter_type bilinear,
+   wrap_mode repeat; its linear pixels beside the XML as "<xml without .xml>.tex.N.pfm"; mesh
+   uvs in the PLY), the background as a `constant` emitter, an
    environment map as an `envmap` emitter (to_world the rotation) of a map resampled to 2H + 1
    rows beside the XML ("<xml without .xml>.env.pfm"), which makes Mitsuba's row interpolation
    pdftrace's exactly, with the background added to it (Mitsuba takes one environment emitter
    per scene), the point, spot and directional lights as Mitsuba's `point`, `spot` (to_world a lookat along the axis)
    and `directional` emitters (the same units and falloff). Refused with
    file:line and the reason (PT_ERROR_UNSUPPORTED, nothing written): fuzzy metal, the 3-D
-   checker, two-sided emitters, an albedo above 1, a dielectric of ior 1, and, as for
+   checker, two-sided emitters, an albedo (or an image texture's value) above 1, a dielectric of ior 1, and, as for
    POV-Ray, every scene the build refuses and one that needs a non-finite number.
 */
 #ifndef PDFTRACE_SCENE_H
@@ -890,7 +901,7 @@ static int pt__sf_material_ref(pt__sf_parser *p, int *out)
     return PT_OK;
 }
 
-/* ---- Wavefront OBJ: v, vn, f (v, v/vt, v//vn, v/vt/vn; negative = relative); vt, o, g, s,
+/* ---- Wavefront OBJ: v, vn, vt, f (v, v/vt, v//vn, v/vt/vn; negative = relative); o, g, s,
    usemtl, mtllib ignored. Every face corner becomes its own vertex (positions and normals in
    OBJ have separate indices); polygons are fanned from their first corner. */
 typedef struct pt__obj {
@@ -3724,7 +3735,7 @@ static int pt__mts_base(pt__mts *w, const char *path, char *err, size_t err_size
             return pt__sf_failf(err, err_size, w->d->file, w->ply_count ? w->ply[0].line : w->d->environment_line,
                                 PT_ERROR_UNSUPPORTED,
                                 "Mitsuba export: the scene needs files named after the output (PLY meshes, the "
-                                "environment map), and its file name holds a byte the XML cannot name them with (a "
+                                "environment map, image textures), and its file name holds a byte the XML cannot name them with (a "
                                 "control byte, a byte >= 0x80, '$' or '\\'); choose another name");
     pt_scenefile_escape(w->base, sizeof w->base, b, PT_SCENEFILE_ESCAPE_XML);
     return PT_OK;
