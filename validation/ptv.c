@@ -901,7 +901,7 @@ static const bad_case bad_cases[] = {
     {"roughconductor negative tint", "%Hmaterial r roughconductor 0.2 Cu tint 1 -1 1\n", "bad.scene:3: roughconductor tint"},
     {"bad name", "%Hmaterial 9lives lambertian 1 1 1\n", "bad name '9lives'"},
     {"unknown material type", "%Hmaterial n plastic 1 1 1\n", "unknown type 'plastic'"},
-    {"undefined checker", "%Hmaterial n lambertian texture nope\n", "checker 'nope' is not defined"},
+    {"undefined checker", "%Hmaterial n lambertian texture nope\n", "texture 'nope' is not defined"},
     {"checker scale 0", "%Hchecker c 1 1 1 0 0 0 0\n", "checker: scale must be >= 1e-6"},
     {"size 0", "%Hsize 0 100\n", "size: width: expected an integer in [1, 16384], got '0'"},
     {"size huge", "%Hsize 100000000000000000000 10\n", "expected an integer"},

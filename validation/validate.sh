@@ -85,7 +85,7 @@ lights            scenes         64   16    512   pixel   point, soft spot and d
 cornell           scenes         64   16    512   region  RTRL box: glass ball, caustics (heavy-tailed)
 env               scenes         64   16    256   pixel   sky map with a sun (scale 0.5, rotated), a diffuse ball, a mirror ball in its shadow
 rough-metal       scenes         64   16    256   pixel   GGX rough conductors (gold, copper, aluminium, silver) under a quad and a sphere light
-textured          scenes         64   16    256   pixel   image textures over (u, v): a PNG on a quad, a sphere and an OBJ with vt (repeat)
+textured          scenes         64   16    256   pixel   image textures over (u, v): an image on a quad, a sphere and an OBJ with vt (repeat)
 balls             bench/scenes   64   16    256   pixel   diffuse balls, global illumination
 many-lights       bench/scenes   64   16    512   pixel   five lights over four orders of power
 metal-glass       bench/scenes   64   16    512   region  mirror and glass balls, caustics (heavy-tailed)
