@@ -597,6 +597,7 @@ PTDEF void pt_scenefile_free(pt_scenefile *d)
     for (i = 0; i < d->mesh_count; ++i) {
         PT_FREE(d->meshes[i].positions);
         PT_FREE(d->meshes[i].normals);
+        PT_FREE(d->meshes[i].uvs);
         PT_FREE(d->meshes[i].indices);
     }
     PT_FREE(d->meshes);
