@@ -62,7 +62,7 @@
 #                         mitsuba 3.9 from PyPI (needs python3, python3-venv; libllvm19 for the
 #                         fast llvm_ad_rgb variant, else the slower scalar_rgb)
 #   make validate-mitsuba only the Mitsuba rows of make validate (VALIDATE_SCENES="a b" for some)
-#   make validate-mitsuba-ci  the Mitsuba rows of direct-quad, glass, cornell, cornell-guided, lights, env, rough-metal, rough-plastic and rough-glass (< 5 min)
+#   make validate-mitsuba-ci  the Mitsuba rows of direct-quad, glass, cornell, cornell-guided, lights, env, rough-metal, rough-plastic, rough-glass and textured (< 8 min)
 #   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
 #   make bench            error against time for every scene and strategy, POV-Ray on the same
 #                         axes, adaptive sampling and skips -> bench/out/ (summary.md, CSV,
@@ -357,7 +357,7 @@ MITSUBA_VENV    ?= $(BUILD)/mitsuba-venv
 MITSUBA_VERSION ?= 3.9.*
 MITSUBA_ENV      = PDFTRACE=$(BUILD)/pdftrace MITSUBA_PY=$(MITSUBA_VENV)/bin/python
 VALIDATE_SCENES ?=
-VALIDATE_CI_SCENES ?= direct-quad glass cornell cornell-guided lights env rough-metal rough-plastic rough-glass
+VALIDATE_CI_SCENES ?= direct-quad glass cornell cornell-guided lights env rough-metal rough-plastic rough-glass textured
 
 mitsuba-install:
 	@command -v python3 >/dev/null || { echo "make mitsuba-install: needs python3 (apt-get install python3 python3-venv)" >&2; exit 1; }

@@ -137,6 +137,7 @@
    - one-sided emitters facing away from the shading point (single-emitter scenes):
      the light component is dropped from the mixture for that vertex. PT_SKIP_FACING_AWAY.
    - no texture on a material: albedo is read directly from it. PT_SKIP_NO_TEXTURES, exact.
+     A hit's (u, v) is computed only at a material with an image texture (pt_hit.u, .v).
    - a light sample the material does not reflect (below the surface): no shadow ray.
      PT_SKIP_ZERO_BSDF_SHADOW, exact.
    - a rectangular light that is large next to its distance: sampled uniformly in solid angle
@@ -679,6 +680,9 @@ typedef struct pt_mesh_desc {
     uint32_t triangle_count;
     const float *normals;        /* optional: 3 floats per vertex, interpolated for shading */
     int material;
+    const float *uvs;            /* optional: 2 floats (u, v) per vertex, finite, interpolated into
+                                    pt_hit.u, .v for image textures; NULL: (u, v) = the hit's
+                                    barycentric weights of the 2nd and 3rd corner (Mitsuba's) */
 } pt_mesh_desc;
 /* Copies the data. Zero-area triangles are skipped (counted in pt_scene_info); the others get
    consecutive primitive indices, starting at the returned one, in the order given. */
@@ -720,6 +724,14 @@ typedef struct pt_hit {
     float magnitude;          /* the scale of point's rounding error along the normal (the
                                  primitive's coordinates weighted by |normal|), for
                                  pt_offset_ray_origin_scaled */
+    float u, v;               /* surface coordinates, where image textures are looked up (those of
+                                 Mitsuba 3's shapes, so an exported scene maps alike). Quad
+                                 Q + a U + b V: (a, b). Triangle a, b, c hit at barycentric weights
+                                 (w0, w1, w2): (w1, w2), or, in a mesh with uvs, w0 uv_a + w1 uv_b
+                                 + w2 uv_c. Sphere, n the unit normal in world axes:
+                                 u = atan2(n.y, n.x) / (2 pi) wrapped to [0, 1), v = acos(n.z) / pi.
+                                 Set by pt_scene_intersect*; the renderer computes them only at
+                                 materials with an image texture */
 } pt_hit;
 
 /* Closest hit with 0 < t < tmax. Returns 1 on a hit, 0 on a miss, an error code on misuse
@@ -748,6 +760,8 @@ PTDEF int pt_intersect_triangle(pt_ray ray, pt_vec3 a, pt_vec3 b, pt_vec3 c, flo
    Lambertian's; the rough dielectric is its glass twin, the only non-delta material that
    scatters below the geometric surface; the rough plastic is a Lambertian base under a GGX
    dielectric coat (Mitsuba 3's roughplastic), sampled by a mixture of the two (docs/materials.md).
+   A material's albedo may come from a texture: the 3-D checker at the world point, or an image
+   at the hit's surface coordinates (pt_hit.u, .v; docs/textures.md).
    ========================================================================================== */
 
 typedef enum pt_material_type {
@@ -787,7 +801,8 @@ typedef enum pt_conductor {
 typedef struct pt_material_desc {
     pt_material_type type;
     pt_color albedo;            /* Lambertian, metal (ignored by dielectric, which is clear) */
-    int albedo_texture;         /* 0: use albedo; else an id from pt_scene_add_checker */
+    int albedo_texture;         /* 0: use albedo; else an id from pt_scene_add_checker or
+                                   pt_scene_add_image_texture (it replaces albedo) */
     float fuzz;                 /* metal, clamped to [0, 1] */
     float ior;                  /* dielectric (and rough plastic coat) index of refraction; 0 means
                                    1.5; else finite, >= 0.001 (the coat's > 1) */
@@ -854,7 +869,19 @@ PTDEF int pt_conductor_ior(pt_conductor conductor, pt_color *eta, pt_color *k);
 /* A 3D checker: colour `odd` where floor(x/s)+floor(y/s)+floor(z/s) is odd, `even` elsewhere
    (world space, s = scale > 0). Returns a texture id >= 1. */
 PTDEF int pt_scene_add_checker(pt_scene *scene, pt_color even, pt_color odd, float scale);
+/* An image texture looked up at the hit's (u, v) (pt_hit): linear RGB pixels (finite, >= 0; at
+   least 1 x 1; copied), row 0 at v = 0 and column 0 at u = 0, pixel (x, y) centred at
+   ((x + 1/2) / W, (y + 1/2) / H), filtered bilinearly between pixel centres and repeated in u
+   and v (Mitsuba 3's `bitmap` with filter_type bilinear and wrap_mode repeat). The pixels are
+   used as given: decoding sRGB (8-bit colour) is the reader's job (pdftrace_png.h,
+   pt_srgb_decode). As albedo_texture it colours Lambertian, metal and the rough conductor's
+   tint. Returns a texture id >= 1, or an error code (PT_ERROR_INVALID_ARGUMENT naming the bad
+   argument, PT_ERROR_OUT_OF_MEMORY). */
+PTDEF int pt_scene_add_image_texture(pt_scene *scene, const struct pt_image *image);
+/* A 3-D texture (checker) at world point p; (0, 0, 0) for an image texture or a bad id. */
 PTDEF pt_color pt_scene_eval_texture(const pt_scene *scene, int texture, pt_vec3 p);
+/* An image texture at (u, v); (0, 0, 0) for a 3-D texture or a bad id. */
+PTDEF pt_color pt_scene_eval_texture_uv(const pt_scene *scene, int texture, float u, float v);
 /* 1 when the material scatters only into delta directions (mirror, glass) or not at all. */
 PTDEF int pt_material_is_delta(const pt_scene *scene, int material);
 
@@ -1388,6 +1415,7 @@ PTDEF int pt_write_pfm_ex(const char *path, const pt_image *image, char *err, si
 PTDEF int pt_read_pfm(const char *path, pt_image *out, char *err, size_t err_size);
 PTDEF int pt_write_ppm_ex(const char *path, const pt_image *image, char *err, size_t err_size);
 PTDEF float pt_srgb_encode(float linear); /* IEC 61966-2-1 transfer function, clamped */
+PTDEF float pt_srgb_decode(float encoded); /* its inverse, linear from encoded in [0, 1] (clamped) */
 
 /* The temporary file every writer of the family (this header, pdftrace_exr.h, pdftrace_png.h,
    pdftrace_scene.h) writes through; for writers of other formats too. pt_output_open creates
@@ -1567,6 +1595,7 @@ typedef struct pt__prim {
     int32_t light;    /* index into scene->lights, or -1 */
     int32_t normals;  /* first of 3 shading normals in scene->normals, or -1 */
     int32_t type;     /* PT__PRIM_* */
+    int32_t uvs;      /* mesh triangle: first of 6 floats (u, v per corner) in scene->uvs, or -1 */
 } pt__prim;
 
 /* Per-ray data computed once per traversal. */
@@ -1596,7 +1625,12 @@ typedef struct pt__material {
     float coat_t[64];
 } pt__material;
 
-typedef struct pt__texture { pt_color even, odd; float inv_scale; } pt__texture;
+/* A texture: the 3-D checker (rgb NULL) or an image (w x h linear RGB, row 0 at v = 0). */
+typedef struct pt__texture {
+    pt_color even, odd; float inv_scale;
+    int w, h;
+    float *rgb;
+} pt__texture;
 
 typedef struct pt__light {
     uint32_t prim;    /* index into scene->prims (after BVH ordering) */
@@ -1716,6 +1750,8 @@ struct pt_scene {
     uint32_t tex_count, tex_cap;
     pt_vec3 *normals;
     uint32_t normal_count, normal_cap;
+    float *uvs;                /* mesh uvs: 6 floats per triangle that has them (pt__prim.uvs) */
+    uint32_t uv_count, uv_cap;
     void *bvh_mem;    /* one allocation: nodes then the leaf pool, aligned to 64 bytes */
     pt__node4 *nodes;
     pt__leaf16 *pool;
@@ -4919,6 +4955,31 @@ static PT__HOT void pt__fill_hit(const pt_scene *s, const pt__prim *p, pt_ray ra
     h->magnitude = pt__prim_magnitude(p, h->geometric_normal);
 }
 
+/* The hit's surface coordinates (pt_hit.u, .v; Mitsuba 3's parameterisations), from a filled
+   hit h on p and the triangle's barycentric weights. Only where something needs them: the
+   renderer calls it at materials with an image texture, so other scenes never pay for it. */
+static void pt__hit_uv(const pt_scene *s, const pt__prim *p, const float *bary, const pt_hit *h, float *u, float *v)
+{
+    if (p->type == PT__PRIM_SPHERE) {
+        pt_vec3 n = h->geometric_normal; /* world axes (a sphere keeps no rotation) */
+        float a = atan2f(n.y, n.x) * (0.5f / PT__PI);
+        *u = a < 0.0f ? a + 1.0f : a;
+        if (*u >= 1.0f) *u = 0.0f;
+        *v = acosf(pt__minf(1.0f, pt__maxf(-1.0f, n.z))) * (1.0f / PT__PI);
+    } else if (p->type == PT__PRIM_QUAD) {
+        pt_vec3 hq = pt_sub(h->point, p->p0); /* both in the scene's stored coordinates */
+        *u = pt_dot(hq, p->w);
+        *v = pt_dot(hq, p->w2);
+    } else if (p->uvs >= 0) {
+        const float *t = s->uvs + p->uvs;
+        *u = bary[0] * t[0] + bary[1] * t[2] + bary[2] * t[4];
+        *v = bary[0] * t[1] + bary[1] * t[3] + bary[2] * t[5];
+    } else {
+        *u = bary[1];
+        *v = bary[2];
+    }
+}
+
 PTDEF pt_scene *pt_scene_create(void)
 {
     pt_scene *s = (pt_scene *)PT_MALLOC(sizeof(pt_scene));
@@ -4940,8 +5001,13 @@ PTDEF void pt_scene_destroy(pt_scene *s)
 #endif
     PT_FREE(s->prims);
     PT_FREE(s->mats);
+    if (s->texs) {
+        uint32_t i;
+        for (i = 0; i < s->tex_count; ++i) PT_FREE(s->texs[i].rgb);
+    }
     PT_FREE(s->texs);
     PT_FREE(s->normals);
+    PT_FREE(s->uvs);
     PT_FREE(s->bvh_mem);
     PT_FREE(s->wide_mem);
     PT_FREE(s->lights);
@@ -5013,6 +5079,7 @@ static pt__prim *pt__new_prim(pt_scene *s, int type, int material)
     p->material = material;
     p->light = -1;
     p->normals = -1;
+    p->uvs = -1;
     p->id = s->prim_count++;
     s->committed = 0;
     if (!s->xf_identity) s->features |= PT_FEATURE_TRANSFORMS;
@@ -5187,6 +5254,8 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
         if (m->normals &&
             !pt__vfinite(pt_v3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2])))
             return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: normal %u is not finite", (unsigned)i);
+        if (m->uvs && !(pt__isfinite(m->uvs[2 * i]) && pt__isfinite(m->uvs[2 * i + 1])))
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "mesh: uvs of vertex %u are not finite", (unsigned)i);
     }
     for (i = 0; i < 3u * m->triangle_count; ++i)
         if (m->indices[i] >= m->vertex_count)
@@ -5194,16 +5263,20 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
                             (unsigned)(i / 3u), (unsigned)m->indices[i], (unsigned)m->vertex_count);
     if (!pt__grow((void **)&s->prims, &s->prim_cap, s->prim_count + m->triangle_count, sizeof(pt__prim)) ||
         (m->normals &&
-         !pt__grow((void **)&s->normals, &s->normal_cap, s->normal_count + 3u * m->triangle_count, sizeof(pt_vec3))))
+         !pt__grow((void **)&s->normals, &s->normal_cap, s->normal_count + 3u * m->triangle_count, sizeof(pt_vec3))) ||
+        (m->uvs && (m->triangle_count > 0x7fffffffu / 6u - s->uv_count / 6u ||
+                    !pt__grow((void **)&s->uvs, &s->uv_cap, s->uv_count + 6u * m->triangle_count, sizeof(float)))))
         return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "mesh: out of memory (%u triangles)", (unsigned)m->triangle_count);
     det = s->xf_identity ? 1.0f : pt__transform_det(&s->xf);
     for (i = 0; i < m->triangle_count; ++i) {
         pt_vec3 v[3], n[3];
+        float uv[6] = {0, 0, 0, 0, 0, 0};
         int k;
         pt__prim *p;
         n[0] = n[1] = n[2] = pt_v3(0, 0, 0);
         for (k = 0; k < 3; ++k) {
             uint32_t vi = m->indices[3 * i + (uint32_t)k];
+            if (m->uvs) { uv[2 * k] = m->uvs[2 * vi]; uv[2 * k + 1] = m->uvs[2 * vi + 1]; }
             v[k] = pt_v3(m->positions[3 * vi], m->positions[3 * vi + 1], m->positions[3 * vi + 2]);
             if (!s->xf_identity) v[k] = pt_transform_point(&s->xf, v[k]);
             if (m->normals) {
@@ -5215,6 +5288,7 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
         if (det < 0.0f) {
             pt_vec3 t = v[1]; v[1] = v[2]; v[2] = t;
             t = n[1]; n[1] = n[2]; n[2] = t;
+            { float a = uv[2], b = uv[3]; uv[2] = uv[4]; uv[3] = uv[5]; uv[4] = a; uv[5] = b; }
         }
         if (!pt__tri_ok(v[0], v[1], v[2])) continue; /* counted below, once the mesh is added */
         p = pt__new_prim(s, PT__PRIM_TRIANGLE, m->material);
@@ -5224,6 +5298,11 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
             s->normals[s->normal_count++] = n[0];
             s->normals[s->normal_count++] = n[1];
             s->normals[s->normal_count++] = n[2];
+        }
+        if (m->uvs) {
+            p->uvs = (int32_t)s->uv_count;
+            memcpy(s->uvs + s->uv_count, uv, sizeof uv);
+            s->uv_count += 6u;
         }
         if (!have_first) { first = p->id; have_first = 1; }
         good++;
@@ -5238,7 +5317,9 @@ PTDEF int pt_scene_add_mesh(pt_scene *s, const pt_mesh_desc *m)
 
 /* ------------------------------------------------------------------------------------------
    4. Materials and textures: the material table (Lambertian, metal with an optional fuzz lobe,
-   clear dielectric, emitter, rough conductor, rough plastic with its coat tables), the 3D checker, and what the integrator asks of a material: its
+   clear dielectric, emitter, rough conductor, rough plastic with its coat tables), the 3D checker
+   and image textures (bilinear between texel centres, repeated; looked up at the hit's (u, v)),
+   and what the integrator asks of a material: its
    A * pScatter for a direction (BRDF times cosine), the density with which it samples a
    direction, a sampled direction, and the exact unpolarised Fresnel reflectance of a dielectric
    interface. Delta materials (mirror, glass) have no density and are followed by the integrator.
@@ -5543,6 +5624,7 @@ PTDEF int pt_scene_add_checker(pt_scene *s, pt_color even, pt_color odd, float s
 {
     pt__texture t;
     if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
+    memset(&t, 0, sizeof t);
     if (!pt__color_ok(even) || !pt__color_ok(odd) || !pt__isfinite(scale) || !(scale > 0.0f))
         return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "checker: colours must be finite and >= 0, scale > 0");
     t.even = even;
@@ -5563,10 +5645,77 @@ static pt_color pt__checker(const pt__texture *t, pt_vec3 p)
     int parity = ((int)fmod(fabs(fx), 2.0) + (int)fmod(fabs(fy), 2.0) + (int)fmod(fabs(fz), 2.0)) & 1;
     return parity ? t->odd : t->even;
 }
+PTDEF int pt_scene_add_image_texture(pt_scene *s, const pt_image *img)
+{
+    pt__texture t;
+    size_t i, n;
+    if (!pt__enter(s)) return PT_ERROR_INVALID_ARGUMENT;
+    if (!img) return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "image texture: image is NULL");
+    if (img->width < 1 || img->height < 1 || !img->rgb)
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "image texture: image is %d x %d%s: needs at least 1 x 1 pixels",
+                        img->width, img->height, img->rgb ? "" : " with no pixels (rgb NULL)");
+    if ((uint64_t)img->width * (uint64_t)img->height > ((uint64_t)1 << 28))
+        return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "image texture: image is %d x %d: more than 2^28 pixels",
+                        img->width, img->height);
+    n = 3u * (size_t)img->width * (size_t)img->height;
+    for (i = 0; i < n; ++i)
+        if (!pt__isfinite(img->rgb[i]) || img->rgb[i] < 0.0f)
+            return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "image texture: image pixel (%d, %d) is not finite and >= 0",
+                            (int)((i / 3u) % (size_t)img->width), (int)((i / 3u) / (size_t)img->width));
+    memset(&t, 0, sizeof t);
+    t.w = img->width;
+    t.h = img->height;
+    t.rgb = (float *)PT_MALLOC(n * sizeof(float));
+    if (!t.rgb || !pt__grow((void **)&s->texs, &s->tex_cap, s->tex_count + 1u, sizeof(pt__texture))) {
+        PT_FREE(t.rgb);
+        return pt__fail(s, PT_ERROR_OUT_OF_MEMORY, "image texture: out of memory (%d x %d pixels)", img->width, img->height);
+    }
+    memcpy(t.rgb, img->rgb, n * sizeof(float));
+    s->texs[s->tex_count++] = t;
+    s->committed = 0;
+    return (int)s->tex_count;
+}
+/* Texel index of coordinate x (pixel units, any real) wrapped into [0, n) (repeat). */
+static int pt__wrap(double x, int n)
+{
+    double r = x - (double)n * floor(x / (double)n);
+    int i = (int)r;
+    return i < 0 ? 0 : i >= n ? n - 1 : i;
+}
+/* Bilinear lookup between pixel centres, repeated in u and v (Mitsuba 3's bitmap with
+   filter_type bilinear and wrap_mode repeat: x = u W - 1/2, weights from its fraction). */
+static pt_color pt__image_lookup(const pt__texture *t, float u, float v)
+{
+    double x = (double)u * t->w - 0.5, y = (double)v * t->h - 0.5, fx0, fy0;
+    float fx, fy;
+    int x0, x1, y0, y1;
+    const float *a, *b, *c, *d;
+    if (!(x == x) || !(y == y) || fabs(x) > 1e15 || fabs(y) > 1e15) return pt_v3(0, 0, 0);
+    fx0 = floor(x);
+    fy0 = floor(y);
+    fx = (float)(x - fx0);
+    fy = (float)(y - fy0);
+    x0 = pt__wrap(fx0, t->w);
+    x1 = x0 + 1 == t->w ? 0 : x0 + 1;
+    y0 = pt__wrap(fy0, t->h);
+    y1 = y0 + 1 == t->h ? 0 : y0 + 1;
+    a = t->rgb + 3u * ((size_t)y0 * (size_t)t->w + (size_t)x0);
+    b = t->rgb + 3u * ((size_t)y0 * (size_t)t->w + (size_t)x1);
+    c = t->rgb + 3u * ((size_t)y1 * (size_t)t->w + (size_t)x0);
+    d = t->rgb + 3u * ((size_t)y1 * (size_t)t->w + (size_t)x1);
+    return pt_v3((1.0f - fy) * ((1.0f - fx) * a[0] + fx * b[0]) + fy * ((1.0f - fx) * c[0] + fx * d[0]),
+                 (1.0f - fy) * ((1.0f - fx) * a[1] + fx * b[1]) + fy * ((1.0f - fx) * c[1] + fx * d[1]),
+                 (1.0f - fy) * ((1.0f - fx) * a[2] + fx * b[2]) + fy * ((1.0f - fx) * c[2] + fx * d[2]));
+}
 PTDEF pt_color pt_scene_eval_texture(const pt_scene *s, int texture, pt_vec3 p)
 {
-    if (!s || texture < 1 || (uint32_t)texture > s->tex_count) return pt_v3(0, 0, 0);
+    if (!s || texture < 1 || (uint32_t)texture > s->tex_count || s->texs[texture - 1].rgb) return pt_v3(0, 0, 0);
     return pt__checker(&s->texs[texture - 1], p);
+}
+PTDEF pt_color pt_scene_eval_texture_uv(const pt_scene *s, int texture, float u, float v)
+{
+    if (!s || texture < 1 || (uint32_t)texture > s->tex_count || !s->texs[texture - 1].rgb) return pt_v3(0, 0, 0);
+    return pt__image_lookup(&s->texs[texture - 1], u, v);
 }
 PTDEF int pt_material_is_delta(const pt_scene *s, int material)
 {
@@ -5842,9 +5991,17 @@ static double pt__dlight_power(const pt__dlight *l, double r)
     return 3.14159265358979323846 * r * r * i;
 }
 
-static pt_color pt__albedo(const pt_scene *s, const pt__material *m, pt_vec3 p)
+/* The albedo at hit h of primitive p (bary: a triangle's weights): a checker at the world
+   point, an image at the hit's (u, v), computed here only. */
+static pt_color pt__albedo(const pt_scene *s, const pt__material *m, const pt__prim *p, const float *bary, const pt_hit *h)
 {
-    return m->texture ? pt__checker(&s->texs[m->texture - 1], pt__to_world(s, p)) : m->albedo;
+    const pt__texture *t;
+    float u, v;
+    if (!m->texture) return m->albedo;
+    t = &s->texs[m->texture - 1];
+    if (!t->rgb) return pt__checker(t, pt__to_world(s, h->point));
+    pt__hit_uv(s, p, bary, h, &u, &v);
+    return pt__image_lookup(t, u, v);
 }
 
 /* Exact unpolarised Fresnel reflectance of a conductor of relative index eta + i k at cos_i in
@@ -8448,6 +8605,7 @@ PTDEF int pt_scene_intersect(const pt_scene *s, pt_ray ray, float tmax, pt_hit *
     pt__rayctx_init(&rc, ray);
     if (!pt__scene_closest(s, &rc, tmax, &prim, &t, bary)) return 0;
     pt__fill_hit(s, &s->prims[prim], ray, t, bary, hit);
+    pt__hit_uv(s, &s->prims[prim], bary, hit, &hit->u, &hit->v);
     pt__hit_to_world(s, hit);
     return 1;
 }
@@ -8480,6 +8638,7 @@ PTDEF int pt_scene_intersect_brute_force(const pt_scene *s, pt_ray ray, float tm
     }
     if (!found) return 0;
     pt__fill_hit(s, &s->prims[best], ray, tmax, best_bary, hit);
+    pt__hit_uv(s, &s->prims[best], best_bary, hit, &hit->u, &hit->v);
     pt__hit_to_world(s, hit);
     return 1;
 }
@@ -9350,9 +9509,10 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         v.ng = h.front_face ? h.geometric_normal : pt_neg(h.geometric_normal);
         v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
         if (m->texture || PT__SKIP(cfg, PT_SKIP_NO_TEXTURES)) {
-            v.albedo = pt__albedo(s, m, h.point);
+            v.albedo = pt__albedo(s, m, prim, bary, &h);
         } else { /* general path: an untextured material looked up as a constant texture */
             pt__texture ct;
+            memset(&ct, 0, sizeof ct);
             ct.even = ct.odd = m->albedo;
             ct.inv_scale = 1.0f;
             v.albedo = pt__checker(&ct, h.point);
@@ -11000,6 +11160,15 @@ PTDEF float pt_srgb_encode(float x)
     if (!(x > 0.0f)) return 0.0f; /* also maps NaN to 0 */
     if (x >= 1.0f) return 1.0f;
     return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
+}
+/* The inverse transfer function (IEC 61966-2-1), in double and rounded once: an 8-bit texel
+   k / 255 decodes to the float nearest its exact linear value. */
+PTDEF float pt_srgb_decode(float x)
+{
+    double e = x;
+    if (!(x > 0.0f)) return 0.0f;
+    if (x >= 1.0f) return 1.0f;
+    return (float)(e <= 0.04045 ? e / 12.92 : pow((e + 0.055) / 1.055, 2.4));
 }
 
 /* Output temporaries. The registry lets a signal handler remove the temporaries in progress: a

@@ -11,6 +11,11 @@
    truncated; for exposure and tone mapping apply pt_image_apply_display first. libpng marks
    8-bit files as sRGB (an sRGB chunk, perceptual intent). pt_write_png_rgb8 writes bytes the
    caller has already encoded (3 per pixel, row 0 at the top).
+   pt_read_png_memory reads a PNG held in memory (image textures: pdftrace_scene.h passes it as
+   pt_scenefile_options.read_png) through the same simplified API as 8-bit RGB (grey and
+   palette expanded, alpha dropped, 16-bit rounded to 8, a gAMA other than sRGB's converted to
+   sRGB by libpng) and returns each channel as its stored code k / 255, still sRGB-encoded:
+   the caller decodes colour with pt_srgb_decode and keeps non-colour data (roughness) as it is.
    Both write to a new temporary beside the target (pdftrace.h's pt_output_open) and rename it
    into place: a failed write leaves no file (and no temporary). They return PT_OK or a pt_result
    code (PT_ERROR_INVALID_ARGUMENT, PT_ERROR_OUT_OF_MEMORY, PT_ERROR_IO) and, when err is not
@@ -49,6 +54,12 @@ extern "C" {
 
 /* img as an 8-bit sRGB PNG (see above). */
 PTDEF int pt_write_png(const char *path, const pt_image *img, char *err, size_t err_size);
+/* A PNG file's bytes (data, size; name for messages) into *out (row 0 at the top): each channel
+   as its 8-bit code / 255, not decoded (see above). PT_OK; PT_ERROR_IO (not a PNG, corrupt,
+   truncated) or PT_ERROR_OUT_OF_MEMORY with "NAME: reading PNG: reason" in err; *out is left
+   empty on failure. Images over 2^28 pixels are refused before their pixels are allocated. */
+PTDEF int pt_read_png_memory(const void *data, size_t size, const char *name, pt_image *out, char *err,
+                             size_t err_size);
 /* width x height pixels of 3 bytes (R, G, B) each, rows top first, written as they are. */
 PTDEF int pt_write_png_rgb8(const char *path, int width, int height, const unsigned char *rgb, char *err,
                             size_t err_size);
@@ -162,6 +173,63 @@ PTDEF int pt_write_png(const char *path, const pt_image *img, char *err, size_t 
     rc = pt_write_png_rgb8(path, img->width, img->height, rgb, err, err_size);
     PT_FREE(rgb);
     return rc;
+}
+
+/* Formats "name: reading PNG: <fmt ...>" into err and returns code. */
+static int pt__png_rfail(char *err, size_t err_size, int code, const char *name, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+    if (!err || !err_size) return code;
+    n = snprintf(err, err_size, "%s: reading PNG: ", name);
+    if (n < 0) n = 0;
+    if ((size_t)n < err_size) {
+        va_start(ap, fmt);
+        vsnprintf(err + n, err_size - (size_t)n, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+PTDEF int pt_read_png_memory(const void *data, size_t size, const char *name, pt_image *out, char *err,
+                             size_t err_size)
+{
+    png_image im;
+    unsigned char *rgb;
+    size_t n, i;
+    int rc;
+    if (err && err_size) err[0] = '\0';
+    if (!name) name = "(memory)";
+    if (!out || !data || size == 0)
+        return pt__png_rfail(err, err_size, PT_ERROR_INVALID_ARGUMENT, name, "no data or no output image");
+    memset(out, 0, sizeof *out);
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_memory(&im, data, size))
+        return pt__png_rfail(err, err_size, PT_ERROR_IO, name, "%s", im.message[0] ? im.message : "not a PNG file");
+    if (im.width > 65536u || im.height > 65536u || (uint64_t)im.width * im.height > ((uint64_t)1 << 28) ||
+        !pt__png_pixels((int)im.width, (int)im.height, &n)) {
+        png_image_free(&im);
+        return pt__png_rfail(err, err_size, PT_ERROR_IO, name, "%lu x %lu pixels: at most 2^28 are read",
+                            (unsigned long)im.width, (unsigned long)im.height);
+    }
+    im.format = PNG_FORMAT_RGB;
+    rgb = (unsigned char *)PT_MALLOC(3u * n);
+    if (!rgb || (rc = pt_image_init(out, (int)im.width, (int)im.height)) != PT_OK) {
+        PT_FREE(rgb);
+        png_image_free(&im);
+        return pt__png_rfail(err, err_size, PT_ERROR_OUT_OF_MEMORY, name, "out of memory");
+    }
+    if (!png_image_finish_read(&im, NULL, rgb, 0, NULL)) {
+        rc = pt__png_rfail(err, err_size, PT_ERROR_IO, name, "%s", im.message[0] ? im.message : "corrupt file");
+        PT_FREE(rgb);
+        pt_image_free(out);
+        png_image_free(&im);
+        return rc;
+    }
+    for (i = 0; i < 3u * n; ++i) out->rgb[i] = (float)rgb[i] / 255.0f;
+    PT_FREE(rgb);
+    return PT_OK;
 }
 
 #ifdef __cplusplus

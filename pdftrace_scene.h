@@ -57,7 +57,14 @@
                                       (default |look_at - look_from|)
      checker NAME R G B R G B SCALE   a texture: the second colour where
                                       floor(x/s)+floor(y/s)+floor(z/s) is odd
-     material NAME lambertian R G B | lambertian texture CHECKER
+     image_texture NAME FILE [raw]    an image looked up at the surface's (u, v) (pdftrace.h,
+                                      pt_scene_add_image_texture: bilinear, repeated; pt_hit
+                                      has each shape's (u, v)); FILE as a mesh path: PFM or
+                                      OpenEXR (linear), or PNG (8-bit sRGB, decoded to linear;
+                                      raw: codes / 255 as they are, for non-colour data) when the
+                                      loader has a reader for it (pt_scenefile_options.read_png,
+                                      read_image); pixels finite and >= 0
+     material NAME lambertian R G B | lambertian texture CHECKER_OR_IMAGE
      material NAME metal R G B [fuzz F]
      material NAME roughconductor ALPHA METAL [tint R G B]   GGX rough metal (pdftrace.h,
                                       PT_MATERIAL_ROUGH_CONDUCTOR): ALPHA in [0, 1] (below 1e-3
@@ -80,7 +87,8 @@
      quad QX QY QZ UX UY UZ VX VY VZ MATERIAL      Q + a*u + b*v; normal (emitting side) u x v
      triangle AX AY AZ BX BY BZ CX CY CZ MATERIAL
      box LOX LOY LOZ HIX HIY HIZ MATERIAL
-     mesh PATH MATERIAL               Wavefront OBJ (v, vn, f; faces fanned into triangles),
+     mesh PATH MATERIAL               Wavefront OBJ (v, vn, vt, f; faces fanned into triangles;
+                                      vt read as (u, 1 - v), as Mitsuba 3 reads OBJ),
                                       PATH relative to the scene file's directory and
                                       inside it (below); a file is read once
      point_light X Y Z R G B          a point light of intensity R G B (W/sr)
@@ -145,8 +153,9 @@
    radiosity, which misses a small bright sun), fuzzy metal, a rough conductor (POV-Ray has no
    microfacet reflection nor conductor Fresnel; only metal none below alpha 1e-3, a coloured
    mirror, is exported), a rough plastic (no microfacet reflection nor layered coat in POV-Ray),
-   a rough dielectric (no microfacet refraction either), emitting triangles, boxes or meshes, a
-   spot light whose beam is
+   a rough dielectric (no microfacet refraction either), an image texture (POV-Ray's uv_mapping
+   and image_map filtering are not pdftrace's), emitting triangles, boxes or meshes, a spot
+   light whose beam is
    narrower than its cutoff (POV-Ray's falloff is a smoothstep in the cosine of the angle,
    pdftrace's linear in the angle); and every scene pt_scenefile_build refuses (the exporter
    runs the build first, so it never writes what pdftrace would not render, such as a sphere
@@ -170,14 +179,16 @@
    diffuse_reflectance, nonlinear), glass as `dielectric`, a rough dielectric as
    `roughdielectric` (ggx, sample_visible, alpha, int_ior and ext_ior; the smooth `dielectric`
    below pdftrace's delta switch), an emitter as a one-sided `area`
-   light on its shape with a black bsdf, the background as a `constant` emitter, an
+   light on its shape with a black bsdf, an image texture as a `bitmap` (filter_type bilinear,
+   wrap_mode repeat; its linear pixels beside the XML as "<xml without .xml>.tex.N.pfm"; mesh
+   uvs in the PLY), the background as a `constant` emitter, an
    environment map as an `envmap` emitter (to_world the rotation) of a map resampled to 2H + 1
    rows beside the XML ("<xml without .xml>.env.pfm"), which makes Mitsuba's row interpolation
    pdftrace's exactly, with the background added to it (Mitsuba takes one environment emitter
    per scene), the point, spot and directional lights as Mitsuba's `point`, `spot` (to_world a lookat along the axis)
    and `directional` emitters (the same units and falloff). Refused with
    file:line and the reason (PT_ERROR_UNSUPPORTED, nothing written): fuzzy metal, the 3-D
-   checker, two-sided emitters, an albedo above 1, a dielectric of ior 1, and, as for
+   checker, two-sided emitters, an albedo (or an image texture's value) above 1, a dielectric of ior 1, and, as for
    POV-Ray, every scene the build refuses and one that needs a non-finite number.
 */
 #ifndef PDFTRACE_SCENE_H
@@ -205,11 +216,21 @@ typedef struct pt_scenefile_checker {
     float scale;
 } pt_scenefile_checker;
 
+/* An `image_texture` statement: the pixels as the build hands them to pt_scene_add_image_texture
+   (linear: an 8-bit PNG decoded from sRGB unless raw). */
+typedef struct pt_scenefile_image {
+    char name[PT_SCENEFILE_NAME_MAX];
+    pt_image image;
+    int raw;                     /* `raw`: a PNG's codes kept as they are (non-colour data) */
+    int line;                    /* line of the statement, for messages */
+} pt_scenefile_image;
+
 typedef struct pt_scenefile_material {
     char name[PT_SCENEFILE_NAME_MAX];
     pt_material_type type;
     pt_color albedo;             /* lambertian, metal */
     int checker;                 /* -1, or an index into pt_scenefile.checkers (lambertian) */
+    int image;                   /* -1, or an index into pt_scenefile.images (lambertian) */
     float fuzz, ior;
     pt_color emission;           /* emitter */
     int two_sided;
@@ -224,6 +245,8 @@ typedef struct pt_obj_mesh {
     float *positions;            /* 3 per vertex, object space */
     float *normals;              /* 3 per vertex, or NULL */
     uint32_t *indices;           /* 3 per triangle */
+    float *uvs;                  /* 2 per vertex (pt_mesh_desc.uvs: the file's vt as (u, 1 - v), as
+                                    Mitsuba 3 reads OBJ), or NULL */
     uint32_t vertex_count, triangle_count;
 } pt_obj_mesh;
 
@@ -266,6 +289,7 @@ typedef struct pt_scenefile {
     int pov_light_grid;          /* N: N x N spotlights per quad emitter */
     int pov_radiosity;           /* 0 none, 1 POV defaults, 2 medium, 3 high (docs/povray.md) */
     pt_scenefile_checker *checkers; int checker_count;
+    pt_scenefile_image *images; int image_count;
     pt_scenefile_material *materials; int material_count;
     pt_scenefile_shape *shapes; int shape_count;
     pt_scenefile_light *lights; int light_count; /* in the file's order (their ids in the scene) */
@@ -300,6 +324,10 @@ typedef struct pt_scenefile_options {
        error code with a message in err. NULL: only PFM maps are read, and an .exr map is
        refused as needing OpenEXR. */
     int (*read_image)(const void *data, size_t size, const char *name, pt_image *out, char *err, size_t err_size);
+    /* Decodes a .png image texture, as pt_read_png_memory of pdftrace_png.h does (pass it):
+       channels as their 8-bit codes / 255, which the loader decodes from sRGB unless the
+       statement says raw. NULL: a .png texture is refused as needing libpng. */
+    int (*read_png)(const void *data, size_t size, const char *name, pt_image *out, char *err, size_t err_size);
 } pt_scenefile_options;
 
 /* Loads a scene file. On failure returns an error code, writes "file:line: message" to
@@ -587,6 +615,7 @@ PTDEF void pt_scenefile_free(pt_scenefile *d)
     for (i = 0; i < d->mesh_count; ++i) {
         PT_FREE(d->meshes[i].positions);
         PT_FREE(d->meshes[i].normals);
+        PT_FREE(d->meshes[i].uvs);
         PT_FREE(d->meshes[i].indices);
     }
     PT_FREE(d->meshes);
@@ -595,6 +624,11 @@ PTDEF void pt_scenefile_free(pt_scenefile *d)
     PT_FREE(d->lights);
     PT_FREE(d->materials);
     PT_FREE(d->checkers);
+    if (d->images) {
+        int i;
+        for (i = 0; i < d->image_count; ++i) pt_image_free(&d->images[i].image);
+    }
+    PT_FREE(d->images);
     memset(d, 0, sizeof *d);
 }
 
@@ -850,6 +884,13 @@ static int pt__sf_find_material(const pt_scenefile *d, const char *name)
         if (strcmp(d->materials[i].name, name) == 0) return i;
     return -1;
 }
+static int pt__sf_find_image(const pt_scenefile *d, const char *name)
+{
+    int i;
+    for (i = 0; i < d->image_count; ++i)
+        if (strcmp(d->images[i].name, name) == 0) return i;
+    return -1;
+}
 static int pt__sf_find_checker(const pt_scenefile *d, const char *name)
 {
     int i;
@@ -865,7 +906,7 @@ static int pt__sf_new_name(pt__sf_parser *p, const char *kind, const char **out)
         return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT,
                            "%s: bad name '%s' (letters, digits, _ and -, at most %d characters, not starting with a digit)",
                            kind, t, PT_SCENEFILE_NAME_MAX - 1);
-    if (pt__sf_find_material(p->d, t) >= 0 || pt__sf_find_checker(p->d, t) >= 0)
+    if (pt__sf_find_material(p->d, t) >= 0 || pt__sf_find_checker(p->d, t) >= 0 || pt__sf_find_image(p->d, t) >= 0)
         return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "%s: name '%s' is already defined", kind, t);
     *out = t;
     return PT_OK;
@@ -879,15 +920,17 @@ static int pt__sf_material_ref(pt__sf_parser *p, int *out)
     return PT_OK;
 }
 
-/* ---- Wavefront OBJ: v, vn, f (v, v/vt, v//vn, v/vt/vn; negative = relative); vt, o, g, s,
+/* ---- Wavefront OBJ: v, vn, vt, f (v, v/vt, v//vn, v/vt/vn; negative = relative); o, g, s,
    usemtl, mtllib ignored. Every face corner becomes its own vertex (positions and normals in
    OBJ have separate indices); polygons are fanned from their first corner. */
 typedef struct pt__obj {
     float *v; int nv, cv;       /* 3 floats per position */
     float *vn; int nn, cn;
+    float *vt; int nt, ct;      /* 3 floats per texture coordinate (u, v, unused) */
     pt_obj_mesh *m;
     uint32_t cap_vert, cap_tri;
     int with_normals;           /* -1 unknown, 0, 1 */
+    int with_uvs;               /* -1 unknown, 0, 1 */
     int statements;             /* statements read so far */
     uint64_t limit, used;       /* bytes the arrays may take, and take (their capacities) */
     int over_limit;             /* set when a growth was refused by the limit */
@@ -967,12 +1010,12 @@ static long pt__obj_index(const char *t, size_t len, int count)
     if (v < 0 && -v <= count) return count + v;
     return -1;
 }
-static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm)
+static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm, const float *uv)
 {
     pt_obj_mesh *m = o->m;
     if (m->vertex_count == o->cap_vert) {
         uint32_t nc = o->cap_vert ? o->cap_vert * 2u : 1024u;
-        size_t per = 3u * sizeof(float) * (nrm ? 2u : 1u);
+        size_t per = 3u * sizeof(float) * (nrm ? 2u : 1u) + (uv ? 2u * sizeof(float) : 0u);
         float *np;
         if (!pt__obj_charge(o, (size_t)o->cap_vert * per, (size_t)nc * per)) return PT_ERROR_OUT_OF_MEMORY;
         np = (float *)PT_REALLOC(m->positions, (size_t)nc * 3u * sizeof(float));
@@ -983,10 +1026,19 @@ static int pt__obj_push_vertex(pt__obj *o, const float *pos, const float *nrm)
             if (!nn) return PT_ERROR_OUT_OF_MEMORY;
             m->normals = nn;
         }
+        if (uv) {
+            float *nu = (float *)PT_REALLOC(m->uvs, (size_t)nc * 2u * sizeof(float));
+            if (!nu) return PT_ERROR_OUT_OF_MEMORY;
+            m->uvs = nu;
+        }
         o->cap_vert = nc;
     }
     memcpy(m->positions + 3u * m->vertex_count, pos, 3u * sizeof(float));
     if (nrm) memcpy(m->normals + 3u * m->vertex_count, nrm, 3u * sizeof(float));
+    if (uv) { /* v flipped: OBJ's v runs up the image, pdftrace's (Mitsuba's) down from row 0 */
+        m->uvs[2u * m->vertex_count] = uv[0];
+        m->uvs[2u * m->vertex_count + 1u] = 1.0f - uv[1];
+    }
     m->vertex_count++;
     return PT_OK;
 }
@@ -1020,6 +1072,21 @@ static int pt__obj_line(void *ctx, char *line, int number)
         }
         return PT_OK;
     }
+    if (strcmp(tok[0], "vt") == 0) { /* vt u [v [w]]: v defaults to 0, w is ignored */
+        float uv[3] = {0, 0, 0};
+        int rc;
+        if (n < 2 || n > 4) return pt__obj_fail(o, number, "'vt' needs 1 to 3 numbers");
+        for (i = 1; i < n && i < 3; ++i) {
+            double x;
+            if (!pt__sf_parse_double(tok[i], &x) || !pt__sf_finite(x) || fabs(x) > PT__SF_MAX_VALUE)
+                return pt__obj_fail(o, number, "'%s' is not a finite number of magnitude <= 1e7", tok[i]);
+            uv[i - 1] = (float)x;
+        }
+        if ((uint32_t)o->nt >= PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many texture coordinates");
+        if ((rc = pt__obj_grow3(o, &o->vt, &o->ct, o->nt)) != PT_OK) return rc;
+        memcpy(o->vt + 3 * o->nt++, uv, sizeof uv);
+        return PT_OK;
+    }
     if (strcmp(tok[0], "f") == 0) {
         uint32_t first = o->m->vertex_count, k;
         int corners = n - 1;
@@ -1027,8 +1094,9 @@ static int pt__obj_line(void *ctx, char *line, int number)
         if (o->m->vertex_count + (uint32_t)corners > PT__SF_MAX_MESH_VERTICES) return pt__obj_fail(o, number, "too many face vertices");
         for (i = 1; i < n; ++i) {
             const char *t = tok[i], *s1 = strchr(t, '/'), *s2 = s1 ? strchr(s1 + 1, '/') : NULL;
-            long vi = pt__obj_index(t, s1 ? (size_t)(s1 - t) : strlen(t), o->nv), ni = -1;
+            long vi = pt__obj_index(t, s1 ? (size_t)(s1 - t) : strlen(t), o->nv), ni = -1, ti = -1;
             int has_n = s2 && s2[1] != '\0';
+            int has_t = s1 && s1[1] != '/' && s1[1] != '\0';
             int rc;
             if (vi < 0) return pt__obj_fail(o, number, "face vertex '%s': position index out of range (%d positions so far)", t, o->nv);
             if (s2 && !has_n) return pt__obj_fail(o, number, "face vertex '%s': empty normal index", t);
@@ -1039,7 +1107,15 @@ static int pt__obj_line(void *ctx, char *line, int number)
             if (o->with_normals < 0) o->with_normals = has_n;
             if (o->with_normals != has_n)
                 return pt__obj_fail(o, number, "face vertex '%s': some face vertices have normals and some do not", t);
-            rc = pt__obj_push_vertex(o, o->v + 3 * vi, has_n ? o->vn + 3 * ni : NULL);
+            if (has_t) {
+                ti = pt__obj_index(s1 + 1, s2 ? (size_t)(s2 - s1 - 1) : strlen(s1 + 1), o->nt);
+                if (ti < 0)
+                    return pt__obj_fail(o, number, "face vertex '%s': texture coordinate index out of range (%d so far)", t, o->nt);
+            }
+            if (o->with_uvs < 0) o->with_uvs = has_t;
+            if (o->with_uvs != has_t)
+                return pt__obj_fail(o, number, "face vertex '%s': some face vertices have texture coordinates and some do not", t);
+            rc = pt__obj_push_vertex(o, o->v + 3 * vi, has_n ? o->vn + 3 * ni : NULL, has_t ? o->vt + 3 * ti : NULL);
             if (rc != PT_OK) return rc;
         }
         for (k = 1; k + 1 < (uint32_t)corners; ++k) {
@@ -1060,7 +1136,7 @@ static int pt__obj_line(void *ctx, char *line, int number)
         }
         return PT_OK;
     }
-    if (!strcmp(tok[0], "vt") || !strcmp(tok[0], "o") || !strcmp(tok[0], "g") || !strcmp(tok[0], "s") ||
+    if (!strcmp(tok[0], "o") || !strcmp(tok[0], "g") || !strcmp(tok[0], "s") ||
         !strcmp(tok[0], "usemtl") || !strcmp(tok[0], "mtllib"))
         return PT_OK;
     return pt__obj_fail(o, number, "unsupported OBJ statement '%s' (v, vn, f, vt, o, g, s, usemtl, mtllib)", tok[0]);
@@ -1070,6 +1146,7 @@ PTDEF void pt_obj_mesh_free(pt_obj_mesh *m)
     if (!m) return;
     PT_FREE(m->positions);
     PT_FREE(m->normals);
+    PT_FREE(m->uvs);
     PT_FREE(m->indices);
     memset(m, 0, sizeof *m);
 }
@@ -1077,7 +1154,7 @@ PTDEF void pt_obj_mesh_free(pt_obj_mesh *m)
 /* Bytes a parsed mesh holds once its arrays are trimmed to their counts. */
 static uint64_t pt__obj_bytes(const pt_obj_mesh *m)
 {
-    return (uint64_t)m->vertex_count * 12u * (m->normals ? 2u : 1u) + (uint64_t)m->triangle_count * 12u;
+    return (uint64_t)m->vertex_count * (12u * (m->normals ? 2u : 1u) + (m->uvs ? 8u : 0u)) + (uint64_t)m->triangle_count * 12u;
 }
 
 /* pt_obj_parse with a limit on the bytes of its arrays; *over_limit tells that the limit, not
@@ -1090,6 +1167,7 @@ static int pt__obj_parse(const char *text, size_t length, const char *name, uint
     memset(&o, 0, sizeof o);
     o.m = out;
     o.with_normals = -1;
+    o.with_uvs = -1;
     o.limit = limit;
     o.file = name;
     o.err = err;
@@ -1100,6 +1178,7 @@ static int pt__obj_parse(const char *text, size_t length, const char *name, uint
     *over_limit = o.over_limit;
     PT_FREE(o.v);
     PT_FREE(o.vn);
+    PT_FREE(o.vt);
     if (rc != PT_OK) {
         pt_obj_mesh_free(out);
         return rc;
@@ -1109,6 +1188,7 @@ static int pt__obj_parse(const char *text, size_t length, const char *name, uint
         if (np) out->positions = (float *)np;
         if (out->normals && (nn = PT_REALLOC(out->normals, (size_t)out->vertex_count * 12u)) != NULL)
             out->normals = (float *)nn;
+        if (out->uvs && (nn = PT_REALLOC(out->uvs, (size_t)out->vertex_count * 8u)) != NULL) out->uvs = (float *)nn;
         if ((ni = PT_REALLOC(out->indices, (size_t)out->triangle_count * 12u)) != NULL) out->indices = (uint32_t *)ni;
     }
     return PT_OK;
@@ -1137,6 +1217,7 @@ PTDEF pt_mesh_desc pt_obj_mesh_desc(const pt_obj_mesh *m, int material)
     md.indices = m->indices;
     md.triangle_count = m->triangle_count;
     md.normals = m->normals;
+    md.uvs = m->uvs;
     return md;
 }
 
@@ -1645,6 +1726,7 @@ static int pt__sf_material(pt__sf_parser *p)
     memset(&m, 0, sizeof m);
     strcpy(m.name, name);
     m.checker = -1;
+    m.image = -1;
     type = pt__sf_next(p);
     if (!type) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing type (lambertian, metal, roughconductor, roughplastic, dielectric, roughdielectric, emitter)", name);
     if (!strcmp(type, "lambertian")) {
@@ -1653,9 +1735,12 @@ static int pt__sf_material(pt__sf_parser *p)
             const char *t;
             p->pos++;
             t = pt__sf_next(p);
-            if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing checker name after 'texture'", name);
+            if (!t) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: missing texture name after 'texture'", name);
             m.checker = pt__sf_find_checker(d, t);
-            if (m.checker < 0) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: checker '%s' is not defined", name, t);
+            m.image = pt__sf_find_image(d, t);
+            if (m.checker < 0 && m.image < 0)
+                return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "material %s: texture '%s' is not defined (checker or image_texture)",
+                                   name, t);
         } else if ((rc = pt__sf_color(p, "lambertian albedo", &m.albedo)) != PT_OK) return rc;
     } else if (!strcmp(type, "metal")) {
         m.type = PT_MATERIAL_METAL;
@@ -1952,6 +2037,78 @@ static int pt__sf_environment(pt__sf_parser *p)
     return PT_OK;
 }
 
+/* image_texture NAME FILE [raw]: FILE confined as a mesh's path, decoded as PFM (.pfm), PNG
+   (.png, by pt_scenefile_options.read_png; 8-bit sRGB codes decoded to linear unless raw) or
+   by read_image (any other, OpenEXR); PFM and EXR are linear already. Pixels must be finite
+   and >= 0, at most PT__SF_MAX_ENV_PIXELS of them. */
+static int pt__sf_image_texture(pt__sf_parser *p)
+{
+    pt_scenefile *d = p->d;
+    const char *name = NULL, *file, *why = "";
+    char shown[PT__SF_PATH], msg[768];
+    pt__sf_in in;
+    pt_scenefile_image t;
+    pt_scenefile_image *nt;
+    char *data = NULL;
+    size_t len = 0, i, n;
+    int rc, pfm, png;
+    int (*reader)(const void *, size_t, const char *, pt_image *, char *, size_t);
+    if ((rc = pt__sf_new_name(p, "image_texture", &name)) != PT_OK) return rc;
+    memset(&t, 0, sizeof t);
+    strcpy(t.name, name);
+    t.line = p->line;
+    file = pt__sf_next(p);
+    if (!file) return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "image_texture %s: missing image file name", name);
+    if (p->pos < p->ntok && !strcmp(p->tok[p->pos], "raw")) { p->pos++; t.raw = 1; }
+    if ((rc = pt__sf_end(p)) != PT_OK) return rc;
+    pfm = pt__sf_has_ext(file, ".pfm");
+    png = pt__sf_has_ext(file, ".png");
+    reader = png ? (p->opt ? p->opt->read_png : NULL) : (p->opt ? p->opt->read_image : NULL);
+    if (!pfm && !reader)
+        return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "image_texture %s: '%s': %s", name, file,
+                           png ? "this program was built without libpng, so it reads no PNG textures "
+                                 "(pt_scenefile_options.read_png is NULL)"
+                               : "not a .pfm or .png file, and this program reads no other format (an .exr texture "
+                                 "needs a build with OpenEXR)");
+    if (d->image_count >= 4096) return pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "image_texture: too many textures (4096)");
+    if ((rc = pt__sf_open_input(p, file, shown, sizeof shown, &in)) != PT_OK) return rc;
+    if ((rc = pt__sf_in_read(&in, PT__SF_MAX_FILE, &data, &len, &why)) != PT_OK)
+        return pt__sf_fail(p, rc, "image_texture %s: cannot read '%s': %s", name, file, why);
+    msg[0] = '\0';
+    rc = pfm ? pt__sf_pfm(data, len, shown, &t.image, msg, sizeof msg) : reader(data, len, shown, &t.image, msg, sizeof msg);
+    PT_FREE(data);
+    if (rc != PT_OK) {
+        pt_image_free(&t.image);
+        return pt__sf_fail(p, rc < 0 ? rc : PT_ERROR_IO, "image_texture %s: %s", name, msg[0] ? msg : "cannot decode the image");
+    }
+    if (t.image.width < 1 || t.image.height < 1 || !t.image.rgb ||
+        (uint64_t)t.image.width * (uint64_t)t.image.height > PT__SF_MAX_ENV_PIXELS) {
+        rc = pt__sf_fail(p, PT_ERROR_UNSUPPORTED, "image_texture %s: '%s': %d x %d pixels: a texture has 1 to %lu", name, file,
+                         t.image.width, t.image.height, (unsigned long)PT__SF_MAX_ENV_PIXELS);
+        pt_image_free(&t.image);
+        return rc;
+    }
+    n = 3u * (size_t)t.image.width * (size_t)t.image.height;
+    for (i = 0; i < n; ++i) {
+        float v = t.image.rgb[i];
+        if (!pt__sf_isfinite(v) || v < 0.0f) {
+            rc = pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "image_texture %s: '%s': pixel (%d, %d) is not finite and >= 0",
+                             name, file, (int)((i / 3u) % (size_t)t.image.width), (int)((i / 3u) / (size_t)t.image.width));
+            pt_image_free(&t.image);
+            return rc;
+        }
+        if (png && !t.raw) t.image.rgb[i] = pt_srgb_decode(v);
+    }
+    nt = (pt_scenefile_image *)PT_REALLOC(d->images, (size_t)(d->image_count + 1) * sizeof *nt);
+    if (!nt) {
+        pt_image_free(&t.image);
+        return pt__sf_fail(p, PT_ERROR_OUT_OF_MEMORY, "out of memory");
+    }
+    d->images = nt;
+    d->images[d->image_count++] = t;
+    return PT_OK;
+}
+
 /* xfd = t xfd in double: a translation of 1e7 after a rotation keeps the object's small
    coordinates exact, where the float product rounds them to 1 unit. */
 static void pt__sf_xfd_identity(double x[3][4])
@@ -2033,6 +2190,8 @@ static int pt__sf_statement(pt__sf_parser *p)
         if ((rc = pt__sf_light(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "environment")) {
         if ((rc = pt__sf_environment(p)) != PT_OK) return rc;
+    } else if (!strcmp(kw, "image_texture")) {
+        if ((rc = pt__sf_image_texture(p)) != PT_OK) return rc;
     } else if (!strcmp(kw, "identity")) {
         p->xf = pt_transform_identity();
         pt__sf_xfd_identity(p->xfd);
@@ -2242,7 +2401,7 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
     if (scene) *scene = NULL;
     if (!d || !scene || !r) return PT_ERROR_INVALID_ARGUMENT;
     s = pt_scene_create();
-    tex = (int *)PT_MALLOC(((size_t)d->checker_count + 1u) * sizeof(int));
+    tex = (int *)PT_MALLOC(((size_t)d->checker_count + (size_t)d->image_count + 1u) * sizeof(int));
     mat = (int *)PT_MALLOC(((size_t)d->material_count + 1u) * sizeof(int));
     if (!s || !tex || !mat) {
         rc = pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_OUT_OF_MEMORY, "out of memory");
@@ -2253,13 +2412,20 @@ PTDEF int pt_scenefile_build(const pt_scenefile *d, pt_scene **scene, pt_render_
         tex[i] = pt_scene_add_checker(s, c->even, c->odd, c->scale);
         if (tex[i] < 0) rc = pt__sf_failf(err, err_size, d->file, 0, tex[i], "checker %s: %s", c->name, pt_scene_error_message(s));
     }
+    for (i = 0; i < d->image_count && rc == PT_OK; ++i) { /* after the checkers in tex[] */
+        const pt_scenefile_image *im = &d->images[i];
+        int id = pt_scene_add_image_texture(s, &im->image);
+        tex[d->checker_count + i] = id;
+        if (id < 0)
+            rc = pt__sf_failf(err, err_size, d->file, im->line, id, "image_texture %s: %s", im->name, pt_scene_error_message(s));
+    }
     for (i = 0; i < d->material_count && rc == PT_OK; ++i) {
         const pt_scenefile_material *m = &d->materials[i];
         pt_material_desc md;
         memset(&md, 0, sizeof md);
         md.type = m->type;
         md.albedo = m->albedo;
-        md.albedo_texture = m->checker >= 0 ? tex[m->checker] : 0;
+        md.albedo_texture = m->checker >= 0 ? tex[m->checker] : m->image >= 0 ? tex[d->checker_count + m->image] : 0;
         md.fuzz = m->fuzz;
         md.ior = m->ior;
         md.emission = m->emission;
@@ -2784,6 +2950,12 @@ static int pt__pov_refuse(const pt_scenefile *d, int width, int height, char *er
         if (m->type == PT_MATERIAL_EMITTER && s->type != PT_SCENEFILE_QUAD && s->type != PT_SCENEFILE_SPHERE)
             return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
                                 "POV-Ray export: only quads and spheres can emit (material %s)", m->name);
+        if (m->image >= 0)
+            return pt__sf_failf(err, err_size, d->file, s->line, PT_ERROR_UNSUPPORTED,
+                                "POV-Ray export: an image texture (material %s) has no exact POV-Ray twin: POV-Ray's "
+                                "uv_mapping parameterises spheres about +y (pdftrace, as Mitsuba, about +z) and its "
+                                "image_map filtering is not pdftrace's bilinear lookup between texel centres; not "
+                                "approximated", m->name);
     }
     for (i = 0; i < d->light_count; ++i) {
         const pt_scenefile_light *l = &d->lights[i];
@@ -3035,7 +3207,18 @@ static void pt__mts_rough_dielectric(pt__mts *w, const pt_scenefile_material *m,
     pt__mts_put(w, "\"/></bsdf>\n");
 }
 
-/* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse, a mirror as a
+/* Image texture `image` as Mitsuba 3's bitmap: the linear pixels pdftrace uses, written beside
+   the XML ("<stem>.tex.<image>.pfm", so Mitsuba decodes nothing), bilinear between texel
+   centres, repeated (pt_scene_add_image_texture: the same lookup); raw for non-colour data. */
+static void pt__mts_bitmap(pt__mts *w, const char *name, int image, int raw)
+{
+    pt__mts_put(w, "<texture type=\"bitmap\" name=\"%s\"><string name=\"filename\" value=\"%s.tex.%d.pfm\"/>"
+                   "<string name=\"filter_type\" value=\"bilinear\"/><string name=\"wrap_mode\" value=\"repeat\"/>"
+                   "<boolean name=\"raw\" value=\"%s\"/></texture>", name, w->base, image, raw ? "true" : "false");
+}
+
+/* The bsdf of material i, with id "mat<i>": Lambertian as two-sided diffuse (an image texture as
+   a bitmap), a mirror as a
    two-sided conductor without Fresnel (material "none": reflectance = specular_reflectance),
    glass as a smooth dielectric in vacuum, an emitter as black diffuse (it reflects nothing). */
 static void pt__mts_bsdf(pt__mts *w, int i)
@@ -3049,7 +3232,8 @@ static void pt__mts_bsdf(pt__mts *w, int i)
     switch (m->type) {
     case PT_MATERIAL_LAMBERTIAN:
         pt__mts_put(w, "  <bsdf type=\"twosided\" id=\"mat%d\"><bsdf type=\"diffuse\">", i);
-        pt__mts_rgb(w, "reflectance", m->albedo);
+        if (m->image >= 0) pt__mts_bitmap(w, "reflectance", m->image, 0);
+        else pt__mts_rgb(w, "reflectance", m->albedo);
         pt__mts_put(w, "</bsdf></bsdf>\n");
         break;
     case PT_MATERIAL_METAL:
@@ -3195,12 +3379,13 @@ static void pt__mts_ply_float(pt__mts *w, double x)
     memcpy(&u, &f, sizeof u);
     if (w->f) pt__mts_le32(w->f, u);
 }
-static void pt__mts_ply_header(pt__mts *w, uint32_t vertices, uint32_t faces, int normals)
+static void pt__mts_ply_header(pt__mts *w, uint32_t vertices, uint32_t faces, int normals, int uvs)
 {
     pt__mts_put(w, "ply\nformat binary_little_endian 1.0\ncomment written by pdftrace %d.%d.%d\n", PDFTRACE_VERSION_MAJOR,
                 PDFTRACE_VERSION_MINOR, PDFTRACE_VERSION_PATCH);
     pt__mts_put(w, "element vertex %lu\nproperty float x\nproperty float y\nproperty float z\n", (unsigned long)vertices);
     if (normals) pt__mts_put(w, "property float nx\nproperty float ny\nproperty float nz\n");
+    if (uvs) pt__mts_put(w, "property float u\nproperty float v\n"); /* Mitsuba's PLY reads them unflipped */
     pt__mts_put(w, "element face %lu\nproperty list uchar uint vertex_indices\nend_header\n", (unsigned long)faces);
 }
 static void pt__mts_ply_face(pt__mts *w, uint32_t a, uint32_t b, uint32_t c)
@@ -3249,7 +3434,7 @@ static void pt__mts_ply_mesh(pt__mts *w, const pt_scenefile_shape *s)
             if (!w->bad) w->bad_line = s->line;
             w->bad = 1;
         }
-        pt__mts_ply_header(w, m->vertex_count, faces, normals);
+        pt__mts_ply_header(w, m->vertex_count, faces, normals, m->uvs != NULL);
         for (k = 0; k < m->vertex_count; ++k) {
             double q[3];
             const float *pp = m->positions + 3u * k;
@@ -3261,6 +3446,10 @@ static void pt__mts_ply_mesh(pt__mts *w, const pt_scenefile_shape *s)
                 for (i = 0; i < 3; ++i) n[i] = it[i][0] * nn[0] + it[i][1] * nn[1] + it[i][2] * nn[2];
                 len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
                 for (i = 0; i < 3; ++i) pt__mts_ply_float(w, n[i] / len);
+            }
+            if (m->uvs) {
+                pt__mts_ply_float(w, m->uvs[2u * k]);
+                pt__mts_ply_float(w, m->uvs[2u * k + 1u]);
             }
         }
     }
@@ -3275,7 +3464,7 @@ static void pt__mts_ply_triangles(pt__mts *w, int material)
     int i, c, j;
     for (i = 0; i < d->shape_count; ++i)
         n += d->shapes[i].type == PT_SCENEFILE_TRIANGLE && d->shapes[i].material == material;
-    pt__mts_ply_header(w, 3u * n, n, 0);
+    pt__mts_ply_header(w, 3u * n, n, 0, 0);
     for (i = 0; i < d->shape_count; ++i) {
         const pt_scenefile_shape *s = &d->shapes[i];
         double x[3][4], q[3];
@@ -3535,6 +3724,14 @@ static void pt__mts_body(pt__mts *w)
 /* What the export refuses, before anything is written: every scene the build refuses (the
    build itself runs), a camera the renderer refuses, then what Mitsuba has no exact twin for
    (docs/mitsuba.md, with the measurements behind each). */
+/* The largest channel value of an image. */
+static float pt__mts_image_max(const pt_image *im)
+{
+    size_t i, n = 3u * (size_t)im->width * (size_t)im->height;
+    float m = 0.0f;
+    for (i = 0; i < n; ++i) m = im->rgb[i] > m ? im->rgb[i] : m;
+    return m;
+}
 static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *err, size_t err_size)
 {
     pt_scene *scene = NULL;
@@ -3557,6 +3754,8 @@ static int pt__mts_refuse(const pt_scenefile *d, int width, int height, char *er
         else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_ROUGH_PLASTIC) && m->checker >= 0)
             why = "the 3-D checker texture (material %s) has no exact Mitsuba equivalent (Mitsuba's checkerboard "
                   "is a 2-D texture over a shape's (u, v) coordinates)";
+        else if (m->image >= 0 && pt__mts_image_max(&d->images[m->image].image) > 1.0f)
+            why = "an image texture with a value above 1 (material %s): Mitsuba accepts RGB reflectances in [0, 1] only";
         else if ((m->type == PT_MATERIAL_LAMBERTIAN || m->type == PT_MATERIAL_METAL ||
                   m->type == PT_MATERIAL_ROUGH_CONDUCTOR) &&
                  (m->albedo.x > 1 || m->albedo.y > 1 || m->albedo.z > 1))
@@ -3645,13 +3844,15 @@ static int pt__mts_plan(pt__mts *w)
 }
 
 /* "<path without .xml>.<job>.ply" into out (size bytes), or with job < 0 the environment map's
-   "<path without .xml>.env.pfm"; 0 if it does not fit. */
+   "<path without .xml>.env.pfm", with job <= -2 image texture -2 - job's "<...>.tex.N.pfm"; 0 if
+   it does not fit. */
 static int pt__mts_ply_path(const char *path, int job, char *out, size_t size)
 {
     size_t n = strlen(path);
     int k;
     if (n > 4 && !strcmp(path + n - 4, ".xml")) n -= 4;
-    if (job < 0) k = snprintf(out, size, "%.*s.env.pfm", (int)n, path);
+    if (job <= -2) k = snprintf(out, size, "%.*s.tex.%d.pfm", (int)n, path, -2 - job);
+    else if (job < 0) k = snprintf(out, size, "%.*s.env.pfm", (int)n, path);
     else k = snprintf(out, size, "%.*s.%d.ply", (int)n, path, job);
     return k > 0 && (size_t)k < size;
 }
@@ -3677,7 +3878,7 @@ static int pt__mts_base(pt__mts *w, const char *path, char *err, size_t err_size
             return pt__sf_failf(err, err_size, w->d->file, w->ply_count ? w->ply[0].line : w->d->environment_line,
                                 PT_ERROR_UNSUPPORTED,
                                 "Mitsuba export: the scene needs files named after the output (PLY meshes, the "
-                                "environment map), and its file name holds a byte the XML cannot name them with (a "
+                                "environment map, image textures), and its file name holds a byte the XML cannot name them with (a "
                                 "control byte, a byte >= 0x80, '$' or '\\'); choose another name");
     pt_scenefile_escape(w->base, sizeof w->base, b, PT_SCENEFILE_ESCAPE_XML);
     return PT_OK;
@@ -3705,12 +3906,18 @@ static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_siz
 {
     char ply_path[PT__SF_PATH + 32];
     pt_output_file out;
-    int i, done = 0, env = 0, rc = PT_OK;
+    int i, done = 0, env = 0, tex = 0, rc = PT_OK;
     if (w->env.width > 0) {
         if (!pt__mts_ply_path(path, -1, ply_path, sizeof ply_path))
             return pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
         if ((rc = pt_write_pfm_ex(ply_path, &w->env, err, err_size)) != PT_OK) return rc;
         env = 1;
+    }
+    for (i = 0; i < w->d->image_count && rc == PT_OK; ++i) {
+        if (!pt__mts_ply_path(path, -2 - i, ply_path, sizeof ply_path))
+            rc = pt__sf_failf(err, err_size, path, 0, PT_ERROR_INVALID_ARGUMENT, "Mitsuba export: the path is too long");
+        else if ((rc = pt_write_pfm_ex(ply_path, &w->d->images[i].image, err, err_size)) == PT_OK)
+            tex = i + 1;
     }
     for (i = 0; i < w->ply_count && rc == PT_OK; ++i)
         if ((rc = pt__mts_write_ply(w, path, i, err, err_size)) == PT_OK) done = i + 1;
@@ -3722,6 +3929,8 @@ static int pt__mts_write(pt__mts *w, const char *path, char *err, size_t err_siz
     }
     for (i = env ? -1 : 0; rc != PT_OK && i < done; ++i)
         if (pt__mts_ply_path(path, i, ply_path, sizeof ply_path)) remove(ply_path);
+    for (i = 0; rc != PT_OK && i < tex; ++i)
+        if (pt__mts_ply_path(path, -2 - i, ply_path, sizeof ply_path)) remove(ply_path);
     return rc;
 }
 
@@ -3753,7 +3962,9 @@ PTDEF int pt_scenefile_export_mitsuba(const pt_scenefile *d, const char *path, c
         rc = pt__sf_failf(err, err_size, d->file, 0, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
         goto done;
     }
-    if ((w.ply_count || d->environment.width > 0) && (rc = pt__mts_base(&w, path, err, err_size)) != PT_OK) goto done;
+    if ((w.ply_count || d->environment.width > 0 || d->image_count > 0) &&
+        (rc = pt__mts_base(&w, path, err, err_size)) != PT_OK)
+        goto done;
     if (d->environment.width > 0 && !pt__mts_env_map(&w)) {
         rc = pt__sf_failf(err, err_size, d->file, d->environment_line, PT_ERROR_OUT_OF_MEMORY, "Mitsuba export: out of memory");
         goto done;

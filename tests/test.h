@@ -75,6 +75,7 @@ extern const test_case test_stress_cases[];  /* numerical stress (tests/stress/,
 extern const test_case test_scenefile_cases[]; /* pdftrace_scene.h: pt_obj_load, pt_scene_add_obj */
 extern const test_case test_pov_cases[];       /* pdftrace_scene.h: the POV-Ray exporter against hostile scenes */
 extern const test_case test_mitsuba_cases[];   /* pdftrace_scene.h: the Mitsuba 3 exporter */
+extern const test_case test_textures_cases[]; /* (u, v) and image textures */
 extern const test_case test_microfacet_cases[]; /* the rough conductor (GGX, visible normals) */
 extern const test_case test_plastic_cases[];    /* the rough plastic (Mitsuba's roughplastic) */
 extern const test_case test_suite_cases[];  /* last: summaries over the whole run */

@@ -746,7 +746,8 @@ static void embree_fp_traps(test_ctx *t)
 static void embree_scene_images(test_ctx *t)
 {
     static const char *names[] = { "cornell", "cornell-diffuse", "direct-quad", "direct-sphere", "mirror", "glass",
-                                   "checker", "mesh", "lights-direct", "lights", "env", "rough-metal", "rough-glass" };
+                                   "checker", "mesh", "lights-direct", "lights", "env", "rough-metal", "rough-glass",
+                                   "rough-plastic", "textured" };
     const int ns = (int)(sizeof names / sizeof names[0]);
     char listing[4096], summary[600] = "";
     int k, listed = tu_dir_entries(TE_SCENE_DIR, listing, sizeof listing), nscene_files = 0;

@@ -111,6 +111,7 @@ int main(int argc, char **argv)
         { "materials", test_materials_cases },
         { "microfacet", test_microfacet_cases },
         { "plastic", test_plastic_cases },
+        { "textures", test_textures_cases },
         { "bvh", test_bvh_cases },
         { "render", test_render_cases },
         { "adaptive", test_adaptive_cases },

@@ -62,6 +62,7 @@ static void add_obj_one_call(test_ctx *t)
     id1 = pt_scene_add_obj(s1, MESH_PATH, m1, err, sizeof err);
     CHECK(t, id1 == 0 && err[0] == '\0', "pt_scene_add_obj: %d '%s'", id1, err);
     if (CHECK(t, pt_obj_load(MESH_PATH, &m, err, sizeof err) == PT_OK, "pt_obj_load: '%s'", err)) {
+        memset(&md, 0, sizeof md); /* fields not named below keep their defaults */
         md.positions = m.positions;
         md.vertex_count = m.vertex_count;
         md.indices = m.indices;

@@ -631,6 +631,9 @@ static int parse_options(int argc, char **argv, options *o)
 #ifdef PDFTRACE_OPENEXR
     o->load.read_image = pt_read_exr_memory; /* `environment` maps in OpenEXR besides PFM */
 #endif
+#ifdef PDFTRACE_PNG
+    o->load.read_png = pt_read_png_memory; /* PNG image textures */
+#endif
     o->backend = PT_BACKEND_AUTO;
     o->display.tonemap = PT_TONEMAP_CLAMP;
     for (i = 1; i < argc; i++) {

@@ -453,6 +453,9 @@ static int load(const char *path, pt_scenefile *sd)
 #ifdef PTV_HAVE_EXR
     opt.read_image = pt_read_exr_memory; /* `environment` maps in OpenEXR besides PFM */
 #endif
+#ifdef PTV_HAVE_PNG
+    opt.read_png = pt_read_png_memory; /* PNG image textures */
+#endif
     if (pt_scenefile_load_ex(path, &opt, sd, err, sizeof err) != PT_OK) { fprintf(stderr, "ptv: %s\n", err); return 0; }
     return 1;
 }
@@ -911,7 +914,7 @@ static const bad_case bad_cases[] = {
     {"roughdielectric trailing", "%Hmaterial r roughdielectric 0.2 1.5 1.33\n", "bad.scene:3:"},
     {"bad name", "%Hmaterial 9lives lambertian 1 1 1\n", "bad name '9lives'"},
     {"unknown material type", "%Hmaterial n plastic 1 1 1\n", "unknown type 'plastic'"},
-    {"undefined checker", "%Hmaterial n lambertian texture nope\n", "checker 'nope' is not defined"},
+    {"undefined checker", "%Hmaterial n lambertian texture nope\n", "texture 'nope' is not defined"},
     {"checker scale 0", "%Hchecker c 1 1 1 0 0 0 0\n", "checker: scale must be >= 1e-6"},
     {"size 0", "%Hsize 0 100\n", "size: width: expected an integer in [1, 16384], got '0'"},
     {"size huge", "%Hsize 100000000000000000000 10\n", "expected an integer"},
@@ -1068,7 +1071,8 @@ static void test_malformed(const char *work)
 static void test_scenes_load(const char *dir)
 {
     static const char *const names[] = {"cornell", "cornell-diffuse", "direct-quad", "direct-sphere", "mirror", "glass", "checker", "mesh",
-                                        "lights", "lights-direct", "env", "rough-metal", "rough-glass"};
+                                        "lights", "lights-direct", "env", "rough-metal", "rough-glass",
+                                        "rough-plastic", "textured"};
     size_t i;
     for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
         char path[2048], err[1024] = "";

@@ -87,6 +87,7 @@ env               scenes         64   16    256   pixel   sky map with a sun (sc
 rough-metal       scenes         64   16    256   pixel   GGX rough conductors (gold, copper, aluminium, silver) under a quad and a sphere light
 rough-plastic     scenes         64   16    128   pixel   GGX-coated plastics (alpha 0.02 .. 0.6, one nonlinear) under a quad and a sphere light
 rough-glass       scenes         64   16    256   pixel   GGX rough dielectrics (two balls, a pane seen through) under a quad and a sphere light
+textured          scenes         64   16    256   pixel   image textures over (u, v): an image on a quad, a sphere and an OBJ with vt (repeat)
 balls             bench/scenes   64   16    256   pixel   diffuse balls, global illumination
 many-lights       bench/scenes   64   16    512   pixel   five lights over four orders of power
 metal-glass       bench/scenes   64   16    512   region  mirror and glass balls, caustics (heavy-tailed)
