@@ -505,6 +505,11 @@ PTDEF pt_pdf pt_pdf_guide_hemisphere(const pt_guide *guide, pt_vec3 point, pt_ve
    channels: the density of the direction at its centre, per steradian. *image is allocated or
    reallocated as by pt_film_resolve. */
 PTDEF int pt_guide_image(const pt_guide *guide, pt_vec3 point, int width, int height, struct pt_image *image);
+/* The caustic photons' guide a guided render attached to guide (pt_render_desc.guiding_guide;
+   section 8, "Guiding": a second pt_guide, learned from photons traced from the lights through
+   the delta surfaces, owned by guide), or NULL when the render traced none (no delta surface or
+   no shaped light). Valid until guide is destroyed or guides another render. */
+PTDEF const pt_guide *pt_guide_caustic(const pt_guide *guide);
 
 /* PT_OK, or PT_ERROR_INVALID_ARGUMENT for a malformed PDF (bad weights, NULL callbacks,
    non-finite parameters, an uncommitted scene ...). */
@@ -1314,6 +1319,9 @@ typedef struct pt_render_stats {
                                     the guide over without (> 1: the guide pays); 0 when not measured */
     size_t guiding_bytes;        /* memory of the guide at the end */
     uint32_t guiding_leaves;     /* its spatial leaves */
+    uint64_t guiding_photons;    /* caustic photons traced for the guide (section 8, "Guiding"; 0 in
+                                    scenes without a delta surface or a shaped light) */
+    double guiding_photon_seconds; /* their wall clock (counted in guiding_seconds) */
     char guiding_note[128];      /* "" without guiding; else what was decided and why */
     char error[256];             /* "" on success; else why the call failed or stopped, naming the one
                                     argument or pt_render_desc field at fault with its value, e.g.
@@ -3589,6 +3597,7 @@ struct pt_guide {
     uint64_t max_nodes;               /* directional nodes max_bytes allows */
     double unit;                      /* the value of one fixed-point unit */
     int updates, at_bound;
+    struct pt_guide *caustic;         /* a render's caustic photons (section 8), owned; or NULL */
 #if !defined(PDFTRACE_NO_THREADS) && !defined(__GNUC__) && !defined(__clang__)
     pthread_mutex_t lock;             /* no atomics: the sums are added under a lock */
 #endif
@@ -4242,6 +4251,7 @@ PTDEF void pt_guide_destroy(pt_guide *g)
 {
     uint32_t i;
     if (!g) return;
+    pt_guide_destroy(g->caustic);
     for (i = 0; g->leaves && i < g->leaf_count; ++i) {
         pt__dtree_free(&g->leaves[i].sampling);
         pt__dtree_free(&g->leaves[i].building);
@@ -4253,6 +4263,8 @@ PTDEF void pt_guide_destroy(pt_guide *g)
     PT_FREE(g->leaves);
     PT_FREE(g);
 }
+
+PTDEF const pt_guide *pt_guide_caustic(const pt_guide *g) { return g ? g->caustic : NULL; }
 
 PTDEF int pt_guide_record(pt_guide *g, pt_vec3 point, pt_vec3 dir, float value)
 {
@@ -8902,16 +8914,42 @@ typedef struct pt__vertex {
     int has_guide;
     float g;
     pt_pdf guide;
+    float cshare;             /* the caustic photons' share of the guide's (0: none) and their leaf */
+    uint32_t cleaf;
     float rr_e, rr_ref; /* guided roulette: the expected contribution of going on per unit throughput
                            (0: unknown) and the path's reference (pt__trace_from) */
 } pt__vertex;
 
+/* The guide's density at vertex v: the learned guide's, mixed with the caustic photons' where
+   they landed (pt__vertex_learned). */
+static float pt__vertex_guide_density(const pt__vertex *v, pt_vec3 wi)
+{
+    const pt_guide *g = v->guide.as.guide.guide;
+    const pt_vec3 n = v->guide.as.guide.fold;
+    const float c = v->cshare;
+    float x, y, mx, my, d0, d1, p;
+    if (!(c > 0.0f)) return pt_pdf_value(&v->guide, wi);
+    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) /* (a transmitting material: unfolded) */
+        return c * pt__guide_value(g->caustic, v->cleaf, wi) +
+               (c < 1.0f ? (1.0f - c) * pt__guide_value(g, v->guide.as.guide.leaf, wi) : 0.0f);
+    if (!(pt_dot(wi, n) > 0.0f)) return 0.0f;
+    /* the square's point and its mirror once, for both trees */
+    pt__guide_dir_to_square(wi, &x, &y);
+    if (!pt__guide_mirror_square(n, x, y, &mx, &my)) pt__guide_dir_to_square(pt__guide_mirror(wi, n), &mx, &my);
+    pt__dtree_density2(&g->caustic->leaves[v->cleaf].sampling, x, y, mx, my, &d0, &d1);
+    p = c * (d0 + d1);
+    if (c < 1.0f) {
+        pt__dtree_density2(&g->leaves[v->guide.as.guide.leaf].sampling, x, y, mx, my, &d0, &d1);
+        p += (1.0f - c) * (d0 + d1);
+    }
+    return p * PT__INV_4PI;
+}
 /* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
 static PT__HOT float pt__scatter_density_pg(const pt__vertex *v, pt_vec3 wi, float pg)
 {
     float pm = pt__material_density(v->m, v->ns, v->wo, wi, v->eta);
     if (!v->has_guide) return pm;
-    return (1.0f - v->g) * pm + v->g * (pg >= 0.0f ? pg : pt_pdf_value(&v->guide, wi));
+    return (1.0f - v->g) * pm + v->g * (pg >= 0.0f ? pg : pt__vertex_guide_density(v, wi));
 }
 static PT__HOT float pt__scatter_density(const pt__vertex *v, pt_vec3 wi) { return pt__scatter_density_pg(v, wi, -1.0f); }
 /* *pg receives the guide's density of *wi when the guide drew it, else -1 */
@@ -8923,9 +8961,18 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
         /* (a one-sample mixture: only directions of the guide's own density) */
         if (v->guide.type == PT_PDF_GUIDE) { /* the learned guide, from the scattering numbers */
             float u1, u2;
+            const pt_guide *g = v->guide.as.guide.guide;
             pt__draw_scatter(smp, depth, &u1, &u2);
-            return pt__guide_sample_fold(v->guide.as.guide.guide, v->guide.as.guide.leaf, v->guide.as.guide.fold, u1, u2,
-                                         wi, pg, 0);
+            if (!(v->cshare > 0.0f))
+                return pt__guide_sample_fold(g, v->guide.as.guide.leaf, v->guide.as.guide.fold, u1, u2, wi, pg, 0);
+            /* the caustic photons' guide or the learned one, by u0 rescaled to [0, 1) */
+            if (u0 < v->g * v->cshare) {
+                if (!pt__guide_sample_fold(g->caustic, v->cleaf, v->guide.as.guide.fold, u1, u2, wi, pg, 0)) return 0;
+            } else if (!pt__guide_sample_fold(g, v->guide.as.guide.leaf, v->guide.as.guide.fold, u1, u2, wi, pg, 0)) {
+                return 0;
+            }
+            *pg = pt__vertex_guide_density(v, *wi);
+            return *pg > 0.0f;
         }
         return pt__pdf_sample_depth(&v->guide, pt__sampler_rng(smp), wi, pg, 0, 1);
     } else {
@@ -9231,6 +9278,32 @@ static pt__sampler *pt__split_sampler(pt__sampler *parent, pt__sampler *child, i
     return child;
 }
 
+/* The direction a delta material at vertex v scatters into, and the throughput's factor: a clear
+   dielectric reflects when u < F, else refracts (weight F/F or (1-F)/(1-F) = 1); a mirror or
+   smooth metal reflects with its reflectance. 0: nothing leaves on the side of ng. Paths and
+   caustic photons (section 8, "Guiding") both take it. */
+static PT__HOT int pt__delta_scatter(const pt__vertex *v, int front_face, float u, pt_vec3 *wi, pt_color *beta)
+{
+    const pt__material *m = v->m;
+    if (m->type == PT_MATERIAL_DIELECTRIC || m->type == PT_MATERIAL_ROUGH_DIELECTRIC) {
+        float eta = front_face ? 1.0f / m->ior : m->ior, cos_t = 0.0f;
+        float cos_i = pt__minf(1.0f, pt_dot(v->wo, v->ns));
+        float F = pt__fresnel_dielectric(cos_i, eta, &cos_t);
+        if (u < F) *wi = pt__reflect(v->wo, v->ns);
+        else {
+            *wi = pt_normalize(pt_add(pt_scale(v->wo, -eta), pt_scale(v->ns, eta * cos_i - cos_t)));
+            /* the smooth limit of the rough dielectric scales transmitted radiance by
+               (n_near / n_far)^2 as the rough one does (pt_material_desc) */
+            if (m->type == PT_MATERIAL_ROUGH_DIELECTRIC) *beta = pt_scale(*beta, eta * eta);
+        }
+        return 1;
+    }
+    *wi = pt__reflect(v->wo, v->ns);
+    if (pt_dot(*wi, v->ng) <= 0.0f) return 0;
+    *beta = pt_mul(*beta, pt__delta_reflectance(m, v->albedo, pt_dot(v->wo, v->ns)));
+    return 1;
+}
+
 /* The continuation at vertex v (depth `depth`, throughput beta_in reaching it): the scattered
    direction and its weight, the spawned ray, then Russian roulette. Returns 0 if the path ends.
    *L_out (zero on entry) receives emission found without a ray (see the rounded case below). */
@@ -9243,23 +9316,10 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
     *beta = beta_in;
     if (m->delta) {
         /* perfectly specular: follow the delta direction; no light PDF here */
-        if (m->type == PT_MATERIAL_DIELECTRIC || m->type == PT_MATERIAL_ROUGH_DIELECTRIC) {
-            float eta = h->front_face ? 1.0f / m->ior : m->ior, cos_t = 0.0f;
-            float cos_i = pt__minf(1.0f, pt_dot(v->wo, v->ns));
-            float F = pt__fresnel_dielectric(cos_i, eta, &cos_t);
-            if (pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_FRESNEL)) < F) wi = pt__reflect(v->wo, v->ns);
-            else {
-                wi = pt_normalize(pt_add(pt_scale(v->wo, -eta), pt_scale(v->ns, eta * cos_i - cos_t)));
-                /* the smooth limit of the rough dielectric scales transmitted radiance by
-                   (n_near / n_far)^2 as the rough one does (pt_material_desc) */
-                if (m->type == PT_MATERIAL_ROUGH_DIELECTRIC) *beta = pt_scale(*beta, eta * eta);
-            }
-            /* weight F/F or (1-F)/(1-F) = 1: clear glass */
-        } else {
-            wi = pt__reflect(v->wo, v->ns);
-            if (pt_dot(wi, v->ng) <= 0.0f) return 0;
-            *beta = pt_mul(*beta, pt__delta_reflectance(m, v->albedo, pt_dot(v->wo, v->ns)));
-        }
+        float u = m->type == PT_MATERIAL_DIELECTRIC || m->type == PT_MATERIAL_ROUGH_DIELECTRIC
+                      ? pt__draw1(smp, PT__SET_BOUNCE(depth, PT__SLOT_FRESNEL))
+                      : 0.0f;
+        if (!pt__delta_scatter(v, h->front_face, u, &wi, beta)) return 0;
         *prev_delta = 1;
     } else {
         float p_total, u, pg = -1.0f;
@@ -9400,12 +9460,19 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
    an atan2, and the light the guide finds matters most where the path's throughput is still
    high (bench/README.md, "Path guiding, step by step"). */
 #define PT__GUIDE_SAMPLE_DEPTH 2
+#define PT__CAUSTIC_SHARE 0.5f /* the caustic photons' share of the guide's, where they landed */
 static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, int depth, pt_path_stats *st)
 {
     uint32_t leaf = pt__guide_leaf_at(cfg->learned, v->p);
-    if (!cfg->learned->leaves[leaf].trained) return;
-    v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
+    const pt_guide *cg = cfg->learned->caustic;
+    int trained = cfg->learned->leaves[leaf].trained;
+    if (trained) v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
     if (depth >= PT__GUIDE_SAMPLE_DEPTH) return;
+    if (cg) {
+        v->cleaf = pt__guide_leaf_at(cg, v->p);
+        if (cg->leaves[v->cleaf].trained) v->cshare = trained ? PT__CAUSTIC_SHARE : 1.0f;
+    }
+    if (!trained && !(v->cshare > 0.0f)) return;
     v->guide.type = PT_PDF_GUIDE; /* (the fields it reads; a whole blank costs a memset a vertex) */
     v->guide.as.guide.guide = cfg->learned;
     v->guide.as.guide.leaf = leaf;
@@ -9531,6 +9598,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         }
         if (!m->delta) {
             v.has_guide = 0;
+            v.cshare = 0.0f;
             v.rr_e = 0.0f; /* (set at a guided vertex; delta vertices keep the last one's: the light
                               through glass is what the vertex before it learned) */
             if (cfg->guide) {
@@ -10672,6 +10740,250 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
     return result;
 }
 
+/* --- Caustic photons (section 8, "Guiding"). Light that reaches a non-delta surface through
+   glass or off a mirror (L S+ D paths) is what next-event estimation cannot sample and what the
+   path guide, learning from the few camera paths that happen upon it, learns last: most of the
+   Cornell box's noise. Photons traced from the lights through the delta surfaces to the first
+   non-delta one find it directly (importance-driven path tracing with photons: Jensen, "Importance
+   Driven Path Tracing using the Photon Map", EGWR 1995). Each records, where it lands, its flux
+   along the direction it came from into a second guide (pt_guide.caustic: its own spatial tree,
+   refined over rounds of 1, 2, 4, 8 parts of the photons), so a leaf's directional density is
+   proportional to the caustic irradiance arriving from each direction (L_i cos, the product with
+   the diffuse lobe's cosine for free). Guided vertices whose leaf holds caustic photons mix it
+   into the guide's share (pt__vertex_learned); the photons only shape a PDF, so the image stays
+   unbiased whatever they learn. Photons leave every light by area and towards the bounding sphere
+   of the delta primitives (Jensen's projection maps, one cone), so nearly every photon is a
+   caustic one; delta lights and the environment emit none yet. --- */
+#define PT__PHOTON_ROUNDS 4        /* refinement rounds of 1, 2, 4, 8 fifteenths of the photons */
+#define PT__PHOTON_CHUNK 4096      /* photons per job */
+#define PT__PHOTON_MAX_DELTA 12    /* delta bounces a photon follows */
+#define PT__PHOTON_SPATIAL 1000.0f /* the caustic guide's spatial threshold (records per leaf) */
+
+typedef struct pt__photon_run {
+    const pt_scene *s;
+    pt_guide *g;
+    pt_vec3 c;           /* the delta primitives' bounding sphere */
+    float r;
+    uint64_t seed, first; /* photon indices first .. first + count - 1 of this round */
+    uint64_t count;
+    int jobs;
+    int next;
+#ifndef PDFTRACE_NO_THREADS
+    pthread_mutex_t lock;
+#endif
+} pt__photon_run;
+
+/* A sphere around the delta primitives (centre, radius): about their box's centre, wide enough
+   for each one's own sphere (exact for a single sphere); 0 when there is none. */
+static void pt__prim_sphere(const pt__prim *p, pt_vec3 *c, float *r)
+{
+    pt_vec3 lo, hi;
+    if (p->type == PT__PRIM_SPHERE) {
+        *c = p->p0;
+        *r = p->p1.x;
+        return;
+    }
+    pt__prim_bounds(p, &lo, &hi);
+    *c = pt_scale(pt_add(lo, hi), 0.5f);
+    *r = 0.5f * pt_length(pt_sub(hi, lo));
+}
+static int pt__delta_bounds(const pt_scene *s, pt_vec3 *c, float *r)
+{
+    pt_vec3 lo = pt_v3(FLT_MAX, FLT_MAX, FLT_MAX), hi = pt_scale(lo, -1.0f), pc;
+    uint32_t i;
+    float pr, R = 0.0f;
+    int any = 0;
+    for (i = 0; i < s->prim_count; ++i) {
+        if (!s->mats[s->prims[i].material].delta) continue;
+        pt__prim_sphere(&s->prims[i], &pc, &pr);
+        lo = pt__vmin(lo, pt_sub(pc, pt_v3(pr, pr, pr)));
+        hi = pt__vmax(hi, pt_add(pc, pt_v3(pr, pr, pr)));
+        any = 1;
+    }
+    if (!any) return 0;
+    *c = pt_scale(pt_add(lo, hi), 0.5f);
+    for (i = 0; i < s->prim_count; ++i) {
+        if (!s->mats[s->prims[i].material].delta) continue;
+        pt__prim_sphere(&s->prims[i], &pc, &pr);
+        R = pt__maxf(R, pt_length(pt_sub(pc, *c)) + pr);
+    }
+    *r = R * 1.0001f + 1e-6f * pt__vmaxabs(*c);
+    return pt__vfinite(*c) && pt__isfinite(*r);
+}
+
+/* Photon i: a point on a light picked by power, a direction towards the delta bounds (uniform in
+   their cone; cosine-weighted where the point is inside them), then delta bounces to the first
+   non-delta surface, where its flux is recorded along the way it came. */
+static void pt__photon_trace(const pt__photon_run *run, uint64_t i)
+{
+    const pt_scene *s = run->s;
+    pt_rng rng;
+    const pt__light *l;
+    const pt__prim *lp;
+    const pt__material *lm;
+    pt_vec3 y, n, w, dc;
+    pt_color beta;
+    double d2, pw, flux;
+    float cos_y;
+    int bounces, tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    pt_rng_seed(&rng, run->seed, i);
+    l = &s->lights[pt__pick_light(s, pt_rng_float(&rng))];
+    lp = &s->prims[l->prim];
+    lm = &s->mats[lp->material];
+    if (lp->type == PT__PRIM_SPHERE) {
+        float u1 = pt_rng_float(&rng), u2 = pt_rng_float(&rng), z = 1.0f - 2.0f * u1, sr = pt__safe_sqrt(1.0f - z * z);
+        n = pt_v3(sr * cosf(2.0f * PT__PI * u2), sr * sinf(2.0f * PT__PI * u2), z);
+        y = pt_madd(lp->p0, n, lp->p1.x);
+    } else {
+        float u1 = pt_rng_float(&rng), u2 = pt_rng_float(&rng);
+        y = pt__planar_point(lp, u1, u2);
+        n = lp->n;
+    }
+    dc = pt_sub(run->c, y);
+    d2 = (double)pt_length2(dc);
+    if (d2 > (double)run->r * (double)run->r * 1.0001) { /* uniform in the bounds' cone */
+        double s2 = (double)run->r * run->r / d2, omc = s2 / (1.0 + sqrt(1.0 - s2)); /* 1 - cos(max) */
+        double ct = 1.0 - pt_rng_float(&rng) * omc, st = sqrt(pt__maxd(0.0, 1.0 - ct * ct));
+        float phi = 2.0f * PT__PI * pt_rng_float(&rng);
+        pt_onb b = pt__onb(pt_scale(dc, 1.0f / sqrtf((float)d2)));
+        w = pt_normalize(pt_onb_to_world(&b, pt_v3((float)st * cosf(phi), (float)st * sinf(phi), (float)ct)));
+        pw = 1.0 / (2.0 * 3.141592653589793 * omc);
+    } else { /* inside the bounds: cosine-weighted about the light's normal */
+        pt_onb b = pt__onb(n);
+        w = pt_onb_to_world(&b, pt__cosine_hemisphere(pt_rng_float(&rng), pt_rng_float(&rng)));
+        pw = (double)pt_dot(w, n) / 3.141592653589793;
+    }
+    cos_y = pt_dot(w, n);
+    if (lm->two_sided) cos_y = fabsf(cos_y);
+    if (!(cos_y > 0.0f) || !(pw > 0.0)) return;
+    /* the photon's flux times the number of photons: L_e cos / (p_area p_dir), p_area = pick / area
+       (only a leaf's relative sums matter: its directional density) */
+    flux = (double)cos_y * (double)l->area / ((double)l->select_pdf * pw);
+    beta = lm->emission;
+    {
+        pt_ray ray;
+        ray.origin = pt__offset_origin(y, n, w, pt__prim_magnitude(lp, n));
+        ray.dir = w;
+        for (bounces = 0; bounces <= PT__PHOTON_MAX_DELTA; ++bounces) {
+            pt__rayctx rc;
+            uint32_t pi;
+            float t, bary[3];
+            const pt__prim *prim;
+            pt__vertex v;
+            pt_hit h;
+            pt_vec3 wi;
+            pt__rayctx_init2(&rc, ray, tri);
+            if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) return;
+            prim = &s->prims[pi];
+            v.m = &s->mats[prim->material];
+            if (!v.m->scatters) return;
+            pt__fill_hit(s, prim, ray, t, bary, &h);
+            if (!v.m->delta) { /* a caustic photon lands (a direct one is next-event estimation's) */
+                double e = flux * ((double)beta.x + (double)beta.y + (double)beta.z) / 3.0;
+                if (bounces > 0) pt__guide_splat(run->g, h.point, pt_neg(ray.dir), e);
+                return;
+            }
+            v.p = h.point;
+            v.wo = pt_neg(ray.dir);
+            v.ng = h.front_face ? h.geometric_normal : pt_neg(h.geometric_normal);
+            v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
+            v.albedo = v.m->texture ? pt__albedo(s, v.m, prim, bary, &h) : v.m->albedo;
+            if (!pt__delta_scatter(&v, h.front_face, pt_rng_float(&rng), &wi, &beta)) return;
+            ray.origin = pt__offset_origin(v.p, v.ng, wi, h.magnitude);
+            ray.dir = wi;
+        }
+    }
+}
+
+static void pt__photon_job(void *data, int job)
+{
+    const pt__photon_run *run = (const pt__photon_run *)data;
+    uint64_t i = run->first + (uint64_t)job * PT__PHOTON_CHUNK, end = run->first + run->count;
+    uint64_t stop = i + PT__PHOTON_CHUNK < end ? i + PT__PHOTON_CHUNK : end;
+    for (; i < stop; ++i) pt__photon_trace(run, i);
+}
+
+#ifndef PDFTRACE_NO_THREADS
+static void *pt__photon_worker(void *data)
+{
+    pt__photon_run *run = (pt__photon_run *)data;
+    for (;;) {
+        int i;
+        pthread_mutex_lock(&run->lock);
+        i = run->next++;
+        pthread_mutex_unlock(&run->lock);
+        if (i >= run->jobs) break;
+        pt__photon_job(run, i);
+    }
+    return NULL;
+}
+#endif
+
+/* One round's photons on the render's threads (or the host's parallel-for): the records are
+   integer sums, so the guide does not depend on which thread traced which photon. */
+static void pt__photon_round(pt__photon_run *run, int threads, const pt_render_desc *d)
+{
+    int i;
+    (void)threads;
+    run->jobs = (int)((run->count + PT__PHOTON_CHUNK - 1) / PT__PHOTON_CHUNK);
+    run->next = 0;
+    if (d->parallel_for) {
+        d->parallel_for(d->parallel_for_user, run->jobs, pt__photon_job, run);
+        return;
+    }
+#ifndef PDFTRACE_NO_THREADS
+    if (threads > 1 && run->jobs > 1) {
+        pthread_t tid[256];
+        int started = 0, n = threads > run->jobs ? run->jobs : threads;
+        if (n > 256) n = 256;
+        pthread_mutex_init(&run->lock, NULL);
+        for (i = 0; i < n - 1; ++i) {
+            if (pthread_create(&tid[i], NULL, pt__photon_worker, run) != 0) break;
+            started++;
+        }
+        (void)pt__photon_worker(run);
+        for (i = 0; i < started; ++i) pthread_join(tid[i], NULL);
+        pthread_mutex_destroy(&run->lock);
+        return;
+    }
+#endif
+    for (i = 0; i < run->jobs; ++i) pt__photon_job(run, i);
+}
+
+/* The caustic guide of a guided render (NULL when the scene has no delta surface or no shaped
+   light): `photons` photons in PT__PHOTON_ROUNDS rounds, the guide updated after each. */
+static int pt__caustic_guide(const pt_scene *s, const pt_render_desc *d, uint64_t photons, size_t max_bytes,
+                             pt_guide **out)
+{
+    pt__photon_run run;
+    pt_guide_desc gd;
+    uint64_t done = 0, parts = (1u << PT__PHOTON_ROUNDS) - 1u;
+    int k, rc, threads = d->threads > 0 ? d->threads : pt__cpu_count();
+    *out = NULL;
+    memset(&run, 0, sizeof run);
+    if (!s->light_count || !(s->features & PT_FEATURE_DELTA) || !pt__delta_bounds(s, &run.c, &run.r)) return PT_OK;
+    memset(&gd, 0, sizeof gd);
+    gd.max_bytes = max_bytes;
+    gd.spatial_threshold = PT__PHOTON_SPATIAL;
+    /* a photon's flux x N is at most about 2 x the lights' power: 2^-24 of that is the unit */
+    gd.value_resolution = (float)pt__maxd(2.0 * s->total_power / 16777216.0, 1e-30);
+    if ((rc = pt_guide_create_for_scene(s, &gd, &run.g)) != PT_OK) return rc;
+    run.s = s;
+    run.seed = pt__mix64(d->seed ^ 0x70686f746f6e73ULL); /* ("photons": a stream apart from the pixels') */
+    for (k = 0; k < PT__PHOTON_ROUNDS; ++k) {
+        run.first = done;
+        run.count = k + 1 < PT__PHOTON_ROUNDS ? photons * ((uint64_t)1 << k) / parts : photons - done;
+        pt__photon_round(&run, threads, d);
+        done += run.count;
+        if ((rc = pt__guide_update(run.g)) != PT_OK) {
+            pt_guide_destroy(run.g);
+            return rc;
+        }
+    }
+    *out = run.g;
+    return PT_OK;
+}
+
 /* --- Guiding: pt_render with pt_render_desc.guiding. Training iterations of 1, 2, 4, ...,
    2^(T-1) samples per pixel (the most T with 2^T - 1 <= guiding_budget x spp; Mueller et al.
    2017, section 4), each guided by what the iterations before it recorded and recording its own
@@ -10873,6 +11185,30 @@ static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film
     return rc;
 }
 
+/* The caustic photons of guided render d into g->caustic (replacing a previous render's): one
+   photon per 4 camera samples of the render, at least 2^16 and at most 2^22 (photons cost about as
+   much as a camera sample each: docs/design.md, "Caustic photons"). */
+#define PT__PHOTONS_PER_SAMPLE 0.25
+static int pt__guiding_photons(const pt_scene *s, const pt_render_desc *d, pt_guide *g, size_t max_bytes,
+                               pt_render_stats *acc)
+{
+    double t0 = pt__now(), n = PT__PHOTONS_PER_SAMPLE * (double)d->width * (double)d->height *
+                                   (double)(d->samples_per_pixel ? d->samples_per_pixel : 16);
+    uint64_t photons = (uint64_t)pt__mind(4194304.0, pt__maxd(65536.0, n));
+    int rc;
+    pt_guide_destroy(g->caustic);
+    g->caustic = NULL;
+    rc = pt__caustic_guide(s, d, photons, max_bytes / 4u, &g->caustic);
+    if (rc == PT_OK && g->caustic) {
+        pt_guide_info gi;
+        pt_guide_get_info(g->caustic, &gi);
+        acc->guiding_photons = photons;
+        acc->guiding_bytes += gi.bytes;
+    }
+    acc->guiding_photon_seconds = pt__now() - t0;
+    return rc;
+}
+
 static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats)
 {
     char *err = stats ? stats->error : NULL;
@@ -10903,13 +11239,15 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
         if (own && (rc = pt_guide_create_for_scene(s, &gd, &g)) != PT_OK)
             return pt__msg(err, en, rc, "pt_render: out of memory for the guide");
         if (!own && !g->updates) g->unit = (double)gd.value_resolution;
-        rc = pt__guiding_train(s, d, film, g, T, Td, weight, &use, &acc, &gain, err, en);
+        rc = pt__guiding_photons(s, d, g, gd.max_bytes, &acc);
+        if (rc != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the caustic photons' guide");
+        else rc = pt__guiding_train(s, d, film, g, T, Td, weight, &use, &acc, &gain, err, en);
         acc.guiding_seconds = pt__now() - t0;
         acc.guiding_samples = acc.samples;
         if (rc == PT_OK) {
             pt_guide_info gi;
             pt_guide_get_info(g, &gi);
-            acc.guiding_bytes = gi.bytes;
+            acc.guiding_bytes += gi.bytes;
             acc.guiding_leaves = gi.spatial_leaves;
             acc.guiding_gain = gain;
             if (d->guiding == PT_GUIDING_ON)
@@ -10936,6 +11274,8 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
     fin.guiding_gain = acc.guiding_gain;
     fin.guiding_bytes = acc.guiding_bytes;
     fin.guiding_leaves = acc.guiding_leaves;
+    fin.guiding_photons = acc.guiding_photons;
+    fin.guiding_photon_seconds = acc.guiding_photon_seconds;
     memcpy(fin.guiding_note, acc.guiding_note, sizeof fin.guiding_note);
     fin.seconds = pt__now() - t0;
     if (stats) {

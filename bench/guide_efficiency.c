@@ -10,6 +10,11 @@
      build/guide_efficiency scenes/cornell.scene bench/ref/cornell.pfm --spp 128 --seeds 3
    Options: --alpha F, --budget F (pt_render_desc.guiding_alpha, guiding_budget; 0: defaults),
    --auto (PT_GUIDING_AUTO instead of ON), --rr-start N (rr_start_depth of both renders),
+   --threads N (default 1; with N > 1 times are wall-clock seconds), --floor F (the reference's own
+   relMSE noise floor, subtracted from every relMSE), --spp-unguided N and --sampler-unguided
+   independent|sobol (the unguided render's, for equal-time comparisons: choose its spp so that its
+   time matches the guided one's; default: the same spp, independent numbers),
+   --save PREFIX (write the first seed's images as PREFIX-guided.pfm and PREFIX-unguided.pfm),
    --probe X Y Z NX NY NZ TX TY TZ: after the first guided render, the share of the guide's
    density at point X Y Z below the surface of normal N and within 5 and 15 degrees of the
    direction to T (a guide that learned where light comes from puts much of it there). */
@@ -27,6 +32,12 @@
 #define MAX_SEEDS 64
 
 static double cpu_seconds(void) { return (double)clock() / (double)CLOCKS_PER_SEC; }
+static double wall_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 static double rel_mse(const pt_image *x, const pt_image *r)
 {
@@ -73,8 +84,11 @@ int main(int argc, char **argv)
     pt_render_desc base;
     pt_image ref, img;
     char err[1024];
-    int spp = 128, seeds = 3, i, k, rr = 0, have_probe = 0, guiding = PT_GUIDING_ON;
+    int spp = 128, seeds = 3, i, k, rr = 0, have_probe = 0, guiding = PT_GUIDING_ON, threads = 1, spp_u = 0;
+    pt_sampler sampler_u = PT_SAMPLER_INDEPENDENT;
     float alpha = 0.0f, budget = 0.0f, pv[9];
+    double floor_relmse = 0.0;
+    const char *save = NULL;
     double ratio[MAX_SEEDS];
     if (argc < 3) {
         fprintf(stderr, "usage: guide_efficiency SCENE REF.pfm [--spp N] [--seeds N] [--alpha F] [--budget F] [--auto]\n"
@@ -87,6 +101,15 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--alpha") && i + 1 < argc) alpha = (float)atof(argv[++i]);
         else if (!strcmp(argv[i], "--budget") && i + 1 < argc) budget = (float)atof(argv[++i]);
         else if (!strcmp(argv[i], "--auto")) guiding = PT_GUIDING_AUTO;
+        else if (!strcmp(argv[i], "--save") && i + 1 < argc) save = argv[++i];
+        else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--floor") && i + 1 < argc) floor_relmse = atof(argv[++i]);
+        else if (!strcmp(argv[i], "--spp-unguided") && i + 1 < argc) spp_u = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--sampler-unguided") && i + 1 < argc) {
+            ++i;
+            if (!strcmp(argv[i], "sobol")) sampler_u = PT_SAMPLER_SOBOL;
+            else if (strcmp(argv[i], "independent")) { fprintf(stderr, "guide_efficiency: bad sampler '%s'\n", argv[i]); return 2; }
+        }
         else if (!strcmp(argv[i], "--rr-start") && i + 1 < argc) rr = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--probe") && i + 9 < argc) {
             for (k = 0; k < 9; ++k) pv[k] = (float)atof(argv[++i]);
@@ -96,7 +119,8 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (spp < 1 || seeds < 1 || seeds > MAX_SEEDS) { fprintf(stderr, "guide_efficiency: bad --spp or --seeds\n"); return 2; }
+    if (spp_u == 0) spp_u = spp;
+    if (spp < 1 || spp_u < 1 || threads < 1 || seeds < 1 || seeds > MAX_SEEDS) { fprintf(stderr, "guide_efficiency: bad --spp or --seeds\n"); return 2; }
     memset(&ref, 0, sizeof ref);
     memset(&img, 0, sizeof img);
     if (pt_scenefile_load(argv[1], &sd, err, sizeof err) != PT_OK || pt_scenefile_build(&sd, &scene, &base, err, sizeof err) != PT_OK ||
@@ -107,12 +131,14 @@ int main(int argc, char **argv)
     base.width = ref.width;
     base.height = ref.height;
     base.samples_per_pixel = spp;
-    base.threads = 1;
+    base.threads = threads;
     base.strategy = PT_STRATEGY_MIS;
     base.rr_start_depth = rr;
     base.guiding_alpha = alpha;
     base.guiding_budget = budget;
-    printf("%s at %dx%d, %d spp, one thread\n", argv[1], ref.width, ref.height, spp);
+    printf("%s at %dx%d, guided %d spp, unguided %d spp (%s), %d thread(s), %s time, noise floor %.3g subtracted\n", argv[1],
+           ref.width, ref.height, spp, spp_u, sampler_u == PT_SAMPLER_SOBOL ? "sobol" : "independent", threads,
+           threads > 1 ? "wall" : "CPU", floor_relmse);
     for (k = 0; k < seeds; ++k) {
         double eff[2];
         int g;
@@ -124,20 +150,30 @@ int main(int argc, char **argv)
             double t0, t, e;
             d.seed = (uint64_t)(101 + k);
             d.guiding = g ? (pt_guiding)guiding : PT_GUIDING_OFF;
+            if (!g) {
+                d.samples_per_pixel = spp_u;
+                d.sampler = sampler_u;
+            }
             if (g && have_probe && k == 0 && pt_guide_create_for_scene(scene, NULL, &guide) == PT_OK) d.guiding_guide = guide;
             if (pt_film_init(&film, d.width, d.height) != PT_OK) return 1;
-            t0 = cpu_seconds();
+            t0 = threads > 1 ? wall_seconds() : cpu_seconds();
             if (pt_render(scene, &d, &film, &st) != PT_OK) { fprintf(stderr, "guide_efficiency: %s\n", st.error); return 1; }
-            t = cpu_seconds() - t0;
+            t = (threads > 1 ? wall_seconds() : cpu_seconds()) - t0;
             pt_film_resolve(&film, &img);
-            e = rel_mse(&img, &ref);
+            e = rel_mse(&img, &ref) - floor_relmse;
+            if (save && k == 0) {
+                char path[1024];
+                snprintf(path, sizeof path, "%s-%s.pfm", save, g ? "guided" : "unguided");
+                if (pt_write_pfm(path, &img) != PT_OK) fprintf(stderr, "guide_efficiency: cannot write %s\n", path);
+            }
             eff[g] = 1.0 / (e * t);
             printf("seed %d %-8s relMSE %.5g  cpu %6.2f s  efficiency %.4g  rays/sample %.2f  guided vertices/sample %.2f  leaves %u  "
-                   "NaN/Inf %llu  %s\n",
+                   "NaN/Inf %llu  photons %llu (%.2f s)  %s\n",
                    101 + k, g ? "guided" : "unguided", e, t, eff[g],
                    (double)(st.camera_rays + st.bounce_rays + st.shadow_rays) / (double)st.samples,
                    (double)st.guided_vertices / (double)st.samples, (unsigned)st.guiding_leaves,
-                   (unsigned long long)st.nonfinite_samples, st.guiding_note);
+                   (unsigned long long)st.nonfinite_samples, (unsigned long long)st.guiding_photons, st.guiding_photon_seconds,
+                   st.guiding_note);
             if (guide) probe(guide, pv);
             pt_guide_destroy(guide);
             pt_film_free(&film);

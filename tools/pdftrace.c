@@ -908,6 +908,8 @@ static void print_stats(const options *o, const pt_scene *scene, const pt_render
                    st->guiding_seconds, (unsigned long long)st->guiding_samples,
                    (unsigned long)(st->guiding_bytes / 1024u), (unsigned long)st->guiding_leaves,
                    st->guiding_leaves == 1 ? "f" : "ves", (unsigned long long)st->guided_vertices);
+        if (st->guiding_photons > 0)
+            printf("; %llu caustic photons in %.3f s", (unsigned long long)st->guiding_photons, st->guiding_photon_seconds);
         printf("\n");
     }
     if (st->estimated_error >= 0) printf("error      estimated RMS relative error %.4f\n", st->estimated_error);
