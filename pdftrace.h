@@ -176,7 +176,10 @@
    back, and the material side of every strategy becomes alpha p_material + (1 - alpha) p_guide
    at non-delta vertices, its density used everywhere (MIS weights included); the guide is folded
    onto the surface's side (pt_pdf_guide_hemisphere), and Russian roulette follows the radiance
-   each of its leaves learned, so that paths carrying indirect light live on. Every sample stays
+   each of its leaves learned, so that paths carrying indirect light live on. In scenes with
+   mirrors or glass and shaped lights, photons traced from the lights through those surfaces
+   train a second guide first (pt_guide_caustic: the caustics next-event estimation cannot
+   sample), which takes half of the guide's share where they landed. Every sample stays
    in the image with equal weight, so the image is unbiased and bit-identical at any thread count.
    PT_GUIDING_AUTO measures, in the last training iteration, whether the guide pays and goes on
    unguided if not; scenes where guiding cannot help (no non-delta material, no light) skip it.
@@ -3592,6 +3595,8 @@ struct pt_guide {
     pt_vec3 lo, hi, inv_extent;       /* the box, in the coordinates records are made in */
     const pt_scene *scene;            /* pt_guide_create_for_scene: points are converted to local */
     pt__guide_node *nodes;
+    uint32_t *jump;                   /* 2^PT__GUIDE_JUMP_BITS entries: the node a point's first
+                                         PT__GUIDE_JUMP_BITS levels lead to (pt__guide_leaf_at) */
     pt__guide_leaf *leaves;
     uint32_t node_count, node_cap, leaf_count, leaf_cap;
     uint64_t max_nodes;               /* directional nodes max_bytes allows */
@@ -3803,6 +3808,7 @@ static size_t pt__dtree_bytes(const pt__dtree *t)
    axis's 16-bit cell index: p becomes a 48-bit Morton code (x, y, z bits interleaved) once, and
    the descent reads bit 47 - d, without a branch on the side. floor(c 2^16) keeps exactly the
    bits that halving c in float would compare (x 2 and 2c - 1 are exact). */
+#define PT__GUIDE_JUMP_BITS 12
 static uint64_t pt__guide_spread16(uint32_t v)
 {
     uint64_t x = (uint64_t)(v & 0xffffu);
@@ -3822,9 +3828,23 @@ static uint32_t pt__guide_leaf_at(const pt_guide *g, pt_vec3 p)
     const uint64_t code = (pt__guide_spread16(pt__guide_cell16((p.x - g->lo.x) * g->inv_extent.x)) << 2) |
                           (pt__guide_spread16(pt__guide_cell16((p.y - g->lo.y) * g->inv_extent.y)) << 1) |
                           pt__guide_spread16(pt__guide_cell16((p.z - g->lo.z) * g->inv_extent.z));
-    const pt__guide_node *nd = g->nodes;
+    const pt__guide_node *nd = g->nodes + g->jump[code >> (48 - PT__GUIDE_JUMP_BITS)];
     while (nd->axis >= 0) nd = g->nodes + nd->child[(code >> (47 - nd->depth)) & 1u];
     return nd->child[0];
+}
+/* The jump table of the first PT__GUIDE_JUMP_BITS levels (a node at depth d splits on bit 47 - d
+   of the code, so those levels read only its top bits): one load instead of a chain of them;
+   remade whenever the spatial tree changes. */
+static void pt__guide_jump_build(pt_guide *g)
+{
+    uint32_t i;
+    for (i = 0; i < (1u << PT__GUIDE_JUMP_BITS); ++i) {
+        const uint64_t code = (uint64_t)i << (48 - PT__GUIDE_JUMP_BITS);
+        uint32_t n = 0;
+        while (g->nodes[n].axis >= 0 && g->nodes[n].depth < PT__GUIDE_JUMP_BITS)
+            n = g->nodes[n].child[(code >> (47 - g->nodes[n].depth)) & 1u];
+        g->jump[i] = n;
+    }
 }
 static pt_vec3 pt__guide_local(const pt_guide *g, pt_vec3 p) { return g->scene ? pt__to_local(g->scene, p) : p; }
 
@@ -4166,6 +4186,7 @@ static int pt__guide_update(pt_guide *g)
         if (!pt__dtree_refine(g, &l->sampling, &l->building, &budget, &g->at_bound)) return PT_ERROR_OUT_OF_MEMORY;
         l->records = 0;
     }
+    pt__guide_jump_build(g);
     g->updates++;
     return PT_OK;
 }
@@ -4207,6 +4228,9 @@ static int pt__guide_make(const pt_guide_desc *d, pt_vec3 lo, pt_vec3 hi, const 
     g->nodes[0].axis = -1;
     g->nodes[0].depth = 0;
     g->nodes[0].child[0] = g->nodes[0].child[1] = 0;
+    g->jump = (uint32_t *)PT_MALLOC(sizeof(uint32_t) << PT__GUIDE_JUMP_BITS);
+    if (!g->jump) { pt_guide_destroy(g); return PT_ERROR_OUT_OF_MEMORY; }
+    pt__guide_jump_build(g);
     memset(&g->leaves[0], 0, sizeof g->leaves[0]);
 #if !defined(PDFTRACE_NO_THREADS) && !defined(__GNUC__) && !defined(__clang__)
     pthread_mutex_init(&g->lock, NULL);
@@ -4260,6 +4284,7 @@ PTDEF void pt_guide_destroy(pt_guide *g)
     pthread_mutex_destroy(&g->lock);
 #endif
     PT_FREE(g->nodes);
+    PT_FREE(g->jump);
     PT_FREE(g->leaves);
     PT_FREE(g);
 }
@@ -4289,7 +4314,8 @@ PTDEF int pt_guide_get_info(const pt_guide *g, pt_guide_info *info)
     info->spatial_leaves = g->leaf_count;
     info->max_bytes = g->desc.max_bytes;
     info->at_memory_bound = g->at_bound;
-    info->bytes = sizeof *g + sizeof(pt__guide_node) * g->node_cap + sizeof(pt__guide_leaf) * g->leaf_cap;
+    info->bytes = sizeof *g + sizeof(pt__guide_node) * g->node_cap + sizeof(pt__guide_leaf) * g->leaf_cap +
+                  (sizeof(uint32_t) << PT__GUIDE_JUMP_BITS);
     for (i = 0; i < g->node_count; ++i)
         if ((uint32_t)g->nodes[i].depth > info->spatial_depth) info->spatial_depth = (uint32_t)g->nodes[i].depth;
     for (i = 0; i < g->leaf_count; ++i) {

@@ -13,7 +13,8 @@
    --threads N (default 1; with N > 1 times are wall-clock seconds), --floor F (the reference's own
    relMSE noise floor, subtracted from every relMSE), --spp-unguided N and --sampler-unguided
    independent|sobol (the unguided render's, for equal-time comparisons: choose its spp so that its
-   time matches the guided one's; default: the same spp, independent numbers),
+   time matches the guided one's; default: the same spp, independent numbers), --sampler-guided
+   independent|sobol (the guided render's; default independent),
    --save PREFIX (write the first seed's images as PREFIX-guided.pfm and PREFIX-unguided.pfm),
    --probe X Y Z NX NY NZ TX TY TZ: after the first guided render, the share of the guide's
    density at point X Y Z below the surface of normal N and within 5 and 15 degrees of the
@@ -85,7 +86,7 @@ int main(int argc, char **argv)
     pt_image ref, img;
     char err[1024];
     int spp = 128, seeds = 3, i, k, rr = 0, have_probe = 0, guiding = PT_GUIDING_ON, threads = 1, spp_u = 0;
-    pt_sampler sampler_u = PT_SAMPLER_INDEPENDENT;
+    pt_sampler sampler_u = PT_SAMPLER_INDEPENDENT, sampler_g = PT_SAMPLER_INDEPENDENT;
     float alpha = 0.0f, budget = 0.0f, pv[9];
     double floor_relmse = 0.0;
     const char *save = NULL;
@@ -105,9 +106,10 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--floor") && i + 1 < argc) floor_relmse = atof(argv[++i]);
         else if (!strcmp(argv[i], "--spp-unguided") && i + 1 < argc) spp_u = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--sampler-unguided") && i + 1 < argc) {
+        else if ((!strcmp(argv[i], "--sampler-unguided") || !strcmp(argv[i], "--sampler-guided")) && i + 1 < argc) {
+            pt_sampler *which = !strcmp(argv[i], "--sampler-guided") ? &sampler_g : &sampler_u;
             ++i;
-            if (!strcmp(argv[i], "sobol")) sampler_u = PT_SAMPLER_SOBOL;
+            if (!strcmp(argv[i], "sobol")) *which = PT_SAMPLER_SOBOL;
             else if (strcmp(argv[i], "independent")) { fprintf(stderr, "guide_efficiency: bad sampler '%s'\n", argv[i]); return 2; }
         }
         else if (!strcmp(argv[i], "--rr-start") && i + 1 < argc) rr = atoi(argv[++i]);
@@ -136,8 +138,9 @@ int main(int argc, char **argv)
     base.rr_start_depth = rr;
     base.guiding_alpha = alpha;
     base.guiding_budget = budget;
-    printf("%s at %dx%d, guided %d spp, unguided %d spp (%s), %d thread(s), %s time, noise floor %.3g subtracted\n", argv[1],
-           ref.width, ref.height, spp, spp_u, sampler_u == PT_SAMPLER_SOBOL ? "sobol" : "independent", threads,
+    printf("%s at %dx%d, guided %d spp (%s), unguided %d spp (%s), %d thread(s), %s time, noise floor %.3g subtracted\n",
+           argv[1], ref.width, ref.height, spp, sampler_g == PT_SAMPLER_SOBOL ? "sobol" : "independent", spp_u,
+           sampler_u == PT_SAMPLER_SOBOL ? "sobol" : "independent", threads,
            threads > 1 ? "wall" : "CPU", floor_relmse);
     for (k = 0; k < seeds; ++k) {
         double eff[2];
@@ -150,10 +153,8 @@ int main(int argc, char **argv)
             double t0, t, e;
             d.seed = (uint64_t)(101 + k);
             d.guiding = g ? (pt_guiding)guiding : PT_GUIDING_OFF;
-            if (!g) {
-                d.samples_per_pixel = spp_u;
-                d.sampler = sampler_u;
-            }
+            d.sampler = g ? sampler_g : sampler_u;
+            if (!g) d.samples_per_pixel = spp_u;
             if (g && have_probe && k == 0 && pt_guide_create_for_scene(scene, NULL, &guide) == PT_OK) d.guiding_guide = guide;
             if (pt_film_init(&film, d.width, d.height) != PT_OK) return 1;
             t0 = threads > 1 ? wall_seconds() : cpu_seconds();
