@@ -11166,12 +11166,37 @@ static int pt__guiding_step(const pt_scene *s, const pt_render_desc *d, pt_film 
     return PT_OK;
 }
 
+/* The caustic photons of guided render d into g->caustic (replacing a previous render's): one
+   photon per 4 camera samples of the render, at least 2^16 and at most 2^22 (photons cost about as
+   much as a camera sample each: docs/design.md, "Caustic photons"). */
+#define PT__PHOTONS_PER_SAMPLE 0.25
+static int pt__guiding_photons(const pt_scene *s, const pt_render_desc *d, pt_guide *g, size_t max_bytes,
+                               pt_render_stats *acc)
+{
+    double t0 = pt__now(), n = PT__PHOTONS_PER_SAMPLE * (double)d->width * (double)d->height *
+                                   (double)(d->samples_per_pixel ? d->samples_per_pixel : 16);
+    uint64_t photons = (uint64_t)pt__mind(4194304.0, pt__maxd(65536.0, n));
+    int rc;
+    pt_guide_destroy(g->caustic);
+    g->caustic = NULL;
+    rc = pt__caustic_guide(s, d, photons, max_bytes / 4u, &g->caustic);
+    if (rc == PT_OK && g->caustic) {
+        pt_guide_info gi;
+        pt_guide_get_info(g->caustic, &gi);
+        acc->guiding_photons = photons;
+        acc->guiding_bytes += gi.bytes;
+    }
+    acc->guiding_photon_seconds = pt__now() - t0;
+    return rc;
+}
+
 /* The training iterations (see above), into the caller's film. With AUTO the last one renders
    half its samples unguided and half guided: *gain, the efficiency ratio of the two halves, then
    decides *use (both measured on equally many samples at the same time: a rare bright path the
    unguided half misses would make an unguided iteration of its own look better than it is). */
 static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_guide *g, int T, int Td,
-                             float weight, int *use, pt_render_stats *acc, double *gain, char *err, size_t en)
+                             float weight, size_t max_bytes, int *use, pt_render_stats *acc, double *gain, char *err,
+                             size_t en)
 {
     pt__film_snap a, b, now;
     int it, rc = PT_OK;
@@ -11196,6 +11221,12 @@ static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film
                 *gain = eg > 0.0 ? eu / eg : (eu > 0.0 ? HUGE_VAL : 1.0);
                 *use = *gain > PT__GUIDING_AUTO_GAIN;
             }
+            /* the caustic photons only once guiding is decided on: a scene it does not help pays
+               nothing for them */
+            if (*use && (rc = pt__guiding_photons(s, d, g, max_bytes, acc)) != PT_OK) {
+                pt__msg(err, en, rc, "pt_render: out of memory for the caustic photons' guide");
+                break;
+            }
         } else {
             rc = pt__guiding_step(s, d, film, n, it > 0 ? g : NULL, g, weight, acc, &cost_g, err, en);
             if (rc != PT_OK) break;
@@ -11208,30 +11239,6 @@ static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film
         rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
     pt__snap_free(&a);
     pt__snap_free(&b);
-    return rc;
-}
-
-/* The caustic photons of guided render d into g->caustic (replacing a previous render's): one
-   photon per 4 camera samples of the render, at least 2^16 and at most 2^22 (photons cost about as
-   much as a camera sample each: docs/design.md, "Caustic photons"). */
-#define PT__PHOTONS_PER_SAMPLE 0.25
-static int pt__guiding_photons(const pt_scene *s, const pt_render_desc *d, pt_guide *g, size_t max_bytes,
-                               pt_render_stats *acc)
-{
-    double t0 = pt__now(), n = PT__PHOTONS_PER_SAMPLE * (double)d->width * (double)d->height *
-                                   (double)(d->samples_per_pixel ? d->samples_per_pixel : 16);
-    uint64_t photons = (uint64_t)pt__mind(4194304.0, pt__maxd(65536.0, n));
-    int rc;
-    pt_guide_destroy(g->caustic);
-    g->caustic = NULL;
-    rc = pt__caustic_guide(s, d, photons, max_bytes / 4u, &g->caustic);
-    if (rc == PT_OK && g->caustic) {
-        pt_guide_info gi;
-        pt_guide_get_info(g->caustic, &gi);
-        acc->guiding_photons = photons;
-        acc->guiding_bytes += gi.bytes;
-    }
-    acc->guiding_photon_seconds = pt__now() - t0;
     return rc;
 }
 
@@ -11265,9 +11272,12 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
         if (own && (rc = pt_guide_create_for_scene(s, &gd, &g)) != PT_OK)
             return pt__msg(err, en, rc, "pt_render: out of memory for the guide");
         if (!own && !g->updates) g->unit = (double)gd.value_resolution;
-        rc = pt__guiding_photons(s, d, g, gd.max_bytes, &acc);
-        if (rc != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the caustic photons' guide");
-        else rc = pt__guiding_train(s, d, film, g, T, Td, weight, &use, &acc, &gain, err, en);
+        pt_guide_destroy(g->caustic); /* (a caller's guide: the last render's photons) */
+        g->caustic = NULL;
+        if (d->guiding == PT_GUIDING_ON && (rc = pt__guiding_photons(s, d, g, gd.max_bytes, &acc)) != PT_OK)
+            pt__msg(err, en, rc, "pt_render: out of memory for the caustic photons' guide");
+        else
+            rc = pt__guiding_train(s, d, film, g, T, Td, weight, gd.max_bytes, &use, &acc, &gain, err, en);
         acc.guiding_seconds = pt__now() - t0;
         acc.guiding_samples = acc.samples;
         if (rc == PT_OK) {
