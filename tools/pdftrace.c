@@ -926,9 +926,9 @@ static void print_stats(const options *o, const pt_scene *scene, const pt_render
 }
 
 /* --guide-at: the guide's density at the point as a 2N x N latitude-longitude picture (pt_guide_image:
-   per steradian, +z up). .pfm and .exr get it as it is; .png and .ppm get it divided by its maximum,
-   so that the likeliest direction is white. Returns 1 when it was written. */
-static int write_guide(const options *o, const pt_guide *guide, const pt_render_stats *st)
+   per steradian, +z up) into out. .pfm and .exr get it as it is; .png and .ppm get it divided by its
+   maximum, so that the likeliest direction is white. Returns 1 when it was written. */
+static int write_guide_to(const options *o, const output *out, const pt_guide *guide, const pt_render_stats *st)
 {
     pt_image img = {0, 0, NULL};
     pt_guide_info info;
@@ -938,25 +938,44 @@ static int write_guide(const options *o, const pt_guide *guide, const pt_render_
         fail("--guide-at: the guide's picture: %s", pt_result_string(rc));
         return 0;
     }
-    if (o->guide_out.fmt == FMT_PNG || o->guide_out.fmt == FMT_PPM) {
+    if (out->fmt == FMT_PNG || out->fmt == FMT_PPM) {
         size_t i, n = 3u * (size_t)img.width * (size_t)img.height;
         float top = 0.0f;
         for (i = 0; i < n; i++)
             if (img.rgb[i] > top) top = img.rgb[i];
         for (i = 0; i < n && top > 0.0f; i++) img.rgb[i] /= top;
     }
-    rc = write_one(&o->guide_out, &img, &img, err, sizeof err);
+    rc = write_one(out, &img, &img, err, sizeof err);
     pt_image_free(&img);
     if (rc != PT_OK) {
         if (err[0]) fail("%s", err);
-        else fail("%s: writing failed: %s", o->guide_out.path, pt_result_string(rc));
+        else fail("%s: writing failed: %s", out->path, pt_result_string(rc));
         return 0;
     }
-    if (!o->quiet) printf("wrote      %s\n", o->guide_out.path);
+    if (!o->quiet) printf("wrote      %s\n", out->path);
     if (pt_guide_get_info(guide, &info) == PT_OK && info.updates == 0)
         fail("warning: --guide-at: the guide learned nothing (%s); %s shows a uniform density", st->guiding_note,
-             o->guide_out.path);
+             out->path);
     return 1;
+}
+
+/* --guide-at: the guide's picture, and where the render traced caustic photons their guide's too,
+   beside it as OUT's name with "-caustic" before the extension. */
+static int write_guide(const options *o, const pt_guide *guide, const pt_render_stats *st)
+{
+    const pt_guide *caustic = pt_guide_caustic(guide);
+    char path[4096];
+    output out = o->guide_out;
+    const char *dot = strrchr(out.path, '.'), *slash = strrchr(out.path, '/');
+    size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - out.path) : strlen(out.path);
+    if (!write_guide_to(o, &o->guide_out, guide, st)) return 0;
+    if (!caustic) return 1;
+    if (snprintf(path, sizeof path, "%.*s-caustic%s", (int)stem, out.path, out.path + stem) >= (int)sizeof path) {
+        fail("--guide-at: %s: the name is too long for its -caustic picture", out.path);
+        return 0;
+    }
+    out.path = path;
+    return write_guide_to(o, &out, caustic, st);
 }
 
 /* Renders into a film of our own (so that previews can resolve it between passes) and writes

@@ -516,9 +516,14 @@ t_guiding() {
     rm -rf "$dir/at" && mkdir -p "$dir/at"
     (cd "$dir/at" && "$P" "$dir/off.scene" --size 24x24 --spp 16 --guiding-memory 4 --guide-at 278 1 278 g.pfm) \
         >"$W/out.txt" 2>"$W/err.txt" || { ok=0; why="failed: $(head -n 1 "$W/err.txt")"; }
-    [ "$(ls "$dir/at" | tr '\n' ' ')" = "g.pfm " ] || { ok=0; why="$why; wrote '$(ls "$dir/at" | tr '\n' ' ')' (want g.pfm only)"; }
-    [ "$(head -c 14 "$dir/at/g.pfm" 2>/dev/null | tr '\n' ' ')" = "PF 512 256 -1." ] || { ok=0; why="$why; g.pfm header"; }
-    [ "$(wc -c <"$dir/at/g.pfm" 2>/dev/null)" = $((16 + 512 * 256 * 12)) ] || { ok=0; why="$why; g.pfm size"; }
+    # (the box's glass ball: the caustic photons' guide beside it)
+    [ "$(ls "$dir/at" | tr '\n' ' ')" = "g-caustic.pfm g.pfm " ] ||
+        { ok=0; why="$why; wrote '$(ls "$dir/at" | tr '\n' ' ')' (want g.pfm and g-caustic.pfm only)"; }
+    for f in g.pfm g-caustic.pfm; do
+        [ "$(head -c 14 "$dir/at/$f" 2>/dev/null | tr '\n' ' ')" = "PF 512 256 -1." ] || { ok=0; why="$why; $f header"; }
+        [ "$(wc -c <"$dir/at/$f" 2>/dev/null)" = $((16 + 512 * 256 * 12)) ] || { ok=0; why="$why; $f size"; }
+    done
+    grep -q '^wrote      g-caustic.pfm$' "$W/out.txt" || { ok=0; why="$why; no 'wrote g-caustic.pfm'"; }
     grep -q 'guiding    guided: .*(turned on for --guide-at)' "$W/out.txt" || { ok=0; why="$why; no '(turned on for --guide-at)'"; }
     ! grep -q '^pdftrace: ' "$W/err.txt" || { ok=0; why="$why; stderr: $(grep '^pdftrace: ' "$W/err.txt")"; }
     # with -o as well, an 8-bit picture; too few samples to train: a warning, still written
@@ -533,7 +538,7 @@ t_guiding() {
     else
         [ "$(head -c 15 "$dir/at/g.ppm" | tr '\n' ' ')" = "P6 512 256 255 " ] || { ok=0; why="$why; g.ppm header"; }
     fi
-    if [ $ok = 1 ]; then pass guide_at "alone: only a 512x256 PFM, guiding turned on; $f with -o; an untrained guide warns"
+    if [ $ok = 1 ]; then pass guide_at "alone: only 512x256 PFMs (the guide's, the caustic photons'), guiding turned on; $f with -o; an untrained guide warns"
     else fail guide_at "$why"; fi
     # the exports are the same with and without the guiding statements
     ok=1
