@@ -3595,8 +3595,9 @@ struct pt_guide {
     pt_vec3 lo, hi, inv_extent;       /* the box, in the coordinates records are made in */
     const pt_scene *scene;            /* pt_guide_create_for_scene: points are converted to local */
     pt__guide_node *nodes;
-    uint32_t *jump;                   /* 2^PT__GUIDE_JUMP_BITS entries: the node a point's first
-                                         PT__GUIDE_JUMP_BITS levels lead to (pt__guide_leaf_at) */
+    uint32_t *jump;                   /* 2^jump_bits entries: the node a point's first jump_bits
+                                         levels lead to (pt__guide_leaf_at) */
+    int jump_bits;                    /* PT__GUIDE_JUMP_BITS, or 0 under a memory bound below 1 MiB */
     pt__guide_leaf *leaves;
     uint32_t node_count, node_cap, leaf_count, leaf_cap;
     uint64_t max_nodes;               /* directional nodes max_bytes allows */
@@ -3828,20 +3829,20 @@ static uint32_t pt__guide_leaf_at(const pt_guide *g, pt_vec3 p)
     const uint64_t code = (pt__guide_spread16(pt__guide_cell16((p.x - g->lo.x) * g->inv_extent.x)) << 2) |
                           (pt__guide_spread16(pt__guide_cell16((p.y - g->lo.y) * g->inv_extent.y)) << 1) |
                           pt__guide_spread16(pt__guide_cell16((p.z - g->lo.z) * g->inv_extent.z));
-    const pt__guide_node *nd = g->nodes + g->jump[code >> (48 - PT__GUIDE_JUMP_BITS)];
+    const pt__guide_node *nd = g->nodes + g->jump[code >> (48 - g->jump_bits)];
     while (nd->axis >= 0) nd = g->nodes + nd->child[(code >> (47 - nd->depth)) & 1u];
     return nd->child[0];
 }
-/* The jump table of the first PT__GUIDE_JUMP_BITS levels (a node at depth d splits on bit 47 - d
-   of the code, so those levels read only its top bits): one load instead of a chain of them;
-   remade whenever the spatial tree changes. */
+/* The jump table of the first jump_bits levels (a node at depth d splits on bit 47 - d of the
+   code, so those levels read only its top bits): one load instead of a chain of them; remade
+   whenever the spatial tree changes. */
 static void pt__guide_jump_build(pt_guide *g)
 {
     uint32_t i;
-    for (i = 0; i < (1u << PT__GUIDE_JUMP_BITS); ++i) {
-        const uint64_t code = (uint64_t)i << (48 - PT__GUIDE_JUMP_BITS);
+    for (i = 0; i < (1u << g->jump_bits); ++i) {
+        const uint64_t code = (uint64_t)i << (48 - g->jump_bits);
         uint32_t n = 0;
-        while (g->nodes[n].axis >= 0 && g->nodes[n].depth < PT__GUIDE_JUMP_BITS)
+        while (g->nodes[n].axis >= 0 && g->nodes[n].depth < g->jump_bits)
             n = g->nodes[n].child[(code >> (47 - g->nodes[n].depth)) & 1u];
         g->jump[i] = n;
     }
@@ -4228,7 +4229,8 @@ static int pt__guide_make(const pt_guide_desc *d, pt_vec3 lo, pt_vec3 hi, const 
     g->nodes[0].axis = -1;
     g->nodes[0].depth = 0;
     g->nodes[0].child[0] = g->nodes[0].child[1] = 0;
-    g->jump = (uint32_t *)PT_MALLOC(sizeof(uint32_t) << PT__GUIDE_JUMP_BITS);
+    g->jump_bits = r.max_bytes >= ((size_t)1 << 20) ? PT__GUIDE_JUMP_BITS : 0; /* (16 KiB) */
+    g->jump = (uint32_t *)PT_MALLOC(sizeof(uint32_t) << g->jump_bits);
     if (!g->jump) { pt_guide_destroy(g); return PT_ERROR_OUT_OF_MEMORY; }
     pt__guide_jump_build(g);
     memset(&g->leaves[0], 0, sizeof g->leaves[0]);
@@ -4315,7 +4317,7 @@ PTDEF int pt_guide_get_info(const pt_guide *g, pt_guide_info *info)
     info->max_bytes = g->desc.max_bytes;
     info->at_memory_bound = g->at_bound;
     info->bytes = sizeof *g + sizeof(pt__guide_node) * g->node_cap + sizeof(pt__guide_leaf) * g->leaf_cap +
-                  (sizeof(uint32_t) << PT__GUIDE_JUMP_BITS);
+                  (sizeof(uint32_t) << g->jump_bits);
     for (i = 0; i < g->node_count; ++i)
         if ((uint32_t)g->nodes[i].depth > info->spatial_depth) info->spatial_depth = (uint32_t)g->nodes[i].depth;
     for (i = 0; i < g->leaf_count; ++i) {

@@ -1639,6 +1639,43 @@ void st_guiding(st_ctx *c)
         }
         pt_film_free(&rref);
     }
+    {   /* the RTRL box (its glass ball: caustic photons) at the origin and moved by 1e6: guided
+           against unguided at the same place */
+        static const double D[] = { 0.0, 1e6 };
+        int CW = c->full ? 32 : 16, cspp = c->full ? 256 : 32, k;
+        for (k = 0; k < 2; k++) {
+            pt_scene *cs = st_cornell(D[k], &cam);
+            pt_film u, f;
+            pt_render_desc d = tu_base_desc(CW, CW, cspp, 61 + (uint64_t)k);
+            char cas[64];
+            double z;
+            int rc;
+            snprintf(cas, sizeof cas, "guiding: cornell (glass) at %g", D[k]);
+            if (!cs || st_render(c, cs, &cam, CW, CW, cspp, 8, PT_STRATEGY_MIS, 71 + (uint64_t)k, &u, &st) != PT_OK) {
+                st_row(c, 0, cas, "unguided render", "PT_OK", "failed");
+                pt_scene_destroy(cs);
+                continue;
+            }
+            nonfinite += st.nonfinite_samples;
+            d.camera = cam;
+            d.max_depth = 8;
+            d.threads = c->threads;
+            d.guiding = PT_GUIDING_ON;
+            rc = pt_film_init(&f, CW, CW) == PT_OK ? pt_render(cs, &d, &f, &st) : PT_ERROR_OUT_OF_MEMORY;
+            if (rc == PT_OK) {
+                nonfinite += st.nonfinite_samples;
+                z = st_compare(c, &f, &u, 2, 2, NULL);
+                st_row(c, z <= c->z_bound && st.guiding_used == 1 && st.guiding_photons > 0, cas,
+                       "guided (caustic photons) vs unguided: max|z| 2x2", st_zb(c), "%.2f, %llu photons", z,
+                       (unsigned long long)st.guiding_photons);
+                pt_film_free(&f);
+            } else {
+                st_row(c, 0, cas, "guided render", "PT_OK", "rc %d", rc);
+            }
+            pt_film_free(&u);
+            pt_scene_destroy(cs);
+        }
+    }
     pt_film_free(&ref);
     st_row(c, nonfinite == 0, "guiding: all renders", "NaN/Inf samples", "0", "%llu", (unsigned long long)nonfinite);
     st_mesh_free(&ico);
