@@ -127,6 +127,10 @@ static const bench_scene scenes[] = {
      "Veach's MIS scene: four rough metal plates (GGX alpha 0.01 .. 0.25) reflecting four sphere lights of equal "
      "power and radii 0.03 .. 0.9 (MIS against each single strategy)",
      "not exported: POV-Ray has no GGX microfacet model, so the exporter refuses the rough conductor", 1},
+    {"rooms", "bench/scenes/rooms.scene", 8192, 1,
+     "a closed two-room house of 10 large quads, the camera's room lit through a doorway from a quad light in the "
+     "far room, diffuse, global illumination (every ray hits: the throughput scene)",
+     "numeric, loose (diffuse global illumination: radiosity, the recipe's 'Cornell box' row)", 0},
 };
 #define SCENE_COUNT ((int)(sizeof scenes / sizeof scenes[0]))
 
