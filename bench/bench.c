@@ -1,6 +1,8 @@
 /* bench.c - `make bench` / `make bench-quick`: error against time for every strategy and scene,
-   POV-Ray and Mitsuba 3 on the same axes, adaptive sampling and the scene-feature skips, and the
-   headline (`make bench-headline`): the 600 x 600 Cornell box at its own settings against Mitsuba.
+   POV-Ray and Mitsuba 3 on the same axes, adaptive sampling and the scene-feature skips, the
+   headline (`make bench-headline`): the 600 x 600 Cornell box at its own settings against Mitsuba,
+   and the throughput (samples/s and rays/s per SIMD level and against Mitsuba 3 at equal depth:
+   run_throughput).
 
      bench run [--quick] [--out DIR] [--budget S] [--seeds N] [--parts LIST] [--scenes LIST]
                [--mitsuba-python PYTHON] [--cache DIR] [--headline-size N]
@@ -26,7 +28,7 @@
    of log relMSE against log time, fitted to the mean over seeds (see fit_loglog).
 
    Output (DIR, default bench/out): series.csv (medians), series-seeds.csv (every seed),
-   fits.csv, guiding.csv, pov.csv, mitsuba.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts
+   fits.csv, guiding.csv, pov.csv, mitsuba.csv, adaptive.csv, skips.csv, tput.csv, plot data (*.dat), gnuplot scripts
    (*.gp), PNG plots, summary.md and headline.md. Missing povray, Mitsuba 3 (the venv of `make
    mitsuba-install`) or gnuplot: that part prints SKIP and the rest runs.
    Exit status: 0 when everything ran (acceptance lines may still say FAIL: this is a
@@ -1723,7 +1725,8 @@ static int tput_build_levels(const loaded *L, tput_row *row, int best, pt_scene 
         if (c->mi_sampler) continue;
         row->c[k].level = level;
         if (level > best) {
-            snprintf(row->c[k].skip, sizeof row->c[k].skip, "this CPU or build goes up to %s",
+            snprintf(row->c[k].skip, sizeof row->c[k].skip, "above the default level here, %s (the CPU, the build or "
+                     "PDFTRACE_SIMD)",
                      pt_simd_level_name((pt_simd_level)best));
             continue;
         }
