@@ -1758,7 +1758,11 @@ static int tput_mitsuba_load(const config *cfg, const loaded *L, tput_row *row, 
     o.width = row->width;
     o.height = row->height;
     o.max_depth = TPUT_DEPTH; /* written as TPUT_DEPTH + 1 segments */
-    if (pt_scenefile_export_mitsuba(&L->sd, xml, &o, why, sizeof why) != PT_OK) ok = 0;
+    if (strpbrk(xml, " \t\r\n")) {
+        snprintf(why, sizeof why, "the path %s has blanks (the commands to Mitsuba split on them)", cfg->out);
+        ok = 0;
+    } else if (pt_scenefile_export_mitsuba(&L->sd, xml, &o, why, sizeof why) != PT_OK)
+        ok = 0;
     for (k = 0; k < TPUT_CONFIGS; ++k) {
         if (!tput_configs[k].mi_sampler) continue;
         if (!ok) {
