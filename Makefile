@@ -65,7 +65,8 @@
 #   make validate-mitsuba-ci  the Mitsuba rows of direct-quad, glass, cornell, cornell-guided, lights, env, rough-metal, rough-plastic, rough-glass and textured (< 8 min)
 #   make validate-refs    re-render the slow POV-Ray references stored in scenes/ref/ (~12 min)
 #   make bench            error against time for every scene and strategy, POV-Ray on the same
-#                         axes, adaptive sampling and skips -> bench/out/ (summary.md, CSV,
+#                         axes, adaptive sampling, skips, and throughput (samples/s and rays/s per
+#                         SIMD level and against Mitsuba 3 at equal depth) -> bench/out/ (summary.md, CSV,
 #                         PNG plots by gnuplot; ~25 min on 2 cores; BENCH_OUT, BENCH_ARGS)
 #   make bench-quick      the same in under 4 minutes -> $(BUILD)/bench-quick/
 #   make bench-headline   the 600x600 Cornell box (scenes/cornell.scene) at its own settings against

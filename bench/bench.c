@@ -1,6 +1,8 @@
 /* bench.c - `make bench` / `make bench-quick`: error against time for every strategy and scene,
-   POV-Ray and Mitsuba 3 on the same axes, adaptive sampling and the scene-feature skips, and the
-   headline (`make bench-headline`): the 600 x 600 Cornell box at its own settings against Mitsuba.
+   POV-Ray and Mitsuba 3 on the same axes, adaptive sampling and the scene-feature skips, the
+   headline (`make bench-headline`): the 600 x 600 Cornell box at its own settings against Mitsuba,
+   and the throughput (samples/s and rays/s per SIMD level and against Mitsuba 3 at equal depth:
+   run_throughput).
 
      bench run [--quick] [--out DIR] [--budget S] [--seeds N] [--parts LIST] [--scenes LIST]
                [--mitsuba-python PYTHON] [--cache DIR] [--headline-size N]
@@ -26,20 +28,24 @@
    of log relMSE against log time, fitted to the mean over seeds (see fit_loglog).
 
    Output (DIR, default bench/out): series.csv (medians), series-seeds.csv (every seed),
-   fits.csv, guiding.csv, pov.csv, mitsuba.csv, adaptive.csv, skips.csv, plot data (*.dat), gnuplot scripts
+   fits.csv, guiding.csv, pov.csv, mitsuba.csv, adaptive.csv, skips.csv, tput.csv, plot data (*.dat), gnuplot scripts
    (*.gp), PNG plots, summary.md and headline.md. Missing povray, Mitsuba 3 (the venv of `make
    mitsuba-install`) or gnuplot: that part prints SKIP and the rest runs.
    Exit status: 0 when everything ran (acceptance lines may still say FAIL: this is a
    measurement, not a test), 1 on an error, 2 on bad usage. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/types.h>
 #include <sys/utsname.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -127,6 +133,10 @@ static const bench_scene scenes[] = {
      "Veach's MIS scene: four rough metal plates (GGX alpha 0.01 .. 0.25) reflecting four sphere lights of equal "
      "power and radii 0.03 .. 0.9 (MIS against each single strategy)",
      "not exported: POV-Ray has no GGX microfacet model, so the exporter refuses the rough conductor", 1},
+    {"rooms", "bench/scenes/rooms.scene", 8192, 1,
+     "a closed two-room house of 10 large quads, the camera's room lit through a doorway from a quad light in the "
+     "far room, diffuse, global illumination (every ray hits: the throughput scene)",
+     "numeric, loose (diffuse global illumination: radiosity, the recipe's 'Cornell box' row)", 0},
 };
 #define SCENE_COUNT ((int)(sizeof scenes / sizeof scenes[0]))
 
@@ -160,7 +170,7 @@ static const bench_strategy strategies[] = {
 #define S_MIS_SOBOL 6
 
 enum { PART_SERIES = 1, PART_ADAPTIVE = 2, PART_SKIPS = 4, PART_POV = 8, PART_MITSUBA = 16, PART_HEADLINE = 32,
-       PART_ALL = 63 };
+       PART_TPUT = 64, PART_ALL = 127 };
 
 typedef struct config {
     int quick;
@@ -1464,6 +1474,622 @@ static void write_headline_table(FILE *f, const headline_results *H)
             H->floor);
 }
 
+/* ---- throughput: camera samples and rays per second at equal depth ---------------------- */
+
+/* Every scene at 128 x 128, and again at its scene file's own size where that differs (the
+   600 x 600 Cornell box, the 160 x 120 rooms), rendered by each configuration in tput_configs:
+   pdftrace with the scene committed at each SIMD level this CPU has (pt_simd_set_cap before the
+   build), pdftrace with the Sobol sampler, and Mitsuba 3 with each sampler. All at equal depth and
+   equal work per camera sample: pdftrace max_depth TPUT_DEPTH with no Russian roulette
+   (rr_start_depth < 0), no splitting (max_splits < 0) and one path per camera sample
+   (indirect_paths 1); Mitsuba's path integrator at max_depth TPUT_DEPTH + 1 (it counts the camera
+   segment: the exporter's mapping) with rr_depth TPUT_MI_RR_DEPTH, beyond it. Each render takes
+   about tput_samples camera samples; every core. A repetition renders every configuration once
+   (seed = the repetition), the order rotated each repetition, so that a change in the machine's
+   load hits the configurations alike; one untimed warm-up render of each Mitsuba sampler first
+   (Dr.Jit compiles its kernels on first use, per sample count) and of the baseline. Figures: the
+   median samples/s and rays/s (pt_render_stats: closest-hit = camera + bounce rays, occlusion =
+   shadow rays; Mitsuba does not count its rays) and, per configuration, the median of the paired
+   ratios of its samples/s to the baseline's (pdftrace's default: independent numbers at the
+   CPU's level) with a distribution-free interval. Checks: pdftrace's SIMD levels give
+   bit-identical images (same seed); each configuration's image mean (all pixels and channels,
+   over the repetitions) against the baseline's, with z from the repetitions' spread, so that
+   samples/s compares renderers computing the same image. To compare another pdftrace
+   configuration (an integrator switch, say), add an entry to tput_configs and set its field in
+   tput_desc: the tables and the CSV take every entry. */
+static int median_interval(const double *sorted, int n, double *lo, double *hi, double *cover);
+static const char *pass_fail(int ok);
+#define TPUT_DEPTH 4
+#define TPUT_MI_RR_DEPTH 1000
+#define TPUT_BEST (-1)         /* tput_config.simd: the level pdftrace chooses by default */
+#define TPUT_MAX_REPS 31
+#define TPUT_MAX_ROWS (2 * SCENE_COUNT)
+#define TPUT_BLOCKS 64         /* the image-mean check's blocks: pixels i (row-major) with i mod 64 = b */
+
+typedef struct tput_config {
+    const char *name;          /* the column's name */
+    const char *mi_sampler;    /* Mitsuba 3 with this sampler; NULL: pdftrace */
+    int simd;                  /* pdftrace: the pt_simd_level the scene is committed at, or TPUT_BEST */
+    pt_sampler sampler;        /* pdftrace's sampler */
+} tput_config;
+
+static const tput_config tput_configs[] = {
+    {"scalar", NULL, PT_SIMD_SCALAR, PT_SAMPLER_INDEPENDENT},
+    {"sse2", NULL, PT_SIMD_SSE2, PT_SAMPLER_INDEPENDENT},
+    {"avx2", NULL, PT_SIMD_AVX2, PT_SAMPLER_INDEPENDENT},
+    {"avx512", NULL, PT_SIMD_AVX512, PT_SAMPLER_INDEPENDENT},
+    {"sobol", NULL, TPUT_BEST, PT_SAMPLER_SOBOL},
+    {"mitsuba-independent", "independent", 0, PT_SAMPLER_INDEPENDENT},
+    {"mitsuba-multijitter", "multijitter", 0, PT_SAMPLER_INDEPENDENT},
+};
+#define TPUT_CONFIGS ((int)(sizeof tput_configs / sizeof tput_configs[0]))
+
+/* the scenes of quick mode (make bench-quick runs in CI: a minute at most for this part) */
+static const char *const tput_quick_scenes[] = {"cornell", "rooms"};
+
+typedef struct tput_cell {
+    int ran;
+    char skip[640];            /* why not (a level this CPU lacks, a scene Mitsuba cannot take) */
+    int level;                 /* pdftrace: the SIMD level the scene was committed at */
+    int spp_used;              /* Mitsuba's multijitter may round the count up */
+    double sps[TPUT_MAX_REPS], closest[TPUT_MAX_REPS], occluded[TPUT_MAX_REPS]; /* per second */
+    double mean[TPUT_MAX_REPS]; /* image mean over pixels and channels */
+    double block[TPUT_MAX_REPS][TPUT_BLOCKS]; /* the same over each block's pixels */
+    uint64_t hash[TPUT_MAX_REPS]; /* pdftrace: of the image's floats */
+    double med_sps, med_rays, med_closest, med_occluded;
+    double ratio, ratio_lo, ratio_hi; /* paired samples/s over the baseline's; lo = hi = NAN: no interval */
+    double mean_diff, mean_z;  /* image mean / the baseline's - 1, and its z from the blocks (NAN: identical) */
+    int identical;             /* pdftrace: bit-identical to the baseline's image in every repetition */
+} tput_cell;
+
+typedef struct tput_row {
+    int scene, width, height, spp, threads;
+    tput_cell c[TPUT_CONFIGS];
+} tput_row;
+
+typedef struct tput_results {
+    int available, n, reps, base, mitsuba;
+    char skip_reason[512], mi_skip[512];
+    double samples_target;
+    tput_row row[TPUT_MAX_ROWS];
+} tput_results;
+
+/* The render description of configuration c for the row: equal depth, no roulette, no splitting. */
+static pt_render_desc tput_desc(const loaded *L, const tput_config *c, const tput_row *row, uint64_t seed)
+{
+    pt_render_desc d = L->rd;
+    d.width = row->width;
+    d.height = row->height;
+    d.samples_per_pixel = row->spp;
+    d.samples_per_pass = 0;
+    d.strategy = PT_STRATEGY_MIS;
+    d.sampler = c->sampler;
+    d.max_depth = TPUT_DEPTH;
+    d.rr_start_depth = -1;
+    d.max_splits = -1;
+    d.indirect_paths = 1;
+    d.guiding = PT_GUIDING_OFF;
+    d.adaptive_threshold = 0;
+    d.threads = 0;
+    d.seed = seed;
+    d.progress = NULL;
+    return d;
+}
+
+/* A Mitsuba 3 process serving renders (mitsuba_series.py serve), its stderr into a log file. */
+typedef struct tput_mitsuba {
+    pid_t pid;
+    FILE *to, *from;
+} tput_mitsuba;
+
+static int tput_mitsuba_start(const config *cfg, tput_mitsuba *m, const char *log)
+{
+    int in[2], out[2];
+    memset(m, 0, sizeof *m);
+    if (pipe(in) != 0) return 0;
+    if (pipe(out) != 0) {
+        close(in[0]);
+        close(in[1]);
+        return 0;
+    }
+    m->pid = fork();
+    if (m->pid == 0) {
+        int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) dup2(fd, 2);
+        dup2(in[0], 0);
+        dup2(out[1], 1);
+        close(in[0]);
+        close(in[1]);
+        close(out[0]);
+        close(out[1]);
+        execl(cfg->mitsuba_python, cfg->mitsuba_python, MI_SCRIPT, "serve", (char *)NULL);
+        _exit(127);
+    }
+    close(in[0]);
+    close(out[1]);
+    if (m->pid < 0) {
+        close(in[1]);
+        close(out[0]);
+        return 0;
+    }
+    m->to = fdopen(in[1], "w");
+    m->from = fdopen(out[0], "r");
+    return m->to && m->from;
+}
+
+static void tput_mitsuba_stop(tput_mitsuba *m)
+{
+    if (m->to) fclose(m->to); /* end of input: the script exits */
+    if (m->from) fclose(m->from);
+    if (m->pid > 0) waitpid(m->pid, NULL, 0);
+    memset(m, 0, sizeof *m);
+}
+
+/* Sends one command line and reads the answer into reply; 1 when it begins with "ok". */
+static int tput_mitsuba_call(tput_mitsuba *m, char *reply, size_t n, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(m->to, fmt, ap);
+    va_end(ap);
+    if (fflush(m->to) != 0 || !fgets(reply, (int)n, m->from)) {
+        snprintf(reply, n, "error the Mitsuba process ended (its log: mitsuba/tput.log)");
+        return 0;
+    }
+    reply[strcspn(reply, "\n")] = '\0';
+    return !strncmp(reply, "ok", 2);
+}
+
+/* One pdftrace render of configuration k for repetition rep (rep < 0: a warm-up, not recorded). */
+static int tput_render_pdftrace(const loaded *L, pt_scene *scene, tput_row *row, int k, int rep)
+{
+    tput_cell *c = &row->c[k];
+    pt_render_desc d = tput_desc(L, &tput_configs[k], row, rep < 0 ? REF_SEED + 1 : (uint64_t)rep + 1);
+    pt_render_stats st;
+    pt_film film;
+    pt_image img = {0, 0, NULL};
+    double t0, t, sum = 0, bsum[TPUT_BLOCKS] = {0};
+    size_t i, n = 3u * (size_t)row->width * (size_t)row->height, bn[TPUT_BLOCKS] = {0};
+    uint64_t h = 14695981039346656037ULL;
+    if (pt_film_init(&film, row->width, row->height) != PT_OK) die_oom();
+    t0 = ptv_now();
+    if (pt_render(scene, &d, &film, &st) != PT_OK) {
+        fprintf(stderr, "bench: throughput render of %s (%s) failed: %s\n", scenes[row->scene].name,
+                tput_configs[k].name, st.error);
+        pt_film_free(&film);
+        return 0;
+    }
+    t = ptv_now() - t0;
+    if (pt_film_resolve(&film, &img) != PT_OK) die_oom();
+    pt_film_free(&film);
+    if (rep < 0) {
+        pt_image_free(&img);
+        return 1;
+    }
+    for (i = 0; i < n; ++i) {
+        uint32_t b;
+        memcpy(&b, &img.rgb[i], sizeof b);
+        h = (h ^ b) * 1099511628211ULL;
+        sum += img.rgb[i];
+        bsum[i / 3 % TPUT_BLOCKS] += img.rgb[i];
+        bn[i / 3 % TPUT_BLOCKS]++;
+    }
+    pt_image_free(&img);
+    for (i = 0; i < TPUT_BLOCKS; ++i) c->block[rep][i] = bn[i] ? bsum[i] / (double)bn[i] : 0;
+    c->sps[rep] = (double)st.samples / t;
+    c->closest[rep] = (double)(st.camera_rays + st.bounce_rays) / t;
+    c->occluded[rep] = (double)st.shadow_rays / t;
+    c->mean[rep] = sum / (double)n;
+    c->hash[rep] = h;
+    row->threads = st.threads;
+    return 1;
+}
+
+/* One Mitsuba render of configuration k (its scene loaded as "tK"); rep < 0: a warm-up. */
+static int tput_render_mitsuba(tput_mitsuba *m, tput_row *row, int k, int rep)
+{
+    tput_cell *c = &row->c[k];
+    char reply[512 + 20 * TPUT_BLOCKS], *p;
+    double t = 0, mr = 0, mg = 0, mb = 0;
+    int used = 0, w = 0, h = 0, b, ok, len = 0;
+    ok = tput_mitsuba_call(m, reply, sizeof reply, "render t%d %d %d %d\n", k, row->spp,
+                           rep < 0 ? (int)REF_SEED + 1 : rep + 1, TPUT_BLOCKS) &&
+         sscanf(reply, "ok %lf %d %d %d %lf %lf %lf%n", &t, &used, &w, &h, &mr, &mg, &mb, &len) == 7 &&
+         w == row->width && h == row->height && t > 0;
+    for (b = 0, p = reply + len; ok && b < TPUT_BLOCKS; ++b, p += len)
+        ok = sscanf(p, "%lf%n", rep < 0 ? &t : &c->block[rep][b], &len) == 1;
+    if (!ok) {
+        fprintf(stderr, "bench: Mitsuba throughput render of %s (%s): %s\n", scenes[row->scene].name,
+                tput_configs[k].name, reply);
+        return 0;
+    }
+    if (rep < 0) return 1;
+    c->spp_used = used;
+    c->sps[rep] = (double)used * w * h / t;
+    c->closest[rep] = c->occluded[rep] = NAN;
+    c->mean[rep] = (mr + mg + mb) / 3.0;
+    return 1;
+}
+
+/* Commits the row's scene once per SIMD level its pdftrace configurations need (scene_at[level]),
+   marking the levels this CPU or build lacks; 0 on a build error. */
+static int tput_build_levels(const loaded *L, tput_row *row, int best, pt_scene **scene_at)
+{
+    char err[1024];
+    int k, ok = 1;
+    for (k = 0; ok && k < TPUT_CONFIGS; ++k) {
+        const tput_config *c = &tput_configs[k];
+        pt_render_desc rd;
+        pt_scene_info info;
+        int level = c->simd == TPUT_BEST ? best : c->simd;
+        if (c->mi_sampler) continue;
+        row->c[k].level = level;
+        if (level > best) {
+            snprintf(row->c[k].skip, sizeof row->c[k].skip, "above the default level here, %s (the CPU, the build or "
+                     "PDFTRACE_SIMD)",
+                     pt_simd_level_name((pt_simd_level)best));
+            continue;
+        }
+        if (scene_at[level]) continue;
+        pt_simd_set_cap((pt_simd_level)level);
+        if (pt_scenefile_build(&L->sd, &scene_at[level], &rd, err, sizeof err) != PT_OK) {
+            fprintf(stderr, "bench: %s\n", err);
+            ok = 0;
+        } else if (pt_scene_get_info(scene_at[level], &info) != PT_OK || (int)info.simd_level != level) {
+            fprintf(stderr, "bench: %s committed at SIMD level %s, asked for %s\n", scenes[row->scene].name,
+                    pt_simd_level_name(info.simd_level), pt_simd_level_name((pt_simd_level)level));
+            ok = 0;
+        }
+    }
+    pt_simd_set_cap(PT_SIMD_AVX512); /* no cap: the default */
+    return ok;
+}
+
+/* Exports the row's scene at equal depth and loads it into the Mitsuba process once per sampler
+   (as "tK"); a scene or sampler Mitsuba cannot take marks its cells skipped. */
+static int tput_mitsuba_load(const config *cfg, const loaded *L, tput_row *row, tput_mitsuba *m)
+{
+    char xml[2300], why[512], reply[512];
+    pt_mitsuba_options o;
+    int k, ok = 1;
+    snprintf(xml, sizeof xml, "%s/mitsuba/%s-%dx%d-depth%d.xml", cfg->out, scenes[row->scene].name, row->width,
+             row->height, TPUT_DEPTH);
+    memset(&o, 0, sizeof o);
+    o.width = row->width;
+    o.height = row->height;
+    o.max_depth = TPUT_DEPTH; /* written as TPUT_DEPTH + 1 segments */
+    if (strpbrk(xml, " \t\r\n")) {
+        snprintf(why, sizeof why, "the path %s has blanks (the commands to Mitsuba split on them)", cfg->out);
+        ok = 0;
+    } else if (pt_scenefile_export_mitsuba(&L->sd, xml, &o, why, sizeof why) != PT_OK)
+        ok = 0;
+    for (k = 0; k < TPUT_CONFIGS; ++k) {
+        if (!tput_configs[k].mi_sampler) continue;
+        if (!ok) {
+            snprintf(row->c[k].skip, sizeof row->c[k].skip, "not exported: %s", why);
+            continue;
+        }
+        if (!tput_mitsuba_call(m, reply, sizeof reply, "load t%d %s %s 0 %d\n", k, xml, tput_configs[k].mi_sampler,
+                               TPUT_MI_RR_DEPTH))
+            snprintf(row->c[k].skip, sizeof row->c[k].skip, "Mitsuba: %s", reply);
+    }
+    return 1;
+}
+
+/* Medians, the paired ratios to the baseline and the image checks of one row. */
+static void tput_summarize_row(tput_row *row, int base, int reps)
+{
+    const tput_cell *b = &row->c[base];
+    int k, r;
+    for (k = 0; k < TPUT_CONFIGS; ++k) {
+        tput_cell *c = &row->c[k];
+        double v[TPUT_MAX_REPS], mc = 0, mb = 0, dm = 0, dv = 0, cover, d;
+        int n = reps * TPUT_BLOCKS, q;
+        if (!c->ran) continue;
+        c->med_sps = median(c->sps, reps);
+        c->med_closest = median(c->closest, reps);
+        c->med_occluded = median(c->occluded, reps);
+        for (r = 0; r < reps; ++r) v[r] = c->closest[r] + c->occluded[r];
+        c->med_rays = median(v, reps);
+        for (r = 0; r < reps; ++r) v[r] = c->sps[r] / b->sps[r];
+        qsort(v, (size_t)reps, sizeof v[0], cmp_double);
+        c->ratio = median(v, reps);
+        if (!median_interval(v, reps, &c->ratio_lo, &c->ratio_hi, &cover)) c->ratio_lo = c->ratio_hi = NAN;
+        c->identical = !tput_configs[k].mi_sampler;
+        for (r = 0; r < reps; ++r) {
+            c->identical &= c->hash[r] == b->hash[r];
+            mc += c->mean[r] / reps;
+            mb += b->mean[r] / reps;
+        }
+        /* z: the mean over repetitions and blocks of the block-mean differences over its standard
+           error; blocks hold disjoint pixels and repetitions other seeds, so the differences are
+           independent, with expectation 0 when both compute the same image */
+        for (r = 0; r < reps; ++r)
+            for (q = 0; q < TPUT_BLOCKS; ++q) dm += (c->block[r][q] - b->block[r][q]) / n;
+        for (r = 0; r < reps; ++r)
+            for (q = 0; q < TPUT_BLOCKS; ++q) {
+                d = c->block[r][q] - b->block[r][q] - dm;
+                dv += d * d / (n - 1.0);
+            }
+        c->mean_diff = mc / mb - 1.0;
+        c->mean_z = c->identical || dv <= 0 ? NAN : dm / sqrt(dv / n);
+    }
+}
+
+/* Measures one row: every configuration, the repetitions in rotated order. */
+static int tput_run_row(const config *cfg, const loaded *L, tput_results *T, tput_row *row, tput_mitsuba *m)
+{
+    pt_scene *scene_at[PT_SIMD_AVX512 + 1] = {NULL, NULL, NULL, NULL};
+    int best = (int)pt_simd_get_level(), k, r, j, ok;
+    ok = tput_build_levels(L, row, best, scene_at);
+    if (ok && T->mitsuba) ok = tput_mitsuba_load(cfg, L, row, m);
+    for (k = 0; k < TPUT_CONFIGS; ++k)
+        if (tput_configs[k].mi_sampler && !T->mitsuba) snprintf(row->c[k].skip, sizeof row->c[k].skip, "%s", T->mi_skip);
+    for (k = 0; k < TPUT_CONFIGS; ++k) row->c[k].ran = !row->c[k].skip[0];
+    /* warm-up: the baseline, and each Mitsuba sampler (its kernels compile for this sample count) */
+    if (ok) ok = tput_render_pdftrace(L, scene_at[row->c[T->base].level], row, T->base, -1);
+    for (k = 0; ok && k < TPUT_CONFIGS; ++k)
+        if (row->c[k].ran && tput_configs[k].mi_sampler) ok = tput_render_mitsuba(m, row, k, -1);
+    for (r = 0; ok && r < T->reps; ++r)
+        for (j = 0; ok && j < TPUT_CONFIGS; ++j) {
+            k = (r + j) % TPUT_CONFIGS;
+            if (!row->c[k].ran) continue;
+            ok = tput_configs[k].mi_sampler ? tput_render_mitsuba(m, row, k, r)
+                                            : tput_render_pdftrace(L, scene_at[row->c[k].level], row, k, r);
+        }
+    for (k = 0; T->mitsuba && k < TPUT_CONFIGS; ++k) {
+        char reply[512];
+        if (tput_configs[k].mi_sampler && row->c[k].ran) (void)tput_mitsuba_call(m, reply, sizeof reply, "drop t%d\n", k);
+    }
+    for (k = 0; k <= PT_SIMD_AVX512; ++k) pt_scene_destroy(scene_at[k]);
+    if (ok) tput_summarize_row(row, T->base, T->reps);
+    return ok;
+}
+
+static int tput_in_quick(const char *name)
+{
+    size_t i;
+    for (i = 0; i < sizeof tput_quick_scenes / sizeof tput_quick_scenes[0]; ++i)
+        if (!strcmp(tput_quick_scenes[i], name)) return 1;
+    return 0;
+}
+
+static int run_throughput(const config *cfg, const results *R, tput_results *T)
+{
+    tput_mitsuba m;
+    char dir[2048], log[2300];
+    int i, k, s, ok = 1;
+    void (*old_pipe)(int) = signal(SIGPIPE, SIG_IGN); /* a Mitsuba process that died: an error, not a signal */
+    memset(T, 0, sizeof *T);
+    memset(&m, 0, sizeof m);
+    T->reps = cfg->quick ? 3 : 7;
+    T->samples_target = cfg->quick ? 131072 : 524288; /* renders of ~0.05 and ~0.2 s at 2.5 M samples/s */
+    T->base = -1;
+    for (k = 0; k < TPUT_CONFIGS; ++k)
+        if (!tput_configs[k].mi_sampler && tput_configs[k].sampler == PT_SAMPLER_INDEPENDENT &&
+            tput_configs[k].simd == (int)pt_simd_get_level() && T->base < 0)
+            T->base = k;
+    if (T->base < 0) {
+        fprintf(stderr, "bench: no throughput configuration renders at pdftrace's default SIMD level\n");
+        signal(SIGPIPE, old_pipe);
+        return 0;
+    }
+    snprintf(dir, sizeof dir, "%s/mitsuba", cfg->out);
+    snprintf(log, sizeof log, "%s/tput.log", dir);
+    if (!mitsuba_usable(cfg, T->mi_skip, sizeof T->mi_skip)) printf("SKIP throughput, Mitsuba: %s\n", T->mi_skip);
+    else if (!mkdirs(dir) || !tput_mitsuba_start(cfg, &m, log)) {
+        snprintf(T->mi_skip, sizeof T->mi_skip, "could not start %s %s serve", cfg->mitsuba_python, MI_SCRIPT);
+        printf("SKIP throughput, Mitsuba: %s\n", T->mi_skip);
+    } else
+        T->mitsuba = 1;
+    printf("throughput: %d repetitions, about %.0f camera samples per render, max_depth %d, no roulette\n", T->reps,
+           T->samples_target, TPUT_DEPTH);
+    fflush(stdout);
+    for (i = 0; ok && i < SCENE_COUNT; ++i) {
+        const loaded *L = &R->L[i];
+        if (!cfg->scene_on[i] || !L->scene || (cfg->quick && !tput_in_quick(scenes[i].name))) continue;
+        for (s = 0; ok && s < 2; ++s) {
+            tput_row *row = &T->row[T->n];
+            int w = s ? L->sd.width : BENCH_SIZE, h = s ? L->sd.height : BENCH_SIZE;
+            double spp;
+            if (s && w == BENCH_SIZE && h == BENCH_SIZE) continue;
+            memset(row, 0, sizeof *row);
+            row->scene = i;
+            row->width = w;
+            row->height = h;
+            spp = floor(T->samples_target / ((double)w * h) + 0.5);
+            row->spp = spp < 1 ? 1 : (int)spp;
+            ok = tput_run_row(cfg, L, T, row, &m);
+            if (!ok) break;
+            T->n++;
+            printf("  %-16s %4dx%-4d %3d spp: pdftrace %.3g M samples/s (%s)", scenes[i].name, w, h, row->spp,
+                   row->c[T->base].med_sps * 1e-6, tput_configs[T->base].name);
+            for (k = 0; k < TPUT_CONFIGS; ++k)
+                if (tput_configs[k].mi_sampler && row->c[k].ran)
+                    printf(", %s %.3g M (mean %+.2f%%)", tput_configs[k].name, row->c[k].med_sps * 1e-6,
+                           100 * row->c[k].mean_diff);
+            printf("\n");
+            fflush(stdout);
+        }
+    }
+    if (T->mitsuba) tput_mitsuba_stop(&m);
+    signal(SIGPIPE, old_pipe);
+    T->available = ok;
+    return ok;
+}
+
+/* The median over repetitions of a's samples/s over b's (paired), with its interval (NAN: none). */
+static double tput_paired(const tput_cell *a, const tput_cell *b, int reps, double *lo, double *hi)
+{
+    double v[TPUT_MAX_REPS], cover;
+    int r;
+    for (r = 0; r < reps; ++r) v[r] = a->sps[r] / b->sps[r];
+    qsort(v, (size_t)reps, sizeof v[0], cmp_double);
+    if (!median_interval(v, reps, lo, hi, &cover)) *lo = *hi = NAN;
+    return median(v, reps);
+}
+
+/* The fastest configuration of the row that ran, among pdftrace's (mitsuba 0) or Mitsuba's (1); -1: none. */
+static int tput_fastest(const tput_row *row, int mitsuba)
+{
+    int k, b = -1;
+    for (k = 0; k < TPUT_CONFIGS; ++k)
+        if (row->c[k].ran && !tput_configs[k].mi_sampler == !mitsuba && (b < 0 || row->c[k].med_sps > row->c[b].med_sps))
+            b = k;
+    return b;
+}
+
+static int write_tput_csv(const config *cfg, const tput_results *T)
+{
+    FILE *f;
+    int i, k;
+    if (!T->available) return 1;
+    f = open_out(cfg, "tput.csv");
+    if (!f) return 0;
+    fprintf(f, "scene,width,height,config,renderer,simd_level,sampler,spp,spp_used,reps,threads,max_depth,"
+               "samples_per_s,rays_per_s,closest_per_s,occluded_per_s,ratio_to_base,ratio_lo,ratio_hi,"
+               "mean_vs_base,mean_z,identical_to_base,skip\n");
+    for (i = 0; i < T->n; ++i) {
+        const tput_row *row = &T->row[i];
+        for (k = 0; k < TPUT_CONFIGS; ++k) {
+            const tput_config *c = &tput_configs[k];
+            const tput_cell *e = &row->c[k];
+            fprintf(f, "%s,%d,%d,%s,%s,%s,%s,%d,%d,%d,%d,%d,", scenes[row->scene].name, row->width, row->height, c->name,
+                    c->mi_sampler ? "mitsuba3" : "pdftrace", c->mi_sampler ? "" : pt_simd_level_name((pt_simd_level)e->level),
+                    c->mi_sampler ? c->mi_sampler : c->sampler == PT_SAMPLER_SOBOL ? "sobol" : "independent", row->spp,
+                    c->mi_sampler ? e->spp_used : row->spp, T->reps, row->threads, TPUT_DEPTH);
+            if (e->ran)
+                fprintf(f, "%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,\n", e->med_sps, e->med_rays, e->med_closest,
+                        e->med_occluded, e->ratio, e->ratio_lo, e->ratio_hi, e->mean_diff, e->mean_z, e->identical);
+            else
+                fprintf(f, ",,,,,,,,,,\"%s\"\n", e->skip);
+        }
+    }
+    return close_out(f, "tput.csv");
+}
+
+/* summary.md's table of every configuration: samples/s, rays/s and the paired ratio to the baseline. */
+static void write_tput_levels(FILE *f, const tput_results *T)
+{
+    int i, k;
+    fprintf(f, "| scene | size | spp |");
+    for (k = 0; k < TPUT_CONFIGS; ++k) fprintf(f, " %s%s |", tput_configs[k].name, k == T->base ? " (baseline)" : "");
+    fprintf(f, " SIMD levels bit-identical |\n|---|---|---|");
+    for (k = 0; k <= TPUT_CONFIGS; ++k) fprintf(f, "---|");
+    fprintf(f, "\n");
+    for (i = 0; i < T->n; ++i) {
+        const tput_row *row = &T->row[i];
+        int same = 1;
+        fprintf(f, "| %s | %dx%d | %d |", scenes[row->scene].name, row->width, row->height, row->spp);
+        for (k = 0; k < TPUT_CONFIGS; ++k) {
+            const tput_cell *e = &row->c[k];
+            if (!e->ran) {
+                fprintf(f, " – |");
+                continue;
+            }
+            fprintf(f, " %.3g", e->med_sps * 1e-6);
+            if (!tput_configs[k].mi_sampler) fprintf(f, " (%.3g)", e->med_rays * 1e-6);
+            if (k != T->base) {
+                fprintf(f, " %.3f×", e->ratio);
+                if (!isnan(e->ratio_lo)) fprintf(f, " [%.3f, %.3f]", e->ratio_lo, e->ratio_hi);
+            }
+            fprintf(f, " |");
+            if (!tput_configs[k].mi_sampler && tput_configs[k].sampler == tput_configs[T->base].sampler)
+                same &= e->identical;
+        }
+        fprintf(f, " %s |\n", same ? "yes" : "**no**");
+    }
+    fprintf(f, "\n");
+}
+
+/* summary.md's table against Mitsuba 3: the fastest configuration of each renderer, and the check
+   that they compute the same image (Mitsuba's image mean against pdftrace's baseline). */
+static void write_tput_mitsuba(FILE *f, const tput_results *T)
+{
+    int i, k;
+    fprintf(f, "| scene | size | pdftrace baseline | pdftrace fastest | Mitsuba 3 fastest | pdftrace / Mitsuba (paired) |");
+    for (k = 0; k < TPUT_CONFIGS; ++k)
+        if (tput_configs[k].mi_sampler) fprintf(f, " image mean, %s / pdftrace − 1 (z) |", tput_configs[k].name);
+    fprintf(f, "\n|---|---|---|---|---|---|");
+    for (k = 0; k < TPUT_CONFIGS; ++k)
+        if (tput_configs[k].mi_sampler) fprintf(f, "---|");
+    fprintf(f, "\n");
+    for (i = 0; i < T->n; ++i) {
+        const tput_row *row = &T->row[i];
+        int p = tput_fastest(row, 0), m = tput_fastest(row, 1);
+        double lo, hi, r;
+        fprintf(f, "| %s | %dx%d | %.3g | %.3g (%s) |", scenes[row->scene].name, row->width, row->height,
+                row->c[T->base].med_sps * 1e-6, row->c[p].med_sps * 1e-6, tput_configs[p].name);
+        if (m < 0) {
+            fprintf(f, " – | – |");
+        } else {
+            r = tput_paired(&row->c[p], &row->c[m], T->reps, &lo, &hi);
+            fprintf(f, " %.3g (%s) | **%.3f**", row->c[m].med_sps * 1e-6, tput_configs[m].mi_sampler, r);
+            if (!isnan(lo)) fprintf(f, " [%.3f, %.3f]", lo, hi);
+            fprintf(f, " |");
+        }
+        for (k = 0; k < TPUT_CONFIGS; ++k) {
+            const tput_cell *e = &row->c[k];
+            if (!tput_configs[k].mi_sampler) continue;
+            if (e->ran) fprintf(f, " %+.3f %% (%+.1f) |", 100 * e->mean_diff, e->mean_z);
+            else fprintf(f, " %s |", e->skip);
+        }
+        fprintf(f, "\n");
+    }
+    fprintf(f, "\n");
+}
+
+/* The acceptance lines of issue 19: at equal depth, pdftrace's samples/s at least Mitsuba 3's on the
+   Cornell box and on the closed room of large quads, each at its scene file's size. */
+static void write_tput_acceptance(FILE *f, const tput_results *T)
+{
+    int i;
+    for (i = 0; T->available && i < T->n; ++i) {
+        const tput_row *row = &T->row[i];
+        int p = tput_fastest(row, 0), m = tput_fastest(row, 1);
+        double lo, hi, r;
+        if (m < 0 || p < 0 || (strcmp(scenes[row->scene].name, "cornell") && strcmp(scenes[row->scene].name, "rooms")) ||
+            (row->width == BENCH_SIZE && row->height == BENCH_SIZE))
+            continue;
+        r = tput_paired(&row->c[p], &row->c[m], T->reps, &lo, &hi);
+        fprintf(f, "| %s %dx%d: at equal depth (%d, no roulette) pdftrace's camera samples/s ≥ Mitsuba 3's | pdftrace %s "
+                   "%.3g M/s, Mitsuba %s %.3g M/s: **ratio %.3f** (paired median) | %s |\n",
+                scenes[row->scene].name, row->width, row->height, TPUT_DEPTH, tput_configs[p].name,
+                row->c[p].med_sps * 1e-6, tput_configs[m].mi_sampler, row->c[m].med_sps * 1e-6, r, pass_fail(r >= 1));
+    }
+}
+
+static void write_tput_summary(FILE *f, const tput_results *T)
+{
+    fprintf(f, "## Throughput at equal depth\n\n");
+    if (!T->available) {
+        fprintf(f, "SKIP: %s\n\n", T->skip_reason);
+        return;
+    }
+    fprintf(f, "Every configuration renders each scene at max_depth %d (pdftrace's scattering events; Mitsuba 3's path "
+               "integrator at max_depth %d, as it counts the camera segment) without Russian roulette (pdftrace "
+               "rr_start_depth < 0; Mitsuba rr_depth %d), pdftrace without splitting (max_splits < 0, indirect_paths 1): "
+               "one path per camera sample in both. About %.0f camera samples per render, every core (%d threads), "
+               "%d repetitions whose order of configurations rotates; after an untimed warm-up render. Figures are "
+               "medians; **M camera samples/s (M rays/s)**, rays = closest-hit (camera and bounce) + occlusion (shadow) "
+               "rays from pt_render_stats (Mitsuba does not count its rays), then the median of the paired ratios of "
+               "samples/s to the baseline (pdftrace's default: independent numbers at this CPU's SIMD level) with its "
+               "distribution-free 95 %% interval where the repetitions allow one. A pdftrace level column is the scene "
+               "committed at that level (pt_simd_set_cap); *sobol* is the Sobol sampler at the default level. "
+               "tput.csv has every figure, closest-hit and occlusion rays apart.\n\n",
+            TPUT_DEPTH, TPUT_DEPTH + 1, TPUT_MI_RR_DEPTH, T->samples_target, T->n ? T->row[0].threads : 0, T->reps);
+    write_tput_levels(f, T);
+    fprintf(f, "### Against Mitsuba 3 at equal depth\n\n");
+    if (!T->mitsuba) fprintf(f, "Mitsuba: SKIP (%s).\n\n", T->mi_skip);
+    fprintf(f, "M camera samples/s; the ratio is the median of the paired ratios of the two fastest configurations (> 1: "
+               "pdftrace is ahead). The image-mean columns check that both compute the same image at this depth: "
+               "Mitsuba's image mean (all pixels and channels, over the repetitions) against pdftrace's baseline, and z "
+               "= the mean difference of the %d pixel blocks' means (pixel i in block i mod %d) over its standard error "
+               "across blocks and repetitions (independent differences: |z| beyond 3 is unlikely by chance; Mitsuba's "
+               "max_depth one lower, 4 segments, moves the rooms' mean by −9 %%).\n\n", TPUT_BLOCKS, TPUT_BLOCKS);
+    write_tput_mitsuba(f, T);
+}
+
 /* ---- adaptive sampling and the scene-feature skips ------------------------------------ */
 
 #define ADAPTIVE_MAX 12
@@ -2508,7 +3134,7 @@ static void write_mitsuba_summary(FILE *f, const config *cfg, const results *R, 
 static int write_summary(const config *cfg, const results *R, const pov_results *P, const mitsuba_results *M,
                          const headline_results *H, const adaptive_results *A,
                          const adaptive_results *A2, const adaptive_results *A3, const adaptive_results *A4,
-                         const skip_results *S, const char *plot_status, double total_seconds)
+                         const skip_results *S, const tput_results *T, const char *plot_status, double total_seconds)
 {
     FILE *f = open_out(cfg, "summary.md"), *h;
     int i, j, l, k, c, in_range = 0, n_series = 0;
@@ -2548,6 +3174,7 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
                 m.extrap > 0 ? " (extrapolated)" : m.extrap < 0 ? " (at its first point already)" : "", m.ratio,
                 !strcmp(scenes[i].name, "tiny-light") ? pass_fail(m.ratio <= 0.5) : "control (not an acceptance line)");
     }
+    write_tput_acceptance(f, T);
     for (i = 0; i < SCENE_COUNT; ++i) { /* Veach's scene: MIS against each single strategy (issue 21) */
         double em, el, ex;
         if (!R->done[i] || strcmp(scenes[i].name, "veach-mis") != 0) continue;
@@ -2699,6 +3326,7 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
     fprintf(f, "\n\\* time MIS needs to reach the final error of the best single strategy (material or light, by "
                "efficiency), divided by that strategy's time.\n\n");
     write_mitsuba_summary(f, cfg, R, M, H);
+    write_tput_summary(f, T);
     /* the Sobol sampler against independent sampling, both MIS */
     fprintf(f, "## Sobol sampler (mis-sobol) against independent sampling (mis)\n\n"
                "relMSE of MIS with PT_SAMPLER_SOBOL divided by MIS with independent sampling (< 1: Sobol lower), "
@@ -2927,7 +3555,7 @@ static int write_summary(const config *cfg, const results *R, const pov_results 
         fprintf(f, "\n");
     }
     fprintf(f, "## Files\n\nseries.csv (medians per spp), series-seeds.csv (every seed), fits.csv (slopes, efficiency), "
-               "guiding.csv (the guided strategies against the best unguided one), pov.csv, adaptive.csv, skips.csv; SCENE.png and headline.png (%s), from plots.gp and the .dat files.\n",
+               "guiding.csv (the guided strategies against the best unguided one), pov.csv, adaptive.csv, skips.csv, tput.csv; SCENE.png and headline.png (%s), from plots.gp and the .dat files.\n",
             plot_status);
     return close_out(f, "summary.md");
 }
@@ -2941,9 +3569,10 @@ static int usage(void)
             "                 [--mitsuba-python PYTHON] [--cache DIR]\n"
             "       bench refs [--spp N] [NAME...]   (--spp: override the table, for experiments)\n"
             "       bench list\n"
-            "  --parts: comma-separated series,adaptive,skips,pov,mitsuba,headline (default all; pov and\n"
-            "           mitsuba need series; headline, the 600x600 Cornell box against Mitsuba, is left out of\n"
-            "           --quick unless named)\n"
+            "  --parts: comma-separated series,adaptive,skips,pov,mitsuba,headline,throughput (default all;\n"
+            "           pov and mitsuba need series; headline, the 600x600 Cornell box against Mitsuba, is left\n"
+            "           out of --quick unless named; throughput: samples/s and rays/s per SIMD level and\n"
+            "           against Mitsuba at equal depth, quick: the cornell and rooms scenes only)\n"
             "  --mitsuba-python: the Python of a venv with Mitsuba 3 (default $MITSUBA_PYTHON, else\n"
             "           build/mitsuba-venv/bin/python; make mitsuba-install creates it)\n"
             "  --cache: where the headline keeps its reference image (default build/bench-cache)\n"
@@ -2981,8 +3610,9 @@ static int add_part(config *cfg, const char *p)
     else if (!strcmp(p, "pov")) cfg->parts |= PART_POV;
     else if (!strcmp(p, "mitsuba")) cfg->parts |= PART_MITSUBA;
     else if (!strcmp(p, "headline")) cfg->parts |= PART_HEADLINE;
+    else if (!strcmp(p, "throughput")) cfg->parts |= PART_TPUT;
     else {
-        fprintf(stderr, "bench: unknown part '%s' (series, adaptive, skips, pov, mitsuba, headline)\n", p);
+        fprintf(stderr, "bench: unknown part '%s' (series, adaptive, skips, pov, mitsuba, headline, throughput)\n", p);
         return 0;
     }
     return 1;
@@ -3021,6 +3651,7 @@ static int cmd_run(int argc, char **argv)
     static skip_results S;
     static mitsuba_results M;
     static headline_results H;
+    static tput_results T;
     char plot_status[512] = "not made";
     int i, any_scene = 0, ok = 1, budget_set = 0;
     double t0 = ptv_now(), v;
@@ -3120,6 +3751,8 @@ static int cmd_run(int argc, char **argv)
     if (ok && (cfg.parts & PART_POV)) ok = run_pov(&cfg, &R, &P) && write_pov_csv(&cfg, &R, &P);
     if (ok && (cfg.parts & PART_MITSUBA)) ok = run_mitsuba(&cfg, &R, &M) && write_mitsuba_csv(&cfg, &R, &M);
     if (ok && (cfg.parts & PART_HEADLINE)) ok = run_headline(&cfg, &H);
+    if (ok && (cfg.parts & PART_TPUT)) ok = run_throughput(&cfg, &R, &T) && write_tput_csv(&cfg, &T);
+    if (!(cfg.parts & PART_TPUT)) snprintf(T.skip_reason, sizeof T.skip_reason, "not run (--parts)");
     if (!(cfg.parts & PART_MITSUBA)) snprintf(M.skip_reason, sizeof M.skip_reason, "not run (--parts)");
     if (!(cfg.parts & PART_HEADLINE))
         snprintf(H.skip_reason, sizeof H.skip_reason, cfg.quick ? "quick mode (make bench-headline runs it)"
@@ -3137,7 +3770,7 @@ static int cmd_run(int argc, char **argv)
     if (!(cfg.parts & PART_SKIPS)) snprintf(S.skip_reason, sizeof S.skip_reason, "not run (--parts)");
     if (!(cfg.parts & PART_POV)) snprintf(P.skip_reason, sizeof P.skip_reason, "not run (--parts)");
     if (ok && (cfg.parts & PART_SERIES)) ok = make_plots(&cfg, &R, &P, &M, &A, &A3, plot_status, sizeof plot_status);
-    if (ok) ok = write_summary(&cfg, &R, &P, &M, &H, &A, &A2, &A3, &A4, &S, plot_status, ptv_now() - t0);
+    if (ok) ok = write_summary(&cfg, &R, &P, &M, &H, &A, &A2, &A3, &A4, &S, &T, plot_status, ptv_now() - t0);
     for (i = 0; i < SCENE_COUNT; ++i) free_scene(&R.L[i]);
     if (!ok) {
         fprintf(stderr, "bench: failed\n");

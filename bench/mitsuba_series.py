@@ -12,6 +12,9 @@
       K independent renders of N spp (seeds B+1 .. B+K, --seed-base B, default 1000) against stored
       references: the mean per channel and the means of 4x4 regions, each with its standard error over
       the K seeds, and z = (Mitsuba - reference) / SE; z_both also counts the reference's own noise.
+  python mitsuba_series.py serve
+      renders on request (commands on standard input, one answer a line): bench.c's throughput part,
+      which interleaves these renders with pdftrace's (see cmd_serve).
 
 Variant llvm_ad_rgb (SIMD wavefronts on every core). Time is the render alone: mi.render with the
 evaluation of the image forced inside the timed region (drjit.eval, then drjit.sync_thread waits for
@@ -109,16 +112,33 @@ def measure(x, r):
     return mse / len(x), (sx / sr - 1.0 if sr > 0 else 0.0)
 
 
-def load_scene(mi, xml_path, sampler):
-    """The scene of xml_path with its sampler replaced by `sampler` (file paths resolve beside it)."""
+def load_scene(mi, xml_path, sampler, max_depth=0, rr_depth=0):
+    """The scene of xml_path with its sampler replaced by `sampler` (file paths resolve beside it) and,
+    when > 0, the path integrator's max_depth (Mitsuba's count: segments) and rr_depth set."""
     with open(xml_path) as f:
-        text = f.read()
+        text = set_depth(f.read(), max_depth, rr_depth)
     text, n = re.subn(r'<sampler\s+type="[^"]*"', '<sampler type="%s"' % sampler, text)
     if n != 1:
         raise ValueError("%s: expected one <sampler type=...> element, found %d" % (xml_path, n))
     resolver = mi.file_resolver() if hasattr(mi, "file_resolver") else mi.Thread.thread().file_resolver()
     resolver.prepend(os.path.dirname(os.path.abspath(xml_path)))
     return mi.load_string(text)
+
+
+def set_depth(text, max_depth, rr_depth):
+    """The XML text with the path integrator's max_depth (Mitsuba's count) and rr_depth set, when > 0."""
+    m = re.search(r'<integrator\s+type="path"\s*>', text)
+    if not m:
+        raise ValueError("expected a <integrator type=\"path\"> element")
+    if max_depth > 0:
+        text, n = re.subn(r'(<integer\s+name="max_depth"\s+value=")[^"]*"', r'\g<1>%d"' % max_depth, text)
+        if n != 1:
+            raise ValueError("expected one max_depth in the integrator, found %d" % n)
+    if rr_depth > 0:
+        if re.search(r'name="rr_depth"', text):
+            raise ValueError("the XML already sets rr_depth")
+        text = text[:m.end()] + '<integer name="rr_depth" value="%d"/>' % rr_depth + text[m.end():]
+    return text
 
 
 def render(mi, dr, scene, spp, seed):
@@ -166,6 +186,44 @@ def cmd_series(a):
                 spp *= 2
     if out is not sys.stdout:
         out.close()
+    return 0
+
+
+def cmd_serve(a):
+    """Renders on request, for bench.c's throughput part (which times pdftrace between these renders).
+    Reads one command per line on standard input and answers each with one line:
+      load NAME XML SAMPLER MAX_DEPTH RR_DEPTH  -> "ok"  (the scene, its sampler and depths set; 0 keeps the XML's)
+      render NAME SPP SEED BLOCKS               -> "ok SECONDS SPP_USED WIDTH HEIGHT MEAN_R MEAN_G MEAN_B M_0 .. M_B-1"
+      drop NAME                                 -> "ok"
+    or "error WHY" (and goes on). SECONDS is the render alone (as render()); MEAN_* are the image's
+    means per channel, M_b the mean over channels and the pixels i (row-major) with i mod BLOCKS = b:
+    for bench.c's check that both renderers compute the same image."""
+    mi, dr = load_mitsuba()
+    scenes = {}
+    for line in sys.stdin:
+        w = line.split()
+        try:
+            if len(w) == 6 and w[0] == "load":
+                scenes[w[1]] = load_scene(mi, w[2], w[3], int(w[4]), int(w[5]))
+                reply = "ok"
+            elif len(w) == 5 and w[0] == "render":
+                t, img, used = render(mi, dr, scenes[w[1]], int(w[2]), int(w[3]))
+                iw, ih, px = image_floats(dr, img)
+                nb, n = int(w[4]), iw * ih
+                means = [sum(px[c::3]) / n for c in range(3)]
+                blocks = [sum(sum(px[3 * b + c::3 * nb]) for c in range(3)) / (3 * ((n - b + nb - 1) // nb))
+                          for b in range(nb)]
+                reply = "ok %.9g %d %d %d %.9g %.9g %.9g" % (t, used, iw, ih, means[0], means[1], means[2])
+                reply += "".join(" %.9g" % v for v in blocks)
+            elif len(w) == 2 and w[0] == "drop":
+                scenes.pop(w[1], None)
+                reply = "ok"
+            else:
+                reply = "error unknown command: %s" % line.strip()
+        except Exception as e:  # a bad scene or render: say why on the same line, keep serving
+            reply = "error %s" % str(e).replace("\n", " ")
+        sys.stdout.write(reply + "\n")
+        sys.stdout.flush()
     return 0
 
 
@@ -246,6 +304,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     sub.add_parser("check")
+    sub.add_parser("serve")
     s = sub.add_parser("series")
     s.add_argument("--xml", required=True)
     s.add_argument("--ref", required=True)
@@ -268,6 +327,8 @@ def main():
         if a.cmd == "check":
             load_mitsuba()
             return 0
+        if a.cmd == "serve":
+            return cmd_serve(a)
         if a.cmd == "series":
             if a.seeds < 1 or a.budget <= 0:
                 p.error("--seeds must be >= 1 and --budget > 0")
