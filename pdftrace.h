@@ -7570,6 +7570,363 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
     return pt__bvh_any4(s, &tv, tmax, skip);
 }
 
+/* --- Packets for small scenes (the batched integrator, section 7). A scene of at most
+   PT__PACKET_MAX quads and spheres (no triangles) is small enough that testing a ray against
+   every primitive costs less than a BVH descent; the batched integrator's closest hits then test
+   four rays at once (SSE2 lanes = rays) against each primitive in turn, with each lane doing
+   exactly the float operations of pt__hit_quad and pt__hit_sphere (as the leaf blocks' SIMD tests
+   above do with lanes = primitives; the lanes their margins or the tiny-sphere case send to the
+   scalar tests go there too). The BVH never culls what these tests accept (pt__quad_margin), and
+   the hit kept is the one of least (t, public id), as pt__best_offer keeps, so a ray's hit is the
+   BVH's bit for bit. */
+#define PT__PACKET_MAX 32
+typedef struct pt__packet_scene {
+    int n;                          /* primitives, in public id order; 0: not a small scene */
+    uint32_t prim[PT__PACKET_MAX];  /* index into s->prims */
+    int sphere[PT__PACKET_MAX];
+    float v[PT__PACKET_MAX][14];    /* a quad's pt__quad4 fields, a sphere's centre and radius */
+} pt__packet_scene;
+
+/* Sets up the packets of scene s, or ps->n = 0 when it is not small (or not built in). */
+static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
+{
+    uint32_t i, j;
+    ps->n = 0;
+#ifdef PT__SSE
+    if (s->backend != PT_BACKEND_BUILTIN || s->simd == PT_SIMD_SCALAR || s->prim_count > PT__PACKET_MAX ||
+        s->prim_count == 0)
+        return;
+    for (i = 0; i < s->prim_count; ++i)
+        if (s->prims[i].type == PT__PRIM_TRIANGLE) return;
+    for (i = 0; i < s->prim_count; ++i) { /* by public id (insertion) */
+        for (j = (uint32_t)ps->n; j > 0 && s->prims[ps->prim[j - 1]].id > s->prims[i].id; --j) ps->prim[j] = ps->prim[j - 1];
+        ps->prim[j] = i;
+        ps->n++;
+    }
+    for (i = 0; i < (uint32_t)ps->n; ++i) {
+        const pt__prim *p = &s->prims[ps->prim[i]];
+        float *v = ps->v[i];
+        ps->sphere[i] = p->type == PT__PRIM_SPHERE;
+        memset(v, 0, sizeof ps->v[i]);
+        if (ps->sphere[i]) {
+            v[0] = p->p0.x; v[1] = p->p0.y; v[2] = p->p0.z; v[3] = p->p1.x;
+        } else {
+            v[0] = p->p0.x; v[1] = p->p0.y; v[2] = p->p0.z;
+            v[3] = p->n.x; v[4] = p->n.y; v[5] = p->n.z;
+            v[6] = p->w.x; v[7] = p->w.y; v[8] = p->w.z;
+            v[9] = p->w2.x; v[10] = p->w2.y; v[11] = p->w2.z;
+            pt__quad_edge_caps(p, &v[12], &v[13]);
+        }
+    }
+#else
+    (void)s; (void)i; (void)j;
+#endif
+}
+
+#ifdef PT__SSE
+/* Quad i of ps against 4 rays (o, d by axis): the lanes hit with 0 < t (mask) and their t. */
+static PT__HOT int pt__packet_quad(const pt_scene *s, const pt__packet_scene *ps, int i, const __m128 *o, const __m128 *d,
+                                   const pt__rayctx *const *rc, __m128 *t_out)
+{
+    const float *v = ps->v[i];
+    __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    __m128 nx = _mm_set1_ps(v[3]), ny = _mm_set1_ps(v[4]), nz = _mm_set1_ps(v[5]);
+    __m128 px = _mm_set1_ps(v[0]), py = _mm_set1_ps(v[1]), pz = _mm_set1_ps(v[2]);
+    __m128 denom = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, d[0]), _mm_mul_ps(ny, d[1])), _mm_mul_ps(nz, d[2]));
+    __m128 ok = _mm_cmpneq_ps(denom, zero), t, hx, hy, hz, a, bb, out;
+    float ts[4];
+    int bits, edge, lane;
+    if (!_mm_movemask_ps(ok)) return 0;
+    t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, _mm_sub_ps(px, o[0])), _mm_mul_ps(ny, _mm_sub_ps(py, o[1]))),
+                   _mm_mul_ps(nz, _mm_sub_ps(pz, o[2])));
+    t = _mm_div_ps(t, _mm_or_ps(_mm_and_ps(ok, denom), _mm_andnot_ps(ok, one)));
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(PT__INF))));
+    if (!_mm_movemask_ps(ok)) return 0;
+    t = _mm_and_ps(ok, t); /* (as pt__quad4_hit_sse) */
+    hx = _mm_sub_ps(_mm_add_ps(o[0], _mm_mul_ps(d[0], t)), px);
+    hy = _mm_sub_ps(_mm_add_ps(o[1], _mm_mul_ps(d[1], t)), py);
+    hz = _mm_sub_ps(_mm_add_ps(o[2], _mm_mul_ps(d[2], t)), pz);
+    a = _mm_add_ps(_mm_add_ps(_mm_mul_ps(hx, _mm_set1_ps(v[6])), _mm_mul_ps(hy, _mm_set1_ps(v[7]))),
+                   _mm_mul_ps(hz, _mm_set1_ps(v[8])));
+    bb = _mm_add_ps(_mm_add_ps(_mm_mul_ps(hx, _mm_set1_ps(v[9])), _mm_mul_ps(hy, _mm_set1_ps(v[10]))),
+                    _mm_mul_ps(hz, _mm_set1_ps(v[11])));
+    out = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(a, zero), _mm_cmpgt_ps(a, one)),
+                    _mm_or_ps(_mm_cmplt_ps(bb, zero), _mm_cmpgt_ps(bb, one)));
+    bits = _mm_movemask_ps(_mm_andnot_ps(out, ok));
+    edge = _mm_movemask_ps(_mm_and_ps(out, ok));
+    if (edge) { /* pt__hit_quad's margin decides the lanes within the caps */
+        __m128 ta = _mm_set1_ps(v[12]), tb = _mm_set1_ps(v[13]);
+        __m128 far_out = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(a, _mm_sub_ps(zero, ta)), _mm_cmpgt_ps(a, _mm_add_ps(one, ta))),
+                                   _mm_or_ps(_mm_cmplt_ps(bb, _mm_sub_ps(zero, tb)), _mm_cmpgt_ps(bb, _mm_add_ps(one, tb))));
+        edge &= ~_mm_movemask_ps(far_out);
+        if (edge) {
+            _mm_storeu_ps(ts, t);
+            for (lane = 0; lane < 4; ++lane) {
+                float tq;
+                if ((edge & (1 << lane)) && pt__hit_quad(rc[lane], &s->prims[ps->prim[i]], PT__INF, &tq)) {
+                    bits |= 1 << lane;
+                    ts[lane] = tq;
+                }
+            }
+            t = _mm_loadu_ps(ts);
+        }
+    }
+    *t_out = t;
+    return bits;
+}
+
+/* Sphere i of ps against 4 rays (pt__sphere4_hit_sse with lanes = rays; aa = d.d by lane). */
+static PT__HOT int pt__packet_sphere(const pt__packet_scene *ps, int i, const __m128 *o, const __m128 *d, __m128 aa,
+                                     const pt__rayctx *const *rc, __m128 *t_out)
+{
+    const float *v = ps->v[i];
+    __m128 zero = _mm_setzero_ps(), sign = _mm_set1_ps(-0.0f), r = _mm_set1_ps(v[3]), fx, fy, fz, bp, ff, rr, k;
+    __m128 lx, ly, lz, ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t, inf = _mm_set1_ps(PT__INF);
+    int bits, tiny, lane;
+    fx = _mm_sub_ps(o[0], _mm_set1_ps(v[0]));
+    fy = _mm_sub_ps(o[1], _mm_set1_ps(v[1]));
+    fz = _mm_sub_ps(o[2], _mm_set1_ps(v[2]));
+    bp = _mm_xor_ps(sign, _mm_add_ps(_mm_add_ps(_mm_mul_ps(fx, d[0]), _mm_mul_ps(fy, d[1])), _mm_mul_ps(fz, d[2])));
+    ff = _mm_add_ps(_mm_add_ps(_mm_mul_ps(fx, fx), _mm_mul_ps(fy, fy)), _mm_mul_ps(fz, fz));
+    rr = _mm_mul_ps(r, r);
+    tiny = _mm_movemask_ps(_mm_cmplt_ps(rr, _mm_mul_ps(_mm_set1_ps(1e-6f), ff)));
+    k = _mm_div_ps(bp, aa);
+    lx = _mm_add_ps(fx, _mm_mul_ps(d[0], k));
+    ly = _mm_add_ps(fy, _mm_mul_ps(d[1], k));
+    lz = _mm_add_ps(fz, _mm_mul_ps(d[2], k));
+    ll = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(lx, lx), _mm_mul_ps(ly, ly)), _mm_mul_ps(lz, lz)));
+    disc = _mm_mul_ps(_mm_mul_ps(aa, _mm_sub_ps(r, ll)), _mm_add_ps(r, ll));
+    ok = _mm_andnot_ps(_mm_cmplt_ps(disc, zero), _mm_castsi128_ps(_mm_set1_epi32(-1)));
+    cc = _mm_sub_ps(ff, rr);
+    sq = _mm_sqrt_ps(_mm_and_ps(ok, disc)); /* no square root of a negative: FE_INVALID traps */
+    qq = _mm_add_ps(bp, _mm_or_ps(_mm_andnot_ps(sign, sq), _mm_and_ps(sign, bp)));
+    ok = _mm_andnot_ps(_mm_cmpeq_ps(qq, zero), ok);
+    qd = _mm_or_ps(_mm_and_ps(ok, qq), _mm_andnot_ps(ok, _mm_set1_ps(1.0f)));
+    t0 = _mm_div_ps(cc, qd);
+    t1 = _mm_div_ps(qq, aa);
+    sw = _mm_cmpgt_ps(t0, t1);
+    lo = _mm_or_ps(_mm_and_ps(sw, t1), _mm_andnot_ps(sw, t0));
+    hi = _mm_or_ps(_mm_and_ps(sw, t0), _mm_andnot_ps(sw, t1));
+    h0 = _mm_and_ps(_mm_cmpgt_ps(lo, zero), _mm_cmplt_ps(lo, inf));
+    h1 = _mm_and_ps(_mm_cmpgt_ps(hi, zero), _mm_cmplt_ps(hi, inf));
+    t = _mm_or_ps(_mm_and_ps(h0, lo), _mm_andnot_ps(h0, hi));
+    bits = _mm_movemask_ps(_mm_and_ps(ok, _mm_or_ps(h0, h1))) & ~tiny;
+    if (tiny) { /* tiny or distant: pt__hit_sphere's double-precision case */
+        float ts[4];
+        _mm_storeu_ps(ts, t);
+        for (lane = 0; lane < 4; ++lane) {
+            float tz;
+            if ((tiny & (1 << lane)) &&
+                pt__hit_sphere(rc[lane], pt_v3(v[0], v[1], v[2]), v[3], PT__INF, &tz)) {
+                bits |= 1 << lane;
+                ts[lane] = tz;
+            }
+        }
+        t = _mm_loadu_ps(ts);
+    }
+    *t_out = t;
+    return bits;
+}
+
+/* The closest hits of n <= 4 rays (pt__scene_closest's results, tmax infinite). */
+static PT__HOT void pt__packet_closest4(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rc4, int n,
+                                        int *found, uint32_t *prim, float *t_out)
+{
+    const pt__rayctx *rc[4];
+    float buf[6][4];
+    __m128 o[3], d[3], aa, best = _mm_set1_ps(PT__INF);
+    int lane, i, any = 0;
+    uint32_t bp[4] = { 0, 0, 0, 0 };
+    for (lane = 0; lane < 4; ++lane) {
+        rc[lane] = rc4[lane < n ? lane : 0]; /* (the padding repeats ray 0; its results are dropped) */
+        buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
+        buf[3][lane] = rc[lane]->d.x; buf[4][lane] = rc[lane]->d.y; buf[5][lane] = rc[lane]->d.z;
+    }
+    for (i = 0; i < 3; ++i) {
+        o[i] = _mm_loadu_ps(buf[i]);
+        d[i] = _mm_loadu_ps(buf[3 + i]);
+    }
+    aa = _mm_add_ps(_mm_add_ps(_mm_mul_ps(d[0], d[0]), _mm_mul_ps(d[1], d[1])), _mm_mul_ps(d[2], d[2]));
+    for (i = 0; i < ps->n; ++i) {
+        __m128 t, closer;
+        int bits = ps->sphere[i] ? pt__packet_sphere(ps, i, o, d, aa, rc, &t) : pt__packet_quad(s, ps, i, o, d, rc, &t);
+        /* strictly closer: at a tie the primitive of lower id (visited first) stays */
+        closer = _mm_cmplt_ps(t, best);
+        bits &= _mm_movemask_ps(closer);
+        if (!bits) continue;
+        for (lane = 0; lane < 4; ++lane)
+            if (bits & (1 << lane)) bp[lane] = ps->prim[i];
+        { /* best = t in the lanes of bits */
+            __m128i sel = _mm_set_epi32(8, 4, 2, 1);
+            __m128 m = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(bits), sel), sel));
+            best = _mm_or_ps(_mm_and_ps(m, t), _mm_andnot_ps(m, best));
+        }
+        any |= bits;
+    }
+    {
+        float bt[4];
+        _mm_storeu_ps(bt, best);
+        for (lane = 0; lane < n; ++lane) {
+            found[lane] = (any >> lane) & 1;
+            prim[lane] = bp[lane];
+            t_out[lane] = bt[lane];
+        }
+    }
+}
+#endif
+#ifdef PT__WIDE
+#define PT__LT8(a, b) _mm256_cmp_ps((a), (b), _CMP_LT_OS) /* (cmpltps's predicate) */
+#define PT__GT8(a, b) _mm256_cmp_ps((b), (a), _CMP_LT_OS)
+#define PT__EQ8(a, b) _mm256_cmp_ps((a), (b), _CMP_EQ_OQ)
+/* The same three with AVX2, 8 rays at a time (pt_simd_level AVX2 and up). */
+PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d,
+                                   const pt__rayctx *const *rc, __m256 *t_out)
+{
+    const float *v = ps->v[i];
+    __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    __m256 nx = _mm256_set1_ps(v[3]), ny = _mm256_set1_ps(v[4]), nz = _mm256_set1_ps(v[5]);
+    __m256 px = _mm256_set1_ps(v[0]), py = _mm256_set1_ps(v[1]), pz = _mm256_set1_ps(v[2]);
+    __m256 denom = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, d[0]), _mm256_mul_ps(ny, d[1])), _mm256_mul_ps(nz, d[2]));
+    __m256 ok = _mm256_cmp_ps(denom, zero, _CMP_NEQ_UQ), t, hx, hy, hz, a, bb, out;
+    float ts[8];
+    int bits, edge, lane;
+    if (!_mm256_movemask_ps(ok)) return 0;
+    t = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_sub_ps(px, o[0])), _mm256_mul_ps(ny, _mm256_sub_ps(py, o[1]))),
+                   _mm256_mul_ps(nz, _mm256_sub_ps(pz, o[2])));
+    t = _mm256_div_ps(t, _mm256_or_ps(_mm256_and_ps(ok, denom), _mm256_andnot_ps(ok, one)));
+    ok = _mm256_and_ps(ok, _mm256_and_ps(PT__GT8(t, zero), PT__LT8(t, _mm256_set1_ps(PT__INF))));
+    if (!_mm256_movemask_ps(ok)) return 0;
+    t = _mm256_and_ps(ok, t); /* (as pt__quad4_hit_sse) */
+    hx = _mm256_sub_ps(_mm256_add_ps(o[0], _mm256_mul_ps(d[0], t)), px);
+    hy = _mm256_sub_ps(_mm256_add_ps(o[1], _mm256_mul_ps(d[1], t)), py);
+    hz = _mm256_sub_ps(_mm256_add_ps(o[2], _mm256_mul_ps(d[2], t)), pz);
+    a = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(hx, _mm256_set1_ps(v[6])), _mm256_mul_ps(hy, _mm256_set1_ps(v[7]))),
+                   _mm256_mul_ps(hz, _mm256_set1_ps(v[8])));
+    bb = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(hx, _mm256_set1_ps(v[9])), _mm256_mul_ps(hy, _mm256_set1_ps(v[10]))),
+                    _mm256_mul_ps(hz, _mm256_set1_ps(v[11])));
+    out = _mm256_or_ps(_mm256_or_ps(PT__LT8(a, zero), PT__GT8(a, one)),
+                    _mm256_or_ps(PT__LT8(bb, zero), PT__GT8(bb, one)));
+    bits = _mm256_movemask_ps(_mm256_andnot_ps(out, ok));
+    edge = _mm256_movemask_ps(_mm256_and_ps(out, ok));
+    if (edge) { /* pt__hit_quad's margin decides the lanes within the caps */
+        __m256 ta = _mm256_set1_ps(v[12]), tb = _mm256_set1_ps(v[13]);
+        __m256 far_out = _mm256_or_ps(_mm256_or_ps(PT__LT8(a, _mm256_sub_ps(zero, ta)), PT__GT8(a, _mm256_add_ps(one, ta))),
+                                   _mm256_or_ps(PT__LT8(bb, _mm256_sub_ps(zero, tb)), PT__GT8(bb, _mm256_add_ps(one, tb))));
+        edge &= ~_mm256_movemask_ps(far_out);
+        if (edge) {
+            _mm256_storeu_ps(ts, t);
+            for (lane = 0; lane < 8; ++lane) {
+                float tq;
+                if ((edge & (1 << lane)) && pt__hit_quad(rc[lane], &s->prims[ps->prim[i]], PT__INF, &tq)) {
+                    bits |= 1 << lane;
+                    ts[lane] = tq;
+                }
+            }
+            t = _mm256_loadu_ps(ts);
+        }
+    }
+    *t_out = t;
+    return bits;
+}
+
+PT__TARGET_AVX2 static int pt__packet_sphere8(const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d, __m256 aa,
+                                     const pt__rayctx *const *rc, __m256 *t_out)
+{
+    const float *v = ps->v[i];
+    __m256 zero = _mm256_setzero_ps(), sign = _mm256_set1_ps(-0.0f), r = _mm256_set1_ps(v[3]), fx, fy, fz, bp, ff, rr, k;
+    __m256 lx, ly, lz, ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t, inf = _mm256_set1_ps(PT__INF);
+    int bits, tiny, lane;
+    fx = _mm256_sub_ps(o[0], _mm256_set1_ps(v[0]));
+    fy = _mm256_sub_ps(o[1], _mm256_set1_ps(v[1]));
+    fz = _mm256_sub_ps(o[2], _mm256_set1_ps(v[2]));
+    bp = _mm256_xor_ps(sign, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(fx, d[0]), _mm256_mul_ps(fy, d[1])), _mm256_mul_ps(fz, d[2])));
+    ff = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(fx, fx), _mm256_mul_ps(fy, fy)), _mm256_mul_ps(fz, fz));
+    rr = _mm256_mul_ps(r, r);
+    tiny = _mm256_movemask_ps(PT__LT8(rr, _mm256_mul_ps(_mm256_set1_ps(1e-6f), ff)));
+    k = _mm256_div_ps(bp, aa);
+    lx = _mm256_add_ps(fx, _mm256_mul_ps(d[0], k));
+    ly = _mm256_add_ps(fy, _mm256_mul_ps(d[1], k));
+    lz = _mm256_add_ps(fz, _mm256_mul_ps(d[2], k));
+    ll = _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(lx, lx), _mm256_mul_ps(ly, ly)), _mm256_mul_ps(lz, lz)));
+    disc = _mm256_mul_ps(_mm256_mul_ps(aa, _mm256_sub_ps(r, ll)), _mm256_add_ps(r, ll));
+    ok = _mm256_andnot_ps(PT__LT8(disc, zero), _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
+    cc = _mm256_sub_ps(ff, rr);
+    sq = _mm256_sqrt_ps(_mm256_and_ps(ok, disc)); /* no square root of a negative: FE_INVALID traps */
+    qq = _mm256_add_ps(bp, _mm256_or_ps(_mm256_andnot_ps(sign, sq), _mm256_and_ps(sign, bp)));
+    ok = _mm256_andnot_ps(PT__EQ8(qq, zero), ok);
+    qd = _mm256_or_ps(_mm256_and_ps(ok, qq), _mm256_andnot_ps(ok, _mm256_set1_ps(1.0f)));
+    t0 = _mm256_div_ps(cc, qd);
+    t1 = _mm256_div_ps(qq, aa);
+    sw = PT__GT8(t0, t1);
+    lo = _mm256_or_ps(_mm256_and_ps(sw, t1), _mm256_andnot_ps(sw, t0));
+    hi = _mm256_or_ps(_mm256_and_ps(sw, t0), _mm256_andnot_ps(sw, t1));
+    h0 = _mm256_and_ps(PT__GT8(lo, zero), PT__LT8(lo, inf));
+    h1 = _mm256_and_ps(PT__GT8(hi, zero), PT__LT8(hi, inf));
+    t = _mm256_or_ps(_mm256_and_ps(h0, lo), _mm256_andnot_ps(h0, hi));
+    bits = _mm256_movemask_ps(_mm256_and_ps(ok, _mm256_or_ps(h0, h1))) & ~tiny;
+    if (tiny) { /* tiny or distant: pt__hit_sphere's double-precision case */
+        float ts[8];
+        _mm256_storeu_ps(ts, t);
+        for (lane = 0; lane < 8; ++lane) {
+            float tz;
+            if ((tiny & (1 << lane)) &&
+                pt__hit_sphere(rc[lane], pt_v3(v[0], v[1], v[2]), v[3], PT__INF, &tz)) {
+                bits |= 1 << lane;
+                ts[lane] = tz;
+            }
+        }
+        t = _mm256_loadu_ps(ts);
+    }
+    *t_out = t;
+    return bits;
+}
+
+PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rc4, int n,
+                                        int *found, uint32_t *prim, float *t_out)
+{
+    const pt__rayctx *rc[8];
+    float buf[6][8];
+    __m256 o[3], d[3], aa, best = _mm256_set1_ps(PT__INF);
+    int lane, i, any = 0;
+    uint32_t bp[8] = { 0, 0, 0, 0, 0, 0, 0, 0 };
+    for (lane = 0; lane < 8; ++lane) {
+        rc[lane] = rc4[lane < n ? lane : 0]; /* (the padding repeats ray 0; its results are dropped) */
+        buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
+        buf[3][lane] = rc[lane]->d.x; buf[4][lane] = rc[lane]->d.y; buf[5][lane] = rc[lane]->d.z;
+    }
+    for (i = 0; i < 3; ++i) {
+        o[i] = _mm256_loadu_ps(buf[i]);
+        d[i] = _mm256_loadu_ps(buf[3 + i]);
+    }
+    aa = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])), _mm256_mul_ps(d[2], d[2]));
+    for (i = 0; i < ps->n; ++i) {
+        __m256 t, closer;
+        int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, &t) : pt__packet_quad8(s, ps, i, o, d, rc, &t);
+        /* strictly closer: at a tie the primitive of lower id (visited first) stays */
+        closer = PT__LT8(t, best);
+        bits &= _mm256_movemask_ps(closer);
+        if (!bits) continue;
+        for (lane = 0; lane < 8; ++lane)
+            if (bits & (1 << lane)) bp[lane] = ps->prim[i];
+        { /* best = t in the lanes of bits */
+            __m256i sel = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
+            __m256 m = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), sel), sel));
+            best = _mm256_or_ps(_mm256_and_ps(m, t), _mm256_andnot_ps(m, best));
+        }
+        any |= bits;
+    }
+    {
+        float bt[8];
+        _mm256_storeu_ps(bt, best);
+        for (lane = 0; lane < n; ++lane) {
+            found[lane] = (any >> lane) & 1;
+            prim[lane] = bp[lane];
+            t_out[lane] = bt[lane];
+        }
+    }
+}
+#endif
+
 /* ------------------------------------------------------------------------------------------
    5b. Embree traversal (PDFTRACE_EMBREE). One Embree device and scene per pt_scene, made at
    commit. Geometry id = primitive type (PT__PRIM_*), one geometry per type present:
@@ -9733,6 +10090,7 @@ typedef struct pt__lane {
     pt__vertex v;
     pt_path_stats st;
     pt_ray ray;
+    pt__rayctx rc; /* the ray's, for its closest hit */
     pt_color beta, beta_in, L;
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
@@ -9865,9 +10223,52 @@ static PT__HOT int pt__lane_continue(const pt__batch_ctx *b, pt__lane *l)
     return 1;
 }
 
+/* Stage 1: the closest hits of the live paths' rays, in a small scene 8 at a time with AVX2 or 4
+   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), else one at a time. */
+static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *live,
+                                      int nlive, int tri)
+{
+    int i, j;
+    for (i = 0; i < nlive; ++i) pt__rayctx_init2(&lanes[live[i]].rc, lanes[live[i]].ray, tri);
+#ifdef PT__SSE
+    if (pk->n > 0) {
+        int w = 4;
+#ifdef PT__WIDE
+        if (s->simd >= PT_SIMD_AVX2) w = 8;
+#endif
+        for (i = 0; i < nlive; i += w) {
+            const pt__rayctx *rc[8];
+            int m = nlive - i < w ? nlive - i : w, found[8];
+            uint32_t prim[8];
+            float t[8];
+            for (j = 0; j < m; ++j) rc[j] = &lanes[live[i + j]].rc;
+#ifdef PT__WIDE
+            if (w == 8) pt__packet_closest8(s, pk, rc, m, found, prim, t);
+            else
+#endif
+                pt__packet_closest4(s, pk, rc, m, found, prim, t);
+            for (j = 0; j < m; ++j) {
+                pt__lane *l = &lanes[live[i + j]];
+                l->found = found[j];
+                l->pi = prim[j];
+                l->t = t[j];
+                l->bary[0] = l->bary[1] = l->bary[2] = 0.0f;
+            }
+        }
+        return;
+    }
+#else
+    (void)pk; (void)j;
+#endif
+    for (i = 0; i < nlive; ++i) {
+        pt__lane *l = &lanes[live[i]];
+        l->found = pt__scene_closest(s, &l->rc, PT__INF, &l->pi, &l->t, l->bary);
+    }
+}
+
 /* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
-   NaN/Inf guard of pt__sample applied). */
-static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, pt__lane *lanes, int n)
+   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). */
+static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes, int n)
 {
     int live[PT__BATCH], shade[PT__BATCH], nlive = n, nshade, i;
     pt__batch_ctx b;
@@ -9879,12 +10280,7 @@ static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, pt__lane *
     b.pick = s->light_count != 1 || cfg->env_pick > 0.0f;
     for (i = 0; i < n; ++i) live[i] = i;
     while (nlive > 0) {
-        for (i = 0; i < nlive; ++i) { /* (1) closest hits */
-            pt__lane *l = &lanes[live[i]];
-            pt__rayctx rc;
-            pt__rayctx_init2(&rc, l->ray, b.tri);
-            l->found = pt__scene_closest(s, &rc, PT__INF, &l->pi, &l->t, l->bary);
-        }
+        pt__batch_closest(s, pk, lanes, live, nlive, b.tri); /* (1) closest hits */
         for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(&b, &lanes[live[i]])) shade[nshade++] = live[i];
         for (i = 0; i < nshade; ++i) { /* (3) shadow rays */
@@ -10077,15 +10473,18 @@ static int pt__render_job_batched(pt__pass *ps, int index)
     pt__job_pixels r;
     pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * PT__BATCH);
     pt__sobol_cache *cache = (pt__sobol_cache *)PT_MALLOC(sizeof(pt__sobol_cache));
+    pt__packet_scene *pk = (pt__packet_scene *)PT_MALLOC(sizeof(pt__packet_scene));
     pt_path_stats st;
     uint64_t taken = 0;
     int x, y, k, n = 0, i;
     const int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
-    if (!lanes || !cache) {
+    if (!lanes || !cache || !pk) {
         PT_FREE(lanes);
         PT_FREE(cache);
+        PT_FREE(pk);
         return 0;
     }
+    pt__packet_init(ps->scene, pk);
     memset(&st, 0, sizeof st);
     if (sobol) pt__sobol_cache_init(cache);
     pt__job_range(ps, index, &r);
@@ -10106,7 +10505,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
                 l->index_k = index_k;
                 pt__lane_start(l, ps->cfg, pt__camera_sample(ps, &l->smp, x, y, pix, index_k, pixel_key, cache));
                 if (++n < PT__BATCH) continue;
-                pt__batch_run(ps->scene, ps->cfg, lanes, n);
+                pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
                 for (i = 0; i < n; ++i) {
                     pt__lane *d = &lanes[i];
                     uint32_t p = d->pix;
@@ -10123,7 +10522,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
             taken += mine;
         }
     }
-    pt__batch_run(ps->scene, ps->cfg, lanes, n);
+    pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
     for (i = 0; i < n; ++i) {
         pt__lane *d = &lanes[i];
         uint32_t p = d->pix;
@@ -10134,6 +10533,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
     }
     PT_FREE(lanes);
     PT_FREE(cache);
+    PT_FREE(pk);
     ps->tile_stats[index] = st;
     ps->tile_samples[index] = taken;
     ps->tile_done[index] = 2; /* (2: done by the batched integrator) */
