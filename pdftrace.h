@@ -1150,7 +1150,9 @@ typedef struct pt_path_stats {
    same image bit for bit. Guide training iterations (path guiding) run SCALAR;
    pt_render_stats.batched_samples counts the samples the batched integrator took. */
 typedef enum pt_integrator {
-    PT_INTEGRATOR_DEFAULT = 0,  /* SCALAR (the faster one as measured: bench/README.md, "Batched integrator") */
+    PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
+                                   for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
+                                   or better (its closest hits then run in 8-ray packets), else SCALAR */
     PT_INTEGRATOR_SCALAR = 1,
     PT_INTEGRATOR_BATCHED = 2
 } pt_integrator;
@@ -1271,7 +1273,7 @@ typedef struct pt_render_desc {
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
                                     quasi-Monte Carlo (section 2), lower error at equal samples */
-    pt_integrator integrator;    /* 0: PT_INTEGRATOR_DEFAULT; SCALAR or BATCHED (the same image) */
+    pt_integrator integrator;    /* 0: PT_INTEGRATOR_DEFAULT (see there); SCALAR or BATCHED (the same image) */
     /* Path guiding: a guide (section 2, pt_guide) learned in training iterations of 1, 2, 4, ...
        samples per pixel, each rendered with the guide of the ones before; then the rest of the
        samples with the final guide. Every sample counts in the image with equal weight and each
@@ -7587,17 +7589,29 @@ typedef struct pt__packet_scene {
     float v[PT__PACKET_MAX][14];    /* a quad's pt__quad4 fields, a sphere's centre and radius */
 } pt__packet_scene;
 
-/* Sets up the packets of scene s, or ps->n = 0 when it is not small (or not built in). */
+/* Whether scene s is small in that sense (and traced by the built-in BVH with SIMD). */
+static int pt__packet_small(const pt_scene *s)
+{
+#ifdef PT__SSE
+    uint32_t i;
+    if (s->backend != PT_BACKEND_BUILTIN || s->simd == PT_SIMD_SCALAR || s->prim_count > PT__PACKET_MAX ||
+        s->prim_count == 0)
+        return 0;
+    for (i = 0; i < s->prim_count; ++i)
+        if (s->prims[i].type == PT__PRIM_TRIANGLE) return 0;
+    return 1;
+#else
+    (void)s;
+    return 0;
+#endif
+}
+/* Sets up the packets of scene s, or ps->n = 0 when it is not small. */
 static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
 {
     uint32_t i, j;
     ps->n = 0;
 #ifdef PT__SSE
-    if (s->backend != PT_BACKEND_BUILTIN || s->simd == PT_SIMD_SCALAR || s->prim_count > PT__PACKET_MAX ||
-        s->prim_count == 0)
-        return;
-    for (i = 0; i < s->prim_count; ++i)
-        if (s->prims[i].type == PT__PRIM_TRIANGLE) return;
+    if (!pt__packet_small(s)) return;
     for (i = 0; i < s->prim_count; ++i) { /* by public id (insertion) */
         for (j = (uint32_t)ps->n; j > 0 && s->prims[ps->prim[j - 1]].id > s->prims[i].id; --j) ps->prim[j] = ps->prim[j - 1];
         ps->prim[j] = i;
@@ -9159,7 +9173,7 @@ typedef struct pt__settings {
     float env_pick;           /* the probability that light sampling picks the environment (0: off) */
     float env_uniform;        /* the uniform sphere's share of the environment's density */
     float lights_share;       /* 1 - env_pick: the shaped lights' share (exactly 1 when off) */
-    int batched;              /* pt_render_desc.integrator resolved: 1 BATCHED, 0 SCALAR */
+    int batched;              /* pt_render_desc.integrator resolved (pt__settings_for_scene): 1 BATCHED, 0 SCALAR */
 } pt__settings;
 
 /* Whether the skip `bit` is taken (not disabled by pt_render_desc.disable_skips). */
@@ -9224,7 +9238,7 @@ static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c, char
         return pt__msg(err, n, bad,
                        "pt_render_desc.integrator = %d: must be PT_INTEGRATOR_DEFAULT (0), _SCALAR (1) or _BATCHED (2)",
                        (int)d->integrator);
-    c->batched = d->integrator == PT_INTEGRATOR_BATCHED;
+    c->batched = (int)d->integrator; /* (PT_INTEGRATOR_DEFAULT: resolved by pt__settings_for_scene) */
     c->rr_gain = c->sampler == PT_SAMPLER_SOBOL ? PT__RR_GAIN_SOBOL : 1.0f;
     c->indirect_paths = d->indirect_paths != 0 ? d->indirect_paths
                                                : c->sampler == PT_SAMPLER_SOBOL ? PT__INDIRECT_PATHS_SOBOL : 1;
@@ -9241,6 +9255,10 @@ static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
     double bg = ((double)c->background.x + (double)c->background.y + (double)c->background.z) / 3.0;
     double m = s->env ? s->env->mean : 0.0, phi, r;
     pt_vec3 ext = pt_sub(s->hi, s->lo);
+    /* the default integrator: BATCHED where its ray packets run 8 wide (the one case where it is
+       measured faster: bench/README.md, "make bench-batched"), SCALAR elsewhere */
+    if (c->batched == (int)PT_INTEGRATOR_DEFAULT) c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
+    else c->batched = c->batched == (int)PT_INTEGRATOR_BATCHED;
     c->env = s->env;
     c->env_on = bg + m > 0.0;
     c->env_pick = 0.0f;

@@ -39,8 +39,8 @@
      strategy mis|material|light|mixture
      sampler independent|sobol        where random numbers come from (default independent;
                                       sobol: scrambled Sobol points, pdftrace.h section 2)
-     integrator scalar|batched        how paths are traced (default scalar; batched: a tile's
-                                      paths a bounce at a time, the same image: pdftrace.h)
+     integrator scalar|batched        how paths are traced (batched: a tile's paths a bounce at
+                                      a time, the same image; default: pt_integrator)
      indirect_paths N                 paths each camera sample continues as from its first
                                       non-delta vertex (1..8; default 3 with sobol, else 1)
      seed N                           random seed (default 0)

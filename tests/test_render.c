@@ -1046,7 +1046,8 @@ done:
    and a diffuse ball, an environment map, delta lights, textures, a rough dielectric, triangles,
    many lights, a guide's scene), under every strategy, both samplers, indirect paths, splitting
    (mixture with light weight 0.75), adaptive sampling and guiding; the stats say which integrator
-   ran (a guide's training runs scalar), and a bad value is refused naming the field. */
+   ran (a guide's training runs scalar) and which the default picks, and a bad value is refused
+   naming the field. */
 static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
@@ -1102,6 +1103,19 @@ static void batched_bit_identical(test_ctx *t)
                       "%s, %s: ray counts differ", scenes[i], configs[c]);
                 split += sb.split_paths > 0;
                 renders += 2;
+                if (c == 0 && (i == 0 || i == 6)) { /* the default: batched in a small scene (the Cornell box) with
+                                                        AVX2, scalar for triangles (mesh.scene) */
+                    pt_film f;
+                    pt_render_stats sd;
+                    int want = i == 0 && pt_simd_get_level() >= PT_SIMD_AVX2;
+                    d.integrator = PT_INTEGRATOR_DEFAULT;
+                    if (tu_render_into(t, s, &d, &f, &sd, "default")) {
+                        CHECK(t, tu_film_equal(&a, &f), "%s: the default integrator's film differs", scenes[i]);
+                        CHECK(t, sd.batched_samples == (want ? sd.samples : 0u), "%s: default ran %s, want %s", scenes[i],
+                              sd.batched_samples ? "batched" : "scalar", want ? "batched" : "scalar");
+                    }
+                    pt_film_free(&f);
+                }
             }
             pt_film_free(&a);
             pt_film_free(&b);

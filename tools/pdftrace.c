@@ -160,7 +160,7 @@ static void print_help(void)
            "      --max-depth N      scattering events per path (1: direct light only)\n"
            "      --indirect-paths N paths each camera sample continues as, 1..8\n"
            "      --light-weight W   light PDF weight of the mixture strategy, in (0, 1] (0.5)\n"
-           "      --backend B        auto | builtin | embree (auto); --integrator scalar | batched (scalar)\n"
+           "      --backend B        auto | builtin | embree (auto); --integrator scalar | batched (auto)\n"
            "      --guiding G        off | on | auto: path guiding (auto: only where training pays)\n"
            "      --guiding-budget F, --guiding-alpha F  in (0, 1): training's share of spp (0.25),\n"
            "                         the material's in the guided mixture (0.7); --guiding-memory MIB (64)\n"
