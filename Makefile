@@ -45,6 +45,9 @@
 #                         generated 1M-triangle terrain), build time, memory, the AUTO crossover:
 #                         bench/bvh.c -> bench/out/bvh.md and bench/out/bvh.csv (needs
 #                         libembree-dev; ~5 min; BENCH_BVH_ARGS=--quick for a short run)
+#   make bench-batched    samples/s of the scalar and the batched integrator side by side (Cornell
+#                         box, door, closed room; 1 and 2 threads; EMBREE=1: Embree too):
+#                         bench/batched.c -> bench/out/batched.md (~3 min)
 #   make bench-simd       rays/s of the built-in BVH at each SIMD level this CPU has, one thread:
 #                         bench/bvh.c --levels -> bench/out/simd.md and simd.csv (~5 min)
 #   make build/ptsky      the procedural sky tool (tools/sky.c; docs/sky.md)
@@ -214,7 +217,7 @@ EXAMPLE_BINS := $(EXAMPLES:%=$(BUILD)/%)
 TEST_SRCS    := $(wildcard tests/*.c) tests/stress/stress_cases.c
 TEST_HDRS    := $(wildcard tests/*.h) $(wildcard tests/stress/*.h) tests/fuzz/pov_check.h tests/fuzz/mitsuba_check.h
 
-.PHONY: all run run-all test test-bins cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs validate-mitsuba validate-mitsuba-ci mitsuba-install bench bench-quick bench-headline bench-refs bench-bvh bench-simd stress install uninstall install-check FORCE
+.PHONY: all run run-all test test-bins cli-test nothreads-test tsan-test exr-test check-warnings clean help validate validate-refs validate-mitsuba validate-mitsuba-ci mitsuba-install bench bench-quick bench-headline bench-refs bench-bvh bench-simd bench-batched stress install uninstall install-check FORCE
 
 all: $(BUILD)/pdftrace $(EXAMPLE_BINS)
 
@@ -482,6 +485,15 @@ bench-bvh: $(BUILD)/bench_bvh
 # rays/s of the built-in BVH at each SIMD level (scalar, SSE2 4-wide, AVX2 8-wide, AVX-512 16-wide)
 bench-simd: $(BUILD)/bench_bvh
 	./$(BUILD)/bench_bvh --levels $(BENCH_BVH_ARGS) bench/out
+
+# ---- make bench-batched (bench/batched.c): samples/s of the scalar and the batched integrator,
+# paired; with EMBREE=1 the Embree backend too.
+BENCH_BATCHED_ARGS ?=
+$(BUILD)/bench_batched: bench/batched.c $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
+	$(CC) -I. $(if $(filter 1,$(EMBREE)),$(EMBREE_FLAGS)) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $< $(LDLIBS) $(if $(filter 1,$(EMBREE)),$(EMBREE_LIBS)) -lm
+
+bench-batched: $(BUILD)/bench_batched
+	./$(BUILD)/bench_batched $(if $(filter 1,$(EMBREE)),--embree) $(BENCH_BATCHED_ARGS) bench/out
 
 # ---- warnings: each example is a complete program with the implementation included.
 # The PDFTRACE_STATIC build is checked too (its functions are marked unused under gcc/clang,

@@ -1151,6 +1151,20 @@ typedef struct pt_path_stats {
                                   PT_SKIP_NO_TEXTURES | PT_SKIP_ZERO_BSDF_SHADOW | PT_SKIP_SOLID_ANGLE_QUADS | \
                                   PT_SKIP_LIGHT_TREE)
 
+/* The integrator that traces a render's paths (pt_render_desc.integrator). SCALAR traces one
+   path at a time, vertex by vertex (the reference). BATCHED advances the paths of a tile's
+   samples together in batches, stage by stage (closest hits, emission and light samples, the
+   batch's shadow rays, continuation): the same functions in the same order per path, so the
+   same image bit for bit. Guide training iterations (path guiding) run SCALAR;
+   pt_render_stats.batched_samples counts the samples the batched integrator took. */
+typedef enum pt_integrator {
+    PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
+                                   for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
+                                   or better (its closest hits then run in 8-ray packets), else SCALAR */
+    PT_INTEGRATOR_SCALAR = 1,
+    PT_INTEGRATOR_BATCHED = 2
+} pt_integrator;
+
 /* ==========================================================================================
    8. RENDERING: tiles, threads, progressive passes, adaptive sampling, statistics
    A render is described by a pt_render_desc (zero means "default" for every field but the
@@ -1267,6 +1281,7 @@ typedef struct pt_render_desc {
                                     outside PT_SKIP_ALL: PT_ERROR_INVALID_ARGUMENT */
     pt_sampler sampler;          /* 0: PT_SAMPLER_INDEPENDENT; PT_SAMPLER_SOBOL: randomised
                                     quasi-Monte Carlo (section 2), lower error at equal samples */
+    pt_integrator integrator;    /* 0: PT_INTEGRATOR_DEFAULT (see there); SCALAR or BATCHED (the same image) */
     /* Path guiding: a guide (section 2, pt_guide) learned in training iterations of 1, 2, 4, ...
        samples per pixel, each rendered with the guide of the ones before; then the rest of the
        samples with the final guide. Every sample counts in the image with equal weight and each
@@ -1305,6 +1320,7 @@ typedef struct pt_render_stats {
     uint64_t nonfinite_samples;  /* NaN/Inf samples caught, zeroed and counted */
     uint64_t split_paths;        /* extra paths started by splitting (section 7) */
     uint64_t guided_vertices;    /* vertices that sampled from a learned guide (path guiding) */
+    uint64_t batched_samples;    /* camera samples the batched integrator took (the rest: scalar) */
     double seconds;              /* wall clock */
     int passes, threads;
     uint64_t pixels_converged;   /* adaptive: pixels that stopped before samples_per_pixel (the
@@ -7596,6 +7612,375 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
     return pt__bvh_any4(s, &tv, tmax, skip);
 }
 
+/* --- Packets for small scenes (the batched integrator, section 7). A scene of at most
+   PT__PACKET_MAX quads and spheres (no triangles) is small enough that testing a ray against
+   every primitive costs less than a BVH descent; the batched integrator's closest hits then test
+   four rays at once (SSE2 lanes = rays) against each primitive in turn, with each lane doing
+   exactly the float operations of pt__hit_quad and pt__hit_sphere (as the leaf blocks' SIMD tests
+   above do with lanes = primitives; the lanes their margins or the tiny-sphere case send to the
+   scalar tests go there too). The BVH never culls what these tests accept (pt__quad_margin), and
+   the hit kept is the one of least (t, public id), as pt__best_offer keeps, so a ray's hit is the
+   BVH's bit for bit. */
+#define PT__PACKET_MAX 32
+typedef struct pt__packet_scene {
+    int n;                          /* primitives, in public id order; 0: not a small scene */
+    uint32_t prim[PT__PACKET_MAX];  /* index into s->prims */
+    int sphere[PT__PACKET_MAX];
+    float v[PT__PACKET_MAX][14];    /* a quad's pt__quad4 fields, a sphere's centre and radius */
+} pt__packet_scene;
+
+/* Whether scene s is small in that sense (and traced by the built-in BVH with SIMD). */
+static int pt__packet_small(const pt_scene *s)
+{
+#ifdef PT__SSE
+    uint32_t i;
+    if (s->backend != PT_BACKEND_BUILTIN || s->simd == PT_SIMD_SCALAR || s->prim_count > PT__PACKET_MAX ||
+        s->prim_count == 0)
+        return 0;
+    for (i = 0; i < s->prim_count; ++i)
+        if (s->prims[i].type == PT__PRIM_TRIANGLE) return 0;
+    return 1;
+#else
+    (void)s;
+    return 0;
+#endif
+}
+/* Sets up the packets of scene s, or ps->n = 0 when it is not small. */
+static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
+{
+    uint32_t i, j;
+    ps->n = 0;
+#ifdef PT__SSE
+    if (!pt__packet_small(s)) return;
+    for (i = 0; i < s->prim_count; ++i) { /* by public id (insertion) */
+        for (j = (uint32_t)ps->n; j > 0 && s->prims[ps->prim[j - 1]].id > s->prims[i].id; --j) ps->prim[j] = ps->prim[j - 1];
+        ps->prim[j] = i;
+        ps->n++;
+    }
+    for (i = 0; i < (uint32_t)ps->n; ++i) {
+        const pt__prim *p = &s->prims[ps->prim[i]];
+        float *v = ps->v[i];
+        ps->sphere[i] = p->type == PT__PRIM_SPHERE;
+        memset(v, 0, sizeof ps->v[i]);
+        if (ps->sphere[i]) {
+            v[0] = p->p0.x; v[1] = p->p0.y; v[2] = p->p0.z; v[3] = p->p1.x;
+        } else {
+            v[0] = p->p0.x; v[1] = p->p0.y; v[2] = p->p0.z;
+            v[3] = p->n.x; v[4] = p->n.y; v[5] = p->n.z;
+            v[6] = p->w.x; v[7] = p->w.y; v[8] = p->w.z;
+            v[9] = p->w2.x; v[10] = p->w2.y; v[11] = p->w2.z;
+            pt__quad_edge_caps(p, &v[12], &v[13]);
+        }
+    }
+#else
+    (void)s; (void)i; (void)j;
+#endif
+}
+
+#ifdef PT__SSE
+/* Quad i of ps against 4 rays (o, d by axis): the lanes hit with 0 < t (mask) and their t. */
+static PT__HOT int pt__packet_quad(const pt_scene *s, const pt__packet_scene *ps, int i, const __m128 *o, const __m128 *d,
+                                   const pt__rayctx *const *rc, __m128 *t_out)
+{
+    const float *v = ps->v[i];
+    __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    __m128 nx = _mm_set1_ps(v[3]), ny = _mm_set1_ps(v[4]), nz = _mm_set1_ps(v[5]);
+    __m128 px = _mm_set1_ps(v[0]), py = _mm_set1_ps(v[1]), pz = _mm_set1_ps(v[2]);
+    __m128 denom = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, d[0]), _mm_mul_ps(ny, d[1])), _mm_mul_ps(nz, d[2]));
+    __m128 ok = _mm_cmpneq_ps(denom, zero), t, hx, hy, hz, a, bb, out;
+    float ts[4];
+    int bits, edge, lane;
+    if (!_mm_movemask_ps(ok)) return 0;
+    t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, _mm_sub_ps(px, o[0])), _mm_mul_ps(ny, _mm_sub_ps(py, o[1]))),
+                   _mm_mul_ps(nz, _mm_sub_ps(pz, o[2])));
+    t = _mm_div_ps(t, _mm_or_ps(_mm_and_ps(ok, denom), _mm_andnot_ps(ok, one)));
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(PT__INF))));
+    if (!_mm_movemask_ps(ok)) return 0;
+    t = _mm_and_ps(ok, t); /* (as pt__quad4_hit_sse) */
+    hx = _mm_sub_ps(_mm_add_ps(o[0], _mm_mul_ps(d[0], t)), px);
+    hy = _mm_sub_ps(_mm_add_ps(o[1], _mm_mul_ps(d[1], t)), py);
+    hz = _mm_sub_ps(_mm_add_ps(o[2], _mm_mul_ps(d[2], t)), pz);
+    a = _mm_add_ps(_mm_add_ps(_mm_mul_ps(hx, _mm_set1_ps(v[6])), _mm_mul_ps(hy, _mm_set1_ps(v[7]))),
+                   _mm_mul_ps(hz, _mm_set1_ps(v[8])));
+    bb = _mm_add_ps(_mm_add_ps(_mm_mul_ps(hx, _mm_set1_ps(v[9])), _mm_mul_ps(hy, _mm_set1_ps(v[10]))),
+                    _mm_mul_ps(hz, _mm_set1_ps(v[11])));
+    out = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(a, zero), _mm_cmpgt_ps(a, one)),
+                    _mm_or_ps(_mm_cmplt_ps(bb, zero), _mm_cmpgt_ps(bb, one)));
+    bits = _mm_movemask_ps(_mm_andnot_ps(out, ok));
+    edge = _mm_movemask_ps(_mm_and_ps(out, ok));
+    if (edge) { /* pt__hit_quad's margin decides the lanes within the caps */
+        __m128 ta = _mm_set1_ps(v[12]), tb = _mm_set1_ps(v[13]);
+        __m128 far_out = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(a, _mm_sub_ps(zero, ta)), _mm_cmpgt_ps(a, _mm_add_ps(one, ta))),
+                                   _mm_or_ps(_mm_cmplt_ps(bb, _mm_sub_ps(zero, tb)), _mm_cmpgt_ps(bb, _mm_add_ps(one, tb))));
+        edge &= ~_mm_movemask_ps(far_out);
+        if (edge) {
+            _mm_storeu_ps(ts, t);
+            for (lane = 0; lane < 4; ++lane) {
+                float tq;
+                if ((edge & (1 << lane)) && pt__hit_quad(rc[lane], &s->prims[ps->prim[i]], PT__INF, &tq)) {
+                    bits |= 1 << lane;
+                    ts[lane] = tq;
+                }
+            }
+            t = _mm_loadu_ps(ts);
+        }
+    }
+    *t_out = t;
+    return bits;
+}
+
+/* Sphere i of ps against 4 rays (pt__sphere4_hit_sse with lanes = rays; aa = d.d by lane). */
+static PT__HOT int pt__packet_sphere(const pt__packet_scene *ps, int i, const __m128 *o, const __m128 *d, __m128 aa,
+                                     const pt__rayctx *const *rc, __m128 *t_out)
+{
+    const float *v = ps->v[i];
+    __m128 zero = _mm_setzero_ps(), sign = _mm_set1_ps(-0.0f), r = _mm_set1_ps(v[3]), fx, fy, fz, bp, ff, rr, k;
+    __m128 lx, ly, lz, ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t, inf = _mm_set1_ps(PT__INF);
+    int bits, tiny, lane;
+    fx = _mm_sub_ps(o[0], _mm_set1_ps(v[0]));
+    fy = _mm_sub_ps(o[1], _mm_set1_ps(v[1]));
+    fz = _mm_sub_ps(o[2], _mm_set1_ps(v[2]));
+    bp = _mm_xor_ps(sign, _mm_add_ps(_mm_add_ps(_mm_mul_ps(fx, d[0]), _mm_mul_ps(fy, d[1])), _mm_mul_ps(fz, d[2])));
+    ff = _mm_add_ps(_mm_add_ps(_mm_mul_ps(fx, fx), _mm_mul_ps(fy, fy)), _mm_mul_ps(fz, fz));
+    rr = _mm_mul_ps(r, r);
+    tiny = _mm_movemask_ps(_mm_cmplt_ps(rr, _mm_mul_ps(_mm_set1_ps(1e-6f), ff)));
+    k = _mm_div_ps(bp, aa);
+    lx = _mm_add_ps(fx, _mm_mul_ps(d[0], k));
+    ly = _mm_add_ps(fy, _mm_mul_ps(d[1], k));
+    lz = _mm_add_ps(fz, _mm_mul_ps(d[2], k));
+    ll = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(lx, lx), _mm_mul_ps(ly, ly)), _mm_mul_ps(lz, lz)));
+    disc = _mm_mul_ps(_mm_mul_ps(aa, _mm_sub_ps(r, ll)), _mm_add_ps(r, ll));
+    ok = _mm_andnot_ps(_mm_cmplt_ps(disc, zero), _mm_castsi128_ps(_mm_set1_epi32(-1)));
+    cc = _mm_sub_ps(ff, rr);
+    sq = _mm_sqrt_ps(_mm_and_ps(ok, disc)); /* no square root of a negative: FE_INVALID traps */
+    qq = _mm_add_ps(bp, _mm_or_ps(_mm_andnot_ps(sign, sq), _mm_and_ps(sign, bp)));
+    ok = _mm_andnot_ps(_mm_cmpeq_ps(qq, zero), ok);
+    qd = _mm_or_ps(_mm_and_ps(ok, qq), _mm_andnot_ps(ok, _mm_set1_ps(1.0f)));
+    t0 = _mm_div_ps(cc, qd);
+    t1 = _mm_div_ps(qq, aa);
+    sw = _mm_cmpgt_ps(t0, t1);
+    lo = _mm_or_ps(_mm_and_ps(sw, t1), _mm_andnot_ps(sw, t0));
+    hi = _mm_or_ps(_mm_and_ps(sw, t0), _mm_andnot_ps(sw, t1));
+    h0 = _mm_and_ps(_mm_cmpgt_ps(lo, zero), _mm_cmplt_ps(lo, inf));
+    h1 = _mm_and_ps(_mm_cmpgt_ps(hi, zero), _mm_cmplt_ps(hi, inf));
+    t = _mm_or_ps(_mm_and_ps(h0, lo), _mm_andnot_ps(h0, hi));
+    bits = _mm_movemask_ps(_mm_and_ps(ok, _mm_or_ps(h0, h1))) & ~tiny;
+    if (tiny) { /* tiny or distant: pt__hit_sphere's double-precision case */
+        float ts[4];
+        _mm_storeu_ps(ts, t);
+        for (lane = 0; lane < 4; ++lane) {
+            float tz;
+            if ((tiny & (1 << lane)) &&
+                pt__hit_sphere(rc[lane], pt_v3(v[0], v[1], v[2]), v[3], PT__INF, &tz)) {
+                bits |= 1 << lane;
+                ts[lane] = tz;
+            }
+        }
+        t = _mm_loadu_ps(ts);
+    }
+    *t_out = t;
+    return bits;
+}
+
+/* The closest hits of n <= 4 rays (pt__scene_closest's results, tmax infinite). */
+static PT__HOT void pt__packet_closest4(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rc4, int n,
+                                        int *found, uint32_t *prim, float *t_out)
+{
+    const pt__rayctx *rc[4];
+    float buf[6][4];
+    __m128 o[3], d[3], aa, best = _mm_set1_ps(PT__INF);
+    int lane, i, any = 0;
+    uint32_t bp[4] = { 0, 0, 0, 0 };
+    for (lane = 0; lane < 4; ++lane) {
+        rc[lane] = rc4[lane < n ? lane : 0]; /* (the padding repeats ray 0; its results are dropped) */
+        buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
+        buf[3][lane] = rc[lane]->d.x; buf[4][lane] = rc[lane]->d.y; buf[5][lane] = rc[lane]->d.z;
+    }
+    for (i = 0; i < 3; ++i) {
+        o[i] = _mm_loadu_ps(buf[i]);
+        d[i] = _mm_loadu_ps(buf[3 + i]);
+    }
+    aa = _mm_add_ps(_mm_add_ps(_mm_mul_ps(d[0], d[0]), _mm_mul_ps(d[1], d[1])), _mm_mul_ps(d[2], d[2]));
+    for (i = 0; i < ps->n; ++i) {
+        __m128 t, closer;
+        int bits = ps->sphere[i] ? pt__packet_sphere(ps, i, o, d, aa, rc, &t) : pt__packet_quad(s, ps, i, o, d, rc, &t);
+        /* strictly closer: at a tie the primitive of lower id (visited first) stays */
+        closer = _mm_cmplt_ps(t, best);
+        bits &= _mm_movemask_ps(closer);
+        if (!bits) continue;
+        for (lane = 0; lane < 4; ++lane)
+            if (bits & (1 << lane)) bp[lane] = ps->prim[i];
+        { /* best = t in the lanes of bits */
+            __m128i sel = _mm_set_epi32(8, 4, 2, 1);
+            __m128 m = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(bits), sel), sel));
+            best = _mm_or_ps(_mm_and_ps(m, t), _mm_andnot_ps(m, best));
+        }
+        any |= bits;
+    }
+    {
+        float bt[4];
+        _mm_storeu_ps(bt, best);
+        for (lane = 0; lane < n; ++lane) {
+            found[lane] = (any >> lane) & 1;
+            prim[lane] = bp[lane];
+            t_out[lane] = bt[lane];
+        }
+    }
+}
+#endif
+#ifdef PT__WIDE
+#define PT__LT8(a, b) _mm256_cmp_ps((a), (b), _CMP_LT_OS) /* (cmpltps's predicate) */
+#define PT__GT8(a, b) _mm256_cmp_ps((b), (a), _CMP_LT_OS)
+#define PT__EQ8(a, b) _mm256_cmp_ps((a), (b), _CMP_EQ_OQ)
+/* The same three with AVX2, 8 rays at a time (pt_simd_level AVX2 and up). */
+PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d,
+                                   const pt__rayctx *const *rc, __m256 *t_out)
+{
+    const float *v = ps->v[i];
+    __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    __m256 nx = _mm256_set1_ps(v[3]), ny = _mm256_set1_ps(v[4]), nz = _mm256_set1_ps(v[5]);
+    __m256 px = _mm256_set1_ps(v[0]), py = _mm256_set1_ps(v[1]), pz = _mm256_set1_ps(v[2]);
+    __m256 denom = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, d[0]), _mm256_mul_ps(ny, d[1])), _mm256_mul_ps(nz, d[2]));
+    __m256 ok = _mm256_cmp_ps(denom, zero, _CMP_NEQ_UQ), t, hx, hy, hz, a, bb, out;
+    float ts[8];
+    int bits, edge, lane;
+    if (!_mm256_movemask_ps(ok)) return 0;
+    t = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_sub_ps(px, o[0])), _mm256_mul_ps(ny, _mm256_sub_ps(py, o[1]))),
+                   _mm256_mul_ps(nz, _mm256_sub_ps(pz, o[2])));
+    t = _mm256_div_ps(t, _mm256_or_ps(_mm256_and_ps(ok, denom), _mm256_andnot_ps(ok, one)));
+    ok = _mm256_and_ps(ok, _mm256_and_ps(PT__GT8(t, zero), PT__LT8(t, _mm256_set1_ps(PT__INF))));
+    if (!_mm256_movemask_ps(ok)) return 0;
+    t = _mm256_and_ps(ok, t); /* (as pt__quad4_hit_sse) */
+    hx = _mm256_sub_ps(_mm256_add_ps(o[0], _mm256_mul_ps(d[0], t)), px);
+    hy = _mm256_sub_ps(_mm256_add_ps(o[1], _mm256_mul_ps(d[1], t)), py);
+    hz = _mm256_sub_ps(_mm256_add_ps(o[2], _mm256_mul_ps(d[2], t)), pz);
+    a = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(hx, _mm256_set1_ps(v[6])), _mm256_mul_ps(hy, _mm256_set1_ps(v[7]))),
+                   _mm256_mul_ps(hz, _mm256_set1_ps(v[8])));
+    bb = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(hx, _mm256_set1_ps(v[9])), _mm256_mul_ps(hy, _mm256_set1_ps(v[10]))),
+                    _mm256_mul_ps(hz, _mm256_set1_ps(v[11])));
+    out = _mm256_or_ps(_mm256_or_ps(PT__LT8(a, zero), PT__GT8(a, one)),
+                    _mm256_or_ps(PT__LT8(bb, zero), PT__GT8(bb, one)));
+    bits = _mm256_movemask_ps(_mm256_andnot_ps(out, ok));
+    edge = _mm256_movemask_ps(_mm256_and_ps(out, ok));
+    if (edge) { /* pt__hit_quad's margin decides the lanes within the caps */
+        __m256 ta = _mm256_set1_ps(v[12]), tb = _mm256_set1_ps(v[13]);
+        __m256 far_out = _mm256_or_ps(_mm256_or_ps(PT__LT8(a, _mm256_sub_ps(zero, ta)), PT__GT8(a, _mm256_add_ps(one, ta))),
+                                   _mm256_or_ps(PT__LT8(bb, _mm256_sub_ps(zero, tb)), PT__GT8(bb, _mm256_add_ps(one, tb))));
+        edge &= ~_mm256_movemask_ps(far_out);
+        if (edge) {
+            _mm256_storeu_ps(ts, t);
+            for (lane = 0; lane < 8; ++lane) {
+                float tq;
+                if ((edge & (1 << lane)) && pt__hit_quad(rc[lane], &s->prims[ps->prim[i]], PT__INF, &tq)) {
+                    bits |= 1 << lane;
+                    ts[lane] = tq;
+                }
+            }
+            t = _mm256_loadu_ps(ts);
+        }
+    }
+    *t_out = t;
+    return bits;
+}
+
+PT__TARGET_AVX2 static int pt__packet_sphere8(const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d, __m256 aa,
+                                     const pt__rayctx *const *rc, __m256 *t_out)
+{
+    const float *v = ps->v[i];
+    __m256 zero = _mm256_setzero_ps(), sign = _mm256_set1_ps(-0.0f), r = _mm256_set1_ps(v[3]), fx, fy, fz, bp, ff, rr, k;
+    __m256 lx, ly, lz, ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t, inf = _mm256_set1_ps(PT__INF);
+    int bits, tiny, lane;
+    fx = _mm256_sub_ps(o[0], _mm256_set1_ps(v[0]));
+    fy = _mm256_sub_ps(o[1], _mm256_set1_ps(v[1]));
+    fz = _mm256_sub_ps(o[2], _mm256_set1_ps(v[2]));
+    bp = _mm256_xor_ps(sign, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(fx, d[0]), _mm256_mul_ps(fy, d[1])), _mm256_mul_ps(fz, d[2])));
+    ff = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(fx, fx), _mm256_mul_ps(fy, fy)), _mm256_mul_ps(fz, fz));
+    rr = _mm256_mul_ps(r, r);
+    tiny = _mm256_movemask_ps(PT__LT8(rr, _mm256_mul_ps(_mm256_set1_ps(1e-6f), ff)));
+    k = _mm256_div_ps(bp, aa);
+    lx = _mm256_add_ps(fx, _mm256_mul_ps(d[0], k));
+    ly = _mm256_add_ps(fy, _mm256_mul_ps(d[1], k));
+    lz = _mm256_add_ps(fz, _mm256_mul_ps(d[2], k));
+    ll = _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(lx, lx), _mm256_mul_ps(ly, ly)), _mm256_mul_ps(lz, lz)));
+    disc = _mm256_mul_ps(_mm256_mul_ps(aa, _mm256_sub_ps(r, ll)), _mm256_add_ps(r, ll));
+    ok = _mm256_andnot_ps(PT__LT8(disc, zero), _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
+    cc = _mm256_sub_ps(ff, rr);
+    sq = _mm256_sqrt_ps(_mm256_and_ps(ok, disc)); /* no square root of a negative: FE_INVALID traps */
+    qq = _mm256_add_ps(bp, _mm256_or_ps(_mm256_andnot_ps(sign, sq), _mm256_and_ps(sign, bp)));
+    ok = _mm256_andnot_ps(PT__EQ8(qq, zero), ok);
+    qd = _mm256_or_ps(_mm256_and_ps(ok, qq), _mm256_andnot_ps(ok, _mm256_set1_ps(1.0f)));
+    t0 = _mm256_div_ps(cc, qd);
+    t1 = _mm256_div_ps(qq, aa);
+    sw = PT__GT8(t0, t1);
+    lo = _mm256_or_ps(_mm256_and_ps(sw, t1), _mm256_andnot_ps(sw, t0));
+    hi = _mm256_or_ps(_mm256_and_ps(sw, t0), _mm256_andnot_ps(sw, t1));
+    h0 = _mm256_and_ps(PT__GT8(lo, zero), PT__LT8(lo, inf));
+    h1 = _mm256_and_ps(PT__GT8(hi, zero), PT__LT8(hi, inf));
+    t = _mm256_or_ps(_mm256_and_ps(h0, lo), _mm256_andnot_ps(h0, hi));
+    bits = _mm256_movemask_ps(_mm256_and_ps(ok, _mm256_or_ps(h0, h1))) & ~tiny;
+    if (tiny) { /* tiny or distant: pt__hit_sphere's double-precision case */
+        float ts[8];
+        _mm256_storeu_ps(ts, t);
+        for (lane = 0; lane < 8; ++lane) {
+            float tz;
+            if ((tiny & (1 << lane)) &&
+                pt__hit_sphere(rc[lane], pt_v3(v[0], v[1], v[2]), v[3], PT__INF, &tz)) {
+                bits |= 1 << lane;
+                ts[lane] = tz;
+            }
+        }
+        t = _mm256_loadu_ps(ts);
+    }
+    *t_out = t;
+    return bits;
+}
+
+PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rc4, int n,
+                                        int *found, uint32_t *prim, float *t_out)
+{
+    const pt__rayctx *rc[8];
+    float buf[6][8];
+    __m256 o[3], d[3], aa, best = _mm256_set1_ps(PT__INF);
+    int lane, i, any = 0;
+    uint32_t bp[8] = { 0, 0, 0, 0, 0, 0, 0, 0 };
+    for (lane = 0; lane < 8; ++lane) {
+        rc[lane] = rc4[lane < n ? lane : 0]; /* (the padding repeats ray 0; its results are dropped) */
+        buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
+        buf[3][lane] = rc[lane]->d.x; buf[4][lane] = rc[lane]->d.y; buf[5][lane] = rc[lane]->d.z;
+    }
+    for (i = 0; i < 3; ++i) {
+        o[i] = _mm256_loadu_ps(buf[i]);
+        d[i] = _mm256_loadu_ps(buf[3 + i]);
+    }
+    aa = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])), _mm256_mul_ps(d[2], d[2]));
+    for (i = 0; i < ps->n; ++i) {
+        __m256 t, closer;
+        int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, &t) : pt__packet_quad8(s, ps, i, o, d, rc, &t);
+        /* strictly closer: at a tie the primitive of lower id (visited first) stays */
+        closer = PT__LT8(t, best);
+        bits &= _mm256_movemask_ps(closer);
+        if (!bits) continue;
+        for (lane = 0; lane < 8; ++lane)
+            if (bits & (1 << lane)) bp[lane] = ps->prim[i];
+        { /* best = t in the lanes of bits */
+            __m256i sel = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
+            __m256 m = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), sel), sel));
+            best = _mm256_or_ps(_mm256_and_ps(m, t), _mm256_andnot_ps(m, best));
+        }
+        any |= bits;
+    }
+    {
+        float bt[8];
+        _mm256_storeu_ps(bt, best);
+        for (lane = 0; lane < n; ++lane) {
+            found[lane] = (any >> lane) & 1;
+            prim[lane] = bp[lane];
+            t_out[lane] = bt[lane];
+        }
+    }
+}
+#endif
+
 /* ------------------------------------------------------------------------------------------
    5b. Embree traversal (PDFTRACE_EMBREE). One Embree device and scene per pt_scene, made at
    commit. Geometry id = primitive type (PT__PRIM_*), one geometry per type present:
@@ -8828,6 +9213,7 @@ typedef struct pt__settings {
     float env_pick;           /* the probability that light sampling picks the environment (0: off) */
     float env_uniform;        /* the uniform sphere's share of the environment's density */
     float lights_share;       /* 1 - env_pick: the shaped lights' share (exactly 1 when off) */
+    int batched;              /* pt_render_desc.integrator resolved (pt__settings_for_scene): 1 BATCHED, 0 SCALAR */
 } pt__settings;
 
 /* Whether the skip `bit` is taken (not disabled by pt_render_desc.disable_skips). */
@@ -8888,6 +9274,11 @@ static int pt__settings_from_desc(const pt_render_desc *d, pt__settings *c, char
                        "pt_render_desc.sampler = %d: must be PT_SAMPLER_INDEPENDENT (0) or PT_SAMPLER_SOBOL (1)",
                        (int)d->sampler);
     c->sampler = d->sampler;
+    if ((int)d->integrator < (int)PT_INTEGRATOR_DEFAULT || (int)d->integrator > (int)PT_INTEGRATOR_BATCHED)
+        return pt__msg(err, n, bad,
+                       "pt_render_desc.integrator = %d: must be PT_INTEGRATOR_DEFAULT (0), _SCALAR (1) or _BATCHED (2)",
+                       (int)d->integrator);
+    c->batched = (int)d->integrator; /* (PT_INTEGRATOR_DEFAULT: resolved by pt__settings_for_scene) */
     c->rr_gain = c->sampler == PT_SAMPLER_SOBOL ? PT__RR_GAIN_SOBOL : 1.0f;
     c->indirect_paths = d->indirect_paths != 0 ? d->indirect_paths
                                                : c->sampler == PT_SAMPLER_SOBOL ? PT__INDIRECT_PATHS_SOBOL : 1;
@@ -8904,6 +9295,10 @@ static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
     double bg = ((double)c->background.x + (double)c->background.y + (double)c->background.z) / 3.0;
     double m = s->env ? s->env->mean : 0.0, phi, r;
     pt_vec3 ext = pt_sub(s->hi, s->lo);
+    /* the default integrator: BATCHED where its ray packets run 8 wide (the one case where it is
+       measured faster: bench/README.md, "make bench-batched"), SCALAR elsewhere */
+    if (c->batched == (int)PT_INTEGRATOR_DEFAULT) c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
+    else c->batched = c->batched == (int)PT_INTEGRATOR_BATCHED;
     c->env = s->env;
     c->env_on = bg + m > 0.0;
     c->env_pick = 0.0f;
@@ -9077,19 +9472,27 @@ static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
     return pt__planar_faces(p, lp->p0, lp->n, two);
 }
 
-/* Whether the segment from v's spawn point to the light sample ls of light li is unoccluded
-   (one shadow ray). */
-static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, const pt__light_sample *ls, uint32_t li,
-                                     int tri, pt_path_stats *st)
+/* The shadow ray from v's spawn point to the light sample ls of light li: the segment, which
+   ends at t = 1 short of the light's offset point. */
+static PT__HOT void pt__light_shadow_ray(const pt_scene *s, const pt__vertex *v, const pt__light_sample *ls, uint32_t li,
+                                         int tri, pt__rayctx *src)
 {
     pt_ray sr;
-    pt__rayctx src;
     pt_vec3 target;
     sr.origin = pt__vertex_origin(v, ls->dir);
     target = pt__offset_origin(ls->point, ls->normal, pt_neg(ls->dir),
                                          pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
     sr.dir = pt_sub(target, sr.origin);
-    pt__rayctx_init2(&src, sr, tri);
+    pt__rayctx_init2(src, sr, tri);
+}
+
+/* Whether the segment from v's spawn point to the light sample ls of light li is unoccluded
+   (one shadow ray). */
+static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, const pt__light_sample *ls, uint32_t li,
+                                     int tri, pt_path_stats *st)
+{
+    pt__rayctx src;
+    pt__light_shadow_ray(s, v, ls, li, tri, &src);
     st->shadow_rays++;
     /* the light itself is skipped: a segment to a point sampled on a sphere (the near side seen
        from outside, any point from inside) or on a planar light meets that light only at the
@@ -9097,37 +9500,56 @@ static PT__HOT int pt__light_visible(const pt_scene *s, const pt__vertex *v, con
     return !pt__scene_any(s, &src, 1.0f - 1e-4f, s->lights[li].prim);
 }
 
-/* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS): the shadow ray and,
-   if it is unoccluded, the contribution beta f Le w / p_light. */
+/* Next-event estimation at vertex v for the light sample ls (LIGHT and MIS) in two halves around
+   its one shadow ray, so that the batched integrator (below) can trace a batch's shadow rays
+   together: pt__nee_prepare evaluates f and sets up the shadow ray (0: nothing to add, no ray),
+   pt__nee_finish gives the contribution beta f Le w / p_light of an unoccluded one. The MIS
+   weight comes after the shadow ray: a guided density costs a tree descent, wasted on an
+   occluded light. */
+typedef struct pt__nee_ray {
+    pt__rayctx rc;
+    float tmax;
+    uint32_t skip; /* the light's primitive, which the ray ignores (0xffffffff: none) */
+    pt_color f;
+} pt__nee_ray;
+static PT__HOT int pt__nee_prepare(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+                                   const pt__light_sample *ls, uint32_t li, int tri, pt__nee_ray *nr, pt_path_stats *st)
+{
+    nr->f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir, v->eta);
+    if (pt__is_black(nr->f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return 0;
+    if (li == PT__ENV_LIGHT) { /* the environment: a shadow ray to infinity */
+        pt_ray sr;
+        if (pt__is_black(ls->radiance)) return 0;
+        sr.origin = pt__vertex_origin(v, ls->dir);
+        sr.dir = ls->dir;
+        pt__rayctx_init2(&nr->rc, sr, tri);
+        nr->tmax = PT__INF;
+        nr->skip = 0xffffffffu;
+    } else { /* (pt__light_visible's segment) */
+        pt__light_shadow_ray(s, v, ls, li, tri, &nr->rc);
+        nr->tmax = 1.0f - 1e-4f;
+        nr->skip = s->lights[li].prim;
+    }
+    st->shadow_rays++;
+    return 1;
+}
+static PT__HOT pt_color pt__nee_finish(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+                                       const pt__light_sample *ls, uint32_t li, pt_color beta, pt_color f)
+{
+    float w = 1.0f;
+    pt_color Le = li == PT__ENV_LIGHT ? ls->radiance : s->mats[s->prims[s->lights[li].prim].material].emission;
+    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta) w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
+    return pt_mul(beta, pt_scale(pt_mul(f, Le), w / ls->pdf));
+}
+/* Both halves with the shadow ray between them (the scalar integrator). */
 static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
                                      const pt__light_sample *ls, uint32_t li, pt_color beta, int tri,
                                      pt_path_stats *st)
 {
-    pt_color f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir, v->eta);
-    float w = 1.0f;
-    const int mis = cfg->strategy == PT_STRATEGY_MIS && !v->m->delta;
-    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
-    /* (the MIS weight after the shadow ray: a guided density costs a tree descent, wasted on an
-       occluded light) */
-    if (li == PT__ENV_LIGHT) { /* the environment: a shadow ray to infinity */
-        pt_color Le = ls->radiance;
-        pt_ray sr;
-        pt__rayctx src;
-        if (pt__is_black(Le)) return pt_v3(0, 0, 0);
-        sr.origin = pt__vertex_origin(v, ls->dir);
-        sr.dir = ls->dir;
-        pt__rayctx_init2(&src, sr, tri);
-        st->shadow_rays++;
-        if (pt__scene_any(s, &src, PT__INF, 0xffffffffu)) return pt_v3(0, 0, 0);
-        if (mis) w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
-        return pt_mul(beta, pt_scale(pt_mul(f, Le), w / ls->pdf));
-    }
-    if (!pt__light_visible(s, v, ls, li, tri, st)) return pt_v3(0, 0, 0);
-    if (mis) w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
-    {
-        const pt__material *lm = &s->mats[s->prims[s->lights[li].prim].material];
-        return pt_mul(beta, pt_scale(pt_mul(f, lm->emission), w / ls->pdf));
-    }
+    pt__nee_ray nr;
+    if (!pt__nee_prepare(s, cfg, v, ls, li, tri, &nr, st) || pt__scene_any(s, &nr.rc, nr.tmax, nr.skip))
+        return pt_v3(0, 0, 0);
+    return pt__nee_finish(s, cfg, v, ls, li, beta, nr.f);
 }
 
 /* Next-event estimation of the delta lights (pt_scene_add_light) at non-delta vertex v, under
@@ -9534,6 +9956,42 @@ static PT__HOT void pt__vertex_spawn(pt__vertex *v, const pt_hit *h)
     }
 }
 
+/* The scattering vertex at hit h of primitive prim (material m) that a ray along dir found:
+   its frame, wo, albedo and spawn points (the guide's fields are the caller's). */
+static PT__HOT void pt__vertex_at(const pt_scene *s, const pt__settings *cfg, pt__vertex *v, const pt__prim *prim,
+                                  const pt__material *m, const pt_hit *h, pt_vec3 dir, const float *bary)
+{
+    v->m = m;
+    v->p = h->point;
+    v->wo = pt_neg(dir);
+    v->ng = h->front_face ? h->geometric_normal : pt_neg(h->geometric_normal);
+    v->ns = pt_dot(h->shading_normal, v->wo) < 0.0f ? pt_neg(h->shading_normal) : h->shading_normal;
+    if (m->texture || PT__SKIP(cfg, PT_SKIP_NO_TEXTURES)) {
+        v->albedo = pt__albedo(s, m, prim, bary, h);
+    } else { /* general path: an untextured material looked up as a constant texture */
+        pt__texture ct;
+        memset(&ct, 0, sizeof ct);
+        ct.even = ct.odd = m->albedo;
+        ct.inv_scale = 1.0f;
+        v->albedo = pt__checker(&ct, h->point);
+    }
+    pt__vertex_spawn(v, h);
+}
+
+/* The weight of emission that a ray scattered at a non-delta vertex (prev_p, receiver normal
+   prev_n, density prev_pdf) finds on the emitting primitive prim at distance t along dir: the
+   strategies at the top of this section. */
+static PT__HOT float pt__emission_weight(const pt_scene *s, const pt__settings *cfg, const pt__prim *prim, float prev_pdf,
+                                         pt_vec3 prev_p, pt_vec3 prev_n, pt_vec3 dir, float t)
+{
+    float pl;
+    if (cfg->strategy == PT_STRATEGY_LIGHT) return 0.0f;
+    if (cfg->strategy != PT_STRATEGY_MIS) return 1.0f;
+    pl = cfg->lights_share * pt__light_pmf(s, prev_p, prev_n, (uint32_t)prim->light, pt__lights_mode(cfg)) *
+         pt__light_prim_value_at(s, prim, prev_p, dir, t, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS));
+    return pt__power_heuristic(prev_pdf, pl);
+}
+
 /* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
    pt__trace). */
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
@@ -9580,12 +10038,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         if (m->emits && (m->two_sided || h.front_face)) {
             float w = 1.0f;
             if (!prev_delta) {
-                if (cfg->strategy == PT_STRATEGY_LIGHT) w = 0.0f;
-                else if (cfg->strategy == PT_STRATEGY_MIS) {
-                    float pl = cfg->lights_share * pt__light_pmf(s, prev_p, prev_n, (uint32_t)prim->light, pt__lights_mode(cfg)) *
-                               pt__light_prim_value_at(s, prim, prev_p, ray.dir, t, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS));
-                    w = pt__power_heuristic(prev_pdf, pl);
-                }
+                w = pt__emission_weight(s, cfg, prim, prev_pdf, prev_p, prev_n, ray.dir, t);
             }
             if (w > 0.0f) {
                 pt_color e = pt_scale(pt_mul(beta, m->emission), w);
@@ -9598,22 +10051,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         if (depth >= cfg->max_depth || !m->scatters) break;
 
         beta_in = beta;
-        v.m = m;
-        v.p = h.point;
-        v.wo = pt_neg(ray.dir);
-        v.ng = h.front_face ? h.geometric_normal : pt_neg(h.geometric_normal);
-        v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
-        if (m->texture || PT__SKIP(cfg, PT_SKIP_NO_TEXTURES)) {
-            v.albedo = pt__albedo(s, m, prim, bary, &h);
-        } else { /* general path: an untextured material looked up as a constant texture */
-            pt__texture ct;
-            memset(&ct, 0, sizeof ct);
-            ct.even = ct.odd = m->albedo;
-            ct.inv_scale = 1.0f;
-            v.albedo = pt__checker(&ct, h.point);
-        }
-
-        pt__vertex_spawn(&v, &h);
+        pt__vertex_at(s, cfg, &v, prim, m, &h, ray.dir, bary);
         if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
             /* general path: next-event estimation as at any vertex; a delta material reflects
                nothing toward the sampled point (pt__material_eval is zero), so this adds nothing */
@@ -9746,6 +10184,236 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
     return L;
 }
 
+/* --- The batched integrator (pt_render_desc.integrator = PT_INTEGRATOR_BATCHED). The paths of up
+   to PT__BATCH camera samples of a tile advance together, a bounce at a time, in stages over the
+   batch: (1) the closest hits of every live path's ray; (2) for each path the emission its ray
+   found, its next vertex and, with next-event estimation, the light sample and its shadow ray;
+   (3) the batch's shadow rays; (4) for each path its light sample's contribution, the delta
+   lights, splitting and the continuation (scattered direction, roulette); paths that ended leave
+   the live list, which stays in sample order. Each stage calls what pt__trace_from calls, in
+   the same order for each path, and a path keeps its own sampler, so every path draws the same
+   numbers, does the same float operations and adds up its radiance in the same order as the
+   scalar integrator: the image is the same bit for bit (tests/test_render.c, "batched"). A
+   split's extra copies (pt__split_copies: rare with the defaults) run depth first within stage
+   4 as in the scalar integrator. A guide's training iterations (cfg->recording) run scalar. */
+#define PT__BATCH 64
+
+typedef struct pt__lane {
+    pt__sampler smp;
+    pt__splits sp;
+    pt__vertex v;
+    pt_path_stats st;
+    pt_ray ray;
+    pt__rayctx rc; /* the ray's, for its closest hit */
+    pt_color beta, beta_in, L;
+    pt_vec3 prev_p, prev_n;
+    float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
+    int depth, prev_delta, found, shadow;
+    uint32_t pi, li, pix, index_k;
+    float t, bary[3];
+    pt_hit h;
+    pt__light_sample ls;
+    pt__nee_ray nr;
+} pt__lane;
+
+/* What every stage of a batch needs: pt__trace_from's per-path constants. */
+typedef struct pt__batch_ctx {
+    const pt_scene *s;
+    const pt__settings *cfg;
+    int tri, any_lights, nee, pick;
+} pt__batch_ctx;
+
+/* A camera sample's path at its start (pt__trace): throughput k = indirect_paths, no scattering. */
+static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
+{
+    const float k = (float)cfg->indirect_paths;
+    l->sp.left = cfg->max_splits;
+    l->sp.first = cfg->indirect_paths;
+    l->sp.rr_ref = 0.0f;
+    memset(&l->st, 0, sizeof l->st);
+    l->st.camera_rays++;
+    l->ray = ray;
+    l->k = k;
+    l->beta = pt_v3(k, k, k);
+    l->L = pt_v3(0, 0, 0);
+    l->depth = 0;
+    l->prev_delta = 1;
+    l->prev_pdf = 0.0f;
+    l->prev_p = ray.origin;
+    l->prev_n = pt_v3(0.0f, 0.0f, 0.0f);
+    l->v.has_guide = 0;
+    l->v.g = 0.0f;
+    l->v.rr_e = l->v.rr_ref = 0.0f;
+}
+
+/* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
+static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
+{
+    const pt_scene *s = b->s;
+    const pt__settings *cfg = b->cfg;
+    const pt__prim *prim;
+    const pt__material *m;
+    pt__vertex *v = &l->v;
+    l->shadow = 0;
+    if (!l->found) {
+        if (PT__UNLIKELY(cfg->env_on)) l->L = pt_add(l->L, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf));
+        else l->L = pt_add(l->L, pt_mul(l->beta, cfg->background));
+        return 0;
+    }
+    prim = &s->prims[l->pi];
+    m = &s->mats[prim->material];
+    pt__fill_hit(s, prim, l->ray, l->t, l->bary, &l->h);
+    if (m->emits && (m->two_sided || l->h.front_face)) {
+        float w = l->prev_delta ? 1.0f : pt__emission_weight(s, cfg, prim, l->prev_pdf, l->prev_p, l->prev_n, l->ray.dir, l->t);
+        if (w > 0.0f) l->L = pt_add(l->L, pt_scale(pt_mul(l->beta, m->emission), w));
+    }
+    if (l->depth >= cfg->max_depth || !m->scatters) return 0;
+    l->beta_in = l->beta;
+    pt__vertex_at(s, cfg, v, prim, m, &l->h, l->ray.dir, l->bary);
+    if (m->delta && b->nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) { /* (the general path of pt__trace_from) */
+        pt__light_sample ls;
+        uint32_t li;
+        float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
+        pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
+        if (pt__lights_sample_all(s, cfg, v->o, pt_v3(0.0f, 0.0f, 0.0f), u0, u1, u2, &ls, &li))
+            l->L = pt_add(l->L, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st));
+    }
+    if (!m->delta) {
+        v->has_guide = 0;
+        v->rr_e = 0.0f;
+        if (cfg->guide) {
+            pt_shading_point sp;
+            sp.position = pt__to_world(s, v->p);
+            sp.normal = v->ns;
+            sp.wo = v->wo;
+            sp.material = prim->material;
+            sp.depth = l->depth;
+            v->g = cfg->guide_weight;
+            v->has_guide = cfg->guide(cfg->guide_user, &sp, &v->guide) ? 1 : 0;
+        } else if (cfg->learned) {
+            pt__vertex_learned(cfg, v, l->depth, &l->st);
+        }
+        if (b->nee) {
+            float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
+            pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
+            l->shadow = pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
+                        pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+        }
+    }
+    return 1;
+}
+
+/* Stage 4 for one path after its shadow ray (l->shadow: 2 if occluded): returns 0 if it ends. */
+static PT__HOT int pt__lane_continue(const pt__batch_ctx *b, pt__lane *l)
+{
+    const pt_scene *s = b->s;
+    const pt__settings *cfg = b->cfg;
+    pt__vertex *v = &l->v;
+    pt_color Lc = pt_v3(0, 0, 0);
+    int k, go;
+    if (!v->m->delta) {
+        if (l->shadow == 1) l->L = pt_add(l->L, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f));
+        if (PT__UNLIKELY(s->dlight_count != 0))
+            l->L = pt_add(l->L, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st));
+        if (v->rr_e > 0.0f && !(l->sp.rr_ref > 0.0f))
+            l->sp.rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
+        v->rr_ref = l->sp.rr_ref;
+        if ((l->sp.first > 1 || PT__UNLIKELY(l->beta_in.x >= PT__SPLIT_BETA || l->beta_in.y >= PT__SPLIT_BETA ||
+                                             l->beta_in.z >= PT__SPLIT_BETA)) &&
+            (k = pt__split_count(l->beta_in, &l->sp)) > 1) {
+            l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
+            l->L = pt_add(l->L, pt__split_copies(s, cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights, b->pick,
+                                                 l->prev_delta, l->prev_pdf, &l->st, &l->sp));
+        }
+    }
+    go = pt__continue(s, cfg, v, &l->h, l->depth, l->beta_in, &l->smp, b->any_lights, b->pick, &l->ray, &l->beta,
+                      &l->prev_pdf, &l->prev_delta, &Lc, &l->st);
+    l->L = pt_add(l->L, Lc);
+    if (!go) return 0;
+    l->prev_p = v->o;
+    l->prev_n = pt__receiver_normal(v);
+    l->st.bounce_rays++;
+    l->depth++;
+    return 1;
+}
+
+/* Stage 1: the closest hits of the live paths' rays, in a small scene 8 at a time with AVX2 or 4
+   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), else one at a time. */
+static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *live,
+                                      int nlive, int tri)
+{
+    int i, j;
+    for (i = 0; i < nlive; ++i) pt__rayctx_init2(&lanes[live[i]].rc, lanes[live[i]].ray, tri);
+#ifdef PT__SSE
+    if (pk->n > 0) {
+        int w = 4;
+#ifdef PT__WIDE
+        if (s->simd >= PT_SIMD_AVX2) w = 8;
+#endif
+        for (i = 0; i < nlive; i += w) {
+            const pt__rayctx *rc[8];
+            int m = nlive - i < w ? nlive - i : w, found[8];
+            uint32_t prim[8];
+            float t[8];
+            for (j = 0; j < m; ++j) rc[j] = &lanes[live[i + j]].rc;
+#ifdef PT__WIDE
+            if (w == 8) pt__packet_closest8(s, pk, rc, m, found, prim, t);
+            else
+#endif
+                pt__packet_closest4(s, pk, rc, m, found, prim, t);
+            for (j = 0; j < m; ++j) {
+                pt__lane *l = &lanes[live[i + j]];
+                l->found = found[j];
+                l->pi = prim[j];
+                l->t = t[j];
+                l->bary[0] = l->bary[1] = l->bary[2] = 0.0f;
+            }
+        }
+        return;
+    }
+#else
+    (void)pk; (void)j;
+#endif
+    for (i = 0; i < nlive; ++i) {
+        pt__lane *l = &lanes[live[i]];
+        l->found = pt__scene_closest(s, &l->rc, PT__INF, &l->pi, &l->t, l->bary);
+    }
+}
+
+/* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
+   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). */
+static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes, int n)
+{
+    int live[PT__BATCH], shade[PT__BATCH], nlive = n, nshade, i;
+    pt__batch_ctx b;
+    b.s = s;
+    b.cfg = cfg;
+    b.tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    b.any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
+    b.nee = b.any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
+    b.pick = s->light_count != 1 || cfg->env_pick > 0.0f;
+    for (i = 0; i < n; ++i) live[i] = i;
+    while (nlive > 0) {
+        pt__batch_closest(s, pk, lanes, live, nlive, b.tri); /* (1) closest hits */
+        for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
+            if (pt__lane_shade(&b, &lanes[live[i]])) shade[nshade++] = live[i];
+        for (i = 0; i < nshade; ++i) { /* (3) shadow rays */
+            pt__lane *l = &lanes[shade[i]];
+            if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
+        }
+        for (i = 0, nlive = 0; i < nshade; ++i) /* (4) contributions, continuation */
+            if (pt__lane_continue(&b, &lanes[shade[i]])) live[nlive++] = shade[i];
+    }
+    for (i = 0; i < n; ++i) {
+        pt__lane *l = &lanes[i];
+        l->L = pt_scale(l->L, 1.0f / l->k);
+        if (!pt__vfinite(l->L)) {
+            l->st.nonfinite_samples++;
+            l->L = pt_v3(0, 0, 0);
+        }
+    }
+}
+
 /* ------------------------------------------------------------------------------------------
    8. Rendering: the image is cut into tiles; each pass adds samples_per_pass samples to every
    pixel of every tile. Tiles are handed out by a pthreads pool (or the host's parallel-for).
@@ -9849,6 +10517,7 @@ typedef struct pt__pass {
                                    next sample index (film holds this part's samples only); NULL: the
                                    film's own count */
     uint32_t parts, part;       /* split render: this part's samples are k with (pixel + k) % parts == part */
+    int batched;                /* the batched integrator runs the jobs (pt__render_job_batched) */
     pt_path_stats *tile_stats;  /* one per tile */
     uint64_t *tile_samples;     /* one per tile */
     unsigned char *tile_done;   /* one per tile */
@@ -9858,37 +10527,151 @@ typedef struct pt__pass {
 #endif
 } pt__pass;
 
+/* The pixels of job `index`: rows y0 .. y1 - 1 of columns x0 .. x1 - 1, the first row from xa and
+   the last up to xb (a tile: xa = x0, xb = x1; an adaptive chunk: a run of pixels in raster order). */
+typedef struct pt__job_pixels {
+    int x0, y0, x1, y1, xa, xb;
+} pt__job_pixels;
+static void pt__job_range(const pt__pass *ps, int index, pt__job_pixels *r)
+{
+    const pt_film *film = ps->film;
+    int tx = index % ps->tiles_x, ty = index / ps->tiles_x;
+    r->x0 = tx * ps->tile_size;
+    r->y0 = ty * ps->tile_size;
+    /* x0 < width and y0 < height: the tile's far edge without int overflow */
+    r->x1 = ps->tile_size < film->width - r->x0 ? r->x0 + ps->tile_size : film->width;
+    r->y1 = ps->tile_size < film->height - r->y0 ? r->y0 + ps->tile_size : film->height;
+    if (ps->chunk_first) { /* adaptive: job = the pixels chunk_first[index] .. chunk_first[index + 1] - 1 */
+        uint32_t p0 = ps->chunk_first[index], p1 = ps->chunk_first[index + 1], w = (uint32_t)film->width;
+        r->y0 = (int)(p0 / w);
+        r->y1 = p1 > p0 ? (int)((p1 - 1u) / w) + 1 : r->y0;
+        r->xa = (int)(p0 % w);
+        r->xb = p1 > p0 ? (int)((p1 - 1u) % w) + 1 : r->xa;
+        r->x0 = 0;
+        r->x1 = film->width;
+    } else {
+        r->xa = r->x0;
+        r->xb = r->x1;
+    }
+}
+
+/* Sample index_k of pixel (x, y): its sampler and camera ray. */
+static pt_ray pt__camera_sample(const pt__pass *ps, pt__sampler *smp, int x, int y, uint32_t pix, uint32_t index_k,
+                                uint64_t pixel_key, pt__sobol_cache *cache)
+{
+    float jx, jy, l1, l2;
+    pt__sampler_init(smp, ps->cfg->sampler, ps->seed, pix, index_k, pixel_key, cache);
+    pt__draw2(smp, PT__SET_PIXEL, &jx, &jy);
+    if (smp->sobol && !(ps->cam->lens_radius > 0.0f)) l1 = l2 = 0.5f; /* pinhole: unused */
+    else pt__draw2(smp, PT__SET_LENS, &l1, &l2);
+    return pt__camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
+}
+
+static void pt__stats_sum(pt_path_stats *t, const pt_path_stats *a)
+{
+    t->camera_rays += a->camera_rays;
+    t->bounce_rays += a->bounce_rays;
+    t->shadow_rays += a->shadow_rays;
+    t->nonfinite_samples += a->nonfinite_samples;
+    t->split_paths += a->split_paths;
+    t->guided_vertices += a->guided_vertices;
+}
+
+/* The batched integrator's job: the job's samples, in the scalar job's order, PT__BATCH at a
+   time through pt__batch_run; each sample then goes to its pixel (the film's sums do not depend
+   on the order they are added in) and its rays to the pixel's count. Returns 0 (nothing done)
+   when the lanes cannot be allocated: the caller then runs the job scalar. */
+static int pt__render_job_batched(pt__pass *ps, int index)
+{
+    pt_film *film = ps->film;
+    pt__job_pixels r;
+    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * PT__BATCH);
+    pt__sobol_cache *cache = (pt__sobol_cache *)PT_MALLOC(sizeof(pt__sobol_cache));
+    pt__packet_scene *pk = (pt__packet_scene *)PT_MALLOC(sizeof(pt__packet_scene));
+    pt_path_stats st;
+    uint64_t taken = 0;
+    int x, y, k, n = 0, i;
+    const int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
+    if (!lanes || !cache || !pk) {
+        PT_FREE(lanes);
+        PT_FREE(cache);
+        PT_FREE(pk);
+        return 0;
+    }
+    pt__packet_init(ps->scene, pk);
+    memset(&st, 0, sizeof st);
+    if (sobol) pt__sobol_cache_init(cache);
+    pt__job_range(ps, index, &r);
+    for (y = r.y0; y < r.y1; ++y) {
+        for (x = y == r.y0 ? r.xa : r.x0; x < (y == r.y1 - 1 ? r.xb : r.x1); ++x) {
+            uint32_t pix = (uint32_t)y * (uint32_t)film->width + (uint32_t)x;
+            uint32_t base = ps->whole ? ps->whole[pix] : film->count[pix];
+            uint32_t count = ps->pixel_spp ? ps->pixel_spp[pix] : (uint32_t)ps->spp, mine = 0;
+            uint64_t pixel_key;
+            if (count == 0) continue;
+            pixel_key = sobol ? pt__sobol_pixel_key(ps->seed, pix) : 0u;
+            for (k = 0; k < (int)count; ++k) {
+                uint32_t index_k = base + (uint32_t)k;
+                pt__lane *l = &lanes[n];
+                if (ps->parts > 1u && ((uint64_t)pix + index_k) % ps->parts != ps->part) continue;
+                mine++;
+                l->pix = pix;
+                l->index_k = index_k;
+                pt__lane_start(l, ps->cfg, pt__camera_sample(ps, &l->smp, x, y, pix, index_k, pixel_key, cache));
+                if (++n < PT__BATCH) continue;
+                pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+                for (i = 0; i < n; ++i) {
+                    pt__lane *d = &lanes[i];
+                    uint32_t p = d->pix;
+                    pt__film_sample(film->sum + 3u * p, film->sum_sq + 3u * p, film->sum_odd + 3u * p, film->low + 9u * p,
+                                    d->index_k, d->L);
+                    if (ps->pixel_rays)
+                        ps->pixel_rays[p] += (double)(d->st.camera_rays + d->st.bounce_rays + d->st.shadow_rays);
+                    pt__stats_sum(&st, &d->st);
+                }
+                n = 0;
+            }
+            film->count[pix] += mine; /* (read by no path: the samples in flight keep their index_k) */
+            if (ps->whole) ps->whole[pix] = base + count;
+            taken += mine;
+        }
+    }
+    pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+    for (i = 0; i < n; ++i) {
+        pt__lane *d = &lanes[i];
+        uint32_t p = d->pix;
+        pt__film_sample(film->sum + 3u * p, film->sum_sq + 3u * p, film->sum_odd + 3u * p, film->low + 9u * p, d->index_k,
+                        d->L);
+        if (ps->pixel_rays) ps->pixel_rays[p] += (double)(d->st.camera_rays + d->st.bounce_rays + d->st.shadow_rays);
+        pt__stats_sum(&st, &d->st);
+    }
+    PT_FREE(lanes);
+    PT_FREE(cache);
+    PT_FREE(pk);
+    ps->tile_stats[index] = st;
+    ps->tile_samples[index] = taken;
+    ps->tile_done[index] = 2; /* (2: done by the batched integrator) */
+    return 1;
+}
+
 static void pt__render_tile(void *data, int job)
 {
     pt__pass *ps = (pt__pass *)data;
     pt_film *film = ps->film;
     int index = ps->jobs[job];
-    int tx = index % ps->tiles_x, ty = index / ps->tiles_x;
-    int x0 = tx * ps->tile_size, y0 = ty * ps->tile_size;
-    /* x0 < width and y0 < height: the tile's far edge without int overflow */
-    int x1 = ps->tile_size < film->width - x0 ? x0 + ps->tile_size : film->width;
-    int y1 = ps->tile_size < film->height - y0 ? y0 + ps->tile_size : film->height, x, y, k, xa, xb;
+    int x, y, k;
+    pt__job_pixels r;
     uint64_t taken = 0;
     pt_path_stats st;
     pt__sobol_cache cache;
     int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
     if (ps->cancel && *ps->cancel) return;
+    if (ps->batched && pt__render_job_batched(ps, index)) return;
     memset(&st, 0, sizeof st);
     if (sobol) pt__sobol_cache_init(&cache);
-    if (ps->chunk_first) { /* adaptive: job = the pixels chunk_first[index] .. chunk_first[index + 1] - 1 */
-        uint32_t p0 = ps->chunk_first[index], p1 = ps->chunk_first[index + 1], w = (uint32_t)film->width;
-        y0 = (int)(p0 / w);
-        y1 = p1 > p0 ? (int)((p1 - 1u) / w) + 1 : y0;
-        xa = (int)(p0 % w);
-        xb = p1 > p0 ? (int)((p1 - 1u) % w) + 1 : xa;
-        x0 = 0;
-        x1 = film->width;
-    } else {
-        xa = x0;
-        xb = x1;
-    }
-    for (y = y0; y < y1; ++y) {
-        for (x = y == y0 ? xa : x0; x < (y == y1 - 1 ? xb : x1); ++x) {
+    pt__job_range(ps, index, &r);
+    for (y = r.y0; y < r.y1; ++y) {
+        for (x = y == r.y0 ? r.xa : r.x0; x < (y == r.y1 - 1 ? r.xb : r.x1); ++x) {
             uint32_t pix = (uint32_t)y * (uint32_t)film->width + (uint32_t)x;
             uint32_t base = ps->whole ? ps->whole[pix] : film->count[pix];
             uint32_t n = ps->pixel_spp ? ps->pixel_spp[pix] : (uint32_t)ps->spp, mine = 0;
@@ -9901,17 +10684,12 @@ static void pt__render_tile(void *data, int job)
             for (k = 0; k < (int)n; ++k) {
                 uint32_t index_k = base + (uint32_t)k;
                 pt__sampler smp;
-                float jx, jy, l1, l2;
-                pt_ray r;
+                pt_ray ray;
                 pt_color L;
                 if (ps->parts > 1u && ((uint64_t)pix + index_k) % ps->parts != ps->part) continue;
                 mine++;
-                pt__sampler_init(&smp, ps->cfg->sampler, ps->seed, pix, index_k, pixel_key, &cache);
-                pt__draw2(&smp, PT__SET_PIXEL, &jx, &jy);
-                if (smp.sobol && !(ps->cam->lens_radius > 0.0f)) l1 = l2 = 0.5f; /* pinhole: unused */
-                else pt__draw2(&smp, PT__SET_LENS, &l1, &l2);
-                r = pt__camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
-                L = pt__sample(ps->scene, ps->cfg, r, &smp, &st);
+                ray = pt__camera_sample(ps, &smp, x, y, pix, index_k, pixel_key, &cache);
+                L = pt__sample(ps->scene, ps->cfg, ray, &smp, &st);
                 pt__film_sample(sum, sq, odd, lo, index_k, L);
             }
             film->count[pix] += mine;
@@ -10596,6 +11374,7 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
 #endif
     ps->scene = s;
     ps->cfg = cfg;
+    ps->batched = cfg->batched && !cfg->recording; /* (a guide's training runs scalar: section 7) */
     ps->cam = cam;
     ps->film = film;
     ps->seed = d->seed;
@@ -10657,6 +11436,7 @@ static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_des
             r->total.split_paths += ts->split_paths;
             r->total.guided_vertices += ts->guided_vertices;
             r->done += ps->tile_samples[r->job_list[j]];
+            if (ps->tile_done[r->job_list[j]] == 2) r->total.batched_samples += ps->tile_samples[r->job_list[j]];
         }
         r->added += (uint32_t)ps->spp;
         r->total.passes = pass + 1;
@@ -11102,6 +11882,7 @@ static void pt__stats_add(pt_render_stats *t, const pt_render_stats *a)
     t->nonfinite_samples += a->nonfinite_samples;
     t->split_paths += a->split_paths;
     t->guided_vertices += a->guided_vertices;
+    t->batched_samples += a->batched_samples;
 }
 
 /* The per-pixel sums of the samples one training iteration added to the film: the film after it

@@ -39,6 +39,8 @@
      strategy mis|material|light|mixture
      sampler independent|sobol        where random numbers come from (default independent;
                                       sobol: scrambled Sobol points, pdftrace.h section 2)
+     integrator scalar|batched        how paths are traced (batched: a tile's paths a bounce at
+                                      a time, the same image; default: pt_integrator)
      indirect_paths N                 paths each camera sample continues as from its first
                                       non-delta vertex (1..8; default 3 with sobol, else 1)
      seed N                           random seed (default 0)
@@ -277,6 +279,7 @@ typedef struct pt_scenefile {
     int width, height, samples_per_pixel, max_depth;
     pt_strategy strategy;
     pt_sampler sampler;
+    pt_integrator integrator;    /* `integrator`; 0: pt_render_desc's default */
     int indirect_paths;          /* 0: pt_render_desc's default */
     pt_guiding guiding;          /* `guiding`; without one the loader's default (PT_GUIDING_OFF) */
     float guiding_budget;        /* `guiding_budget`, in (0, 1); 0: pt_render_desc's default */
@@ -1499,7 +1502,7 @@ static int pt__sf_int_setting(pt__sf_parser *p, const char *kw)
     return PT_OK;
 }
 
-/* strategy, pov_radiosity, sampler: one of a few names. */
+/* strategy, pov_radiosity, sampler, integrator: one of a few names. */
 static int pt__sf_choice(pt__sf_parser *p, const char *kw)
 {
     pt_scenefile *d = p->d;
@@ -1522,6 +1525,13 @@ static int pt__sf_choice(pt__sf_parser *p, const char *kw)
         else if (t && !strcmp(t, "sobol")) d->sampler = PT_SAMPLER_SOBOL;
         else
             return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "sampler: expected independent or sobol, got '%s'",
+                               t ? t : "nothing");
+    } else if (!strcmp(kw, "integrator")) {
+        const char *t = pt__sf_next(p);
+        if (t && !strcmp(t, "scalar")) d->integrator = PT_INTEGRATOR_SCALAR;
+        else if (t && !strcmp(t, "batched")) d->integrator = PT_INTEGRATOR_BATCHED;
+        else
+            return pt__sf_fail(p, PT_ERROR_INVALID_ARGUMENT, "integrator: expected scalar or batched, got '%s'",
                                t ? t : "nothing");
     }
     return PT_OK;
@@ -2169,7 +2179,8 @@ static int pt__sf_statement(pt__sf_parser *p)
     if (!strcmp(kw, "size") || !strcmp(kw, "spp") || !strcmp(kw, "max_depth") || !strcmp(kw, "indirect_paths") ||
         !strcmp(kw, "seed") || !strcmp(kw, "pov_light_grid")) {
         if ((rc = pt__sf_int_setting(p, kw)) != PT_OK) return rc;
-    } else if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity") || !strcmp(kw, "sampler")) {
+    } else if (!strcmp(kw, "strategy") || !strcmp(kw, "pov_radiosity") || !strcmp(kw, "sampler") ||
+               !strcmp(kw, "integrator")) {
         if ((rc = pt__sf_choice(p, kw)) != PT_OK) return rc;
     } else if (!strcmp(kw, "guiding") || !strcmp(kw, "guiding_budget") || !strcmp(kw, "guiding_alpha") ||
                !strcmp(kw, "guiding_memory")) {
@@ -2493,6 +2504,7 @@ done:
     r->max_depth = d->max_depth;
     r->strategy = d->strategy;
     r->sampler = d->sampler;
+    r->integrator = d->integrator;
     r->indirect_paths = d->indirect_paths;
     r->guiding = d->guiding;
     r->guiding_budget = d->guiding_budget;

@@ -13,6 +13,7 @@
    1e-4 relative first, see tu_z_floor) (the false-failure rate of each test is at most 0.01; the file has
    RENDER_STAT_FAMILIES such tests, so at most ~5% for the file if all were independent). */
 #include "test_util.h"
+#include "pdftrace_scene.h"
 
 #ifndef PDFTRACE_NO_THREADS
 #include <pthread.h>
@@ -1039,9 +1040,111 @@ done:
     pt_scene_destroy(s);
 }
 
+
+/* The batched integrator (pt_render_desc.integrator) renders the same film as the scalar one, bit
+   for bit, over scene files that between them hold every feature the integrator branches on (glass
+   and a diffuse ball, an environment map, delta lights, textures, a rough dielectric, triangles,
+   many lights, a guide's scene), under every strategy, both samplers, indirect paths, splitting
+   (mixture with light weight 0.75), adaptive sampling and guiding; the stats say which integrator
+   ran (a guide's training runs scalar) and which the default picks, and a bad value is refused
+   naming the field. */
+static void batched_bit_identical(test_ctx *t)
+{
+    static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
+                                          "scenes/lights.scene", "scenes/textured.scene", "scenes/rough-glass.scene",
+                                          "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene" };
+    static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
+                                           "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol" };
+    const int nscenes = (int)(sizeof scenes / sizeof scenes[0]), nconfigs = (int)(sizeof configs / sizeof configs[0]);
+    int i, c, renders = 0, split = 0;
+    char err[512];
+    for (i = 0; i < nscenes; ++i) {
+        pt_scenefile sf;
+        pt_scene *s = NULL;
+        pt_render_desc base;
+        if (!CHECK(t, pt_scenefile_load(scenes[i], &sf, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) continue;
+        if (!CHECK(t, pt_scenefile_build(&sf, &s, &base, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) {
+            pt_scenefile_free(&sf);
+            continue;
+        }
+        pt_scenefile_free(&sf);
+        base.width = 14;
+        base.height = 10;
+        base.samples_per_pixel = 8;
+        base.threads = 2;
+        base.seed = 77;
+        for (c = 0; c < nconfigs; ++c) {
+            pt_render_desc d = base, e;
+            pt_film a, b;
+            pt_render_stats sa, sb;
+            d.strategy = c == 1 ? PT_STRATEGY_MATERIAL : c == 2 ? PT_STRATEGY_LIGHT : c == 3 || c == 5 ? PT_STRATEGY_MIXTURE
+                                                                                                        : PT_STRATEGY_MIS;
+            if (c == 4 || c == 5 || c == 8) d.sampler = PT_SAMPLER_SOBOL;
+            if (c == 5) d.light_weight = 0.75f;
+            if (c == 6) d.indirect_paths = 4;
+            if (c == 7) { d.adaptive_threshold = 0.2f; d.samples_per_pixel = 12; d.adaptive_min_spp = 4; }
+            if (c == 8) { d.guiding = PT_GUIDING_ON; d.samples_per_pixel = 16; }
+            d.integrator = PT_INTEGRATOR_SCALAR;
+            e = d;
+            e.integrator = PT_INTEGRATOR_BATCHED;
+            e.threads = 1;
+            if (tu_render_into(t, s, &d, &a, &sa, "scalar") && tu_render_into(t, s, &e, &b, &sb, "batched")) {
+                CHECK(t, tu_film_equal(&a, &b), "%s, %s: the batched film differs from the scalar one", scenes[i],
+                      configs[c]);
+                CHECK(t, sa.batched_samples == 0, "%s, %s: scalar render reports %llu batched samples", scenes[i],
+                      configs[c], (unsigned long long)sa.batched_samples);
+                CHECK(t, sb.batched_samples == sb.samples - sb.guiding_samples && sb.batched_samples > 0,
+                      "%s, %s: batched_samples %llu of %llu (training %llu)", scenes[i], configs[c],
+                      (unsigned long long)sb.batched_samples, (unsigned long long)sb.samples,
+                      (unsigned long long)sb.guiding_samples);
+                CHECK(t, sa.camera_rays == sb.camera_rays && sa.bounce_rays == sb.bounce_rays &&
+                             sa.shadow_rays == sb.shadow_rays && sa.split_paths == sb.split_paths &&
+                             sa.guided_vertices == sb.guided_vertices,
+                      "%s, %s: ray counts differ", scenes[i], configs[c]);
+                split += sb.split_paths > 0;
+                renders += 2;
+                if (c == 0 && (i == 0 || i == 6)) { /* the default: batched in a small scene (the Cornell box) with
+                                                        AVX2, scalar for triangles (mesh.scene) */
+                    pt_film f;
+                    pt_render_stats sd;
+                    int want = i == 0 && pt_simd_get_level() >= PT_SIMD_AVX2;
+                    d.integrator = PT_INTEGRATOR_DEFAULT;
+                    if (tu_render_into(t, s, &d, &f, &sd, "default")) {
+                        CHECK(t, tu_film_equal(&a, &f), "%s: the default integrator's film differs", scenes[i]);
+                        CHECK(t, sd.batched_samples == (want ? sd.samples : 0u), "%s: default ran %s, want %s", scenes[i],
+                              sd.batched_samples ? "batched" : "scalar", want ? "batched" : "scalar");
+                    }
+                    pt_film_free(&f);
+                }
+            }
+            pt_film_free(&a);
+            pt_film_free(&b);
+        }
+        pt_scene_destroy(s);
+    }
+    CHECK(t, split > 0, "no configuration split a path: the splitting branch went untested");
+    {   /* a bad value names the field */
+        pt_render_desc d = tu_base_desc(4, 4, 1, 1);
+        pt_scene *s = cornell(0, &d);
+        pt_film f;
+        pt_render_stats st;
+        if (CHECK(t, s != NULL, "Cornell scene")) {
+            d.integrator = (pt_integrator)3;
+            if (pt_film_init(&f, 4, 4) == PT_OK) {
+                CHECK(t, pt_render(s, &d, &f, &st) == PT_ERROR_INVALID_ARGUMENT && strstr(st.error, "pt_render_desc.integrator = 3"),
+                      "integrator 3: '%s'", st.error);
+                pt_film_free(&f);
+            }
+            pt_scene_destroy(s);
+        }
+    }
+    test_note(t, "%d renders of %d scenes x %d settings: batched = scalar bit for bit", renders, nscenes, nconfigs);
+}
+
 const test_case test_render_cases[] = {
     TEST_CASE(camera_conventions),
     TEST_CASE(threads_bit_identical),
+    TEST_CASE(batched_bit_identical),
     TEST_CASE(progressive_equals_single),
     TEST_CASE(cancellation_and_progress),
     TEST_CASE(render_image_matches_film),

@@ -244,6 +244,36 @@ static int parse_text(const char *text, const char *base_dir, pt_scenefile *sf, 
 }
 #define T_HEAD "camera look_from 0 0 -5 look_at 0 0 0\nmaterial m lambertian 0.5 0.5 0.5\n"
 
+/* `integrator scalar|batched` reaches pt_render_desc.integrator through pt_scenefile_build; any
+   other word, or none, is a file:line error. */
+static void integrator_statement(test_ctx *t)
+{
+    static const char *const bad[] = {"integrator fast\n", "integrator\n", "integrator batched extra\n"};
+    char text[512], err[512];
+    pt_scenefile sf;
+    pt_scene *s = NULL;
+    pt_render_desc rd;
+    size_t i;
+    int k;
+    for (k = 0; k < 2; ++k) {
+        snprintf(text, sizeof text, T_HEAD "integrator %s\nsphere 0 0 0 1 m\n", k ? "batched" : "scalar");
+        if (!CHECK(t, parse_text(text, NULL, &sf, err, sizeof err) == PT_OK, "parse: %s", err)) continue;
+        if (CHECK(t, pt_scenefile_build(&sf, &s, &rd, err, sizeof err) == PT_OK, "build: %s", err)) {
+            CHECK(t, rd.integrator == (k ? PT_INTEGRATOR_BATCHED : PT_INTEGRATOR_SCALAR), "integrator %d, want %d",
+                  (int)rd.integrator, k ? 2 : 1);
+            pt_scene_destroy(s);
+        }
+        pt_scenefile_free(&sf);
+    }
+    for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        snprintf(text, sizeof text, T_HEAD "%s", bad[i]);
+        k = parse_text(text, NULL, &sf, err, sizeof err);
+        CHECK(t, k != PT_OK && strncmp(err, "t.scene:3:", 10) == 0 && strstr(err, "integrator"), "'%s': %d '%s'", bad[i],
+              k, err);
+        if (k == PT_OK) pt_scenefile_free(&sf);
+    }
+}
+
 /* A bad background is a file:line error at load (its code was overwritten by the end-of-line check). */
 static void background_errors_at_load(test_ctx *t)
 {
@@ -1076,6 +1106,7 @@ const test_case test_scenefile_cases[] = {
     TEST_CASE(add_obj_errors),
     TEST_CASE(camera_depth_of_field),
     TEST_CASE(camera_depth_of_field_errors),
+    TEST_CASE(integrator_statement),
     TEST_CASE(background_errors_at_load),
     TEST_CASE(byte_order_mark),
     TEST_CASE(messages_escape_bytes),

@@ -56,7 +56,7 @@ typedef struct output {
 /* The render settings a scene file has; set on the command line, they replace the file's. */
 enum { GIVEN_WIDTH = 1, GIVEN_HEIGHT = 2, GIVEN_SPP = 4, GIVEN_STRATEGY = 8, GIVEN_SAMPLER = 16,
        GIVEN_SEED = 32, GIVEN_DEPTH = 64, GIVEN_INDIRECT = 128, GIVEN_GUIDING = 256, GIVEN_GUIDING_BUDGET = 512,
-       GIVEN_GUIDING_ALPHA = 1024, GIVEN_GUIDING_MEMORY = 2048 };
+       GIVEN_GUIDING_ALPHA = 1024, GIVEN_GUIDING_MEMORY = 2048, GIVEN_INTEGRATOR = 4096 };
 
 #define GUIDE_IMAGE_HEIGHT 256 /* --guide-at: a 512 x 256 latitude-longitude picture */
 
@@ -160,7 +160,7 @@ static void print_help(void)
            "      --max-depth N      scattering events per path (1: direct light only)\n"
            "      --indirect-paths N paths each camera sample continues as, 1..8\n"
            "      --light-weight W   light PDF weight of the mixture strategy, in (0, 1] (0.5)\n"
-           "      --backend B        auto | builtin | embree: ray traversal (auto)\n"
+           "      --backend B        auto | builtin | embree (auto); --integrator scalar | batched (auto)\n"
            "      --guiding G        off | on | auto: path guiding (auto: only where training pays)\n"
            "      --guiding-budget F, --guiding-alpha F  in (0, 1): training's share of spp (0.25),\n"
            "                         the material's in the guided mixture (0.7); --guiding-memory MIB (64)\n"
@@ -342,7 +342,7 @@ typedef enum opt_id {
     O_OUTPUT, O_WIDTH, O_HEIGHT, O_SIZE, O_SPP, O_STRATEGY, O_SAMPLER, O_SEED, O_MAX_DEPTH, O_INDIRECT,
     O_LIGHT_WEIGHT, O_THREADS, O_BACKEND, O_ADAPTIVE, O_ADAPTIVE_MIN, O_ADAPTIVE_CHECK, O_ADAPTIVE_NB, O_ADAPTIVE_MODE,
     O_SKIPS, O_EXPOSURE, O_TONEMAP, O_PREVIEW, O_POV, O_MITSUBA, O_QUIET, O_HELP, O_VERSION, O_ALLOW_PATH,
-    O_MESH_MEMORY, O_IMAGE_MEMORY, O_GUIDING, O_GUIDING_BUDGET, O_GUIDING_ALPHA, O_GUIDING_MEMORY, O_GUIDE_AT
+    O_MESH_MEMORY, O_IMAGE_MEMORY, O_GUIDING, O_GUIDING_BUDGET, O_GUIDING_ALPHA, O_GUIDING_MEMORY, O_GUIDE_AT, O_INTEGRATOR
 } opt_id;
 
 static const struct option_def {
@@ -368,7 +368,7 @@ static const struct option_def {
     { "--mesh-memory", NULL, 1, O_MESH_MEMORY }, { "--image-memory", NULL, 1, O_IMAGE_MEMORY },
     { "--guiding", NULL, 1, O_GUIDING },      { "--guiding-budget", NULL, 1, O_GUIDING_BUDGET },
     { "--guiding-alpha", NULL, 1, O_GUIDING_ALPHA }, { "--guiding-memory", NULL, 1, O_GUIDING_MEMORY },
-    { "--guide-at", NULL, 4, O_GUIDE_AT }
+    { "--guide-at", NULL, 4, O_GUIDE_AT },    { "--integrator", NULL, 1, O_INTEGRATOR }
 };
 
 static const struct option_def *find_option(const char *name)
@@ -387,6 +387,7 @@ static int set_scene_setting(options *o, opt_id id, const char *name, const char
     static const pt_strategy strategy_ids[] = { PT_STRATEGY_MIS, PT_STRATEGY_MATERIAL, PT_STRATEGY_LIGHT,
                                                 PT_STRATEGY_MIXTURE };
     static const char *const samplers[] = { "independent", "sobol" };
+    static const char *const integrators[] = { "scalar", "batched" };
     static const char *const guidings[] = { "off", "on", "auto" };
     static const pt_guiding guiding_ids[] = { PT_GUIDING_OFF, PT_GUIDING_ON, PT_GUIDING_AUTO };
     pt_render_desc *d = &o->set;
@@ -408,6 +409,11 @@ static int set_scene_setting(options *o, opt_id id, const char *name, const char
         rc = parse_choice(name, v, samplers, 2, "independent or sobol", &k);
         d->sampler = k ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
         o->given |= GIVEN_SAMPLER;
+        break;
+    case O_INTEGRATOR:
+        rc = parse_choice(name, v, integrators, 2, "scalar or batched", &k);
+        d->integrator = k ? PT_INTEGRATOR_BATCHED : PT_INTEGRATOR_SCALAR;
+        o->given |= GIVEN_INTEGRATOR;
         break;
     case O_SEED: rc = parse_u64(name, v, &d->seed); o->given |= GIVEN_SEED; break;
     case O_MAX_DEPTH: rc = parse_int(name, v, 1, 100000, &d->max_depth); o->given |= GIVEN_DEPTH; break;
@@ -664,6 +670,7 @@ static void apply_settings(const options *o, pt_render_desc *d)
     if (o->given & GIVEN_SPP) d->samples_per_pixel = s->samples_per_pixel;
     if (o->given & GIVEN_STRATEGY) d->strategy = s->strategy;
     if (o->given & GIVEN_SAMPLER) d->sampler = s->sampler;
+    if (o->given & GIVEN_INTEGRATOR) d->integrator = s->integrator;
     if (o->given & GIVEN_SEED) d->seed = s->seed;
     if (o->given & GIVEN_DEPTH) d->max_depth = s->max_depth;
     if (o->given & GIVEN_INDIRECT) d->indirect_paths = s->indirect_paths;
@@ -896,6 +903,11 @@ static void print_stats(const options *o, const pt_scene *scene, const pt_render
     printf(", max depth %d, seed %llu\n", d->max_depth ? d->max_depth : 50, (unsigned long long)d->seed);
     printf("time       %.3f s on %d thread%s, %d pass%s\n", st->seconds, st->threads, st->threads == 1 ? "" : "s",
            st->passes, st->passes == 1 ? "" : "es");
+    if (st->batched_samples == st->samples && st->samples) printf("integrator batched\n");
+    else if (st->batched_samples) /* guide training runs scalar (pdftrace.h, pt_integrator) */
+        printf("integrator batched (%llu samples), scalar (%llu: guide training)\n",
+               (unsigned long long)st->batched_samples, (unsigned long long)(st->samples - st->batched_samples));
+    else printf("integrator scalar\n");
     printf("samples    %llu (%.3f M samples/s)\n", (unsigned long long)st->samples, (double)st->samples / secs * 1e-6);
     if (d->adaptive_threshold > 0.0f)
         printf("adaptive   threshold %g: %llu pixels converged early (%.1f%%), %u to %u spp, mean %.1f\n",

@@ -114,7 +114,7 @@ t_bad_input() {
     for a in "--bogus" "--spp 0" "--spp abc" "--width -5" "--size 3x" "--strategy best" "--sampler halton" \
              "--light-weight 2" "--threads" "--tonemap filmic" "--exposure inf" "--preview-every 0" "--adaptive -1" \
              "--adaptive-mode best" \
-             "--disable-skips nope" "--indirect-paths 9" "--backend fast" "--quiet=1" "-o out.tiff" \
+             "--disable-skips nope" "--indirect-paths 9" "--backend fast" "--integrator fast" "--quiet=1" "-o out.tiff" \
              "-o no/such/dir/x.ppm" "--export-pov no/such/dir/x.pov" "--export-mitsuba no/such/dir/x.xml" \
              "--guiding sometimes" "--guiding" "--guiding-budget 1.5" "--guiding-budget 0" "--guiding-budget 1" \
              "--guiding-alpha 0" "--guiding-alpha nan" "--guiding-memory 0" "--guiding-memory 2.5" \
@@ -617,6 +617,29 @@ t_environment() {
     [ $ok = 1 ] && pass environment "renders; Mitsuba export with its map; POV-Ray refused; 7 bad statements with file:line; --allow-path; .exr $([ $have_exr = 1 ] && echo read || echo refused)"
 }
 
+# ---- --integrator: batched writes the scalar image byte for byte; the statistics say which ran,
+# and the option overrides the scene file's statement
+t_integrator() {
+    local dir=$W/integrator ok=1 why=""
+    mkdir -p "$dir"
+    { cat "$S/glass.scene"; printf 'integrator batched\n'; } >"$dir/batched.scene"
+    "$P" "$S/glass.scene" --spp 2 --size 24x16 -o "$dir/s.pfm" >"$dir/s.txt" &&
+        "$P" "$S/glass.scene" --spp 2 --size 24x16 --integrator batched -o "$dir/b.pfm" >"$dir/b.txt" &&
+        "$P" "$dir/batched.scene" --spp 2 --size 24x16 -o "$dir/f.pfm" >"$dir/f.txt" &&
+        "$P" "$dir/batched.scene" --spp 2 --size 24x16 --integrator scalar -o "$dir/o.pfm" >"$dir/o.txt" ||
+        { ok=0; why="a render failed"; }
+    if [ $ok = 1 ]; then
+        cmp -s "$dir/s.pfm" "$dir/b.pfm" || { ok=0; why="--integrator batched changed the image"; }
+        cmp -s "$dir/s.pfm" "$dir/f.pfm" || { ok=0; why="the scene's 'integrator batched' changed the image"; }
+        grep -q '^integrator scalar$' "$dir/s.txt" || { ok=0; why="the default run does not say 'integrator scalar'"; }
+        grep -q '^integrator batched$' "$dir/b.txt" || { ok=0; why="--integrator batched does not say so"; }
+        grep -q '^integrator batched$' "$dir/f.txt" || { ok=0; why="the scene's statement was not applied"; }
+        grep -q '^integrator scalar$' "$dir/o.txt" || { ok=0; why="--integrator scalar did not override the scene"; }
+    fi
+    if [ $ok = 1 ]; then pass integrator "batched = scalar byte for byte; stats line; scene statement and override"
+    else fail integrator "$why"; fi
+}
+
 t_help
 t_png_exr
 t_precision_warning
@@ -627,6 +650,7 @@ t_default_output
 t_preview
 t_overrides
 t_adaptive_mode
+t_integrator
 t_guiding
 t_display
 t_scene_limits
