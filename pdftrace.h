@@ -10242,6 +10242,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->prev_p = ray.origin;
     l->prev_n = pt_v3(0.0f, 0.0f, 0.0f);
     l->v.has_guide = 0;
+    l->v.cshare = 0.0f;
     l->v.g = 0.0f;
     l->v.rr_e = l->v.rr_ref = 0.0f;
 }
@@ -10280,6 +10281,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     }
     if (!m->delta) {
         v->has_guide = 0;
+        v->cshare = 0.0f;
         v->rr_e = 0.0f;
         if (cfg->guide) {
             pt_shading_point sp;
