@@ -37,8 +37,8 @@
      spp N                            samples per pixel (default 64)
      max_depth N                      scattering events per path (default 50; 1 = direct only)
      strategy mis|material|light|mixture
-     sampler independent|sobol        where random numbers come from (default independent;
-                                      sobol: scrambled Sobol points, pdftrace.h section 2)
+     sampler independent|sobol        where random numbers come from (default sobol:
+                                      scrambled Sobol points, pdftrace.h section 2)
      integrator scalar|batched        how paths are traced (batched: a tile's paths a bounce at
                                       a time, the same image; default: pt_integrator)
      indirect_paths N                 paths each camera sample continues as from its first
@@ -496,6 +496,9 @@ static int pt__sf_isfinite(float f)
 /* Path guiding of a scene file without a `guiding` statement (pt_scenefile.guiding as loaded,
    and so pt_render_desc.guiding from pt_scenefile_build): a render setting, not scene content. */
 #define PT__SF_DEFAULT_GUIDING PT_GUIDING_OFF
+/* The sampler of a scene file without a `sampler` statement: Sobol, the most efficient measured
+   with MIS on the benchmark scenes (bench/README.md, "Sobol sampler"). */
+#define PT__SF_DEFAULT_SAMPLER PT_SAMPLER_SOBOL
 
 typedef struct pt__sf_parser {
     pt_scenefile *d;
@@ -2264,6 +2267,7 @@ PTDEF int pt_scenefile_parse_ex(const char *text, size_t length, const char *nam
     out->max_depth = 50;
     out->pov_light_grid = 16;
     out->guiding = PT__SF_DEFAULT_GUIDING;
+    out->sampler = PT__SF_DEFAULT_SAMPLER;
     rc = pt__sf_lines(text, length, &p, pt__sf_line, err, err_size, name);
     if (rc == PT_OK && !p.have_camera)
         rc = pt__sf_failf(err, err_size, name, 0, PT_ERROR_INVALID_ARGUMENT, "no 'camera' statement");

@@ -566,6 +566,33 @@ done:
     tu_remove_tree(top);
 }
 
+/* The sampler a file gets without a `sampler` statement is Sobol (the most efficient measured:
+   bench/README.md); the statement still chooses either. */
+static void sampler_default(test_ctx *t)
+{
+    static const struct { const char *line; pt_sampler want; } cases[] = {
+        {"", PT_SAMPLER_SOBOL}, {"sampler independent\n", PT_SAMPLER_INDEPENDENT}, {"sampler sobol\n", PT_SAMPLER_SOBOL}};
+    char text[512], err[512];
+    size_t i;
+    for (i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        pt_scenefile sf;
+        pt_scene *scene = NULL;
+        pt_render_desc rd;
+        int rc;
+        snprintf(text, sizeof text, T_HEAD "%ssphere 0 0 0 1 m\n", cases[i].line);
+        rc = parse_text(text, NULL, &sf, err, sizeof err);
+        if (!CHECK(t, rc == PT_OK, "'%s': %d '%s'", cases[i].line, rc, err)) continue;
+        CHECK(t, sf.sampler == cases[i].want, "'%s': read as %d, expected %d", cases[i].line, (int)sf.sampler,
+              (int)cases[i].want);
+        rc = pt_scenefile_build(&sf, &scene, &rd, err, sizeof err);
+        if (CHECK(t, rc == PT_OK, "build: %d '%s'", rc, err))
+            CHECK(t, rd.sampler == cases[i].want, "'%s': built as %d, expected %d", cases[i].line, (int)rd.sampler,
+                  (int)cases[i].want);
+        pt_scene_destroy(scene);
+        pt_scenefile_free(&sf);
+    }
+}
+
 /* The guiding statements: read into pt_scenefile and handed to pt_render_desc by the build;
    without them the build's guiding is the file's default (the same as the parsed value, valid);
    bad values are file:line errors naming the statement. */
@@ -1118,6 +1145,7 @@ const test_case test_scenefile_cases[] = {
     TEST_CASE(mesh_memory_budget),
     TEST_CASE(mesh_allowed_dirs),
     TEST_CASE(guiding_statements),
+    TEST_CASE(sampler_default),
     TEST_CASE(light_statements),
     TEST_CASE(light_statement_errors),
     TEST_CASE(light_far_origin),
