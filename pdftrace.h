@@ -9361,6 +9361,15 @@ static float pt__power_heuristic(float a, float b)
     if (!pt__isfinite(a2)) return 1.0f; /* a dominates (only in extreme cases) */
     return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
+/* The power heuristic over a (a > 0), a / (a^2 + b^2): the weight of a sample of density a
+   divided by that density, in one division where the weight and the quotient take two one after
+   the other on next-event estimation's chain */
+static float pt__power_heuristic_over(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    if (!pt__isfinite(a2)) return 1.0f / a;
+    return a2 + b2 > 0.0f ? a / (a2 + b2) : 0.0f;
+}
 
 /* Per-vertex state of the scatter density (material PDF mixed with an optional guide). */
 typedef struct pt__vertex {
@@ -9577,10 +9586,11 @@ static PT__HOT int pt__nee_prepare(const pt_scene *s, const pt__settings *cfg, c
 static PT__HOT pt_color pt__nee_finish(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
                                        const pt__light_sample *ls, uint32_t li, pt_color beta, pt_color f)
 {
-    float w = 1.0f;
+    float w_over_p;
     pt_color Le = li == PT__ENV_LIGHT ? ls->radiance : s->mats[s->prims[s->lights[li].prim].material].emission;
-    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta) w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
-    return pt_mul(beta, pt_scale(pt_mul(f, Le), w / ls->pdf));
+    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta) w_over_p = pt__power_heuristic_over(ls->pdf, pt__scatter_density(v, ls->dir));
+    else w_over_p = 1.0f / ls->pdf;
+    return pt_mul(beta, pt_scale(pt_mul(f, Le), w_over_p));
 }
 /* Both halves with the shadow ray between them (the scalar integrator). */
 static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
@@ -9818,6 +9828,7 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         int use_light = 0;
         pt__light_sample ls;
         uint32_t li = 0;
+        int weighed = 0; /* 1: *beta already carries f / p_total */
         ls.rounded = 0;
         if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights &&
             (!s->light_count || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v->o))) {
@@ -9841,13 +9852,20 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
             pt__draw_scatter(smp, depth, &u1, &u2);
             u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA), 0);
             if (!pt__material_sample_dir(m, v->ns, v->wo, v->eta, u1, u2, u3, &wi, &p_total)) return 0;
+            /* f / p_total = albedo (cos/pi over the same cos/pi, which the draw made > 0), where
+               pt__material_eval gives f; no division on the path's chain */
+            if (!(pt_dot(v->ng, wi) > 0.0f) || pt__is_black(v->albedo)) return 0;
+            *beta = pt_mul(*beta, v->albedo);
+            weighed = 1;
         } else {
             if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
             p_total = pt__scatter_density_pg(v, wi, pg);
         }
-        f = pt__material_eval(m, v->albedo, v->ns, v->ng, v->wo, wi, v->eta);
-        if (pt__is_black(f) || !(p_total > 0.0f)) return 0;
-        *beta = pt_mul(*beta, pt_scale(f, 1.0f / p_total));
+        if (!weighed) {
+            f = pt__material_eval(m, v->albedo, v->ns, v->ng, v->wo, wi, v->eta);
+            if (pt__is_black(f) || !(p_total > 0.0f)) return 0;
+            *beta = pt_mul(*beta, pt_scale(f, 1.0f / p_total));
+        }
         *prev_pdf = p_total;
         *prev_delta = 0;
         if (ls.rounded) {
