@@ -2568,16 +2568,31 @@ static PT__HOT void pt__draw_scatter(pt__sampler *smp, int depth, float *a, floa
     pt__draw_scatter_sobol(smp, depth, a, b);
 }
 
+/* sin and cos of x in [-pi/4, pi/4] by their Taylor polynomials to degree 9 and 10 (truncation
+   error below 2e-9, under float's rounding), in float: the same operations on every CPU and in
+   every build, where a libm's sinf/cosf differ, and a fraction of their cost. */
+static PT__HOT void pt__sincos_quarter(float x, float *sn, float *cs)
+{
+    const float x2 = x * x;
+    *sn = x + x * x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f + x2 * (1.0f / 362880.0f))));
+    *cs = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f + x2 * (-1.0f / 3628800.0f)))));
+}
 /* Concentric map of the square to the disk (Shirley & Chiu, "A Low Distortion Map Between
-   Disk and Square", JGT 2(3), 1997). */
+   Disk and Square", JGT 2(3), 1997). In the sectors where |sy| >= |sx| the angle is
+   pi/2 - (pi/4) sx/sy, whose cosine and sine are the sine and cosine of (pi/4) sx/sy. */
 static PT__HOT void pt__concentric_disk(float u1, float u2, float *x, float *y)
 {
-    float sx = 2.0f * u1 - 1.0f, sy = 2.0f * u2 - 1.0f, r, th;
+    float sx = 2.0f * u1 - 1.0f, sy = 2.0f * u2 - 1.0f, sn, cs;
     if (sx == 0.0f && sy == 0.0f) { *x = 0.0f; *y = 0.0f; return; }
-    if (fabsf(sx) > fabsf(sy)) { r = sx; th = (PT__PI / 4.0f) * (sy / sx); }
-    else { r = sy; th = (PT__PI / 2.0f) - (PT__PI / 4.0f) * (sx / sy); }
-    *x = r * cosf(th);
-    *y = r * sinf(th);
+    if (fabsf(sx) > fabsf(sy)) {
+        pt__sincos_quarter((PT__PI / 4.0f) * (sy / sx), &sn, &cs);
+        *x = sx * cs;
+        *y = sx * sn;
+    } else {
+        pt__sincos_quarter((PT__PI / 4.0f) * (sx / sy), &sn, &cs);
+        *x = sy * sn;
+        *y = sy * cs;
+    }
 }
 PTDEF void pt_sample_concentric_disk(float u1, float u2, float *x, float *y) { pt__concentric_disk(u1, u2, x, y); }
 /* Malley's method: project the uniform disk up to the hemisphere; density cos(theta)/pi. */
@@ -2605,6 +2620,10 @@ typedef struct pt__light_sample {
     int rounded;      /* 1: dir is only the float rounding of a direction that meets the light
                          (a sphere narrower than float's angular resolution): a segment to
                          point is valid, a ray along dir misses and has density 0 */
+    const void *sph_prim; /* a planar light sampled with solid-angle sampling allowed: its primitive,
+                             and in sph_S the solid angle sampled by (0: sampled by area); a
+                             caller that wants them sets sph_prim to NULL first */
+    double sph_S;
 } pt__light_sample;
 
 /* --- sphere light. Outside: uniform in the cone of directions that meet the sphere, with
@@ -2796,34 +2815,35 @@ typedef struct pt__sphrect {
     double x0, y0, z0, x1, y1, b0, b1, k, S;
 } pt__sphrect;
 static double pt__d3dot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void pt__d3unit(double *a, double x, double y, double z)
-{
-    double l = sqrt(x * x + y * y + z * z);
-    a[0] = x / l;
-    a[1] = y / l;
-    a[2] = z / l;
-}
+static void pt__d3cross(double *out, const double *a, const double *b);
 static double pt__acos_clamped(double c) { return acos(c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c)); }
-/* 1 when quad p seen from o is a rectangle whose solid angle is in range (r then set up). */
+/* 1 when quad p seen from o is a rectangle whose solid angle is in range (r then set up). The
+   normals of the planes through o and each edge, (0, z0, -y0), (-z0, 0, x1), (0, -z0, y1) and
+   (z0, 0, -x0) over their lengths l0 .. l3, are never formed: the cosines of the inner angles
+   between neighbours are the closed forms below, so the set-up costs four square roots and no
+   unit vectors but the frame's. */
 static int pt__sphrect_init(pt__sphrect *r, const pt__prim *p, pt_vec3 o)
 {
-    double u[3], v[3], d[3], lu, lv, n[4][3], g[4];
+    double u[3], v[3], d[3], lu, lv, iu, iv, zz, l0, l1, l2, l3, g0, g1, g2, g3, c[3], ic;
     int i;
     {   /* is it large next to its distance? (float: only a threshold) */
-        pt_vec3 c = pt_sub(pt_madd(pt_madd(p->p0, p->p1, 0.5f), p->p2, 0.5f), o);
-        if (!(0.25f * (pt_length2(p->p1) + pt_length2(p->p2)) >= (float)PT__SPHERICAL_FROM * pt_length2(c))) return 0;
+        pt_vec3 cc = pt_sub(pt_madd(pt_madd(p->p0, p->p1, 0.5f), p->p2, 0.5f), o);
+        if (!(0.25f * (pt_length2(p->p1) + pt_length2(p->p2)) >= (float)PT__SPHERICAL_FROM * pt_length2(cc))) return 0;
     }
     u[0] = p->p1.x; u[1] = p->p1.y; u[2] = p->p1.z;
     v[0] = p->p2.x; v[1] = p->p2.y; v[2] = p->p2.z;
     lu = sqrt(pt__d3dot(u, u));
     lv = sqrt(pt__d3dot(v, v));
     if (!(lu > 0.0 && lv > 0.0) || fabs(pt__d3dot(u, v)) > 1e-5 * lu * lv) return 0; /* not a rectangle */
+    iu = 1.0 / lu;
+    iv = 1.0 / lv;
     for (i = 0; i < 3; ++i) {
-        r->ex[i] = u[i] / lu;
-        r->ey[i] = v[i] / lv;
+        r->ex[i] = u[i] * iu;
+        r->ey[i] = v[i] * iv;
     }
-    pt__d3unit(r->ez, r->ex[1] * r->ey[2] - r->ex[2] * r->ey[1], r->ex[2] * r->ey[0] - r->ex[0] * r->ey[2],
-               r->ex[0] * r->ey[1] - r->ex[1] * r->ey[0]);
+    pt__d3cross(c, r->ex, r->ey);
+    ic = 1.0 / sqrt(pt__d3dot(c, c));
+    for (i = 0; i < 3; ++i) r->ez[i] = c[i] * ic;
     r->o[0] = o.x; r->o[1] = o.y; r->o[2] = o.z;
     d[0] = (double)p->p0.x - o.x; d[1] = (double)p->p0.y - o.y; d[2] = (double)p->p0.z - o.z;
     r->x0 = pt__d3dot(d, r->ex);
@@ -2836,17 +2856,21 @@ static int pt__sphrect_init(pt__sphrect *r, const pt__prim *p, pt_vec3 o)
     if (!(r->z0 < 0.0)) return 0;
     r->x1 = r->x0 + lu;
     r->y1 = r->y0 + lv;
-    /* the normals of the planes through o and each edge, and the rectangle's inner angles */
-    pt__d3unit(n[0], 0.0, r->z0, -r->y0);
-    pt__d3unit(n[1], -r->z0, 0.0, r->x1);
-    pt__d3unit(n[2], 0.0, -r->z0, r->y1);
-    pt__d3unit(n[3], r->z0, 0.0, -r->x0);
-    for (i = 0; i < 4; ++i) g[i] = pt__acos_clamped(-pt__d3dot(n[i], n[(i + 1) & 3]));
-    r->S = g[0] + g[1] + g[2] + g[3] - 2.0 * 3.14159265358979323846;
+    zz = r->z0 * r->z0;
+    l0 = sqrt(zz + r->y0 * r->y0);
+    l1 = sqrt(zz + r->x1 * r->x1);
+    l2 = sqrt(zz + r->y1 * r->y1);
+    l3 = sqrt(zz + r->x0 * r->x0);
+    /* the inner angles: acos of minus the dot products of neighbouring normals */
+    g0 = pt__acos_clamped(r->y0 * r->x1 / (l0 * l1));
+    g1 = pt__acos_clamped(-(r->x1 * r->y1) / (l1 * l2));
+    g2 = pt__acos_clamped(r->x0 * r->y1 / (l2 * l3));
+    g3 = pt__acos_clamped(-(r->x0 * r->y0) / (l3 * l0));
+    r->S = g0 + g1 + g2 + g3 - 2.0 * 3.14159265358979323846;
     if (!(r->S >= PT__SPHERICAL_MIN && r->S <= PT__SPHERICAL_MAX)) return 0;
-    r->b0 = n[0][2];
-    r->b1 = n[2][2];
-    r->k = 2.0 * 3.14159265358979323846 - g[2] - g[3];
+    r->b0 = -r->y0 / l0;
+    r->b1 = r->y1 / l2;
+    r->k = 2.0 * 3.14159265358979323846 - g2 - g3;
     return 1;
 }
 /* The point of the rectangle that (u1, u2) maps to (Urena et al. 2013, sec. 3-4). */
@@ -2973,9 +2997,13 @@ static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided,
     pt__sphrect r;
     pt__sphtri tr;
     if (!pt__planar_faces(o, p->p0, p->n, two_sided)) return 0;
+    if (sph && p->type == PT__PRIM_QUAD) {
+        ls->sph_prim = p;
+        ls->sph_S = 0.0;
+    }
     if (sph && p->type == PT__PRIM_QUAD && pt__sphrect_init(&r, p, o)) {
         q = pt__sphrect_point(&r, u1, u2);
-        S = r.S;
+        S = ls->sph_S = r.S;
     } else if (sph && p->type == PT__PRIM_TRIANGLE && pt__sphtri_init(&tr, p, o)) {
         q = pt__sphtri_point(&tr, p, u1, u2);
         S = tr.S;
@@ -6282,8 +6310,12 @@ static PT__HOT int pt__material_sample_dir(const pt__material *m, pt_vec3 ns, pt
                                            float u3, pt_vec3 *wi, float *pdf)
 {
     if (m->type == PT_MATERIAL_LAMBERTIAN) {
+        /* not normalized again: the point is on the unit hemisphere and the basis orthonormal to a
+           few ulps, so |wi| = 1 within 4e-7 (3 ulps, the most seen over 2e7 normals and draws),
+           and the square root and division sat on every path's critical chain
+           (bench/README.md, "Per-vertex work") */
         pt_onb b = pt__onb(ns);
-        *wi = pt_normalize(pt_onb_to_world(&b, pt__cosine_hemisphere(u1, u2)));
+        *wi = pt_onb_to_world(&b, pt__cosine_hemisphere(u1, u2));
         *pdf = pt__maxf(0.0f, pt_dot(ns, *wi)) * PT__INV_PI;
         return *pdf > 0.0f;
     }
@@ -7834,7 +7866,7 @@ static PT__HOT void pt__packet_closest4(const pt_scene *s, const pt__packet_scen
 #define PT__EQ8(a, b) _mm256_cmp_ps((a), (b), _CMP_EQ_OQ)
 /* The same three with AVX2, 8 rays at a time (pt_simd_level AVX2 and up). */
 PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d,
-                                   const pt__rayctx *const *rc, __m256 *t_out)
+                                   const pt__rayctx *const *rc, __m256 best, __m256 *t_out)
 {
     const float *v = ps->v[i];
     __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
@@ -7848,7 +7880,10 @@ PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_
     t = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_sub_ps(px, o[0])), _mm256_mul_ps(ny, _mm256_sub_ps(py, o[1]))),
                    _mm256_mul_ps(nz, _mm256_sub_ps(pz, o[2])));
     t = _mm256_div_ps(t, _mm256_or_ps(_mm256_and_ps(ok, denom), _mm256_andnot_ps(ok, one)));
-    ok = _mm256_and_ps(ok, _mm256_and_ps(PT__GT8(t, zero), PT__LT8(t, _mm256_set1_ps(PT__INF))));
+    /* t < best (<= inf): a lane whose nearest hit so far is not farther cannot take this quad
+       (the caller keeps the strictly closer), so it skips the rest, the edge test included
+       (whose t is this t: pt__hit_quad's operations) */
+    ok = _mm256_and_ps(ok, _mm256_and_ps(PT__GT8(t, zero), PT__LT8(t, best)));
     if (!_mm256_movemask_ps(ok)) return 0;
     t = _mm256_and_ps(ok, t); /* (as pt__quad4_hit_sse) */
     hx = _mm256_sub_ps(_mm256_add_ps(o[0], _mm256_mul_ps(d[0], t)), px);
@@ -7941,8 +7976,9 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
     const pt__rayctx *rc[8];
     float buf[6][8];
     __m256 o[3], d[3], aa, best = _mm256_set1_ps(PT__INF);
+    __m256i bpv = _mm256_setzero_si256();
     int lane, i, any = 0;
-    uint32_t bp[8] = { 0, 0, 0, 0, 0, 0, 0, 0 };
+    uint32_t bp[8];
     for (lane = 0; lane < 8; ++lane) {
         rc[lane] = rc4[lane < n ? lane : 0]; /* (the padding repeats ray 0; its results are dropped) */
         buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
@@ -7955,23 +7991,24 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
     aa = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])), _mm256_mul_ps(d[2], d[2]));
     for (i = 0; i < ps->n; ++i) {
         __m256 t, closer;
-        int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, &t) : pt__packet_quad8(s, ps, i, o, d, rc, &t);
+        int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, &t) : pt__packet_quad8(s, ps, i, o, d, rc, best, &t);
         /* strictly closer: at a tie the primitive of lower id (visited first) stays */
         closer = PT__LT8(t, best);
         bits &= _mm256_movemask_ps(closer);
         if (!bits) continue;
-        for (lane = 0; lane < 8; ++lane)
-            if (bits & (1 << lane)) bp[lane] = ps->prim[i];
-        { /* best = t in the lanes of bits */
+        { /* best = t and the primitive = this one in the lanes of bits */
             __m256i sel = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
-            __m256 m = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), sel), sel));
+            __m256i mi = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), sel), sel);
+            __m256 m = _mm256_castsi256_ps(mi);
             best = _mm256_or_ps(_mm256_and_ps(m, t), _mm256_andnot_ps(m, best));
+            bpv = _mm256_or_si256(_mm256_and_si256(mi, _mm256_set1_epi32((int)ps->prim[i])), _mm256_andnot_si256(mi, bpv));
         }
         any |= bits;
     }
     {
         float bt[8];
         _mm256_storeu_ps(bt, best);
+        _mm256_storeu_si256((__m256i *)(void *)bp, bpv);
         for (lane = 0; lane < n; ++lane) {
             found[lane] = (any >> lane) & 1;
             prim[lane] = bp[lane];
@@ -9324,6 +9361,15 @@ static float pt__power_heuristic(float a, float b)
     if (!pt__isfinite(a2)) return 1.0f; /* a dominates (only in extreme cases) */
     return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
+/* The power heuristic over a (a > 0), a / (a^2 + b^2): the weight of a sample of density a
+   divided by that density, in one division where the weight and the quotient take two one after
+   the other on next-event estimation's chain */
+static float pt__power_heuristic_over(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    if (!pt__isfinite(a2)) return 1.0f / a;
+    return a2 + b2 > 0.0f ? a / (a2 + b2) : 0.0f;
+}
 
 /* Per-vertex state of the scatter density (material PDF mixed with an optional guide). */
 typedef struct pt__vertex {
@@ -9341,6 +9387,9 @@ typedef struct pt__vertex {
     uint32_t cleaf;
     float rr_e, rr_ref; /* guided roulette: the expected contribution of going on per unit throughput
                            (0: unknown) and the path's reference (pt__trace_from) */
+    const void *sph_prim; /* the light sample at o: a quad light's primitive and the solid angle it */
+    double sph_S;         /* was sampled by (pt__light_sample; NULL: none), which the emission a
+                             scattered ray finds on that light reuses (pt__emission_weight) */
 } pt__vertex;
 
 /* The guide's density at vertex v: the learned guide's, mixed with the caustic photons' where
@@ -9370,7 +9419,8 @@ static float pt__vertex_guide_density(const pt__vertex *v, pt_vec3 wi)
 /* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
 static PT__HOT float pt__scatter_density_pg(const pt__vertex *v, pt_vec3 wi, float pg)
 {
-    float pm = pt__material_density(v->m, v->ns, v->wo, wi, v->eta);
+    float pm = v->m->type == PT_MATERIAL_LAMBERTIAN ? pt__maxf(0.0f, pt_dot(v->ns, wi)) * PT__INV_PI /* (inline) */
+                                                    : pt__material_density(v->m, v->ns, v->wo, wi, v->eta);
     if (!v->has_guide) return pm;
     return (1.0f - v->g) * pm + v->g * (pg >= 0.0f ? pg : pt__vertex_guide_density(v, wi));
 }
@@ -9536,10 +9586,11 @@ static PT__HOT int pt__nee_prepare(const pt_scene *s, const pt__settings *cfg, c
 static PT__HOT pt_color pt__nee_finish(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
                                        const pt__light_sample *ls, uint32_t li, pt_color beta, pt_color f)
 {
-    float w = 1.0f;
+    float w_over_p;
     pt_color Le = li == PT__ENV_LIGHT ? ls->radiance : s->mats[s->prims[s->lights[li].prim].material].emission;
-    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta) w = pt__power_heuristic(ls->pdf, pt__scatter_density(v, ls->dir));
-    return pt_mul(beta, pt_scale(pt_mul(f, Le), w / ls->pdf));
+    if (cfg->strategy == PT_STRATEGY_MIS && !v->m->delta) w_over_p = pt__power_heuristic_over(ls->pdf, pt__scatter_density(v, ls->dir));
+    else w_over_p = 1.0f / ls->pdf;
+    return pt_mul(beta, pt_scale(pt_mul(f, Le), w_over_p));
 }
 /* Both halves with the shadow ray between them (the scalar integrator). */
 static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
@@ -9777,6 +9828,7 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
         int use_light = 0;
         pt__light_sample ls;
         uint32_t li = 0;
+        int weighed = 0; /* 1: *beta already carries f / p_total */
         ls.rounded = 0;
         if (cfg->strategy == PT_STRATEGY_MIXTURE && any_lights &&
             (!s->light_count || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_FACING_AWAY) || pt__lights_reachable(s, v->o))) {
@@ -9793,13 +9845,27 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
             p_total = cfg->light_weight *
                           (pt__lights_value_all(s, cfg, v->o, pt__receiver_normal(v), wi) + (ls.rounded ? ls.pdf : 0.0f)) +
                       (1.0f - cfg->light_weight) * pt__scatter_density_pg(v, wi, pg);
+        } else if (!v->has_guide && m->type == PT_MATERIAL_LAMBERTIAN) {
+            /* pt__scatter_sample's draws for a Lambertian vertex without a guide, whose sampling
+               density is the material's: not evaluated a second time */
+            float u1, u2, u3;
+            pt__draw_scatter(smp, depth, &u1, &u2);
+            u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA), 0);
+            if (!pt__material_sample_dir(m, v->ns, v->wo, v->eta, u1, u2, u3, &wi, &p_total)) return 0;
+            /* f / p_total = albedo (cos/pi over the same cos/pi, which the draw made > 0), where
+               pt__material_eval gives f; no division on the path's chain */
+            if (!(pt_dot(v->ng, wi) > 0.0f) || pt__is_black(v->albedo)) return 0;
+            *beta = pt_mul(*beta, v->albedo);
+            weighed = 1;
         } else {
             if (!pt__scatter_sample(v, smp, depth, &wi, &pg)) return 0;
             p_total = pt__scatter_density_pg(v, wi, pg);
         }
-        f = pt__material_eval(m, v->albedo, v->ns, v->ng, v->wo, wi, v->eta);
-        if (pt__is_black(f) || !(p_total > 0.0f)) return 0;
-        *beta = pt_mul(*beta, pt_scale(f, 1.0f / p_total));
+        if (!weighed) {
+            f = pt__material_eval(m, v->albedo, v->ns, v->ng, v->wo, wi, v->eta);
+            if (pt__is_black(f) || !(p_total > 0.0f)) return 0;
+            *beta = pt_mul(*beta, pt_scale(f, 1.0f / p_total));
+        }
         *prev_pdf = p_total;
         *prev_delta = 0;
         if (ls.rounded) {
@@ -9963,6 +10029,7 @@ static PT__HOT void pt__vertex_at(const pt_scene *s, const pt__settings *cfg, pt
 {
     v->m = m;
     v->p = h->point;
+    v->sph_prim = NULL;
     v->wo = pt_neg(dir);
     v->ng = h->front_face ? h->geometric_normal : pt_neg(h->geometric_normal);
     v->ns = pt_dot(h->shading_normal, v->wo) < 0.0f ? pt_neg(h->shading_normal) : h->shading_normal;
@@ -9982,13 +10049,16 @@ static PT__HOT void pt__vertex_at(const pt_scene *s, const pt__settings *cfg, pt
    prev_n, density prev_pdf) finds on the emitting primitive prim at distance t along dir: the
    strategies at the top of this section. */
 static PT__HOT float pt__emission_weight(const pt_scene *s, const pt__settings *cfg, const pt__prim *prim, float prev_pdf,
-                                         pt_vec3 prev_p, pt_vec3 prev_n, pt_vec3 dir, float t)
+                                         pt_vec3 prev_p, pt_vec3 prev_n, pt_vec3 dir, float t, const pt__vertex *pv)
 {
-    float pl;
+    float pl, d;
     if (cfg->strategy == PT_STRATEGY_LIGHT) return 0.0f;
     if (cfg->strategy != PT_STRATEGY_MIS) return 1.0f;
-    pl = cfg->lights_share * pt__light_pmf(s, prev_p, prev_n, (uint32_t)prim->light, pt__lights_mode(cfg)) *
-         pt__light_prim_value_at(s, prim, prev_p, dir, t, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS));
+    if (pv && pv->sph_prim == (const void *)prim) /* the previous vertex's light sample set this quad up */
+        d = pv->sph_S > 0.0 ? (float)(1.0 / pv->sph_S) : pt__planar_density(prim->n, s->lights[prim->light].area, t, dir);
+    else
+        d = pt__light_prim_value_at(s, prim, prev_p, dir, t, PT__SKIP(cfg, PT_SKIP_SOLID_ANGLE_QUADS));
+    pl = cfg->lights_share * pt__light_pmf(s, prev_p, prev_n, (uint32_t)prim->light, pt__lights_mode(cfg)) * d;
     return pt__power_heuristic(prev_pdf, pl);
 }
 
@@ -10012,6 +10082,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                         when has_guide is) */
     v.g = 0.0f;
     v.rr_e = v.rr_ref = 0.0f;
+    v.sph_prim = NULL; /* (the caller's vertex is not this one's: no light sample to reuse) */
     for (depth = depth0;; ++depth) {
         pt__rayctx rc;
         uint32_t pi;
@@ -10038,7 +10109,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         if (m->emits && (m->two_sided || h.front_face)) {
             float w = 1.0f;
             if (!prev_delta) {
-                w = pt__emission_weight(s, cfg, prim, prev_pdf, prev_p, prev_n, ray.dir, t);
+                w = pt__emission_weight(s, cfg, prim, prev_pdf, prev_p, prev_n, ray.dir, t, &v);
             }
             if (w > 0.0f) {
                 pt_color e = pt_scale(pt_mul(beta, m->emission), w);
@@ -10085,8 +10156,12 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 uint32_t li;
                 float u0 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_PICK), pick), u1, u2;
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
+                ls.sph_prim = NULL;
+                ls.sph_S = 0.0;
                 if (pt__lights_sample_all(s, cfg, v.o, pt__receiver_normal(&v), u0, u1, u2, &ls, &li))
                     L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
+                v.sph_prim = ls.sph_prim;
+                v.sph_S = ls.sph_S;
             }
             /* the delta lights, under every strategy (a scene without them skips this) */
             if (PT__UNLIKELY(s->dlight_count != 0)) L = pt_add(L, pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st));
@@ -10245,6 +10320,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->v.cshare = 0.0f;
     l->v.g = 0.0f;
     l->v.rr_e = l->v.rr_ref = 0.0f;
+    l->v.sph_prim = NULL;
 }
 
 /* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
@@ -10265,7 +10341,8 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     m = &s->mats[prim->material];
     pt__fill_hit(s, prim, l->ray, l->t, l->bary, &l->h);
     if (m->emits && (m->two_sided || l->h.front_face)) {
-        float w = l->prev_delta ? 1.0f : pt__emission_weight(s, cfg, prim, l->prev_pdf, l->prev_p, l->prev_n, l->ray.dir, l->t);
+        float w = l->prev_delta ? 1.0f
+                                : pt__emission_weight(s, cfg, prim, l->prev_pdf, l->prev_p, l->prev_n, l->ray.dir, l->t, v);
         if (w > 0.0f) l->L = pt_add(l->L, pt_scale(pt_mul(l->beta, m->emission), w));
     }
     if (l->depth >= cfg->max_depth || !m->scatters) return 0;
@@ -10298,8 +10375,12 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
         if (b->nee) {
             float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
             pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
+            l->ls.sph_prim = NULL;
+            l->ls.sph_S = 0.0;
             l->shadow = pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
                         pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+            v->sph_prim = l->ls.sph_prim;
+            v->sph_S = l->ls.sph_S;
         }
     }
     return 1;
