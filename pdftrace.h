@@ -3763,6 +3763,40 @@ static void pt__dtree_density2(const pt__dtree *t, float x0, float y0, float x1,
     *d1 = b > 0.0f ? b : 0.0f;
 }
 
+/* The densities of two trees (a, b) at two points each (a direction and its mirror): the four
+   descents interleaved, as pt__dtree_density2's two. */
+static void pt__dtree_density4(const pt__dtree *a, const pt__dtree *b, float x0, float y0, float x1, float y1,
+                               float d[4])
+{
+    const pt__dtree *t[4];
+    float x[4], y[4], p[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+    uint32_t n[4] = {0, 0, 0, 0};
+    int level, k, go[4], live;
+    t[0] = t[1] = a;
+    t[2] = t[3] = b;
+    x[0] = x[2] = x0;
+    y[0] = y[2] = y0;
+    x[1] = x[3] = x1;
+    y[1] = y[3] = y1;
+    go[0] = go[1] = a->nodes != 0;
+    go[2] = go[3] = b->nodes != 0;
+    live = go[0] || go[2];
+    for (level = 0; level < PT__GUIDE_MAX_DEPTH && live; ++level) {
+        live = 0;
+        for (k = 0; k < 4; ++k) {
+            if (go[k]) {
+                const pt__dnode *nd = t[k]->node + n[k];
+                int q = pt__guide_quadrant(&x[k], &y[k]);
+                p[k] *= 4.0f * nd->prob[q];
+                n[k] = nd->child[q];
+                go[k] = n[k] && p[k] > 0.0f;
+                live |= go[k];
+            }
+        }
+    }
+    for (k = 0; k < 4; ++k) d[k] = p[k] > 0.0f ? p[k] : 0.0f;
+}
+
 /* Draws (x, y) from the sampling tree by warping (ux, uy) level by level (a column by its
    marginal, then the quadrant in it), so each level takes one bit of each number. */
 static float pt__dtree_sample(const pt__dtree *t, float ux, float uy, double *x, double *y, double *cell)
@@ -9408,12 +9442,14 @@ static float pt__vertex_guide_density(const pt__vertex *v, pt_vec3 wi)
     /* the square's point and its mirror once, for both trees */
     pt__guide_dir_to_square(wi, &x, &y);
     if (!pt__guide_mirror_square(n, x, y, &mx, &my)) pt__guide_dir_to_square(pt__guide_mirror(wi, n), &mx, &my);
+    if (c < 1.0f) { /* both trees, their four descents interleaved */
+        float d[4];
+        pt__dtree_density4(&g->caustic->leaves[v->cleaf].sampling, &g->leaves[v->guide.as.guide.leaf].sampling, x, y,
+                           mx, my, d);
+        return (c * (d[0] + d[1]) + (1.0f - c) * (d[2] + d[3])) * PT__INV_4PI;
+    }
     pt__dtree_density2(&g->caustic->leaves[v->cleaf].sampling, x, y, mx, my, &d0, &d1);
     p = c * (d0 + d1);
-    if (c < 1.0f) {
-        pt__dtree_density2(&g->leaves[v->guide.as.guide.leaf].sampling, x, y, mx, my, &d0, &d1);
-        p += (1.0f - c) * (d0 + d1);
-    }
     return p * PT__INV_4PI;
 }
 /* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
