@@ -9778,9 +9778,53 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
 /* A camera sample's splitting budget: `left` extra copies may still start (max_splits), and
    `first` is the split of the first non-delta vertex still to come (indirect_paths; 1 once it
    has been reached). */
+/* Path classes (a diagnostic, compiled only with PDFTRACE_PATH_CLASSES: bench/path_classes.c).
+   The scalar integrator hands each contribution to pt_path_class_add, which the including file
+   defines, with the class of the path that made it, from the sequence of its vertices: D a
+   non-delta vertex, S a delta one, read from the camera (E) to the light (L). */
+#ifdef PDFTRACE_PATH_CLASSES
+enum {
+    PT_PATH_CLASS_NO_DELTA,        /* E D+ L: no delta vertex */
+    PT_PATH_CLASS_DELTA,           /* delta vertices, none between the light and the last D */
+    PT_PATH_CLASS_CAUSTIC_SEEN,    /* L S+ D E: a caustic the camera sees */
+    PT_PATH_CLASS_CAUSTIC_THROUGH, /* L S+ D S+ E: a caustic seen through delta surfaces */
+    PT_PATH_CLASS_CAUSTIC_BOUNCE,  /* L S+ D (S*) D (S*) E: a caustic's light after one more D */
+    PT_PATH_CLASS_CAUSTIC_BOUNCES, /* L S+ D ... D ... D ... E: after two or more */
+    PT_PATH_CLASS_COUNT
+};
+void pt_path_class_add(int path_class, pt_color contribution);
+void pt_path_class_sample_done(uint32_t pixel); /* after each camera sample of pt_render (scalar) */
+typedef struct pt__pclass {
+    int d, s_first, s_last, s_any; /* D count; S before the first D, since the last D, anywhere */
+} pt__pclass;
+static void pt__pclass_vertex(pt__pclass *c, int delta)
+{
+    if (delta) {
+        c->s_first |= c->d == 0;
+        c->s_last = c->s_any = 1;
+    } else {
+        c->d++;
+        c->s_last = 0;
+    }
+}
+/* the class of light reached by a ray from the last vertex (next-event estimation's is
+   pt__pclass_nee's) */
+static int pt__pclass_found(const pt__pclass *c)
+{
+    if (!c->s_last || c->d == 0) return c->s_any ? PT_PATH_CLASS_DELTA : PT_PATH_CLASS_NO_DELTA;
+    if (c->d == 1) return c->s_first ? PT_PATH_CLASS_CAUSTIC_THROUGH : PT_PATH_CLASS_CAUSTIC_SEEN;
+    return c->d == 2 ? PT_PATH_CLASS_CAUSTIC_BOUNCE : PT_PATH_CLASS_CAUSTIC_BOUNCES;
+}
+static int pt__pclass_nee(const pt__pclass *c) { return c->s_any ? PT_PATH_CLASS_DELTA : PT_PATH_CLASS_NO_DELTA; }
+#define PT__PCLASS(...) __VA_ARGS__
+#else
+#define PT__PCLASS(...)
+#endif
+
 typedef struct pt__splits {
     int left, first;
     float rr_ref; /* guided roulette: the path's expected value at its first guided vertex (0: none yet) */
+    PT__PCLASS(pt__pclass pc;) /* the path's class at the vertex that splits (split copies start from it) */
 } pt__splits;
 
 /* How many copies the path continues as from a non-delta vertex reached with throughput beta_in:
@@ -9976,6 +10020,7 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
 {
     pt_color L = pt_v3(0, 0, 0);
     int copy;
+    PT__PCLASS(const pt__pclass pc = sp->pc;) /* (a copy's own splits overwrite sp->pc) */
     for (copy = 1; copy < k; ++copy) {
         pt__sampler child;
         pt__sampler *cs = pt__split_sampler(smp, &child, depth, copy);
@@ -9984,6 +10029,7 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
         float pp2 = prev_pdf;
         int pd2 = prev_delta;
         st->split_paths++;
+        PT__PCLASS(sp->pc = pc;)
         pt_color Lc = pt_v3(0, 0, 0);
         if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2, &Lc, st)) {
             pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, pt__receiver_normal(v), cs, st, sp);
@@ -10000,6 +10046,7 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
             }
         }
         L = pt_add(L, Lc);
+        PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(Lc, 1.0f / (float)cfg->indirect_paths));)
     }
     return L;
 }
@@ -10119,6 +10166,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
     v.g = 0.0f;
     v.rr_e = v.rr_ref = 0.0f;
     v.sph_prim = NULL; /* (the caller's vertex is not this one's: no light sample to reuse) */
+    PT__PCLASS(pt__pclass pc = sp->pc; const float pc_k = 1.0f / (float)cfg->indirect_paths;)
     for (depth = depth0;; ++depth) {
         pt__rayctx rc;
         uint32_t pi;
@@ -10132,6 +10180,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             if (PT__UNLIKELY(cfg->env_on)) {
                 pt_color e = pt__env_escape(cfg, ray.dir, beta, prev_delta, prev_pdf);
                 L = pt_add(L, e);
+                PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(e, pc_k));)
                 if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
             } else {
                 L = pt_add(L, pt_mul(beta, cfg->background)); /* (black: the scene has no environment) */
@@ -10150,6 +10199,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             if (w > 0.0f) {
                 pt_color e = pt_scale(pt_mul(beta, m->emission), w);
                 L = pt_add(L, e);
+                PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(e, pc_k));)
                 /* training with next-event estimation: direct light is NEE's, the guide learns the rest */
                 if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
             }
@@ -10158,6 +10208,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         if (depth >= cfg->max_depth || !m->scatters) break;
 
         beta_in = beta;
+        PT__PCLASS(pt__pclass_vertex(&pc, m->delta);)
         pt__vertex_at(s, cfg, &v, prim, m, &h, ray.dir, bary);
         if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
             /* general path: next-event estimation as at any vertex; a delta material reflects
@@ -10194,13 +10245,20 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                 ls.sph_prim = NULL;
                 ls.sph_S = 0.0;
-                if (pt__lights_sample_all(s, cfg, v.o, pt__receiver_normal(&v), u0, u1, u2, &ls, &li))
-                    L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
+                if (pt__lights_sample_all(s, cfg, v.o, pt__receiver_normal(&v), u0, u1, u2, &ls, &li)) {
+                    pt_color e = pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st);
+                    L = pt_add(L, e);
+                    PT__PCLASS(pt_path_class_add(pt__pclass_nee(&pc), pt_scale(e, pc_k));)
+                }
                 v.sph_prim = ls.sph_prim;
                 v.sph_S = ls.sph_S;
             }
             /* the delta lights, under every strategy (a scene without them skips this) */
-            if (PT__UNLIKELY(s->dlight_count != 0)) L = pt_add(L, pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st));
+            if (PT__UNLIKELY(s->dlight_count != 0)) {
+                pt_color e = pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st);
+                L = pt_add(L, e);
+                PT__PCLASS(pt_path_class_add(pt__pclass_nee(&pc), pt_scale(e, pc_k));)
+            }
             if (v.rr_e > 0.0f && !(sp->rr_ref > 0.0f)) /* the first guided vertex: what the path has so far
                                                           and what going on should add */
                 sp->rr_ref = pt_max_component(L) + pt_max_component(beta) * v.rr_e;
@@ -10212,6 +10270,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
              PT__UNLIKELY(beta_in.x >= PT__SPLIT_BETA || beta_in.y >= PT__SPLIT_BETA || beta_in.z >= PT__SPLIT_BETA)) &&
             (k = pt__split_count(beta_in, sp)) > 1) {
             beta_in = pt_scale(beta_in, 1.0f / (float)k);
+            PT__PCLASS(sp->pc = pc;)
             L = pt_add(L, pt__split_copies(s, cfg, &v, &h, depth, k, beta_in, smp, any_lights, pick, prev_delta, prev_pdf,
                                            st, sp));
         }
@@ -10220,6 +10279,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             int go = pt__continue(s, cfg, &v, &h, depth, beta_in, smp, any_lights, pick, &ray, &beta, &prev_pdf,
                                   &prev_delta, &Lc, st);
             L = pt_add(L, Lc);
+            PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(Lc, pc_k));)
             if (!go) break;
             if (PT__UNLIKELY(cfg->recording != NULL) && !prev_delta && nrec < PT__GUIDE_PATH_RECORDS) {
                 recs[nrec].p = v.p; /* what arrives along ray.dir is what L gains from here on */
@@ -10251,6 +10311,7 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     sp.left = cfg->max_splits;
     sp.first = cfg->indirect_paths;
     sp.rr_ref = 0.0f;
+    PT__PCLASS(memset(&sp.pc, 0, sizeof sp.pc);)
     st->camera_rays++;
     return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 1, 0.0f, ray.origin, pt_v3(0.0f, 0.0f, 0.0f), smp, st, &sp), 1.0f / k);
 }
@@ -10341,6 +10402,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->sp.left = cfg->max_splits;
     l->sp.first = cfg->indirect_paths;
     l->sp.rr_ref = 0.0f;
+    PT__PCLASS(memset(&l->sp.pc, 0, sizeof l->sp.pc);)
     memset(&l->st, 0, sizeof l->st);
     l->st.camera_rays++;
     l->ray = ray;
@@ -10809,6 +10871,7 @@ static void pt__render_tile(void *data, int job)
                 mine++;
                 ray = pt__camera_sample(ps, &smp, x, y, pix, index_k, pixel_key, &cache);
                 L = pt__sample(ps->scene, ps->cfg, ray, &smp, &st);
+                PT__PCLASS(pt_path_class_sample_done(pix);)
                 pt__film_sample(sum, sq, odd, lo, index_k, L);
             }
             film->count[pix] += mine;
