@@ -20,6 +20,7 @@
 #define PDFTRACE_SCENE_IMPLEMENTATION
 #include "pdftrace_scene.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -67,6 +68,13 @@ static void print_table(const pt_film *film, int spp)
                 rv[c] += (pixel_sq[i] / spp - mc * mc) / den;
             }
         }
+    {   /* every contribution has a class: the classes' means add up to the image's */
+        double t = 0.0;
+        for (c = 0; c < PT_PATH_CLASS_COUNT; ++c) t += mean[c];
+        if (!(fabs(t - mean[PT_PATH_CLASS_COUNT]) <= 1e-5 * mean[PT_PATH_CLASS_COUNT]))
+            printf("warning: the classes' means add up to %.6g, the image's is %.6g (a contribution without a class)\n",
+                   t / (3.0 * (double)n), mean[PT_PATH_CLASS_COUNT] / (3.0 * (double)n));
+    }
     printf("%-32s %10s %12s %18s\n", "class", "mean", "share", "relvar per sample");
     for (c = 0; c <= PT_PATH_CLASS_COUNT; ++c)
         printf("%-32s %10.5f %11.1f%% %10.4f (%5.1f%%)\n", name[c], mean[c] / (3.0 * (double)n),
