@@ -9788,17 +9788,21 @@ enum {
     PT_PATH_CLASS_DELTA,           /* delta vertices, none between the light and the last D */
     PT_PATH_CLASS_CAUSTIC_SEEN,    /* L S+ D E: a caustic the camera sees */
     PT_PATH_CLASS_CAUSTIC_THROUGH, /* L S+ D S+ E: a caustic seen through delta surfaces */
-    PT_PATH_CLASS_CAUSTIC_BOUNCE,  /* L S+ D (S*) D (S*) E: a caustic's light after one more D */
-    PT_PATH_CLASS_CAUSTIC_BOUNCES, /* L S+ D ... D ... D ... E: after two or more */
+    PT_PATH_CLASS_CAUSTIC_BOUNCE,  /* L S+ D D ... E: a caustic's light, one more D next to it */
+    PT_PATH_CLASS_CAUSTIC_SDS,     /* L S+ D S+ D ... E: a caustic's light seen through delta
+                                      surfaces from a D (no unbiased local sampling technique
+                                      connects these: only a scattered direction finds them) */
     PT_PATH_CLASS_COUNT
 };
 void pt_path_class_add(int path_class, pt_color contribution);
 void pt_path_class_sample_done(uint32_t pixel); /* after each camera sample of pt_render (scalar) */
 typedef struct pt__pclass {
     int d, s_first, s_last, s_any; /* D count; S before the first D, since the last D, anywhere */
+    int s_before;         /* an S between the last D and the D before it */
 } pt__pclass;
 static void pt__pclass_vertex(pt__pclass *c, int delta)
 {
+    if (!delta) c->s_before = c->s_last && c->d > 0;
     if (delta) {
         c->s_first |= c->d == 0;
         c->s_last = c->s_any = 1;
@@ -9813,7 +9817,7 @@ static int pt__pclass_found(const pt__pclass *c)
 {
     if (!c->s_last || c->d == 0) return c->s_any ? PT_PATH_CLASS_DELTA : PT_PATH_CLASS_NO_DELTA;
     if (c->d == 1) return c->s_first ? PT_PATH_CLASS_CAUSTIC_THROUGH : PT_PATH_CLASS_CAUSTIC_SEEN;
-    return c->d == 2 ? PT_PATH_CLASS_CAUSTIC_BOUNCE : PT_PATH_CLASS_CAUSTIC_BOUNCES;
+    return c->s_before ? PT_PATH_CLASS_CAUSTIC_SDS : PT_PATH_CLASS_CAUSTIC_BOUNCE;
 }
 static int pt__pclass_nee(const pt__pclass *c) { return c->s_any ? PT_PATH_CLASS_DELTA : PT_PATH_CLASS_NO_DELTA; }
 #define PT__PCLASS(...) __VA_ARGS__
@@ -11801,9 +11805,69 @@ static int pt__delta_bounds(const pt_scene *s, pt_vec3 *c, float *r)
     return pt__vfinite(*c) && pt__isfinite(*r);
 }
 
+/* Follows a photon along ray through at most PT__PHOTON_MAX_DELTA delta bounces (beta its
+   throughput, updated) to the first non-delta surface: returns 1 with the hit there and the
+   direction the photon arrived along, 0 if it left the scene or ended. *deltas: the delta
+   bounces taken. */
+static int pt__photon_deltas(const pt_scene *s, pt_ray ray, pt_rng *rng, pt_color *beta, const pt__prim **prim,
+                             pt_hit *h, float bary[3], pt_vec3 *arrival, int *deltas)
+{
+    const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    for (*deltas = 0; *deltas <= PT__PHOTON_MAX_DELTA; ++*deltas) {
+        pt__rayctx rc;
+        uint32_t pi;
+        float t;
+        pt__vertex v;
+        pt_vec3 wi;
+        pt__rayctx_init2(&rc, ray, tri);
+        if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) return 0;
+        *prim = &s->prims[pi];
+        v.m = &s->mats[(*prim)->material];
+        if (!v.m->scatters) return 0;
+        pt__fill_hit(s, *prim, ray, t, bary, h);
+        *arrival = ray.dir;
+        if (!v.m->delta) return 1;
+        v.p = h->point;
+        v.wo = pt_neg(ray.dir);
+        v.ng = h->front_face ? h->geometric_normal : pt_neg(h->geometric_normal);
+        v.ns = pt_dot(h->shading_normal, v.wo) < 0.0f ? pt_neg(h->shading_normal) : h->shading_normal;
+        v.albedo = v.m->texture ? pt__albedo(s, v.m, *prim, bary, h) : v.m->albedo;
+        if (!pt__delta_scatter(&v, h->front_face, pt_rng_float(rng), &wi, beta)) return 0;
+        ray.origin = pt__offset_origin(v.p, v.ng, wi, h->magnitude);
+        ray.dir = wi;
+    }
+    return 0;
+}
+
+/* A landed caustic photon goes on: one bounce cosine-weighted about the lit side's normal (its
+   throughput times the albedo, exact for a Lambertian surface; it only shapes a PDF), then
+   delta bounces; if it passed a delta surface it is recorded at the next non-delta one. These
+   are the ways a diffuse point sees a caustic through glass (S D S paths), which no shadow ray
+   can join: the point's photon leaf then points into the glass where the caustic shows. */
+static void pt__photon_onward(const pt__photon_run *run, pt_rng *rng, const pt__prim *prim, const pt_hit *h,
+                              const float bary[3], pt_color beta, double flux)
+{
+    const pt_scene *s = run->s;
+    const pt__material *m = &s->mats[prim->material];
+    pt_vec3 ng = h->front_face ? h->geometric_normal : pt_neg(h->geometric_normal);
+    pt_onb b = pt__onb(ng);
+    pt_ray ray;
+    pt_hit h2;
+    const pt__prim *p2;
+    pt_vec3 arrival;
+    float bary2[3];
+    int deltas;
+    ray.dir = pt_onb_to_world(&b, pt__cosine_hemisphere(pt_rng_float(rng), pt_rng_float(rng)));
+    ray.origin = pt__offset_origin(h->point, ng, ray.dir, h->magnitude);
+    beta = pt_mul(beta, m->texture ? pt__albedo(s, m, prim, bary, h) : m->albedo);
+    if (pt__photon_deltas(s, ray, rng, &beta, &p2, &h2, bary2, &arrival, &deltas) && deltas > 0)
+        pt__guide_splat(run->g, h2.point, pt_neg(arrival), flux * ((double)beta.x + (double)beta.y + (double)beta.z) / 3.0);
+}
+
 /* Photon i: a point on a light picked by power, a direction towards the delta bounds (uniform in
    their cone; cosine-weighted where the point is inside them), then delta bounces to the first
-   non-delta surface, where its flux is recorded along the way it came. */
+   non-delta surface, where its flux is recorded along the way it came; then it goes on
+   (pt__photon_onward). */
 static void pt__photon_trace(const pt__photon_run *run, uint64_t i)
 {
     const pt_scene *s = run->s;
@@ -11814,8 +11878,12 @@ static void pt__photon_trace(const pt__photon_run *run, uint64_t i)
     pt_vec3 y, n, w, dc;
     pt_color beta;
     double d2, pw, flux;
-    float cos_y;
-    int bounces, tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    float cos_y, bary[3];
+    int bounces;
+    pt_ray ray;
+    const pt__prim *prim;
+    pt_hit h;
+    pt_vec3 arrival;
     pt_rng_seed(&rng, run->seed, i);
     l = &s->lights[pt__pick_light(s, pt_rng_float(&rng))];
     lp = &s->prims[l->prim];
@@ -11850,39 +11918,12 @@ static void pt__photon_trace(const pt__photon_run *run, uint64_t i)
        (only a leaf's relative sums matter: its directional density) */
     flux = (double)cos_y * (double)l->area / ((double)l->select_pdf * pw);
     beta = lm->emission;
-    {
-        pt_ray ray;
-        ray.origin = pt__offset_origin(y, n, w, pt__prim_magnitude(lp, n));
-        ray.dir = w;
-        for (bounces = 0; bounces <= PT__PHOTON_MAX_DELTA; ++bounces) {
-            pt__rayctx rc;
-            uint32_t pi;
-            float t, bary[3];
-            const pt__prim *prim;
-            pt__vertex v;
-            pt_hit h;
-            pt_vec3 wi;
-            pt__rayctx_init2(&rc, ray, tri);
-            if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) return;
-            prim = &s->prims[pi];
-            v.m = &s->mats[prim->material];
-            if (!v.m->scatters) return;
-            pt__fill_hit(s, prim, ray, t, bary, &h);
-            if (!v.m->delta) { /* a caustic photon lands (a direct one is next-event estimation's) */
-                double e = flux * ((double)beta.x + (double)beta.y + (double)beta.z) / 3.0;
-                if (bounces > 0) pt__guide_splat(run->g, h.point, pt_neg(ray.dir), e);
-                return;
-            }
-            v.p = h.point;
-            v.wo = pt_neg(ray.dir);
-            v.ng = h.front_face ? h.geometric_normal : pt_neg(h.geometric_normal);
-            v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
-            v.albedo = v.m->texture ? pt__albedo(s, v.m, prim, bary, &h) : v.m->albedo;
-            if (!pt__delta_scatter(&v, h.front_face, pt_rng_float(&rng), &wi, &beta)) return;
-            ray.origin = pt__offset_origin(v.p, v.ng, wi, h.magnitude);
-            ray.dir = wi;
-        }
-    }
+    ray.origin = pt__offset_origin(y, n, w, pt__prim_magnitude(lp, n));
+    ray.dir = w;
+    if (!pt__photon_deltas(s, ray, &rng, &beta, &prim, &h, bary, &arrival, &bounces) || bounces == 0)
+        return; /* (a photon that lands without a delta bounce is next-event estimation's light) */
+    pt__guide_splat(run->g, h.point, pt_neg(arrival), flux * ((double)beta.x + (double)beta.y + (double)beta.z) / 3.0);
+    pt__photon_onward(run, &rng, prim, &h, bary, beta, flux);
 }
 
 static void pt__photon_job(void *data, int job)

@@ -1,8 +1,8 @@
 /* path_classes.c - where a render's variance is, by the kind of path that carries it. The scalar
    integrator, compiled with PDFTRACE_PATH_CLASSES, reports each contribution with its path's
    class (section 7 of pdftrace.h: E D+ L; delta vertices but not between the light and the last
-   non-delta vertex; the caustics L S+ D E, L S+ D S+ E, and L S+ D ... D E after one or after two
-   or more non-delta vertices). This program renders on one thread, sums each class per camera
+   non-delta vertex; the caustics L S+ D E and L S+ D S+ E, and a caustic's light reaching another
+   non-delta vertex directly, L S+ D D ... E, or through delta ones, L S+ D S+ D ... E). This program renders on one thread, sums each class per camera
    sample, and prints per class: its share of the image's mean, its relative variance per sample
    (mean over pixels and channels of Var/(m^2 + 0.01), m the pixel's mean, as the relMSE of
    bench/guide_efficiency.c) and its share of the whole's (the classes' shares need not add up
@@ -52,7 +52,7 @@ static void print_table(const pt_film *film, int spp)
 {
     static const char *name[PT_PATH_CLASS_COUNT + 1] = {
         "E D+ L (no delta vertex)", "delta vertices, not a caustic", "L S+ D E (caustic seen)",
-        "L S+ D S+ E (through glass)", "L S+ D D E (one bounce)", "L S+ D..D..D E (more)", "the image"};
+        "L S+ D S+ E (through glass)", "L S+ D D.. E (next to a D)", "L S+ D S+ D.. E (SDS)", "the image"};
     double mean[PT_PATH_CLASS_COUNT + 1] = {0}, rv[PT_PATH_CLASS_COUNT + 1] = {0};
     size_t n = (size_t)film->width * (size_t)film->height, p;
     int c, k;
