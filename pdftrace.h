@@ -9421,6 +9421,7 @@ typedef struct pt__vertex {
     uint32_t cleaf;
     float rr_e, rr_ref; /* guided roulette: the expected contribution of going on per unit throughput
                            (0: unknown) and the path's reference (pt__trace_from) */
+    int surface;          /* non-delta vertices before this one on its path (this one non-delta) */
     const void *sph_prim; /* the light sample at o: a quad light's primitive and the solid angle it */
     double sph_S;         /* was sampled by (pt__light_sample; NULL: none), which the emission a
                              scattered ray finds on that light reuses (pt__emission_weight) */
@@ -9980,9 +9981,8 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
 }
 
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
-                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n, pt__sampler *smp,
-                               pt_path_stats *st,
-                               pt__splits *sp);
+                               int surfaces0, int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n,
+                               pt__sampler *smp, pt_path_stats *st, pt__splits *sp);
 
 /* Training a guide (section 8, "Guiding"): a non-delta vertex that continued along w with
    density pdf and throughput beta (after the scatter weight and roulette) when the path had
@@ -10036,7 +10036,8 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
         PT__PCLASS(sp->pc = pc;)
         pt_color Lc = pt_v3(0, 0, 0);
         if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2, &Lc, st)) {
-            pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, pt__receiver_normal(v), cs, st, sp);
+            pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, v->surface + 1, pd2, pp2, v->o, pt__receiver_normal(v),
+                                         cs, st, sp);
             st->bounce_rays++;
             L = pt_add(L, Li);
             if (PT__UNLIKELY(cfg->recording != NULL) && !pd2) {
@@ -10055,22 +10056,24 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
     return L;
 }
 
-/* Path guiding at non-delta vertex v (bounce `depth`): guided roulette's estimate of what going on
-   adds per unit throughput, from the learned guide's leaf once it has data, and, at the first
-   PT__GUIDE_SAMPLE_DEPTH bounces, the leaf's guide folded about the geometric normal (non-delta
-   materials reflect only: pt__continue; a transmitting one keeps the whole sphere, fold 0).
-   Deeper vertices sample the material alone: each guided vertex pays two quadtree descents and
-   an atan2, and the light the guide finds matters most where the path's throughput is still
-   high (bench/README.md, "Path guiding, step by step"). */
-#define PT__GUIDE_SAMPLE_DEPTH 2
+/* Path guiding at non-delta vertex v: guided roulette's estimate of what going on adds per unit
+   throughput, from the learned guide's leaf once it has data, and, at the first
+   PT__GUIDE_SAMPLE_SURFACES non-delta vertices of a path (v->surface counts those before v), the
+   leaf's guide folded about the geometric normal (non-delta materials reflect only:
+   pt__continue; a transmitting one keeps the whole sphere, fold 0). Later vertices sample the
+   material alone: each guided vertex pays two quadtree descents and an atan2, and the light the
+   guide finds matters most where the path's throughput is still high (bench/README.md, "Path
+   guiding, step by step"). Delta bounces are not counted: the caustic under a glass ball, seen
+   through it from a wall, is reached at bounce 3 and found from there by its guide. */
+#define PT__GUIDE_SAMPLE_SURFACES 2
 #define PT__CAUSTIC_SHARE 0.5f /* the caustic photons' share of the guide's, where they landed */
-static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, int depth, pt_path_stats *st)
+static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_stats *st)
 {
     uint32_t leaf = pt__guide_leaf_at(cfg->learned, v->p);
     const pt_guide *cg = cfg->learned->caustic;
     int trained = cfg->learned->leaves[leaf].trained;
     if (trained) v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
-    if (depth >= PT__GUIDE_SAMPLE_DEPTH) return;
+    if (v->surface >= PT__GUIDE_SAMPLE_SURFACES) return;
     if (cg) {
         v->cleaf = pt__guide_leaf_at(cg, v->p);
         if (cg->leaves[v->cleaf].trained) v->cshare = trained ? PT__CAUSTIC_SHARE : 1.0f;
@@ -10149,15 +10152,14 @@ static PT__HOT float pt__emission_weight(const pt_scene *s, const pt__settings *
     return pt__power_heuristic(prev_pdf, pl);
 }
 
-/* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
-   pt__trace). */
+/* The path from `ray` on, which has throughput beta and has scattered `depth0` times, at
+   `surfaces0` non-delta vertices (see pt__trace). */
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
-                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n, pt__sampler *smp,
-                               pt_path_stats *st,
-                               pt__splits *sp)
+                               int surfaces0, int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n,
+                               pt__sampler *smp, pt_path_stats *st, pt__splits *sp)
 {
     pt_color L = pt_v3(0, 0, 0), beta_in;
-    int depth;
+    int depth, surfaces = surfaces0;
     const int any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
     const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0; /* else rays skip the triangle set-up */
     const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
@@ -10225,6 +10227,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
         if (!m->delta) {
+            v.surface = surfaces++;
             v.has_guide = 0;
             v.cshare = 0.0f;
             v.rr_e = 0.0f; /* (set at a guided vertex; delta vertices keep the last one's: the light
@@ -10239,7 +10242,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 v.g = cfg->guide_weight;
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
             } else if (cfg->learned) {
-                pt__vertex_learned(cfg, &v, depth, st);
+                pt__vertex_learned(cfg, &v, st);
             }
             /* next-event estimation (LIGHT and MIS) */
             if (nee) {
@@ -10317,7 +10320,8 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     sp.rr_ref = 0.0f;
     PT__PCLASS(memset(&sp.pc, 0, sizeof sp.pc);)
     st->camera_rays++;
-    return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 1, 0.0f, ray.origin, pt_v3(0.0f, 0.0f, 0.0f), smp, st, &sp), 1.0f / k);
+    return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 0, 1, 0.0f, ray.origin, pt_v3(0.0f, 0.0f, 0.0f), smp, st, &sp),
+                    1.0f / k);
 }
 
 /* One camera sample with the per-sample NaN/Inf guard. */
@@ -10384,7 +10388,7 @@ typedef struct pt__lane {
     pt_color beta, beta_in, L;
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
-    int depth, prev_delta, found, shadow;
+    int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
     pt_hit h;
@@ -10414,6 +10418,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->beta = pt_v3(k, k, k);
     l->L = pt_v3(0, 0, 0);
     l->depth = 0;
+    l->surfaces = 0;
     l->prev_delta = 1;
     l->prev_pdf = 0.0f;
     l->prev_p = ray.origin;
@@ -10459,6 +10464,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
             l->L = pt_add(l->L, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st));
     }
     if (!m->delta) {
+        v->surface = l->surfaces++;
         v->has_guide = 0;
         v->cshare = 0.0f;
         v->rr_e = 0.0f;
@@ -10472,7 +10478,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
             v->g = cfg->guide_weight;
             v->has_guide = cfg->guide(cfg->guide_user, &sp, &v->guide) ? 1 : 0;
         } else if (cfg->learned) {
-            pt__vertex_learned(cfg, v, l->depth, &l->st);
+            pt__vertex_learned(cfg, v, &l->st);
         }
         if (b->nee) {
             float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;

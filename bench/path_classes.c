@@ -12,8 +12,8 @@
      cc -std=c99 -O2 -I. -pthread -o build/path_classes bench/path_classes.c -lm
      build/path_classes scenes/cornell.scene --size 300 --spp 64
      build/path_classes scenes/cornell.scene --size 300 --spp 64 --guiding on
-   Options: --size N (square image), --spp N, --guiding off|on, --sampler independent|sobol (the
-   scene's, else Sobol), --seed N. */
+   Options: --size N (square image), --spp N, --guiding off|on, --alpha F (guiding_alpha; 0: the
+   default), --sampler independent|sobol (the scene's, else Sobol), --seed N. */
 #define PDFTRACE_PATH_CLASSES
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
@@ -92,6 +92,7 @@ int main(int argc, char **argv)
     char err[512];
     int size = 300, spp = 64, guiding = 0, sampler = -1, i;
     long seed = 1;
+    float alpha = 0.0f;
     clock_t t0;
     if (argc < 2) {
         fprintf(stderr, "usage: path_classes SCENE [--size N] [--spp N] [--guiding off|on] [--sampler S] [--seed N]\n");
@@ -103,6 +104,7 @@ int main(int argc, char **argv)
         else if (i + 1 < argc && !strcmp(argv[i], "--guiding")) guiding = !strcmp(argv[++i], "on");
         else if (i + 1 < argc && !strcmp(argv[i], "--sampler")) sampler = !strcmp(argv[++i], "sobol");
         else if (i + 1 < argc && !strcmp(argv[i], "--seed")) seed = atol(argv[++i]);
+        else if (i + 1 < argc && !strcmp(argv[i], "--alpha")) alpha = (float)atof(argv[++i]);
         else {
             fprintf(stderr, "path_classes: bad argument '%s'\n", argv[i]);
             return 2;
@@ -124,6 +126,7 @@ int main(int argc, char **argv)
     d.strategy = PT_STRATEGY_MIS;
     d.guiding = guiding ? PT_GUIDING_ON : PT_GUIDING_OFF;
     d.seed = (uint64_t)seed;
+    d.guiding_alpha = alpha;
     if (sampler >= 0) d.sampler = sampler ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
     pixel_sum = (double *)calloc((size_t)size * (size_t)size * PT_PATH_CLASS_COUNT * 3u, sizeof(double));
     pixel_sq = (double *)calloc((size_t)size * (size_t)size * PT_PATH_CLASS_COUNT * 3u, sizeof(double));
