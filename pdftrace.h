@@ -179,7 +179,8 @@
    each of its leaves learned, so that paths carrying indirect light live on. In scenes with
    mirrors or glass and shaped lights, photons traced from the lights through those surfaces
    train a second guide first (pt_guide_caustic: the caustics next-event estimation cannot
-   sample), which takes half of the guide's share where they landed. Every sample stays
+   sample, and, one diffuse bounce on, where they are seen through the glass), which takes half
+   of the guide's share where they landed. Every sample stays
    in the image with equal weight, so the image is unbiased and bit-identical at any thread count.
    PT_GUIDING_AUTO measures, in the last training iteration, whether the guide pays and goes on
    unguided if not; scenes where guiding cannot help (no non-delta material, no light) skip it.
