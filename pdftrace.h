@@ -179,7 +179,8 @@
    each of its leaves learned, so that paths carrying indirect light live on. In scenes with
    mirrors or glass and shaped lights, photons traced from the lights through those surfaces
    train a second guide first (pt_guide_caustic: the caustics next-event estimation cannot
-   sample), which takes half of the guide's share where they landed. Every sample stays
+   sample, and, one diffuse bounce on, where they are seen through the glass), which takes half
+   of the guide's share where they landed. Every sample stays
    in the image with equal weight, so the image is unbiased and bit-identical at any thread count.
    PT_GUIDING_AUTO measures, in the last training iteration, whether the guide pays and goes on
    unguided if not; scenes where guiding cannot help (no non-delta material, no light) skip it.
@@ -3761,6 +3762,40 @@ static void pt__dtree_density2(const pt__dtree *t, float x0, float y0, float x1,
     }
     *d0 = a > 0.0f ? a : 0.0f;
     *d1 = b > 0.0f ? b : 0.0f;
+}
+
+/* The densities of two trees (a, b) at two points each (a direction and its mirror): the four
+   descents interleaved, as pt__dtree_density2's two. */
+static void pt__dtree_density4(const pt__dtree *a, const pt__dtree *b, float x0, float y0, float x1, float y1,
+                               float d[4])
+{
+    const pt__dtree *t[4];
+    float x[4], y[4], p[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+    uint32_t n[4] = {0, 0, 0, 0};
+    int level, k, go[4], live;
+    t[0] = t[1] = a;
+    t[2] = t[3] = b;
+    x[0] = x[2] = x0;
+    y[0] = y[2] = y0;
+    x[1] = x[3] = x1;
+    y[1] = y[3] = y1;
+    go[0] = go[1] = a->nodes != 0;
+    go[2] = go[3] = b->nodes != 0;
+    live = go[0] || go[2];
+    for (level = 0; level < PT__GUIDE_MAX_DEPTH && live; ++level) {
+        live = 0;
+        for (k = 0; k < 4; ++k) {
+            if (go[k]) {
+                const pt__dnode *nd = t[k]->node + n[k];
+                int q = pt__guide_quadrant(&x[k], &y[k]);
+                p[k] *= 4.0f * nd->prob[q];
+                n[k] = nd->child[q];
+                go[k] = n[k] && p[k] > 0.0f;
+                live |= go[k];
+            }
+        }
+    }
+    for (k = 0; k < 4; ++k) d[k] = p[k] > 0.0f ? p[k] : 0.0f;
 }
 
 /* Draws (x, y) from the sampling tree by warping (ux, uy) level by level (a column by its
@@ -9387,6 +9422,7 @@ typedef struct pt__vertex {
     uint32_t cleaf;
     float rr_e, rr_ref; /* guided roulette: the expected contribution of going on per unit throughput
                            (0: unknown) and the path's reference (pt__trace_from) */
+    int surface;          /* non-delta vertices before this one on its path (this one non-delta) */
     const void *sph_prim; /* the light sample at o: a quad light's primitive and the solid angle it */
     double sph_S;         /* was sampled by (pt__light_sample; NULL: none), which the emission a
                              scattered ray finds on that light reuses (pt__emission_weight) */
@@ -9408,12 +9444,14 @@ static float pt__vertex_guide_density(const pt__vertex *v, pt_vec3 wi)
     /* the square's point and its mirror once, for both trees */
     pt__guide_dir_to_square(wi, &x, &y);
     if (!pt__guide_mirror_square(n, x, y, &mx, &my)) pt__guide_dir_to_square(pt__guide_mirror(wi, n), &mx, &my);
+    if (c < 1.0f) { /* both trees, their four descents interleaved */
+        float d[4];
+        pt__dtree_density4(&g->caustic->leaves[v->cleaf].sampling, &g->leaves[v->guide.as.guide.leaf].sampling, x, y,
+                           mx, my, d);
+        return (c * (d[0] + d[1]) + (1.0f - c) * (d[2] + d[3])) * PT__INV_4PI;
+    }
     pt__dtree_density2(&g->caustic->leaves[v->cleaf].sampling, x, y, mx, my, &d0, &d1);
     p = c * (d0 + d1);
-    if (c < 1.0f) {
-        pt__dtree_density2(&g->leaves[v->guide.as.guide.leaf].sampling, x, y, mx, my, &d0, &d1);
-        p += (1.0f - c) * (d0 + d1);
-    }
     return p * PT__INV_4PI;
 }
 /* pg: the guide's density of wi when it is known (a guide sample's own), else < 0 */
@@ -9742,9 +9780,57 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
 /* A camera sample's splitting budget: `left` extra copies may still start (max_splits), and
    `first` is the split of the first non-delta vertex still to come (indirect_paths; 1 once it
    has been reached). */
+/* Path classes (a diagnostic, compiled only with PDFTRACE_PATH_CLASSES: bench/path_classes.c).
+   The scalar integrator hands each contribution to pt_path_class_add, which the including file
+   defines, with the class of the path that made it, from the sequence of its vertices: D a
+   non-delta vertex, S a delta one, read from the camera (E) to the light (L). */
+#ifdef PDFTRACE_PATH_CLASSES
+enum {
+    PT_PATH_CLASS_NO_DELTA,        /* E D+ L: no delta vertex */
+    PT_PATH_CLASS_DELTA,           /* delta vertices, none between the light and the last D */
+    PT_PATH_CLASS_CAUSTIC_SEEN,    /* L S+ D E: a caustic the camera sees */
+    PT_PATH_CLASS_CAUSTIC_THROUGH, /* L S+ D S+ E: a caustic seen through delta surfaces */
+    PT_PATH_CLASS_CAUSTIC_BOUNCE,  /* L S+ D D ... E: a caustic's light, one more D next to it */
+    PT_PATH_CLASS_CAUSTIC_SDS,     /* L S+ D S+ D ... E: a caustic's light seen through delta
+                                      surfaces from a D (no unbiased local sampling technique
+                                      connects these: only a scattered direction finds them) */
+    PT_PATH_CLASS_COUNT
+};
+void pt_path_class_add(int path_class, pt_color contribution);
+void pt_path_class_sample_done(uint32_t pixel); /* after each camera sample of pt_render (scalar) */
+typedef struct pt__pclass {
+    int d, s_first, s_last, s_any; /* D count; S before the first D, since the last D, anywhere */
+    int s_before;         /* an S between the last D and the D before it */
+} pt__pclass;
+static void pt__pclass_vertex(pt__pclass *c, int delta)
+{
+    if (!delta) c->s_before = c->s_last && c->d > 0;
+    if (delta) {
+        c->s_first |= c->d == 0;
+        c->s_last = c->s_any = 1;
+    } else {
+        c->d++;
+        c->s_last = 0;
+    }
+}
+/* the class of light reached by a ray from the last vertex (next-event estimation's is
+   pt__pclass_nee's) */
+static int pt__pclass_found(const pt__pclass *c)
+{
+    if (!c->s_last || c->d == 0) return c->s_any ? PT_PATH_CLASS_DELTA : PT_PATH_CLASS_NO_DELTA;
+    if (c->d == 1) return c->s_first ? PT_PATH_CLASS_CAUSTIC_THROUGH : PT_PATH_CLASS_CAUSTIC_SEEN;
+    return c->s_before ? PT_PATH_CLASS_CAUSTIC_SDS : PT_PATH_CLASS_CAUSTIC_BOUNCE;
+}
+static int pt__pclass_nee(const pt__pclass *c) { return c->s_any ? PT_PATH_CLASS_DELTA : PT_PATH_CLASS_NO_DELTA; }
+#define PT__PCLASS(...) __VA_ARGS__
+#else
+#define PT__PCLASS(...)
+#endif
+
 typedef struct pt__splits {
     int left, first;
     float rr_ref; /* guided roulette: the path's expected value at its first guided vertex (0: none yet) */
+    PT__PCLASS(pt__pclass pc;) /* the path's class at the vertex that splits (split copies start from it) */
 } pt__splits;
 
 /* How many copies the path continues as from a non-delta vertex reached with throughput beta_in:
@@ -9896,9 +9982,8 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
 }
 
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
-                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n, pt__sampler *smp,
-                               pt_path_stats *st,
-                               pt__splits *sp);
+                               int surfaces0, int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n,
+                               pt__sampler *smp, pt_path_stats *st, pt__splits *sp);
 
 /* Training a guide (section 8, "Guiding"): a non-delta vertex that continued along w with
    density pdf and throughput beta (after the scatter weight and roulette) when the path had
@@ -9940,6 +10025,7 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
 {
     pt_color L = pt_v3(0, 0, 0);
     int copy;
+    PT__PCLASS(const pt__pclass pc = sp->pc;) /* (a copy's own splits overwrite sp->pc) */
     for (copy = 1; copy < k; ++copy) {
         pt__sampler child;
         pt__sampler *cs = pt__split_sampler(smp, &child, depth, copy);
@@ -9948,9 +10034,11 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
         float pp2 = prev_pdf;
         int pd2 = prev_delta;
         st->split_paths++;
+        PT__PCLASS(sp->pc = pc;)
         pt_color Lc = pt_v3(0, 0, 0);
         if (pt__continue(s, cfg, v, h, depth, beta_share, cs, any_lights, pick, &r2, &b2, &pp2, &pd2, &Lc, st)) {
-            pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, pd2, pp2, v->o, pt__receiver_normal(v), cs, st, sp);
+            pt_color Li = pt__trace_from(s, cfg, r2, b2, depth + 1, v->surface + 1, pd2, pp2, v->o, pt__receiver_normal(v),
+                                         cs, st, sp);
             st->bounce_rays++;
             L = pt_add(L, Li);
             if (PT__UNLIKELY(cfg->recording != NULL) && !pd2) {
@@ -9964,26 +10052,29 @@ static pt_color pt__split_copies(const pt_scene *s, const pt__settings *cfg, con
             }
         }
         L = pt_add(L, Lc);
+        PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(Lc, 1.0f / (float)cfg->indirect_paths));)
     }
     return L;
 }
 
-/* Path guiding at non-delta vertex v (bounce `depth`): guided roulette's estimate of what going on
-   adds per unit throughput, from the learned guide's leaf once it has data, and, at the first
-   PT__GUIDE_SAMPLE_DEPTH bounces, the leaf's guide folded about the geometric normal (non-delta
-   materials reflect only: pt__continue; a transmitting one keeps the whole sphere, fold 0).
-   Deeper vertices sample the material alone: each guided vertex pays two quadtree descents and
-   an atan2, and the light the guide finds matters most where the path's throughput is still
-   high (bench/README.md, "Path guiding, step by step"). */
-#define PT__GUIDE_SAMPLE_DEPTH 2
+/* Path guiding at non-delta vertex v: guided roulette's estimate of what going on adds per unit
+   throughput, from the learned guide's leaf once it has data, and, at the first
+   PT__GUIDE_SAMPLE_SURFACES non-delta vertices of a path (v->surface counts those before v), the
+   leaf's guide folded about the geometric normal (non-delta materials reflect only:
+   pt__continue; a transmitting one keeps the whole sphere, fold 0). Later vertices sample the
+   material alone: each guided vertex pays two quadtree descents and an atan2, and the light the
+   guide finds matters most where the path's throughput is still high (bench/README.md, "Path
+   guiding, step by step"). Delta bounces are not counted: the caustic under a glass ball, seen
+   through it from a wall, is reached at bounce 3 and found from there by its guide. */
+#define PT__GUIDE_SAMPLE_SURFACES 2
 #define PT__CAUSTIC_SHARE 0.5f /* the caustic photons' share of the guide's, where they landed */
-static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, int depth, pt_path_stats *st)
+static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_stats *st)
 {
     uint32_t leaf = pt__guide_leaf_at(cfg->learned, v->p);
     const pt_guide *cg = cfg->learned->caustic;
     int trained = cfg->learned->leaves[leaf].trained;
     if (trained) v->rr_e = cfg->learned->leaves[leaf].flux * pt_max_component(v->albedo) * (0.5f / PT__PI);
-    if (depth >= PT__GUIDE_SAMPLE_DEPTH) return;
+    if (v->surface >= PT__GUIDE_SAMPLE_SURFACES) return;
     if (cg) {
         v->cleaf = pt__guide_leaf_at(cg, v->p);
         if (cg->leaves[v->cleaf].trained) v->cshare = trained ? PT__CAUSTIC_SHARE : 1.0f;
@@ -10062,15 +10153,14 @@ static PT__HOT float pt__emission_weight(const pt_scene *s, const pt__settings *
     return pt__power_heuristic(prev_pdf, pl);
 }
 
-/* The path from `ray` on, which has throughput beta and has scattered `depth0` times (see
-   pt__trace). */
+/* The path from `ray` on, which has throughput beta and has scattered `depth0` times, at
+   `surfaces0` non-delta vertices (see pt__trace). */
 static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ray ray, pt_color beta, int depth0,
-                               int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n, pt__sampler *smp,
-                               pt_path_stats *st,
-                               pt__splits *sp)
+                               int surfaces0, int prev_delta, float prev_pdf, pt_vec3 prev_p, pt_vec3 prev_n,
+                               pt__sampler *smp, pt_path_stats *st, pt__splits *sp)
 {
     pt_color L = pt_v3(0, 0, 0), beta_in;
-    int depth;
+    int depth, surfaces = surfaces0;
     const int any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
     const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0; /* else rays skip the triangle set-up */
     const int nee = any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
@@ -10083,6 +10173,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
     v.g = 0.0f;
     v.rr_e = v.rr_ref = 0.0f;
     v.sph_prim = NULL; /* (the caller's vertex is not this one's: no light sample to reuse) */
+    PT__PCLASS(pt__pclass pc = sp->pc; const float pc_k = 1.0f / (float)cfg->indirect_paths;)
     for (depth = depth0;; ++depth) {
         pt__rayctx rc;
         uint32_t pi;
@@ -10096,6 +10187,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             if (PT__UNLIKELY(cfg->env_on)) {
                 pt_color e = pt__env_escape(cfg, ray.dir, beta, prev_delta, prev_pdf);
                 L = pt_add(L, e);
+                PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(e, pc_k));)
                 if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
             } else {
                 L = pt_add(L, pt_mul(beta, cfg->background)); /* (black: the scene has no environment) */
@@ -10114,6 +10206,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             if (w > 0.0f) {
                 pt_color e = pt_scale(pt_mul(beta, m->emission), w);
                 L = pt_add(L, e);
+                PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(e, pc_k));)
                 /* training with next-event estimation: direct light is NEE's, the guide learns the rest */
                 if (rec_last >= 0 && nee) recs[rec_last].L0 = pt_add(recs[rec_last].L0, e);
             }
@@ -10122,6 +10215,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
         if (depth >= cfg->max_depth || !m->scatters) break;
 
         beta_in = beta;
+        PT__PCLASS(pt__pclass_vertex(&pc, m->delta);)
         pt__vertex_at(s, cfg, &v, prim, m, &h, ray.dir, bary);
         if (m->delta && nee && !PT__SKIP(cfg, PT_SKIP_DELTA_VERTEX)) {
             /* general path: next-event estimation as at any vertex; a delta material reflects
@@ -10134,6 +10228,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
         }
         if (!m->delta) {
+            v.surface = surfaces++;
             v.has_guide = 0;
             v.cshare = 0.0f;
             v.rr_e = 0.0f; /* (set at a guided vertex; delta vertices keep the last one's: the light
@@ -10148,7 +10243,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 v.g = cfg->guide_weight;
                 v.has_guide = cfg->guide(cfg->guide_user, &sp, &v.guide) ? 1 : 0;
             } else if (cfg->learned) {
-                pt__vertex_learned(cfg, &v, depth, st);
+                pt__vertex_learned(cfg, &v, st);
             }
             /* next-event estimation (LIGHT and MIS) */
             if (nee) {
@@ -10158,13 +10253,20 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
                 pt__draw2(smp, PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
                 ls.sph_prim = NULL;
                 ls.sph_S = 0.0;
-                if (pt__lights_sample_all(s, cfg, v.o, pt__receiver_normal(&v), u0, u1, u2, &ls, &li))
-                    L = pt_add(L, pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st));
+                if (pt__lights_sample_all(s, cfg, v.o, pt__receiver_normal(&v), u0, u1, u2, &ls, &li)) {
+                    pt_color e = pt__nee_contribution(s, cfg, &v, &ls, li, beta, tri, st);
+                    L = pt_add(L, e);
+                    PT__PCLASS(pt_path_class_add(pt__pclass_nee(&pc), pt_scale(e, pc_k));)
+                }
                 v.sph_prim = ls.sph_prim;
                 v.sph_S = ls.sph_S;
             }
             /* the delta lights, under every strategy (a scene without them skips this) */
-            if (PT__UNLIKELY(s->dlight_count != 0)) L = pt_add(L, pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st));
+            if (PT__UNLIKELY(s->dlight_count != 0)) {
+                pt_color e = pt__delta_nee(s, cfg, &v, beta, depth, smp, tri, st);
+                L = pt_add(L, e);
+                PT__PCLASS(pt_path_class_add(pt__pclass_nee(&pc), pt_scale(e, pc_k));)
+            }
             if (v.rr_e > 0.0f && !(sp->rr_ref > 0.0f)) /* the first guided vertex: what the path has so far
                                                           and what going on should add */
                 sp->rr_ref = pt_max_component(L) + pt_max_component(beta) * v.rr_e;
@@ -10176,6 +10278,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
              PT__UNLIKELY(beta_in.x >= PT__SPLIT_BETA || beta_in.y >= PT__SPLIT_BETA || beta_in.z >= PT__SPLIT_BETA)) &&
             (k = pt__split_count(beta_in, sp)) > 1) {
             beta_in = pt_scale(beta_in, 1.0f / (float)k);
+            PT__PCLASS(sp->pc = pc;)
             L = pt_add(L, pt__split_copies(s, cfg, &v, &h, depth, k, beta_in, smp, any_lights, pick, prev_delta, prev_pdf,
                                            st, sp));
         }
@@ -10184,6 +10287,7 @@ static pt_color pt__trace_from(const pt_scene *s, const pt__settings *cfg, pt_ra
             int go = pt__continue(s, cfg, &v, &h, depth, beta_in, smp, any_lights, pick, &ray, &beta, &prev_pdf,
                                   &prev_delta, &Lc, st);
             L = pt_add(L, Lc);
+            PT__PCLASS(pt_path_class_add(pt__pclass_found(&pc), pt_scale(Lc, pc_k));)
             if (!go) break;
             if (PT__UNLIKELY(cfg->recording != NULL) && !prev_delta && nrec < PT__GUIDE_PATH_RECORDS) {
                 recs[nrec].p = v.p; /* what arrives along ray.dir is what L gains from here on */
@@ -10215,8 +10319,10 @@ static pt_color pt__trace(const pt_scene *s, const pt__settings *cfg, pt_ray ray
     sp.left = cfg->max_splits;
     sp.first = cfg->indirect_paths;
     sp.rr_ref = 0.0f;
+    PT__PCLASS(memset(&sp.pc, 0, sizeof sp.pc);)
     st->camera_rays++;
-    return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 1, 0.0f, ray.origin, pt_v3(0.0f, 0.0f, 0.0f), smp, st, &sp), 1.0f / k);
+    return pt_scale(pt__trace_from(s, cfg, ray, pt_v3(k, k, k), 0, 0, 1, 0.0f, ray.origin, pt_v3(0.0f, 0.0f, 0.0f), smp, st, &sp),
+                    1.0f / k);
 }
 
 /* One camera sample with the per-sample NaN/Inf guard. */
@@ -10283,7 +10389,7 @@ typedef struct pt__lane {
     pt_color beta, beta_in, L;
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
-    int depth, prev_delta, found, shadow;
+    int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
     pt_hit h;
@@ -10305,6 +10411,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->sp.left = cfg->max_splits;
     l->sp.first = cfg->indirect_paths;
     l->sp.rr_ref = 0.0f;
+    PT__PCLASS(memset(&l->sp.pc, 0, sizeof l->sp.pc);)
     memset(&l->st, 0, sizeof l->st);
     l->st.camera_rays++;
     l->ray = ray;
@@ -10312,6 +10419,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->beta = pt_v3(k, k, k);
     l->L = pt_v3(0, 0, 0);
     l->depth = 0;
+    l->surfaces = 0;
     l->prev_delta = 1;
     l->prev_pdf = 0.0f;
     l->prev_p = ray.origin;
@@ -10357,6 +10465,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
             l->L = pt_add(l->L, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st));
     }
     if (!m->delta) {
+        v->surface = l->surfaces++;
         v->has_guide = 0;
         v->cshare = 0.0f;
         v->rr_e = 0.0f;
@@ -10370,7 +10479,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
             v->g = cfg->guide_weight;
             v->has_guide = cfg->guide(cfg->guide_user, &sp, &v->guide) ? 1 : 0;
         } else if (cfg->learned) {
-            pt__vertex_learned(cfg, v, l->depth, &l->st);
+            pt__vertex_learned(cfg, v, &l->st);
         }
         if (b->nee) {
             float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
@@ -10773,6 +10882,7 @@ static void pt__render_tile(void *data, int job)
                 mine++;
                 ray = pt__camera_sample(ps, &smp, x, y, pix, index_k, pixel_key, &cache);
                 L = pt__sample(ps->scene, ps->cfg, ray, &smp, &st);
+                PT__PCLASS(pt_path_class_sample_done(pix);)
                 pt__film_sample(sum, sq, odd, lo, index_k, L);
             }
             film->count[pix] += mine;
@@ -11702,9 +11812,69 @@ static int pt__delta_bounds(const pt_scene *s, pt_vec3 *c, float *r)
     return pt__vfinite(*c) && pt__isfinite(*r);
 }
 
+/* Follows a photon along ray through at most PT__PHOTON_MAX_DELTA delta bounces (beta its
+   throughput, updated) to the first non-delta surface: returns 1 with the hit there and the
+   direction the photon arrived along, 0 if it left the scene or ended. *deltas: the delta
+   bounces taken. */
+static int pt__photon_deltas(const pt_scene *s, pt_ray ray, pt_rng *rng, pt_color *beta, const pt__prim **prim,
+                             pt_hit *h, float bary[3], pt_vec3 *arrival, int *deltas)
+{
+    const int tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    for (*deltas = 0; *deltas <= PT__PHOTON_MAX_DELTA; ++*deltas) {
+        pt__rayctx rc;
+        uint32_t pi;
+        float t;
+        pt__vertex v;
+        pt_vec3 wi;
+        pt__rayctx_init2(&rc, ray, tri);
+        if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) return 0;
+        *prim = &s->prims[pi];
+        v.m = &s->mats[(*prim)->material];
+        if (!v.m->scatters) return 0;
+        pt__fill_hit(s, *prim, ray, t, bary, h);
+        *arrival = ray.dir;
+        if (!v.m->delta) return 1;
+        v.p = h->point;
+        v.wo = pt_neg(ray.dir);
+        v.ng = h->front_face ? h->geometric_normal : pt_neg(h->geometric_normal);
+        v.ns = pt_dot(h->shading_normal, v.wo) < 0.0f ? pt_neg(h->shading_normal) : h->shading_normal;
+        v.albedo = v.m->texture ? pt__albedo(s, v.m, *prim, bary, h) : v.m->albedo;
+        if (!pt__delta_scatter(&v, h->front_face, pt_rng_float(rng), &wi, beta)) return 0;
+        ray.origin = pt__offset_origin(v.p, v.ng, wi, h->magnitude);
+        ray.dir = wi;
+    }
+    return 0;
+}
+
+/* A landed caustic photon goes on: one bounce cosine-weighted about the lit side's normal (its
+   throughput times the albedo, exact for a Lambertian surface; it only shapes a PDF), then
+   delta bounces; if it passed a delta surface it is recorded at the next non-delta one. These
+   are the ways a diffuse point sees a caustic through glass (S D S paths), which no shadow ray
+   can join: the point's photon leaf then points into the glass where the caustic shows. */
+static void pt__photon_onward(const pt__photon_run *run, pt_rng *rng, const pt__prim *prim, const pt_hit *h,
+                              const float bary[3], pt_color beta, double flux)
+{
+    const pt_scene *s = run->s;
+    const pt__material *m = &s->mats[prim->material];
+    pt_vec3 ng = h->front_face ? h->geometric_normal : pt_neg(h->geometric_normal);
+    pt_onb b = pt__onb(ng);
+    pt_ray ray;
+    pt_hit h2;
+    const pt__prim *p2;
+    pt_vec3 arrival;
+    float bary2[3];
+    int deltas;
+    ray.dir = pt_onb_to_world(&b, pt__cosine_hemisphere(pt_rng_float(rng), pt_rng_float(rng)));
+    ray.origin = pt__offset_origin(h->point, ng, ray.dir, h->magnitude);
+    beta = pt_mul(beta, m->texture ? pt__albedo(s, m, prim, bary, h) : m->albedo);
+    if (pt__photon_deltas(s, ray, rng, &beta, &p2, &h2, bary2, &arrival, &deltas) && deltas > 0)
+        pt__guide_splat(run->g, h2.point, pt_neg(arrival), flux * ((double)beta.x + (double)beta.y + (double)beta.z) / 3.0);
+}
+
 /* Photon i: a point on a light picked by power, a direction towards the delta bounds (uniform in
    their cone; cosine-weighted where the point is inside them), then delta bounces to the first
-   non-delta surface, where its flux is recorded along the way it came. */
+   non-delta surface, where its flux is recorded along the way it came; then it goes on
+   (pt__photon_onward). */
 static void pt__photon_trace(const pt__photon_run *run, uint64_t i)
 {
     const pt_scene *s = run->s;
@@ -11715,8 +11885,12 @@ static void pt__photon_trace(const pt__photon_run *run, uint64_t i)
     pt_vec3 y, n, w, dc;
     pt_color beta;
     double d2, pw, flux;
-    float cos_y;
-    int bounces, tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    float cos_y, bary[3];
+    int bounces;
+    pt_ray ray;
+    const pt__prim *prim;
+    pt_hit h;
+    pt_vec3 arrival;
     pt_rng_seed(&rng, run->seed, i);
     l = &s->lights[pt__pick_light(s, pt_rng_float(&rng))];
     lp = &s->prims[l->prim];
@@ -11751,39 +11925,12 @@ static void pt__photon_trace(const pt__photon_run *run, uint64_t i)
        (only a leaf's relative sums matter: its directional density) */
     flux = (double)cos_y * (double)l->area / ((double)l->select_pdf * pw);
     beta = lm->emission;
-    {
-        pt_ray ray;
-        ray.origin = pt__offset_origin(y, n, w, pt__prim_magnitude(lp, n));
-        ray.dir = w;
-        for (bounces = 0; bounces <= PT__PHOTON_MAX_DELTA; ++bounces) {
-            pt__rayctx rc;
-            uint32_t pi;
-            float t, bary[3];
-            const pt__prim *prim;
-            pt__vertex v;
-            pt_hit h;
-            pt_vec3 wi;
-            pt__rayctx_init2(&rc, ray, tri);
-            if (!pt__scene_closest(s, &rc, PT__INF, &pi, &t, bary)) return;
-            prim = &s->prims[pi];
-            v.m = &s->mats[prim->material];
-            if (!v.m->scatters) return;
-            pt__fill_hit(s, prim, ray, t, bary, &h);
-            if (!v.m->delta) { /* a caustic photon lands (a direct one is next-event estimation's) */
-                double e = flux * ((double)beta.x + (double)beta.y + (double)beta.z) / 3.0;
-                if (bounces > 0) pt__guide_splat(run->g, h.point, pt_neg(ray.dir), e);
-                return;
-            }
-            v.p = h.point;
-            v.wo = pt_neg(ray.dir);
-            v.ng = h.front_face ? h.geometric_normal : pt_neg(h.geometric_normal);
-            v.ns = pt_dot(h.shading_normal, v.wo) < 0.0f ? pt_neg(h.shading_normal) : h.shading_normal;
-            v.albedo = v.m->texture ? pt__albedo(s, v.m, prim, bary, &h) : v.m->albedo;
-            if (!pt__delta_scatter(&v, h.front_face, pt_rng_float(&rng), &wi, &beta)) return;
-            ray.origin = pt__offset_origin(v.p, v.ng, wi, h.magnitude);
-            ray.dir = wi;
-        }
-    }
+    ray.origin = pt__offset_origin(y, n, w, pt__prim_magnitude(lp, n));
+    ray.dir = w;
+    if (!pt__photon_deltas(s, ray, &rng, &beta, &prim, &h, bary, &arrival, &bounces) || bounces == 0)
+        return; /* (a photon that lands without a delta bounce is next-event estimation's light) */
+    pt__guide_splat(run->g, h.point, pt_neg(arrival), flux * ((double)beta.x + (double)beta.y + (double)beta.z) / 3.0);
+    pt__photon_onward(run, &rng, prim, &h, bary, beta, flux);
 }
 
 static void pt__photon_job(void *data, int job)
