@@ -5,7 +5,8 @@
    and per wall second (with 1 thread the CPU figure is the one less disturbed by other jobs),
    a hash of the film's sums (equal hashes: equal images) and the image mean.
 
-   tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR SEED   (INTEGRATOR: 0 default, 1 scalar, 2 batched) */
+   tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR SEED [SAMPLER]
+   (INTEGRATOR: 0 default, 1 scalar, 2 batched; SAMPLER: 0 independent, the default, 1 Sobol) */
 #define _POSIX_C_SOURCE 200809L
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
@@ -37,8 +38,8 @@ int main(int argc, char **argv)
     uint64_t h = 1469598103934665603ULL; /* FNV-1a over the sums' bits */
     double c0, c1, mean = 0.0;
     int integ;
-    if (argc != 8) {
-        fprintf(stderr, "usage: tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR(0|1|2) SEED\n");
+    if (argc != 8 && argc != 9) {
+        fprintf(stderr, "usage: tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR(0|1|2) SEED [SAMPLER(0|1)]\n");
         return 2;
     }
     if (pt_scenefile_load(argv[1], &sd, err, sizeof err) != PT_OK ||
@@ -51,7 +52,7 @@ int main(int argc, char **argv)
     d.samples_per_pixel = atoi(argv[4]);
     d.samples_per_pass = 0;
     d.strategy = PT_STRATEGY_MIS;
-    d.sampler = PT_SAMPLER_INDEPENDENT;
+    d.sampler = argc == 9 && atoi(argv[8]) == 1 ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
     d.max_depth = 4;
     d.rr_start_depth = -1;
     d.max_splits = -1;
