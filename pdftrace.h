@@ -3187,12 +3187,7 @@ static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided,
     if (!(dist2 > 0.0f)) return 0;
     dist = sqrtf(dist2);
     ls->dir = pt_scale(v, 1.0f / dist);
-    if (S > 0.0) ls->pdf = (float)(1.0 / S);
-    else { /* pt__planar_density with its cosine |n . v| / dist: off the chain through dir (and
-              dist^2 times dist / (|n . v| area), whose factors stay in range where dist^3 would not) */
-        float cosd = fabsf(pt_dot(p->n, v));
-        ls->pdf = cosd > 0.0f ? dist2 * (dist / (cosd * area)) : 0.0f;
-    }
+    ls->pdf = S > 0.0 ? (float)(1.0 / S) : pt__planar_density(p->n, area, dist, ls->dir);
     ls->dist = dist;
     ls->point = q;
     ls->normal = p->n;
