@@ -2429,6 +2429,12 @@ typedef struct pt__sampler {
     uint32_t pixel, sample;
     pt__sobol_cache *cache; /* SOBOL: set seeds, shared by the samples of one tile job */
     uint32_t cache_lane;   /* SOBOL: where its sets go in the cache (pt__sobol_cache) */
+    /* SOBOL: draws made ahead (pt__sobol_draw_ahead), each tagged with its set's seed (and a
+       scattered direction with its depth's parity): [0] a light point, [1] a scattered direction;
+       bit i of ahead_ok: entry i is set */
+    uint64_t ahead_seed[2];
+    float ahead_u[2][2];
+    uint32_t ahead_odd, ahead_ok;
 } pt__sampler;
 
 /* Sets: the pixel and lens positions, then PT__SLOTS per bounce (depth d's slot s is set
@@ -2473,6 +2479,7 @@ static void pt__sampler_init(pt__sampler *smp, pt_sampler kind, uint64_t seed, u
     smp->key = 0u;
     smp->cache = NULL;
     smp->cache_lane = 0u;
+    smp->ahead_ok = 0u;
     if (smp->sobol) {
         smp->index_reversed = pt__reverse_bits(sample);
         smp->index_high = sample & 0xffff0000u;
@@ -2494,10 +2501,10 @@ static uint64_t pt__set_seed(const pt__sampler *smp, uint32_t set)
 {
     return smp->key + 0x9e3779b97f4a7c15ULL * (uint64_t)(set + 1u);
 }
-/* SOBOL: the seeds of set `set` of this sample's pixel (from the cache, or made). */
-static pt__sobol_seeds *pt__sobol_set_seeds(const pt__sampler *smp, uint32_t set)
+/* SOBOL: the seeds of set `set` (whose set seed is `seed`) of this sample's pixel (from the
+   cache, or made). */
+static pt__sobol_seeds *pt__sobol_set_seeds(const pt__sampler *smp, uint32_t set, uint64_t seed)
 {
-    uint64_t seed = pt__set_seed(smp, set);
     pt__sobol_seeds *e = &smp->cache->e[(set + smp->cache_lane) & (PT__SOBOL_CACHE_SIZE - 1u)];
     if (e->seed != seed) pt__sobol_seeds_make(e, seed);
     return e;
@@ -2505,30 +2512,195 @@ static pt__sobol_seeds *pt__sobol_set_seeds(const pt__sampler *smp, uint32_t set
 /* The SOBOL halves of the draws below (the independent halves are inlined into the integrator). */
 static float pt__draw1_sobol(const pt__sampler *smp, uint32_t set)
 {
-    const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set);
+    const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set, pt__set_seed(smp, set));
     uint32_t k1;
     return pt__owen_float(pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1), e->add[0],
                           e->mul[0]);
 }
+static void pt__draw2_sobol_make(const pt__sampler *smp, uint32_t set, uint64_t seed, float *u)
+{
+    const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set, seed);
+    uint32_t k1, k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1);
+    pt__sobol_point01(e, k, k1, u);
+}
 static void pt__draw2_sobol(const pt__sampler *smp, uint32_t set, float *a, float *b)
 {
-    const pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set);
-    uint32_t k1, k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1);
+    const uint64_t seed = pt__set_seed(smp, set);
     float u[2];
-    pt__sobol_point01(e, k, k1, u);
+    if ((smp->ahead_ok & 1u) && smp->ahead_seed[0] == seed) {
+        *a = smp->ahead_u[0][0];
+        *b = smp->ahead_u[0][1];
+        return;
+    }
+    pt__draw2_sobol_make(smp, set, seed, u);
     *a = u[0];
     *b = u[1];
+}
+static void pt__draw_scatter_sobol_make(const pt__sampler *smp, uint32_t set, uint64_t seed, uint32_t odd, float *u)
+{
+    pt__sobol_seeds *e = pt__sobol_set_seeds(smp, set, seed);
+    uint32_t k1, k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1);
+    if (odd) pt__sobol_point23(e, k, u);
+    else pt__sobol_point01(e, k, k1, u);
 }
 static void pt__draw_scatter_sobol(const pt__sampler *smp, int depth, float *a, float *b)
 {
-    pt__sobol_seeds *e = pt__sobol_set_seeds(smp, PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR));
-    uint32_t k1, k = pt__sobol_shuffle(e, smp->index_reversed, smp->index_high, smp->index_high1, &k1);
+    const uint32_t set = PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR), odd = (uint32_t)depth & 1u;
+    const uint64_t seed = pt__set_seed(smp, set);
     float u[2];
-    if (depth & 1) pt__sobol_point23(e, k, u);
-    else pt__sobol_point01(e, k, k1, u);
+    if ((smp->ahead_ok & 2u) && smp->ahead_seed[1] == seed && smp->ahead_odd == odd) {
+        *a = smp->ahead_u[1][0];
+        *b = smp->ahead_u[1][1];
+        return;
+    }
+    pt__draw_scatter_sobol_make(smp, set, seed, odd, u);
     *a = u[0];
     *b = u[1];
 }
+/* SOBOL: makes depth `depth`'s light point (if `light`) and scattered direction (if `scatter`)
+   ahead of their draws, which then find them (the same function of (seed, pixel, sample, set):
+   the same numbers). The batched integrator draws a whole batch's ahead in one loop, whose
+   paths' independent hash chains overlap, where each draw in its place would wait on its own. */
+static void pt__sobol_draw_ahead(pt__sampler *smp, int depth, int light, int scatter)
+{
+    smp->ahead_ok = 0u;
+    if (light) {
+        const uint32_t set = PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT);
+        smp->ahead_seed[0] = pt__set_seed(smp, set);
+        pt__draw2_sobol_make(smp, set, smp->ahead_seed[0], smp->ahead_u[0]);
+        smp->ahead_ok = 1u;
+    }
+    if (scatter) {
+        const uint32_t set = PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR);
+        smp->ahead_seed[1] = pt__set_seed(smp, set);
+        smp->ahead_odd = (uint32_t)depth & 1u;
+        pt__draw_scatter_sobol_make(smp, set, smp->ahead_seed[1], smp->ahead_odd, smp->ahead_u[1]);
+        smp->ahead_ok |= 2u;
+    }
+}
+#ifdef PT__WIDE
+/* The same with AVX2 for up to 8 draws at a time (the batched integrator's stage 1b), each one's
+   set seeds (pt__sobol_seeds) gathered by pt__sobol_ahead_add: exactly the scalar draws' integer
+   steps (the byte look-ups of pt__sobol_shuffle and pt__reversed_fraction_float as bit
+   reversals, Sobol's dimensions 2 and 3 as the xor of the direction numbers of k's set bits)
+   and the same exact conversion to float, so the same numbers. */
+typedef struct pt__sobol_ahead8 {
+    uint32_t ir[8], ih[8], ih1[8], sadd[8], smul[8], add0[8], mul0[8], add1[8], mul1[8], odd[8];
+    float *out[8];
+    int n;
+} pt__sobol_ahead8;
+PT__TARGET_AVX2 static __m256i pt__nested_hash8(__m256i x, __m256i add, __m256i mul_odd)
+{
+    x = _mm256_add_epi32(x, add);
+    x = _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0xf9b439fcu)));
+    x = _mm256_mullo_epi32(x, mul_odd);
+    x = _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0x91d93080u)));
+    return _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0x8142c8eau)));
+}
+/* Each 32-bit lane's bits reversed: the nibbles of each byte by a table, then the bytes. */
+PT__TARGET_AVX2 static __m256i pt__reverse_bits8(__m256i x)
+{
+    const __m256i lut = _mm256_setr_epi8(0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15,
+                                         0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15);
+    const __m256i bytes = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12,
+                                           3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+    const __m256i nib = _mm256_set1_epi8(0x0f);
+    __m256i lo = _mm256_shuffle_epi8(lut, _mm256_and_si256(x, nib));
+    __m256i hi = _mm256_shuffle_epi8(lut, _mm256_and_si256(_mm256_srli_epi16(x, 4), nib));
+    return _mm256_shuffle_epi8(_mm256_or_si256(_mm256_slli_epi16(lo, 4), hi), bytes);
+}
+PT__TARGET_AVX2 static __m256i pt__sobol1_reversed8(__m256i i)
+{
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 1), _mm256_set1_epi32(0x55555555)));
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 2), _mm256_set1_epi32(0x33333333)));
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 4), _mm256_set1_epi32(0x0f0f0f0f)));
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 8), _mm256_set1_epi32(0x00ff00ff)));
+    return _mm256_xor_si256(i, _mm256_srli_epi32(i, 16));
+}
+/* pt__owen_float of each lane. */
+PT__TARGET_AVX2 static __m256 pt__owen_float8(__m256i x_reversed, __m256i add, __m256i mul_odd)
+{
+    __m256i f = _mm256_srli_epi32(pt__reverse_bits8(pt__nested_hash8(x_reversed, add, mul_odd)), 8);
+    return _mm256_mul_ps(_mm256_cvtepi32_ps(f), _mm256_set1_ps(1.0f / 16777216.0f));
+}
+#define PT__LOAD8(a) _mm256_loadu_si256((const __m256i *)(const void *)(a))
+PT__TARGET_AVX2 static void pt__sobol_ahead8_run(pt__sobol_ahead8 *a)
+{
+    __m256i h, r, k, k1, odd;
+    float u0[8], u1[8];
+    int i;
+    for (i = a->n; i < 8; ++i) { /* unused lanes: copies of the first */
+        a->ir[i] = a->ir[0]; a->ih[i] = a->ih[0]; a->ih1[i] = a->ih1[0]; a->sadd[i] = a->sadd[0];
+        a->smul[i] = a->smul[0]; a->add0[i] = a->add0[0]; a->mul0[i] = a->mul0[0]; a->add1[i] = a->add1[0];
+        a->mul1[i] = a->mul1[0]; a->odd[i] = a->odd[0];
+    }
+    /* step 1 (pt__sobol_shuffle): r = the hash's top 16 bits reversed */
+    h = pt__nested_hash8(PT__LOAD8(a->ir), PT__LOAD8(a->sadd), PT__LOAD8(a->smul));
+    r = _mm256_and_si256(pt__reverse_bits8(h), _mm256_set1_epi32(0xffff));
+    k = _mm256_or_si256(PT__LOAD8(a->ih), r);
+    k1 = _mm256_xor_si256(PT__LOAD8(a->ih1), pt__sobol1_reversed8(r));
+    odd = _mm256_cmpgt_epi32(PT__LOAD8(a->odd), _mm256_setzero_si256());
+    if (_mm256_movemask_epi8(odd)) { /* dimensions 2 and 3 (pt__sobol_point23) where odd */
+        __m256i x2 = _mm256_setzero_si256(), x3 = _mm256_setzero_si256(), kk = k;
+        uint32_t high = 0u;
+        int j, bits;
+        for (i = 0; i < 8; ++i) high |= a->ih[i];
+        bits = high ? 32 : 16; /* k = ih | r, r < 2^16 */
+        for (j = 0; j < bits; ++j) {
+            __m256i m = _mm256_srai_epi32(_mm256_slli_epi32(kk, 31), 31);
+            x2 = _mm256_xor_si256(x2, _mm256_and_si256(m, _mm256_set1_epi32((int)(uint32_t)pt__sobol23_rdir[j])));
+            x3 = _mm256_xor_si256(x3, _mm256_and_si256(m, _mm256_set1_epi32((int)(uint32_t)(pt__sobol23_rdir[j] >> 32))));
+            kk = _mm256_srli_epi32(kk, 1);
+        }
+        k1 = _mm256_blendv_epi8(k1, x3, odd);
+        k = _mm256_blendv_epi8(k, x2, odd);
+    }
+    _mm256_storeu_ps(u0, pt__owen_float8(k, PT__LOAD8(a->add0), PT__LOAD8(a->mul0)));
+    _mm256_storeu_ps(u1, pt__owen_float8(k1, PT__LOAD8(a->add1), PT__LOAD8(a->mul1)));
+    for (i = 0; i < a->n; ++i) {
+        a->out[i][0] = u0[i];
+        a->out[i][1] = u1[i];
+    }
+    a->n = 0;
+}
+#undef PT__LOAD8
+/* Adds sampler smp's draw of the set whose seeds are e (its dimensions 2 and 3 if odd) into out. */
+static void pt__sobol_ahead_add(pt__sobol_ahead8 *a, const pt__sampler *smp, pt__sobol_seeds *e, uint32_t odd, float *out)
+{
+    const int i = a->n, d = odd ? 2 : 0;
+    if (odd && !e->mul[2]) pt__sobol_seeds_make23(e);
+    a->ir[i] = smp->index_reversed;
+    a->ih[i] = smp->index_high;
+    a->ih1[i] = smp->index_high1;
+    a->sadd[i] = e->shuffle_add;
+    a->smul[i] = e->shuffle_mul;
+    a->add0[i] = e->add[d];
+    a->mul0[i] = e->mul[d];
+    a->add1[i] = e->add[d + 1];
+    a->mul1[i] = e->mul[d + 1];
+    a->odd[i] = odd;
+    a->out[i] = out;
+    if (++a->n == 8) pt__sobol_ahead8_run(a);
+}
+/* pt__sobol_draw_ahead's draws into a (run when 8 are in; the caller runs the rest). */
+static void pt__sobol_draw_ahead8(pt__sobol_ahead8 *a, pt__sampler *smp, int depth, int light, int scatter)
+{
+    smp->ahead_ok = 0u;
+    if (light) {
+        const uint32_t set = PT__SET_BOUNCE(depth, PT__SLOT_LIGHT_POINT);
+        smp->ahead_seed[0] = pt__set_seed(smp, set);
+        pt__sobol_ahead_add(a, smp, pt__sobol_set_seeds(smp, set, smp->ahead_seed[0]), 0u, smp->ahead_u[0]);
+        smp->ahead_ok = 1u;
+    }
+    if (scatter) {
+        const uint32_t set = PT__SET_BOUNCE(depth & ~1, PT__SLOT_SCATTER_DIR);
+        smp->ahead_seed[1] = pt__set_seed(smp, set);
+        smp->ahead_odd = (uint32_t)depth & 1u;
+        pt__sobol_ahead_add(a, smp, pt__sobol_set_seeds(smp, set, smp->ahead_seed[1]), smp->ahead_odd, smp->ahead_u[1]);
+        smp->ahead_ok |= 2u;
+    }
+}
+#endif
 /* One number of set `set`. */
 static PT__HOT float pt__draw1(pt__sampler *smp, uint32_t set)
 {
@@ -10572,6 +10744,38 @@ static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene 
     }
 }
 
+/* Stage 1b (SOBOL): each live path's light point and scattered direction of this bounce drawn
+   ahead (pt__sobol_draw_ahead) where its vertex will draw them: a non-delta scattering material
+   before the last depth (a guided vertex may draw its direction from the guide instead: that
+   draw is then only wasted). */
+static void pt__batch_draw_ahead(const pt__batch_ctx *b, pt__lane *lanes, const int *live, int nlive)
+{
+    const int scatter = b->cfg->strategy != PT_STRATEGY_MIXTURE;
+    int i;
+#ifdef PT__WIDE
+    if (b->s->simd >= PT_SIMD_AVX2) {
+        pt__sobol_ahead8 a;
+        a.n = 0;
+        for (i = 0; i < nlive; ++i) {
+            pt__lane *l = &lanes[live[i]];
+            const pt__material *m;
+            if (!l->found || l->depth >= b->cfg->max_depth) continue;
+            m = &b->s->mats[b->s->prims[l->pi].material];
+            if (m->scatters && !m->delta) pt__sobol_draw_ahead8(&a, &l->smp, l->depth, b->nee, scatter);
+        }
+        if (a.n) pt__sobol_ahead8_run(&a);
+        return;
+    }
+#endif
+    for (i = 0; i < nlive; ++i) {
+        pt__lane *l = &lanes[live[i]];
+        const pt__material *m;
+        if (!l->found || l->depth >= b->cfg->max_depth) continue;
+        m = &b->s->mats[b->s->prims[l->pi].material];
+        if (m->scatters && !m->delta) pt__sobol_draw_ahead(&l->smp, l->depth, b->nee, scatter);
+    }
+}
+
 /* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
    NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). */
 static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes, int n)
@@ -10587,6 +10791,7 @@ static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__
     for (i = 0; i < n; ++i) live[i] = i;
     while (nlive > 0) {
         pt__batch_closest(s, pk, lanes, live, nlive, b.tri); /* (1) closest hits */
+        if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(&b, lanes, live, nlive); /* (1b) */
         for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(&b, &lanes[live[i]])) shade[nshade++] = live[i];
         for (i = 0; i < nshade; ++i) { /* (3) shadow rays */

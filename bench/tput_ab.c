@@ -5,7 +5,9 @@
    and per wall second (with 1 thread the CPU figure is the one less disturbed by other jobs),
    a hash of the film's sums (equal hashes: equal images) and the image mean.
 
-   tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR SEED   (INTEGRATOR: 0 default, 1 scalar, 2 batched) */
+   tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR SEED [MODE]
+   (INTEGRATOR: 0 default, 1 scalar, 2 batched; MODE: 0 the throughput settings, the default; 1 the
+   same with the Sobol sampler; 2 the scene file's own settings, e.g. a default Sobol render) */
 #define _POSIX_C_SOURCE 200809L
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
@@ -36,9 +38,9 @@ int main(int argc, char **argv)
     size_t i, n;
     uint64_t h = 1469598103934665603ULL; /* FNV-1a over the sums' bits */
     double c0, c1, mean = 0.0;
-    int integ;
-    if (argc != 8) {
-        fprintf(stderr, "usage: tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR(0|1|2) SEED\n");
+    int integ, mode;
+    if (argc != 8 && argc != 9) {
+        fprintf(stderr, "usage: tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR(0|1|2) SEED [MODE(0|1|2)]\n");
         return 2;
     }
     if (pt_scenefile_load(argv[1], &sd, err, sizeof err) != PT_OK ||
@@ -46,17 +48,20 @@ int main(int argc, char **argv)
         fprintf(stderr, "tput_ab: %s\n", err);
         return 1;
     }
+    mode = argc == 9 ? atoi(argv[8]) : 0;
     d.width = atoi(argv[2]);
     d.height = atoi(argv[3]);
     d.samples_per_pixel = atoi(argv[4]);
     d.samples_per_pass = 0;
-    d.strategy = PT_STRATEGY_MIS;
-    d.sampler = PT_SAMPLER_INDEPENDENT;
-    d.max_depth = 4;
-    d.rr_start_depth = -1;
-    d.max_splits = -1;
-    d.indirect_paths = 1;
-    d.guiding = PT_GUIDING_OFF;
+    if (mode != 2) { /* 2: the scene file's own settings (the sampler, depth, roulette, splitting) */
+        d.strategy = PT_STRATEGY_MIS;
+        d.sampler = mode == 1 ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
+        d.max_depth = 4;
+        d.rr_start_depth = -1;
+        d.max_splits = -1;
+        d.indirect_paths = 1;
+        d.guiding = PT_GUIDING_OFF;
+    }
     d.adaptive_threshold = 0;
     d.threads = atoi(argv[5]);
     integ = atoi(argv[6]);

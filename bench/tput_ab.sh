@@ -5,17 +5,19 @@
 # hit both alike. Prints the medians of each and the median (and range) of the paired ratios B/A,
 # per CPU second (the figure to read with 1 thread) and per wall second.
 #
-#   bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] REV_A REV_B
+#   bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] REV_A REV_B
 #
 # A revision is anything `git show REV:pdftrace.h` takes, or `.` for the working tree.
-# -i: the integrator (0 default, 1 scalar, 2 batched). Run from the repository root.
+# -i: the integrator (0 default, 1 scalar, 2 batched); -s: 0 the throughput settings (independent
+# numbers), 1 the same with the Sobol sampler, 2 each scene file's own settings (Sobol,
+# indirect_paths, roulette: a default render). Run from the repository root.
 set -eu
-reps=7; threads=1; integ=0
-while getopts r:t:i: o; do
-    case $o in r) reps=$OPTARG ;; t) threads=$OPTARG ;; i) integ=$OPTARG ;; *) exit 2 ;; esac
+reps=7; threads=1; integ=0; sampler=0
+while getopts r:t:i:s: o; do
+    case $o in r) reps=$OPTARG ;; t) threads=$OPTARG ;; i) integ=$OPTARG ;; s) sampler=$OPTARG ;; *) exit 2 ;; esac
 done
 shift $((OPTIND - 1))
-[ $# -eq 2 ] || { echo "usage: bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] REV_A REV_B" >&2; exit 2; }
+[ $# -eq 2 ] || { echo "usage: bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] REV_A REV_B" >&2; exit 2; }
 dir=build/tput-ab
 mkdir -p "$dir/a" "$dir/b"
 for side in a b; do
@@ -33,7 +35,7 @@ for spec in "bench/scenes/rooms.scene 160 120 64" "scenes/cornell-diffuse.scene 
         if [ $((r % 2)) -eq 1 ]; then order="a b"; else order="b a"; fi
         for side in $order; do
             # shellcheck disable=SC2086
-            echo "$r $side $("$dir/$side/tput_ab" $spec "$threads" "$integ" "$r")" >> "$dir/runs"
+            echo "$r $side $("$dir/$side/tput_ab" $spec "$threads" "$integ" "$r" "$sampler")" >> "$dir/runs"
         done
         r=$((r + 1))
     done
