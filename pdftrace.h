@@ -1202,8 +1202,8 @@ typedef enum pt_guiding {
                              then render with p = alpha p_material + (1 - alpha) p_guide */
     PT_GUIDING_AUTO = 2   /* train as ON within a quarter of the budget, whose last iteration
                              measures the efficiency (1 / (error x cost)) with and without the
-                             guide on equal halves of its samples; go on as ON only if the guide
-                             pays, else render the rest unguided */
+                             guide (its second half guided at a quarter of the pixels); go on as
+                             ON only if the guide pays, else render the rest unguided */
 } pt_guiding;
 
 /* Splitting a render (pt_render_desc.split_parts; section 8, "Splitting a render"). A merge hook
@@ -11890,9 +11890,11 @@ static void pt__render_end_stats(const pt__adaptive *ad, const pt_render_desc *d
 }
 
 /* One render of the desc's samples into the film (what pt_render does without guiding); with
-   learned/recording set, its paths sample from and record into a guide (section 8, "Guiding"). */
+   learned/recording set, its paths sample from and record into a guide (section 8, "Guiding");
+   with pixel_spp (not adaptive, one pass), pixel i takes pixel_spp[i] samples instead. */
 static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_render_stats *stats,
-                           const pt_guide *learned, pt_guide *recording, float learned_weight)
+                           const pt_guide *learned, pt_guide *recording, float learned_weight,
+                           const uint32_t *pixel_spp)
 {
     pt__settings cfg;
     pt_camera cam;
@@ -11915,6 +11917,7 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
     cfg.recording = recording;
     cfg.learned_weight = learned_weight;
     result = pt__render_setup(s, d, film, &cfg, &cam, &ps, &ad, &run, err, en);
+    if (pixel_spp) ps.pixel_spp = pixel_spp;
     if (result == PT_OK && d->split_parts > 1 && !pt__split_init(&split, d, film, &ps, &ad))
         result = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for a split render (%d x %d pixels)",
                          d->width, d->height);
@@ -12236,7 +12239,7 @@ static int pt__caustic_guide(const pt_scene *s, const pt_render_desc *d, uint64_
    same sample indices with and without guiding. Splats are summed as integers and the guide is
    updated between iterations on one thread, so the image does not depend on the thread count.
    AUTO trains within a quarter of the budget, renders the last of those iterations' first half
-   unguided and its second half guided and compares their efficiencies 1 / (relMSE per sample x
+   unguided and its second half guided at a quarter of the pixels and compares their efficiencies 1 / (relMSE per sample x
    cost per sample), relMSE estimated against the film's mean and the cost counted in rays and
    guide look-ups (counts, not clocks: the decision is deterministic); only if the guide pays does
    training go on, and the rest is guided. --- */
@@ -12244,9 +12247,7 @@ static int pt__caustic_guide(const pt_scene *s, const pt_render_desc *d, uint64_
 #define PT__GUIDING_ALPHA 0.7f
 #define PT__GUIDING_MIB 64
 #define PT__GUIDING_MAX_ITERATIONS 16
-#define PT__GUIDING_AUTO_GAIN 1.5 /* AUTO guides above this measured gain: from half an iteration, a
-                                     guide that adds rare bright paths looks better than it is (the
-                                     door measures 1.37 and is 0.5x; docs/design.md) */
+#define PT__GUIDING_AUTO_GAIN 1.0 /* AUTO guides above this measured gain (docs/design.md, "AUTO") */
 #define PT__GUIDING_AUTO_SHARE 0.25 /* ... measured within this share of the training budget */
 #define PT__GUIDING_LOOKUP_COST 2.0 /* AUTO's cost model: a guided vertex costs 2 rays (the door 1.6,
                                        the Cornell box 2.1, training included: docs/design.md) */
@@ -12346,27 +12347,30 @@ static int pt__snap_take(pt__film_snap *sn, const pt_film *f)
     memcpy(sn->count, f->count, sizeof(uint32_t) * np);
     return 1;
 }
-/* relMSE per sample of the samples `after` holds and `before` does not, against the film's mean
-   (all its samples). */
-static double pt__guiding_rel_mse(const pt_film *f, const pt__film_snap *after, const pt__film_snap *before)
+/* The squared relative errors of the samples `after` holds and `before` does not at the pixels i
+   with only[i] > 0, against the film's mean (all its samples), added to *err, and their count
+   (pixels x channels x samples) to *n: *err / *n is their relMSE per sample. */
+static void pt__guiding_rel_err(const pt_film *f, const pt__film_snap *after, const pt__film_snap *before,
+                                const uint32_t *only, double *err, double *n)
 {
     size_t i, np = (size_t)f->width * (size_t)f->height;
-    double e = 0.0;
     for (i = 0; i < 3u * np; ++i) {
-        double n = (double)(after->count[i / 3u] - before->count[i / 3u]), r, s1, s2;
-        if (!(n > 0.0)) continue;
+        double m = (double)(after->count[i / 3u] - before->count[i / 3u]), r, s1, s2;
+        if (!(m > 0.0) || (only && !only[i / 3u])) continue;
         r = f->sum[i] / (double)f->count[i / 3u];
         s1 = after->sum[i] - before->sum[i];
         s2 = after->sum_sq[i] - before->sum_sq[i];
-        e += (s2 - 2.0 * r * s1 + n * r * r) / n / (r * r + 0.01);
+        *err += (s2 - 2.0 * r * s1 + m * r * r) / (r * r + 0.01);
+        *n += m;
     }
-    return e / (3.0 * (double)np);
 }
 
-/* One training render of spp samples per pixel into the film, sampling from `learned` (NULL:
-   unguided) and recording into g; *cost: its cost per sample (rays and guide look-ups). */
-static int pt__guiding_step(const pt_scene *s, const pt_render_desc *d, pt_film *film, int spp, const pt_guide *learned,
-                            pt_guide *g, float weight, pt_render_stats *acc, double *cost, char *err, size_t en)
+/* One training render into the film, sampling from `learned` (NULL: unguided) and recording into
+   g (NULL: not recording), spp samples per pixel or pixel_spp[i] at pixel i; its cost (rays and
+   guide look-ups) is added to *cost and its samples to *samples. */
+static int pt__guiding_step(const pt_scene *s, const pt_render_desc *d, pt_film *film, int spp,
+                            const uint32_t *pixel_spp, const pt_guide *learned, pt_guide *g, float weight,
+                            pt_render_stats *acc, double *cost, double *samples, char *err, size_t en)
 {
     pt_render_desc sub = *d;
     pt_render_stats st;
@@ -12376,12 +12380,64 @@ static int pt__guiding_step(const pt_scene *s, const pt_render_desc *d, pt_film 
     sub.samples_per_pixel = sub.samples_per_pass = spp;
     sub.adaptive_threshold = 0.0f;
     sub.progress = NULL;
-    rc = pt__render_once(s, &sub, film, &st, learned, g, weight);
+    rc = pt__render_once(s, &sub, film, &st, learned, g, weight, pixel_spp);
     if (rc != PT_OK) return pt__msg(err, en, rc, "%s", st.error);
     pt__stats_add(acc, &st);
-    *cost = ((double)(st.camera_rays + st.bounce_rays + st.shadow_rays) +
-             PT__GUIDING_LOOKUP_COST * (double)st.guided_vertices) / (double)(st.samples ? st.samples : 1);
+    *cost += (double)(st.camera_rays + st.bounce_rays + st.shadow_rays) +
+             PT__GUIDING_LOOKUP_COST * (double)st.guided_vertices;
+    *samples += (double)st.samples;
     return PT_OK;
+}
+
+/* AUTO's decision, in training iteration `it` (n = 2^it samples per pixel): n/2 unguided samples
+   everywhere, recording; then the other n - n/2 guided (and recording) at a quarter of the
+   pixels (even x, even y) and unguided, not recording, at the others. *gain is the guided samples'
+   efficiency 1 / (relMSE per sample x cost per sample) over the unguided ones'; both are measured
+   on samples of the same iteration (a rare bright path the unguided samples miss would make an
+   unguided iteration of its own look better than it is), and guiding a quarter of the pixels
+   halves what a scene the guide does not help pays for finding out (docs/design.md, "AUTO"). */
+static int pt__guiding_decide(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_guide *g, int n,
+                              float weight, pt_render_stats *acc, double *gain, char *err, size_t en)
+{
+    size_t np = (size_t)d->width * (size_t)d->height, i;
+    pt__film_snap a, b, c, now;
+    uint32_t *guided = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np), *plain = (uint32_t *)PT_MALLOC(sizeof(uint32_t) * np);
+    double cu = 0.0, nu = 0.0, cg = 0.0, ng = 0.0, eu = 0.0, mu = 0.0, eg = 0.0, mg = 0.0;
+    int rc = PT_ERROR_OUT_OF_MEMORY;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    memset(&c, 0, sizeof c);
+    now.sum = film->sum; /* (the film itself, read as a snapshot) */
+    now.sum_sq = film->sum_sq;
+    now.count = film->count;
+    if (guided && plain) {
+        for (i = 0; i < np; ++i) {
+            int on = (int)(((i % (size_t)d->width) | (i / (size_t)d->width)) & 1u) == 0;
+            guided[i] = on ? (uint32_t)(n - n / 2) : 0u;
+            plain[i] = on ? 0u : (uint32_t)(n - n / 2);
+        }
+        if (pt__snap_take(&a, film) &&
+            (rc = pt__guiding_step(s, d, film, n / 2, NULL, NULL, g, weight, acc, &cu, &nu, err, en)) == PT_OK &&
+            (rc = PT_ERROR_OUT_OF_MEMORY, pt__snap_take(&b, film)) &&
+            (rc = pt__guiding_step(s, d, film, n - n / 2, guided, g, g, weight, acc, &cg, &ng, err, en)) == PT_OK &&
+            (rc = PT_ERROR_OUT_OF_MEMORY, pt__snap_take(&c, film)) &&
+            (rc = pt__guiding_step(s, d, film, n - n / 2, plain, NULL, NULL, weight, acc, &cu, &nu, err, en)) == PT_OK) {
+            /* all against the mean of every sample so far */
+            pt__guiding_rel_err(film, &b, &a, NULL, &eu, &mu);
+            pt__guiding_rel_err(film, &c, &b, NULL, &eg, &mg);
+            pt__guiding_rel_err(film, &now, &c, NULL, &eu, &mu);
+            eu = mu > 0.0 && nu > 0.0 ? eu / mu * (cu / nu) : 0.0;
+            eg = mg > 0.0 && ng > 0.0 ? eg / mg * (cg / ng) : 0.0;
+            *gain = eg > 0.0 ? eu / eg : (eu > 0.0 ? HUGE_VAL : 1.0);
+        }
+    }
+    if (rc == PT_ERROR_OUT_OF_MEMORY) pt__msg(err, en, rc, "pt_render: out of memory for guiding's error estimate");
+    PT_FREE(guided);
+    PT_FREE(plain);
+    pt__snap_free(&a);
+    pt__snap_free(&b);
+    pt__snap_free(&c);
+    return rc;
 }
 
 /* The caustic photons of guided render d into g->caustic (replacing a previous render's): one
@@ -12408,55 +12464,33 @@ static int pt__guiding_photons(const pt_scene *s, const pt_render_desc *d, pt_gu
     return rc;
 }
 
-/* The training iterations (see above), into the caller's film. With AUTO the last one renders
-   half its samples unguided and half guided: *gain, the efficiency ratio of the two halves, then
-   decides *use (both measured on equally many samples at the same time: a rare bright path the
-   unguided half misses would make an unguided iteration of its own look better than it is). */
+/* The training iterations (see above), into the caller's film. With AUTO the last one decides
+   (pt__guiding_decide): *gain, then *use. */
 static int pt__guiding_train(const pt_scene *s, const pt_render_desc *d, pt_film *film, pt_guide *g, int T, int Td,
                              float weight, size_t max_bytes, int *use, pt_render_stats *acc, double *gain, char *err,
                              size_t en)
 {
-    pt__film_snap a, b, now;
     int it, rc = PT_OK;
-    memset(&a, 0, sizeof a);
-    memset(&b, 0, sizeof b);
-    now.sum = film->sum; /* (the film itself, read as a snapshot) */
-    now.sum_sq = film->sum_sq;
-    now.count = film->count;
     *use = 1;
     for (it = 0; it < T && rc == PT_OK; ++it) {
-        double cost_u, cost_g;
+        double cost = 0.0, samples = 0.0;
         int n = 1 << it;
         if (d->guiding == PT_GUIDING_AUTO && it == Td - 1) {
-            if (!pt__snap_take(&a, film)) break;
-            rc = pt__guiding_step(s, d, film, n / 2, NULL, g, weight, acc, &cost_u, err, en);
-            if (rc != PT_OK) break;
-            if (!pt__snap_take(&b, film)) break;
-            rc = pt__guiding_step(s, d, film, n - n / 2, g, g, weight, acc, &cost_g, err, en);
-            if (rc != PT_OK) break;
-            { /* both against the mean of every sample so far */
-                double eu = pt__guiding_rel_mse(film, &b, &a) * cost_u, eg = pt__guiding_rel_mse(film, &now, &b) * cost_g;
-                *gain = eg > 0.0 ? eu / eg : (eu > 0.0 ? HUGE_VAL : 1.0);
-                *use = *gain > PT__GUIDING_AUTO_GAIN;
-            }
+            if ((rc = pt__guiding_decide(s, d, film, g, n, weight, acc, gain, err, en)) != PT_OK) break;
+            *use = *gain > PT__GUIDING_AUTO_GAIN;
             /* the caustic photons only once guiding is decided on: a scene it does not help pays
                nothing for them */
             if (*use && (rc = pt__guiding_photons(s, d, g, max_bytes, acc)) != PT_OK) {
                 pt__msg(err, en, rc, "pt_render: out of memory for the caustic photons' guide");
                 break;
             }
-        } else {
-            rc = pt__guiding_step(s, d, film, n, it > 0 ? g : NULL, g, weight, acc, &cost_g, err, en);
-            if (rc != PT_OK) break;
-        }
+        } else if ((rc = pt__guiding_step(s, d, film, n, NULL, it > 0 ? g : NULL, g, weight, acc, &cost, &samples, err,
+                                          en)) != PT_OK)
+            break;
         acc->guiding_iterations = it + 1;
         if (!*use) break; /* (AUTO: the rest unguided, untrained) */
         if ((rc = pt__guide_update(g)) != PT_OK) pt__msg(err, en, rc, "pt_render: out of memory for the guide");
     }
-    if (rc == PT_OK && it < T && *use)
-        rc = pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory for guiding's error estimate");
-    pt__snap_free(&a);
-    pt__snap_free(&b);
     return rc;
 }
 
@@ -12513,12 +12547,12 @@ static int pt__render_guided(const pt_scene *s, const pt_render_desc *d, pt_film
                         acc.guiding_iterations, gain, use ? "above" : "not above", PT__GUIDING_AUTO_GAIN);
             last.samples_per_pixel = spp - (int)(acc.guiding_samples / ((uint64_t)d->width * (uint64_t)d->height));
             if (last.samples_per_pixel > 0)
-                rc = pt__render_once(s, &last, film, &fin, use ? g : NULL, NULL, weight);
+                rc = pt__render_once(s, &last, film, &fin, use ? g : NULL, NULL, weight, NULL);
         }
         if (own) pt_guide_destroy(g);
     } else {
         pt__msg(acc.guiding_note, sizeof acc.guiding_note, 0, "not guided: %s", why);
-        rc = pt__render_once(s, &last, film, &fin, NULL, NULL, 0.0f);
+        rc = pt__render_once(s, &last, film, &fin, NULL, NULL, 0.0f, NULL);
     }
     pt__stats_add(&fin, &acc);
     fin.guiding_used = use;
@@ -12546,7 +12580,7 @@ PTDEF int pt_render(const pt_scene *s, const pt_render_desc *d, pt_film *film, p
     int rc;
     if (stats) memset(stats, 0, sizeof *stats);
     if (d && (rc = pt__guiding_check(d, err, en)) != PT_OK) return rc;
-    if (!d || d->guiding == PT_GUIDING_OFF) return pt__render_once(s, d, film, stats, NULL, NULL, 0.0f);
+    if (!d || d->guiding == PT_GUIDING_OFF) return pt__render_once(s, d, film, stats, NULL, NULL, 0.0f, NULL);
     {   /* the desc, scene and film first: a guide is built only for a render that can run */
         pt__settings cfg;
         pt_camera cam;
