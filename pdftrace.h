@@ -1322,6 +1322,8 @@ typedef struct pt_render_stats {
     uint64_t split_paths;        /* extra paths started by splitting (section 7) */
     uint64_t guided_vertices;    /* vertices that sampled from a learned guide (path guiding) */
     uint64_t batched_samples;    /* camera samples the batched integrator took (the rest: scalar) */
+    uint64_t batched_split_paths; /* of split_paths, those the batched integrator ran as paths of its
+                                    batch (the rest ran depth first in the scalar integrator) */
     double seconds;              /* wall clock */
     int passes, threads;
     uint64_t pixels_converged;   /* adaptive: pixels that stopped before samples_per_pixel (the
@@ -10550,6 +10552,10 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    split's extra copies (pt__split_copies: rare with the defaults) run depth first within stage
    4 as in the scalar integrator. A guide's training iterations (cfg->recording) run scalar. */
 #define PT__BATCH 64
+#define PT__BATCH_LANES (4 * PT__BATCH) /* a batch's camera samples and the split copies' lanes */
+#define PT__LANE_LOG 32     /* a lane's log; a bounce adds at most PT__LANE_LOG_BOUNCE to it */
+#define PT__LANE_LOG_BOUNCE 6
+enum { PT__WAIT_NONE, PT__WAIT_HEAD, PT__WAIT_LOG, PT__WAIT_ENDED };
 
 typedef struct pt__lane {
     pt__sampler smp;
@@ -10567,14 +10573,82 @@ typedef struct pt__lane {
     pt_hit h;
     pt__light_sample ls;
     pt__nee_ray nr;
+    /* split copies as lanes (below): the camera sample's lane is its family's root */
+    int self, root, parent, copy; /* copy: which of the parent's copies (1 .. k-1) */
+    int prev, next, head;         /* the family's scalar order (head: the root's, its first) */
+    int pending, nkids, nlog, wait; /* pending: copies still running; wait: PT__WAIT_* */
+    pt_color kid_L[PT__SPLIT_MAX_COPIES], kid_Lc[PT__SPLIT_MAX_COPIES];
+    unsigned char kid_go[PT__SPLIT_MAX_COPIES];
+    pt_color log[PT__LANE_LOG]; /* what the path gathered while its copies ran, in order */
 } pt__lane;
 
-/* What every stage of a batch needs: pt__trace_from's per-path constants. */
+/* What every stage of a batch needs: pt__trace_from's per-path constants, and the lanes the
+   split copies take (copies: whether they may; free: the lanes not in use). */
 typedef struct pt__batch_ctx {
     const pt_scene *s;
     const pt__settings *cfg;
-    int tri, any_lights, nee, pick;
+    int tri, any_lights, nee, pick, copies;
+    pt__lane *lanes;
+    int nfree, nspawn, nparked;
+    uint64_t lane_copies; /* split copies that ran as lanes */
+    int free[PT__BATCH_LANES], spawn[PT__BATCH_LANES], parked[PT__BATCH_LANES];
 } pt__batch_ctx;
+
+static void pt__stats_sum(pt_path_stats *t, const pt_path_stats *a)
+{
+    t->camera_rays += a->camera_rays;
+    t->bounce_rays += a->bounce_rays;
+    t->shadow_rays += a->shadow_rays;
+    t->nonfinite_samples += a->nonfinite_samples;
+    t->split_paths += a->split_paths;
+    t->guided_vertices += a->guided_vertices;
+}
+
+/* Lane l gathers x: into its sum, or, while copies it split into are still running (whose sum
+   the scalar integrator adds first), into its log, which pt__lane_fold adds after theirs. A zero
+   is left out of the log: a sum that starts at +0 is never -0, so adding a zero leaves it as is. */
+static PT__HOT void pt__lane_add(pt__lane *l, pt_color x)
+{
+    if (!l->pending) l->L = pt_add(l->L, x);
+    else if (x.x != 0.0f || x.y != 0.0f || x.z != 0.0f) l->log[l->nlog++] = x;
+}
+
+/* Once lane l's copies have all ended: their sum as pt__split_copies makes it (copy by copy, the
+   path's sum, then what its continuation found), added to l's, then l's log in order. */
+static void pt__lane_fold(pt__lane *l)
+{
+    pt_color S = pt_v3(0, 0, 0);
+    int c;
+    for (c = 1; c <= l->nkids; ++c) {
+        if (l->kid_go[c]) S = pt_add(S, l->kid_L[c]);
+        S = pt_add(S, l->kid_Lc[c]);
+    }
+    l->L = pt_add(l->L, S);
+    for (c = 0; c < l->nlog; ++c) l->L = pt_add(l->L, l->log[c]);
+    l->nlog = 0;
+}
+
+/* Lane idx's path has ended: once its copies have too, it leaves its family's order, its sum
+   goes to its parent (its rays to the camera sample's count) and its lane is free again; the
+   parent, if that was its last copy, folds and may end in turn. */
+static void pt__lane_end(pt__batch_ctx *b, int idx)
+{
+    pt__lane *lanes = b->lanes, *l = &lanes[idx];
+    l->wait = PT__WAIT_ENDED;
+    while (l->wait == PT__WAIT_ENDED && !l->pending) {
+        pt__lane *p;
+        if (l->prev >= 0) lanes[l->prev].next = l->next;
+        else lanes[l->root].head = l->next;
+        if (l->next >= 0) lanes[l->next].prev = l->prev;
+        if (l->parent < 0) return;
+        p = &lanes[l->parent];
+        p->kid_L[l->copy] = l->L;
+        pt__stats_sum(&lanes[l->root].st, &l->st);
+        b->free[b->nfree++] = l->self;
+        if (--p->pending == 0) pt__lane_fold(p);
+        l = p;
+    }
+}
 
 /* A camera sample's path at its start (pt__trace): throughput k = indirect_paths, no scattering. */
 static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
@@ -10613,8 +10687,8 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     pt__vertex *v = &l->v;
     l->shadow = 0;
     if (!l->found) {
-        if (PT__UNLIKELY(cfg->env_on)) l->L = pt_add(l->L, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf));
-        else l->L = pt_add(l->L, pt_mul(l->beta, cfg->background));
+        if (PT__UNLIKELY(cfg->env_on)) pt__lane_add(l, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf));
+        else pt__lane_add(l, pt_mul(l->beta, cfg->background));
         return 0;
     }
     prim = &s->prims[l->pi];
@@ -10623,7 +10697,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     if (m->emits && (m->two_sided || l->h.front_face)) {
         float w = l->prev_delta ? 1.0f
                                 : pt__emission_weight(s, cfg, prim, l->prev_pdf, l->prev_p, l->prev_n, l->ray.dir, l->t, v);
-        if (w > 0.0f) l->L = pt_add(l->L, pt_scale(pt_mul(l->beta, m->emission), w));
+        if (w > 0.0f) pt__lane_add(l, pt_scale(pt_mul(l->beta, m->emission), w));
     }
     if (l->depth >= cfg->max_depth || !m->scatters) return 0;
     l->beta_in = l->beta;
@@ -10634,7 +10708,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
         float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
         pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
         if (pt__lights_sample_all(s, cfg, v->o, pt_v3(0.0f, 0.0f, 0.0f), u0, u1, u2, &ls, &li))
-            l->L = pt_add(l->L, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st));
+            pt__lane_add(l, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st));
     }
     if (!m->delta) {
         v->surface = l->surfaces++;
@@ -10667,8 +10741,68 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     return 1;
 }
 
-/* Stage 4 for one path after its shadow ray (l->shadow: 2 if occluded): returns 0 if it ends. */
-static PT__HOT int pt__lane_continue(const pt__batch_ctx *b, pt__lane *l)
+/* Stage 4's splits with the Sobol sampler: copies 1 .. k-1 of lane l's split into k take free
+   lanes of their own, each after its continuation from l's vertex (pt__split_copies's order:
+   the copies draw from sets of their own, so the order they run in changes no number), and go
+   before l in the family's scalar order; l goes on as copy 0, its gains logged until they end. */
+static void pt__lane_split(pt__batch_ctx *b, pt__lane *l, int k)
+{
+    const pt__vertex *v = &l->v;
+    int c;
+    l->nkids = k - 1;
+    b->lane_copies += (uint64_t)(k - 1);
+    for (c = 1; c < k; ++c) {
+        const int idx = b->free[b->nfree - 1];
+        pt__lane *cl = &b->lanes[idx];
+        float pp2 = l->prev_pdf;
+        int pd2 = l->prev_delta;
+        pt_color Lc = pt_v3(0, 0, 0);
+        l->st.split_paths++;
+        (void)pt__split_sampler(&l->smp, &cl->smp, l->depth, c);
+        l->kid_go[c] = (unsigned char)pt__continue(b->s, b->cfg, v, &l->h, l->depth, l->beta_in, &cl->smp, b->any_lights,
+                                                   b->pick, &cl->ray, &cl->beta, &pp2, &pd2, &Lc, &l->st);
+        l->kid_Lc[c] = Lc;
+        l->kid_L[c] = pt_v3(0, 0, 0);
+        if (!l->kid_go[c]) continue;
+        b->nfree--;
+        l->st.bounce_rays++;
+        memset(&cl->st, 0, sizeof cl->st);
+        cl->L = pt_v3(0, 0, 0);
+        cl->prev_pdf = pp2;
+        cl->prev_delta = pd2;
+        cl->prev_p = v->o;
+        cl->prev_n = pt__receiver_normal(v);
+        cl->depth = l->depth + 1;
+        cl->surfaces = v->surface + 1;
+        cl->v.has_guide = 0; /* (pt__trace_from's start) */
+        cl->v.cshare = 0.0f;
+        cl->v.g = 0.0f;
+        cl->v.rr_e = cl->v.rr_ref = 0.0f;
+        cl->v.sph_prim = NULL;
+        cl->self = idx;
+        cl->root = l->root;
+        cl->parent = l->self;
+        cl->copy = c;
+        cl->pending = cl->nkids = cl->nlog = 0;
+        cl->wait = PT__WAIT_NONE;
+        cl->next = l->self; /* (before l, after the copies before it) */
+        cl->prev = l->prev;
+        if (l->prev >= 0) b->lanes[l->prev].next = idx;
+        else b->lanes[l->root].head = idx;
+        l->prev = idx;
+        l->pending++;
+        b->spawn[b->nspawn++] = idx;
+    }
+    if (!l->pending) pt__lane_fold(l);
+}
+
+/* Stage 4 for one path after its shadow ray (l->shadow: 2 if occluded): returns 0 if it ends, 1
+   if it goes on, 2 if it waits (l->wait). What a path does with its camera sample's shared
+   splitting state (pt__splits: the budget, guided roulette's reference) depends on what the
+   paths before it in the scalar integrator's order did, so a copy does it only once it is its
+   family's first (PT__WAIT_HEAD: the lane then resumes here); and a path whose log could fill
+   waits for its copies to end (PT__WAIT_LOG). */
+static PT__HOT int pt__lane_continue(pt__batch_ctx *b, pt__lane *l)
 {
     const pt_scene *s = b->s;
     const pt__settings *cfg = b->cfg;
@@ -10676,28 +10810,42 @@ static PT__HOT int pt__lane_continue(const pt__batch_ctx *b, pt__lane *l)
     pt_color Lc = pt_v3(0, 0, 0);
     int k, go;
     if (!v->m->delta) {
-        if (l->shadow == 1) l->L = pt_add(l->L, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f));
-        if (PT__UNLIKELY(s->dlight_count != 0))
-            l->L = pt_add(l->L, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st));
-        if (v->rr_e > 0.0f && !(l->sp.rr_ref > 0.0f))
-            l->sp.rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
-        v->rr_ref = l->sp.rr_ref;
-        if ((l->sp.first > 1 || PT__UNLIKELY(l->beta_in.x >= PT__SPLIT_BETA || l->beta_in.y >= PT__SPLIT_BETA ||
-                                             l->beta_in.z >= PT__SPLIT_BETA)) &&
-            (k = pt__split_count(l->beta_in, &l->sp)) > 1) {
+        pt__splits *sp = &b->lanes[l->root].sp; /* (the camera sample's) */
+        int split;
+        if (l->wait != PT__WAIT_HEAD) {
+            if (l->shadow == 1) pt__lane_add(l, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f));
+            if (PT__UNLIKELY(s->dlight_count != 0))
+                pt__lane_add(l, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st));
+        }
+        split = sp->first > 1 || PT__UNLIKELY(l->beta_in.x >= PT__SPLIT_BETA || l->beta_in.y >= PT__SPLIT_BETA ||
+                                               l->beta_in.z >= PT__SPLIT_BETA);
+        if ((split || (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f))) && b->lanes[l->root].head != l->self) {
+            l->wait = PT__WAIT_HEAD;
+            return 2;
+        }
+        l->wait = PT__WAIT_NONE;
+        if (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f)) sp->rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
+        v->rr_ref = sp->rr_ref;
+        if (split && (k = pt__split_count(l->beta_in, sp)) > 1) {
             l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
-            l->L = pt_add(l->L, pt__split_copies(s, cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights, b->pick,
-                                                 l->prev_delta, l->prev_pdf, &l->st, &l->sp));
+            if (b->copies && b->nfree >= k - 1) pt__lane_split(b, l, k);
+            else
+                l->L = pt_add(l->L, pt__split_copies(s, cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights,
+                                                     b->pick, l->prev_delta, l->prev_pdf, &l->st, sp));
         }
     }
     go = pt__continue(s, cfg, v, &l->h, l->depth, l->beta_in, &l->smp, b->any_lights, b->pick, &l->ray, &l->beta,
                       &l->prev_pdf, &l->prev_delta, &Lc, &l->st);
-    l->L = pt_add(l->L, Lc);
+    pt__lane_add(l, Lc);
     if (!go) return 0;
     l->prev_p = v->o;
     l->prev_n = pt__receiver_normal(v);
     l->st.bounce_rays++;
     l->depth++;
+    if (PT__UNLIKELY(l->nlog > PT__LANE_LOG - PT__LANE_LOG_BOUNCE)) {
+        l->wait = PT__WAIT_LOG;
+        return 2;
+    }
     return 1;
 }
 
@@ -10776,30 +10924,86 @@ static void pt__batch_draw_ahead(const pt__batch_ctx *b, pt__lane *lanes, const 
     }
 }
 
-/* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
-   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). */
-static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes, int n)
+/* Lanes that waited (pt__lane_continue) and may now go on: back into live[] from nlive on;
+   returns the new nlive. A lane resumed at its family's head may split, end or wait again, which
+   may let others go on: the scan repeats until nothing changes. */
+static int pt__batch_resume(pt__batch_ctx *b, int *live, int nlive)
 {
-    int live[PT__BATCH], shade[PT__BATCH], nlive = n, nshade, i;
-    pt__batch_ctx b;
-    b.s = s;
-    b.cfg = cfg;
-    b.tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
-    b.any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
-    b.nee = b.any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
-    b.pick = s->light_count != 1 || cfg->env_pick > 0.0f;
-    for (i = 0; i < n; ++i) live[i] = i;
+    int i, changed = 1;
+    while (changed && b->nparked > 0) {
+        changed = 0;
+        for (i = 0; i < b->nparked;) {
+            const int idx = b->parked[i];
+            pt__lane *l = &b->lanes[idx];
+            int r = 1;
+            if (l->wait == PT__WAIT_HEAD ? b->lanes[l->root].head != idx : l->pending != 0) {
+                ++i;
+                continue;
+            }
+            b->parked[i] = b->parked[--b->nparked];
+            changed = 1;
+            if (l->wait == PT__WAIT_HEAD) r = pt__lane_continue(b, l);
+            else l->wait = PT__WAIT_NONE;
+            if (r == 1) live[nlive++] = idx;
+            else if (r == 2) b->parked[b->nparked++] = idx;
+            else pt__lane_end(b, idx);
+        }
+    }
+    return nlive;
+}
+
+/* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
+   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init); lanes holds
+   PT__BATCH_LANES lanes, those from n on for split copies (with the Sobol sampler). Returns the
+   split copies that ran as lanes. */
+static uint64_t pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes,
+                              int n)
+{
+    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], nlive = n, nshade, i;
+    pt__batch_ctx bc, *b = &bc;
+    b->s = s;
+    b->cfg = cfg;
+    b->tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    b->any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
+    b->nee = b->any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
+    b->pick = s->light_count != 1 || cfg->env_pick > 0.0f;
+    /* split copies as lanes: with Sobol sets of their own (independent numbers: the parent's stream,
+       so depth first in pt__split_copies), and not for the path classes' diagnostic */
+    b->copies = cfg->sampler == PT_SAMPLER_SOBOL;
+    PT__PCLASS(b->copies = 0;)
+    b->lanes = lanes;
+    b->nfree = b->nspawn = b->nparked = 0;
+    b->lane_copies = 0;
+    for (i = PT__BATCH_LANES - 1; i >= n; --i) b->free[b->nfree++] = i;
+    for (i = 0; i < n; ++i) {
+        pt__lane *l = &lanes[i];
+        live[i] = i;
+        l->self = l->root = l->head = i;
+        l->parent = l->prev = l->next = -1;
+        l->pending = l->nkids = l->nlog = 0;
+        l->wait = PT__WAIT_NONE;
+    }
     while (nlive > 0) {
-        pt__batch_closest(s, pk, lanes, live, nlive, b.tri); /* (1) closest hits */
-        if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(&b, lanes, live, nlive); /* (1b) */
+        pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
+        if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(b, lanes, live, nlive); /* (1b) */
         for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
-            if (pt__lane_shade(&b, &lanes[live[i]])) shade[nshade++] = live[i];
+            if (pt__lane_shade(b, &lanes[live[i]])) shade[nshade++] = live[i];
+            else pt__lane_end(b, live[i]);
         for (i = 0; i < nshade; ++i) { /* (3) shadow rays */
             pt__lane *l = &lanes[shade[i]];
             if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
         }
-        for (i = 0, nlive = 0; i < nshade; ++i) /* (4) contributions, continuation */
-            if (pt__lane_continue(&b, &lanes[shade[i]])) live[nlive++] = shade[i];
+        for (i = 0, nlive = 0; i < nshade; ++i) { /* (4) contributions, splits, continuation */
+            const int r = pt__lane_continue(b, &lanes[shade[i]]);
+            if (r == 1) live[nlive++] = shade[i];
+            else if (r == 2) b->parked[b->nparked++] = shade[i];
+            else pt__lane_end(b, shade[i]);
+        }
+        for (i = 0; i < b->nspawn; ++i) live[nlive++] = b->spawn[i]; /* (the new copies) */
+        b->nspawn = 0;
+        nlive = pt__batch_resume(b, live, nlive);
+        for (i = 0; i < b->nspawn; ++i) live[nlive++] = b->spawn[i];
+        b->nspawn = 0;
     }
     for (i = 0; i < n; ++i) {
         pt__lane *l = &lanes[i];
@@ -10809,6 +11013,7 @@ static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__
             l->L = pt_v3(0, 0, 0);
         }
     }
+    return b->lane_copies;
 }
 
 /* ------------------------------------------------------------------------------------------
@@ -10917,6 +11122,7 @@ typedef struct pt__pass {
     int batched;                /* the batched integrator runs the jobs (pt__render_job_batched) */
     pt_path_stats *tile_stats;  /* one per tile */
     uint64_t *tile_samples;     /* one per tile */
+    uint64_t *tile_copies;      /* one per tile: split copies the batched integrator ran as lanes */
     unsigned char *tile_done;   /* one per tile */
 #ifndef PDFTRACE_NO_THREADS
     pthread_mutex_t lock;
@@ -10964,16 +11170,6 @@ static pt_ray pt__camera_sample(const pt__pass *ps, pt__sampler *smp, int x, int
     return pt__camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
 }
 
-static void pt__stats_sum(pt_path_stats *t, const pt_path_stats *a)
-{
-    t->camera_rays += a->camera_rays;
-    t->bounce_rays += a->bounce_rays;
-    t->shadow_rays += a->shadow_rays;
-    t->nonfinite_samples += a->nonfinite_samples;
-    t->split_paths += a->split_paths;
-    t->guided_vertices += a->guided_vertices;
-}
-
 /* The batched integrator's job: the job's samples, in the scalar job's order, PT__BATCH at a
    time through pt__batch_run; each sample then goes to its pixel (the film's sums do not depend
    on the order they are added in) and its rays to the pixel's count. Returns 0 (nothing done)
@@ -10982,11 +11178,11 @@ static int pt__render_job_batched(pt__pass *ps, int index)
 {
     pt_film *film = ps->film;
     pt__job_pixels r;
-    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * PT__BATCH);
+    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * PT__BATCH_LANES);
     pt__sobol_cache *cache = (pt__sobol_cache *)PT_MALLOC(sizeof(pt__sobol_cache));
     pt__packet_scene *pk = (pt__packet_scene *)PT_MALLOC(sizeof(pt__packet_scene));
     pt_path_stats st;
-    uint64_t taken = 0;
+    uint64_t taken = 0, copies = 0;
     int x, y, k, n = 0, i;
     const int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
     if (!lanes || !cache || !pk) {
@@ -11016,7 +11212,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
                 l->index_k = index_k;
                 pt__lane_start(l, ps->cfg, pt__camera_sample(ps, &l->smp, x, y, pix, index_k, pixel_key, cache));
                 if (++n < PT__BATCH) continue;
-                pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+                copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
                 for (i = 0; i < n; ++i) {
                     pt__lane *d = &lanes[i];
                     uint32_t p = d->pix;
@@ -11033,7 +11229,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
             taken += mine;
         }
     }
-    pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+    copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
     for (i = 0; i < n; ++i) {
         pt__lane *d = &lanes[i];
         uint32_t p = d->pix;
@@ -11047,6 +11243,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
     PT_FREE(pk);
     ps->tile_stats[index] = st;
     ps->tile_samples[index] = taken;
+    ps->tile_copies[index] = copies;
     ps->tile_done[index] = 2; /* (2: done by the batched integrator) */
     return 1;
 }
@@ -11786,11 +11983,12 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
     slots = r->adaptive && ad->chunks > tiles ? ad->chunks : tiles;
     ps->tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
     ps->tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
+    ps->tile_copies = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
     ps->tile_done = (unsigned char *)PT_MALLOC((size_t)slots);
     r->job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)slots);
     adaptive_ok = !r->adaptive || pt__adaptive_init(ad, d, film, r->spp, r->per_pass);
     ps->pixel_rays = ad->rays;
-    if (!ps->tile_stats || !ps->tile_samples || !ps->tile_done || !r->job_list || !adaptive_ok)
+    if (!ps->tile_stats || !ps->tile_samples || !ps->tile_copies || !ps->tile_done || !r->job_list || !adaptive_ok)
         return pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory (%d x %d pixels)", d->width,
                        d->height);
     if (ad->pilot) { /* the pilot's passes first, into its own film with its own seed (section 8) */
@@ -11834,7 +12032,10 @@ static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_des
             r->total.split_paths += ts->split_paths;
             r->total.guided_vertices += ts->guided_vertices;
             r->done += ps->tile_samples[r->job_list[j]];
-            if (ps->tile_done[r->job_list[j]] == 2) r->total.batched_samples += ps->tile_samples[r->job_list[j]];
+            if (ps->tile_done[r->job_list[j]] == 2) {
+                r->total.batched_samples += ps->tile_samples[r->job_list[j]];
+                r->total.batched_split_paths += ps->tile_copies[r->job_list[j]];
+            }
         }
         r->added += (uint32_t)ps->spp;
         r->total.passes = pass + 1;
@@ -11933,6 +12134,7 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
     }
     PT_FREE(ps.tile_stats);
     PT_FREE(ps.tile_samples);
+    PT_FREE(ps.tile_copies);
     PT_FREE(ps.tile_done);
     PT_FREE(run.job_list);
     pt__adaptive_free(&ad);
@@ -12318,6 +12520,7 @@ static void pt__stats_add(pt_render_stats *t, const pt_render_stats *a)
     t->split_paths += a->split_paths;
     t->guided_vertices += a->guided_vertices;
     t->batched_samples += a->batched_samples;
+    t->batched_split_paths += a->batched_split_paths;
 }
 
 /* The per-pixel sums of the samples one training iteration added to the film: the film after it
