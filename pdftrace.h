@@ -10577,21 +10577,30 @@ typedef struct pt__lane {
     int self, root, parent, copy; /* copy: which of the parent's copies (1 .. k-1) */
     int prev, next, head;         /* the family's scalar order (head: the root's, its first) */
     int pending, nkids, nlog, wait; /* pending: copies still running; wait: PT__WAIT_* */
-    pt_color kid_L[PT__SPLIT_MAX_COPIES], kid_Lc[PT__SPLIT_MAX_COPIES];
-    unsigned char kid_go[PT__SPLIT_MAX_COPIES];
-    pt_color log[PT__LANE_LOG]; /* what the path gathered while its copies ran, in order */
+    struct pt__lane_kids *kids;   /* (its own: kept apart, as only a split touches it) */
 } pt__lane;
+
+/* A lane's split copies' sums and its log (pt__lane_add). */
+typedef struct pt__lane_kids {
+    pt_color L[PT__SPLIT_MAX_COPIES], Lc[PT__SPLIT_MAX_COPIES]; /* each copy's path's sum, its continuation's */
+    unsigned char go[PT__SPLIT_MAX_COPIES];                     /* whether the copy went on */
+    pt_color log[PT__LANE_LOG]; /* what the path gathered while its copies ran, in order */
+} pt__lane_kids;
 
 /* What every stage of a batch needs: pt__trace_from's per-path constants, and the lanes the
    split copies take (copies: whether they may; free: the lanes not in use). */
+typedef struct pt__batch_pool {
+    pt__lane_kids *kids;
+    int nfree, nspawn, nparked;
+    uint64_t lane_copies; /* split copies that ran as lanes */
+    int free[PT__BATCH_LANES], spawn[PT__BATCH_LANES], parked[PT__BATCH_LANES];
+} pt__batch_pool;
 typedef struct pt__batch_ctx {
     const pt_scene *s;
     const pt__settings *cfg;
     int tri, any_lights, nee, pick, copies;
     pt__lane *lanes;
-    int nfree, nspawn, nparked;
-    uint64_t lane_copies; /* split copies that ran as lanes */
-    int free[PT__BATCH_LANES], spawn[PT__BATCH_LANES], parked[PT__BATCH_LANES];
+    pt__batch_pool *pool; /* (copies only) */
 } pt__batch_ctx;
 
 static void pt__stats_sum(pt_path_stats *t, const pt_path_stats *a)
@@ -10607,33 +10616,34 @@ static void pt__stats_sum(pt_path_stats *t, const pt_path_stats *a)
 /* Lane l gathers x: into its sum, or, while copies it split into are still running (whose sum
    the scalar integrator adds first), into its log, which pt__lane_fold adds after theirs. A zero
    is left out of the log: a sum that starts at +0 is never -0, so adding a zero leaves it as is. */
-static PT__HOT void pt__lane_add(pt__lane *l, pt_color x)
+static PT__HOT void pt__lane_add(pt__lane *l, pt_color x, const int copies)
 {
-    if (!l->pending) l->L = pt_add(l->L, x);
-    else if (x.x != 0.0f || x.y != 0.0f || x.z != 0.0f) l->log[l->nlog++] = x;
+    if (!copies || !l->pending) l->L = pt_add(l->L, x);
+    else if (x.x != 0.0f || x.y != 0.0f || x.z != 0.0f) l->kids->log[l->nlog++] = x;
 }
 
 /* Once lane l's copies have all ended: their sum as pt__split_copies makes it (copy by copy, the
    path's sum, then what its continuation found), added to l's, then l's log in order. */
-static void pt__lane_fold(pt__lane *l)
+static PT__NOINLINE void pt__lane_fold(pt__lane *l)
 {
+    const pt__lane_kids *kx = l->kids;
     pt_color S = pt_v3(0, 0, 0);
     int c;
     for (c = 1; c <= l->nkids; ++c) {
-        if (l->kid_go[c]) S = pt_add(S, l->kid_L[c]);
-        S = pt_add(S, l->kid_Lc[c]);
+        if (kx->go[c]) S = pt_add(S, kx->L[c]);
+        S = pt_add(S, kx->Lc[c]);
     }
     l->L = pt_add(l->L, S);
-    for (c = 0; c < l->nlog; ++c) l->L = pt_add(l->L, l->log[c]);
+    for (c = 0; c < l->nlog; ++c) l->L = pt_add(l->L, kx->log[c]);
     l->nlog = 0;
 }
 
 /* Lane idx's path has ended: once its copies have too, it leaves its family's order, its sum
    goes to its parent (its rays to the camera sample's count) and its lane is free again; the
    parent, if that was its last copy, folds and may end in turn. */
-static void pt__lane_end(pt__batch_ctx *b, int idx)
+static PT__NOINLINE void pt__lane_end(pt__lane *lanes, pt__batch_pool *pool, int idx)
 {
-    pt__lane *lanes = b->lanes, *l = &lanes[idx];
+    pt__lane *l = &lanes[idx];
     l->wait = PT__WAIT_ENDED;
     while (l->wait == PT__WAIT_ENDED && !l->pending) {
         pt__lane *p;
@@ -10642,9 +10652,9 @@ static void pt__lane_end(pt__batch_ctx *b, int idx)
         if (l->next >= 0) lanes[l->next].prev = l->prev;
         if (l->parent < 0) return;
         p = &lanes[l->parent];
-        p->kid_L[l->copy] = l->L;
+        p->kids->L[l->copy] = l->L;
         pt__stats_sum(&lanes[l->root].st, &l->st);
-        b->free[b->nfree++] = l->self;
+        pool->free[pool->nfree++] = l->self;
         if (--p->pending == 0) pt__lane_fold(p);
         l = p;
     }
@@ -10678,7 +10688,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
 }
 
 /* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
-static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
+static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int copies)
 {
     const pt_scene *s = b->s;
     const pt__settings *cfg = b->cfg;
@@ -10687,8 +10697,8 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     pt__vertex *v = &l->v;
     l->shadow = 0;
     if (!l->found) {
-        if (PT__UNLIKELY(cfg->env_on)) pt__lane_add(l, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf));
-        else pt__lane_add(l, pt_mul(l->beta, cfg->background));
+        if (PT__UNLIKELY(cfg->env_on)) pt__lane_add(l, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf), copies);
+        else pt__lane_add(l, pt_mul(l->beta, cfg->background), copies);
         return 0;
     }
     prim = &s->prims[l->pi];
@@ -10697,7 +10707,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     if (m->emits && (m->two_sided || l->h.front_face)) {
         float w = l->prev_delta ? 1.0f
                                 : pt__emission_weight(s, cfg, prim, l->prev_pdf, l->prev_p, l->prev_n, l->ray.dir, l->t, v);
-        if (w > 0.0f) pt__lane_add(l, pt_scale(pt_mul(l->beta, m->emission), w));
+        if (w > 0.0f) pt__lane_add(l, pt_scale(pt_mul(l->beta, m->emission), w), copies);
     }
     if (l->depth >= cfg->max_depth || !m->scatters) return 0;
     l->beta_in = l->beta;
@@ -10708,7 +10718,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
         float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
         pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
         if (pt__lights_sample_all(s, cfg, v->o, pt_v3(0.0f, 0.0f, 0.0f), u0, u1, u2, &ls, &li))
-            pt__lane_add(l, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st));
+            pt__lane_add(l, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st), copies);
     }
     if (!m->delta) {
         v->surface = l->surfaces++;
@@ -10745,26 +10755,27 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
    lanes of their own, each after its continuation from l's vertex (pt__split_copies's order:
    the copies draw from sets of their own, so the order they run in changes no number), and go
    before l in the family's scalar order; l goes on as copy 0, its gains logged until they end. */
-static void pt__lane_split(pt__batch_ctx *b, pt__lane *l, int k)
+static PT__NOINLINE void pt__lane_split(pt__batch_ctx *b, pt__lane *l, int k)
 {
     const pt__vertex *v = &l->v;
+    pt__lane_kids *kx = l->kids;
     int c;
     l->nkids = k - 1;
-    b->lane_copies += (uint64_t)(k - 1);
+    b->pool->lane_copies += (uint64_t)(k - 1);
     for (c = 1; c < k; ++c) {
-        const int idx = b->free[b->nfree - 1];
+        const int idx = b->pool->free[b->pool->nfree - 1];
         pt__lane *cl = &b->lanes[idx];
         float pp2 = l->prev_pdf;
         int pd2 = l->prev_delta;
         pt_color Lc = pt_v3(0, 0, 0);
         l->st.split_paths++;
         (void)pt__split_sampler(&l->smp, &cl->smp, l->depth, c);
-        l->kid_go[c] = (unsigned char)pt__continue(b->s, b->cfg, v, &l->h, l->depth, l->beta_in, &cl->smp, b->any_lights,
-                                                   b->pick, &cl->ray, &cl->beta, &pp2, &pd2, &Lc, &l->st);
-        l->kid_Lc[c] = Lc;
-        l->kid_L[c] = pt_v3(0, 0, 0);
-        if (!l->kid_go[c]) continue;
-        b->nfree--;
+        kx->go[c] = (unsigned char)pt__continue(b->s, b->cfg, v, &l->h, l->depth, l->beta_in, &cl->smp, b->any_lights,
+                                                b->pick, &cl->ray, &cl->beta, &pp2, &pd2, &Lc, &l->st);
+        kx->Lc[c] = Lc;
+        kx->L[c] = pt_v3(0, 0, 0);
+        if (!kx->go[c]) continue;
+        b->pool->nfree--;
         l->st.bounce_rays++;
         memset(&cl->st, 0, sizeof cl->st);
         cl->L = pt_v3(0, 0, 0);
@@ -10791,58 +10802,80 @@ static void pt__lane_split(pt__batch_ctx *b, pt__lane *l, int k)
         else b->lanes[l->root].head = idx;
         l->prev = idx;
         l->pending++;
-        b->spawn[b->nspawn++] = idx;
+        b->pool->spawn[b->pool->nspawn++] = idx;
     }
     if (!l->pending) pt__lane_fold(l);
 }
 
+/* Stage 4's use of the camera sample's shared splitting state sp (pt__splits: the budget, guided
+   roulette's reference), at non-delta vertex l->v where the path may split or set the reference:
+   what it does there depends on what the paths before it in the scalar integrator's order did,
+   so a copy goes on only as its family's first (returns 0 if it is not: it waits). */
+static PT__NOINLINE int pt__lane_shared(pt__batch_ctx bc, pt__lane *l, pt__splits *sp, int split)
+{
+    pt__batch_ctx *b = &bc;
+    pt__vertex *v = &l->v;
+    int k;
+    if (b->lanes[l->root].head != l->self) return 0;
+    if (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f)) sp->rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
+    v->rr_ref = sp->rr_ref; /* (before the copies' continuations, which read it) */
+    if (split && (k = pt__split_count(l->beta_in, sp)) > 1) {
+        l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
+        if (b->copies && b->pool->nfree >= k - 1) pt__lane_split(b, l, k);
+        else
+            l->L = pt_add(l->L, pt__split_copies(b->s, b->cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights,
+                                                 b->pick, l->prev_delta, l->prev_pdf, &l->st, sp));
+    }
+    return 1;
+}
+
 /* Stage 4 for one path after its shadow ray (l->shadow: 2 if occluded): returns 0 if it ends, 1
-   if it goes on, 2 if it waits (l->wait). What a path does with its camera sample's shared
-   splitting state (pt__splits: the budget, guided roulette's reference) depends on what the
-   paths before it in the scalar integrator's order did, so a copy does it only once it is its
-   family's first (PT__WAIT_HEAD: the lane then resumes here); and a path whose log could fill
-   waits for its copies to end (PT__WAIT_LOG). */
-static PT__HOT int pt__lane_continue(pt__batch_ctx *b, pt__lane *l)
+   if it goes on, 2 if it waits (l->wait): PT__WAIT_HEAD, for pt__lane_shared (the lane then
+   resumes there), or PT__WAIT_LOG, a path whose log could fill, for its copies to end. */
+static PT__HOT int pt__lane_continue(pt__batch_ctx *b, pt__lane *l, const int copies)
 {
     const pt_scene *s = b->s;
     const pt__settings *cfg = b->cfg;
     pt__vertex *v = &l->v;
     pt_color Lc = pt_v3(0, 0, 0);
-    int k, go;
+    int go;
     if (!v->m->delta) {
-        pt__splits *sp = &b->lanes[l->root].sp; /* (the camera sample's) */
+        pt__splits *sp = copies ? &b->lanes[l->root].sp : &l->sp; /* (the camera sample's) */
         int split;
-        if (l->wait != PT__WAIT_HEAD) {
-            if (l->shadow == 1) pt__lane_add(l, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f));
+        if (!copies || l->wait != PT__WAIT_HEAD) {
+            if (l->shadow == 1) pt__lane_add(l, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f), copies);
             if (PT__UNLIKELY(s->dlight_count != 0))
-                pt__lane_add(l, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st));
+                pt__lane_add(l, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st), copies);
         }
         split = sp->first > 1 || PT__UNLIKELY(l->beta_in.x >= PT__SPLIT_BETA || l->beta_in.y >= PT__SPLIT_BETA ||
                                                l->beta_in.z >= PT__SPLIT_BETA);
-        if ((split || (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f))) && b->lanes[l->root].head != l->self) {
-            l->wait = PT__WAIT_HEAD;
-            return 2;
-        }
-        l->wait = PT__WAIT_NONE;
-        if (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f)) sp->rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
-        v->rr_ref = sp->rr_ref;
-        if (split && (k = pt__split_count(l->beta_in, sp)) > 1) {
-            l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
-            if (b->copies && b->nfree >= k - 1) pt__lane_split(b, l, k);
-            else
+        if (!copies) { /* (the path is its camera sample's only one: pt__trace_from's order) */
+            int k;
+            if (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f))
+                sp->rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
+            v->rr_ref = sp->rr_ref;
+            if (split && (k = pt__split_count(l->beta_in, sp)) > 1) {
+                l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
                 l->L = pt_add(l->L, pt__split_copies(s, cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights,
                                                      b->pick, l->prev_delta, l->prev_pdf, &l->st, sp));
+            }
+        } else if (PT__UNLIKELY(split || (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f))) && !pt__lane_shared(*b, l, sp, split)) {
+            l->wait = PT__WAIT_HEAD;
+            return 2;
+        } else {
+            l->wait = PT__WAIT_NONE;
+            v->rr_ref = sp->rr_ref;
         }
     }
     go = pt__continue(s, cfg, v, &l->h, l->depth, l->beta_in, &l->smp, b->any_lights, b->pick, &l->ray, &l->beta,
                       &l->prev_pdf, &l->prev_delta, &Lc, &l->st);
-    pt__lane_add(l, Lc);
+    pt__lane_add(l, Lc, copies);
     if (!go) return 0;
     l->prev_p = v->o;
     l->prev_n = pt__receiver_normal(v);
     l->st.bounce_rays++;
     l->depth++;
-    if (PT__UNLIKELY(l->nlog > PT__LANE_LOG - PT__LANE_LOG_BOUNCE)) {
+    if (copies && PT__UNLIKELY(l->nlog > PT__LANE_LOG - PT__LANE_LOG_BOUNCE)) {
         l->wait = PT__WAIT_LOG;
         return 2;
     }
@@ -10896,8 +10929,9 @@ static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene 
    ahead (pt__sobol_draw_ahead) where its vertex will draw them: a non-delta scattering material
    before the last depth (a guided vertex may draw its direction from the guide instead: that
    draw is then only wasted). */
-static void pt__batch_draw_ahead(const pt__batch_ctx *b, pt__lane *lanes, const int *live, int nlive)
+static PT__HOT void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const int *live, int nlive)
 {
+    const pt__batch_ctx *b = &bc;
     const int scatter = b->cfg->strategy != PT_STRATEGY_MIXTURE;
     int i;
 #ifdef PT__WIDE
@@ -10927,40 +10961,44 @@ static void pt__batch_draw_ahead(const pt__batch_ctx *b, pt__lane *lanes, const 
 /* Lanes that waited (pt__lane_continue) and may now go on: back into live[] from nlive on;
    returns the new nlive. A lane resumed at its family's head may split, end or wait again, which
    may let others go on: the scan repeats until nothing changes. */
-static int pt__batch_resume(pt__batch_ctx *b, int *live, int nlive)
+static PT__NOINLINE int pt__batch_resume(pt__batch_ctx bc, int *live, int nlive)
 {
+    pt__batch_ctx *b = &bc;
     int i, changed = 1;
-    while (changed && b->nparked > 0) {
+    while (changed && b->pool->nparked > 0) {
         changed = 0;
-        for (i = 0; i < b->nparked;) {
-            const int idx = b->parked[i];
+        for (i = 0; i < b->pool->nparked;) {
+            const int idx = b->pool->parked[i];
             pt__lane *l = &b->lanes[idx];
             int r = 1;
             if (l->wait == PT__WAIT_HEAD ? b->lanes[l->root].head != idx : l->pending != 0) {
                 ++i;
                 continue;
             }
-            b->parked[i] = b->parked[--b->nparked];
+            b->pool->parked[i] = b->pool->parked[--b->pool->nparked];
             changed = 1;
-            if (l->wait == PT__WAIT_HEAD) r = pt__lane_continue(b, l);
+            if (l->wait == PT__WAIT_HEAD) r = pt__lane_continue(b, l, 1);
             else l->wait = PT__WAIT_NONE;
             if (r == 1) live[nlive++] = idx;
-            else if (r == 2) b->parked[b->nparked++] = idx;
-            else pt__lane_end(b, idx);
+            else if (r == 2) b->pool->parked[b->pool->nparked++] = idx;
+            else pt__lane_end(b->lanes, b->pool, idx);
         }
     }
     return nlive;
 }
 
 /* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
-   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init); lanes holds
-   PT__BATCH_LANES lanes, those from n on for split copies (with the Sobol sampler). Returns the
-   split copies that ran as lanes. */
-static uint64_t pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes,
-                              int n)
+   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). With kids
+   (PT__BATCH_LANES of them; the Sobol sampler), lanes holds PT__BATCH_LANES lanes, those from n on
+   for split copies; without, PT__BATCH, and the copies run in pt__split_copies. Returns the split
+   copies that ran as lanes. */
+static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
+                                           pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
 {
     int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], nlive = n, nshade, i;
     pt__batch_ctx bc, *b = &bc;
+    pt__batch_pool pool;
+    b->pool = &pool;
     b->s = s;
     b->cfg = cfg;
     b->tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
@@ -10969,12 +11007,16 @@ static uint64_t pt__batch_run(const pt_scene *s, const pt__settings *cfg, const 
     b->pick = s->light_count != 1 || cfg->env_pick > 0.0f;
     /* split copies as lanes: with Sobol sets of their own (independent numbers: the parent's stream,
        so depth first in pt__split_copies), and not for the path classes' diagnostic */
-    b->copies = cfg->sampler == PT_SAMPLER_SOBOL;
-    PT__PCLASS(b->copies = 0;)
+    b->copies = copies;
     b->lanes = lanes;
-    b->nfree = b->nspawn = b->nparked = 0;
-    b->lane_copies = 0;
-    for (i = PT__BATCH_LANES - 1; i >= n; --i) b->free[b->nfree++] = i;
+    b->pool->kids = kids;
+    b->pool->nfree = b->pool->nspawn = b->pool->nparked = 0;
+    b->pool->lane_copies = 0;
+    if (kids)
+        for (i = PT__BATCH_LANES - 1; i >= 0; --i) {
+            lanes[i].kids = &kids[i];
+            if (i >= n) b->pool->free[b->pool->nfree++] = i;
+        }
     for (i = 0; i < n; ++i) {
         pt__lane *l = &lanes[i];
         live[i] = i;
@@ -10985,25 +11027,27 @@ static uint64_t pt__batch_run(const pt_scene *s, const pt__settings *cfg, const 
     }
     while (nlive > 0) {
         pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
-        if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(b, lanes, live, nlive); /* (1b) */
+        if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
         for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
-            if (pt__lane_shade(b, &lanes[live[i]])) shade[nshade++] = live[i];
-            else pt__lane_end(b, live[i]);
+            if (pt__lane_shade(b, &lanes[live[i]], copies)) shade[nshade++] = live[i];
+            else if (copies) pt__lane_end(lanes, b->pool, live[i]);
         for (i = 0; i < nshade; ++i) { /* (3) shadow rays */
             pt__lane *l = &lanes[shade[i]];
             if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
         }
         for (i = 0, nlive = 0; i < nshade; ++i) { /* (4) contributions, splits, continuation */
-            const int r = pt__lane_continue(b, &lanes[shade[i]]);
+            const int r = pt__lane_continue(b, &lanes[shade[i]], copies);
             if (r == 1) live[nlive++] = shade[i];
-            else if (r == 2) b->parked[b->nparked++] = shade[i];
-            else pt__lane_end(b, shade[i]);
+            else if (copies && r == 2) b->pool->parked[b->pool->nparked++] = shade[i];
+            else if (copies) pt__lane_end(lanes, b->pool, shade[i]);
         }
-        for (i = 0; i < b->nspawn; ++i) live[nlive++] = b->spawn[i]; /* (the new copies) */
-        b->nspawn = 0;
-        nlive = pt__batch_resume(b, live, nlive);
-        for (i = 0; i < b->nspawn; ++i) live[nlive++] = b->spawn[i];
-        b->nspawn = 0;
+        if (copies) {
+            for (i = 0; i < b->pool->nspawn; ++i) live[nlive++] = b->pool->spawn[i]; /* (the new copies) */
+            b->pool->nspawn = 0;
+            nlive = pt__batch_resume(*b, live, nlive);
+            for (i = 0; i < b->pool->nspawn; ++i) live[nlive++] = b->pool->spawn[i];
+            b->pool->nspawn = 0;
+        }
     }
     for (i = 0; i < n; ++i) {
         pt__lane *l = &lanes[i];
@@ -11013,7 +11057,23 @@ static uint64_t pt__batch_run(const pt_scene *s, const pt__settings *cfg, const 
             l->L = pt_v3(0, 0, 0);
         }
     }
-    return b->lane_copies;
+    return b->pool->lane_copies;
+}
+/* (two functions: with copies as lanes, and without, which keeps none of their bookkeeping) */
+static PT__NOINLINE uint64_t pt__batch_run_lanes(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
+                                                 pt__lane *lanes, pt__lane_kids *kids, int n)
+{
+    return pt__batch_run_with(s, cfg, pk, lanes, kids, n, 1);
+}
+static PT__NOINLINE uint64_t pt__batch_run_plain(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
+                                                 pt__lane *lanes, int n)
+{
+    return pt__batch_run_with(s, cfg, pk, lanes, NULL, n, 0);
+}
+static uint64_t pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes,
+                              pt__lane_kids *kids, int n)
+{
+    return kids ? pt__batch_run_lanes(s, cfg, pk, lanes, kids, n) : pt__batch_run_plain(s, cfg, pk, lanes, n);
 }
 
 /* ------------------------------------------------------------------------------------------
@@ -11178,15 +11238,20 @@ static int pt__render_job_batched(pt__pass *ps, int index)
 {
     pt_film *film = ps->film;
     pt__job_pixels r;
-    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * PT__BATCH_LANES);
+    /* split copies as lanes: with Sobol sets of their own (independent numbers: the parent's
+       stream, so depth first in pt__split_copies), and not for the path classes' diagnostic */
+    const int copies_as_lanes = ps->cfg->sampler == PT_SAMPLER_SOBOL && ps->cfg->max_splits > 0 PT__PCLASS(&& 0);
+    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * (copies_as_lanes ? PT__BATCH_LANES : PT__BATCH));
+    pt__lane_kids *kids = copies_as_lanes ? (pt__lane_kids *)PT_MALLOC(sizeof(pt__lane_kids) * PT__BATCH_LANES) : NULL;
     pt__sobol_cache *cache = (pt__sobol_cache *)PT_MALLOC(sizeof(pt__sobol_cache));
     pt__packet_scene *pk = (pt__packet_scene *)PT_MALLOC(sizeof(pt__packet_scene));
     pt_path_stats st;
     uint64_t taken = 0, copies = 0;
     int x, y, k, n = 0, i;
     const int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
-    if (!lanes || !cache || !pk) {
+    if (!lanes || !cache || !pk || (copies_as_lanes && !kids)) {
         PT_FREE(lanes);
+        PT_FREE(kids);
         PT_FREE(cache);
         PT_FREE(pk);
         return 0;
@@ -11212,7 +11277,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
                 l->index_k = index_k;
                 pt__lane_start(l, ps->cfg, pt__camera_sample(ps, &l->smp, x, y, pix, index_k, pixel_key, cache));
                 if (++n < PT__BATCH) continue;
-                copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+                copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, kids, n);
                 for (i = 0; i < n; ++i) {
                     pt__lane *d = &lanes[i];
                     uint32_t p = d->pix;
@@ -11229,7 +11294,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
             taken += mine;
         }
     }
-    copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+    copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, kids, n);
     for (i = 0; i < n; ++i) {
         pt__lane *d = &lanes[i];
         uint32_t p = d->pix;
@@ -11239,6 +11304,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
         pt__stats_sum(&st, &d->st);
     }
     PT_FREE(lanes);
+    PT_FREE(kids);
     PT_FREE(cache);
     PT_FREE(pk);
     ps->tile_stats[index] = st;

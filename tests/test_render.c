@@ -1054,7 +1054,7 @@ static void batched_bit_identical(test_ctx *t)
                                           "scenes/lights.scene", "scenes/textured.scene", "scenes/rough-glass.scene",
                                           "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene" };
     static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
-                                           "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol",
+                                           "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol, roulette from 1",
                                            "sobol, indirect_paths 8, mixture 0.75, max_splits 12" };
     const int nscenes = (int)(sizeof scenes / sizeof scenes[0]), nconfigs = (int)(sizeof configs / sizeof configs[0]);
     int i, c, renders = 0, split = 0, lane_copies = 0, inline_copies = 0;
@@ -1085,7 +1085,8 @@ static void batched_bit_identical(test_ctx *t)
             if (c == 9) { d.strategy = PT_STRATEGY_MIXTURE; d.indirect_paths = 8; d.max_splits = 12; }
             if (c == 6) d.indirect_paths = 4;
             if (c == 7) { d.adaptive_threshold = 0.2f; d.samples_per_pixel = 12; d.adaptive_min_spp = 4; }
-            if (c == 8) { d.guiding = PT_GUIDING_ON; d.samples_per_pixel = 16; }
+            if (c == 8) { d.guiding = PT_GUIDING_ON; d.samples_per_pixel = 16; d.rr_start_depth = 1; } /* (guided
+                roulette at the first vertex, where it splits) */
             d.integrator = PT_INTEGRATOR_SCALAR;
             e = d;
             e.integrator = PT_INTEGRATOR_BATCHED;
