@@ -1157,7 +1157,9 @@ typedef struct pt_path_stats {
    samples together in batches, stage by stage (closest hits, emission and light samples, the
    batch's shadow rays, continuation): the same functions in the same order per path, so the
    same image bit for bit. Guide training iterations (path guiding) run SCALAR;
-   pt_render_stats.batched_samples counts the samples the batched integrator took. */
+   pt_render_stats.batched_samples counts the samples the batched integrator took. With the
+   Sobol sampler a split's copies (indirect_paths) are paths of the batch too; with independent
+   numbers they run depth first as in SCALAR (pt_render_stats.batched_split_paths). */
 typedef enum pt_integrator {
     PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
                                    for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
@@ -10545,16 +10547,28 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    found, its next vertex and, with next-event estimation, the light sample and its shadow ray;
    (3) the batch's shadow rays; (4) for each path its light sample's contribution, the delta
    lights, splitting and the continuation (scattered direction, roulette); paths that ended leave
-   the live list, which stays in sample order. Each stage calls what pt__trace_from calls, in
-   the same order for each path, and a path keeps its own sampler, so every path draws the same
-   numbers, does the same float operations and adds up its radiance in the same order as the
-   scalar integrator: the image is the same bit for bit (tests/test_render.c, "batched"). A
-   split's extra copies (pt__split_copies: rare with the defaults) run depth first within stage
-   4 as in the scalar integrator. A guide's training iterations (cfg->recording) run scalar. */
+   the live list. Each stage calls what pt__trace_from calls, in the same order for each path,
+   and a path keeps its own sampler, so every path draws the same numbers, does the same float
+   operations and adds up its radiance in the same order as the scalar integrator: the image is
+   the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
+   (cfg->recording) run scalar.
+   Split copies (indirect_paths: every camera sample of a default render). With the Sobol
+   sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
+   take free lanes and run beside the path that split (copy 0), as the camera sample's family.
+   What the scalar integrator does in its depth-first order is kept: (a) sums: a copy's lane sums
+   its own path from 0; the parent logs what it gathers while its copies run (pt__lane_add) and,
+   once they have all ended, adds their sum as pt__split_copies makes it, then its log
+   (pt__lane_fold); (b) the camera sample's shared splitting state (pt__splits: the split budget,
+   guided roulette's reference) is read and changed only by the family's first path in the scalar
+   order (a list kept per family: a split's copies go before the path that split), which is
+   where the scalar integrator would be; another path that needs it waits (pt__lane_shared);
+   (c) rays and NaN counts go to the camera sample's. With independent numbers the copies draw
+   from the parent's stream and run depth first in stage 4 (pt__split_copies), as they do when
+   no lanes are free; pt_render_stats.batched_split_paths counts the copies that ran as lanes. */
 #define PT__BATCH 64
 #define PT__BATCH_LANES (4 * PT__BATCH) /* a batch's camera samples and the split copies' lanes */
-#define PT__LANE_LOG 32     /* a lane's log; a bounce adds at most PT__LANE_LOG_BOUNCE to it */
-#define PT__LANE_LOG_BOUNCE 6
+#define PT__LANE_LOG 32     /* a lane's log; a bounce adds at most PT__LANE_LOG_BOUNCE to it (5 sums: */
+#define PT__LANE_LOG_BOUNCE 6 /* emission, a delta vertex's light, the light sample, delta lights, Lc) */
 enum { PT__WAIT_NONE, PT__WAIT_HEAD, PT__WAIT_LOG, PT__WAIT_ENDED };
 
 typedef struct pt__lane {
@@ -10587,14 +10601,16 @@ typedef struct pt__lane_kids {
     pt_color log[PT__LANE_LOG]; /* what the path gathered while its copies ran, in order */
 } pt__lane_kids;
 
-/* What every stage of a batch needs: pt__trace_from's per-path constants, and the lanes the
-   split copies take (copies: whether they may; free: the lanes not in use). */
+/* The lanes split copies take (free: not in use; spawn: copies started in this stage 4; parked:
+   lanes that wait, pt__lane_continue). */
 typedef struct pt__batch_pool {
     pt__lane_kids *kids;
     int nfree, nspawn, nparked;
     uint64_t lane_copies; /* split copies that ran as lanes */
     int free[PT__BATCH_LANES], spawn[PT__BATCH_LANES], parked[PT__BATCH_LANES];
 } pt__batch_pool;
+/* What every stage of a batch needs: pt__trace_from's per-path constants, and whether copies
+   run as lanes (copies; pool). */
 typedef struct pt__batch_ctx {
     const pt_scene *s;
     const pt__settings *cfg;
@@ -10929,7 +10945,7 @@ static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene 
    ahead (pt__sobol_draw_ahead) where its vertex will draw them: a non-delta scattering material
    before the last depth (a guided vertex may draw its direction from the guide instead: that
    draw is then only wasted). */
-static PT__HOT void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const int *live, int nlive)
+static void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const int *live, int nlive)
 {
     const pt__batch_ctx *b = &bc;
     const int scatter = b->cfg->strategy != PT_STRATEGY_MIXTURE;
@@ -11005,8 +11021,6 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     b->any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
     b->nee = b->any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
     b->pick = s->light_count != 1 || cfg->env_pick > 0.0f;
-    /* split copies as lanes: with Sobol sets of their own (independent numbers: the parent's stream,
-       so depth first in pt__split_copies), and not for the path classes' diagnostic */
     b->copies = copies;
     b->lanes = lanes;
     b->pool->kids = kids;
@@ -11241,17 +11255,17 @@ static int pt__render_job_batched(pt__pass *ps, int index)
     /* split copies as lanes: with Sobol sets of their own (independent numbers: the parent's
        stream, so depth first in pt__split_copies), and not for the path classes' diagnostic */
     const int copies_as_lanes = ps->cfg->sampler == PT_SAMPLER_SOBOL && ps->cfg->max_splits > 0 PT__PCLASS(&& 0);
-    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * (copies_as_lanes ? PT__BATCH_LANES : PT__BATCH));
-    pt__lane_kids *kids = copies_as_lanes ? (pt__lane_kids *)PT_MALLOC(sizeof(pt__lane_kids) * PT__BATCH_LANES) : NULL;
+    const size_t nl = copies_as_lanes ? PT__BATCH_LANES : PT__BATCH; /* (one block: lanes, then the kids) */
+    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * nl + (copies_as_lanes ? sizeof(pt__lane_kids) * nl : 0u));
+    pt__lane_kids *kids = copies_as_lanes && lanes ? (pt__lane_kids *)(void *)(lanes + nl) : NULL;
     pt__sobol_cache *cache = (pt__sobol_cache *)PT_MALLOC(sizeof(pt__sobol_cache));
     pt__packet_scene *pk = (pt__packet_scene *)PT_MALLOC(sizeof(pt__packet_scene));
     pt_path_stats st;
     uint64_t taken = 0, copies = 0;
     int x, y, k, n = 0, i;
     const int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
-    if (!lanes || !cache || !pk || (copies_as_lanes && !kids)) {
+    if (!lanes || !cache || !pk) {
         PT_FREE(lanes);
-        PT_FREE(kids);
         PT_FREE(cache);
         PT_FREE(pk);
         return 0;
@@ -11304,7 +11318,6 @@ static int pt__render_job_batched(pt__pass *ps, int index)
         pt__stats_sum(&st, &d->st);
     }
     PT_FREE(lanes);
-    PT_FREE(kids);
     PT_FREE(cache);
     PT_FREE(pk);
     ps->tile_stats[index] = st;
