@@ -1045,9 +1045,11 @@ done:
    for bit, over scene files that between them hold every feature the integrator branches on (glass
    and a diffuse ball, an environment map, delta lights, textures, a rough dielectric, triangles,
    many lights, a guide's scene), under every strategy, both samplers, indirect paths, splitting
-   (mixture with light weight 0.75), adaptive sampling and guiding; the stats say which integrator
-   ran (a guide's training runs scalar) and which the default picks, and a bad value is refused
-   naming the field. */
+   (mixture with light weight 0.75), adaptive sampling and guiding; with Sobol, split copies run as
+   lanes of the batch, and with 8 indirect paths and a budget of 12 also depth first (no free lane)
+   with budgets ending within a camera sample's paths; the stats say which integrator ran (a
+   guide's training runs scalar), how many copies ran as lanes, and which the default picks, and a
+   bad value is refused naming the field. */
 static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
