@@ -1157,7 +1157,9 @@ typedef struct pt_path_stats {
    samples together in batches, stage by stage (closest hits, emission and light samples, the
    batch's shadow rays, continuation): the same functions in the same order per path, so the
    same image bit for bit. Guide training iterations (path guiding) run SCALAR;
-   pt_render_stats.batched_samples counts the samples the batched integrator took. */
+   pt_render_stats.batched_samples counts the samples the batched integrator took. With the
+   Sobol sampler a split's copies (indirect_paths) are paths of the batch too; with independent
+   numbers they run depth first as in SCALAR (pt_render_stats.batched_split_paths). */
 typedef enum pt_integrator {
     PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
                                    for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
@@ -1322,6 +1324,8 @@ typedef struct pt_render_stats {
     uint64_t split_paths;        /* extra paths started by splitting (section 7) */
     uint64_t guided_vertices;    /* vertices that sampled from a learned guide (path guiding) */
     uint64_t batched_samples;    /* camera samples the batched integrator took (the rest: scalar) */
+    uint64_t batched_split_paths; /* of split_paths, those the batched integrator ran as paths of its
+                                    batch (the rest ran depth first in the scalar integrator) */
     double seconds;              /* wall clock */
     int passes, threads;
     uint64_t pixels_converged;   /* adaptive: pixels that stopped before samples_per_pixel (the
@@ -10543,13 +10547,29 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    found, its next vertex and, with next-event estimation, the light sample and its shadow ray;
    (3) the batch's shadow rays; (4) for each path its light sample's contribution, the delta
    lights, splitting and the continuation (scattered direction, roulette); paths that ended leave
-   the live list, which stays in sample order. Each stage calls what pt__trace_from calls, in
-   the same order for each path, and a path keeps its own sampler, so every path draws the same
-   numbers, does the same float operations and adds up its radiance in the same order as the
-   scalar integrator: the image is the same bit for bit (tests/test_render.c, "batched"). A
-   split's extra copies (pt__split_copies: rare with the defaults) run depth first within stage
-   4 as in the scalar integrator. A guide's training iterations (cfg->recording) run scalar. */
+   the live list. Each stage calls what pt__trace_from calls, in the same order for each path,
+   and a path keeps its own sampler, so every path draws the same numbers, does the same float
+   operations and adds up its radiance in the same order as the scalar integrator: the image is
+   the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
+   (cfg->recording) run scalar.
+   Split copies (indirect_paths: every camera sample of a default render). With the Sobol
+   sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
+   take free lanes and run beside the path that split (copy 0), as the camera sample's family.
+   What the scalar integrator does in its depth-first order is kept: (a) sums: a copy's lane sums
+   its own path from 0; the parent logs what it gathers while its copies run (pt__lane_add) and,
+   once they have all ended, adds their sum as pt__split_copies makes it, then its log
+   (pt__lane_fold); (b) the camera sample's shared splitting state (pt__splits: the split budget,
+   guided roulette's reference) is read and changed only by the family's first path in the scalar
+   order (a list kept per family: a split's copies go before the path that split), which is
+   where the scalar integrator would be; another path that needs it waits (pt__lane_shared);
+   (c) rays and NaN counts go to the camera sample's. With independent numbers the copies draw
+   from the parent's stream and run depth first in stage 4 (pt__split_copies), as they do when
+   no lanes are free; pt_render_stats.batched_split_paths counts the copies that ran as lanes. */
 #define PT__BATCH 64
+#define PT__BATCH_LANES (4 * PT__BATCH) /* a batch's camera samples and the split copies' lanes */
+#define PT__LANE_LOG 32     /* a lane's log; a bounce adds at most PT__LANE_LOG_BOUNCE to it (5 sums: */
+#define PT__LANE_LOG_BOUNCE 6 /* emission, a delta vertex's light, the light sample, delta lights, Lc) */
+enum { PT__WAIT_NONE, PT__WAIT_HEAD, PT__WAIT_LOG, PT__WAIT_ENDED };
 
 typedef struct pt__lane {
     pt__sampler smp;
@@ -10567,14 +10587,94 @@ typedef struct pt__lane {
     pt_hit h;
     pt__light_sample ls;
     pt__nee_ray nr;
+    /* split copies as lanes (below): the camera sample's lane is its family's root */
+    int self, root, parent, copy; /* copy: which of the parent's copies (1 .. k-1) */
+    int prev, next, head;         /* the family's scalar order (head: the root's, its first) */
+    int pending, nkids, nlog, wait; /* pending: copies still running; wait: PT__WAIT_* */
+    struct pt__lane_kids *kids;   /* (its own: kept apart, as only a split touches it) */
 } pt__lane;
 
-/* What every stage of a batch needs: pt__trace_from's per-path constants. */
+/* A lane's split copies' sums and its log (pt__lane_add). */
+typedef struct pt__lane_kids {
+    pt_color L[PT__SPLIT_MAX_COPIES], Lc[PT__SPLIT_MAX_COPIES]; /* each copy's path's sum, its continuation's */
+    unsigned char go[PT__SPLIT_MAX_COPIES];                     /* whether the copy went on */
+    pt_color log[PT__LANE_LOG]; /* what the path gathered while its copies ran, in order */
+} pt__lane_kids;
+
+/* The lanes split copies take (free: not in use; spawn: copies started in this stage 4; parked:
+   lanes that wait, pt__lane_continue). */
+typedef struct pt__batch_pool {
+    pt__lane_kids *kids;
+    int nfree, nspawn, nparked;
+    uint64_t lane_copies; /* split copies that ran as lanes */
+    int free[PT__BATCH_LANES], spawn[PT__BATCH_LANES], parked[PT__BATCH_LANES];
+} pt__batch_pool;
+/* What every stage of a batch needs: pt__trace_from's per-path constants, and whether copies
+   run as lanes (copies; pool). */
 typedef struct pt__batch_ctx {
     const pt_scene *s;
     const pt__settings *cfg;
-    int tri, any_lights, nee, pick;
+    int tri, any_lights, nee, pick, copies;
+    pt__lane *lanes;
+    pt__batch_pool *pool; /* (copies only) */
 } pt__batch_ctx;
+
+static void pt__stats_sum(pt_path_stats *t, const pt_path_stats *a)
+{
+    t->camera_rays += a->camera_rays;
+    t->bounce_rays += a->bounce_rays;
+    t->shadow_rays += a->shadow_rays;
+    t->nonfinite_samples += a->nonfinite_samples;
+    t->split_paths += a->split_paths;
+    t->guided_vertices += a->guided_vertices;
+}
+
+/* Lane l gathers x: into its sum, or, while copies it split into are still running (whose sum
+   the scalar integrator adds first), into its log, which pt__lane_fold adds after theirs. A zero
+   is left out of the log: a sum that starts at +0 is never -0, so adding a zero leaves it as is. */
+static PT__HOT void pt__lane_add(pt__lane *l, pt_color x, const int copies)
+{
+    if (!copies || !l->pending) l->L = pt_add(l->L, x);
+    else if (x.x != 0.0f || x.y != 0.0f || x.z != 0.0f) l->kids->log[l->nlog++] = x;
+}
+
+/* Once lane l's copies have all ended: their sum as pt__split_copies makes it (copy by copy, the
+   path's sum, then what its continuation found), added to l's, then l's log in order. */
+static PT__NOINLINE void pt__lane_fold(pt__lane *l)
+{
+    const pt__lane_kids *kx = l->kids;
+    pt_color S = pt_v3(0, 0, 0);
+    int c;
+    for (c = 1; c <= l->nkids; ++c) {
+        if (kx->go[c]) S = pt_add(S, kx->L[c]);
+        S = pt_add(S, kx->Lc[c]);
+    }
+    l->L = pt_add(l->L, S);
+    for (c = 0; c < l->nlog; ++c) l->L = pt_add(l->L, kx->log[c]);
+    l->nlog = 0;
+}
+
+/* Lane idx's path has ended: once its copies have too, it leaves its family's order, its sum
+   goes to its parent (its rays to the camera sample's count) and its lane is free again; the
+   parent, if that was its last copy, folds and may end in turn. */
+static PT__NOINLINE void pt__lane_end(pt__lane *lanes, pt__batch_pool *pool, int idx)
+{
+    pt__lane *l = &lanes[idx];
+    l->wait = PT__WAIT_ENDED;
+    while (l->wait == PT__WAIT_ENDED && !l->pending) {
+        pt__lane *p;
+        if (l->prev >= 0) lanes[l->prev].next = l->next;
+        else lanes[l->root].head = l->next;
+        if (l->next >= 0) lanes[l->next].prev = l->prev;
+        if (l->parent < 0) return;
+        p = &lanes[l->parent];
+        p->kids->L[l->copy] = l->L;
+        pt__stats_sum(&lanes[l->root].st, &l->st);
+        pool->free[pool->nfree++] = l->self;
+        if (--p->pending == 0) pt__lane_fold(p);
+        l = p;
+    }
+}
 
 /* A camera sample's path at its start (pt__trace): throughput k = indirect_paths, no scattering. */
 static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
@@ -10604,7 +10704,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
 }
 
 /* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
-static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
+static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int copies)
 {
     const pt_scene *s = b->s;
     const pt__settings *cfg = b->cfg;
@@ -10613,8 +10713,8 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     pt__vertex *v = &l->v;
     l->shadow = 0;
     if (!l->found) {
-        if (PT__UNLIKELY(cfg->env_on)) l->L = pt_add(l->L, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf));
-        else l->L = pt_add(l->L, pt_mul(l->beta, cfg->background));
+        if (PT__UNLIKELY(cfg->env_on)) pt__lane_add(l, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf), copies);
+        else pt__lane_add(l, pt_mul(l->beta, cfg->background), copies);
         return 0;
     }
     prim = &s->prims[l->pi];
@@ -10623,7 +10723,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     if (m->emits && (m->two_sided || l->h.front_face)) {
         float w = l->prev_delta ? 1.0f
                                 : pt__emission_weight(s, cfg, prim, l->prev_pdf, l->prev_p, l->prev_n, l->ray.dir, l->t, v);
-        if (w > 0.0f) l->L = pt_add(l->L, pt_scale(pt_mul(l->beta, m->emission), w));
+        if (w > 0.0f) pt__lane_add(l, pt_scale(pt_mul(l->beta, m->emission), w), copies);
     }
     if (l->depth >= cfg->max_depth || !m->scatters) return 0;
     l->beta_in = l->beta;
@@ -10634,7 +10734,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
         float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
         pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
         if (pt__lights_sample_all(s, cfg, v->o, pt_v3(0.0f, 0.0f, 0.0f), u0, u1, u2, &ls, &li))
-            l->L = pt_add(l->L, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st));
+            pt__lane_add(l, pt__nee_contribution(s, cfg, v, &ls, li, l->beta, b->tri, &l->st), copies);
     }
     if (!m->delta) {
         v->surface = l->surfaces++;
@@ -10667,37 +10767,134 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l)
     return 1;
 }
 
-/* Stage 4 for one path after its shadow ray (l->shadow: 2 if occluded): returns 0 if it ends. */
-static PT__HOT int pt__lane_continue(const pt__batch_ctx *b, pt__lane *l)
+/* Stage 4's splits with the Sobol sampler: copies 1 .. k-1 of lane l's split into k take free
+   lanes of their own, each after its continuation from l's vertex (pt__split_copies's order:
+   the copies draw from sets of their own, so the order they run in changes no number), and go
+   before l in the family's scalar order; l goes on as copy 0, its gains logged until they end. */
+static PT__NOINLINE void pt__lane_split(pt__batch_ctx *b, pt__lane *l, int k)
+{
+    const pt__vertex *v = &l->v;
+    pt__lane_kids *kx = l->kids;
+    int c;
+    l->nkids = k - 1;
+    b->pool->lane_copies += (uint64_t)(k - 1);
+    for (c = 1; c < k; ++c) {
+        const int idx = b->pool->free[b->pool->nfree - 1];
+        pt__lane *cl = &b->lanes[idx];
+        float pp2 = l->prev_pdf;
+        int pd2 = l->prev_delta;
+        pt_color Lc = pt_v3(0, 0, 0);
+        l->st.split_paths++;
+        (void)pt__split_sampler(&l->smp, &cl->smp, l->depth, c);
+        kx->go[c] = (unsigned char)pt__continue(b->s, b->cfg, v, &l->h, l->depth, l->beta_in, &cl->smp, b->any_lights,
+                                                b->pick, &cl->ray, &cl->beta, &pp2, &pd2, &Lc, &l->st);
+        kx->Lc[c] = Lc;
+        kx->L[c] = pt_v3(0, 0, 0);
+        if (!kx->go[c]) continue;
+        b->pool->nfree--;
+        l->st.bounce_rays++;
+        memset(&cl->st, 0, sizeof cl->st);
+        cl->L = pt_v3(0, 0, 0);
+        cl->prev_pdf = pp2;
+        cl->prev_delta = pd2;
+        cl->prev_p = v->o;
+        cl->prev_n = pt__receiver_normal(v);
+        cl->depth = l->depth + 1;
+        cl->surfaces = v->surface + 1;
+        cl->v.has_guide = 0; /* (pt__trace_from's start) */
+        cl->v.cshare = 0.0f;
+        cl->v.g = 0.0f;
+        cl->v.rr_e = cl->v.rr_ref = 0.0f;
+        cl->v.sph_prim = NULL;
+        cl->self = idx;
+        cl->root = l->root;
+        cl->parent = l->self;
+        cl->copy = c;
+        cl->pending = cl->nkids = cl->nlog = 0;
+        cl->wait = PT__WAIT_NONE;
+        cl->next = l->self; /* (before l, after the copies before it) */
+        cl->prev = l->prev;
+        if (l->prev >= 0) b->lanes[l->prev].next = idx;
+        else b->lanes[l->root].head = idx;
+        l->prev = idx;
+        l->pending++;
+        b->pool->spawn[b->pool->nspawn++] = idx;
+    }
+    if (!l->pending) pt__lane_fold(l);
+}
+
+/* Stage 4's use of the camera sample's shared splitting state sp (pt__splits: the budget, guided
+   roulette's reference), at non-delta vertex l->v where the path may split or set the reference:
+   what it does there depends on what the paths before it in the scalar integrator's order did,
+   so a copy goes on only as its family's first (returns 0 if it is not: it waits). */
+static PT__NOINLINE int pt__lane_shared(pt__batch_ctx bc, pt__lane *l, pt__splits *sp, int split)
+{
+    pt__batch_ctx *b = &bc;
+    pt__vertex *v = &l->v;
+    int k;
+    if (b->lanes[l->root].head != l->self) return 0;
+    if (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f)) sp->rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
+    v->rr_ref = sp->rr_ref; /* (before the copies' continuations, which read it) */
+    if (split && (k = pt__split_count(l->beta_in, sp)) > 1) {
+        l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
+        if (b->copies && b->pool->nfree >= k - 1) pt__lane_split(b, l, k);
+        else
+            l->L = pt_add(l->L, pt__split_copies(b->s, b->cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights,
+                                                 b->pick, l->prev_delta, l->prev_pdf, &l->st, sp));
+    }
+    return 1;
+}
+
+/* Stage 4 for one path after its shadow ray (l->shadow: 2 if occluded): returns 0 if it ends, 1
+   if it goes on, 2 if it waits (l->wait): PT__WAIT_HEAD, for pt__lane_shared (the lane then
+   resumes there), or PT__WAIT_LOG, a path whose log could fill, for its copies to end. */
+static PT__HOT int pt__lane_continue(pt__batch_ctx *b, pt__lane *l, const int copies)
 {
     const pt_scene *s = b->s;
     const pt__settings *cfg = b->cfg;
     pt__vertex *v = &l->v;
     pt_color Lc = pt_v3(0, 0, 0);
-    int k, go;
+    int go;
     if (!v->m->delta) {
-        if (l->shadow == 1) l->L = pt_add(l->L, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f));
-        if (PT__UNLIKELY(s->dlight_count != 0))
-            l->L = pt_add(l->L, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st));
-        if (v->rr_e > 0.0f && !(l->sp.rr_ref > 0.0f))
-            l->sp.rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
-        v->rr_ref = l->sp.rr_ref;
-        if ((l->sp.first > 1 || PT__UNLIKELY(l->beta_in.x >= PT__SPLIT_BETA || l->beta_in.y >= PT__SPLIT_BETA ||
-                                             l->beta_in.z >= PT__SPLIT_BETA)) &&
-            (k = pt__split_count(l->beta_in, &l->sp)) > 1) {
-            l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
-            l->L = pt_add(l->L, pt__split_copies(s, cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights, b->pick,
-                                                 l->prev_delta, l->prev_pdf, &l->st, &l->sp));
+        pt__splits *sp = copies ? &b->lanes[l->root].sp : &l->sp; /* (the camera sample's) */
+        int split;
+        if (!copies || l->wait != PT__WAIT_HEAD) {
+            if (l->shadow == 1) pt__lane_add(l, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f), copies);
+            if (PT__UNLIKELY(s->dlight_count != 0))
+                pt__lane_add(l, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st), copies);
+        }
+        split = sp->first > 1 || PT__UNLIKELY(l->beta_in.x >= PT__SPLIT_BETA || l->beta_in.y >= PT__SPLIT_BETA ||
+                                               l->beta_in.z >= PT__SPLIT_BETA);
+        if (!copies) { /* (the path is its camera sample's only one: pt__trace_from's order) */
+            int k;
+            if (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f))
+                sp->rr_ref = pt_max_component(l->L) + pt_max_component(l->beta) * v->rr_e;
+            v->rr_ref = sp->rr_ref;
+            if (split && (k = pt__split_count(l->beta_in, sp)) > 1) {
+                l->beta_in = pt_scale(l->beta_in, 1.0f / (float)k);
+                l->L = pt_add(l->L, pt__split_copies(s, cfg, v, &l->h, l->depth, k, l->beta_in, &l->smp, b->any_lights,
+                                                     b->pick, l->prev_delta, l->prev_pdf, &l->st, sp));
+            }
+        } else if (PT__UNLIKELY(split || (v->rr_e > 0.0f && !(sp->rr_ref > 0.0f))) && !pt__lane_shared(*b, l, sp, split)) {
+            l->wait = PT__WAIT_HEAD;
+            return 2;
+        } else {
+            l->wait = PT__WAIT_NONE;
+            v->rr_ref = sp->rr_ref;
         }
     }
     go = pt__continue(s, cfg, v, &l->h, l->depth, l->beta_in, &l->smp, b->any_lights, b->pick, &l->ray, &l->beta,
                       &l->prev_pdf, &l->prev_delta, &Lc, &l->st);
-    l->L = pt_add(l->L, Lc);
+    pt__lane_add(l, Lc, copies);
     if (!go) return 0;
     l->prev_p = v->o;
     l->prev_n = pt__receiver_normal(v);
     l->st.bounce_rays++;
     l->depth++;
+    if (copies && PT__UNLIKELY(l->nlog > PT__LANE_LOG - PT__LANE_LOG_BOUNCE)) {
+        l->wait = PT__WAIT_LOG;
+        return 2;
+    }
     return 1;
 }
 
@@ -10748,8 +10945,9 @@ static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene 
    ahead (pt__sobol_draw_ahead) where its vertex will draw them: a non-delta scattering material
    before the last depth (a guided vertex may draw its direction from the guide instead: that
    draw is then only wasted). */
-static void pt__batch_draw_ahead(const pt__batch_ctx *b, pt__lane *lanes, const int *live, int nlive)
+static void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const int *live, int nlive)
 {
+    const pt__batch_ctx *b = &bc;
     const int scatter = b->cfg->strategy != PT_STRATEGY_MIXTURE;
     int i;
 #ifdef PT__WIDE
@@ -10776,30 +10974,94 @@ static void pt__batch_draw_ahead(const pt__batch_ctx *b, pt__lane *lanes, const 
     }
 }
 
-/* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
-   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). */
-static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes, int n)
+/* Lanes that waited (pt__lane_continue) and may now go on: back into live[] from nlive on;
+   returns the new nlive. A lane resumed at its family's head may split, end or wait again, which
+   may let others go on: the scan repeats until nothing changes. */
+static PT__NOINLINE int pt__batch_resume(pt__batch_ctx bc, int *live, int nlive)
 {
-    int live[PT__BATCH], shade[PT__BATCH], nlive = n, nshade, i;
-    pt__batch_ctx b;
-    b.s = s;
-    b.cfg = cfg;
-    b.tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
-    b.any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
-    b.nee = b.any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
-    b.pick = s->light_count != 1 || cfg->env_pick > 0.0f;
-    for (i = 0; i < n; ++i) live[i] = i;
+    pt__batch_ctx *b = &bc;
+    int i, changed = 1;
+    while (changed && b->pool->nparked > 0) {
+        changed = 0;
+        for (i = 0; i < b->pool->nparked;) {
+            const int idx = b->pool->parked[i];
+            pt__lane *l = &b->lanes[idx];
+            int r = 1;
+            if (l->wait == PT__WAIT_HEAD ? b->lanes[l->root].head != idx : l->pending != 0) {
+                ++i;
+                continue;
+            }
+            b->pool->parked[i] = b->pool->parked[--b->pool->nparked];
+            changed = 1;
+            if (l->wait == PT__WAIT_HEAD) r = pt__lane_continue(b, l, 1);
+            else l->wait = PT__WAIT_NONE;
+            if (r == 1) live[nlive++] = idx;
+            else if (r == 2) b->pool->parked[b->pool->nparked++] = idx;
+            else pt__lane_end(b->lanes, b->pool, idx);
+        }
+    }
+    return nlive;
+}
+
+/* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
+   NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). With kids
+   (PT__BATCH_LANES of them; the Sobol sampler), lanes holds PT__BATCH_LANES lanes, those from n on
+   for split copies; without, PT__BATCH, and the copies run in pt__split_copies. Returns the split
+   copies that ran as lanes. */
+static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
+                                           pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
+{
+    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], nlive = n, nshade, i;
+    pt__batch_ctx bc, *b = &bc;
+    pt__batch_pool pool;
+    b->pool = &pool;
+    b->s = s;
+    b->cfg = cfg;
+    b->tri = (s->features & PT_FEATURE_TRIANGLES) != 0;
+    b->any_lights = s->light_count > 0 || cfg->env_on || !PT__SKIP(cfg, PT_SKIP_NO_EMITTERS);
+    b->nee = b->any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
+    b->pick = s->light_count != 1 || cfg->env_pick > 0.0f;
+    b->copies = copies;
+    b->lanes = lanes;
+    b->pool->kids = kids;
+    b->pool->nfree = b->pool->nspawn = b->pool->nparked = 0;
+    b->pool->lane_copies = 0;
+    if (kids)
+        for (i = PT__BATCH_LANES - 1; i >= 0; --i) {
+            lanes[i].kids = &kids[i];
+            if (i >= n) b->pool->free[b->pool->nfree++] = i;
+        }
+    for (i = 0; i < n; ++i) {
+        pt__lane *l = &lanes[i];
+        live[i] = i;
+        l->self = l->root = l->head = i;
+        l->parent = l->prev = l->next = -1;
+        l->pending = l->nkids = l->nlog = 0;
+        l->wait = PT__WAIT_NONE;
+    }
     while (nlive > 0) {
-        pt__batch_closest(s, pk, lanes, live, nlive, b.tri); /* (1) closest hits */
-        if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(&b, lanes, live, nlive); /* (1b) */
+        pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
+        if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
         for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
-            if (pt__lane_shade(&b, &lanes[live[i]])) shade[nshade++] = live[i];
+            if (pt__lane_shade(b, &lanes[live[i]], copies)) shade[nshade++] = live[i];
+            else if (copies) pt__lane_end(lanes, b->pool, live[i]);
         for (i = 0; i < nshade; ++i) { /* (3) shadow rays */
             pt__lane *l = &lanes[shade[i]];
             if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
         }
-        for (i = 0, nlive = 0; i < nshade; ++i) /* (4) contributions, continuation */
-            if (pt__lane_continue(&b, &lanes[shade[i]])) live[nlive++] = shade[i];
+        for (i = 0, nlive = 0; i < nshade; ++i) { /* (4) contributions, splits, continuation */
+            const int r = pt__lane_continue(b, &lanes[shade[i]], copies);
+            if (r == 1) live[nlive++] = shade[i];
+            else if (copies && r == 2) b->pool->parked[b->pool->nparked++] = shade[i];
+            else if (copies) pt__lane_end(lanes, b->pool, shade[i]);
+        }
+        if (copies) {
+            for (i = 0; i < b->pool->nspawn; ++i) live[nlive++] = b->pool->spawn[i]; /* (the new copies) */
+            b->pool->nspawn = 0;
+            nlive = pt__batch_resume(*b, live, nlive);
+            for (i = 0; i < b->pool->nspawn; ++i) live[nlive++] = b->pool->spawn[i];
+            b->pool->nspawn = 0;
+        }
     }
     for (i = 0; i < n; ++i) {
         pt__lane *l = &lanes[i];
@@ -10809,6 +11071,23 @@ static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__
             l->L = pt_v3(0, 0, 0);
         }
     }
+    return b->pool->lane_copies;
+}
+/* (two functions: with copies as lanes, and without, which keeps none of their bookkeeping) */
+static PT__NOINLINE uint64_t pt__batch_run_lanes(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
+                                                 pt__lane *lanes, pt__lane_kids *kids, int n)
+{
+    return pt__batch_run_with(s, cfg, pk, lanes, kids, n, 1);
+}
+static PT__NOINLINE uint64_t pt__batch_run_plain(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
+                                                 pt__lane *lanes, int n)
+{
+    return pt__batch_run_with(s, cfg, pk, lanes, NULL, n, 0);
+}
+static uint64_t pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes,
+                              pt__lane_kids *kids, int n)
+{
+    return kids ? pt__batch_run_lanes(s, cfg, pk, lanes, kids, n) : pt__batch_run_plain(s, cfg, pk, lanes, n);
 }
 
 /* ------------------------------------------------------------------------------------------
@@ -10917,6 +11196,7 @@ typedef struct pt__pass {
     int batched;                /* the batched integrator runs the jobs (pt__render_job_batched) */
     pt_path_stats *tile_stats;  /* one per tile */
     uint64_t *tile_samples;     /* one per tile */
+    uint64_t *tile_copies;      /* one per tile: split copies the batched integrator ran as lanes */
     unsigned char *tile_done;   /* one per tile */
 #ifndef PDFTRACE_NO_THREADS
     pthread_mutex_t lock;
@@ -10964,16 +11244,6 @@ static pt_ray pt__camera_sample(const pt__pass *ps, pt__sampler *smp, int x, int
     return pt__camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
 }
 
-static void pt__stats_sum(pt_path_stats *t, const pt_path_stats *a)
-{
-    t->camera_rays += a->camera_rays;
-    t->bounce_rays += a->bounce_rays;
-    t->shadow_rays += a->shadow_rays;
-    t->nonfinite_samples += a->nonfinite_samples;
-    t->split_paths += a->split_paths;
-    t->guided_vertices += a->guided_vertices;
-}
-
 /* The batched integrator's job: the job's samples, in the scalar job's order, PT__BATCH at a
    time through pt__batch_run; each sample then goes to its pixel (the film's sums do not depend
    on the order they are added in) and its rays to the pixel's count. Returns 0 (nothing done)
@@ -10982,11 +11252,16 @@ static int pt__render_job_batched(pt__pass *ps, int index)
 {
     pt_film *film = ps->film;
     pt__job_pixels r;
-    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * PT__BATCH);
+    /* split copies as lanes: with Sobol sets of their own (independent numbers: the parent's
+       stream, so depth first in pt__split_copies), and not for the path classes' diagnostic */
+    const int copies_as_lanes = ps->cfg->sampler == PT_SAMPLER_SOBOL && ps->cfg->max_splits > 0 PT__PCLASS(&& 0);
+    const size_t nl = copies_as_lanes ? PT__BATCH_LANES : PT__BATCH; /* (one block: lanes, then the kids) */
+    pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * nl + (copies_as_lanes ? sizeof(pt__lane_kids) * nl : 0u));
+    pt__lane_kids *kids = copies_as_lanes && lanes ? (pt__lane_kids *)(void *)(lanes + nl) : NULL;
     pt__sobol_cache *cache = (pt__sobol_cache *)PT_MALLOC(sizeof(pt__sobol_cache));
     pt__packet_scene *pk = (pt__packet_scene *)PT_MALLOC(sizeof(pt__packet_scene));
     pt_path_stats st;
-    uint64_t taken = 0;
+    uint64_t taken = 0, copies = 0;
     int x, y, k, n = 0, i;
     const int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
     if (!lanes || !cache || !pk) {
@@ -11016,7 +11291,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
                 l->index_k = index_k;
                 pt__lane_start(l, ps->cfg, pt__camera_sample(ps, &l->smp, x, y, pix, index_k, pixel_key, cache));
                 if (++n < PT__BATCH) continue;
-                pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+                copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, kids, n);
                 for (i = 0; i < n; ++i) {
                     pt__lane *d = &lanes[i];
                     uint32_t p = d->pix;
@@ -11033,7 +11308,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
             taken += mine;
         }
     }
-    pt__batch_run(ps->scene, ps->cfg, pk, lanes, n);
+    copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, kids, n);
     for (i = 0; i < n; ++i) {
         pt__lane *d = &lanes[i];
         uint32_t p = d->pix;
@@ -11047,6 +11322,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
     PT_FREE(pk);
     ps->tile_stats[index] = st;
     ps->tile_samples[index] = taken;
+    ps->tile_copies[index] = copies;
     ps->tile_done[index] = 2; /* (2: done by the batched integrator) */
     return 1;
 }
@@ -11786,11 +12062,12 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
     slots = r->adaptive && ad->chunks > tiles ? ad->chunks : tiles;
     ps->tile_stats = (pt_path_stats *)PT_MALLOC(sizeof(pt_path_stats) * (size_t)slots);
     ps->tile_samples = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
+    ps->tile_copies = (uint64_t *)PT_MALLOC(sizeof(uint64_t) * (size_t)slots);
     ps->tile_done = (unsigned char *)PT_MALLOC((size_t)slots);
     r->job_list = (int *)PT_MALLOC(sizeof(int) * (size_t)slots);
     adaptive_ok = !r->adaptive || pt__adaptive_init(ad, d, film, r->spp, r->per_pass);
     ps->pixel_rays = ad->rays;
-    if (!ps->tile_stats || !ps->tile_samples || !ps->tile_done || !r->job_list || !adaptive_ok)
+    if (!ps->tile_stats || !ps->tile_samples || !ps->tile_copies || !ps->tile_done || !r->job_list || !adaptive_ok)
         return pt__msg(err, en, PT_ERROR_OUT_OF_MEMORY, "pt_render: out of memory (%d x %d pixels)", d->width,
                        d->height);
     if (ad->pilot) { /* the pilot's passes first, into its own film with its own seed (section 8) */
@@ -11834,7 +12111,10 @@ static int pt__render_passes(pt__pass *ps, pt__adaptive *ad, const pt_render_des
             r->total.split_paths += ts->split_paths;
             r->total.guided_vertices += ts->guided_vertices;
             r->done += ps->tile_samples[r->job_list[j]];
-            if (ps->tile_done[r->job_list[j]] == 2) r->total.batched_samples += ps->tile_samples[r->job_list[j]];
+            if (ps->tile_done[r->job_list[j]] == 2) {
+                r->total.batched_samples += ps->tile_samples[r->job_list[j]];
+                r->total.batched_split_paths += ps->tile_copies[r->job_list[j]];
+            }
         }
         r->added += (uint32_t)ps->spp;
         r->total.passes = pass + 1;
@@ -11936,6 +12216,7 @@ static int pt__render_once(const pt_scene *s, const pt_render_desc *d, pt_film *
     }
     PT_FREE(ps.tile_stats);
     PT_FREE(ps.tile_samples);
+    PT_FREE(ps.tile_copies);
     PT_FREE(ps.tile_done);
     PT_FREE(run.job_list);
     pt__adaptive_free(&ad);
@@ -12319,6 +12600,7 @@ static void pt__stats_add(pt_render_stats *t, const pt_render_stats *a)
     t->split_paths += a->split_paths;
     t->guided_vertices += a->guided_vertices;
     t->batched_samples += a->batched_samples;
+    t->batched_split_paths += a->batched_split_paths;
 }
 
 /* The per-pixel sums of the samples one training iteration added to the film: the film after it

@@ -1045,18 +1045,21 @@ done:
    for bit, over scene files that between them hold every feature the integrator branches on (glass
    and a diffuse ball, an environment map, delta lights, textures, a rough dielectric, triangles,
    many lights, a guide's scene), under every strategy, both samplers, indirect paths, splitting
-   (mixture with light weight 0.75), adaptive sampling and guiding; the stats say which integrator
-   ran (a guide's training runs scalar) and which the default picks, and a bad value is refused
-   naming the field. */
+   (mixture with light weight 0.75), adaptive sampling and guiding; with Sobol, split copies run as
+   lanes of the batch, and with 8 indirect paths and a budget of 12 also depth first (no free lane)
+   with budgets ending within a camera sample's paths; the stats say which integrator ran (a
+   guide's training runs scalar), how many copies ran as lanes, and which the default picks, and a
+   bad value is refused naming the field. */
 static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
                                           "scenes/lights.scene", "scenes/textured.scene", "scenes/rough-glass.scene",
                                           "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene" };
     static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
-                                           "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol" };
+                                           "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol, roulette from 1",
+                                           "sobol, indirect_paths 8, mixture 0.75, max_splits 12" };
     const int nscenes = (int)(sizeof scenes / sizeof scenes[0]), nconfigs = (int)(sizeof configs / sizeof configs[0]);
-    int i, c, renders = 0, split = 0;
+    int i, c, renders = 0, split = 0, lane_copies = 0, inline_copies = 0;
     char err[512];
     for (i = 0; i < nscenes; ++i) {
         pt_scenefile sf;
@@ -1079,11 +1082,13 @@ static void batched_bit_identical(test_ctx *t)
             pt_render_stats sa, sb;
             d.strategy = c == 1 ? PT_STRATEGY_MATERIAL : c == 2 ? PT_STRATEGY_LIGHT : c == 3 || c == 5 ? PT_STRATEGY_MIXTURE
                                                                                                         : PT_STRATEGY_MIS;
-            if (c == 4 || c == 5 || c == 8) d.sampler = PT_SAMPLER_SOBOL;
-            if (c == 5) d.light_weight = 0.75f;
+            if (c == 4 || c == 5 || c == 8 || c == 9) d.sampler = PT_SAMPLER_SOBOL;
+            if (c == 5 || c == 9) d.light_weight = 0.75f;
+            if (c == 9) { d.strategy = PT_STRATEGY_MIXTURE; d.indirect_paths = 8; d.max_splits = 12; }
             if (c == 6) d.indirect_paths = 4;
             if (c == 7) { d.adaptive_threshold = 0.2f; d.samples_per_pixel = 12; d.adaptive_min_spp = 4; }
-            if (c == 8) { d.guiding = PT_GUIDING_ON; d.samples_per_pixel = 16; }
+            if (c == 8) { d.guiding = PT_GUIDING_ON; d.samples_per_pixel = 16; d.rr_start_depth = 1; } /* (guided
+                roulette at the first vertex, where it splits) */
             d.integrator = PT_INTEGRATOR_SCALAR;
             e = d;
             e.integrator = PT_INTEGRATOR_BATCHED;
@@ -1101,6 +1106,14 @@ static void batched_bit_identical(test_ctx *t)
                              sa.shadow_rays == sb.shadow_rays && sa.split_paths == sb.split_paths &&
                              sa.guided_vertices == sb.guided_vertices,
                       "%s, %s: ray counts differ", scenes[i], configs[c]);
+                /* with Sobol split copies run as lanes of the batch (the rest, and every copy with
+                   independent numbers, depth first in the scalar integrator) */
+                CHECK(t, sa.batched_split_paths == 0 && sb.batched_split_paths <= sb.split_paths &&
+                             (d.sampler == PT_SAMPLER_SOBOL) == (sb.batched_split_paths > 0),
+                      "%s, %s: batched_split_paths %llu of %llu", scenes[i], configs[c],
+                      (unsigned long long)sb.batched_split_paths, (unsigned long long)sb.split_paths);
+                lane_copies += sb.batched_split_paths > 0;
+                inline_copies += d.sampler == PT_SAMPLER_SOBOL && sb.batched_split_paths < sb.split_paths;
                 split += sb.split_paths > 0;
                 renders += 2;
                 if (c == 0 && (i == 0 || i == 6)) { /* the default: batched in a small scene (the Cornell box) with
@@ -1140,6 +1153,9 @@ static void batched_bit_identical(test_ctx *t)
         pt_scene_destroy(s);
     }
     CHECK(t, split > 0, "no configuration split a path: the splitting branch went untested");
+    CHECK(t, lane_copies > 0 && inline_copies > 0,
+          "Sobol renders with copies as lanes: %d, with copies also inline (no free lane): %d; both must be tested",
+          lane_copies, inline_copies);
     {   /* a bad value names the field */
         pt_render_desc d = tu_base_desc(4, 4, 1, 1);
         pt_scene *s = cornell(0, &d);
