@@ -8259,6 +8259,12 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
 #ifndef PDFTRACE_EMBREE_BUILD_QUALITY
 #define PDFTRACE_EMBREE_BUILD_QUALITY RTC_BUILD_QUALITY_MEDIUM
 #endif
+/* 1: the batched integrator traces its batch's closest hits and shadow rays as Embree 3 streams
+   (rtcIntersect1M, rtcOccluded1M); 0: one rtcIntersect1 / rtcOccluded1 call per ray. Embree 4
+   has no stream calls: always per ray there. */
+#ifndef PDFTRACE_EMBREE_STREAM
+#define PDFTRACE_EMBREE_STREAM 1
+#endif
 /* Device configuration string passed to rtcNewDevice (NULL: Embree's defaults). */
 #ifndef PDFTRACE_EMBREE_CONFIG
 #define PDFTRACE_EMBREE_CONFIG NULL
@@ -8270,7 +8276,8 @@ typedef struct pt__rtc_ctx {
 #else
     struct RTCIntersectContext base;
 #endif
-    const pt__rayctx *rc;
+    const pt__rayctx *const *rc; /* by Embree ray id: one ray (id 0, `one`) or a stream's */
+    const pt__rayctx *one;
 } pt__rtc_ctx;
 
 static void pt__rtc_ctx_init(pt__rtc_ctx *c, const pt__rayctx *rc)
@@ -8280,7 +8287,8 @@ static void pt__rtc_ctx_init(pt__rtc_ctx *c, const pt__rayctx *rc)
 #else
     rtcInitIntersectContext(&c->base);
 #endif
-    c->rc = rc;
+    c->one = rc;
+    c->rc = &c->one;
 }
 
 static const char *pt__rtc_error_name(int code)
@@ -8337,7 +8345,15 @@ static void pt__rtc_release(pt_scene *s)
 }
 
 /* User geometry callbacks (quads and spheres). geometryUserPtr is the geometry's pt__rtc_geom.
-   Only single-ray queries are issued, so N == 1 and the packet is a plain RTCRayHit / RTCRay. */
+   Single-ray queries hand them N == 1; a stream (pt__rtc_closest_n, pt__rtc_any_n) is traced by
+   Embree as packets, so N rays in SOA layout with a valid mask, each found by its id. The SOA
+   fields (Embree 3 docs, RTCRayN and RTCHitN; rtcore_ray.h's accessors are C++ only): field f of
+   ray i is float or unsigned [f * N + i]; the ray's tfar is field 8 and its id field 10, the hit
+   (after the ray's 12 fields) has Ng x, y, z, u, v, primID, geomID, instID[0]. */
+#define PT__RTCN_F(base, f, n, i) (((float *)(base))[(f) * (n) + (i)])
+#define PT__RTCN_U(base, f, n, i) (((unsigned *)(void *)(base))[(f) * (n) + (i)])
+#define PT__RTCN_TFAR 8u
+#define PT__RTCN_ID 10u
 static const pt__prim *pt__rtc_user_prim(void *user, unsigned prim_id)
 {
     const pt__rtc_geom *g = (const pt__rtc_geom *)user;
@@ -8366,28 +8382,32 @@ static int pt__rtc_user_hit(const pt__prim *p, const pt__rayctx *rc, float tfar,
 static void pt__rtc_intersect(const struct RTCIntersectFunctionNArguments *a)
 {
     const pt__rtc_ctx *c = (const pt__rtc_ctx *)(const void *)a->context;
-    struct RTCRayHit *rh = (struct RTCRayHit *)(void *)a->rayhit;
-    const pt__prim *p;
+    float *ray = (float *)(void *)a->rayhit, *hit = ray + 12u * a->N; /* RTCRayN, then RTCHitN */
+    const pt__prim *p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
+    unsigned i, n = a->N;
     float t;
-    if (a->N != 1 || !a->valid[0]) return;
-    p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
-    if (!pt__rtc_user_hit(p, c->rc, rh->ray.tfar, &t)) return;
-    rh->ray.tfar = t;
-    rh->hit.u = 0.0f;
-    rh->hit.v = 0.0f;
-    rh->hit.Ng_x = p->n.x; rh->hit.Ng_y = p->n.y; rh->hit.Ng_z = p->n.z; /* unused by pdftrace */
-    rh->hit.primID = a->primID;
-    rh->hit.geomID = a->geomID;
-    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    for (i = 0; i < n; ++i) {
+        if (!a->valid[i] || !pt__rtc_user_hit(p, c->rc[PT__RTCN_U(ray, PT__RTCN_ID, n, i)], PT__RTCN_F(ray, PT__RTCN_TFAR, n, i), &t)) continue;
+        PT__RTCN_F(ray, PT__RTCN_TFAR, n, i) = t;
+        PT__RTCN_F(hit, 0, n, i) = p->n.x; /* Ng, unused by pdftrace */
+        PT__RTCN_F(hit, 1, n, i) = p->n.y;
+        PT__RTCN_F(hit, 2, n, i) = p->n.z;
+        PT__RTCN_F(hit, 3, n, i) = 0.0f; /* u, v */
+        PT__RTCN_F(hit, 4, n, i) = 0.0f;
+        PT__RTCN_U(hit, 5, n, i) = a->primID;
+        PT__RTCN_U(hit, 6, n, i) = a->geomID;
+        PT__RTCN_U(hit, 7, n, i) = RTC_INVALID_GEOMETRY_ID; /* instID[0] */
+    }
 }
 static void pt__rtc_occluded(const struct RTCOccludedFunctionNArguments *a)
 {
     const pt__rtc_ctx *c = (const pt__rtc_ctx *)(const void *)a->context;
-    struct RTCRay *ray = (struct RTCRay *)(void *)a->ray;
-    float t;
-    if (a->N != 1 || !a->valid[0]) return;
-    if (pt__rtc_user_hit(pt__rtc_user_prim(a->geometryUserPtr, a->primID), c->rc, ray->tfar, &t))
-        ray->tfar = -INFINITY; /* Embree's "occluded" mark */
+    const pt__prim *p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
+    float *ray = (float *)(void *)a->ray, t;
+    unsigned i, n = a->N;
+    for (i = 0; i < n; ++i)
+        if (a->valid[i] && pt__rtc_user_hit(p, c->rc[PT__RTCN_U(ray, PT__RTCN_ID, n, i)], PT__RTCN_F(ray, PT__RTCN_TFAR, n, i), &t))
+            PT__RTCN_F(ray, PT__RTCN_TFAR, n, i) = -INFINITY; /* Embree's "occluded" mark */
 }
 
 static int pt__rtc_fail(pt_scene *s, int fallback_code, const char *what)
@@ -8596,6 +8616,75 @@ static int pt__rtc_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
     }
     return r.tfar < 0.0f;
 }
+
+#if RTC_VERSION_MAJOR < 4 && PDFTRACE_EMBREE_STREAM
+#define PT__RTC_STREAM 64 /* the most rays of one stream call (the batched integrator's batch) */
+/* The closest hits of n <= PT__RTC_STREAM rays (0 < t < inf) in one rtcIntersect1M call: what
+   n calls of pt__rtc_closest return (the callbacks run the same tests; Embree's triangle test is
+   the same per lane), into found[i], prim[i], t[i] and bary[3 i .. 3 i + 2]. */
+static void pt__rtc_closest_n(const pt_scene *s, const pt__rayctx *const *rc, int n, int *found, uint32_t *prim,
+                              float *t, float *bary)
+{
+    struct RTCRayHit rh[PT__RTC_STREAM];
+    const pt__rayctx *rcs[PT__RTC_STREAM];
+    int idx[PT__RTC_STREAM], i, m = 0;
+    pt__rtc_ctx c;
+    for (i = 0; i < n; ++i) {
+        found[i] = 0;
+        if (!pt__rtc_ray_ok(rc[i], PT__INF)) continue;
+        pt__rtc_ray(&rh[m].ray, rc[i], PT__INF);
+        rh[m].ray.id = (unsigned)m;
+        rh[m].hit.geomID = rh[m].hit.primID = rh[m].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rcs[m] = rc[i];
+        idx[m++] = i;
+    }
+    if (!m) return;
+    pt__rtc_ctx_init(&c, NULL);
+    c.rc = rcs;
+    {
+        PT__RTC_GUARD_BEGIN;
+        rtcIntersect1M(s->rtc.scene, &c.base, rh, (unsigned)m, sizeof rh[0]);
+        PT__RTC_GUARD_END;
+    }
+    for (i = 0; i < m; ++i) {
+        unsigned g = rh[i].hit.geomID;
+        int j = idx[i];
+        if (g >= 3u || rh[i].hit.primID >= s->rtc.count[g]) continue;
+        found[j] = 1;
+        prim[j] = s->rtc.map[g][rh[i].hit.primID];
+        t[j] = rh[i].ray.tfar;
+        bary[3 * j] = g == PT__PRIM_TRIANGLE ? 1.0f - rh[i].hit.u - rh[i].hit.v : 0.0f;
+        bary[3 * j + 1] = g == PT__PRIM_TRIANGLE ? rh[i].hit.u : 0.0f;
+        bary[3 * j + 2] = g == PT__PRIM_TRIANGLE ? rh[i].hit.v : 0.0f;
+    }
+}
+/* Any hits of n <= PT__RTC_STREAM rays (0 < t < tmax[i]) in one rtcOccluded1M call: hit[i] as
+   pt__rtc_any returns it. */
+static void pt__rtc_any_n(const pt_scene *s, const pt__rayctx *const *rc, const float *tmax, int n, int *hit)
+{
+    struct RTCRay r[PT__RTC_STREAM];
+    const pt__rayctx *rcs[PT__RTC_STREAM];
+    int idx[PT__RTC_STREAM], i, m = 0;
+    pt__rtc_ctx c;
+    for (i = 0; i < n; ++i) {
+        hit[i] = 0;
+        if (!pt__rtc_ray_ok(rc[i], tmax[i])) continue;
+        pt__rtc_ray(&r[m], rc[i], tmax[i]);
+        r[m].id = (unsigned)m;
+        rcs[m] = rc[i];
+        idx[m++] = i;
+    }
+    if (!m) return;
+    pt__rtc_ctx_init(&c, NULL);
+    c.rc = rcs;
+    {
+        PT__RTC_GUARD_BEGIN;
+        rtcOccluded1M(s->rtc.scene, &c.base, r, (unsigned)m, sizeof r[0]);
+        PT__RTC_GUARD_END;
+    }
+    for (i = 0; i < m; ++i) hit[idx[i]] = r[i].tfar < 0.0f;
+}
+#endif
 
 /* Flush-to-zero and denormals-are-zero (MXCSR bits 15 and 6) for Embree's traversal; the
    previous state is returned for pt__ftz_end. A no-op without SSE (e.g. on ARM). */
@@ -10701,13 +10790,41 @@ static PT__HOT int pt__lane_continue(const pt__batch_ctx *b, pt__lane *l)
     return 1;
 }
 
+#ifdef PT__RTC_STREAM
+/* Stage 1 with Embree 3: the live paths' closest hits as one stream (pt__rtc_closest_n). */
+static void pt__batch_closest_rtc(const pt_scene *s, pt__lane *lanes, const int *live, int nlive)
+{
+    const pt__rayctx *rc[PT__BATCH];
+    int found[PT__BATCH], i;
+    uint32_t prim[PT__BATCH];
+    float t[PT__BATCH], bary[3 * PT__BATCH];
+    for (i = 0; i < nlive; ++i) rc[i] = &lanes[live[i]].rc;
+    pt__rtc_closest_n(s, rc, nlive, found, prim, t, bary);
+    for (i = 0; i < nlive; ++i) {
+        pt__lane *l = &lanes[live[i]];
+        l->found = found[i];
+        if (!found[i]) continue;
+        l->pi = prim[i];
+        l->t = t[i];
+        l->bary[0] = bary[3 * i]; l->bary[1] = bary[3 * i + 1]; l->bary[2] = bary[3 * i + 2];
+    }
+}
+#endif
+
 /* Stage 1: the closest hits of the live paths' rays, in a small scene 8 at a time with AVX2 or 4
-   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), else one at a time. */
+   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), with Embree 3 as one stream
+   (pt__batch_closest_rtc), else one at a time. */
 static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *live,
                                       int nlive, int tri)
 {
     int i, j;
     for (i = 0; i < nlive; ++i) pt__rayctx_init2(&lanes[live[i]].rc, lanes[live[i]].ray, tri);
+#ifdef PT__RTC_STREAM
+    if (s->backend == PT_BACKEND_EMBREE) {
+        pt__batch_closest_rtc(s, lanes, live, nlive);
+        return;
+    }
+#endif
 #ifdef PT__SSE
     if (pk->n > 0) {
         int w = 4;
@@ -10776,6 +10893,35 @@ static void pt__batch_draw_ahead(const pt__batch_ctx *b, pt__lane *lanes, const 
     }
 }
 
+/* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded), with Embree 3
+   as one stream (pt__rtc_any_n), else one at a time. */
+static void pt__batch_shadow(const pt_scene *s, pt__lane *lanes, const int *shade, int nshade)
+{
+    int i;
+#ifdef PT__RTC_STREAM
+    if (s->backend == PT_BACKEND_EMBREE) {
+        const pt__rayctx *rc[PT__BATCH];
+        float tmax[PT__BATCH];
+        int which[PT__BATCH], hit[PT__BATCH], m = 0;
+        for (i = 0; i < nshade; ++i) {
+            pt__lane *l = &lanes[shade[i]];
+            if (!l->shadow) continue;
+            rc[m] = &l->nr.rc;
+            tmax[m] = l->nr.tmax;
+            which[m++] = shade[i];
+        }
+        pt__rtc_any_n(s, rc, tmax, m, hit);
+        for (i = 0; i < m; ++i)
+            if (hit[i]) lanes[which[i]].shadow = 2;
+        return;
+    }
+#endif
+    for (i = 0; i < nshade; ++i) {
+        pt__lane *l = &lanes[shade[i]];
+        if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
+    }
+}
+
 /* Runs the paths of lanes[0 .. n-1] to their ends; each lane's L is then its sample's value (the
    NaN/Inf guard of pt__sample applied). pk: the scene's packets (pt__packet_init). */
 static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk, pt__lane *lanes, int n)
@@ -10794,10 +10940,7 @@ static void pt__batch_run(const pt_scene *s, const pt__settings *cfg, const pt__
         if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(&b, lanes, live, nlive); /* (1b) */
         for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(&b, &lanes[live[i]])) shade[nshade++] = live[i];
-        for (i = 0; i < nshade; ++i) { /* (3) shadow rays */
-            pt__lane *l = &lanes[shade[i]];
-            if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
-        }
+        pt__batch_shadow(s, lanes, shade, nshade); /* (3) shadow rays */
         for (i = 0, nlive = 0; i < nshade; ++i) /* (4) contributions, continuation */
             if (pt__lane_continue(&b, &lanes[shade[i]])) live[nlive++] = shade[i];
     }
