@@ -8387,7 +8387,15 @@ static void pt__rtc_intersect(const struct RTCIntersectFunctionNArguments *a)
     unsigned i, n = a->N;
     float t;
     for (i = 0; i < n; ++i) {
-        if (!a->valid[i] || !pt__rtc_user_hit(p, c->rc[PT__RTCN_U(ray, PT__RTCN_ID, n, i)], PT__RTCN_F(ray, PT__RTCN_TFAR, n, i), &t)) continue;
+        float tfar = PT__RTCN_F(ray, PT__RTCN_TFAR, n, i);
+        unsigned g = PT__RTCN_U(hit, 6, n, i);
+        if (!a->valid[i] || !pt__rtc_user_hit(p, c->rc[PT__RTCN_U(ray, PT__RTCN_ID, n, i)], tfar, &t)) continue;
+        /* A tie (t = the hit so far) goes to a triangle, else to the least (geomID, primID), not
+           to the primitive Embree happens to visit last: a stream's packets and a single ray
+           visit in different orders, and their hits must be the same. */
+        if (t == tfar && g != RTC_INVALID_GEOMETRY_ID &&
+            (g == PT__PRIM_TRIANGLE || g < a->geomID || (g == a->geomID && PT__RTCN_U(hit, 5, n, i) < a->primID)))
+            continue;
         PT__RTCN_F(ray, PT__RTCN_TFAR, n, i) = t;
         PT__RTCN_F(hit, 0, n, i) = p->n.x; /* Ng, unused by pdftrace */
         PT__RTCN_F(hit, 1, n, i) = p->n.y;
