@@ -995,6 +995,11 @@ typedef struct pt_shading_point {
      for the duration of each tile, as Embree asks, and restore the previous state, so the
      host's floating-point state is unchanged afterwards. pt_scene_intersect and
      pt_scene_occluded leave the caller's state alone (correct, maybe slower on denormals).
+   - The batched integrator (pt_render_desc.integrator; the default with Embree 3) hands Embree
+     its batch's rays as one stream (rtcIntersect1M, rtcOccluded1M) rather than one call per
+     ray; the hits are the same (PDFTRACE_EMBREE_STREAM=0: per ray). Ties (two primitives at
+     the same t) go to a triangle, else to the lowest primitive type and index, whatever order
+     Embree visits them in; two triangles at the same t are Embree's to order.
    - Embree errors become pdftrace error codes with Embree's message in
      pt_scene_error_message; the library never aborts. Embree's own code computes with
      inf and NaN on purpose, so every call into it masks SSE floating-point exceptions
@@ -1156,12 +1161,15 @@ typedef struct pt_path_stats {
    path at a time, vertex by vertex (the reference). BATCHED advances the paths of a tile's
    samples together in batches, stage by stage (closest hits, emission and light samples, the
    batch's shadow rays, continuation): the same functions in the same order per path, so the
-   same image bit for bit. Guide training iterations (path guiding) run SCALAR;
-   pt_render_stats.batched_samples counts the samples the batched integrator took. */
+   same image bit for bit. With Embree 3 (section 5b) the batch's closest hits and shadow rays
+   go to Embree as streams (rtcIntersect1M, rtcOccluded1M). Guide training iterations (path
+   guiding) run SCALAR; pt_render_stats.batched_samples counts the samples the batched
+   integrator took. */
 typedef enum pt_integrator {
     PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
                                    for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
-                                   or better (its closest hits then run in 8-ray packets), else SCALAR */
+                                   or better (its closest hits then run in 8-ray packets) and for scenes
+                                   traced by Embree 3 (its batches then go to Embree as streams), else SCALAR */
     PT_INTEGRATOR_SCALAR = 1,
     PT_INTEGRATOR_BATCHED = 2
 } pt_integrator;
@@ -9636,9 +9644,15 @@ static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
     double bg = ((double)c->background.x + (double)c->background.y + (double)c->background.z) / 3.0;
     double m = s->env ? s->env->mean : 0.0, phi, r;
     pt_vec3 ext = pt_sub(s->hi, s->lo);
-    /* the default integrator: BATCHED where its ray packets run 8 wide (the one case where it is
-       measured faster: bench/README.md, "make bench-batched"), SCALAR elsewhere */
-    if (c->batched == (int)PT_INTEGRATOR_DEFAULT) c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
+    /* the default integrator: BATCHED where its ray packets run 8 wide or Embree 3 traces its
+       batches as streams (the cases where it is measured faster: bench/README.md, "make
+       bench-batched" and "Embree streams"), SCALAR elsewhere */
+    if (c->batched == (int)PT_INTEGRATOR_DEFAULT) {
+        c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
+#ifdef PT__RTC_STREAM
+        c->batched |= s->backend == PT_BACKEND_EMBREE;
+#endif
+    }
     else c->batched = c->batched == (int)PT_INTEGRATOR_BATCHED;
     c->env = s->env;
     c->env_on = bg + m > 0.0;

@@ -11,9 +11,9 @@
 # -i: the integrator (0 default, 1 scalar, 2 batched); -s: 0 the throughput settings (independent
 # numbers), 1 the same with the Sobol sampler, 2 each scene file's own settings (Sobol,
 # indirect_paths, roulette: a default render); -e: both built with Embree (-DPDFTRACE_EMBREE,
-# -lembree3) and rendering with the Embree backend, and two more scenes: many-tris (1049
-# primitives) and nine tori of scenes/mesh.obj (20738 primitives: Embree under AUTO too). Run
-# from the repository root.
+# -lembree3) and rendering with the Embree backend, and three more scenes: many-tris (1049
+# primitives), nine tori of scenes/mesh.obj (20738 primitives) and a heightfield of 20000
+# triangles (both large enough for Embree under AUTO). Run from the repository root.
 set -eu
 reps=7; threads=1; integ=0; sampler=0; embree=0
 while getopts r:t:i:s:e o; do
@@ -33,7 +33,21 @@ if [ $embree = 1 ]; then
           printf 'identity\nrotate 1 0 0 -30\ntranslate %s 0.7 %s\nmesh mesh.obj gold\n' $x $z
       done; done; } > "$dir/tori.scene"
     cp scenes/mesh.obj "$dir/mesh.obj"
-    scenes="$scenes|bench/scenes/many-tris.scene 128 96 16|$dir/tori.scene 160 120 64"
+    python3 - "$dir/terrain.obj" <<'PY'
+import math, sys
+n = 100  # a 100 x 100 heightfield: 20000 triangles
+with open(sys.argv[1], 'w') as f:
+    for j in range(n + 1):
+        for i in range(n + 1):
+            x, z = -5 + 10 * i / n, -5 + 10 * j / n
+            f.write(f"v {x:.5f} {0.6 * math.sin(1.7 * x) * math.cos(1.3 * z) + 0.25 * math.sin(4.1 * x + 2.3 * z):.5f} {z:.5f}\n")
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i + 1
+            f.write(f"f {a} {a + n + 1} {a + 1}\nf {a + 1} {a + n + 1} {a + n + 2}\n")
+PY
+    printf 'size 160 120\ncamera look_from 0 4 -8 look_at 0 0 0 vfov 50\nmaterial ground lambertian 0.6 0.55 0.5\nmaterial lamp emitter 8 8 8\nmesh terrain.obj ground\nquad -1 5 -1   2 0 0   0 0 2   lamp\n' > "$dir/terrain.scene"
+    scenes="$scenes|bench/scenes/many-tris.scene 128 96 16|$dir/tori.scene 160 120 64|$dir/terrain.scene 160 120 32"
 fi
 for side in a b; do
     if [ $side = a ]; then rev=$1; else rev=$2; fi

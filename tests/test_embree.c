@@ -16,7 +16,8 @@
    - auto / rebuild / ftz: AUTO's threshold, re-commits after a change, and the floating-point
      state (flush-to-zero inside Embree tiles only, the host's state restored).
    - batched: the batched integrator's Embree streams (rtcIntersect1M, rtcOccluded1M) render the
-     scalar integrator's film (one rtcIntersect1 / rtcOccluded1 per ray) bit for bit. */
+     scalar integrator's film (one rtcIntersect1 / rtcOccluded1 per ray) bit for bit, and are
+     the default integrator with Embree 3. */
 #define _GNU_SOURCE /* feenableexcept (glibc) for embree_fp_traps */
 #include "pdftrace_scene.h"
 
@@ -791,6 +792,20 @@ static void embree_batched_bit_identical(test_ctx *t)
                       (unsigned long long)sa.shadow_rays, (unsigned long long)sb.shadow_rays);
                 renders += 2;
             }
+#ifndef PDFTRACE_EMBREE4
+            if (c == 0) { /* with Embree 3's streams the default is BATCHED */
+                pt_film f;
+                pt_render_stats sd;
+                d.integrator = PT_INTEGRATOR_DEFAULT;
+                memset(&f, 0, sizeof f);
+                if (tu_render_into(t, s, &d, &f, &sd, "default"))
+                    CHECK(t, tu_film_equal(&a, &f) && sd.batched_samples == sd.samples, "%s: Embree, default: %s, %llu of %llu batched",
+                          scenes[i], tu_film_equal(&a, &f) ? "same film" : "the film differs",
+                          (unsigned long long)sd.batched_samples, (unsigned long long)sd.samples);
+                pt_film_free(&f);
+                renders++;
+            }
+#endif
             pt_film_free(&a);
             pt_film_free(&b);
         }
