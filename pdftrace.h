@@ -995,7 +995,8 @@ typedef struct pt_shading_point {
      for the duration of each tile, as Embree asks, and restore the previous state, so the
      host's floating-point state is unchanged afterwards. pt_scene_intersect and
      pt_scene_occluded leave the caller's state alone (correct, maybe slower on denormals).
-   - The batched integrator (pt_render_desc.integrator; the default with Embree 3) hands Embree
+   - The batched integrator (pt_render_desc.integrator; with Embree 3 the default from
+     PDFTRACE_EMBREE_MIN_PRIMS primitives, where AUTO chooses Embree) hands Embree
      its batch's rays as one stream (rtcIntersect1M, rtcOccluded1M) rather than one call per
      ray; the hits are the same (PDFTRACE_EMBREE_STREAM=0: per ray). Ties (two primitives at
      the same t) go to a triangle, else to the lowest primitive type and index, whatever order
@@ -1169,7 +1170,8 @@ typedef enum pt_integrator {
     PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
                                    for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
                                    or better (its closest hits then run in 8-ray packets) and for scenes
-                                   traced by Embree 3 (its batches then go to Embree as streams), else SCALAR */
+                                   of at least PDFTRACE_EMBREE_MIN_PRIMS primitives traced by Embree 3 (its
+                                   batches then go to Embree as streams), else SCALAR */
     PT_INTEGRATOR_SCALAR = 1,
     PT_INTEGRATOR_BATCHED = 2
 } pt_integrator;
@@ -9645,12 +9647,13 @@ static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
     double m = s->env ? s->env->mean : 0.0, phi, r;
     pt_vec3 ext = pt_sub(s->hi, s->lo);
     /* the default integrator: BATCHED where its ray packets run 8 wide or Embree 3 traces its
-       batches as streams (the cases where it is measured faster: bench/README.md, "make
-       bench-batched" and "Embree streams"), SCALAR elsewhere */
+       batches as streams in a scene large enough for AUTO to choose Embree (the cases where it is
+       measured faster: bench/README.md, "make bench-batched" and "Embree streams"), SCALAR
+       elsewhere */
     if (c->batched == (int)PT_INTEGRATOR_DEFAULT) {
         c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
 #ifdef PT__RTC_STREAM
-        c->batched |= s->backend == PT_BACKEND_EMBREE;
+        c->batched |= s->backend == PT_BACKEND_EMBREE && s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS);
 #endif
     }
     else c->batched = c->batched == (int)PT_INTEGRATOR_BATCHED;
