@@ -995,6 +995,12 @@ typedef struct pt_shading_point {
      for the duration of each tile, as Embree asks, and restore the previous state, so the
      host's floating-point state is unchanged afterwards. pt_scene_intersect and
      pt_scene_occluded leave the caller's state alone (correct, maybe slower on denormals).
+   - The batched integrator (pt_render_desc.integrator; with Embree 3 the default from
+     PDFTRACE_EMBREE_MIN_PRIMS primitives, where AUTO chooses Embree) hands Embree
+     its batch's rays as one stream (rtcIntersect1M, rtcOccluded1M) rather than one call per
+     ray; the hits are the same (PDFTRACE_EMBREE_STREAM=0: per ray). Ties (two primitives at
+     the same t) go to a triangle, else to the lowest primitive type and index, whatever order
+     Embree visits them in; two triangles at the same t are Embree's to order.
    - Embree errors become pdftrace error codes with Embree's message in
      pt_scene_error_message; the library never aborts. Embree's own code computes with
      inf and NaN on purpose, so every call into it masks SSE floating-point exceptions
@@ -1156,14 +1162,18 @@ typedef struct pt_path_stats {
    path at a time, vertex by vertex (the reference). BATCHED advances the paths of a tile's
    samples together in batches, stage by stage (closest hits, emission and light samples, the
    batch's shadow rays, continuation): the same functions in the same order per path, so the
-   same image bit for bit. Guide training iterations (path guiding) run SCALAR;
-   pt_render_stats.batched_samples counts the samples the batched integrator took. With the
-   Sobol sampler a split's copies (indirect_paths) are paths of the batch too; with independent
-   numbers they run depth first as in SCALAR (pt_render_stats.batched_split_paths). */
+   same image bit for bit. With Embree 3 (section 5b) the batch's closest hits and shadow rays
+   go to Embree as streams (rtcIntersect1M, rtcOccluded1M). Guide training iterations (path
+   guiding) run SCALAR; pt_render_stats.batched_samples counts the samples the batched
+   integrator took. With the Sobol sampler a split's copies (indirect_paths) are paths of the
+   batch too; with independent numbers they run depth first as in SCALAR
+   (pt_render_stats.batched_split_paths). */
 typedef enum pt_integrator {
     PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
                                    for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
-                                   or better (its closest hits then run in 8-ray packets), else SCALAR */
+                                   or better (its closest hits then run in 8-ray packets) and for scenes
+                                   of at least PDFTRACE_EMBREE_MIN_PRIMS primitives traced by Embree 3 (its
+                                   batches then go to Embree as streams), else SCALAR */
     PT_INTEGRATOR_SCALAR = 1,
     PT_INTEGRATOR_BATCHED = 2
 } pt_integrator;
@@ -8263,6 +8273,12 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
 #ifndef PDFTRACE_EMBREE_BUILD_QUALITY
 #define PDFTRACE_EMBREE_BUILD_QUALITY RTC_BUILD_QUALITY_MEDIUM
 #endif
+/* 1: the batched integrator traces its batch's closest hits and shadow rays as Embree 3 streams
+   (rtcIntersect1M, rtcOccluded1M); 0: one rtcIntersect1 / rtcOccluded1 call per ray. Embree 4
+   has no stream calls: always per ray there. */
+#ifndef PDFTRACE_EMBREE_STREAM
+#define PDFTRACE_EMBREE_STREAM 1
+#endif
 /* Device configuration string passed to rtcNewDevice (NULL: Embree's defaults). */
 #ifndef PDFTRACE_EMBREE_CONFIG
 #define PDFTRACE_EMBREE_CONFIG NULL
@@ -8274,7 +8290,8 @@ typedef struct pt__rtc_ctx {
 #else
     struct RTCIntersectContext base;
 #endif
-    const pt__rayctx *rc;
+    const pt__rayctx *const *rc; /* by Embree ray id: one ray (id 0, `one`) or a stream's */
+    const pt__rayctx *one;
 } pt__rtc_ctx;
 
 static void pt__rtc_ctx_init(pt__rtc_ctx *c, const pt__rayctx *rc)
@@ -8284,7 +8301,8 @@ static void pt__rtc_ctx_init(pt__rtc_ctx *c, const pt__rayctx *rc)
 #else
     rtcInitIntersectContext(&c->base);
 #endif
-    c->rc = rc;
+    c->one = rc;
+    c->rc = &c->one;
 }
 
 static const char *pt__rtc_error_name(int code)
@@ -8341,7 +8359,15 @@ static void pt__rtc_release(pt_scene *s)
 }
 
 /* User geometry callbacks (quads and spheres). geometryUserPtr is the geometry's pt__rtc_geom.
-   Only single-ray queries are issued, so N == 1 and the packet is a plain RTCRayHit / RTCRay. */
+   Single-ray queries hand them N == 1; a stream (pt__rtc_closest_n, pt__rtc_any_n) is traced by
+   Embree as packets, so N rays in SOA layout with a valid mask, each found by its id. The SOA
+   fields (Embree 3 docs, RTCRayN and RTCHitN; rtcore_ray.h's accessors are C++ only): field f of
+   ray i is float or unsigned [f * N + i]; the ray's tfar is field 8 and its id field 10, the hit
+   (after the ray's 12 fields) has Ng x, y, z, u, v, primID, geomID, instID[0]. */
+#define PT__RTCN_F(base, f, n, i) (((float *)(base))[(f) * (n) + (i)])
+#define PT__RTCN_U(base, f, n, i) (((unsigned *)(void *)(base))[(f) * (n) + (i)])
+#define PT__RTCN_TFAR 8u
+#define PT__RTCN_ID 10u
 static const pt__prim *pt__rtc_user_prim(void *user, unsigned prim_id)
 {
     const pt__rtc_geom *g = (const pt__rtc_geom *)user;
@@ -8370,28 +8396,40 @@ static int pt__rtc_user_hit(const pt__prim *p, const pt__rayctx *rc, float tfar,
 static void pt__rtc_intersect(const struct RTCIntersectFunctionNArguments *a)
 {
     const pt__rtc_ctx *c = (const pt__rtc_ctx *)(const void *)a->context;
-    struct RTCRayHit *rh = (struct RTCRayHit *)(void *)a->rayhit;
-    const pt__prim *p;
+    float *ray = (float *)(void *)a->rayhit, *hit = ray + 12u * a->N; /* RTCRayN, then RTCHitN */
+    const pt__prim *p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
+    unsigned i, n = a->N;
     float t;
-    if (a->N != 1 || !a->valid[0]) return;
-    p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
-    if (!pt__rtc_user_hit(p, c->rc, rh->ray.tfar, &t)) return;
-    rh->ray.tfar = t;
-    rh->hit.u = 0.0f;
-    rh->hit.v = 0.0f;
-    rh->hit.Ng_x = p->n.x; rh->hit.Ng_y = p->n.y; rh->hit.Ng_z = p->n.z; /* unused by pdftrace */
-    rh->hit.primID = a->primID;
-    rh->hit.geomID = a->geomID;
-    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    for (i = 0; i < n; ++i) {
+        float tfar = PT__RTCN_F(ray, PT__RTCN_TFAR, n, i);
+        unsigned g = PT__RTCN_U(hit, 6, n, i);
+        if (!a->valid[i] || !pt__rtc_user_hit(p, c->rc[PT__RTCN_U(ray, PT__RTCN_ID, n, i)], tfar, &t)) continue;
+        /* A tie (t = the hit so far) goes to a triangle, else to the least (geomID, primID), not
+           to the primitive Embree happens to visit last: a stream's packets and a single ray
+           visit in different orders, and their hits must be the same. */
+        if (t == tfar && g != RTC_INVALID_GEOMETRY_ID &&
+            (g == PT__PRIM_TRIANGLE || g < a->geomID || (g == a->geomID && PT__RTCN_U(hit, 5, n, i) < a->primID)))
+            continue;
+        PT__RTCN_F(ray, PT__RTCN_TFAR, n, i) = t;
+        PT__RTCN_F(hit, 0, n, i) = p->n.x; /* Ng, unused by pdftrace */
+        PT__RTCN_F(hit, 1, n, i) = p->n.y;
+        PT__RTCN_F(hit, 2, n, i) = p->n.z;
+        PT__RTCN_F(hit, 3, n, i) = 0.0f; /* u, v */
+        PT__RTCN_F(hit, 4, n, i) = 0.0f;
+        PT__RTCN_U(hit, 5, n, i) = a->primID;
+        PT__RTCN_U(hit, 6, n, i) = a->geomID;
+        PT__RTCN_U(hit, 7, n, i) = RTC_INVALID_GEOMETRY_ID; /* instID[0] */
+    }
 }
 static void pt__rtc_occluded(const struct RTCOccludedFunctionNArguments *a)
 {
     const pt__rtc_ctx *c = (const pt__rtc_ctx *)(const void *)a->context;
-    struct RTCRay *ray = (struct RTCRay *)(void *)a->ray;
-    float t;
-    if (a->N != 1 || !a->valid[0]) return;
-    if (pt__rtc_user_hit(pt__rtc_user_prim(a->geometryUserPtr, a->primID), c->rc, ray->tfar, &t))
-        ray->tfar = -INFINITY; /* Embree's "occluded" mark */
+    const pt__prim *p = pt__rtc_user_prim(a->geometryUserPtr, a->primID);
+    float *ray = (float *)(void *)a->ray, t;
+    unsigned i, n = a->N;
+    for (i = 0; i < n; ++i)
+        if (a->valid[i] && pt__rtc_user_hit(p, c->rc[PT__RTCN_U(ray, PT__RTCN_ID, n, i)], PT__RTCN_F(ray, PT__RTCN_TFAR, n, i), &t))
+            PT__RTCN_F(ray, PT__RTCN_TFAR, n, i) = -INFINITY; /* Embree's "occluded" mark */
 }
 
 static int pt__rtc_fail(pt_scene *s, int fallback_code, const char *what)
@@ -8600,6 +8638,75 @@ static int pt__rtc_any(const pt_scene *s, const pt__rayctx *rc, float tmax)
     }
     return r.tfar < 0.0f;
 }
+
+#if RTC_VERSION_MAJOR < 4 && PDFTRACE_EMBREE_STREAM
+#define PT__RTC_STREAM 64 /* the most rays of one stream call (a batch's camera samples) */
+/* The closest hits of n <= PT__RTC_STREAM rays (0 < t < inf) in one rtcIntersect1M call: what
+   n calls of pt__rtc_closest return (the callbacks run the same tests; Embree's triangle test is
+   the same per lane), into found[i], prim[i], t[i] and bary[3 i .. 3 i + 2]. */
+static void pt__rtc_closest_n(const pt_scene *s, const pt__rayctx *const *rc, int n, int *found, uint32_t *prim,
+                              float *t, float *bary)
+{
+    struct RTCRayHit rh[PT__RTC_STREAM];
+    const pt__rayctx *rcs[PT__RTC_STREAM];
+    int idx[PT__RTC_STREAM], i, m = 0;
+    pt__rtc_ctx c;
+    for (i = 0; i < n; ++i) {
+        found[i] = 0;
+        if (!pt__rtc_ray_ok(rc[i], PT__INF)) continue;
+        pt__rtc_ray(&rh[m].ray, rc[i], PT__INF);
+        rh[m].ray.id = (unsigned)m;
+        rh[m].hit.geomID = rh[m].hit.primID = rh[m].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rcs[m] = rc[i];
+        idx[m++] = i;
+    }
+    if (!m) return;
+    pt__rtc_ctx_init(&c, NULL);
+    c.rc = rcs;
+    {
+        PT__RTC_GUARD_BEGIN;
+        rtcIntersect1M(s->rtc.scene, &c.base, rh, (unsigned)m, sizeof rh[0]);
+        PT__RTC_GUARD_END;
+    }
+    for (i = 0; i < m; ++i) {
+        unsigned g = rh[i].hit.geomID;
+        int j = idx[i];
+        if (g >= 3u || rh[i].hit.primID >= s->rtc.count[g]) continue;
+        found[j] = 1;
+        prim[j] = s->rtc.map[g][rh[i].hit.primID];
+        t[j] = rh[i].ray.tfar;
+        bary[3 * j] = g == PT__PRIM_TRIANGLE ? 1.0f - rh[i].hit.u - rh[i].hit.v : 0.0f;
+        bary[3 * j + 1] = g == PT__PRIM_TRIANGLE ? rh[i].hit.u : 0.0f;
+        bary[3 * j + 2] = g == PT__PRIM_TRIANGLE ? rh[i].hit.v : 0.0f;
+    }
+}
+/* Any hits of n <= PT__RTC_STREAM rays (0 < t < tmax[i]) in one rtcOccluded1M call: hit[i] as
+   pt__rtc_any returns it. */
+static void pt__rtc_any_n(const pt_scene *s, const pt__rayctx *const *rc, const float *tmax, int n, int *hit)
+{
+    struct RTCRay r[PT__RTC_STREAM];
+    const pt__rayctx *rcs[PT__RTC_STREAM];
+    int idx[PT__RTC_STREAM], i, m = 0;
+    pt__rtc_ctx c;
+    for (i = 0; i < n; ++i) {
+        hit[i] = 0;
+        if (!pt__rtc_ray_ok(rc[i], tmax[i])) continue;
+        pt__rtc_ray(&r[m], rc[i], tmax[i]);
+        r[m].id = (unsigned)m;
+        rcs[m] = rc[i];
+        idx[m++] = i;
+    }
+    if (!m) return;
+    pt__rtc_ctx_init(&c, NULL);
+    c.rc = rcs;
+    {
+        PT__RTC_GUARD_BEGIN;
+        rtcOccluded1M(s->rtc.scene, &c.base, r, (unsigned)m, sizeof r[0]);
+        PT__RTC_GUARD_END;
+    }
+    for (i = 0; i < m; ++i) hit[idx[i]] = r[i].tfar < 0.0f;
+}
+#endif
 
 /* Flush-to-zero and denormals-are-zero (MXCSR bits 15 and 6) for Embree's traversal; the
    previous state is returned for pt__ftz_end. A no-op without SSE (e.g. on ARM). */
@@ -9543,9 +9650,16 @@ static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
     double bg = ((double)c->background.x + (double)c->background.y + (double)c->background.z) / 3.0;
     double m = s->env ? s->env->mean : 0.0, phi, r;
     pt_vec3 ext = pt_sub(s->hi, s->lo);
-    /* the default integrator: BATCHED where its ray packets run 8 wide (the one case where it is
-       measured faster: bench/README.md, "make bench-batched"), SCALAR elsewhere */
-    if (c->batched == (int)PT_INTEGRATOR_DEFAULT) c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
+    /* the default integrator: BATCHED where its ray packets run 8 wide or Embree 3 traces its
+       batches as streams in a scene large enough for AUTO to choose Embree (the cases where it is
+       measured faster: bench/README.md, "make bench-batched" and "Embree streams"), SCALAR
+       elsewhere */
+    if (c->batched == (int)PT_INTEGRATOR_DEFAULT) {
+        c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
+#ifdef PT__RTC_STREAM
+        c->batched |= s->backend == PT_BACKEND_EMBREE && s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS);
+#endif
+    }
     else c->batched = c->batched == (int)PT_INTEGRATOR_BATCHED;
     c->env = s->env;
     c->env_on = bg + m > 0.0;
@@ -10898,13 +11012,44 @@ static PT__HOT int pt__lane_continue(pt__batch_ctx *b, pt__lane *l, const int co
     return 1;
 }
 
+#ifdef PT__RTC_STREAM
+/* Stage 1 with Embree 3: the live paths' closest hits as streams (pt__rtc_closest_n), at most
+   PT__RTC_STREAM rays each (split copies as lanes can make a batch of more live paths). */
+static void pt__batch_closest_rtc(const pt_scene *s, pt__lane *lanes, const int *live, int nlive)
+{
+    const pt__rayctx *rc[PT__BATCH_LANES];
+    int found[PT__BATCH_LANES], i;
+    uint32_t prim[PT__BATCH_LANES];
+    float t[PT__BATCH_LANES], bary[3 * PT__BATCH_LANES];
+    for (i = 0; i < nlive; ++i) rc[i] = &lanes[live[i]].rc;
+    for (i = 0; i < nlive; i += PT__RTC_STREAM) /* (streams of at most PT__RTC_STREAM rays) */
+        pt__rtc_closest_n(s, rc + i, nlive - i < PT__RTC_STREAM ? nlive - i : PT__RTC_STREAM, found + i, prim + i, t + i,
+                          bary + 3 * i);
+    for (i = 0; i < nlive; ++i) {
+        pt__lane *l = &lanes[live[i]];
+        l->found = found[i];
+        if (!found[i]) continue;
+        l->pi = prim[i];
+        l->t = t[i];
+        l->bary[0] = bary[3 * i]; l->bary[1] = bary[3 * i + 1]; l->bary[2] = bary[3 * i + 2];
+    }
+}
+#endif
+
 /* Stage 1: the closest hits of the live paths' rays, in a small scene 8 at a time with AVX2 or 4
-   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), else one at a time. */
+   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), with Embree 3 as one stream
+   (pt__batch_closest_rtc), else one at a time. */
 static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *live,
                                       int nlive, int tri)
 {
     int i, j;
     for (i = 0; i < nlive; ++i) pt__rayctx_init2(&lanes[live[i]].rc, lanes[live[i]].ray, tri);
+#ifdef PT__RTC_STREAM
+    if (s->backend == PT_BACKEND_EMBREE) {
+        pt__batch_closest_rtc(s, lanes, live, nlive);
+        return;
+    }
+#endif
 #ifdef PT__SSE
     if (pk->n > 0) {
         int w = 4;
@@ -10971,6 +11116,36 @@ static void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const 
         if (!l->found || l->depth >= b->cfg->max_depth) continue;
         m = &b->s->mats[b->s->prims[l->pi].material];
         if (m->scatters && !m->delta) pt__sobol_draw_ahead(&l->smp, l->depth, b->nee, scatter);
+    }
+}
+
+/* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded), with Embree 3
+   as one stream (pt__rtc_any_n), else one at a time. */
+static void pt__batch_shadow(const pt_scene *s, pt__lane *lanes, const int *shade, int nshade)
+{
+    int i;
+#ifdef PT__RTC_STREAM
+    if (s->backend == PT_BACKEND_EMBREE) {
+        const pt__rayctx *rc[PT__BATCH_LANES];
+        float tmax[PT__BATCH_LANES];
+        int which[PT__BATCH_LANES], hit[PT__BATCH_LANES], m = 0, o;
+        for (i = 0; i < nshade; ++i) {
+            pt__lane *l = &lanes[shade[i]];
+            if (!l->shadow) continue;
+            rc[m] = &l->nr.rc;
+            tmax[m] = l->nr.tmax;
+            which[m++] = shade[i];
+        }
+        for (o = 0; o < m; o += PT__RTC_STREAM) /* (streams of at most PT__RTC_STREAM rays) */
+            pt__rtc_any_n(s, rc + o, tmax + o, m - o < PT__RTC_STREAM ? m - o : PT__RTC_STREAM, hit + o);
+        for (i = 0; i < m; ++i)
+            if (hit[i]) lanes[which[i]].shadow = 2;
+        return;
+    }
+#endif
+    for (i = 0; i < nshade; ++i) {
+        pt__lane *l = &lanes[shade[i]];
+        if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
     }
 }
 
@@ -11045,10 +11220,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
         for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(b, &lanes[live[i]], copies)) shade[nshade++] = live[i];
             else if (copies) pt__lane_end(lanes, b->pool, live[i]);
-        for (i = 0; i < nshade; ++i) { /* (3) shadow rays */
-            pt__lane *l = &lanes[shade[i]];
-            if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
-        }
+        pt__batch_shadow(s, lanes, shade, nshade); /* (3) shadow rays */
         for (i = 0, nlive = 0; i < nshade; ++i) { /* (4) contributions, splits, continuation */
             const int r = pt__lane_continue(b, &lanes[shade[i]], copies);
             if (r == 1) live[nlive++] = shade[i];

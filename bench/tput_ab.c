@@ -7,7 +7,8 @@
 
    tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR SEED [MODE]
    (INTEGRATOR: 0 default, 1 scalar, 2 batched; MODE: 0 the throughput settings, the default; 1 the
-   same with the Sobol sampler; 2 the scene file's own settings, e.g. a default Sobol render) */
+   same with the Sobol sampler; 2 the scene file's own settings, e.g. a default Sobol render).
+   Built with -DPDFTRACE_EMBREE (tput_ab.sh -e) it renders with the Embree backend. */
 #define _POSIX_C_SOURCE 200809L
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
@@ -48,6 +49,12 @@ int main(int argc, char **argv)
         fprintf(stderr, "tput_ab: %s\n", err);
         return 1;
     }
+#ifdef PDFTRACE_EMBREE
+    if (pt_scene_set_backend(scene, PT_BACKEND_EMBREE) != PT_OK || pt_scene_commit(scene) != PT_OK) {
+        fprintf(stderr, "tput_ab: Embree: %s\n", pt_scene_error_message(scene));
+        return 1;
+    }
+#endif
     mode = argc == 9 ? atoi(argv[8]) : 0;
     d.width = atoi(argv[2]);
     d.height = atoi(argv[3]);

@@ -5,30 +5,61 @@
 # hit both alike. Prints the medians of each and the median (and range) of the paired ratios B/A,
 # per CPU second (the figure to read with 1 thread) and per wall second.
 #
-#   bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] REV_A REV_B
+#   bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] [-e] REV_A REV_B
 #
 # A revision is anything `git show REV:pdftrace.h` takes, or `.` for the working tree.
 # -i: the integrator (0 default, 1 scalar, 2 batched); -s: 0 the throughput settings (independent
 # numbers), 1 the same with the Sobol sampler, 2 each scene file's own settings (Sobol,
-# indirect_paths, roulette: a default render). Run from the repository root.
+# indirect_paths, roulette: a default render); -e: both built with Embree (-DPDFTRACE_EMBREE,
+# -lembree3) and rendering with the Embree backend, and three more scenes: many-tris (1049
+# primitives), nine tori of scenes/mesh.obj (20738 primitives) and a heightfield of 20000
+# triangles (both large enough for Embree under AUTO). Run from the repository root.
 set -eu
-reps=7; threads=1; integ=0; sampler=0
-while getopts r:t:i:s: o; do
-    case $o in r) reps=$OPTARG ;; t) threads=$OPTARG ;; i) integ=$OPTARG ;; s) sampler=$OPTARG ;; *) exit 2 ;; esac
+reps=7; threads=1; integ=0; sampler=0; embree=0
+while getopts r:t:i:s:e o; do
+    case $o in r) reps=$OPTARG ;; t) threads=$OPTARG ;; i) integ=$OPTARG ;; s) sampler=$OPTARG ;; e) embree=1 ;; *) exit 2 ;; esac
 done
 shift $((OPTIND - 1))
-[ $# -eq 2 ] || { echo "usage: bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] REV_A REV_B" >&2; exit 2; }
+[ $# -eq 2 ] || { echo "usage: bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] [-e] REV_A REV_B" >&2; exit 2; }
 dir=build/tput-ab
 mkdir -p "$dir/a" "$dir/b"
+eflags=; elibs=; scenes="bench/scenes/rooms.scene 160 120 64|scenes/cornell-diffuse.scene 600 600 4"
+if [ $embree = 1 ]; then
+    eflags=-DPDFTRACE_EMBREE; elibs=-lembree3
+    { printf 'size 160 120\ncamera look_from 0 5 -9 look_at 0 0.5 0 vfov 50\n'
+      printf 'material floor lambertian 0.7 0.7 0.7\nmaterial gold lambertian 0.8 0.6 0.2\nmaterial lamp emitter 6 6 6\n'
+      printf 'quad -8 0 -8   0 0 16   16 0 0   floor\nquad -2 6 -2   4 0 0   0 0 4   lamp\n'
+      for x in -2.5 0 2.5; do for z in -2.5 0 2.5; do
+          printf 'identity\nrotate 1 0 0 -30\ntranslate %s 0.7 %s\nmesh mesh.obj gold\n' $x $z
+      done; done; } > "$dir/tori.scene"
+    cp scenes/mesh.obj "$dir/mesh.obj"
+    python3 - "$dir/terrain.obj" <<'PY'
+import math, sys
+n = 100  # a 100 x 100 heightfield: 20000 triangles
+with open(sys.argv[1], 'w') as f:
+    for j in range(n + 1):
+        for i in range(n + 1):
+            x, z = -5 + 10 * i / n, -5 + 10 * j / n
+            f.write(f"v {x:.5f} {0.6 * math.sin(1.7 * x) * math.cos(1.3 * z) + 0.25 * math.sin(4.1 * x + 2.3 * z):.5f} {z:.5f}\n")
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i + 1
+            f.write(f"f {a} {a + n + 1} {a + 1}\nf {a + 1} {a + n + 1} {a + n + 2}\n")
+PY
+    printf 'size 160 120\ncamera look_from 0 4 -8 look_at 0 0 0 vfov 50\nmaterial ground lambertian 0.6 0.55 0.5\nmaterial lamp emitter 8 8 8\nmesh terrain.obj ground\nquad -1 5 -1   2 0 0   0 0 2   lamp\n' > "$dir/terrain.scene"
+    scenes="$scenes|bench/scenes/many-tris.scene 128 96 16|$dir/tori.scene 160 120 64|$dir/terrain.scene 160 120 32"
+fi
 for side in a b; do
     if [ $side = a ]; then rev=$1; else rev=$2; fi
     for f in pdftrace.h pdftrace_scene.h; do
         if [ "$rev" = . ]; then cp "$f" "$dir/$side/$f"; else git show "$rev:$f" > "$dir/$side/$f"; fi
     done
-    ${CC:-cc} -I"$dir/$side" -std=c99 -O3 -pthread -o "$dir/$side/tput_ab" bench/tput_ab.c -lm
+    ${CC:-cc} -I"$dir/$side" $eflags -std=c99 -O3 -pthread -o "$dir/$side/tput_ab" bench/tput_ab.c $elibs -lm
 done
 # scene, width, height, spp: the throughput part's sizes, about a second each on one thread
-for spec in "bench/scenes/rooms.scene 160 120 64" "scenes/cornell-diffuse.scene 600 600 4"; do
+IFS='|'; set -f
+for spec in $scenes; do
+    unset IFS; set +f
     : > "$dir/runs"
     r=1
     while [ $r -le "$reps" ]; do

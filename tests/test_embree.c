@@ -14,7 +14,10 @@
      backends from independent seeds; per-region z-tests of the means, one Sidak family at
      alpha = 0.01 over all regions, channels and scenes.
    - auto / rebuild / ftz: AUTO's threshold, re-commits after a change, and the floating-point
-     state (flush-to-zero inside Embree tiles only, the host's state restored). */
+     state (flush-to-zero inside Embree tiles only, the host's state restored).
+   - batched: the batched integrator's Embree streams (rtcIntersect1M, rtcOccluded1M) render the
+     scalar integrator's film (one rtcIntersect1 / rtcOccluded1 per ray) bit for bit, and are
+     the default integrator with Embree 3. */
 #define _GNU_SOURCE /* feenableexcept (glibc) for embree_fp_traps */
 #include "pdftrace_scene.h"
 
@@ -736,6 +739,127 @@ static void embree_fp_traps(test_ctx *t)
 #endif
 }
 
+/* The batched integrator with the Embree backend (its closest hits and shadow rays as Embree
+   streams, section 5b) renders the scalar integrator's film bit for bit: quads and spheres (user
+   geometry, whose callbacks then take packets of rays), glass, triangles (a mesh), delta and many
+   lights, under MIS and light sampling, independent and Sobol numbers. */
+static void embree_batched_bit_identical(test_ctx *t)
+{
+#ifdef PDFTRACE_EMBREE
+    static const char *const scenes[] = { "scenes/cornell.scene", "scenes/mesh.scene", "scenes/lights.scene" };
+    const int ns = (int)(sizeof scenes / sizeof scenes[0]);
+    int i, c, renders = 0;
+    char err[512];
+    for (i = 0; i < ns; ++i) {
+        pt_scenefile sf;
+        pt_scene *s = NULL;
+        pt_render_desc base;
+        if (!CHECK(t, pt_scenefile_load(scenes[i], &sf, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) continue;
+        if (!CHECK(t, pt_scenefile_build(&sf, &s, &base, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) {
+            pt_scenefile_free(&sf);
+            continue;
+        }
+        pt_scenefile_free(&sf);
+        if (!CHECK(t, pt_scene_set_backend(s, PT_BACKEND_EMBREE) == PT_OK && pt_scene_commit(s) == PT_OK, "%s: Embree: %s",
+                   scenes[i], pt_scene_error_message(s))) {
+            pt_scene_destroy(s);
+            continue;
+        }
+        base.width = 24;
+        base.height = 18;
+        base.samples_per_pixel = 8;
+        base.seed = 91;
+        base.max_depth = base.max_depth > 8 ? 8 : base.max_depth;
+        for (c = 0; c < 2; ++c) {
+            pt_render_desc d = base, e;
+            pt_film a, b;
+            pt_render_stats sa, sb;
+            d.strategy = c ? PT_STRATEGY_LIGHT : PT_STRATEGY_MIS;
+            d.sampler = c ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
+            d.integrator = PT_INTEGRATOR_SCALAR;
+            d.threads = 2;
+            e = d;
+            e.integrator = PT_INTEGRATOR_BATCHED;
+            e.threads = 1;
+            memset(&a, 0, sizeof a);
+            memset(&b, 0, sizeof b);
+            if (tu_render_into(t, s, &d, &a, &sa, "scalar") && tu_render_into(t, s, &e, &b, &sb, "batched")) {
+                CHECK(t, tu_film_equal(&a, &b), "%s, %s: Embree, the batched film differs from the scalar one", scenes[i],
+                      c ? "light sobol" : "MIS");
+                CHECK(t, sb.batched_samples == sb.samples && sb.shadow_rays == sa.shadow_rays && sb.shadow_rays > 0,
+                      "%s: batched samples %llu of %llu, shadow rays %llu and %llu", scenes[i],
+                      (unsigned long long)sb.batched_samples, (unsigned long long)sb.samples,
+                      (unsigned long long)sa.shadow_rays, (unsigned long long)sb.shadow_rays);
+                renders += 2;
+            }
+#ifndef PDFTRACE_EMBREE4
+            if (c == 0) { /* below PDFTRACE_EMBREE_MIN_PRIMS the default stays SCALAR */
+                pt_film f;
+                pt_render_stats sd;
+                d.integrator = PT_INTEGRATOR_DEFAULT;
+                memset(&f, 0, sizeof f);
+                if (tu_render_into(t, s, &d, &f, &sd, "default"))
+                    CHECK(t, tu_film_equal(&a, &f) && sd.batched_samples == 0, "%s: Embree, default: %s, %llu of %llu batched",
+                          scenes[i], tu_film_equal(&a, &f) ? "same film" : "the film differs",
+                          (unsigned long long)sd.batched_samples, (unsigned long long)sd.samples);
+                pt_film_free(&f);
+                renders++;
+            }
+#endif
+            pt_film_free(&a);
+            pt_film_free(&b);
+        }
+        pt_scene_destroy(s);
+    }
+    {   /* coincident surfaces: every ray on the overlap is a tie (two quads, a triangle on a quad) */
+        pt_scene *s = te_small_scene();
+        pt_scene_info info;
+        pt_render_desc d = tu_base_desc(24, 24, 4, 1), e;
+        pt_film a, b;
+        int red = s ? pt_scene_add_lambertian(s, pt_v3(0.7f, 0.1f, 0.1f)) : -1;
+        int green = s ? pt_scene_add_lambertian(s, pt_v3(0.1f, 0.7f, 0.1f)) : -1;
+        if (CHECK(t, s && red >= 0 && green >= 0 && pt_scene_add_quad(s, pt_v3(-3, 0, -3), pt_v3(6, 0, 0), pt_v3(0, 0, 6), red) >= 0 &&
+                         pt_scene_add_quad(s, pt_v3(-4, 0, -2), pt_v3(5, 0, 0), pt_v3(0, 0, 5), green) >= 0 &&
+                         pt_scene_add_triangle(s, pt_v3(-2, 0, -2), pt_v3(-2, 0, 2), pt_v3(2, 0, 0), green) >= 0,
+                  "coincident scene")) {
+            int k;
+            pt_render_stats sd;
+            /* 5000 small triangles behind the camera: a scene where AUTO picks Embree, and the
+               default integrator (with Embree 3) is BATCHED */
+            for (k = 0; k < 5000; ++k)
+                pt_scene_add_triangle(s, pt_v3((float)(k % 100) * 0.1f, 9, 8 + (float)(k / 100) * 0.1f),
+                                      pt_v3((float)(k % 100) * 0.1f + 0.05f, 9, 8 + (float)(k / 100) * 0.1f),
+                                      pt_v3((float)(k % 100) * 0.1f, 9.05f, 8 + (float)(k / 100) * 0.1f), red);
+            d.camera.look_from = pt_v3(0.3f, 6, -4);
+            d.camera.look_at = pt_v3(0, 0, 0);
+            d.integrator = PT_INTEGRATOR_SCALAR;
+            e = d;
+            e.integrator = PT_INTEGRATOR_DEFAULT;
+            memset(&a, 0, sizeof a);
+            memset(&b, 0, sizeof b);
+            if (CHECK(t, pt_scene_set_backend(s, PT_BACKEND_AUTO) == PT_OK && pt_scene_commit(s) == PT_OK &&
+                             pt_scene_get_info(s, &info) == PT_OK && info.backend == PT_BACKEND_EMBREE,
+                      "coincident scene: AUTO did not choose Embree") &&
+                tu_render_into(t, s, &d, &a, NULL, "scalar") && tu_render_into(t, s, &e, &b, &sd, "default")) {
+                CHECK(t, tu_film_equal(&a, &b), "coincident surfaces: Embree, the batched film differs from the scalar one");
+#ifndef PDFTRACE_EMBREE4
+                CHECK(t, sd.batched_samples == sd.samples, "AUTO with Embree: the default integrator took %llu of %llu samples batched",
+                      (unsigned long long)sd.batched_samples, (unsigned long long)sd.samples);
+#endif
+            }
+            renders += 2;
+            pt_film_free(&a);
+            pt_film_free(&b);
+        }
+        pt_scene_destroy(s);
+    }
+    test_note(t, "%d Embree renders of %d scenes and coincident surfaces: batched (streams) = scalar (per ray) bit for bit",
+              renders, ns);
+#else
+    test_skip(t, "Embree not compiled in (make EMBREE=1)");
+#endif
+}
+
 /* ---- the scene suite: same image within noise ---- */
 #ifndef TE_SCENE_DIR
 #define TE_SCENE_DIR "scenes"
@@ -851,6 +975,7 @@ const test_case test_embree_cases[] = {
     TEST_CASE(embree_fp_traps),
     TEST_CASE(embree_first_hits),
     TEST_CASE(embree_scene_images),
+    TEST_CASE(embree_batched_bit_identical),
     TEST_END
 };
 
