@@ -11037,7 +11037,7 @@ static void pt__batch_closest_rtc(const pt_scene *s, pt__lane *lanes, const int 
 #endif
 
 /* Stage 1: the closest hits of the live paths' rays, in a small scene 8 at a time with AVX2 or 4
-   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), with Embree 3 as one stream
+   with SSE2 (pt__packet_closest8/4, the level pt_simd_level chose), with Embree 3 as streams
    (pt__batch_closest_rtc), else one at a time. */
 static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *live,
                                       int nlive, int tri)
@@ -11120,7 +11120,7 @@ static void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const 
 }
 
 /* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded), with Embree 3
-   as one stream (pt__rtc_any_n), else one at a time. */
+   as streams of at most PT__RTC_STREAM rays (pt__rtc_any_n), else one at a time. */
 static void pt__batch_shadow(const pt_scene *s, pt__lane *lanes, const int *shade, int nshade)
 {
     int i;
