@@ -2481,7 +2481,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         pt_image first = {0, 0, NULL}, img = {0, 0, NULL};
         double t_on[SKIP_REPS_MAX], t_off[SKIP_REPS_MAX], pr[SKIP_REPS_MAX], v_on[SKIP_REPS_MAX],
             v_off[SKIP_REPS_MAX], eqb[4096], sorted[SKIP_REPS_MAX], bias;
-        int spp = 1, r, i, b, n_mean = 0, idx[SKIP_REPS_MAX];
+        int spp = 2, r, i, b, n_mean = 0, idx[SKIP_REPS_MAX]; /* 2: a pixel's variance needs two samples */
         uint64_t rs = 0x5c1b5ULL + (uint64_t)c;
         size_t p;
         if (find_scene(sk->scene_name) >= 0 && !cfg->scene_on[find_scene(sk->scene_name)]) continue; /* --scenes */
@@ -2497,7 +2497,7 @@ static int run_skips(const config *cfg, results *R, skip_results *S)
         d.threads = 1;
         d.seed = 1;
         memset(mean, 0, sizeof(double) * 3u * npix);
-        /* calibrate: double spp until one render takes at least target / 2 */
+        /* calibrate: double spp (from 2) until one render takes at least target / 2 */
         for (;;) {
             double t0 = cpu_now();
             d.samples_per_pixel = spp;
