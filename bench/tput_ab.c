@@ -8,7 +8,9 @@
    tput_ab SCENE WIDTH HEIGHT SPP THREADS INTEGRATOR SEED [MODE]
    (INTEGRATOR: 0 default, 1 scalar, 2 batched; MODE: 0 the throughput settings, the default; 1 the
    same with the Sobol sampler; 2 the scene file's own settings, e.g. a default Sobol render).
-   Built with -DPDFTRACE_EMBREE (tput_ab.sh -e) it renders with the Embree backend. */
+   Built with -DPDFTRACE_EMBREE (tput_ab.sh -e) it renders with the Embree backend; with
+   -DTPUT_AB_NO_INTEGRATOR it builds against a pdftrace.h from before pt_render_desc.integrator
+   (tput_ab.sh passes it for such revisions), whose only integrator is the scalar one. */
 #define _POSIX_C_SOURCE 200809L
 #define PDFTRACE_IMPLEMENTATION
 #include "pdftrace.h"
@@ -72,7 +74,11 @@ int main(int argc, char **argv)
     d.adaptive_threshold = 0;
     d.threads = atoi(argv[5]);
     integ = atoi(argv[6]);
+#ifndef TPUT_AB_NO_INTEGRATOR
     d.integrator = integ == 1 ? PT_INTEGRATOR_SCALAR : integ == 2 ? PT_INTEGRATOR_BATCHED : PT_INTEGRATOR_DEFAULT;
+#else
+    (void)integ; /* a revision from before the batched integrator: scalar only */
+#endif
     d.seed = (uint64_t)strtoull(argv[7], NULL, 10);
     d.progress = NULL;
     if (pt_film_init(&film, d.width, d.height) != PT_OK) return 1;

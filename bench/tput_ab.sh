@@ -54,7 +54,9 @@ for side in a b; do
     for f in pdftrace.h pdftrace_scene.h; do
         if [ "$rev" = . ]; then cp "$f" "$dir/$side/$f"; else git show "$rev:$f" > "$dir/$side/$f"; fi
     done
-    ${CC:-cc} -I"$dir/$side" $eflags -std=c99 -O3 -pthread -o "$dir/$side/tput_ab" bench/tput_ab.c $elibs -lm
+    # a revision from before the batched integrator has no pt_render_desc.integrator
+    oflags=; grep -q PT_INTEGRATOR_BATCHED "$dir/$side/pdftrace.h" || oflags=-DTPUT_AB_NO_INTEGRATOR
+    ${CC:-cc} -I"$dir/$side" $eflags $oflags -std=c99 -O3 -pthread -o "$dir/$side/tput_ab" bench/tput_ab.c $elibs -lm
 done
 # scene, width, height, spp: the throughput part's sizes, about a second each on one thread
 IFS='|'; set -f
