@@ -510,6 +510,10 @@ check-warnings: | $(BUILD)
 	    done; \
 	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD examples/minimal.c"; \
 	    $$cc $(WARN_CFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(PT_CPPFLAGS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-nothreads.o; \
+	    for o in -O1 -Og -Os; do \
+	        echo "$$cc $(WARN_CFLAGS) $$o tools/pdftrace.c (other optimisation levels: other flow analysis)"; \
+	        $$cc $(WARN_CFLAGS) $$o $(PT_CPPFLAGS) $(PT_THREADS) -c tools/pdftrace.c -o $(BUILD)/warn-$$cc-tool$$o.o; \
+	    done; \
 	    echo "$$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC examples/minimal.c"; \
 	    $$cc $(WARN_CFLAGS) -DPDFTRACE_STATIC $(PT_CPPFLAGS) $(PT_THREADS) -c examples/minimal.c -o $(BUILD)/warn-$$cc-static.o; \
 	    echo "$$cc $(WARN_CFLAGS) bench/bench.c (with and without OpenEXR/libpng)"; \

@@ -8057,6 +8057,7 @@ static PT__HOT void pt__packet_closest4(const pt_scene *s, const pt__packet_scen
     for (i = 0; i < ps->n; ++i) {
         __m128 t, closer;
         int bits = ps->sphere[i] ? pt__packet_sphere(ps, i, o, d, aa, rc, &t) : pt__packet_quad(s, ps, i, o, d, rc, &t);
+        if (!bits) continue; /* no lane hit it (t is then not set) */
         /* strictly closer: at a tie the primitive of lower id (visited first) stays */
         closer = _mm_cmplt_ps(t, best);
         bits &= _mm_movemask_ps(closer);
@@ -8213,6 +8214,7 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
     for (i = 0; i < ps->n; ++i) {
         __m256 t, closer;
         int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, &t) : pt__packet_quad8(s, ps, i, o, d, rc, best, &t);
+        if (!bits) continue; /* no lane hit it (t is then not set) */
         /* strictly closer: at a tie the primitive of lower id (visited first) stays */
         closer = PT__LT8(t, best);
         bits &= _mm256_movemask_ps(closer);
