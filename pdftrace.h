@@ -11227,24 +11227,6 @@ static void pt__scatter_peek(const pt__sampler *smp, int depth, float *u1, float
         *u2 = pt_rng_float(&r);
     }
 }
-/* pt__lambert_dir8 over the first n of the 8 vertices vs (the rest of the lanes copies of the
-   first), each result kept in its vertex tagged with its draws. */
-static void pt__scatter_ahead8(pt__vertex **vs, float (*in)[8], int n)
-{
-    float out[4][8];
-    int i, k;
-    for (i = n; i < 8; ++i)
-        for (k = 0; k < 5; ++k) in[k][i] = in[k][0];
-    pt__lambert_dir8(in[0], in[1], in[2], in[3], in[4], out[0], out[1], out[2], out[3]);
-    for (i = 0; i < n; ++i) {
-        pt__vertex *v = vs[i];
-        v->scat_u[0] = in[3][i];
-        v->scat_u[1] = in[4][i];
-        v->scat_wi = pt_v3(out[0][i], out[1][i], out[2][i]);
-        v->scat_pdf = out[3][i];
-        v->scat_ok = 1;
-    }
-}
 #endif
 /* Stage 3b (AVX2): the scattered direction and density of each path whose vertex is Lambertian
    and unguided (pt__continue's branch for such a vertex, outside the mixture strategy), made 8 at
@@ -11256,9 +11238,10 @@ static void pt__batch_scatter_ahead(const pt__batch_ctx bc, pt__lane *lanes, con
 {
 #ifdef PT__WIDE
     const pt__batch_ctx *b = &bc;
-    float in[5][8]; /* n.x, n.y, n.z, u1, u2 */
-    pt__vertex *vs[8];
-    int i, n = 0;
+    /* the vertices' normals and draws gathered first, so that the vector loads find them stored */
+    float in[5][PT__BATCH_LANES + 8], out[4][PT__BATCH_LANES + 8]; /* n.x, n.y, n.z, u1, u2; w, pdf */
+    pt__vertex *vs[PT__BATCH_LANES];
+    int i, k, n = 0;
     if (b->s->simd < PT_SIMD_AVX2 || b->cfg->strategy == PT_STRATEGY_MIXTURE ||
         (b->cfg->sampler != PT_SAMPLER_SOBOL && b->s->dlight_count != 0))
         return;
@@ -11270,13 +11253,22 @@ static void pt__batch_scatter_ahead(const pt__batch_ctx bc, pt__lane *lanes, con
         in[0][n] = v->ns.x;
         in[1][n] = v->ns.y;
         in[2][n] = v->ns.z;
-        vs[n] = v;
-        if (++n == 8) {
-            pt__scatter_ahead8(vs, in, n);
-            n = 0;
-        }
+        vs[n++] = v;
     }
-    if (n) pt__scatter_ahead8(vs, in, n);
+    if (!n) return;
+    for (i = n; i % 8; ++i) /* (the last block's unused lanes: copies of the first) */
+        for (k = 0; k < 5; ++k) in[k][i] = in[k][0];
+    for (i = 0; i < n; i += 8)
+        pt__lambert_dir8(in[0] + i, in[1] + i, in[2] + i, in[3] + i, in[4] + i, out[0] + i, out[1] + i, out[2] + i,
+                         out[3] + i);
+    for (i = 0; i < n; ++i) {
+        pt__vertex *v = vs[i];
+        v->scat_u[0] = in[3][i];
+        v->scat_u[1] = in[4][i];
+        v->scat_wi = pt_v3(out[0][i], out[1][i], out[2][i]);
+        v->scat_pdf = out[3][i];
+        v->scat_ok = 1;
+    }
 #else
     (void)bc; (void)lanes; (void)shade; (void)nshade;
 #endif
