@@ -2790,6 +2790,60 @@ static PT__HOT pt_vec3 pt__cosine_hemisphere(float u1, float u2)
     return pt_v3(x, y, pt__safe_sqrt(1.0f - x * x - y * y));
 }
 PTDEF pt_vec3 pt_sample_cosine_hemisphere(float u1, float u2) { return pt__cosine_hemisphere(u1, u2); }
+#ifdef PT__WIDE
+/* A Lambertian vertex's scattered direction and density (pt__material_sample_dir: the disk map
+   with pt__sincos_quarter, Malley's lift, pt__onb's basis at the shading normal n, the cosine
+   density) for 8 lanes at a time with AVX2, each lane doing the scalar code's float operations
+   in the scalar code's order (no FMA), so the same bits. In: n and the draws u1, u2; out: w, pdf. */
+PT__TARGET_AVX2 static void pt__lambert_dir8(const float *nx, const float *ny, const float *nz, const float *u1,
+                                             const float *u2, float *wx, float *wy, float *wz, float *pdf)
+{
+    const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps(), signbit = _mm256_set1_ps(-0.0f);
+    const __m256 sx = _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), _mm256_loadu_ps(u1)), one);
+    const __m256 sy = _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), _mm256_loadu_ps(u2)), one);
+    const __m256 xbig = _mm256_cmp_ps(_mm256_andnot_ps(signbit, sx), _mm256_andnot_ps(signbit, sy), _CMP_GT_OQ);
+    const __m256 at0 = _mm256_and_ps(_mm256_cmp_ps(sx, zero, _CMP_EQ_OQ), _mm256_cmp_ps(sy, zero, _CMP_EQ_OQ));
+    const __m256 den = _mm256_blendv_ps(sy, sx, xbig), num = _mm256_blendv_ps(sx, sy, xbig);
+    const __m256 a = _mm256_mul_ps(_mm256_set1_ps(PT__PI / 4.0f), _mm256_div_ps(num, den)), a2 = _mm256_mul_ps(a, a);
+    __m256 sn, cs, x, y, lz, n0, n1, n2, sign, inv, c, w0, w1, w2, d;
+    /* pt__sincos_quarter */
+    sn = _mm256_add_ps(_mm256_set1_ps(1.0f / 120.0f),
+                       _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-1.0f / 5040.0f),
+                                                       _mm256_mul_ps(a2, _mm256_set1_ps(1.0f / 362880.0f)))));
+    sn = _mm256_add_ps(a, _mm256_mul_ps(_mm256_mul_ps(a, a2), _mm256_add_ps(_mm256_set1_ps(-1.0f / 6.0f), _mm256_mul_ps(a2, sn))));
+    cs = _mm256_add_ps(_mm256_set1_ps(1.0f / 40320.0f), _mm256_mul_ps(a2, _mm256_set1_ps(-1.0f / 3628800.0f)));
+    cs = _mm256_add_ps(_mm256_set1_ps(1.0f / 24.0f),
+                       _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-1.0f / 720.0f), _mm256_mul_ps(a2, cs))));
+    cs = _mm256_add_ps(one, _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-0.5f), _mm256_mul_ps(a2, cs))));
+    /* pt__concentric_disk (0 at the centre, where 0/0 made a NaN) and Malley's lift */
+    x = _mm256_andnot_ps(at0, _mm256_mul_ps(den, _mm256_blendv_ps(sn, cs, xbig)));
+    y = _mm256_andnot_ps(at0, _mm256_mul_ps(den, _mm256_blendv_ps(cs, sn, xbig)));
+    lz = _mm256_sub_ps(_mm256_sub_ps(one, _mm256_mul_ps(x, x)), _mm256_mul_ps(y, y));
+    lz = _mm256_sqrt_ps(_mm256_and_ps(_mm256_cmp_ps(lz, zero, _CMP_GT_OQ), lz));
+    /* pt__onb (Duff et al. 2017) and pt_onb_to_world */
+    n0 = _mm256_loadu_ps(nx);
+    n1 = _mm256_loadu_ps(ny);
+    n2 = _mm256_loadu_ps(nz);
+    sign = _mm256_or_ps(_mm256_and_ps(signbit, n2), one);
+    inv = _mm256_div_ps(_mm256_set1_ps(-1.0f), _mm256_add_ps(sign, n2));
+    c = _mm256_mul_ps(_mm256_mul_ps(n0, n1), inv);
+    w0 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(one, _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(sign, n0), n0), inv)), x),
+                                     _mm256_mul_ps(c, y)),
+                       _mm256_mul_ps(n0, lz));
+    w1 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(sign, c), x),
+                                     _mm256_mul_ps(_mm256_add_ps(sign, _mm256_mul_ps(_mm256_mul_ps(n1, n1), inv)), y)),
+                       _mm256_mul_ps(n1, lz));
+    w2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_xor_ps(signbit, sign), n0), x),
+                                     _mm256_mul_ps(_mm256_xor_ps(signbit, n1), y)),
+                       _mm256_mul_ps(n2, lz));
+    /* the density max(0, n . w) / pi (max_ps(0, d) is 0 > d ? 0 : d, as pt__maxf) */
+    d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n0, w0), _mm256_mul_ps(n1, w1)), _mm256_mul_ps(n2, w2));
+    _mm256_storeu_ps(wx, w0);
+    _mm256_storeu_ps(wy, w1);
+    _mm256_storeu_ps(wz, w2);
+    _mm256_storeu_ps(pdf, _mm256_mul_ps(_mm256_max_ps(zero, d), _mm256_set1_ps(PT__INV_PI)));
+}
+#endif
 /* Archimedes: z is uniform on [-1, 1] for uniform directions; density 1/(4 pi). */
 PTDEF pt_vec3 pt_sample_uniform_sphere(float u1, float u2)
 {
@@ -9718,6 +9772,11 @@ typedef struct pt__vertex {
     const void *sph_prim; /* the light sample at o: a quad light's primitive and the solid angle it */
     double sph_S;         /* was sampled by (pt__light_sample; NULL: none), which the emission a
                              scattered ray finds on that light reuses (pt__emission_weight) */
+    int scat_ok;          /* 1: scat_wi and scat_pdf are this vertex's Lambertian direction and density
+                             for the draws scat_u (the batch's stage 3b, pt__batch_scatter_ahead); 0
+                             from pt__vertex_at on */
+    float scat_u[2], scat_pdf;
+    pt_vec3 scat_wi;
 } pt__vertex;
 
 /* The guide's density at vertex v: the learned guide's, mixed with the caustic photons' where
@@ -10229,7 +10288,11 @@ static PT__HOT int pt__continue(const pt_scene *s, const pt__settings *cfg, cons
             float u1, u2, u3;
             pt__draw_scatter(smp, depth, &u1, &u2);
             u3 = pt__draw1_if(smp, PT__SET_BOUNCE(depth, PT__SLOT_SCATTER_EXTRA), 0);
-            if (!pt__material_sample_dir(m, v->ns, v->wo, v->eta, u1, u2, u3, &wi, &p_total)) return 0;
+            if (v->scat_ok && v->scat_u[0] == u1 && v->scat_u[1] == u2) { /* made ahead for these draws */
+                wi = v->scat_wi;
+                p_total = v->scat_pdf;
+                if (!(p_total > 0.0f)) return 0;
+            } else if (!pt__material_sample_dir(m, v->ns, v->wo, v->eta, u1, u2, u3, &wi, &p_total)) return 0;
             /* f / p_total = albedo (cos/pi over the same cos/pi, which the draw made > 0), where
                pt__material_eval gives f; no division on the path's chain */
             if (!(pt_dot(v->ng, wi) > 0.0f) || pt__is_black(v->albedo)) return 0;
@@ -10413,6 +10476,7 @@ static PT__HOT void pt__vertex_at(const pt_scene *s, const pt__settings *cfg, pt
     v->m = m;
     v->p = h->point;
     v->sph_prim = NULL;
+    v->scat_ok = 0;
     v->wo = pt_neg(dir);
     v->ng = h->front_face ? h->geometric_normal : pt_neg(h->geometric_normal);
     v->ns = pt_dot(h->shading_normal, v->wo) < 0.0f ? pt_neg(h->shading_normal) : h->shading_normal;
@@ -11151,6 +11215,67 @@ static void pt__batch_shadow(const pt_scene *s, pt__lane *lanes, const int *shad
     }
 }
 
+#ifdef PT__WIDE
+/* The two numbers sampler smp's continuation at `depth` draws first for its direction
+   (pt__draw_scatter), without drawing them: SOBOL's are a function of the set (the draw made
+   ahead in stage 1b where there is one), the independent ones the next two of its stream. */
+static void pt__scatter_peek(const pt__sampler *smp, int depth, float *u1, float *u2)
+{
+    if (smp->sobol) {
+        pt__draw_scatter_sobol(smp, depth, u1, u2);
+    } else {
+        pt_rng r = smp->rng;
+        *u1 = pt_rng_float(&r);
+        *u2 = pt_rng_float(&r);
+    }
+}
+#endif
+/* Stage 3b (AVX2): the scattered direction and density of each path whose vertex is Lambertian
+   and unguided (pt__continue's branch for such a vertex, outside the mixture strategy), made 8 at
+   a time (pt__lambert_dir8) from the numbers its continuation will draw (pt__scatter_peek; with
+   independent numbers only where no delta light draws before them) and kept in the vertex tagged
+   with those numbers (pt__vertex.scat_*), which pt__continue takes when its draws match. A
+   path's chain of divisions, square root and polynomials becomes a vector's share of one. */
+static void pt__batch_scatter_ahead(const pt__batch_ctx bc, pt__lane *lanes, const int *shade, int nshade)
+{
+#ifdef PT__WIDE
+    const pt__batch_ctx *b = &bc;
+    /* the vertices' normals and draws gathered first, so that the vector loads find them stored */
+    float in[5][PT__BATCH_LANES + 8], out[4][PT__BATCH_LANES + 8]; /* n.x, n.y, n.z, u1, u2; w, pdf */
+    pt__vertex *vs[PT__BATCH_LANES];
+    int i, k, n = 0;
+    if (b->s->simd < PT_SIMD_AVX2 || b->cfg->strategy == PT_STRATEGY_MIXTURE ||
+        (b->cfg->sampler != PT_SAMPLER_SOBOL && b->s->dlight_count != 0))
+        return;
+    for (i = 0; i < nshade; ++i) {
+        pt__lane *l = &lanes[shade[i]];
+        pt__vertex *v = &l->v;
+        if (v->m->type != PT_MATERIAL_LAMBERTIAN || v->m->delta || v->has_guide) continue;
+        pt__scatter_peek(&l->smp, l->depth, &in[3][n], &in[4][n]);
+        in[0][n] = v->ns.x;
+        in[1][n] = v->ns.y;
+        in[2][n] = v->ns.z;
+        vs[n++] = v;
+    }
+    if (!n) return;
+    for (i = n; i % 8; ++i) /* (the last block's unused lanes: copies of the first) */
+        for (k = 0; k < 5; ++k) in[k][i] = in[k][0];
+    for (i = 0; i < n; i += 8)
+        pt__lambert_dir8(in[0] + i, in[1] + i, in[2] + i, in[3] + i, in[4] + i, out[0] + i, out[1] + i, out[2] + i,
+                         out[3] + i);
+    for (i = 0; i < n; ++i) {
+        pt__vertex *v = vs[i];
+        v->scat_u[0] = in[3][i];
+        v->scat_u[1] = in[4][i];
+        v->scat_wi = pt_v3(out[0][i], out[1][i], out[2][i]);
+        v->scat_pdf = out[3][i];
+        v->scat_ok = 1;
+    }
+#else
+    (void)bc; (void)lanes; (void)shade; (void)nshade;
+#endif
+}
+
 /* Lanes that waited (pt__lane_continue) and may now go on: back into live[] from nlive on;
    returns the new nlive. A lane resumed at its family's head may split, end or wait again, which
    may let others go on: the scan repeats until nothing changes. */
@@ -11223,6 +11348,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
             if (pt__lane_shade(b, &lanes[live[i]], copies)) shade[nshade++] = live[i];
             else if (copies) pt__lane_end(lanes, b->pool, live[i]);
         pt__batch_shadow(s, lanes, shade, nshade); /* (3) shadow rays */
+        pt__batch_scatter_ahead(*b, lanes, shade, nshade); /* (3b) Lambertian directions */
         for (i = 0, nlive = 0; i < nshade; ++i) { /* (4) contributions, splits, continuation */
             const int r = pt__lane_continue(b, &lanes[shade[i]], copies);
             if (r == 1) live[nlive++] = shade[i];

@@ -26,7 +26,7 @@ STAGES = [
                                       'pt__sphere_light', 'pt__lnode', 'pt__sphrect']),
     ('sampler', ['pt__draw', 'pt_rng', 'pt__sampler', 'pt__sobol', 'pt__owen']),
     ('hit record', ['pt__fill_hit', 'pt__albedo']),
-    ('material sample/eval/density', ['pt__material', 'pt__scatter', 'pt__cosine', 'pt__onb', 'pt__fresnel',
+    ('material sample/eval/density', ['pt__material', 'pt__scatter', 'pt__lambert', 'pt__cosine', 'pt__onb', 'pt__fresnel',
                                       'pt__reflect', 'sincos']),
 ]
 
