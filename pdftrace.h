@@ -348,6 +348,11 @@ PTDEF void pt_rng_seed(pt_rng *r, uint64_t seed, uint64_t stream);
 /* The stream of one camera sample: a pure function of (seed, pixel index, sample index), so
    an image is bit-identical whatever the thread count or tile order. */
 PTDEF pt_rng pt_rng_for_sample(uint64_t seed, uint32_t pixel, uint32_t sample);
+/* The library's own double acos on [-1, 1] and sin and cos on [-pi/4, 9 pi/4], within 4 ulps of a
+   correctly rounded libm: quad lights' solid-angle sampling uses them, so that its vector version
+   computes the same bits as the scalar one on every CPU. */
+PTDEF double pt_acos(double c);
+PTDEF void pt_sincos(double x, double *sn, double *cs);
 
 /* ==========================================================================================
    2. SAMPLING AND PDFs
@@ -2764,6 +2769,72 @@ static PT__HOT void pt__sincos_quarter(float x, float *sn, float *cs)
     *sn = x + x * x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f + x2 * (1.0f / 362880.0f))));
     *cs = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f + x2 * (-1.0f / 3628800.0f)))));
 }
+/* Double-precision acos, sin and cos for the solid-angle sampling of quad lights (pt__sphrect_init,
+   pt__sphrect_point): the same operations on every CPU and in every build, where libm's differ,
+   and written so that a vector version does exactly these operations per lane (no table, no
+   branch that the lanes cannot take as a select). Within a few ulps of a correctly rounded libm
+   (the math tests check 4). */
+#define PT__PIO2_HI 1.5707963267948966     /* pi/2 rounded to double ... */
+#define PT__PIO2_LO 6.123233995736766e-17  /* ... and the rest of pi/2 */
+/* (asin(x) - x)/x^3 as a polynomial in t = x^2 on [0, 1/4], degree 12: Chebyshev interpolation
+   (near minimax; Trefethen, "Approximation Theory and Approximation Practice", ch. 16), made with
+   mpmath: chebyfit(lambda t: (asin(sqrt(t)) - sqrt(t))/t**1.5, [0, 0.25], 13); its error, 1.5e-17,
+   is 0.03 ulp of asin. */
+static const double pt__asin_c[13] = { 0.16666666666666669, 0.07499999999998433, 0.04464285714635543,
+    0.030381944138531247, 0.02237217294214989, 0.017352392720869973, 0.013971212973552933, 0.011479177415184906,
+    0.01032281435018578, 0.005457506718640358, 0.01740087944269402, -0.014851887071247204, 0.028757851367421566 };
+static PT__HOT double pt__asin_poly(double t)
+{
+    double p = pt__asin_c[12];
+    int i;
+    for (i = 11; i >= 0; --i) p = pt__asin_c[i] + t * p; /* (Horner) */
+    return p;
+}
+/* acos(c) for c in [-1, 1]: pi/2 - asin(c) where |c| <= 1/2; else with s = sqrt((1 - |c|)/2),
+   2 asin(s) for c > 0 and pi - 2 asin(s) for c < 0 (the half-angle reduction of Cody & Waite,
+   "Software Manual for the Elementary Functions", 1980, ch. 10), so asin's argument is at most 1/2. */
+static PT__HOT double pt__acos_d(double c)
+{
+    const double ac = fabs(c);
+    const int small = ac <= 0.5;
+    const double t = small ? c * c : 0.5 * (1.0 - ac), s = small ? c : sqrt(t);
+    const double a = s + s * (t * pt__asin_poly(t)), r = PT__PIO2_HI - (a - PT__PIO2_LO);
+    PT_ASSERT(!(c < -1.0 || c > 1.0)); /* (NaN passes, to NaN, as libm's) */
+    return small ? r : (c < 0.0 ? 2.0 * r : 2.0 * a);
+}
+/* sin and cos of x for x in [-pi/4, 2 pi + pi/4]: x less the nearest multiple n pi/2, by pi/2 in
+   three parts (Cody & Waite, ch. 8: the first two of 33 and 31 bits, so n times them is exact and
+   x - n p1 is exact), then the Taylor polynomials of sin and cos to degree 17 and 16 on
+   [-pi/4, pi/4] (truncation error below 1e-19), swapped and negated by n mod 4. */
+#define PT__PIO2_1 1.5707963267341256
+#define PT__PIO2_2 6.077100506303966e-11
+#define PT__PIO2_3 2.0222662487959506e-21
+static const double pt__sin_c[8] = { -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0,
+    1.0 / 6227020800.0, -1.0 / 1307674368000.0, 1.0 / 355687428096000.0 };
+static const double pt__cos_c[8] = { -0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0,
+    -1.0 / 87178291200.0, 1.0 / 20922789888000.0 };
+static PT__HOT void pt__sincos_d(double x, double *sn, double *cs)
+{
+    const int n = (int)(x * 0.6366197723675814 + 0.5);
+    const double dn = (double)n, r = ((x - dn * PT__PIO2_1) - dn * PT__PIO2_2) - dn * PT__PIO2_3, r2 = r * r;
+    double ps = pt__sin_c[7], pc = pt__cos_c[7], s, c;
+    int i;
+    for (i = 6; i >= 0; --i) {
+        ps = pt__sin_c[i] + r2 * ps;
+        pc = pt__cos_c[i] + r2 * pc;
+    }
+    s = r + r * (r2 * ps);
+    c = 1.0 + r2 * pc;
+    PT_ASSERT(x >= -0.7854 && x <= 7.0686);
+    switch (n & 3) {
+    case 0: *sn = s; *cs = c; break;
+    case 1: *sn = c; *cs = -s; break;
+    case 2: *sn = -s; *cs = -c; break;
+    default: *sn = -c; *cs = s; break;
+    }
+}
+PTDEF double pt_acos(double c) { return pt__acos_d(c); }
+PTDEF void pt_sincos(double x, double *sn, double *cs) { pt__sincos_d(x, sn, cs); }
 /* Concentric map of the square to the disk (Shirley & Chiu, "A Low Distortion Map Between
    Disk and Square", JGT 2(3), 1997). In the sectors where |sy| >= |sx| the angle is
    pi/2 - (pi/4) sx/sy, whose cosine and sine are the sine and cosine of (pi/4) sx/sy. */
@@ -3057,20 +3128,22 @@ typedef struct pt__sphrect {
 } pt__sphrect;
 static double pt__d3dot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 static void pt__d3cross(double *out, const double *a, const double *b);
-static double pt__acos_clamped(double c) { return acos(c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c)); }
+static double pt__acos_clamped(double c) { return pt__acos_d(c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c)); }
 /* 1 when quad p seen from o is a rectangle whose solid angle is in range (r then set up). The
    normals of the planes through o and each edge, (0, z0, -y0), (-z0, 0, x1), (0, -z0, y1) and
    (z0, 0, -x0) over their lengths l0 .. l3, are never formed: the cosines of the inner angles
    between neighbours are the closed forms below, so the set-up costs four square roots and no
    unit vectors but the frame's. */
-static int pt__sphrect_init(pt__sphrect *r, const pt__prim *p, pt_vec3 o)
+/* Is quad p large next to its distance from o? (float: only a threshold) */
+static PT__HOT int pt__sphrect_wanted(const pt__prim *p, pt_vec3 o)
+{
+    pt_vec3 cc = pt_sub(pt_madd(pt_madd(p->p0, p->p1, 0.5f), p->p2, 0.5f), o);
+    return 0.25f * (pt_length2(p->p1) + pt_length2(p->p2)) >= (float)PT__SPHERICAL_FROM * pt_length2(cc);
+}
+static int pt__sphrect_setup(pt__sphrect *r, const pt__prim *p, pt_vec3 o)
 {
     double u[3], v[3], d[3], lu, lv, iu, iv, zz, l0, l1, l2, l3, g0, g1, g2, g3, c[3], ic;
     int i;
-    {   /* is it large next to its distance? (float: only a threshold) */
-        pt_vec3 cc = pt_sub(pt_madd(pt_madd(p->p0, p->p1, 0.5f), p->p2, 0.5f), o);
-        if (!(0.25f * (pt_length2(p->p1) + pt_length2(p->p2)) >= (float)PT__SPHERICAL_FROM * pt_length2(cc))) return 0;
-    }
     u[0] = p->p1.x; u[1] = p->p1.y; u[2] = p->p1.z;
     v[0] = p->p2.x; v[1] = p->p2.y; v[2] = p->p2.z;
     lu = sqrt(pt__d3dot(u, u));
@@ -3114,11 +3187,16 @@ static int pt__sphrect_init(pt__sphrect *r, const pt__prim *p, pt_vec3 o)
     r->k = 2.0 * 3.14159265358979323846 - g2 - g3;
     return 1;
 }
+static int pt__sphrect_init(pt__sphrect *r, const pt__prim *p, pt_vec3 o)
+{
+    return pt__sphrect_wanted(p, o) && pt__sphrect_setup(r, p, o);
+}
 /* The point of the rectangle that (u1, u2) maps to (Urena et al. 2013, sec. 3-4). */
 static pt_vec3 pt__sphrect_point(const pt__sphrect *r, double u1, double u2)
 {
-    double au = u1 * r->S + r->k, sa = sin(au), fu, cu, xu, dd, h0, h1, hv, yv;
-    fu = sa != 0.0 ? (cos(au) * r->b0 - r->b1) / sa : 0.0;
+    double au = u1 * r->S + r->k, sa, ca, fu, cu, xu, dd, h0, h1, hv, yv;
+    pt__sincos_d(au, &sa, &ca); /* au is in [0, 2 pi]: k = 2 pi - g2 - g3 >= 0, k + S = g0 + g1 <= 2 pi */
+    fu = sa != 0.0 ? (ca * r->b0 - r->b1) / sa : 0.0;
     if (!(fu == fu)) fu = 0.0;
     cu = (fu > 0.0 ? 1.0 : -1.0) / sqrt(fu * fu + r->b0 * r->b0);
     cu = cu < -1.0 ? -1.0 : (cu > 1.0 ? 1.0 : cu);
@@ -3134,6 +3212,214 @@ static pt_vec3 pt__sphrect_point(const pt__sphrect *r, double u1, double u2)
                  (float)(r->o[1] + xu * r->ex[1] + yv * r->ey[1] + r->z0 * r->ez[1]),
                  (float)(r->o[2] + xu * r->ex[2] + yv * r->ey[2] + r->z0 * r->ez[2]));
 }
+
+/* The spherical rectangle's set-up and point for 4 shading points at once (4 lanes of double with
+   AVX2; pt__batch_lights): lane by lane the operations of pt__sphrect_setup and pt__sphrect_point
+   with pt__acos_d and pt__sincos_d, in the same order and without FMA, so the bits are the
+   scalar code's. Where the scalar code branches, both sides are computed and selected; a
+   division or square root the scalar code would skip gets a harmless operand instead, so no lane
+   raises an exception (FE_INVALID, FE_DIVBYZERO) that the scalar code would not. */
+#ifdef PT__WIDE
+PT__TARGET_AVX2 static inline __m256d pt__v4sel(__m256d m, __m256d a, __m256d b) { return _mm256_blendv_pd(b, a, m); }
+PT__TARGET_AVX2 static inline __m256d pt__v4neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0)); }
+PT__TARGET_AVX2 static inline __m256d pt__v4dot(const __m256d *a, const __m256d *b)
+{
+    return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])), _mm256_mul_pd(a[2], b[2]));
+}
+/* lo if x < lo, hi if x > hi, else x (NaN stays): the scalar code's ternaries as max(lo, min(hi, x)) */
+PT__TARGET_AVX2 static inline __m256d pt__v4clamp(__m256d x, __m256d lo, __m256d hi)
+{
+    return _mm256_max_pd(lo, _mm256_min_pd(hi, x));
+}
+PT__TARGET_AVX2 static __m256d pt__acos4(__m256d c)
+{
+    const __m256d one = _mm256_set1_pd(1.0), ac = _mm256_andnot_pd(_mm256_set1_pd(-0.0), c);
+    const __m256d small = _mm256_cmp_pd(ac, _mm256_set1_pd(0.5), _CMP_LE_OQ);
+    const __m256d t = pt__v4sel(small, _mm256_mul_pd(c, c), _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_sub_pd(one, ac)));
+    const __m256d s = pt__v4sel(small, c, _mm256_sqrt_pd(t));
+    __m256d p = _mm256_set1_pd(pt__asin_c[12]), a, r;
+    int i;
+    for (i = 11; i >= 0; --i) p = _mm256_add_pd(_mm256_set1_pd(pt__asin_c[i]), _mm256_mul_pd(t, p));
+    a = _mm256_add_pd(s, _mm256_mul_pd(s, _mm256_mul_pd(t, p)));
+    r = _mm256_sub_pd(_mm256_set1_pd(PT__PIO2_HI), _mm256_sub_pd(a, _mm256_set1_pd(PT__PIO2_LO)));
+    return pt__v4sel(small, r, pt__v4sel(_mm256_cmp_pd(c, _mm256_setzero_pd(), _CMP_LT_OQ), _mm256_mul_pd(_mm256_set1_pd(2.0), r),
+                                         _mm256_mul_pd(_mm256_set1_pd(2.0), a)));
+}
+PT__TARGET_AVX2 static void pt__sincos4(__m256d x, __m256d *sn, __m256d *cs)
+{
+    const __m128i n = _mm256_cvttpd_epi32(_mm256_add_pd(_mm256_mul_pd(x, _mm256_set1_pd(0.6366197723675814)), _mm256_set1_pd(0.5)));
+    const __m256d dn = _mm256_cvtepi32_pd(n);
+    const __m256d r = _mm256_sub_pd(_mm256_sub_pd(_mm256_sub_pd(x, _mm256_mul_pd(dn, _mm256_set1_pd(PT__PIO2_1))),
+                                                  _mm256_mul_pd(dn, _mm256_set1_pd(PT__PIO2_2))),
+                                    _mm256_mul_pd(dn, _mm256_set1_pd(PT__PIO2_3)));
+    const __m256d r2 = _mm256_mul_pd(r, r), sign = _mm256_set1_pd(-0.0);
+    const __m256i n64 = _mm256_cvtepi32_epi64(n), b1 = _mm256_set1_epi64x(1), b2 = _mm256_set1_epi64x(2);
+    const __m256d odd = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(n64, b1), b1));
+    const __m256d sneg = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(n64, b2), b2));
+    const __m256d cneg = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(_mm256_add_epi64(n64, b1), b2), b2));
+    __m256d ps = _mm256_set1_pd(pt__sin_c[7]), pc = _mm256_set1_pd(pt__cos_c[7]), s, c;
+    int i;
+    for (i = 6; i >= 0; --i) {
+        ps = _mm256_add_pd(_mm256_set1_pd(pt__sin_c[i]), _mm256_mul_pd(r2, ps));
+        pc = _mm256_add_pd(_mm256_set1_pd(pt__cos_c[i]), _mm256_mul_pd(r2, pc));
+    }
+    s = _mm256_add_pd(r, _mm256_mul_pd(r, _mm256_mul_pd(r2, ps)));
+    c = _mm256_add_pd(_mm256_set1_pd(1.0), _mm256_mul_pd(r2, pc));
+    *sn = _mm256_xor_pd(pt__v4sel(odd, c, s), _mm256_and_pd(sneg, sign));
+    *cs = _mm256_xor_pd(pt__v4sel(odd, s, c), _mm256_and_pd(cneg, sign));
+}
+/* pt__sphrect in 4 lanes */
+typedef struct pt__sphrect4 {
+    __m256d o[3], ex[3], ey[3], ez[3];
+    __m256d x0, y0, z0, x1, y1, b0, b1, k, S;
+} pt__sphrect4;
+/* a lane's value where m is set, else lane j's */
+PT__TARGET_AVX2 static inline __m256d pt__v4fill(__m256d m, __m256d a, int j)
+{
+    double t[4];
+    _mm256_storeu_pd(t, a);
+    return pt__v4sel(m, a, _mm256_set1_pd(t[j]));
+}
+/* pt__sphrect_setup's lanes (the mask of those it returns 1 for): a lane that is not a rectangle
+   goes on with the unit square's frame, one with o in its plane with z0 = -1. */
+PT__TARGET_AVX2 static __m256d pt__sphrect_setup4(pt__sphrect4 *r, const pt__prim *const *p, const pt_vec3 *o)
+{
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), twopi = _mm256_set1_pd(2.0 * 3.14159265358979323846);
+    __m256d u[3], v[3], d[3], c[3], lu, lv, ok, flip, zz, l0, l1, l2, l3, g0, g1, g2, g3, iu, iv, ic;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        double a[4], b[4], q[4], w[4];
+        int j;
+        for (j = 0; j < 4; ++j) {
+            a[j] = i == 0 ? p[j]->p1.x : i == 1 ? p[j]->p1.y : p[j]->p1.z;
+            b[j] = i == 0 ? p[j]->p2.x : i == 1 ? p[j]->p2.y : p[j]->p2.z;
+            q[j] = i == 0 ? p[j]->p0.x : i == 1 ? p[j]->p0.y : p[j]->p0.z;
+            w[j] = i == 0 ? o[j].x : i == 1 ? o[j].y : o[j].z;
+        }
+        u[i] = _mm256_loadu_pd(a);
+        v[i] = _mm256_loadu_pd(b);
+        r->o[i] = _mm256_loadu_pd(w);
+        d[i] = _mm256_sub_pd(_mm256_loadu_pd(q), r->o[i]);
+    }
+    lu = _mm256_sqrt_pd(pt__v4dot(u, u));
+    lv = _mm256_sqrt_pd(pt__v4dot(v, v));
+    ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(lu, zero, _CMP_GT_OQ), _mm256_cmp_pd(lv, zero, _CMP_GT_OQ)),
+                       _mm256_cmp_pd(_mm256_andnot_pd(_mm256_set1_pd(-0.0), pt__v4dot(u, v)),
+                                     _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(1e-5), lu), lv), _CMP_NGT_UQ));
+    for (i = 0; i < 3; ++i) {
+        u[i] = pt__v4sel(ok, u[i], i == 0 ? one : zero);
+        v[i] = pt__v4sel(ok, v[i], i == 1 ? one : zero);
+    }
+    lu = pt__v4sel(ok, lu, one);
+    lv = pt__v4sel(ok, lv, one);
+    iu = _mm256_div_pd(one, lu);
+    iv = _mm256_div_pd(one, lv);
+    for (i = 0; i < 3; ++i) {
+        r->ex[i] = _mm256_mul_pd(u[i], iu);
+        r->ey[i] = _mm256_mul_pd(v[i], iv);
+    }
+    c[0] = _mm256_sub_pd(_mm256_mul_pd(r->ex[1], r->ey[2]), _mm256_mul_pd(r->ex[2], r->ey[1]));
+    c[1] = _mm256_sub_pd(_mm256_mul_pd(r->ex[2], r->ey[0]), _mm256_mul_pd(r->ex[0], r->ey[2]));
+    c[2] = _mm256_sub_pd(_mm256_mul_pd(r->ex[0], r->ey[1]), _mm256_mul_pd(r->ex[1], r->ey[0]));
+    ic = _mm256_div_pd(one, _mm256_sqrt_pd(pt__v4dot(c, c)));
+    for (i = 0; i < 3; ++i) r->ez[i] = _mm256_mul_pd(c[i], ic);
+    r->x0 = pt__v4dot(d, r->ex);
+    r->y0 = pt__v4dot(d, r->ey);
+    r->z0 = pt__v4dot(d, r->ez);
+    flip = _mm256_cmp_pd(r->z0, zero, _CMP_GT_OQ);
+    for (i = 0; i < 3; ++i) r->ez[i] = pt__v4sel(flip, pt__v4neg(r->ez[i]), r->ez[i]);
+    r->z0 = pt__v4sel(flip, pt__v4neg(r->z0), r->z0);
+    flip = _mm256_cmp_pd(r->z0, zero, _CMP_LT_OQ);
+    ok = _mm256_and_pd(ok, flip);
+    r->z0 = pt__v4sel(flip, r->z0, _mm256_set1_pd(-1.0));
+    r->x1 = _mm256_add_pd(r->x0, lu);
+    r->y1 = _mm256_add_pd(r->y0, lv);
+    zz = _mm256_mul_pd(r->z0, r->z0);
+    l0 = _mm256_sqrt_pd(_mm256_add_pd(zz, _mm256_mul_pd(r->y0, r->y0)));
+    l1 = _mm256_sqrt_pd(_mm256_add_pd(zz, _mm256_mul_pd(r->x1, r->x1)));
+    l2 = _mm256_sqrt_pd(_mm256_add_pd(zz, _mm256_mul_pd(r->y1, r->y1)));
+    l3 = _mm256_sqrt_pd(_mm256_add_pd(zz, _mm256_mul_pd(r->x0, r->x0)));
+    {
+        const __m256d m1 = _mm256_set1_pd(-1.0);
+        g0 = pt__acos4(pt__v4clamp(_mm256_div_pd(_mm256_mul_pd(r->y0, r->x1), _mm256_mul_pd(l0, l1)), m1, one));
+        g1 = pt__acos4(pt__v4clamp(_mm256_div_pd(pt__v4neg(_mm256_mul_pd(r->x1, r->y1)), _mm256_mul_pd(l1, l2)), m1, one));
+        g2 = pt__acos4(pt__v4clamp(_mm256_div_pd(_mm256_mul_pd(r->x0, r->y1), _mm256_mul_pd(l2, l3)), m1, one));
+        g3 = pt__acos4(pt__v4clamp(_mm256_div_pd(pt__v4neg(_mm256_mul_pd(r->x0, r->y0)), _mm256_mul_pd(l3, l0)), m1, one));
+    }
+    r->S = _mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(_mm256_add_pd(g0, g1), g2), g3), twopi);
+    ok = _mm256_and_pd(ok, _mm256_and_pd(_mm256_cmp_pd(r->S, _mm256_set1_pd(PT__SPHERICAL_MIN), _CMP_GE_OQ),
+                                         _mm256_cmp_pd(r->S, _mm256_set1_pd(PT__SPHERICAL_MAX), _CMP_LE_OQ)));
+    r->b0 = _mm256_div_pd(pt__v4neg(r->y0), l0);
+    r->b1 = _mm256_div_pd(r->y1, l2);
+    r->k = _mm256_sub_pd(_mm256_sub_pd(twopi, g2), g3);
+    return ok;
+}
+/* pt__sphrect_point's lanes, into q (rounded to float as there) */
+PT__TARGET_AVX2 static void pt__sphrect_point4(const pt__sphrect4 *r, __m256d u1, __m256d u2, float q[3][4])
+{
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+    const __m256d au = _mm256_add_pd(_mm256_mul_pd(u1, r->S), r->k);
+    __m256d sa, ca, nz, fu, cu, w, pos, xu, dd, h0, h1, hv, lt;
+    int i;
+    pt__sincos4(au, &sa, &ca);
+    nz = _mm256_cmp_pd(sa, zero, _CMP_NEQ_UQ);
+    fu = pt__v4sel(nz, _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(ca, r->b0), r->b1), pt__v4sel(nz, sa, one)), zero);
+    fu = pt__v4sel(_mm256_cmp_pd(fu, fu, _CMP_ORD_Q), fu, zero);
+    cu = _mm256_div_pd(pt__v4sel(_mm256_cmp_pd(fu, zero, _CMP_GT_OQ), one, _mm256_set1_pd(-1.0)),
+                       _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(fu, fu), _mm256_mul_pd(r->b0, r->b0))));
+    cu = pt__v4clamp(cu, _mm256_set1_pd(-1.0), one);
+    w = _mm256_sub_pd(one, _mm256_mul_pd(cu, cu));
+    pos = _mm256_cmp_pd(w, zero, _CMP_GT_OQ);
+    xu = pt__v4sel(pos, _mm256_div_pd(pt__v4neg(_mm256_mul_pd(cu, r->z0)), _mm256_sqrt_pd(pt__v4sel(pos, w, one))),
+                   pt__v4sel(_mm256_cmp_pd(cu, zero, _CMP_GT_OQ), r->x1, r->x0));
+    xu = pt__v4clamp(xu, r->x0, r->x1);
+    dd = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(xu, xu), _mm256_mul_pd(r->z0, r->z0)));
+    w = _mm256_mul_pd(dd, dd);
+    h0 = _mm256_div_pd(r->y0, _mm256_sqrt_pd(_mm256_add_pd(w, _mm256_mul_pd(r->y0, r->y0))));
+    h1 = _mm256_div_pd(r->y1, _mm256_sqrt_pd(_mm256_add_pd(w, _mm256_mul_pd(r->y1, r->y1))));
+    hv = _mm256_add_pd(h0, _mm256_mul_pd(u2, _mm256_sub_pd(h1, h0)));
+    w = _mm256_mul_pd(hv, hv);
+    lt = _mm256_cmp_pd(w, _mm256_set1_pd(1.0 - 1e-12), _CMP_LT_OQ);
+    w = pt__v4sel(lt, _mm256_div_pd(_mm256_mul_pd(hv, dd), _mm256_sqrt_pd(pt__v4sel(lt, _mm256_sub_pd(one, w), one))), r->y1);
+    w = pt__v4clamp(w, r->y0, r->y1);
+    for (i = 0; i < 3; ++i)
+        _mm_storeu_ps(q[i], _mm256_cvtpd_ps(_mm256_add_pd(_mm256_add_pd(_mm256_add_pd(r->o[i], _mm256_mul_pd(xu, r->ex[i])),
+                                                                        _mm256_mul_pd(w, r->ey[i])),
+                                                          _mm256_mul_pd(r->z0, r->ez[i]))));
+}
+/* Quads p[j] sampled by solid angle from o[j] at (u1[j], u2[j]), j < 4, whose pt__sphrect_wanted
+   holds: ok[j] = pt__sphrect_setup's answer; where 1, the point and the solid angle. */
+PT__TARGET_AVX2 static void pt__sphrect_sample4(const pt__prim *const *p, const pt_vec3 *o, const float *u1,
+                                                const float *u2, int *ok, pt_vec3 *q, double *S)
+{
+    pt__sphrect4 r;
+    float qq[3][4];
+    double a[4], b[4];
+    const __m256d m = pt__sphrect_setup4(&r, p, o);
+    const int bits = _mm256_movemask_pd(m);
+    int j, i;
+    for (j = 0; j < 4; ++j) ok[j] = (bits >> j) & 1;
+    if (!bits) return;
+    j = bits & 1 ? 0 : bits & 2 ? 1 : bits & 4 ? 2 : 3; /* the lanes that failed take lane j's values */
+    for (i = 0; i < 3; ++i) {
+        r.o[i] = pt__v4fill(m, r.o[i], j);
+        r.ex[i] = pt__v4fill(m, r.ex[i], j);
+        r.ey[i] = pt__v4fill(m, r.ey[i], j);
+        r.ez[i] = pt__v4fill(m, r.ez[i], j);
+    }
+    r.x0 = pt__v4fill(m, r.x0, j); r.y0 = pt__v4fill(m, r.y0, j); r.z0 = pt__v4fill(m, r.z0, j);
+    r.x1 = pt__v4fill(m, r.x1, j); r.y1 = pt__v4fill(m, r.y1, j);
+    r.b0 = pt__v4fill(m, r.b0, j); r.b1 = pt__v4fill(m, r.b1, j);
+    r.k = pt__v4fill(m, r.k, j); r.S = pt__v4fill(m, r.S, j);
+    for (i = 0; i < 4; ++i) {
+        a[i] = u1[i];
+        b[i] = u2[i];
+    }
+    pt__sphrect_point4(&r, _mm256_loadu_pd(a), _mm256_loadu_pd(b), qq);
+    _mm256_storeu_pd(S, r.S);
+    for (j = 0; j < 4; ++j) q[j] = pt_v3(qq[0][j], qq[1][j], qq[2][j]);
+}
+#endif
 
 /* Solid-angle sampling of a triangle light (Arvo, "Stratified Sampling of Spherical Triangles",
    SIGGRAPH 1995), in double, under the rule of rectangles above: where (half its longest edge /
@@ -3228,12 +3514,12 @@ static float pt__planar_density_from(const pt__prim *p, float area, pt_vec3 o, f
     return pt__planar_density(p->n, area, t, w);
 }
 
+static PT__HOT int pt__planar_light_at(const pt__prim *p, float area, pt_vec3 o, pt_vec3 q, double S, pt__light_sample *ls);
 /* Samples quad or triangle primitive p (of area `area`) from o. */
 static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided, pt_vec3 o, float u1, float u2,
                                    pt__light_sample *ls, int sph)
 {
-    pt_vec3 q, v;
-    float dist2, dist;
+    pt_vec3 q;
     double S = 0.0;
     pt__sphrect r;
     pt__sphtri tr;
@@ -3251,6 +3537,14 @@ static int pt__planar_light_sample(const pt__prim *p, float area, int two_sided,
     } else {
         q = pt__planar_point(p, u1, u2);
     }
+    return pt__planar_light_at(p, area, o, q, S, ls);
+}
+/* The rest of a sample of quad or triangle p once its point q is chosen (by solid angle S, or by
+   area where S is 0). */
+static PT__HOT int pt__planar_light_at(const pt__prim *p, float area, pt_vec3 o, pt_vec3 q, double S, pt__light_sample *ls)
+{
+    pt_vec3 v;
+    float dist2, dist;
     v = pt_sub(q, o);
     dist2 = pt_length2(v);
     if (!(dist2 > 0.0f)) return 0;
@@ -3491,23 +3785,31 @@ static float pt__light_pmf(const pt_scene *s, pt_vec3 p, pt_vec3 nr, uint32_t li
 }
 
 /* Picks a light (by the tree, or by power) and samples it: ls->pdf is P_i * p_i(dir). */
+/* Its two halves: the pick (light *li with probability *pick), then ls->pdf times the pick's. */
+static PT__HOT int pt__lights_pick(const pt_scene *s, pt_vec3 o, pt_vec3 nr, float u0, uint32_t *li, float *pick,
+                                   unsigned mode)
+{
+    if (!s->light_count) return 0;
+    if (s->ltree && (mode & PT__LIGHTS_TREE)) return pt__tree_pick(s, o, nr, u0, li, pick);
+    *li = pt__pick_light(s, u0);
+    *pick = s->lights[*li].select_pdf;
+    return 1;
+}
+static PT__HOT int pt__lights_picked(pt__light_sample *ls, float pick, uint32_t li, uint32_t *light_index)
+{
+    ls->pdf *= pick;
+    *light_index = li;
+    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
+}
 static PT__HOT int pt__lights_sample(const pt_scene *s, pt_vec3 o, pt_vec3 nr, float u0, float u1, float u2,
                                      pt__light_sample *ls, uint32_t *light_index, unsigned mode)
 {
     uint32_t li;
     float pick;
-    if (!s->light_count) return 0;
-    if (s->ltree && (mode & PT__LIGHTS_TREE)) {
-        if (!pt__tree_pick(s, o, nr, u0, &li, &pick)) return 0;
-    } else {
-        li = pt__pick_light(s, u0);
-        pick = s->lights[li].select_pdf;
-    }
+    if (!pt__lights_pick(s, o, nr, u0, &li, &pick, mode)) return 0;
     if (!pt__light_prim_sample(s, &s->prims[s->lights[li].prim], o, u1, u2, ls, (mode & PT__LIGHTS_SPHERICAL) != 0))
         return 0;
-    ls->pdf *= pick;
-    *light_index = li;
-    return ls->pdf > 0.0f && pt__isfinite(ls->pdf);
+    return pt__lights_picked(ls, pick, li, light_index);
 }
 static float pt__lights_value(const pt_scene *s, pt_vec3 o, pt_vec3 nr, pt_vec3 w, unsigned mode)
 {
@@ -10731,7 +11033,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    and a path keeps its own sampler, so every path draws the same numbers, does the same float
    operations and adds up its radiance in the same order as the scalar integrator: the image is
    the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
-   (cfg->recording) run scalar.
+   (cfg->recording) run scalar. Stage 2 leaves the light samples of quads by solid angle to
+   stage 2b, which sets their spherical rectangles up 4 paths at a time (pt__lane_light).
    Split copies (indirect_paths: every camera sample of a default render). With the Sobol
    sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
    take free lanes and run beside the path that split (copy 0), as the camera sample's family.
@@ -10762,6 +11065,8 @@ typedef struct pt__lane {
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
     int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
+    int defer;         /* 1: its light sample left to stage 2b (pt__lane_light) with these: */
+    float dpick, du1, du2; /* the pick's probability, the point's numbers */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
     pt_hit h;
@@ -10795,6 +11100,8 @@ typedef struct pt__batch_ctx {
     const pt_scene *s;
     const pt__settings *cfg;
     int tri, any_lights, nee, pick, copies;
+    int defer;       /* quads' solid-angle samples left to stage 2b (pt__lane_light) */
+    unsigned lmode;  /* pt__lights_mode */
     pt__lane *lanes;
     pt__batch_pool *pool; /* (copies only) */
 } pt__batch_ctx;
@@ -10883,6 +11190,95 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->v.sph_prim = NULL;
 }
 
+/* Stage 2's light sample at lane l's vertex (the numbers u0, u1, u2 of pt__lights_sample_all) and
+   its shadow ray. Where the light picked is a quad that faces the vertex and is large enough next
+   to its distance to be sampled by solid angle (pt__sphrect_wanted), the rest is left to stage 2b
+   (l->defer; pt__batch_lights), which sets up the batch's spherical rectangles 4 at a time. b->defer
+   is 0 without AVX2, with an environment or with solid-angle sampling off: then it is all done
+   here. Either way each path does what pt__lights_sample_all and pt__nee_prepare do. */
+static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, pt_vec3 nr, float u0, float u1, float u2)
+{
+    const pt_scene *s = b->s;
+    pt__vertex *v = &l->v;
+    uint32_t li;
+    float pick;
+    l->ls.sph_prim = NULL;
+    l->ls.sph_S = 0.0;
+    if (!b->defer) {
+        l->shadow = pt__lights_sample_all(s, b->cfg, v->o, nr, u0, u1, u2, &l->ls, &l->li) &&
+                    pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+    } else if (!pt__lights_pick(s, v->o, nr, u0, &li, &pick, b->lmode)) {
+        l->shadow = 0;
+    } else {
+        const pt__prim *p = &s->prims[s->lights[li].prim];
+        int ok;
+        if (p->type != PT__PRIM_QUAD) {
+            ok = pt__light_prim_sample(s, p, v->o, u1, u2, &l->ls, 1);
+        } else if (!pt__planar_faces(v->o, p->p0, p->n, s->mats[p->material].two_sided)) {
+            ok = 0;
+        } else if (pt__sphrect_wanted(p, v->o)) {
+            l->defer = 1;
+            l->li = li;
+            l->dpick = pick;
+            l->du1 = u1;
+            l->du2 = u2;
+            return;
+        } else { /* (pt__planar_light_sample's area sample) */
+            l->ls.sph_prim = p;
+            ok = pt__planar_light_at(p, s->lights[p->light].area, v->o, pt__planar_point(p, u1, u2), 0.0, &l->ls);
+        }
+        l->shadow = ok && pt__lights_picked(&l->ls, pick, li, &l->li) &&
+                    pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+    }
+    v->sph_prim = l->ls.sph_prim;
+    v->sph_S = l->ls.sph_S;
+}
+/* Stage 2b for lane l, whose quad p's spherical rectangle was set up (ok; then q, S: its point and
+   solid angle): the rest of pt__planar_light_sample, the pick, and the shadow ray. */
+static PT__HOT void pt__lane_light_finish(const pt__batch_ctx *b, pt__lane *l, const pt__prim *p, int ok, pt_vec3 q, double S)
+{
+    const pt_scene *s = b->s;
+    pt__vertex *v = &l->v;
+    l->defer = 0;
+    l->ls.sph_prim = p;
+    l->ls.sph_S = ok ? S : 0.0;
+    if (!ok) {
+        q = pt__planar_point(p, l->du1, l->du2);
+        S = 0.0;
+    }
+    l->shadow = pt__planar_light_at(p, s->lights[p->light].area, v->o, q, S, &l->ls) &&
+                pt__lights_picked(&l->ls, l->dpick, l->li, &l->li) &&
+                pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+    v->sph_prim = l->ls.sph_prim;
+    v->sph_S = l->ls.sph_S;
+}
+/* Stage 2b: the light samples stage 2 left (defer: n lanes), 4 at a time (pt__sphrect_sample4; a
+   last group of fewer repeats its last lane). */
+static void pt__batch_lights(const pt__batch_ctx *b, pt__lane *lanes, const int *defer, int n)
+{
+#ifdef PT__WIDE
+    int i, j;
+    for (i = 0; i < n; i += 4) {
+        const pt__prim *p[4];
+        pt_vec3 o[4], q[4];
+        float u1[4], u2[4];
+        double S[4];
+        int ok[4];
+        for (j = 0; j < 4; ++j) {
+            const pt__lane *l = &lanes[defer[i + j < n ? i + j : n - 1]];
+            p[j] = &b->s->prims[b->s->lights[l->li].prim];
+            o[j] = l->v.o;
+            u1[j] = l->du1;
+            u2[j] = l->du2;
+        }
+        pt__sphrect_sample4(p, o, u1, u2, ok, q, S);
+        for (j = 0; j < 4 && i + j < n; ++j) pt__lane_light_finish(b, &lanes[defer[i + j]], p[j], ok[j], q[j], S[j]);
+    }
+#else
+    (void)b; (void)lanes; (void)defer; (void)n; /* (b->defer is 0) */
+#endif
+}
+
 /* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
 static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int copies)
 {
@@ -10892,6 +11288,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
     const pt__material *m;
     pt__vertex *v = &l->v;
     l->shadow = 0;
+    l->defer = 0;
     if (!l->found) {
         if (PT__UNLIKELY(cfg->env_on)) pt__lane_add(l, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf), copies);
         else pt__lane_add(l, pt_mul(l->beta, cfg->background), copies);
@@ -10936,12 +11333,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
         if (b->nee) {
             float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
             pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-            l->ls.sph_prim = NULL;
-            l->ls.sph_S = 0.0;
-            l->shadow = pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
-                        pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
-            v->sph_prim = l->ls.sph_prim;
-            v->sph_S = l->ls.sph_S;
+            pt__lane_light(b, l, pt__receiver_normal(v), u0, u1, u2);
         }
     }
     return 1;
@@ -11313,7 +11705,7 @@ static PT__NOINLINE int pt__batch_resume(pt__batch_ctx bc, int *live, int nlive)
 static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
                                            pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
 {
-    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], nlive = n, nshade, i;
+    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], nlive = n, nshade, ndefer, i;
     pt__batch_ctx bc, *b = &bc;
     pt__batch_pool pool;
     b->pool = &pool;
@@ -11324,6 +11716,11 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     b->nee = b->any_lights && (cfg->strategy == PT_STRATEGY_MIS || cfg->strategy == PT_STRATEGY_LIGHT);
     b->pick = s->light_count != 1 || cfg->env_pick > 0.0f;
     b->copies = copies;
+    b->lmode = pt__lights_mode(cfg);
+    b->defer = s->simd >= PT_SIMD_AVX2 && !(cfg->env_pick > 0.0f) && (b->lmode & PT__LIGHTS_SPHERICAL);
+#ifndef PT__WIDE
+    b->defer = 0;
+#endif
     b->lanes = lanes;
     b->pool->kids = kids;
     b->pool->nfree = b->pool->nspawn = b->pool->nparked = 0;
@@ -11344,9 +11741,12 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     while (nlive > 0) {
         pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
         if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
-        for (i = 0, nshade = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
-            if (pt__lane_shade(b, &lanes[live[i]], copies)) shade[nshade++] = live[i];
-            else if (copies) pt__lane_end(lanes, b->pool, live[i]);
+        for (i = 0, nshade = 0, ndefer = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
+            if (pt__lane_shade(b, &lanes[live[i]], copies)) {
+                if (lanes[live[i]].defer) defer[ndefer++] = live[i];
+                shade[nshade++] = live[i];
+            } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
+        if (ndefer) pt__batch_lights(b, lanes, defer, ndefer); /* (2b) quads' solid-angle samples */
         pt__batch_shadow(s, lanes, shade, nshade); /* (3) shadow rays */
         pt__batch_scatter_ahead(*b, lanes, shade, nshade); /* (3b) Lambertian directions */
         for (i = 0, nlive = 0; i < nshade; ++i) { /* (4) contributions, splits, continuation */

@@ -229,11 +229,55 @@ static void onb_duff(test_ctx *t)
     test_note(t, "100000 random + 82 special normals, worst error %.2g (limit 1e-6)", worst);
 }
 
+/* |a - ref| in units in the last place of ref (libm's value, taken as exact) */
+static double ulps_off(double a, double ref)
+{
+    double r = fabs(ref), u = nextafter(r, HUGE_VAL) - r;
+    return fabs(a - ref) / u;
+}
+
+/* pt_acos on [-1, 1] and pt_sincos on [-pi/4, 9 pi/4] (the ranges the quad lights' solid-angle
+   sampler needs) against libm at 2^21 + 1 evenly spaced arguments each, and at the ends, the
+   switches of acos's reduction (+-1/2) and the doubles nearest multiples of pi/2, where sin or cos
+   is near 0: within 4 ulps (glibc's are within 1 of the exact value; ours measure 1). */
+static void own_acos_sincos(test_ctx *t)
+{
+    const int n = 1 << 21;
+    const double special[] = { -1.0, -0.5, -0.0, 0.0, 0.5, 1.0, 0x1.0000000000001p-1, 0x1.fffffffffffffp-2,
+                               -0.7853981633974483, TU_PI / 2, TU_PI, 3 * TU_PI / 2, 2 * TU_PI,
+                               7.0685834705770345 };
+    double worst_a = 0.0, worst_s = 0.0, worst_c = 0.0, at_a = 0.0, at_s = 0.0, at_c = 0.0;
+    int i;
+    for (i = 0; i <= n + (int)(sizeof special / sizeof special[0]); i++) {
+        double c, x, sn, cs, e;
+        if (i <= n) {
+            c = -1.0 + 2.0 * i / n;
+            x = -0.7853981633974483 + (9.0 * TU_PI / 4.0 + 0.7853981633974483) * i / n;
+        } else {
+            c = x = special[i - n - 1];
+            if (c < -1.0 || c > 1.0) c = 0.25;
+            if (x < -0.7853981633974483) x = 0.25; /* (acos's specials below -pi/4) */
+        }
+        e = ulps_off(pt_acos(c), acos(c));
+        if (e > worst_a) { worst_a = e; at_a = c; }
+        pt_sincos(x, &sn, &cs);
+        e = ulps_off(sn, sin(x));
+        if (e > worst_s) { worst_s = e; at_s = x; }
+        e = ulps_off(cs, cos(x));
+        if (e > worst_c) { worst_c = e; at_c = x; }
+    }
+    CHECK(t, worst_a <= 4.0, "pt_acos is %.3g ulps off at %.17g", worst_a, at_a);
+    CHECK(t, worst_s <= 4.0, "pt_sincos: sin is %.3g ulps off at %.17g", worst_s, at_s);
+    CHECK(t, worst_c <= 4.0, "pt_sincos: cos is %.3g ulps off at %.17g", worst_c, at_c);
+    test_note(t, "worst: acos %.3g, sin %.3g, cos %.3g ulps (limit 4)", worst_a, worst_s, worst_c);
+}
+
 const test_case test_math_cases[] = {
     TEST_CASE(vector_ops),
     TEST_CASE(transform_basics),
     TEST_CASE(transform_rotate),
     TEST_CASE(transform_normal),
     TEST_CASE(onb_duff),
+    TEST_CASE(own_acos_sincos),
     TEST_END
 };

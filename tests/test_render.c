@@ -1050,11 +1050,24 @@ done:
    with budgets ending within a camera sample's paths; the stats say which integrator ran (a
    guide's training runs scalar), how many copies ran as lanes, and which the default picks, and a
    bad value is refused naming the field. */
+/* Quad lights sampled by solid angle from near and at grazing angles (the batched integrator sets
+   their spherical rectangles up 4 at a time): one lying just above the floor and one upright, both
+   two-sided, the whole ceiling (solid angles past PT__SPHERICAL_MAX near it), and a slanted
+   parallelogram (not a rectangle: sampled by area). */
+static const char quad_lights_scene[] =
+    "camera look_from 0 1.2 -2.5 look_at 0 0.8 1 vfov 75\n"
+    "material floor lambertian 0.7 0.7 0.7\nmaterial wall lambertian 0.6 0.5 0.4\n"
+    "material lamp emitter 4 4 4\nmaterial lamp2 emitter 2 3 4 two_sided\n"
+    "quad -2 0 -3   0 0 6   4 0 0   floor\nquad -2 0 3   4 0 0   0 2.5 0   wall\nquad -2 0 -3   0 2.5 0   0 0 6   wall\n"
+    "quad -2 2.5 -3   4 0 0   0 0 6   lamp\nquad -1.5 0.02 0.5   1 0 0   0 0 1   lamp2\n"
+    "quad 1.2 0.3 -1   0 1.5 0   0 0 2   lamp2\nquad 0.3 0.05 1.2   0.8 0.3 0   0.1 0 0.9   lamp\n";
+
 static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
                                           "scenes/lights.scene", "scenes/textured.scene", "scenes/rough-glass.scene",
-                                          "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene" };
+                                          "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene",
+                                          "bench/scenes/rooms.scene", "quad lights" };
     static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
                                            "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol, roulette from 1",
                                            "sobol, indirect_paths 8, mixture 0.75, max_splits 12" };
@@ -1065,7 +1078,10 @@ static void batched_bit_identical(test_ctx *t)
         pt_scenefile sf;
         pt_scene *s = NULL;
         pt_render_desc base;
-        if (!CHECK(t, pt_scenefile_load(scenes[i], &sf, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) continue;
+        int r = i == nscenes - 1 ? pt_scenefile_parse(quad_lights_scene, sizeof quad_lights_scene - 1, scenes[i], ".", &sf, err,
+                                                      sizeof err)
+                                 : pt_scenefile_load(scenes[i], &sf, err, sizeof err);
+        if (!CHECK(t, r == PT_OK, "%s: %s", scenes[i], err)) continue;
         if (!CHECK(t, pt_scenefile_build(&sf, &s, &base, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) {
             pt_scenefile_free(&sf);
             continue;
