@@ -11200,8 +11200,8 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, pt_vec3 
 {
     const pt_scene *s = b->s;
     pt__vertex *v = &l->v;
-    uint32_t li;
-    float pick;
+    uint32_t li = 0;  /* set by pt__lights_pick (gcc -Og cannot see it) */
+    float pick = 0.0f;
     l->ls.sph_prim = NULL;
     l->ls.sph_S = 0.0;
     if (!b->defer) {
