@@ -350,7 +350,7 @@ PTDEF void pt_rng_seed(pt_rng *r, uint64_t seed, uint64_t stream);
 PTDEF pt_rng pt_rng_for_sample(uint64_t seed, uint32_t pixel, uint32_t sample);
 /* The library's own double acos on [-1, 1] and sin and cos on [-pi/4, 9 pi/4], within 4 ulps of a
    correctly rounded libm: quad lights' solid-angle sampling uses them, so that its vector version
-   computes the same bits as the scalar one on every CPU. */
+   computes the same bits as the scalar one on every CPU. Outside those ranges: libm's answer. */
 PTDEF double pt_acos(double c);
 PTDEF void pt_sincos(double x, double *sn, double *cs);
 
@@ -2833,8 +2833,18 @@ static PT__HOT void pt__sincos_d(double x, double *sn, double *cs)
     default: *sn = -c; *cs = s; break;
     }
 }
-PTDEF double pt_acos(double c) { return pt__acos_d(c); }
-PTDEF void pt_sincos(double x, double *sn, double *cs) { pt__sincos_d(x, sn, cs); }
+/* Outside their ranges the public forms answer as libm does (NaN; libm's sin and cos), where the
+   internal ones assert: a caller's argument must not abort the host program. */
+PTDEF double pt_acos(double c) { return c < -1.0 || c > 1.0 ? acos(c) : pt__acos_d(c); }
+PTDEF void pt_sincos(double x, double *sn, double *cs)
+{
+    if (x >= -0.7854 && x <= 7.0686) {
+        pt__sincos_d(x, sn, cs);
+    } else {
+        *sn = sin(x);
+        *cs = cos(x);
+    }
+}
 /* Concentric map of the square to the disk (Shirley & Chiu, "A Low Distortion Map Between
    Disk and Square", JGT 2(3), 1997). In the sectors where |sy| >= |sx| the angle is
    pi/2 - (pi/4) sx/sy, whose cosine and sine are the sine and cosine of (pi/4) sx/sy. */

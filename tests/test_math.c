@@ -269,6 +269,12 @@ static void own_acos_sincos(test_ctx *t)
     CHECK(t, worst_a <= 4.0, "pt_acos is %.3g ulps off at %.17g", worst_a, at_a);
     CHECK(t, worst_s <= 4.0, "pt_sincos: sin is %.3g ulps off at %.17g", worst_s, at_s);
     CHECK(t, worst_c <= 4.0, "pt_sincos: cos is %.3g ulps off at %.17g", worst_c, at_c);
+    { /* outside the ranges the public forms answer as libm (no assertion) */
+        double sn, cs;
+        CHECK(t, pt_acos(1.5) != pt_acos(1.5), "pt_acos(1.5) = %g, not NaN", pt_acos(1.5));
+        pt_sincos(10.0, &sn, &cs);
+        CHECK(t, sn == sin(10.0) && cs == cos(10.0), "pt_sincos(10) = (%.17g, %.17g), not libm's", sn, cs);
+    }
     test_note(t, "worst: acos %.3g, sin %.3g, cos %.3g ulps (limit 4)", worst_a, worst_s, worst_c);
 }
 
