@@ -1174,10 +1174,11 @@ typedef struct pt_path_stats {
    batch too; with independent numbers they run depth first as in SCALAR
    (pt_render_stats.batched_split_paths). */
 typedef enum pt_integrator {
-    PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
-                                   for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
-                                   or better (its closest hits then run in 8-ray packets) and for scenes
-                                   of at least PDFTRACE_EMBREE_MIN_PRIMS primitives traced by Embree 3 (its
+    PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched" and
+                                   "Two revisions side by side"): BATCHED for scenes on the built-in BVH
+                                   with AVX2 or better (its stages then run 8 paths at a time; scenes of at
+                                   most 32 quads and spheres also trace 8-ray packets) and for scenes of at
+                                   least PDFTRACE_EMBREE_MIN_PRIMS primitives traced by Embree 3 (its
                                    batches then go to Embree as streams), else SCALAR */
     PT_INTEGRATOR_SCALAR = 1,
     PT_INTEGRATOR_BATCHED = 2
@@ -10018,12 +10019,12 @@ static void pt__settings_for_scene(pt__settings *c, const pt_scene *s)
     double bg = ((double)c->background.x + (double)c->background.y + (double)c->background.z) / 3.0;
     double m = s->env ? s->env->mean : 0.0, phi, r;
     pt_vec3 ext = pt_sub(s->hi, s->lo);
-    /* the default integrator: BATCHED where its ray packets run 8 wide or Embree 3 traces its
-       batches as streams in a scene large enough for AUTO to choose Embree (the cases where it is
-       measured faster: bench/README.md, "make bench-batched" and "Embree streams"), SCALAR
-       elsewhere */
+    /* the default integrator: BATCHED where its stages run 8 wide (the built-in BVH with AVX2) or
+       Embree 3 traces its batches as streams in a scene large enough for AUTO to choose Embree
+       (the cases where it is measured faster: bench/README.md, "make bench-batched", "Embree
+       streams" and "Two revisions side by side"), SCALAR elsewhere */
     if (c->batched == (int)PT_INTEGRATOR_DEFAULT) {
-        c->batched = pt__packet_small(s) && s->simd >= PT_SIMD_AVX2;
+        c->batched = s->backend == PT_BACKEND_BUILTIN && s->simd >= PT_SIMD_AVX2;
 #ifdef PT__RTC_STREAM
         c->batched |= s->backend == PT_BACKEND_EMBREE && s->prim_count >= (uint32_t)(PDFTRACE_EMBREE_MIN_PRIMS);
 #endif

@@ -5,7 +5,7 @@
 # hit both alike. Prints the medians of each and the median (and range) of the paired ratios B/A,
 # per CPU second (the figure to read with 1 thread) and per wall second.
 #
-#   bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] [-e] REV_A REV_B
+#   bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] [-e] [-S SPECS] REV_A REV_B
 #
 # A revision is anything `git show REV:pdftrace.h` takes, or `.` for the working tree.
 # -i: the integrator (0 default, 1 scalar, 2 batched); -s: 0 the throughput settings (independent
@@ -13,14 +13,17 @@
 # indirect_paths, roulette: a default render); -e: both built with Embree (-DPDFTRACE_EMBREE,
 # -lembree3) and rendering with the Embree backend, and three more scenes: many-tris (1049
 # primitives), nine tori of scenes/mesh.obj (20738 primitives) and a heightfield of 20000
-# triangles (both large enough for Embree under AUTO). Run from the repository root.
+# triangles (both large enough for Embree under AUTO); -S: these scenes instead, "FILE W H SPP"
+# each, separated by '|' (e.g. every benchmark scene at 128 x 128: bench/README.md, "Two
+# revisions side by side"). Run from the repository root.
 set -eu
-reps=7; threads=1; integ=0; sampler=0; embree=0
-while getopts r:t:i:s:e o; do
-    case $o in r) reps=$OPTARG ;; t) threads=$OPTARG ;; i) integ=$OPTARG ;; s) sampler=$OPTARG ;; e) embree=1 ;; *) exit 2 ;; esac
+reps=7; threads=1; integ=0; sampler=0; embree=0; only=
+while getopts r:t:i:s:eS: o; do
+    case $o in r) reps=$OPTARG ;; t) threads=$OPTARG ;; i) integ=$OPTARG ;; s) sampler=$OPTARG ;; e) embree=1 ;;
+               S) only=$OPTARG ;; *) exit 2 ;; esac
 done
 shift $((OPTIND - 1))
-[ $# -eq 2 ] || { echo "usage: bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] [-e] REV_A REV_B" >&2; exit 2; }
+[ $# -eq 2 ] || { echo "usage: bench/tput_ab.sh [-r REPS] [-t THREADS] [-i 0|1|2] [-s 0|1|2] [-e] [-S SPECS] REV_A REV_B" >&2; exit 2; }
 dir=build/tput-ab
 mkdir -p "$dir/a" "$dir/b"
 eflags=; elibs=; scenes="bench/scenes/rooms.scene 160 120 64|scenes/cornell-diffuse.scene 600 600 4"
@@ -49,6 +52,7 @@ PY
     printf 'size 160 120\ncamera look_from 0 4 -8 look_at 0 0 0 vfov 50\nmaterial ground lambertian 0.6 0.55 0.5\nmaterial lamp emitter 8 8 8\nmesh terrain.obj ground\nquad -1 5 -1   2 0 0   0 0 2   lamp\n' > "$dir/terrain.scene"
     scenes="$scenes|bench/scenes/many-tris.scene 128 96 16|$dir/tori.scene 160 120 64|$dir/terrain.scene 160 120 32"
 fi
+[ -z "$only" ] || scenes=$only
 for side in a b; do
     if [ $side = a ]; then rev=$1; else rev=$2; fi
     for f in pdftrace.h pdftrace_scene.h; do
