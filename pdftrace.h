@@ -8249,10 +8249,10 @@ typedef struct pt__packet_scene {
     float v[PT__PACKET_MAX][14];    /* a quad's pt__quad4 fields, a sphere's centre and radius */
 } pt__packet_scene;
 
+#ifdef PT__SSE
 /* Whether scene s is small in that sense (and traced by the built-in BVH with SIMD). */
 static int pt__packet_small(const pt_scene *s)
 {
-#ifdef PT__SSE
     uint32_t i;
     if (s->backend != PT_BACKEND_BUILTIN || s->simd == PT_SIMD_SCALAR || s->prim_count > PT__PACKET_MAX ||
         s->prim_count == 0)
@@ -8260,11 +8260,8 @@ static int pt__packet_small(const pt_scene *s)
     for (i = 0; i < s->prim_count; ++i)
         if (s->prims[i].type == PT__PRIM_TRIANGLE) return 0;
     return 1;
-#else
-    (void)s;
-    return 0;
-#endif
 }
+#endif
 /* Sets up the packets of scene s, or ps->n = 0 when it is not small. */
 static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
 {
