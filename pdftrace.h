@@ -8497,7 +8497,7 @@ static PT__HOT void pt__packet_closest4(const pt_scene *s, const pt__packet_scen
 #define PT__GT8(a, b) _mm256_cmp_ps((b), (a), _CMP_LT_OS)
 #define PT__EQ8(a, b) _mm256_cmp_ps((a), (b), _CMP_EQ_OQ)
 /* The same three with AVX2, 8 rays at a time (pt_simd_level AVX2 and up). */
-PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d,
+PT__TARGET_AVX2 static PT__HOT int pt__packet_quad8(const pt_scene *s, const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d,
                                    const pt__rayctx *const *rc, __m256 best, __m256 *t_out)
 {
     const float *v = ps->v[i];
@@ -8551,7 +8551,7 @@ PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_
 }
 
 /* (lim: each lane's tmax, pt__hit_sphere's; 0 for a lane not to test) */
-PT__TARGET_AVX2 static int pt__packet_sphere8(const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d, __m256 aa,
+PT__TARGET_AVX2 static PT__HOT int pt__packet_sphere8(const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d, __m256 aa,
                                      const pt__rayctx *const *rc, __m256 lim, __m256 *t_out)
 {
     const float *v = ps->v[i];
