@@ -13,7 +13,8 @@
 # indirect_paths, roulette: a default render); -e: both built with Embree (-DPDFTRACE_EMBREE,
 # -lembree3) and rendering with the Embree backend, and three more scenes: many-tris (1049
 # primitives), nine tori of scenes/mesh.obj (20738 primitives) and a heightfield of 20000
-# triangles (both large enough for Embree under AUTO). Run from the repository root.
+# triangles (both large enough for Embree under AUTO). TPUT_AB_SCENES="FILE W H SPP|..." replaces
+# the scene list (e.g. "bench/scenes/door.scene 128 128 32"). Run from the repository root.
 set -eu
 reps=7; threads=1; integ=0; sampler=0; embree=0
 while getopts r:t:i:s:e o; do
@@ -49,6 +50,7 @@ PY
     printf 'size 160 120\ncamera look_from 0 4 -8 look_at 0 0 0 vfov 50\nmaterial ground lambertian 0.6 0.55 0.5\nmaterial lamp emitter 8 8 8\nmesh terrain.obj ground\nquad -1 5 -1   2 0 0   0 0 2   lamp\n' > "$dir/terrain.scene"
     scenes="$scenes|bench/scenes/many-tris.scene 128 96 16|$dir/tori.scene 160 120 64|$dir/terrain.scene 160 120 32"
 fi
+scenes=${TPUT_AB_SCENES:-$scenes}
 for side in a b; do
     if [ $side = a ]; then rev=$1; else rev=$2; fi
     for f in pdftrace.h pdftrace_scene.h; do
