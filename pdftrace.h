@@ -8239,15 +8239,14 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
    above do with lanes = primitives; the lanes their margins or the tiny-sphere case send to the
    scalar tests go there too). The BVH never culls what these tests accept (pt__quad_margin), and
    the hit kept is the one of least (t, public id), as pt__best_offer keeps, so a ray's hit is the
-   BVH's bit for bit. */
-#define PT__PACKET_MAX 32
+   BVH's bit for bit. (The door scene's 38 primitives run 1.19x the BVH's speed this way:
+   bench/README.md, "Two revisions side by side".) */
+#define PT__PACKET_MAX 64
 typedef struct pt__packet_scene {
     int n;                          /* primitives, in public id order; 0: not a small scene */
     uint32_t prim[PT__PACKET_MAX];  /* index into s->prims */
     int sphere[PT__PACKET_MAX];
     float v[PT__PACKET_MAX][14];    /* a quad's pt__quad4 fields, a sphere's centre and radius */
-    int order[PT__PACKET_MAX];      /* the any-hit test's order of the above: largest first (pt__packet_order) */
-    unsigned char alone[PT__PACKET_MAX]; /* by index into s->prims: its BVH block holds it alone (the any-hit's skip) */
 } pt__packet_scene;
 
 /* Whether scene s is small in that sense (and traced by the built-in BVH with SIMD). */
@@ -8266,46 +8265,6 @@ static int pt__packet_small(const pt_scene *s)
     return 0;
 #endif
 }
-#ifdef PT__SSE
-/* The any-hit order of ps (any hit's answer does not depend on it): by mean projected area
-   descending (a quad's area / 2, a sphere's pi r^2), so that the shapes likeliest to occlude a
-   shadow ray are tested first; equal areas in id order. */
-static void pt__packet_order(const pt_scene *s, pt__packet_scene *ps)
-{
-    float area[PT__PACKET_MAX];
-    int i, j;
-    for (i = 0; i < ps->n; ++i) {
-        const pt__prim *p = &s->prims[ps->prim[i]];
-        area[i] = ps->sphere[i] ? 3.14159265f * p->p1.x * p->p1.x : 0.5f * pt_length(pt_cross(p->p1, p->p2));
-        for (j = i; j > 0 && area[ps->order[j - 1]] < area[i]; --j) ps->order[j] = ps->order[j - 1];
-        ps->order[j] = i;
-    }
-}
-/* Which primitives the BVH's any-hit skips when asked to (pt__leaf_any: a quad or sphere block
-   holding that primitive alone), found by walking the leaves of the 4-wide nodes. */
-static void pt__packet_alone(const pt_scene *s, pt__packet_scene *ps)
-{
-    uint32_t i, c, j;
-    memset(ps->alone, 0, sizeof ps->alone);
-    for (i = 0; i < s->node_count; ++i)
-        for (c = 0; c < 4; ++c) {
-            const uint32_t ref = s->nodes[i].child[c];
-            const pt__leaf16 *h;
-            const char *blk;
-            if (!(ref & PT__BVH_LEAF)) continue;
-            h = &s->pool[ref & PT__BVH_OFFSET_MASK];
-            blk = (const char *)(h + 1) + h->u[0] * sizeof(pt__tri4);
-            for (j = 0; j < h->u[1]; ++j, blk += sizeof(pt__quad4)) {
-                const pt__quad4 *q = (const pt__quad4 *)(const void *)blk;
-                if (q->prim[1] == q->prim[0]) ps->alone[q->prim[0]] = 1;
-            }
-            for (j = 0; j < h->u[2]; ++j, blk += sizeof(pt__sphere4)) {
-                const pt__sphere4 *q = (const pt__sphere4 *)(const void *)blk;
-                if (q->prim[1] == q->prim[0]) ps->alone[q->prim[0]] = 1;
-            }
-        }
-}
-#endif
 /* Sets up the packets of scene s, or ps->n = 0 when it is not small. */
 static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
 {
@@ -8333,8 +8292,6 @@ static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
             pt__quad_edge_caps(p, &v[12], &v[13]);
         }
     }
-    pt__packet_order(s, ps);
-    pt__packet_alone(s, ps);
 #else
     (void)s; (void)i; (void)j;
 #endif
@@ -8652,12 +8609,13 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
     }
 }
 
-/* Any hits of n <= 8 shadow rays (pt__scene_any's answers: each ray's own tmax and skipped
-   primitive, skip[lane] = 0xffffffff for none): returns bit `lane` set for an occluded ray. The
-   primitives are tested in ps->order, the same operations per lane as the BVH's leaf tests (a
-   one-primitive block, as every block of a small scene, tests a sphere with pt__hit_sphere); a
-   lane stops testing once occluded (its bound set to 0: nothing lies at 0 < t < 0), and the
-   packet when every lane is. The skip is the BVH's too: a primitive its block holds alone. */
+/* Any hits of n <= 8 shadow rays in a scene of at most PT__BVH_SMALL_SCENE primitives
+   (pt__scene_any's answers): each ray with its own tmax and skipped primitive (0xffffffff:
+   none), which in such a scene, one primitive per leaf block, the BVH skips wherever it is
+   (pt__leaf_any). Returns bit `lane` set for an occluded ray. Each lane does the float
+   operations of the BVH's leaf tests (pt__quad4_hit_sse's, pt__hit_sphere's for a block of one
+   sphere); a lane stops testing once occluded (its bound set to 0: nothing lies at 0 < t < 0),
+   and the packet when every lane is. */
 PT__TARGET_AVX2 static int pt__packet_any8(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rc8,
                                            const float *tmax, const uint32_t *skip, int n)
 {
@@ -8668,24 +8626,23 @@ PT__TARGET_AVX2 static int pt__packet_any8(const pt_scene *s, const pt__packet_s
     __m256 o[3], d[3], aa, lim;
     __m256i skv;
     const __m256i sel = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
-    int lane, k, hit = 0;
+    int lane, i, hit = 0;
     for (lane = 0; lane < 8; ++lane) {
         const int j = lane < n ? lane : 0; /* (the padding repeats ray 0 with tmax 0: never a hit) */
         rc[lane] = rc8[j];
         buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
         buf[3][lane] = rc[lane]->d.x; buf[4][lane] = rc[lane]->d.y; buf[5][lane] = rc[lane]->d.z;
         buf[6][lane] = lane < n ? tmax[j] : 0.0f;
-        sk[lane] = skip[j] < s->prim_count && ps->alone[skip[j]] ? skip[j] : 0xffffffffu;
+        sk[lane] = skip[j];
     }
-    for (k = 0; k < 3; ++k) {
-        o[k] = _mm256_loadu_ps(buf[k]);
-        d[k] = _mm256_loadu_ps(buf[3 + k]);
+    for (i = 0; i < 3; ++i) {
+        o[i] = _mm256_loadu_ps(buf[i]);
+        d[i] = _mm256_loadu_ps(buf[3 + i]);
     }
     lim = _mm256_loadu_ps(buf[6]);
     skv = _mm256_loadu_si256((const __m256i *)(const void *)sk);
     aa = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])), _mm256_mul_ps(d[2], d[2]));
-    for (k = 0; k < ps->n; ++k) {
-        const int i = ps->order[k];
+    for (i = 0; i < ps->n; ++i) {
         /* the lanes that skip this primitive test it against 0 */
         __m256 skipped = _mm256_castsi256_ps(_mm256_cmpeq_epi32(skv, _mm256_set1_epi32((int)ps->prim[i])));
         __m256 bound = _mm256_andnot_ps(skipped, lim), t;
@@ -11681,13 +11638,14 @@ static void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const 
 }
 
 /* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded), in a small
-   scene 8 at a time with AVX2 (pt__packet_any8), with Embree 3 as streams of at most
-   PT__RTC_STREAM rays (pt__rtc_any_n), else one at a time. */
+   scene of at most PT__BVH_SMALL_SCENE primitives 8 at a time with AVX2 (pt__packet_any8; in
+   larger packet scenes the BVH measured as fast: docs/design.md, "Packets for shadow rays"), with
+   Embree 3 as streams of at most PT__RTC_STREAM rays (pt__rtc_any_n), else one at a time. */
 static void pt__batch_shadow(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *shade, int nshade)
 {
     int i;
 #ifdef PT__WIDE
-    if (pk->n > 0 && s->simd >= PT_SIMD_AVX2) {
+    if (pk->n > 0 && s->prim_count <= PT__BVH_SMALL_SCENE && s->simd >= PT_SIMD_AVX2) {
         const pt__rayctx *rc[8];
         float tmax[8];
         uint32_t skip[8];
