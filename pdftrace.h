@@ -1175,7 +1175,7 @@ typedef struct pt_path_stats {
    (pt_render_stats.batched_split_paths). */
 typedef enum pt_integrator {
     PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched"): BATCHED
-                                   for scenes of at most 32 quads and spheres on the built-in BVH with AVX2
+                                   for scenes of at most 64 quads and spheres on the built-in BVH with AVX2
                                    or better (its closest hits then run in 8-ray packets) and for scenes
                                    of at least PDFTRACE_EMBREE_MIN_PRIMS primitives traced by Embree 3 (its
                                    batches then go to Embree as streams), else SCALAR */
