@@ -1177,7 +1177,7 @@ typedef enum pt_integrator {
     PT_INTEGRATOR_DEFAULT = 0,  /* the faster one as measured (bench/README.md, "make bench-batched" and
                                    "Two revisions side by side"): BATCHED for scenes on the built-in BVH
                                    with AVX2 or better (its stages then run 8 paths at a time; scenes of at
-                                   most 32 quads and spheres also trace 8-ray packets) and for scenes of at
+                                   most 64 quads and spheres also trace 8-ray packets) and for scenes of at
                                    least PDFTRACE_EMBREE_MIN_PRIMS primitives traced by Embree 3 (its
                                    batches then go to Embree as streams), else SCALAR */
     PT_INTEGRATOR_SCALAR = 1,
@@ -8240,8 +8240,9 @@ static int pt__bvh_any(const pt_scene *s, const pt__rayctx *rc, float tmax, uint
    above do with lanes = primitives; the lanes their margins or the tiny-sphere case send to the
    scalar tests go there too). The BVH never culls what these tests accept (pt__quad_margin), and
    the hit kept is the one of least (t, public id), as pt__best_offer keeps, so a ray's hit is the
-   BVH's bit for bit. */
-#define PT__PACKET_MAX 32
+   BVH's bit for bit. (The door scene's 38 primitives run 1.19x the BVH's speed this way:
+   bench/README.md, "Two revisions side by side".) */
+#define PT__PACKET_MAX 64
 typedef struct pt__packet_scene {
     int n;                          /* primitives, in public id order; 0: not a small scene */
     uint32_t prim[PT__PACKET_MAX];  /* index into s->prims */
@@ -8451,7 +8452,7 @@ static PT__HOT void pt__packet_closest4(const pt_scene *s, const pt__packet_scen
 #define PT__GT8(a, b) _mm256_cmp_ps((b), (a), _CMP_LT_OS)
 #define PT__EQ8(a, b) _mm256_cmp_ps((a), (b), _CMP_EQ_OQ)
 /* The same three with AVX2, 8 rays at a time (pt_simd_level AVX2 and up). */
-PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d,
+PT__TARGET_AVX2 static PT__HOT int pt__packet_quad8(const pt_scene *s, const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d,
                                    const pt__rayctx *const *rc, __m256 best, __m256 *t_out)
 {
     const float *v = ps->v[i];
@@ -8504,12 +8505,13 @@ PT__TARGET_AVX2 static int pt__packet_quad8(const pt_scene *s, const pt__packet_
     return bits;
 }
 
-PT__TARGET_AVX2 static int pt__packet_sphere8(const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d, __m256 aa,
-                                     const pt__rayctx *const *rc, __m256 *t_out)
+/* (lim: each lane's tmax, pt__hit_sphere's; 0 for a lane not to test) */
+PT__TARGET_AVX2 static PT__HOT int pt__packet_sphere8(const pt__packet_scene *ps, int i, const __m256 *o, const __m256 *d, __m256 aa,
+                                     const pt__rayctx *const *rc, __m256 lim, __m256 *t_out)
 {
     const float *v = ps->v[i];
     __m256 zero = _mm256_setzero_ps(), sign = _mm256_set1_ps(-0.0f), r = _mm256_set1_ps(v[3]), fx, fy, fz, bp, ff, rr, k;
-    __m256 lx, ly, lz, ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t, inf = _mm256_set1_ps(PT__INF);
+    __m256 lx, ly, lz, ll, disc, ok, cc, sq, qq, qd, t0, t1, sw, lo, hi, h0, h1, t;
     int bits, tiny, lane;
     fx = _mm256_sub_ps(o[0], _mm256_set1_ps(v[0]));
     fy = _mm256_sub_ps(o[1], _mm256_set1_ps(v[1]));
@@ -8517,7 +8519,7 @@ PT__TARGET_AVX2 static int pt__packet_sphere8(const pt__packet_scene *ps, int i,
     bp = _mm256_xor_ps(sign, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(fx, d[0]), _mm256_mul_ps(fy, d[1])), _mm256_mul_ps(fz, d[2])));
     ff = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(fx, fx), _mm256_mul_ps(fy, fy)), _mm256_mul_ps(fz, fz));
     rr = _mm256_mul_ps(r, r);
-    tiny = _mm256_movemask_ps(PT__LT8(rr, _mm256_mul_ps(_mm256_set1_ps(1e-6f), ff)));
+    tiny = _mm256_movemask_ps(_mm256_and_ps(PT__LT8(rr, _mm256_mul_ps(_mm256_set1_ps(1e-6f), ff)), PT__GT8(lim, zero)));
     k = _mm256_div_ps(bp, aa);
     lx = _mm256_add_ps(fx, _mm256_mul_ps(d[0], k));
     ly = _mm256_add_ps(fy, _mm256_mul_ps(d[1], k));
@@ -8535,17 +8537,18 @@ PT__TARGET_AVX2 static int pt__packet_sphere8(const pt__packet_scene *ps, int i,
     sw = PT__GT8(t0, t1);
     lo = _mm256_or_ps(_mm256_and_ps(sw, t1), _mm256_andnot_ps(sw, t0));
     hi = _mm256_or_ps(_mm256_and_ps(sw, t0), _mm256_andnot_ps(sw, t1));
-    h0 = _mm256_and_ps(PT__GT8(lo, zero), PT__LT8(lo, inf));
-    h1 = _mm256_and_ps(PT__GT8(hi, zero), PT__LT8(hi, inf));
+    h0 = _mm256_and_ps(PT__GT8(lo, zero), PT__LT8(lo, lim));
+    h1 = _mm256_and_ps(PT__GT8(hi, zero), PT__LT8(hi, lim));
     t = _mm256_or_ps(_mm256_and_ps(h0, lo), _mm256_andnot_ps(h0, hi));
     bits = _mm256_movemask_ps(_mm256_and_ps(ok, _mm256_or_ps(h0, h1))) & ~tiny;
     if (tiny) { /* tiny or distant: pt__hit_sphere's double-precision case */
-        float ts[8];
+        float ts[8], lims[8];
         _mm256_storeu_ps(ts, t);
+        _mm256_storeu_ps(lims, lim);
         for (lane = 0; lane < 8; ++lane) {
             float tz;
             if ((tiny & (1 << lane)) &&
-                pt__hit_sphere(rc[lane], pt_v3(v[0], v[1], v[2]), v[3], PT__INF, &tz)) {
+                pt__hit_sphere(rc[lane], pt_v3(v[0], v[1], v[2]), v[3], lims[lane], &tz)) {
                 bits |= 1 << lane;
                 ts[lane] = tz;
             }
@@ -8561,7 +8564,7 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
 {
     const pt__rayctx *rc[8];
     float buf[6][8];
-    __m256 o[3], d[3], aa, best = _mm256_set1_ps(PT__INF);
+    __m256 o[3], d[3], aa, inf = _mm256_set1_ps(PT__INF), best = inf;
     __m256i bpv = _mm256_setzero_si256();
     int lane, i, any = 0;
     uint32_t bp[8];
@@ -8577,7 +8580,7 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
     aa = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])), _mm256_mul_ps(d[2], d[2]));
     for (i = 0; i < ps->n; ++i) {
         __m256 t, closer;
-        int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, &t) : pt__packet_quad8(s, ps, i, o, d, rc, best, &t);
+        int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, inf, &t) : pt__packet_quad8(s, ps, i, o, d, rc, best, &t);
         if (!bits) continue; /* no lane hit it (t is then not set) */
         /* strictly closer: at a tie the primitive of lower id (visited first) stays */
         closer = PT__LT8(t, best);
@@ -8602,6 +8605,53 @@ PT__TARGET_AVX2 static void pt__packet_closest8(const pt_scene *s, const pt__pac
             t_out[lane] = bt[lane];
         }
     }
+}
+
+/* Any hits of n <= 8 shadow rays in a scene of at most PT__BVH_SMALL_SCENE primitives
+   (pt__scene_any's answers): each ray with its own tmax and skipped primitive (0xffffffff:
+   none), which in such a scene, one primitive per leaf block, the BVH skips wherever it is
+   (pt__leaf_any). Returns bit `lane` set for an occluded ray. Each lane does the float
+   operations of the BVH's leaf tests (pt__quad4_hit_sse's, pt__hit_sphere's for a block of one
+   sphere); a lane stops testing once occluded (its bound set to 0: nothing lies at 0 < t < 0),
+   and the packet when every lane is. */
+PT__TARGET_AVX2 static int pt__packet_any8(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rc8,
+                                           const float *tmax, const uint32_t *skip, int n)
+{
+    const pt__rayctx *rc[8];
+    float buf[7][8];
+    uint32_t sk[8];
+    const int all = (1 << n) - 1;
+    __m256 o[3], d[3], aa, lim;
+    __m256i skv;
+    const __m256i sel = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
+    int lane, i, hit = 0;
+    for (lane = 0; lane < 8; ++lane) {
+        const int j = lane < n ? lane : 0; /* (the padding repeats ray 0 with tmax 0: never a hit) */
+        rc[lane] = rc8[j];
+        buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
+        buf[3][lane] = rc[lane]->d.x; buf[4][lane] = rc[lane]->d.y; buf[5][lane] = rc[lane]->d.z;
+        buf[6][lane] = lane < n ? tmax[j] : 0.0f;
+        sk[lane] = skip[j];
+    }
+    for (i = 0; i < 3; ++i) {
+        o[i] = _mm256_loadu_ps(buf[i]);
+        d[i] = _mm256_loadu_ps(buf[3 + i]);
+    }
+    lim = _mm256_loadu_ps(buf[6]);
+    skv = _mm256_loadu_si256((const __m256i *)(const void *)sk);
+    aa = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])), _mm256_mul_ps(d[2], d[2]));
+    for (i = 0; i < ps->n; ++i) {
+        /* the lanes that skip this primitive test it against 0 */
+        __m256 skipped = _mm256_castsi256_ps(_mm256_cmpeq_epi32(skv, _mm256_set1_epi32((int)ps->prim[i])));
+        __m256 bound = _mm256_andnot_ps(skipped, lim), t;
+        int bits = ps->sphere[i] ? pt__packet_sphere8(ps, i, o, d, aa, rc, bound, &t)
+                                 : pt__packet_quad8(s, ps, i, o, d, rc, bound, &t);
+        if (!bits) continue;
+        hit |= bits;
+        if ((hit & all) == all) break;
+        lim = _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), sel), sel)), lim);
+    }
+    return hit & all;
 }
 #endif
 
@@ -11585,11 +11635,40 @@ static void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const 
     }
 }
 
-/* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded), with Embree 3
-   as streams of at most PT__RTC_STREAM rays (pt__rtc_any_n), else one at a time. */
-static void pt__batch_shadow(const pt_scene *s, pt__lane *lanes, const int *shade, int nshade)
+/* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded), in a small
+   scene of at most PT__BVH_SMALL_SCENE primitives 8 at a time with AVX2 (pt__packet_any8; in
+   larger packet scenes the BVH measured as fast: docs/design.md, "Packets for shadow rays"), with
+   Embree 3 as streams of at most PT__RTC_STREAM rays (pt__rtc_any_n), else one at a time. */
+static void pt__batch_shadow(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *shade, int nshade)
 {
     int i;
+#ifdef PT__WIDE
+    if (pk->n > 0 && s->prim_count <= PT__BVH_SMALL_SCENE && s->simd >= PT_SIMD_AVX2) {
+        const pt__rayctx *rc[8];
+        float tmax[8];
+        uint32_t skip[8];
+        int which[8], m = 0, j;
+        for (i = 0; i <= nshade; ++i) {
+            if (i < nshade) {
+                pt__lane *l = &lanes[shade[i]];
+                if (!l->shadow) continue;
+                rc[m] = &l->nr.rc;
+                tmax[m] = l->nr.tmax;
+                skip[m] = l->nr.skip;
+                which[m++] = shade[i];
+            }
+            if (m == 8 || (i == nshade && m > 0)) { /* a full packet, or the last one */
+                const int hit = pt__packet_any8(s, pk, rc, tmax, skip, m);
+                for (j = 0; j < m; ++j)
+                    if (hit & (1 << j)) lanes[which[j]].shadow = 2;
+                m = 0;
+            }
+        }
+        return;
+    }
+#else
+    (void)pk;
+#endif
 #ifdef PT__RTC_STREAM
     if (s->backend == PT_BACKEND_EMBREE) {
         const pt__rayctx *rc[PT__BATCH_LANES];
@@ -11755,7 +11834,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
                 shade[nshade++] = live[i];
             } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
         if (ndefer) pt__batch_lights(b, lanes, defer, ndefer); /* (2b) quads' solid-angle samples */
-        pt__batch_shadow(s, lanes, shade, nshade); /* (3) shadow rays */
+        pt__batch_shadow(s, pk, lanes, shade, nshade); /* (3) shadow rays */
         pt__batch_scatter_ahead(*b, lanes, shade, nshade); /* (3b) Lambertian directions */
         for (i = 0, nlive = 0; i < nshade; ++i) { /* (4) contributions, splits, continuation */
             const int r = pt__lane_continue(b, &lanes[shade[i]], copies);

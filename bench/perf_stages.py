@@ -16,9 +16,10 @@ import subprocess
 import sys
 
 STAGES = [
+    ('shadow rays (any-hit)', ['pt__scene_any', 'pt__bvh_any', 'pt__light_visible', 'pt__leaf_any', 'pt__rtc_any',
+                               'pt__packet_any', 'pt__batch_shadow']),
     ('closest-hit traversal', ['pt__packet', 'pt__batch_closest', 'pt__scene_closest', 'pt__bvh_closest',
                                'pt__bvh_trace', 'pt__leaf_closest', 'pt__rtc_closest']),
-    ('shadow rays (any-hit)', ['pt__scene_any', 'pt__bvh_any', 'pt__light_visible', 'pt__leaf_any', 'pt__rtc_any']),
     ('film', ['pt__film_sample', 'pt__dd_add', 'pt__two_sum']),
     ('camera', ['pt__camera_ray']),
     ('light sampling and light pmf', ['pt__lights_sample', 'pt__planar_light_sample', 'pt__light_pmf',

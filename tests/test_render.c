@@ -1145,9 +1145,10 @@ static void batched_bit_identical(test_ctx *t)
                     }
                     pt_film_free(&f);
                 }
-                if ((c == 4 || c == 0) && i <= 1) { /* Sobol's draws made ahead (stage 1b) and the Lambertian
-                    directions made ahead (stage 3b, Sobol and independent numbers): AVX2's 8 at a time and the
-                    scalar code below that level give the same film */
+                if ((c == 4 || c == 0) && (i <= 1 || i == 9)) { /* Sobol's draws made ahead (stage 1b), the
+                    Lambertian directions made ahead (stage 3b, Sobol and independent numbers) and the shadow rays'
+                    packets (stage 3; the Cornell boxes' and the rooms' occluders): AVX2's 8 at a time and the
+                    code below that level give the same film */
                     int level;
                     for (level = PT_SIMD_SCALAR; level < (int)pt_simd_cpu_level(); ++level) {
                         pt_film f;
