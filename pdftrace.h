@@ -11217,6 +11217,14 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->v.sph_prim = NULL;
 }
 
+/* pt__lights_pick at vertex v. A pick by power reads neither the vertex's point nor its normal,
+   which are left alone (the point, just stored, would be read back before the stores are done). */
+static PT__HOT int pt__lane_pick(const pt__batch_ctx *b, const pt__vertex *v, float u0, uint32_t *li, float *pick)
+{
+    if (!(b->s->ltree && (b->lmode & PT__LIGHTS_TREE)))
+        return pt__lights_pick(b->s, pt_v3(0.0f, 0.0f, 0.0f), pt_v3(0.0f, 0.0f, 0.0f), u0, li, pick, 0u);
+    return pt__lights_pick(b->s, v->o, pt__receiver_normal(v), u0, li, pick, b->lmode);
+}
 /* Stage 2's light sample at lane l's vertex (the numbers u0, u1, u2 of pt__lights_sample_all) and
    its shadow ray. Where the light picked is a quad, the rest is left to stage 2c (l->defer = 2;
    pt__batch_area_lights), which makes the batch's area samples of quads 8 at a time and leaves
@@ -11224,7 +11232,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
    sets up their spherical rectangles 4 at a time. b->area is 0 without AVX2 or with an
    environment: then it is all done here. Either way each path does what pt__lights_sample_all
    and pt__nee_prepare do. */
-static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, pt_vec3 nr, float u0, float u1, float u2)
+static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0, float u1, float u2)
 {
     const pt_scene *s = b->s;
     pt__vertex *v = &l->v;
@@ -11233,9 +11241,9 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, pt_vec3 
     l->ls.sph_prim = NULL;
     l->ls.sph_S = 0.0;
     if (!b->area) {
-        l->shadow = pt__lights_sample_all(s, b->cfg, v->o, nr, u0, u1, u2, &l->ls, &l->li) &&
+        l->shadow = pt__lights_sample_all(s, b->cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
                     pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
-    } else if (!pt__lights_pick(s, v->o, nr, u0, &li, &pick, b->lmode)) {
+    } else if (!pt__lane_pick(b, v, u0, &li, &pick)) {
         l->shadow = 0;
     } else {
         const pt__prim *p = &s->prims[s->lights[li].prim];
@@ -11550,7 +11558,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
         if (b->nee) {
             float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
             pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-            pt__lane_light(b, l, pt__receiver_normal(v), u0, u1, u2);
+            pt__lane_light(b, l, u0, u1, u2);
         }
     }
     return 1;
