@@ -11059,7 +11059,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    operations and adds up its radiance in the same order as the scalar integrator: the image is
    the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
    (cfg->recording) run scalar. Stage 2 leaves the light samples of quads to stage 2c, which
-   makes the area samples 8 paths at a time, and that the samples by solid angle to stage 2b,
+   makes their area samples 8 paths at a time and passes those by solid angle on to stage 2b,
    which sets their spherical rectangles up 4 paths at a time (pt__lane_light).
    Split copies (indirect_paths: every camera sample of a default render). With the Sobol
    sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
@@ -11452,7 +11452,7 @@ static int pt__batch_area_lights(const pt__batch_ctx *b, pt__lane *lanes, const 
     const pt_scene *s = b->s;
     pt__qa_row in[PT__QA_IN], out[PT__QA_OUT];
     const pt__prim *prim[PT__BATCH_LANES + 8];
-    pt__qa_light rec[8], last;
+    pt__qa_light rec[8], last = {{0.0f}}; /* (set before its first use; gcc -Og cannot see it) */
     const pt__qa_light *L[8];
     const pt__prim *lastp = NULL;
     int i, k;
@@ -11484,12 +11484,12 @@ static int pt__batch_area_lights(const pt__batch_ctx *b, pt__lane *lanes, const 
         bits = pt__quad_area8(in, L, same, out, i, b->sph);
         for (k = 0; k < 8 && i + k < n; ++k) {
             pt__lane *l = &lanes[area[i + k]];
-            if (!(bits >> k & 1)) { /* facing away: no sample (pt__planar_faces) */
+            if (!((bits >> k) & 1)) { /* facing away: no sample (pt__planar_faces) */
                 l->defer = 0;
                 l->shadow = 0;
                 l->v.sph_prim = NULL;
                 l->v.sph_S = 0.0;
-            } else if (bits >> (8 + k) & 1) {
+            } else if ((bits >> (8 + k)) & 1) { /* by solid angle (pt__sphrect_wanted) */
                 l->defer = 1;
                 defer[ndefer++] = area[i + k];
             } else {
