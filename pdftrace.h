@@ -10272,17 +10272,24 @@ static int pt__lights_reachable(const pt_scene *s, pt_vec3 p)
 }
 
 /* The shadow ray from v's spawn point to the light sample ls of light li: the segment, which
-   ends at t = 1 short of the light's offset point. */
+   ends at t = 1 short of the light's offset point (target: that point, pt__light_target). */
+static PT__HOT void pt__light_shadow_ray_to(const pt__vertex *v, const pt__light_sample *ls, pt_vec3 target, int tri,
+                                            pt__rayctx *src)
+{
+    pt_ray sr;
+    sr.origin = pt__vertex_origin(v, ls->dir);
+    sr.dir = pt_sub(target, sr.origin);
+    pt__rayctx_init2(src, sr, tri);
+}
+static PT__HOT pt_vec3 pt__light_target(const pt_scene *s, const pt__light_sample *ls, uint32_t li)
+{
+    return pt__offset_origin(ls->point, ls->normal, pt_neg(ls->dir),
+                             pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
+}
 static PT__HOT void pt__light_shadow_ray(const pt_scene *s, const pt__vertex *v, const pt__light_sample *ls, uint32_t li,
                                          int tri, pt__rayctx *src)
 {
-    pt_ray sr;
-    pt_vec3 target;
-    sr.origin = pt__vertex_origin(v, ls->dir);
-    target = pt__offset_origin(ls->point, ls->normal, pt_neg(ls->dir),
-                                         pt__prim_magnitude(&s->prims[s->lights[li].prim], ls->normal));
-    sr.dir = pt_sub(target, sr.origin);
-    pt__rayctx_init2(src, sr, tri);
+    pt__light_shadow_ray_to(v, ls, pt__light_target(s, ls, li), tri, src);
 }
 
 /* Whether the segment from v's spawn point to the light sample ls of light li is unoccluded
@@ -10311,8 +10318,10 @@ typedef struct pt__nee_ray {
     uint32_t skip; /* the light's primitive, which the ray ignores (0xffffffff: none) */
     pt_color f;
 } pt__nee_ray;
-static PT__HOT int pt__nee_prepare(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
-                                   const pt__light_sample *ls, uint32_t li, int tri, pt__nee_ray *nr, pt_path_stats *st)
+/* (target: the shadow ray's end, pt__light_target, where the caller has it already; else NULL) */
+static PT__HOT int pt__nee_prepare_to(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+                                      const pt__light_sample *ls, uint32_t li, int tri, pt__nee_ray *nr, pt_path_stats *st,
+                                      const pt_vec3 *target)
 {
     nr->f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, ls->dir, v->eta);
     if (pt__is_black(nr->f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return 0;
@@ -10325,12 +10334,18 @@ static PT__HOT int pt__nee_prepare(const pt_scene *s, const pt__settings *cfg, c
         nr->tmax = PT__INF;
         nr->skip = 0xffffffffu;
     } else { /* (pt__light_visible's segment) */
-        pt__light_shadow_ray(s, v, ls, li, tri, &nr->rc);
+        if (target) pt__light_shadow_ray_to(v, ls, *target, tri, &nr->rc);
+        else pt__light_shadow_ray(s, v, ls, li, tri, &nr->rc);
         nr->tmax = 1.0f - 1e-4f;
         nr->skip = s->lights[li].prim;
     }
     st->shadow_rays++;
     return 1;
+}
+static PT__HOT int pt__nee_prepare(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
+                                   const pt__light_sample *ls, uint32_t li, int tri, pt__nee_ray *nr, pt_path_stats *st)
+{
+    return pt__nee_prepare_to(s, cfg, v, ls, li, tri, nr, st, NULL);
 }
 static PT__HOT pt_color pt__nee_finish(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v,
                                        const pt__light_sample *ls, uint32_t li, pt_color beta, pt_color f)
@@ -11091,8 +11106,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    and a path keeps its own sampler, so every path draws the same numbers, does the same float
    operations and adds up its radiance in the same order as the scalar integrator: the image is
    the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
-   (cfg->recording) run scalar. Stage 2 leaves the light samples of quads by solid angle to
-   stage 2b, which sets their spherical rectangles up 4 paths at a time (pt__lane_light).
+   (cfg->recording) run scalar. Stage 2 leaves quads' light samples to stage 2c (by area, 8 paths
+   at a time), which leaves those by solid angle to stage 2b (4 at a time; pt__lane_light).
    Split copies (indirect_paths: every camera sample of a default render). With the Sobol
    sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
    take free lanes and run beside the path that split (copy 0), as the camera sample's family.
@@ -11123,7 +11138,7 @@ typedef struct pt__lane {
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
     int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
-    int defer;         /* 1: its light sample left to stage 2b (pt__lane_light) with these: */
+    int defer;         /* its light sample left to stage 2b (1) or 2c (2) (pt__lane_light) with these: */
     float dpick, du1, du2; /* the pick's probability, the point's numbers */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
@@ -11158,7 +11173,8 @@ typedef struct pt__batch_ctx {
     const pt_scene *s;
     const pt__settings *cfg;
     int tri, any_lights, nee, pick, copies;
-    int defer;       /* quads' solid-angle samples left to stage 2b (pt__lane_light) */
+    int area;        /* quads' light samples left to stage 2c, and 2b (pt__lane_light) */
+    int sph;         /* solid-angle sampling of quads allowed (PT__LIGHTS_SPHERICAL) */
     unsigned lmode;  /* pt__lights_mode */
     pt__lane *lanes;
     pt__batch_pool *pool; /* (copies only) */
@@ -11248,13 +11264,22 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->v.sph_prim = NULL;
 }
 
+/* pt__lights_pick at vertex v. A pick by power reads neither the vertex's point nor its normal,
+   which are left alone (the point, just stored, would be read back before the stores are done). */
+static PT__HOT int pt__lane_pick(const pt__batch_ctx *b, const pt__vertex *v, float u0, uint32_t *li, float *pick)
+{
+    if (!(b->s->ltree && (b->lmode & PT__LIGHTS_TREE)))
+        return pt__lights_pick(b->s, pt_v3(0.0f, 0.0f, 0.0f), pt_v3(0.0f, 0.0f, 0.0f), u0, li, pick, 0u);
+    return pt__lights_pick(b->s, v->o, pt__receiver_normal(v), u0, li, pick, b->lmode);
+}
 /* Stage 2's light sample at lane l's vertex (the numbers u0, u1, u2 of pt__lights_sample_all) and
-   its shadow ray. Where the light picked is a quad that faces the vertex and is large enough next
-   to its distance to be sampled by solid angle (pt__sphrect_wanted), the rest is left to stage 2b
-   (l->defer; pt__batch_lights), which sets up the batch's spherical rectangles 4 at a time. b->defer
-   is 0 without AVX2, with an environment or with solid-angle sampling off: then it is all done
-   here. Either way each path does what pt__lights_sample_all and pt__nee_prepare do. */
-static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, pt_vec3 nr, float u0, float u1, float u2)
+   its shadow ray. Where the light picked is a quad, the rest is left to stage 2c (l->defer = 2;
+   pt__batch_area_lights), which makes the batch's area samples of quads 8 at a time and leaves
+   those to be sampled by solid angle (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which
+   sets up their spherical rectangles 4 at a time. b->area is 0 without AVX2 or with an
+   environment: then it is all done here. Either way each path does what pt__lights_sample_all
+   and pt__nee_prepare do. */
+static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0, float u1, float u2)
 {
     const pt_scene *s = b->s;
     pt__vertex *v = &l->v;
@@ -11262,30 +11287,23 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, pt_vec3 
     float pick = 0.0f;
     l->ls.sph_prim = NULL;
     l->ls.sph_S = 0.0;
-    if (!b->defer) {
-        l->shadow = pt__lights_sample_all(s, b->cfg, v->o, nr, u0, u1, u2, &l->ls, &l->li) &&
+    if (!b->area) {
+        l->shadow = pt__lights_sample_all(s, b->cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
                     pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
-    } else if (!pt__lights_pick(s, v->o, nr, u0, &li, &pick, b->lmode)) {
+    } else if (!pt__lane_pick(b, v, u0, &li, &pick)) {
         l->shadow = 0;
     } else {
         const pt__prim *p = &s->prims[s->lights[li].prim];
-        int ok;
-        if (p->type != PT__PRIM_QUAD) {
-            ok = pt__light_prim_sample(s, p, v->o, u1, u2, &l->ls, 1);
-        } else if (!pt__planar_faces(v->o, p->p0, p->n, s->mats[p->material].two_sided)) {
-            ok = 0;
-        } else if (pt__sphrect_wanted(p, v->o)) {
-            l->defer = 1;
+        if (p->type == PT__PRIM_QUAD) {
+            l->defer = 2;
             l->li = li;
             l->dpick = pick;
             l->du1 = u1;
             l->du2 = u2;
             return;
-        } else { /* (pt__planar_light_sample's area sample) */
-            l->ls.sph_prim = p;
-            ok = pt__planar_light_at(p, s->lights[p->light].area, v->o, pt__planar_point(p, u1, u2), 0.0, &l->ls);
         }
-        l->shadow = ok && pt__lights_picked(&l->ls, pick, li, &l->li) &&
+        l->shadow = pt__light_prim_sample(s, p, v->o, u1, u2, &l->ls, b->sph) &&
+                    pt__lights_picked(&l->ls, pick, li, &l->li) &&
                     pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
     }
     v->sph_prim = l->ls.sph_prim;
@@ -11333,8 +11351,204 @@ static void pt__batch_lights(const pt__batch_ctx *b, pt__lane *lanes, const int 
         for (j = 0; j < 4 && i + j < n; ++j) pt__lane_light_finish(b, &lanes[defer[i + j]], p[j], ok[j], q[j], S[j]);
     }
 #else
-    (void)b; (void)lanes; (void)defer; (void)n; /* (b->defer is 0) */
+    (void)b; (void)lanes; (void)defer; (void)n; /* (b->area is 0) */
 #endif
+}
+
+#ifdef PT__WIDE
+/* Stage 2c's numbers. A light's (pt__qa_light_of): the quad's corner p0, edges e1, e2 and normal
+   n, its area, the shadow ray offset's magnitude (pt__prim_magnitude, made valid as
+   pt__offset_origin does) and its two-sidedness (1 or 0). A lane's, one row per quantity and a
+   column per lane: in, the vertex's point o and the point's numbers u1, u2; out, the light point
+   q, the unit direction, the distance, the density and the shadow ray's end (pt__light_target). */
+enum { PT__QL_P0 = 0, PT__QL_E1 = 3, PT__QL_E2 = 6, PT__QL_N = 9, PT__QL_AREA = 12, PT__QL_MAG, PT__QL_TWO, PT__QL_SIZE };
+enum { PT__QA_O = 0, PT__QA_U1 = 3, PT__QA_U2, PT__QA_IN };
+enum { PT__QA_Q = 0, PT__QA_DIR = 3, PT__QA_DIST = 6, PT__QA_PDF, PT__QA_TARGET, PT__QA_OUT = PT__QA_TARGET + 3 };
+typedef float pt__qa_row[PT__BATCH_LANES + 8];
+typedef struct pt__qa_light { float v[PT__QL_SIZE]; } pt__qa_light;
+static void pt__qa_light_of(const pt_scene *s, const pt__prim *p, pt__qa_light *r)
+{
+    const float mag = pt__prim_magnitude(p, p->n);
+    r->v[PT__QL_P0] = p->p0.x; r->v[PT__QL_P0 + 1] = p->p0.y; r->v[PT__QL_P0 + 2] = p->p0.z;
+    r->v[PT__QL_E1] = p->p1.x; r->v[PT__QL_E1 + 1] = p->p1.y; r->v[PT__QL_E1 + 2] = p->p1.z;
+    r->v[PT__QL_E2] = p->p2.x; r->v[PT__QL_E2 + 1] = p->p2.y; r->v[PT__QL_E2 + 2] = p->p2.z;
+    r->v[PT__QL_N] = p->n.x; r->v[PT__QL_N + 1] = p->n.y; r->v[PT__QL_N + 2] = p->n.z;
+    r->v[PT__QL_AREA] = s->lights[p->light].area;
+    r->v[PT__QL_MAG] = !(mag >= 0.0f) || !pt__isfinite(mag) ? 1.0f : mag;
+    r->v[PT__QL_TWO] = s->mats[p->material].two_sided ? 1.0f : 0.0f;
+}
+/* Quantity k of the 8 lanes' lights L[0..7] (all L[0] where same). */
+PT__TARGET_AVX2 static inline __m256 pt__qa_lights8(const pt__qa_light *const *L, int k, int same)
+{
+    if (same) return _mm256_set1_ps(L[0]->v[k]);
+    return _mm256_setr_ps(L[0]->v[k], L[1]->v[k], L[2]->v[k], L[3]->v[k], L[4]->v[k], L[5]->v[k], L[6]->v[k], L[7]->v[k]);
+}
+PT__TARGET_AVX2 static inline __m256 pt__v8dot(const __m256 *a, const __m256 *b)
+{
+    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a[0], b[0]), _mm256_mul_ps(a[1], b[1])), _mm256_mul_ps(a[2], b[2]));
+}
+/* Area samples of quads for the 8 lanes from column i (their lights L; same: all L[0]), each lane
+   doing the float operations of pt__planar_faces, pt__sphrect_wanted (sph: solid-angle sampling
+   allowed), pt__planar_point, pt__planar_light_at (the density of pt__planar_density) and
+   pt__light_target (pt__offset_origin with the SSE2 code's integer steps) in the scalar code's
+   order, without FMA, so the same bits. A lane whose quad faces away or goes to solid-angle
+   sampling, whose point is at o, or whose cosine is 0 takes 1 for the square root's and the
+   quotient's operand, so no lane raises an exception (FE_INVALID, FE_DIVBYZERO) that the scalar
+   code would not. Returns the lanes' bits: facing (bit k), wanted (bit 8 + k), a point away from
+   o (bit 16 + k). */
+PT__TARGET_AVX2 static int pt__quad_area8(pt__qa_row *in, const pt__qa_light *const *L, int same, pt__qa_row *out, int i,
+                                          int sph)
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), signbit = _mm256_set1_ps(-0.0f);
+    const __m256 u1 = _mm256_loadu_ps(in[PT__QA_U1] + i), u2 = _mm256_loadu_ps(in[PT__QA_U2] + i);
+    __m256 o[3], p0[3], e1[3], e2[3], n[3], d[3], q[3], dir[3], w[3];
+    __m256 faces, wanted = zero, live, dist2, dist, inv, cosl, cpos, pdf, flip, m;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        o[k] = _mm256_loadu_ps(in[PT__QA_O + k] + i);
+        p0[k] = pt__qa_lights8(L, PT__QL_P0 + k, same);
+        e1[k] = pt__qa_lights8(L, PT__QL_E1 + k, same);
+        e2[k] = pt__qa_lights8(L, PT__QL_E2 + k, same);
+        n[k] = pt__qa_lights8(L, PT__QL_N + k, same);
+        d[k] = _mm256_sub_ps(o[k], p0[k]);
+    }
+    { /* pt__planar_faces: n . (o - p0) != 0 for a two-sided quad, > 0 for a one-sided one */
+        const __m256 side = pt__v8dot(n, d);
+        faces = _mm256_blendv_ps(_mm256_cmp_ps(side, zero, _CMP_GT_OQ), _mm256_cmp_ps(side, zero, _CMP_NEQ_UQ),
+                                 _mm256_cmp_ps(pt__qa_lights8(L, PT__QL_TWO, same), zero, _CMP_NEQ_UQ));
+    }
+    if (sph) { /* pt__sphrect_wanted */
+        const __m256 half = _mm256_set1_ps(0.5f);
+        __m256 cc[3];
+        for (k = 0; k < 3; ++k)
+            cc[k] = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(p0[k], _mm256_mul_ps(e1[k], half)), _mm256_mul_ps(e2[k], half)),
+                                  o[k]);
+        wanted = _mm256_cmp_ps(_mm256_mul_ps(_mm256_set1_ps(0.25f), _mm256_add_ps(pt__v8dot(e1, e1), pt__v8dot(e2, e2))),
+                               _mm256_mul_ps(_mm256_set1_ps((float)PT__SPHERICAL_FROM), pt__v8dot(cc, cc)), _CMP_GE_OQ);
+    }
+    /* pt__planar_point, pt__planar_light_at, pt__planar_density */
+    for (k = 0; k < 3; ++k) {
+        q[k] = _mm256_add_ps(_mm256_add_ps(p0[k], _mm256_mul_ps(e1[k], u1)), _mm256_mul_ps(e2[k], u2));
+        d[k] = _mm256_sub_ps(q[k], o[k]);
+    }
+    dist2 = pt__v8dot(d, d);
+    live = _mm256_and_ps(_mm256_andnot_ps(wanted, faces), _mm256_cmp_ps(dist2, zero, _CMP_GT_OQ));
+    dist = _mm256_sqrt_ps(_mm256_blendv_ps(one, dist2, live));
+    inv = _mm256_div_ps(one, dist);
+    for (k = 0; k < 3; ++k) dir[k] = _mm256_mul_ps(d[k], inv);
+    cosl = _mm256_andnot_ps(signbit, pt__v8dot(n, dir));
+    cpos = _mm256_cmp_ps(cosl, zero, _CMP_GT_OQ);
+    pdf = _mm256_div_ps(_mm256_mul_ps(dist, dist), _mm256_blendv_ps(one, _mm256_mul_ps(cosl, pt__qa_lights8(L, PT__QL_AREA, same)),
+                                                                    _mm256_and_ps(cpos, live)));
+    pdf = _mm256_and_ps(cpos, pdf);
+    /* pt__light_target: pt__offset_origin(q, n, -dir, magnitude) */
+    for (k = 0; k < 3; ++k) w[k] = _mm256_xor_ps(signbit, dir[k]);
+    flip = _mm256_and_ps(signbit, _mm256_cmp_ps(pt__v8dot(n, w), zero, _CMP_LT_OQ));
+    m = _mm256_max_ps(_mm256_andnot_ps(signbit, q[0]), _mm256_max_ps(_mm256_andnot_ps(signbit, q[1]), _mm256_andnot_ps(signbit, q[2])));
+    m = _mm256_max_ps(pt__qa_lights8(L, PT__QL_MAG, same), m);
+    m = _mm256_blendv_ps(_mm256_set1_ps(FLT_MIN), m, _mm256_cmp_ps(m, zero, _CMP_GT_OQ));
+    for (k = 0; k < 3; ++k) {
+        const __m256 nk = _mm256_xor_ps(n[k], flip);
+        const __m256i neg = _mm256_castps_si256(_mm256_cmp_ps(q[k], zero, _CMP_LT_OQ));
+        __m256i of = _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_set1_ps(256.0f), nk));
+        __m256 p_i, p_f, near;
+        of = _mm256_sub_epi32(_mm256_xor_si256(of, neg), neg); /* -of_i where q < 0 */
+        p_i = _mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(q[k]), of));
+        p_f = _mm256_add_ps(q[k], _mm256_mul_ps(_mm256_mul_ps(m, _mm256_set1_ps(1.0f / 65536.0f)), nk));
+        near = _mm256_cmp_ps(_mm256_andnot_ps(signbit, q[k]), _mm256_mul_ps(m, _mm256_set1_ps(1.0f / 32.0f)), _CMP_LT_OQ);
+        _mm256_storeu_ps(out[PT__QA_TARGET + k] + i, _mm256_blendv_ps(p_i, p_f, near));
+        _mm256_storeu_ps(out[PT__QA_Q + k] + i, q[k]);
+        _mm256_storeu_ps(out[PT__QA_DIR + k] + i, dir[k]);
+    }
+    _mm256_storeu_ps(out[PT__QA_DIST] + i, dist);
+    _mm256_storeu_ps(out[PT__QA_PDF] + i, pdf);
+    return _mm256_movemask_ps(faces) | _mm256_movemask_ps(wanted) << 8 | _mm256_movemask_ps(live) << 16;
+}
+/* Stage 2c for lane l, whose quad p faces its vertex and is sampled by area (bits: pt__quad_area8's
+   for this lane; column j of out): the rest of pt__planar_light_sample, the pick, and
+   pt__nee_prepare with the shadow ray's end made. */
+static PT__HOT void pt__lane_area_finish(const pt__batch_ctx *b, pt__lane *l, const pt__prim *p, pt__qa_row *out, int j,
+                                         int bits)
+{
+    pt__vertex *v = &l->v;
+    pt_vec3 target;
+    int ok = 0;
+    if (b->sph) l->ls.sph_prim = p;
+    if (bits & (1 << 16)) {
+        l->ls.dir = pt_v3(out[PT__QA_DIR][j], out[PT__QA_DIR + 1][j], out[PT__QA_DIR + 2][j]);
+        l->ls.pdf = out[PT__QA_PDF][j];
+        l->ls.dist = out[PT__QA_DIST][j];
+        l->ls.point = pt_v3(out[PT__QA_Q][j], out[PT__QA_Q + 1][j], out[PT__QA_Q + 2][j]);
+        l->ls.normal = p->n;
+        l->ls.rounded = 0;
+        ok = l->ls.pdf > 0.0f && pt__isfinite(l->ls.pdf);
+    }
+    target = pt_v3(out[PT__QA_TARGET][j], out[PT__QA_TARGET + 1][j], out[PT__QA_TARGET + 2][j]);
+    l->shadow = ok && pt__lights_picked(&l->ls, l->dpick, l->li, &l->li) &&
+                pt__nee_prepare_to(b->s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st, &target);
+    v->sph_prim = l->ls.sph_prim;
+    v->sph_S = l->ls.sph_S;
+}
+#endif
+/* Stage 2c: the quads' light samples stage 2 left (area: n lanes), 8 at a time (pt__quad_area8;
+   the last group's unused lanes copy the first): those facing away end there, those to be sampled
+   by solid angle are appended to defer (stage 2b; returns their new count), the rest finish. */
+static int pt__batch_area_lights(const pt__batch_ctx *b, pt__lane *lanes, const int *area, int n, int *defer, int ndefer)
+{
+#ifdef PT__WIDE
+    const pt_scene *s = b->s;
+    pt__qa_row in[PT__QA_IN], out[PT__QA_OUT];
+    const pt__prim *prim[PT__BATCH_LANES + 8];
+    pt__qa_light rec[8], last = {{0.0f}}; /* (set before its first use; gcc -Og cannot see it) */
+    const pt__qa_light *L[8];
+    const pt__prim *lastp = NULL;
+    int i, k;
+    for (i = 0; i < n; ++i) {
+        const pt__lane *l = &lanes[area[i]];
+        prim[i] = &s->prims[s->lights[l->li].prim];
+        in[PT__QA_O][i] = l->v.o.x;
+        in[PT__QA_O + 1][i] = l->v.o.y;
+        in[PT__QA_O + 2][i] = l->v.o.z;
+        in[PT__QA_U1][i] = l->du1;
+        in[PT__QA_U2][i] = l->du2;
+    }
+    for (i = n; i % 8; ++i) {
+        prim[i] = prim[0];
+        for (k = 0; k < PT__QA_IN; ++k) in[k][i] = in[k][0];
+    }
+    for (i = 0; i < n; i += 8) {
+        int same = 1, bits;
+        for (k = 1; k < 8; ++k) same &= prim[i + k] == prim[i];
+        if (same) { /* (the common case: one light for all 8, its numbers kept from the last group) */
+            if (prim[i] != lastp) pt__qa_light_of(s, lastp = prim[i], &last);
+            L[0] = &last;
+        } else {
+            for (k = 0; k < 8; ++k) {
+                pt__qa_light_of(s, prim[i + k], &rec[k]);
+                L[k] = &rec[k];
+            }
+        }
+        bits = pt__quad_area8(in, L, same, out, i, b->sph);
+        for (k = 0; k < 8 && i + k < n; ++k) {
+            pt__lane *l = &lanes[area[i + k]];
+            if (!((bits >> k) & 1)) { /* facing away: no sample (pt__planar_faces) */
+                l->defer = 0;
+                l->shadow = 0;
+                l->v.sph_prim = NULL;
+                l->v.sph_S = 0.0;
+            } else if ((bits >> (8 + k)) & 1) { /* by solid angle (pt__sphrect_wanted) */
+                l->defer = 1;
+                defer[ndefer++] = area[i + k];
+            } else {
+                l->defer = 0;
+                pt__lane_area_finish(b, l, prim[i + k], out, i + k, bits >> k);
+            }
+        }
+    }
+#else
+    (void)b; (void)lanes; (void)area; (void)n; (void)defer; /* (b->area is 0) */
+#endif
+    return ndefer;
 }
 
 /* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
@@ -11391,7 +11605,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
         if (b->nee) {
             float u0 = pt__draw1_if(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_PICK), b->pick), u1, u2;
             pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
-            pt__lane_light(b, l, pt__receiver_normal(v), u0, u1, u2);
+            pt__lane_light(b, l, u0, u1, u2);
         }
     }
     return 1;
@@ -11792,7 +12006,8 @@ static PT__NOINLINE int pt__batch_resume(pt__batch_ctx bc, int *live, int nlive)
 static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
                                            pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
 {
-    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], nlive = n, nshade, ndefer, i;
+    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], area[PT__BATCH_LANES];
+    int nlive = n, nshade, ndefer, narea, i;
     pt__batch_ctx bc, *b = &bc;
     pt__batch_pool pool;
     b->pool = &pool;
@@ -11804,9 +12019,10 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     b->pick = s->light_count != 1 || cfg->env_pick > 0.0f;
     b->copies = copies;
     b->lmode = pt__lights_mode(cfg);
-    b->defer = s->simd >= PT_SIMD_AVX2 && !(cfg->env_pick > 0.0f) && (b->lmode & PT__LIGHTS_SPHERICAL);
+    b->sph = (b->lmode & PT__LIGHTS_SPHERICAL) != 0;
+    b->area = s->simd >= PT_SIMD_AVX2 && !(cfg->env_pick > 0.0f);
 #ifndef PT__WIDE
-    b->defer = 0;
+    b->area = 0;
 #endif
     b->lanes = lanes;
     b->pool->kids = kids;
@@ -11828,11 +12044,12 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     while (nlive > 0) {
         pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
         if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
-        for (i = 0, nshade = 0, ndefer = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
+        for (i = 0, nshade = 0, ndefer = 0, narea = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(b, &lanes[live[i]], copies)) {
-                if (lanes[live[i]].defer) defer[ndefer++] = live[i];
+                if (lanes[live[i]].defer) area[narea++] = live[i];
                 shade[nshade++] = live[i];
             } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
+        if (narea) ndefer = pt__batch_area_lights(b, lanes, area, narea, defer, 0); /* (2c) quads' samples */
         if (ndefer) pt__batch_lights(b, lanes, defer, ndefer); /* (2b) quads' solid-angle samples */
         pt__batch_shadow(s, pk, lanes, shade, nshade); /* (3) shadow rays */
         pt__batch_scatter_ahead(*b, lanes, shade, nshade); /* (3b) Lambertian directions */

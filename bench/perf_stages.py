@@ -22,13 +22,19 @@ STAGES = [
                                'pt__bvh_trace', 'pt__leaf_closest', 'pt__rtc_closest']),
     ('film', ['pt__film_sample', 'pt__dd_add', 'pt__two_sum']),
     ('camera', ['pt__camera_ray']),
-    ('light sampling and light pmf', ['pt__lights_sample', 'pt__planar_light_sample', 'pt__light_pmf',
-                                      'pt__light_prim_value', 'pt__lights_value', 'pt__lights_reachable',
-                                      'pt__sphere_light', 'pt__lnode', 'pt__sphrect']),
     ('sampler', ['pt__draw', 'pt_rng', 'pt__sampler', 'pt__sobol', 'pt__owen']),
     ('hit record', ['pt__fill_hit', 'pt__albedo']),
+    # (before light sampling: next-event estimation's f, pt__material_eval in pt__nee_prepare, is the material's)
     ('material sample/eval/density', ['pt__material', 'pt__scatter', 'pt__lambert', 'pt__cosine', 'pt__onb', 'pt__fresnel',
                                       'pt__reflect', 'sincos']),
+    # the light sample and its shadow ray's set-up, in the scalar integrator and in the batched one's
+    # stages 2, 2b and 2c (pt__lane_light, pt__batch_lights, pt__batch_area_lights and what they inline)
+    ('light sampling and light pmf', ['pt__lights_sample', 'pt__lights_pick', 'pt__planar_', 'pt__light_pmf',
+                                      'pt__light_prim_value', 'pt__lights_value', 'pt__lights_reachable',
+                                      'pt__sphere_light', 'pt__lnode', 'pt__sphrect', 'pt__light_shadow_ray',
+                                      'pt__light_target', 'pt__nee_prepare', 'pt__lane_light', 'pt__lane_pick',
+                                      'pt__lane_area', 'pt__batch_lights', 'pt__batch_area_lights', 'pt__quad_area8',
+                                      'pt__qa_']),
 ]
 
 

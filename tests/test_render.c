@@ -1145,10 +1145,11 @@ static void batched_bit_identical(test_ctx *t)
                     }
                     pt_film_free(&f);
                 }
-                if ((c == 4 || c == 0) && (i <= 1 || i == 9)) { /* Sobol's draws made ahead (stage 1b), the
-                    Lambertian directions made ahead (stage 3b, Sobol and independent numbers) and the shadow rays'
-                    packets (stage 3; the Cornell boxes' and the rooms' occluders): AVX2's 8 at a time and the
-                    code below that level give the same film */
+                if ((c == 4 || c == 0) && (i <= 1 || i >= nscenes - 2)) { /* Sobol's draws made ahead (stage
+                    1b), the Lambertian directions made ahead (stage 3b, Sobol and independent numbers), quad
+                    lights' samples (stages 2b and 2c, on rooms and the quad lights) and the shadow rays' packets
+                    (stage 3; the Cornell boxes' and the rooms' occluders): AVX2's 8 (or 4) at a time and the
+                    scalar code below that level give the same film */
                     int level;
                     for (level = PT_SIMD_SCALAR; level < (int)pt_simd_cpu_level(); ++level) {
                         pt_film f;
@@ -1163,6 +1164,19 @@ static void batched_bit_identical(test_ctx *t)
                         pt_film_free(&f);
                     }
                     CHECK(t, pt_simd_set_cap(PT_SIMD_AVX512) == PT_OK && pt_scene_commit(s) == PT_OK, "uncapped commit");
+                }
+                if (c == 0 && i == nscenes - 1) { /* quads by area only (stage 2c without 2b), and shadow rays
+                    traced where the material reflects nothing (pt__nee_prepare's general path) */
+                    pt_film f, g;
+                    memset(&f, 0, sizeof f);
+                    memset(&g, 0, sizeof g);
+                    d.disable_skips = e.disable_skips = PT_SKIP_SOLID_ANGLE_QUADS | PT_SKIP_ZERO_BSDF_SHADOW;
+                    if (tu_render_into(t, s, &d, &f, NULL, "scalar, general") &&
+                        tu_render_into(t, s, &e, &g, NULL, "batched, general"))
+                        CHECK(t, tu_film_equal(&f, &g), "%s, %s, quads by area: the batched film differs from the scalar one",
+                              scenes[i], configs[c]);
+                    pt_film_free(&f);
+                    pt_film_free(&g);
                 }
             }
             pt_film_free(&a);
