@@ -1168,9 +1168,9 @@ typedef struct pt_path_stats {
    samples together in batches, stage by stage (closest hits, emission and light samples, the
    batch's shadow rays, continuation): the same functions in the same order per path, so the
    same image bit for bit. With Embree 3 (section 5b) the batch's closest hits and shadow rays
-   go to Embree as streams (rtcIntersect1M, rtcOccluded1M). Guide training iterations (path
-   guiding) run SCALAR; pt_render_stats.batched_samples counts the samples the batched
-   integrator took. With the Sobol sampler a split's copies (indirect_paths) are paths of the
+   go to Embree as streams (rtcIntersect1M, rtcOccluded1M). Path guiding's training iterations
+   run batched too, recording the same records; pt_render_stats.batched_samples counts the
+   samples the batched integrator took. With the Sobol sampler a split's copies (indirect_paths) are paths of the
    batch too; with independent numbers they run depth first as in SCALAR
    (pt_render_stats.batched_split_paths). */
 typedef enum pt_integrator {
@@ -11106,7 +11106,7 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    and a path keeps its own sampler, so every path draws the same numbers, does the same float
    operations and adds up its radiance in the same order as the scalar integrator: the image is
    the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
-   (cfg->recording) run scalar. Stage 2 leaves quads' light samples to stage 2c (by area, 8 paths
+   (cfg->recording) keep each path's records in its lane (pt__lane_recs). Stage 2 leaves quads' light samples to stage 2c (by area, 8 paths
    at a time), which leaves those by solid angle to stage 2b (4 at a time; pt__lane_light).
    Split copies (indirect_paths: every camera sample of a default render). With the Sobol
    sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
@@ -11150,6 +11150,7 @@ typedef struct pt__lane {
     int prev, next, head;         /* the family's scalar order (head: the root's, its first) */
     int pending, nkids, nlog, wait; /* pending: copies still running; wait: PT__WAIT_* */
     struct pt__lane_kids *kids;   /* (its own: kept apart, as only a split touches it) */
+    struct pt__lane_recs *recs;   /* training (cfg->recording): its path's records; else NULL */
 } pt__lane;
 
 /* A lane's split copies' sums and its log (pt__lane_add). */
@@ -11159,10 +11160,70 @@ typedef struct pt__lane_kids {
     pt_color log[PT__LANE_LOG]; /* what the path gathered while its copies ran, in order */
 } pt__lane_kids;
 
+/* Training a guide in the batched integrator (cfg->recording): a lane's records as
+   pt__trace_from keeps them (a split copy's first is its continuation from the parent's vertex,
+   as pt__split_copies records it), splatted when the path has ended (pt__lane_recs_flush; the
+   splats are integer sums, so their order changes nothing). A record made while the lane's copies
+   run has mark >= 0: its L0 is the lane's sum once pt__lane_fold has added the copies' and `mark`
+   entries of the log, where the scalar integrator's sum stood. e: the emission the record's own
+   ray found, which L0 leaves out (pt__trace_from adds it to L0 when found; added here at the end,
+   the same float addition). */
+typedef struct pt__lane_recs {
+    pt__guide_rec r[PT__GUIDE_PATH_RECORDS + 1];
+    pt_color e[PT__GUIDE_PATH_RECORDS + 1];
+    signed char mark[PT__GUIDE_PATH_RECORDS + 1];
+    int n, cap, last; /* records, how many it may hold, the last one's (-1: none to find emission) */
+} pt__lane_recs;
+
+/* A path's records at its start: none yet, up to PT__GUIDE_PATH_RECORDS of its own vertices. */
+static void pt__lane_recs_start(pt__lane_recs *r)
+{
+    r->n = 0;
+    r->last = -1;
+    r->cap = PT__GUIDE_PATH_RECORDS;
+}
+
+/* Lane l's non-delta vertex continued along l->ray (pt__trace_from's record after pt__continue). */
+static PT__NOINLINE void pt__lane_record(pt__lane *l, const int copies)
+{
+    pt__lane_recs *r = l->recs;
+    const int i = r->n;
+    if (i >= r->cap) return;
+    r->r[i].p = l->v.p;
+    r->r[i].w = l->ray.dir;
+    r->r[i].pdf = l->prev_pdf;
+    r->r[i].beta = l->beta;
+    r->r[i].L0 = l->L;
+    r->e[i] = pt_v3(0.0f, 0.0f, 0.0f);
+    r->mark[i] = (signed char)(copies && l->pending ? l->nlog : -1);
+    r->last = r->n++;
+}
+
+/* The records of lane l whose sum stood at l->L after `mark` entries of its log (pt__lane_fold). */
+static void pt__lane_recs_resolve(pt__lane_recs *r, int mark, pt_color L)
+{
+    int i;
+    for (i = 0; i < r->n; ++i)
+        if (r->mark[i] == mark) {
+            r->r[i].L0 = L;
+            r->mark[i] = -1;
+        }
+}
+
+/* A path's records into the guide once its sum L is final. */
+static PT__NOINLINE void pt__lane_recs_flush(pt_guide *g, pt__lane_recs *r, pt_color L)
+{
+    int i;
+    for (i = 0; i < r->n; ++i) r->r[i].L0 = pt_add(r->r[i].L0, r->e[i]);
+    if (r->n) pt__guide_record_path(g, r->r, r->n, L);
+    r->n = 0;
+}
+
 /* The lanes split copies take (free: not in use; spawn: copies started in this stage 4; parked:
    lanes that wait, pt__lane_continue). */
 typedef struct pt__batch_pool {
     pt__lane_kids *kids;
+    pt_guide *recording; /* cfg->recording */
     int nfree, nspawn, nparked;
     uint64_t lane_copies; /* split copies that ran as lanes */
     int free[PT__BATCH_LANES], spawn[PT__BATCH_LANES], parked[PT__BATCH_LANES];
@@ -11211,7 +11272,11 @@ static PT__NOINLINE void pt__lane_fold(pt__lane *l)
         S = pt_add(S, kx->Lc[c]);
     }
     l->L = pt_add(l->L, S);
-    for (c = 0; c < l->nlog; ++c) l->L = pt_add(l->L, kx->log[c]);
+    if (PT__UNLIKELY(l->recs != NULL)) pt__lane_recs_resolve(l->recs, 0, l->L);
+    for (c = 0; c < l->nlog; ++c) {
+        l->L = pt_add(l->L, kx->log[c]);
+        if (PT__UNLIKELY(l->recs != NULL)) pt__lane_recs_resolve(l->recs, c + 1, l->L);
+    }
     l->nlog = 0;
 }
 
@@ -11224,6 +11289,7 @@ static PT__NOINLINE void pt__lane_end(pt__lane *lanes, pt__batch_pool *pool, int
     l->wait = PT__WAIT_ENDED;
     while (l->wait == PT__WAIT_ENDED && !l->pending) {
         pt__lane *p;
+        if (PT__UNLIKELY(l->recs != NULL)) pt__lane_recs_flush(pool->recording, l->recs, l->L);
         if (l->prev >= 0) lanes[l->prev].next = l->next;
         else lanes[l->root].head = l->next;
         if (l->next >= 0) lanes[l->next].prev = l->prev;
@@ -11262,6 +11328,7 @@ static void pt__lane_start(pt__lane *l, const pt__settings *cfg, pt_ray ray)
     l->v.g = 0.0f;
     l->v.rr_e = l->v.rr_ref = 0.0f;
     l->v.sph_prim = NULL;
+    if (PT__UNLIKELY(l->recs != NULL)) pt__lane_recs_start(l->recs);
 }
 
 /* pt__lights_pick at vertex v. A pick by power reads neither the vertex's point nor its normal,
@@ -11562,8 +11629,13 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
     l->shadow = 0;
     l->defer = 0;
     if (!l->found) {
-        if (PT__UNLIKELY(cfg->env_on)) pt__lane_add(l, pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf), copies);
-        else pt__lane_add(l, pt_mul(l->beta, cfg->background), copies);
+        if (PT__UNLIKELY(cfg->env_on)) {
+            pt_color e = pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf);
+            pt__lane_add(l, e, copies);
+            if (PT__UNLIKELY(l->recs != NULL) && l->recs->last >= 0 && b->nee) l->recs->e[l->recs->last] = e;
+        } else {
+            pt__lane_add(l, pt_mul(l->beta, cfg->background), copies);
+        }
         return 0;
     }
     prim = &s->prims[l->pi];
@@ -11572,8 +11644,14 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
     if (m->emits && (m->two_sided || l->h.front_face)) {
         float w = l->prev_delta ? 1.0f
                                 : pt__emission_weight(s, cfg, prim, l->prev_pdf, l->prev_p, l->prev_n, l->ray.dir, l->t, v);
-        if (w > 0.0f) pt__lane_add(l, pt_scale(pt_mul(l->beta, m->emission), w), copies);
+        if (w > 0.0f) {
+            pt_color e = pt_scale(pt_mul(l->beta, m->emission), w);
+            pt__lane_add(l, e, copies);
+            /* training with next-event estimation: direct light is NEE's (pt__trace_from) */
+            if (PT__UNLIKELY(l->recs != NULL) && l->recs->last >= 0 && b->nee) l->recs->e[l->recs->last] = e;
+        }
     }
+    if (PT__UNLIKELY(l->recs != NULL)) l->recs->last = -1;
     if (l->depth >= cfg->max_depth || !m->scatters) return 0;
     l->beta_in = l->beta;
     pt__vertex_at(s, cfg, v, prim, m, &l->h, l->ray.dir, l->bary);
@@ -11656,6 +11734,20 @@ static PT__NOINLINE void pt__lane_split(pt__batch_ctx *b, pt__lane *l, int k)
         cl->copy = c;
         cl->pending = cl->nkids = cl->nlog = 0;
         cl->wait = PT__WAIT_NONE;
+        if (PT__UNLIKELY(cl->recs != NULL)) { /* its continuation's record first (pt__split_copies) */
+            pt__lane_recs_start(cl->recs);
+            if (!pd2) {
+                pt__lane_recs *r = cl->recs;
+                r->r[0].p = v->p;
+                r->r[0].w = cl->ray.dir;
+                r->r[0].pdf = pp2;
+                r->r[0].beta = cl->beta;
+                r->r[0].L0 = r->e[0] = pt_v3(0.0f, 0.0f, 0.0f);
+                r->mark[0] = -1;
+                r->n = 1;
+                r->cap = 1 + PT__GUIDE_PATH_RECORDS;
+            }
+        }
         cl->next = l->self; /* (before l, after the copies before it) */
         cl->prev = l->prev;
         if (l->prev >= 0) b->lanes[l->prev].next = idx;
@@ -11731,6 +11823,7 @@ static PT__HOT int pt__lane_continue(pt__batch_ctx *b, pt__lane *l, const int co
                       &l->prev_pdf, &l->prev_delta, &Lc, &l->st);
     pt__lane_add(l, Lc, copies);
     if (!go) return 0;
+    if (PT__UNLIKELY(l->recs != NULL) && !l->prev_delta) pt__lane_record(l, copies);
     l->prev_p = v->o;
     l->prev_n = pt__receiver_normal(v);
     l->st.bounce_rays++;
@@ -12026,6 +12119,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
 #endif
     b->lanes = lanes;
     b->pool->kids = kids;
+    b->pool->recording = cfg->recording;
     b->pool->nfree = b->pool->nspawn = b->pool->nparked = 0;
     b->pool->lane_copies = 0;
     if (kids)
@@ -12069,6 +12163,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     }
     for (i = 0; i < n; ++i) {
         pt__lane *l = &lanes[i];
+        if (!copies && PT__UNLIKELY(l->recs != NULL)) pt__lane_recs_flush(cfg->recording, l->recs, l->L);
         l->L = pt_scale(l->L, 1.0f / l->k);
         if (!pt__vfinite(l->L)) {
             l->st.nonfinite_samples++;
@@ -12262,18 +12357,21 @@ static int pt__render_job_batched(pt__pass *ps, int index)
     const size_t nl = copies_as_lanes ? PT__BATCH_LANES : PT__BATCH; /* (one block: lanes, then the kids) */
     pt__lane *lanes = (pt__lane *)PT_MALLOC(sizeof(pt__lane) * nl + (copies_as_lanes ? sizeof(pt__lane_kids) * nl : 0u));
     pt__lane_kids *kids = copies_as_lanes && lanes ? (pt__lane_kids *)(void *)(lanes + nl) : NULL;
+    pt__lane_recs *recs = ps->cfg->recording ? (pt__lane_recs *)PT_MALLOC(sizeof(pt__lane_recs) * nl) : NULL;
     pt__sobol_cache *cache = (pt__sobol_cache *)PT_MALLOC(sizeof(pt__sobol_cache));
     pt__packet_scene *pk = (pt__packet_scene *)PT_MALLOC(sizeof(pt__packet_scene));
     pt_path_stats st;
     uint64_t taken = 0, copies = 0;
     int x, y, k, n = 0, i;
     const int sobol = ps->cfg->sampler == PT_SAMPLER_SOBOL;
-    if (!lanes || !cache || !pk) {
+    if (!lanes || !cache || !pk || (ps->cfg->recording && !recs)) {
         PT_FREE(lanes);
+        PT_FREE(recs);
         PT_FREE(cache);
         PT_FREE(pk);
         return 0;
     }
+    for (i = 0; i < (int)nl; ++i) lanes[i].recs = recs ? &recs[i] : NULL;
     pt__packet_init(ps->scene, pk);
     memset(&st, 0, sizeof st);
     if (sobol) pt__sobol_cache_init(cache);
@@ -12322,6 +12420,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
         pt__stats_sum(&st, &d->st);
     }
     PT_FREE(lanes);
+    PT_FREE(recs);
     PT_FREE(cache);
     PT_FREE(pk);
     ps->tile_stats[index] = st;
@@ -13052,7 +13151,7 @@ static int pt__render_setup(const pt_scene *s, const pt_render_desc *d, pt_film 
 #endif
     ps->scene = s;
     ps->cfg = cfg;
-    ps->batched = cfg->batched && !cfg->recording; /* (a guide's training runs scalar: section 7) */
+    ps->batched = cfg->batched;
     ps->cam = cam;
     ps->film = film;
     ps->seed = d->seed;

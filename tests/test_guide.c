@@ -1043,6 +1043,75 @@ static pt_scene *small_box_with_balls(pt_render_desc *d, int *glass, int *matte)
     return s;
 }
 
+/* The training iterations run in the batched integrator record what the scalar one records: for
+   the box with a glass and a matte ball (guiding ON, 32 x 32, 16 spp: 2 iterations of 1 and 2 spp), with independent numbers and 1 or 4 indirect paths (split copies depth first) and with
+   Sobol and 4 or 8 indirect paths (copies as paths of the batch, recording while their parent
+   goes on; the last with weight-window splits and a budget of 12), the guide each integrator
+   trained (pt_render_desc.guiding_guide) and its film are bit-identical, and the stats say every
+   sample, training included, was batched. */
+static void render_batched_training(test_ctx *t)
+{
+    static const char *const names[] = { "independent", "independent, indirect_paths 4", "sobol, indirect_paths 4",
+                                         "sobol, indirect_paths 8, mixture 0.75, max_splits 12" };
+    const size_t fp_size = (size_t)64 * (64 * sizeof(float) + 8 * (sizeof(int) + sizeof(pt_vec3) + sizeof(float)));
+    pt_render_desc base = tu_base_desc(32, 32, 16, 6262);
+    int glass, matte, c;
+    pt_scene *s = small_box_with_balls(&base, &glass, &matte);
+    unsigned char *fa = (unsigned char *)malloc(fp_size), *fb = (unsigned char *)malloc(fp_size);
+    if (!CHECK(t, s != NULL && fa && fb, "scene with balls")) goto done;
+    for (c = 0; c < 4; ++c) {
+        pt_render_desc d = base, e;
+        pt_guide *ga = NULL, *gb = NULL;
+        pt_film a, b;
+        pt_render_stats sa, sb;
+        memset(&a, 0, sizeof a);
+        memset(&b, 0, sizeof b);
+        d.guiding = PT_GUIDING_ON;
+        d.threads = 2;
+        d.sampler = c >= 2 ? PT_SAMPLER_SOBOL : PT_SAMPLER_INDEPENDENT;
+        d.indirect_paths = c == 0 ? 1 : c == 3 ? 8 : 4;
+        if (c == 3) { d.strategy = PT_STRATEGY_MIXTURE; d.light_weight = 0.75f; d.max_splits = 12; }
+        d.integrator = PT_INTEGRATOR_SCALAR;
+        e = d;
+        e.integrator = PT_INTEGRATOR_BATCHED;
+        if (!CHECK(t, pt_guide_create_for_scene(s, NULL, &ga) == PT_OK && pt_guide_create_for_scene(s, NULL, &gb) == PT_OK,
+                   "pt_guide_create_for_scene")) {
+            pt_guide_destroy(ga);
+            pt_guide_destroy(gb);
+            break;
+        }
+        d.guiding_guide = ga;
+        e.guiding_guide = gb;
+        if (tu_render_into(t, s, &d, &a, &sa, "scalar") && tu_render_into(t, s, &e, &b, &sb, "batched")) {
+            CHECK(t, sa.guiding_iterations == 2 && sb.guiding_iterations == 2 && sb.guiding_samples == 32u * 32u * 3u,
+                  "%s: %d and %d iterations, %llu training samples", names[c], sa.guiding_iterations,
+                  sb.guiding_iterations, (unsigned long long)sb.guiding_samples);
+            CHECK(t, sa.batched_samples == 0 && sb.batched_samples == sb.samples,
+                  "%s: batched samples %llu (scalar) and %llu of %llu (batched)", names[c],
+                  (unsigned long long)sa.batched_samples, (unsigned long long)sb.batched_samples,
+                  (unsigned long long)sb.samples);
+            CHECK(t, (c >= 2) == (sb.batched_split_paths > 0), "%s: %llu copies ran as lanes", names[c],
+                  (unsigned long long)sb.batched_split_paths);
+            guide_fingerprint(ga, fa, 64, 64);
+            guide_fingerprint(gb, fb, 64, 64);
+            CHECK(t, memcmp(fa, fb, fp_size) == 0, "%s: the guide the batched integrator trained differs from the scalar one's",
+                  names[c]);
+            CHECK(t, sa.guiding_leaves == sb.guiding_leaves && sa.guiding_bytes == sb.guiding_bytes,
+                  "%s: %u leaves, %zu bytes (scalar) against %u, %zu (batched)", names[c], sa.guiding_leaves,
+                  sa.guiding_bytes, sb.guiding_leaves, sb.guiding_bytes);
+            CHECK(t, tu_film_equal(&a, &b), "%s: the batched film differs from the scalar one", names[c]);
+        }
+        pt_film_free(&a);
+        pt_film_free(&b);
+        pt_guide_destroy(ga);
+        pt_guide_destroy(gb);
+    }
+done:
+    free(fa);
+    free(fb);
+    pt_scene_destroy(s);
+}
+
 static void render_threads_bit_identical(test_ctx *t)
 {
     /* Guiding ON, 48 x 48, 32 spp (3 training iterations of 1, 2, 4 spp, then 25 guided): the film
@@ -1858,6 +1927,7 @@ const test_case test_guide_cases[] = {
     TEST_CASE(spatial_leaves_are_local),
     TEST_CASE(guide_order_independent),
     TEST_CASE(render_threads_bit_identical),
+    TEST_CASE(render_batched_training),
     TEST_CASE(render_unbiased),
     TEST_CASE(render_unbiased_glass),
     TEST_CASE(caustic_photons),
