@@ -11339,25 +11339,41 @@ static PT__HOT int pt__lane_pick(const pt__batch_ctx *b, const pt__vertex *v, fl
         return pt__lights_pick(b->s, pt_v3(0.0f, 0.0f, 0.0f), pt_v3(0.0f, 0.0f, 0.0f), u0, li, pick, 0u);
     return pt__lights_pick(b->s, v->o, pt__receiver_normal(v), u0, li, pick, b->lmode);
 }
+/* pt__lights_picked for a shaped light's sample at a lane, and with an environment the shaped
+   lights' share pt__lights_sample_all multiplies in after it (in that order: the same bits). */
+static PT__HOT int pt__lane_picked(const pt__batch_ctx *b, pt__light_sample *ls, float pick, uint32_t li,
+                                   uint32_t *light_index)
+{
+    if (!pt__lights_picked(ls, pick, li, light_index)) return 0;
+    if (PT__UNLIKELY(b->cfg->env_pick > 0.0f)) {
+        ls->pdf *= b->cfg->lights_share;
+        return ls->pdf > 0.0f;
+    }
+    return 1;
+}
 /* Stage 2's light sample at lane l's vertex (the numbers u0, u1, u2 of pt__lights_sample_all) and
    its shadow ray. Where the light picked is a quad, the rest is left to stage 2c (l->defer = 2;
    pt__batch_area_lights), which makes the batch's area samples of quads 8 at a time and leaves
    those to be sampled by solid angle (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which
-   sets up their spherical rectangles 4 at a time. b->area is 0 without AVX2 or with an
-   environment: then it is all done here. Either way each path does what pt__lights_sample_all
-   and pt__nee_prepare do. */
+   sets up their spherical rectangles 4 at a time. b->area is 0 without AVX2: then it is all done
+   here, as it is for a lane whose pick chose the environment. With an environment a shaped light
+   is picked with pt__lights_sample_all's u0 rescaled, and its density carries the lights' share
+   (pt__lane_picked). Either way each path does what pt__lights_sample_all and pt__nee_prepare do. */
 static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0, float u1, float u2)
 {
     const pt_scene *s = b->s;
+    const pt__settings *cfg = b->cfg;
     pt__vertex *v = &l->v;
     uint32_t li = 0;  /* set by pt__lights_pick (gcc -Og cannot see it) */
     float pick = 0.0f;
     l->ls.sph_prim = NULL;
     l->ls.sph_S = 0.0;
-    if (!b->area) {
-        l->shadow = pt__lights_sample_all(s, b->cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
-                    pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
-    } else if (!pt__lane_pick(b, v, u0, &li, &pick)) {
+    if (!b->area || (PT__UNLIKELY(cfg->env_pick > 0.0f) && u0 < cfg->env_pick)) {
+        l->shadow = pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
+                    pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+    } else if (!pt__lane_pick(b, v, PT__UNLIKELY(cfg->env_pick > 0.0f)
+                                        ? pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f) : u0,
+                              &li, &pick)) {
         l->shadow = 0;
     } else {
         const pt__prim *p = &s->prims[s->lights[li].prim];
@@ -11370,8 +11386,8 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0
             return;
         }
         l->shadow = pt__light_prim_sample(s, p, v->o, u1, u2, &l->ls, b->sph) &&
-                    pt__lights_picked(&l->ls, pick, li, &l->li) &&
-                    pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+                    pt__lane_picked(b, &l->ls, pick, li, &l->li) &&
+                    pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
     }
     v->sph_prim = l->ls.sph_prim;
     v->sph_S = l->ls.sph_S;
@@ -11390,7 +11406,7 @@ static PT__HOT void pt__lane_light_finish(const pt__batch_ctx *b, pt__lane *l, c
         S = 0.0;
     }
     l->shadow = pt__planar_light_at(p, s->lights[p->light].area, v->o, q, S, &l->ls) &&
-                pt__lights_picked(&l->ls, l->dpick, l->li, &l->li) &&
+                pt__lane_picked(b, &l->ls, l->dpick, l->li, &l->li) &&
                 pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
     v->sph_prim = l->ls.sph_prim;
     v->sph_S = l->ls.sph_S;
@@ -11551,7 +11567,7 @@ static PT__HOT void pt__lane_area_finish(const pt__batch_ctx *b, pt__lane *l, co
         ok = l->ls.pdf > 0.0f && pt__isfinite(l->ls.pdf);
     }
     target = pt_v3(out[PT__QA_TARGET][j], out[PT__QA_TARGET + 1][j], out[PT__QA_TARGET + 2][j]);
-    l->shadow = ok && pt__lights_picked(&l->ls, l->dpick, l->li, &l->li) &&
+    l->shadow = ok && pt__lane_picked(b, &l->ls, l->dpick, l->li, &l->li) &&
                 pt__nee_prepare_to(b->s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st, &target);
     v->sph_prim = l->ls.sph_prim;
     v->sph_S = l->ls.sph_S;
@@ -12113,7 +12129,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     b->copies = copies;
     b->lmode = pt__lights_mode(cfg);
     b->sph = (b->lmode & PT__LIGHTS_SPHERICAL) != 0;
-    b->area = s->simd >= PT_SIMD_AVX2 && !(cfg->env_pick > 0.0f);
+    b->area = s->simd >= PT_SIMD_AVX2;
 #ifndef PT__WIDE
     b->area = 0;
 #endif

@@ -1054,33 +1054,39 @@ done:
 /* Quad lights sampled by solid angle from near and at grazing angles (the batched integrator sets
    their spherical rectangles up 4 at a time): one lying just above the floor and one upright, both
    two-sided, the whole ceiling (solid angles past PT__SPHERICAL_MAX near it), and a slanted
-   parallelogram (not a rectangle: sampled by area). */
-static const char quad_lights_scene[] =
-    "camera look_from 0 1.2 -2.5 look_at 0 0.8 1 vfov 75\n"
-    "material floor lambertian 0.7 0.7 0.7\nmaterial wall lambertian 0.6 0.5 0.4\n"
-    "material lamp emitter 4 4 4\nmaterial lamp2 emitter 2 3 4 two_sided\n"
-    "quad -2 0 -3   0 0 6   4 0 0   floor\nquad -2 0 3   4 0 0   0 2.5 0   wall\nquad -2 0 -3   0 2.5 0   0 0 6   wall\n"
-    "quad -2 2.5 -3   4 0 0   0 0 6   lamp\nquad -1.5 0.02 0.5   1 0 0   0 0 1   lamp2\n"
-    "quad 1.2 0.3 -1   0 1.5 0   0 0 2   lamp2\nquad 0.3 0.05 1.2   0.8 0.3 0   0.1 0 0.9   lamp\n";
+   parallelogram (not a rectangle: sampled by area). The same under scenes/sky.pfm: light sampling
+   then picks the environment or a quad (the batched integrator's quads still 8 and 4 at a time). */
+#define QUAD_LIGHTS_TEXT                                                                                                       \
+    "camera look_from 0 1.2 -2.5 look_at 0 0.8 1 vfov 75\n"                                                                  \
+    "material floor lambertian 0.7 0.7 0.7\nmaterial wall lambertian 0.6 0.5 0.4\n"                                         \
+    "material lamp emitter 4 4 4\nmaterial lamp2 emitter 2 3 4 two_sided\n"                                                 \
+    "quad -2 0 -3   0 0 6   4 0 0   floor\nquad -2 0 3   4 0 0   0 2.5 0   wall\nquad -2 0 -3   0 2.5 0   0 0 6   wall\n"  \
+    "quad -2 2.5 -3   4 0 0   0 0 6   lamp\nquad -1.5 0.02 0.5   1 0 0   0 0 1   lamp2\n"                                   \
+    "quad 1.2 0.3 -1   0 1.5 0   0 0 2   lamp2\nquad 0.3 0.05 1.2   0.8 0.3 0   0.1 0 0.9   lamp\n"
+static const char quad_lights_scene[] = QUAD_LIGHTS_TEXT;
+static const char quad_sky_scene[] = QUAD_LIGHTS_TEXT "environment sky.pfm 0.5\n";
 
 static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
                                           "scenes/lights.scene", "scenes/textured.scene", "scenes/rough-glass.scene",
                                           "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene",
-                                          "bench/scenes/rooms.scene", "quad lights" };
+                                          "bench/scenes/rooms.scene", "quad lights", "quad lights under a sky" };
     static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
                                            "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol, roulette from 1",
                                            "sobol, indirect_paths 8, mixture 0.75, max_splits 12",
                                            "guiding, indirect_paths 4" };
     const int nscenes = (int)(sizeof scenes / sizeof scenes[0]), nconfigs = (int)(sizeof configs / sizeof configs[0]);
+    const int quads = nscenes - 2, rooms = nscenes - 3; /* (the two scenes of quad lights are the last) */
     int i, c, renders = 0, split = 0, lane_copies = 0, inline_copies = 0;
     char err[512];
     for (i = 0; i < nscenes; ++i) {
         pt_scenefile sf;
         pt_scene *s = NULL;
         pt_render_desc base;
-        int r = i == nscenes - 1 ? pt_scenefile_parse(quad_lights_scene, sizeof quad_lights_scene - 1, scenes[i], ".", &sf, err,
+        int r = i == quads       ? pt_scenefile_parse(quad_lights_scene, sizeof quad_lights_scene - 1, scenes[i], ".", &sf, err,
+                                                      sizeof err)
+                : i == quads + 1 ? pt_scenefile_parse(quad_sky_scene, sizeof quad_sky_scene - 1, scenes[i], "scenes", &sf, err,
                                                       sizeof err)
                                  : pt_scenefile_load(scenes[i], &sf, err, sizeof err);
         if (!CHECK(t, r == PT_OK, "%s: %s", scenes[i], err)) continue;
@@ -1148,9 +1154,10 @@ static void batched_bit_identical(test_ctx *t)
                     }
                     pt_film_free(&f);
                 }
-                if ((c == 4 || c == 0) && (i <= 1 || i >= nscenes - 2)) { /* Sobol's draws made ahead (stage
+                if ((c == 4 || c == 0) && (i <= 1 || i >= rooms)) { /* Sobol's draws made ahead (stage
                     1b), the Lambertian directions made ahead (stage 3b, Sobol and independent numbers), quad
-                    lights' samples (stages 2b and 2c, on rooms and the quad lights) and the shadow rays' packets
+                    lights' samples (stages 2b and 2c, on rooms and the quad lights, with and without an
+                    environment the pick can choose) and the shadow rays' packets
                     (stage 3; the Cornell boxes' and the rooms' occluders): AVX2's 8 (or 4) at a time and the
                     scalar code below that level give the same film */
                     int level;
@@ -1168,7 +1175,7 @@ static void batched_bit_identical(test_ctx *t)
                     }
                     CHECK(t, pt_simd_set_cap(PT_SIMD_AVX512) == PT_OK && pt_scene_commit(s) == PT_OK, "uncapped commit");
                 }
-                if (c == 0 && i == nscenes - 1) { /* quads by area only (stage 2c without 2b), and shadow rays
+                if (c == 0 && i >= quads) { /* quads by area only (stage 2c without 2b), and shadow rays
                     traced where the material reflects nothing (pt__nee_prepare's general path) */
                     pt_film f, g;
                     memset(&f, 0, sizeof f);
