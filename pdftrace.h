@@ -5274,15 +5274,21 @@ static PT__HOT void pt__rayctx_init2(pt__rayctx *rc, pt_ray r, int need_triangle
     if (!need_triangles) { rc->kx = 0; rc->ky = 1; rc->kz = 2; rc->sx = rc->sy = rc->sz = 0.0f; return; }
     ax = fabsf(r.dir.x); ay = fabsf(r.dir.y); az = fabsf(r.dir.z);
     /* Woop, Benthin & Wald 2013: kz = dominant axis, kx/ky follow cyclically (swapped to keep
-       the winding when dir[kz] < 0). */
-    rc->kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-    rc->kx = (rc->kz + 1) % 3;
-    rc->ky = (rc->kx + 1) % 3;
-    dk = pt__vget(r.dir, rc->kz);
-    if (dk < 0.0f) { int tmp = rc->kx; rc->kx = rc->ky; rc->ky = tmp; }
-    if (dk == 0.0f) dk = FLT_MIN; /* zero direction: nothing is hit, but stay finite */
-    rc->sx = pt__vget(r.dir, rc->kx) / dk;
-    rc->sy = pt__vget(r.dir, rc->ky) / dk;
+       the winding when dir[kz] < 0). Chosen by selects and indexing rather than branches, which a
+       random direction would mispredict: kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2). */
+    {
+        static const int next[3] = {1, 2, 0};
+        const float dv[3] = {r.dir.x, r.dir.y, r.dir.z};
+        const int xy = ax > ay, big = (xy ? ax : ay) > az, kz = 2 - big * (1 + xy);
+        const int kx = next[kz], ky = next[kx], swap = -(int)(dv[kz] < 0.0f);
+        rc->kz = kz;
+        rc->kx = kx ^ ((kx ^ ky) & swap);
+        rc->ky = ky ^ ((kx ^ ky) & swap);
+        dk = dv[kz];
+        if (dk == 0.0f) dk = FLT_MIN; /* zero direction: nothing is hit, but stay finite */
+        rc->sx = dv[rc->kx] / dk;
+        rc->sy = dv[rc->ky] / dk;
+    }
     rc->sz = 1.0f / dk;
 }
 static void pt__rayctx_init(pt__rayctx *rc, pt_ray r) { pt__rayctx_init2(rc, r, 1); }
