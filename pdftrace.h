@@ -1717,6 +1717,7 @@ typedef struct pt__dlight {
     pt_vec3 pos;         /* relative to the scene's origin (commit) */
     pt_vec3 axis;        /* unit: the spot's axis, the directional light's direction of travel */
     float cutoff, beam, inv_transition; /* SPOT (radians) */
+    double tan_in, tan_out; /* SPOT: the falloff's shortcuts (pt__spot_bounds) */
     double power;        /* picks it (commit) */
     float select_pdf, cdf;
 } pt__dlight;
@@ -5273,15 +5274,21 @@ static PT__HOT void pt__rayctx_init2(pt__rayctx *rc, pt_ray r, int need_triangle
     if (!need_triangles) { rc->kx = 0; rc->ky = 1; rc->kz = 2; rc->sx = rc->sy = rc->sz = 0.0f; return; }
     ax = fabsf(r.dir.x); ay = fabsf(r.dir.y); az = fabsf(r.dir.z);
     /* Woop, Benthin & Wald 2013: kz = dominant axis, kx/ky follow cyclically (swapped to keep
-       the winding when dir[kz] < 0). */
-    rc->kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-    rc->kx = (rc->kz + 1) % 3;
-    rc->ky = (rc->kx + 1) % 3;
-    dk = pt__vget(r.dir, rc->kz);
-    if (dk < 0.0f) { int tmp = rc->kx; rc->kx = rc->ky; rc->ky = tmp; }
-    if (dk == 0.0f) dk = FLT_MIN; /* zero direction: nothing is hit, but stay finite */
-    rc->sx = pt__vget(r.dir, rc->kx) / dk;
-    rc->sy = pt__vget(r.dir, rc->ky) / dk;
+       the winding when dir[kz] < 0). Chosen by selects and indexing rather than branches, which a
+       random direction would mispredict: kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2). */
+    {
+        static const int next[3] = {1, 2, 0};
+        const float dv[3] = {r.dir.x, r.dir.y, r.dir.z};
+        const int xy = ax > ay, big = (xy ? ax : ay) > az, kz = 2 - big * (1 + xy);
+        const int kx = next[kz], ky = next[kx], swap = -(int)(dv[kz] < 0.0f);
+        rc->kz = kz;
+        rc->kx = kx ^ ((kx ^ ky) & swap);
+        rc->ky = ky ^ ((kx ^ ky) & swap);
+        dk = dv[kz];
+        if (dk == 0.0f) dk = FLT_MIN; /* zero direction: nothing is hit, but stay finite */
+        rc->sx = dv[rc->kx] / dk;
+        rc->sy = dv[rc->ky] / dk;
+    }
     rc->sz = 1.0f / dk;
 }
 static void pt__rayctx_init(pt__rayctx *rc, pt_ray r) { pt__rayctx_init2(rc, r, 1); }
@@ -6395,6 +6402,17 @@ PTDEF int pt_material_is_delta(const pt_scene *s, int material)
     return s->mats[material].delta || !s->mats[material].scatters;
 }
 /* --- delta lights (pt_scene_add_light) --- */
+/* The spot's shortcuts for pt__spot_falloff: an angle whose tangent (sin over a positive cos) is
+   below tan_in is inside the beam, one whose tangent is above tan_out is outside the cone. Each
+   bound is 1e-4 of the angle inside its edge, far beyond the few float ulps of atan2f's error
+   and the double products' rounding, so atan2f would compare alike; tan_in 0 and tan_out
+   infinite turn them off (a beam too narrow for a relative margin, a cone near 90 degrees). */
+static void pt__spot_bounds(pt__dlight *l)
+{
+    double in = (double)l->beam * (1.0 - 1e-4), out = (double)l->cutoff * (1.0 + 1e-4);
+    l->tan_in = l->beam >= 1e-6f ? tan(in) : 0.0;
+    l->tan_out = out < 1.5 ? tan(out) : HUGE_VAL;
+}
 PTDEF int pt_scene_add_light(pt_scene *s, const pt_light_desc *d)
 {
     pt__dlight l;
@@ -6451,6 +6469,7 @@ PTDEF int pt_scene_add_light(pt_scene *s, const pt_light_desc *d)
         l.cutoff = c * deg;
         l.beam = b * deg;
         l.inv_transition = b < c ? 1.0f / (l.cutoff - l.beam) : 0.0f;
+        pt__spot_bounds(&l);
     } else {
         l.desc.cutoff_angle = l.desc.beam_width = 0.0f;
     }
@@ -6645,7 +6664,14 @@ PTDEF pt_color pt_scene_environment_radiance(const pt_scene *s, pt_vec3 dir)
    not (cos 0.01 degrees rounds to 1 in float). */
 static float pt__spot_falloff(const pt__dlight *l, pt_vec3 w)
 {
-    float a = atan2f(pt_length(pt_cross(l->axis, w)), pt_dot(l->axis, w));
+    float sn = pt_length(pt_cross(l->axis, w)), cs = pt_dot(l->axis, w), a;
+    /* the angle atan2f(sn, cs) is well inside the beam or well outside the cone: the comparisons
+       below give what they would give on atan2f's result, without it */
+    if (cs > 0.0f && sn >= 0.0f && sn <= FLT_MAX) {
+        if ((double)sn < (double)cs * l->tan_in) return 1.0f;
+        if ((double)sn > (double)cs * l->tan_out) return 0.0f;
+    }
+    a = atan2f(sn, cs);
     if (a <= l->beam) return 1.0f;
     if (!(a < l->cutoff)) return 0.0f;
     return pt__minf(1.0f, (l->cutoff - a) * l->inv_transition);

@@ -24,6 +24,7 @@
 #include <time.h>
 
 #include "test.h"
+#include "test_internals.h" /* (its section calls the implementation's static functions) */
 
 int test_check_(test_ctx *t, int ok, const char *file, int line, const char *fmt, ...)
 {
@@ -123,6 +124,7 @@ int main(int argc, char **argv)
         { "embree", test_embree_cases },
         { "analytic", test_analytic_cases },
         { "lights", test_lights_cases },
+        { "internals", test_internals_cases },
         { "regress", test_regress_cases },
         { "origin", test_origin_cases },
         { "stress", test_stress_cases },
