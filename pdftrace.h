@@ -2771,6 +2771,23 @@ static PT__HOT void pt__sincos_quarter(float x, float *sn, float *cs)
     *sn = x + x * x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f + x2 * (1.0f / 362880.0f))));
     *cs = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f + x2 * (-1.0f / 3628800.0f)))));
 }
+/* sin and cos of 2 pi u for u in [0, 1]: u less its nearest quarter turn k/4 (exact: k/4 is a
+   multiple of u's ulp and |u - k/4| <= 1/8), pt__sincos_quarter of 2 pi times that, turned by k
+   quarter turns. k is counted by comparisons (a NaN gives k = 0 and NaNs out, no undefined
+   conversion), so pt__sincos_turn8 does these operations lane by lane. */
+static PT__HOT void pt__sincos_turn(float u, float *sn, float *cs)
+{
+    const float q = 4.0f * u + 0.5f;
+    const int k = (q >= 1.0f) + (q >= 2.0f) + (q >= 3.0f) + (q >= 4.0f);
+    float s, c;
+    pt__sincos_quarter((2.0f * PT__PI) * (u - 0.25f * (float)k), &s, &c);
+    switch (k & 3) {
+    case 0: *sn = s; *cs = c; break;
+    case 1: *sn = c; *cs = -s; break;
+    case 2: *sn = -s; *cs = -c; break;
+    default: *sn = -c; *cs = s; break;
+    }
+}
 /* Double-precision acos, sin and cos for the solid-angle sampling of quad lights (pt__sphrect_init,
    pt__sphrect_point): the same operations on every CPU and in every build, where libm's differ,
    and written so that a vector version does exactly these operations per lane (no table, no
@@ -2874,6 +2891,55 @@ static PT__HOT pt_vec3 pt__cosine_hemisphere(float u1, float u2)
 }
 PTDEF pt_vec3 pt_sample_cosine_hemisphere(float u1, float u2) { return pt__cosine_hemisphere(u1, u2); }
 #ifdef PT__WIDE
+/* pt__sincos_quarter for 8 lanes (AVX2): its operations in its order, so the same bits. */
+PT__TARGET_AVX2 static inline void pt__sincos_quarter8(__m256 a, __m256 *sn, __m256 *cs)
+{
+    const __m256 a2 = _mm256_mul_ps(a, a);
+    __m256 s, c;
+    s = _mm256_add_ps(_mm256_set1_ps(1.0f / 120.0f),
+                      _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-1.0f / 5040.0f),
+                                                      _mm256_mul_ps(a2, _mm256_set1_ps(1.0f / 362880.0f)))));
+    *sn = _mm256_add_ps(a, _mm256_mul_ps(_mm256_mul_ps(a, a2), _mm256_add_ps(_mm256_set1_ps(-1.0f / 6.0f), _mm256_mul_ps(a2, s))));
+    c = _mm256_add_ps(_mm256_set1_ps(1.0f / 40320.0f), _mm256_mul_ps(a2, _mm256_set1_ps(-1.0f / 3628800.0f)));
+    c = _mm256_add_ps(_mm256_set1_ps(1.0f / 24.0f),
+                      _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-1.0f / 720.0f), _mm256_mul_ps(a2, c))));
+    *cs = _mm256_add_ps(_mm256_set1_ps(1.0f), _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-0.5f), _mm256_mul_ps(a2, c))));
+}
+/* pt__sincos_turn for 8 lanes: k's comparisons as masks, the quarter turns as selects and sign flips. */
+PT__TARGET_AVX2 static inline void pt__sincos_turn8(__m256 u, __m256 *sn, __m256 *cs)
+{
+    const __m256 one = _mm256_set1_ps(1.0f), signbit = _mm256_set1_ps(-0.0f);
+    const __m256 q = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(4.0f), u), _mm256_set1_ps(0.5f));
+    const __m256 ge1 = _mm256_cmp_ps(q, one, _CMP_GE_OQ), ge2 = _mm256_cmp_ps(q, _mm256_set1_ps(2.0f), _CMP_GE_OQ);
+    const __m256 ge3 = _mm256_cmp_ps(q, _mm256_set1_ps(3.0f), _CMP_GE_OQ), ge4 = _mm256_cmp_ps(q, _mm256_set1_ps(4.0f), _CMP_GE_OQ);
+    const __m256 k = _mm256_add_ps(_mm256_add_ps(_mm256_and_ps(ge1, one), _mm256_and_ps(ge2, one)),
+                                   _mm256_add_ps(_mm256_and_ps(ge3, one), _mm256_and_ps(ge4, one)));
+    const __m256 odd = _mm256_xor_ps(_mm256_xor_ps(ge1, ge2), _mm256_xor_ps(ge3, ge4)); /* k = 1 or 3 */
+    const __m256 sneg = _mm256_andnot_ps(ge4, ge2);                                      /* k = 2 or 3 */
+    const __m256 cneg = _mm256_andnot_ps(ge3, ge1);                                      /* k = 1 or 2 */
+    __m256 s, c;
+    pt__sincos_quarter8(_mm256_mul_ps(_mm256_set1_ps(2.0f * PT__PI), _mm256_sub_ps(u, _mm256_mul_ps(_mm256_set1_ps(0.25f), k))),
+                        &s, &c);
+    *sn = _mm256_xor_ps(_mm256_blendv_ps(s, c, odd), _mm256_and_ps(sneg, signbit));
+    *cs = _mm256_xor_ps(_mm256_blendv_ps(c, s, odd), _mm256_and_ps(cneg, signbit));
+}
+/* pt_onb_to_world(pt__onb(n), l) for 8 lanes (Duff et al. 2017), in the scalar code's order. */
+PT__TARGET_AVX2 static inline void pt__onb_to_world8(const __m256 *n, const __m256 *l, __m256 *w)
+{
+    const __m256 one = _mm256_set1_ps(1.0f), signbit = _mm256_set1_ps(-0.0f);
+    const __m256 sign = _mm256_or_ps(_mm256_and_ps(signbit, n[2]), one);
+    const __m256 inv = _mm256_div_ps(_mm256_set1_ps(-1.0f), _mm256_add_ps(sign, n[2]));
+    const __m256 c = _mm256_mul_ps(_mm256_mul_ps(n[0], n[1]), inv);
+    w[0] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(one, _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(sign, n[0]), n[0]), inv)), l[0]),
+                                       _mm256_mul_ps(c, l[1])),
+                         _mm256_mul_ps(n[0], l[2]));
+    w[1] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(sign, c), l[0]),
+                                       _mm256_mul_ps(_mm256_add_ps(sign, _mm256_mul_ps(_mm256_mul_ps(n[1], n[1]), inv)), l[1])),
+                         _mm256_mul_ps(n[1], l[2]));
+    w[2] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_xor_ps(signbit, sign), n[0]), l[0]),
+                                       _mm256_mul_ps(_mm256_xor_ps(signbit, n[1]), l[1])),
+                         _mm256_mul_ps(n[2], l[2]));
+}
 /* A Lambertian vertex's scattered direction and density (pt__material_sample_dir: the disk map
    with pt__sincos_quarter, Malley's lift, pt__onb's basis at the shading normal n, the cosine
    density) for 8 lanes at a time with AVX2, each lane doing the scalar code's float operations
@@ -2887,43 +2953,22 @@ PT__TARGET_AVX2 static void pt__lambert_dir8(const float *nx, const float *ny, c
     const __m256 xbig = _mm256_cmp_ps(_mm256_andnot_ps(signbit, sx), _mm256_andnot_ps(signbit, sy), _CMP_GT_OQ);
     const __m256 at0 = _mm256_and_ps(_mm256_cmp_ps(sx, zero, _CMP_EQ_OQ), _mm256_cmp_ps(sy, zero, _CMP_EQ_OQ));
     const __m256 den = _mm256_blendv_ps(sy, sx, xbig), num = _mm256_blendv_ps(sx, sy, xbig);
-    const __m256 a = _mm256_mul_ps(_mm256_set1_ps(PT__PI / 4.0f), _mm256_div_ps(num, den)), a2 = _mm256_mul_ps(a, a);
-    __m256 sn, cs, x, y, lz, n0, n1, n2, sign, inv, c, w0, w1, w2, d;
-    /* pt__sincos_quarter */
-    sn = _mm256_add_ps(_mm256_set1_ps(1.0f / 120.0f),
-                       _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-1.0f / 5040.0f),
-                                                       _mm256_mul_ps(a2, _mm256_set1_ps(1.0f / 362880.0f)))));
-    sn = _mm256_add_ps(a, _mm256_mul_ps(_mm256_mul_ps(a, a2), _mm256_add_ps(_mm256_set1_ps(-1.0f / 6.0f), _mm256_mul_ps(a2, sn))));
-    cs = _mm256_add_ps(_mm256_set1_ps(1.0f / 40320.0f), _mm256_mul_ps(a2, _mm256_set1_ps(-1.0f / 3628800.0f)));
-    cs = _mm256_add_ps(_mm256_set1_ps(1.0f / 24.0f),
-                       _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-1.0f / 720.0f), _mm256_mul_ps(a2, cs))));
-    cs = _mm256_add_ps(one, _mm256_mul_ps(a2, _mm256_add_ps(_mm256_set1_ps(-0.5f), _mm256_mul_ps(a2, cs))));
+    __m256 sn, cs, l[3], n[3], w[3], d;
+    pt__sincos_quarter8(_mm256_mul_ps(_mm256_set1_ps(PT__PI / 4.0f), _mm256_div_ps(num, den)), &sn, &cs);
     /* pt__concentric_disk (0 at the centre, where 0/0 made a NaN) and Malley's lift */
-    x = _mm256_andnot_ps(at0, _mm256_mul_ps(den, _mm256_blendv_ps(sn, cs, xbig)));
-    y = _mm256_andnot_ps(at0, _mm256_mul_ps(den, _mm256_blendv_ps(cs, sn, xbig)));
-    lz = _mm256_sub_ps(_mm256_sub_ps(one, _mm256_mul_ps(x, x)), _mm256_mul_ps(y, y));
-    lz = _mm256_sqrt_ps(_mm256_and_ps(_mm256_cmp_ps(lz, zero, _CMP_GT_OQ), lz));
-    /* pt__onb (Duff et al. 2017) and pt_onb_to_world */
-    n0 = _mm256_loadu_ps(nx);
-    n1 = _mm256_loadu_ps(ny);
-    n2 = _mm256_loadu_ps(nz);
-    sign = _mm256_or_ps(_mm256_and_ps(signbit, n2), one);
-    inv = _mm256_div_ps(_mm256_set1_ps(-1.0f), _mm256_add_ps(sign, n2));
-    c = _mm256_mul_ps(_mm256_mul_ps(n0, n1), inv);
-    w0 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(one, _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(sign, n0), n0), inv)), x),
-                                     _mm256_mul_ps(c, y)),
-                       _mm256_mul_ps(n0, lz));
-    w1 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(sign, c), x),
-                                     _mm256_mul_ps(_mm256_add_ps(sign, _mm256_mul_ps(_mm256_mul_ps(n1, n1), inv)), y)),
-                       _mm256_mul_ps(n1, lz));
-    w2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_xor_ps(signbit, sign), n0), x),
-                                     _mm256_mul_ps(_mm256_xor_ps(signbit, n1), y)),
-                       _mm256_mul_ps(n2, lz));
+    l[0] = _mm256_andnot_ps(at0, _mm256_mul_ps(den, _mm256_blendv_ps(sn, cs, xbig)));
+    l[1] = _mm256_andnot_ps(at0, _mm256_mul_ps(den, _mm256_blendv_ps(cs, sn, xbig)));
+    l[2] = _mm256_sub_ps(_mm256_sub_ps(one, _mm256_mul_ps(l[0], l[0])), _mm256_mul_ps(l[1], l[1]));
+    l[2] = _mm256_sqrt_ps(_mm256_and_ps(_mm256_cmp_ps(l[2], zero, _CMP_GT_OQ), l[2]));
+    n[0] = _mm256_loadu_ps(nx);
+    n[1] = _mm256_loadu_ps(ny);
+    n[2] = _mm256_loadu_ps(nz);
+    pt__onb_to_world8(n, l, w);
     /* the density max(0, n . w) / pi (max_ps(0, d) is 0 > d ? 0 : d, as pt__maxf) */
-    d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n0, w0), _mm256_mul_ps(n1, w1)), _mm256_mul_ps(n2, w2));
-    _mm256_storeu_ps(wx, w0);
-    _mm256_storeu_ps(wy, w1);
-    _mm256_storeu_ps(wz, w2);
+    d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], w[0]), _mm256_mul_ps(n[1], w[1])), _mm256_mul_ps(n[2], w[2]));
+    _mm256_storeu_ps(wx, w[0]);
+    _mm256_storeu_ps(wy, w[1]);
+    _mm256_storeu_ps(wz, w[2]);
     _mm256_storeu_ps(pdf, _mm256_mul_ps(_mm256_max_ps(zero, d), _mm256_set1_ps(PT__INV_PI)));
 }
 #endif
@@ -2992,12 +3037,12 @@ static float pt__cone_one_minus_cos(float s2)
    point - c (whose float error exceeds r): cos(alpha) = sin^2/sin_max + cos sqrt(1 -
    sin^2/sin_max^2), alpha measured at the centre from the direction towards o (pbrt-v4 sec.
    6.2.4, "Sampling a sphere"). */
-static pt_vec3 pt__cone_normal(const pt_onb *b, float s2, float sin2_t, float cos_t, float phi)
+static pt_vec3 pt__cone_normal(const pt_onb *b, float s2, float sin2_t, float cos_t, float sin_phi, float cos_phi)
 {
     float smax = sqrtf(s2), q = sin2_t / s2;
     float cos_a = pt__minf(1.0f, sin2_t / smax + cos_t * pt__safe_sqrt(1.0f - q));
     float sin_a = pt__safe_sqrt(1.0f - cos_a * cos_a);
-    return pt_normalize(pt_onb_to_world(b, pt_v3(sin_a * cosf(phi), sin_a * sinf(phi), -cos_a)));
+    return pt_normalize(pt_onb_to_world(b, pt_v3(sin_a * cos_phi, sin_a * sin_phi, -cos_a)));
 }
 static float pt__sphere_light_value(pt_vec3 o, pt_vec3 c, float r, int two_sided, pt_vec3 w);
 static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int two_sided, float u1, float u2,
@@ -3010,11 +3055,12 @@ static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int tw
         float omc = pt__cone_one_minus_cos(s2);           /* 1 - cos(theta_max) */
         float uc = u1 * omc;
         float cos_t = 1.0f - uc, sin2_t = uc * (2.0f - uc), sin_t = pt__safe_sqrt(sin2_t);
-        float phi = 2.0f * PT__PI * u2, t;
+        float sin_phi, cos_phi, t;
         pt_onb b = pt__onb(pt_scale(wc, 1.0f / d));
         pt_vec3 w0;
         if (!(omc > 0.0f)) return 0;
-        w0 = ls->dir = pt_normalize(pt_onb_to_world(&b, pt_v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t)));
+        pt__sincos_turn(u2, &sin_phi, &cos_phi); /* phi = 2 pi u2 */
+        w0 = ls->dir = pt_normalize(pt_onb_to_world(&b, pt_v3(sin_t * cos_phi, sin_t * sin_phi, cos_t)));
         ls->rounded = 0;
         {
             /* a sample at the rim can round to just outside the cone; nudge it towards the axis
@@ -3034,7 +3080,7 @@ static PT__HOT int pt__sphere_light_sample(pt_vec3 o, pt_vec3 c, float r, int tw
         t = d * (cos_t - pt__safe_sqrt(s2 - sin2_t));
         ls->dist = t > 0.0f ? t : 0.0f;
         ls->point = pt_madd(o, ls->dir, ls->dist);
-        if (ls->rounded) ls->normal = pt__cone_normal(&b, s2, sin2_t, cos_t, phi);
+        if (ls->rounded) ls->normal = pt__cone_normal(&b, s2, sin2_t, cos_t, sin_phi, cos_phi);
         else ls->normal = pt_normalize(pt_sub(ls->point, c));
         return pt__isfinite(ls->pdf) && ls->dist > 0.0f;
     }
@@ -11164,7 +11210,7 @@ typedef struct pt__lane {
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
     int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
-    int defer;         /* its light sample left to stage 2b (1) or 2c (2) (pt__lane_light) with these: */
+    int defer;         /* its light sample left to stage 2b (1), 2c (2) or 2s (3) (pt__lane_light) with these: */
     float dpick, du1, du2; /* the pick's probability, the point's numbers */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
@@ -11403,8 +11449,8 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0
         l->shadow = 0;
     } else {
         const pt__prim *p = &s->prims[s->lights[li].prim];
-        if (p->type == PT__PRIM_QUAD) {
-            l->defer = 2;
+        if (p->type == PT__PRIM_QUAD || p->type == PT__PRIM_SPHERE) {
+            l->defer = p->type == PT__PRIM_QUAD ? 2 : 3;
             l->li = li;
             l->dpick = pick;
             l->du1 = u1;
@@ -11496,6 +11542,31 @@ PT__TARGET_AVX2 static inline __m256 pt__v8dot(const __m256 *a, const __m256 *b)
 {
     return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a[0], b[0]), _mm256_mul_ps(a[1], b[1])), _mm256_mul_ps(a[2], b[2]));
 }
+/* pt__offset_origin(p, n, w, magnitude) for 8 lanes: the magnitude made valid, the normal turned
+   to w's side, and each coordinate moved as the SSE2 code moves it (ulp steps as integer adds). */
+PT__TARGET_AVX2 static inline void pt__offset_origin8(const __m256 *p, const __m256 *n, const __m256 *w, __m256 magnitude,
+                                                      __m256 *out)
+{
+    const __m256 zero = _mm256_setzero_ps(), signbit = _mm256_set1_ps(-0.0f);
+    const __m256 flip = _mm256_and_ps(signbit, _mm256_cmp_ps(pt__v8dot(n, w), zero, _CMP_LT_OQ));
+    const __m256 valid = _mm256_and_ps(_mm256_cmp_ps(magnitude, zero, _CMP_GE_OQ),
+                                       _mm256_cmp_ps(magnitude, _mm256_castsi256_ps(_mm256_set1_epi32(0x7f800000)), _CMP_LT_OQ));
+    __m256 m = _mm256_max_ps(_mm256_andnot_ps(signbit, p[0]), _mm256_max_ps(_mm256_andnot_ps(signbit, p[1]), _mm256_andnot_ps(signbit, p[2])));
+    int k;
+    m = _mm256_max_ps(_mm256_blendv_ps(_mm256_set1_ps(1.0f), magnitude, valid), m);
+    m = _mm256_blendv_ps(_mm256_set1_ps(FLT_MIN), m, _mm256_cmp_ps(m, zero, _CMP_GT_OQ));
+    for (k = 0; k < 3; ++k) {
+        const __m256 nk = _mm256_xor_ps(n[k], flip);
+        const __m256i neg = _mm256_castps_si256(_mm256_cmp_ps(p[k], zero, _CMP_LT_OQ));
+        __m256i of = _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_set1_ps(256.0f), nk));
+        __m256 p_i, p_f, near;
+        of = _mm256_sub_epi32(_mm256_xor_si256(of, neg), neg); /* -of_i where p < 0 */
+        p_i = _mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(p[k]), of));
+        p_f = _mm256_add_ps(p[k], _mm256_mul_ps(_mm256_mul_ps(m, _mm256_set1_ps(1.0f / 65536.0f)), nk));
+        near = _mm256_cmp_ps(_mm256_andnot_ps(signbit, p[k]), _mm256_mul_ps(m, _mm256_set1_ps(1.0f / 32.0f)), _CMP_LT_OQ);
+        out[k] = _mm256_blendv_ps(p_i, p_f, near);
+    }
+}
 /* Area samples of quads for the 8 lanes from column i (their lights L; same: all L[0]), each lane
    doing the float operations of pt__planar_faces, pt__sphrect_wanted (sph: solid-angle sampling
    allowed), pt__planar_point, pt__planar_light_at (the density of pt__planar_density) and
@@ -11510,8 +11581,8 @@ PT__TARGET_AVX2 static int pt__quad_area8(pt__qa_row *in, const pt__qa_light *co
 {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), signbit = _mm256_set1_ps(-0.0f);
     const __m256 u1 = _mm256_loadu_ps(in[PT__QA_U1] + i), u2 = _mm256_loadu_ps(in[PT__QA_U2] + i);
-    __m256 o[3], p0[3], e1[3], e2[3], n[3], d[3], q[3], dir[3], w[3];
-    __m256 faces, wanted = zero, live, dist2, dist, inv, cosl, cpos, pdf, flip, m;
+    __m256 o[3], p0[3], e1[3], e2[3], n[3], d[3], q[3], dir[3], w[3], t[3];
+    __m256 faces, wanted = zero, live, dist2, dist, inv, cosl, cpos, pdf;
     int k;
     for (k = 0; k < 3; ++k) {
         o[k] = _mm256_loadu_ps(in[PT__QA_O + k] + i);
@@ -11552,20 +11623,9 @@ PT__TARGET_AVX2 static int pt__quad_area8(pt__qa_row *in, const pt__qa_light *co
     pdf = _mm256_and_ps(cpos, pdf);
     /* pt__light_target: pt__offset_origin(q, n, -dir, magnitude) */
     for (k = 0; k < 3; ++k) w[k] = _mm256_xor_ps(signbit, dir[k]);
-    flip = _mm256_and_ps(signbit, _mm256_cmp_ps(pt__v8dot(n, w), zero, _CMP_LT_OQ));
-    m = _mm256_max_ps(_mm256_andnot_ps(signbit, q[0]), _mm256_max_ps(_mm256_andnot_ps(signbit, q[1]), _mm256_andnot_ps(signbit, q[2])));
-    m = _mm256_max_ps(pt__qa_lights8(L, PT__QL_MAG, same), m);
-    m = _mm256_blendv_ps(_mm256_set1_ps(FLT_MIN), m, _mm256_cmp_ps(m, zero, _CMP_GT_OQ));
+    pt__offset_origin8(q, n, w, pt__qa_lights8(L, PT__QL_MAG, same), t);
     for (k = 0; k < 3; ++k) {
-        const __m256 nk = _mm256_xor_ps(n[k], flip);
-        const __m256i neg = _mm256_castps_si256(_mm256_cmp_ps(q[k], zero, _CMP_LT_OQ));
-        __m256i of = _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_set1_ps(256.0f), nk));
-        __m256 p_i, p_f, near;
-        of = _mm256_sub_epi32(_mm256_xor_si256(of, neg), neg); /* -of_i where q < 0 */
-        p_i = _mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(q[k]), of));
-        p_f = _mm256_add_ps(q[k], _mm256_mul_ps(_mm256_mul_ps(m, _mm256_set1_ps(1.0f / 65536.0f)), nk));
-        near = _mm256_cmp_ps(_mm256_andnot_ps(signbit, q[k]), _mm256_mul_ps(m, _mm256_set1_ps(1.0f / 32.0f)), _CMP_LT_OQ);
-        _mm256_storeu_ps(out[PT__QA_TARGET + k] + i, _mm256_blendv_ps(p_i, p_f, near));
+        _mm256_storeu_ps(out[PT__QA_TARGET + k] + i, t[k]);
         _mm256_storeu_ps(out[PT__QA_Q + k] + i, q[k]);
         _mm256_storeu_ps(out[PT__QA_DIR + k] + i, dir[k]);
     }
@@ -11597,6 +11657,112 @@ static PT__HOT void pt__lane_area_finish(const pt__batch_ctx *b, pt__lane *l, co
                 pt__nee_prepare_to(b->s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st, &target);
     v->sph_prim = l->ls.sph_prim;
     v->sph_S = l->ls.sph_S;
+}
+/* Stage 2s's numbers, one row per quantity and a column per lane of a group of 8: in, the vertex's
+   point o, the point's numbers u1, u2, the sphere's centre c, radius r and pt__prim_magnitude's
+   m; out, the light sample's direction, point, normal, distance, density and the shadow ray's end. */
+enum { PT__SS_O = 0, PT__SS_U1 = 3, PT__SS_U2, PT__SS_C, PT__SS_R = PT__SS_C + 3, PT__SS_MAG, PT__SS_IN = PT__SS_MAG + 3 };
+enum { PT__SO_DIR = 0, PT__SO_POINT = 3, PT__SO_NORMAL = 6, PT__SO_TARGET = 9, PT__SO_DIST = 12, PT__SO_PDF, PT__SO_OUT };
+/* pt__in_cone for the 8 lanes, in double as it is (two halves of 4): the lanes' bits. */
+PT__TARGET_AVX2 static inline int pt__in_cone8(const __m256 *w, const __m256 *o, const __m256 *c, __m256 r)
+{
+    int h, bits = 0;
+    for (h = 0; h < 2; ++h) {
+        __m256d wd[3], cd[3], x, y, z, ww, dot, rd;
+        int k;
+        for (k = 0; k < 3; ++k) {
+            wd[k] = _mm256_cvtps_pd(h ? _mm256_extractf128_ps(w[k], 1) : _mm256_castps256_ps128(w[k]));
+            cd[k] = _mm256_sub_pd(_mm256_cvtps_pd(h ? _mm256_extractf128_ps(c[k], 1) : _mm256_castps256_ps128(c[k])),
+                                  _mm256_cvtps_pd(h ? _mm256_extractf128_ps(o[k], 1) : _mm256_castps256_ps128(o[k])));
+        }
+        rd = _mm256_cvtps_pd(h ? _mm256_extractf128_ps(r, 1) : _mm256_castps256_ps128(r));
+        x = _mm256_sub_pd(_mm256_mul_pd(wd[1], cd[2]), _mm256_mul_pd(wd[2], cd[1]));
+        y = _mm256_sub_pd(_mm256_mul_pd(wd[2], cd[0]), _mm256_mul_pd(wd[0], cd[2]));
+        z = _mm256_sub_pd(_mm256_mul_pd(wd[0], cd[1]), _mm256_mul_pd(wd[1], cd[0]));
+        ww = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(wd[0], wd[0]), _mm256_mul_pd(wd[1], wd[1])), _mm256_mul_pd(wd[2], wd[2]));
+        dot = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(wd[0], cd[0]), _mm256_mul_pd(wd[1], cd[1])), _mm256_mul_pd(wd[2], cd[2]));
+        x = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z));
+        bits |= _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(dot, _mm256_setzero_pd(), _CMP_GT_OQ),
+                                                 _mm256_cmp_pd(x, _mm256_mul_pd(_mm256_mul_pd(rd, rd), ww), _CMP_LE_OQ))) << (4 * h);
+    }
+    return bits;
+}
+/* Cone samples of sphere lights seen from outside for 8 lanes, each lane doing the float operations
+   of pt__sphere_light_sample (pt__cone_one_minus_cos, pt__sincos_turn, pt__onb, pt_normalize,
+   pt__in_cone, the near intersection, the normal) and of pt__light_target in the scalar code's
+   order, without FMA, so the same bits. A lane whose point is inside or on its sphere, whose
+   direction rounded out of the cone (the nudge) or whose sample the scalar code rejects is left
+   out of the returned bits, for the scalar code to redo; such lanes take 1 as the operand of the
+   square roots and divisions, so no lane raises an exception the scalar code would not. */
+PT__TARGET_AVX2 static int pt__sphere_sample8(float (*in)[8], float (*out)[8])
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), signbit = _mm256_set1_ps(-0.0f);
+    const __m256 r = _mm256_loadu_ps(in[PT__SS_R]), u1 = _mm256_loadu_ps(in[PT__SS_U1]);
+    __m256 o[3], c[3], wc[3], n[3], l[3], w[3], q[3], pn[3], nrm[3], t[3], mg = zero;
+    __m256 d2, rr, live, d, s2, x, omc, uc, cos_t, sin2_t, sin_t, sn, cs, inv, l2, ok, pdf, dist;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        o[k] = _mm256_loadu_ps(in[PT__SS_O + k]);
+        c[k] = _mm256_loadu_ps(in[PT__SS_C + k]);
+        wc[k] = _mm256_sub_ps(c[k], o[k]);
+    }
+    /* outside (not pt__sphere_inside), the cone's 1 - cos(theta_max) (pt__cone_one_minus_cos) */
+    d2 = pt__v8dot(wc, wc);
+    rr = _mm256_mul_ps(r, r);
+    live = _mm256_cmp_ps(d2, _mm256_mul_ps(rr, _mm256_set1_ps(1.0f + 1e-5f)), _CMP_GT_OQ);
+    d2 = _mm256_blendv_ps(one, d2, live);
+    d = _mm256_sqrt_ps(d2);
+    s2 = _mm256_div_ps(rr, d2);
+    x = _mm256_sub_ps(one, s2);
+    omc = _mm256_div_ps(s2, _mm256_add_ps(one, _mm256_sqrt_ps(_mm256_and_ps(_mm256_cmp_ps(x, zero, _CMP_GT_OQ), x))));
+    live = _mm256_and_ps(live, _mm256_cmp_ps(omc, zero, _CMP_GT_OQ));
+    /* the direction: uniform in the cone about wc / d */
+    uc = _mm256_mul_ps(u1, omc);
+    cos_t = _mm256_sub_ps(one, uc);
+    sin2_t = _mm256_mul_ps(uc, _mm256_sub_ps(_mm256_set1_ps(2.0f), uc));
+    sin_t = _mm256_sqrt_ps(_mm256_and_ps(_mm256_cmp_ps(sin2_t, zero, _CMP_GT_OQ), sin2_t));
+    pt__sincos_turn8(_mm256_loadu_ps(in[PT__SS_U2]), &sn, &cs);
+    inv = _mm256_div_ps(one, d);
+    for (k = 0; k < 3; ++k) n[k] = _mm256_mul_ps(wc[k], inv);
+    l[0] = _mm256_mul_ps(sin_t, cs);
+    l[1] = _mm256_mul_ps(sin_t, sn);
+    l[2] = cos_t;
+    pt__onb_to_world8(n, l, w);
+    l2 = pt__v8dot(w, w);
+    ok = _mm256_cmp_ps(l2, zero, _CMP_GT_OQ);
+    live = _mm256_and_ps(live, ok);
+    inv = _mm256_div_ps(one, _mm256_sqrt_ps(_mm256_blendv_ps(one, l2, ok)));
+    for (k = 0; k < 3; ++k) w[k] = _mm256_mul_ps(w[k], inv);
+    /* the density, and the distance to the near intersection d (cos - sqrt(s^2 - sin^2)) */
+    pdf = _mm256_div_ps(one, _mm256_mul_ps(_mm256_set1_ps(2.0f * PT__PI), _mm256_blendv_ps(one, omc, live)));
+    x = _mm256_sub_ps(s2, sin2_t);
+    dist = _mm256_mul_ps(d, _mm256_sub_ps(cos_t, _mm256_sqrt_ps(_mm256_and_ps(_mm256_cmp_ps(x, zero, _CMP_GT_OQ), x))));
+    dist = _mm256_and_ps(_mm256_cmp_ps(dist, zero, _CMP_GT_OQ), dist);
+    live = _mm256_and_ps(live, _mm256_cmp_ps(dist, zero, _CMP_GT_OQ));
+    live = _mm256_and_ps(live, _mm256_cmp_ps(pdf, _mm256_castsi256_ps(_mm256_set1_epi32(0x7f800000)), _CMP_LT_OQ));
+    /* the point, its normal (pt_normalize: 0 for a point at c) and the shadow ray's end */
+    for (k = 0; k < 3; ++k) {
+        q[k] = _mm256_add_ps(o[k], _mm256_mul_ps(w[k], dist));
+        pn[k] = _mm256_sub_ps(q[k], c[k]);
+    }
+    l2 = pt__v8dot(pn, pn);
+    ok = _mm256_cmp_ps(l2, zero, _CMP_GT_OQ);
+    inv = _mm256_div_ps(one, _mm256_sqrt_ps(_mm256_blendv_ps(one, l2, ok)));
+    for (k = 0; k < 3; ++k) {
+        nrm[k] = _mm256_and_ps(ok, _mm256_mul_ps(pn[k], inv));
+        mg = _mm256_add_ps(mg, _mm256_mul_ps(_mm256_andnot_ps(signbit, nrm[k]), _mm256_loadu_ps(in[PT__SS_MAG + k])));
+        l[k] = _mm256_xor_ps(signbit, w[k]);
+    }
+    pt__offset_origin8(q, nrm, l, mg, t);
+    for (k = 0; k < 3; ++k) {
+        _mm256_storeu_ps(out[PT__SO_DIR + k], w[k]);
+        _mm256_storeu_ps(out[PT__SO_POINT + k], q[k]);
+        _mm256_storeu_ps(out[PT__SO_NORMAL + k], nrm[k]);
+        _mm256_storeu_ps(out[PT__SO_TARGET + k], t[k]);
+    }
+    _mm256_storeu_ps(out[PT__SO_DIST], dist);
+    _mm256_storeu_ps(out[PT__SO_PDF], pdf);
+    return _mm256_movemask_ps(live) & pt__in_cone8(w, o, c, r);
 }
 #endif
 /* Stage 2c: the quads' light samples stage 2 left (area: n lanes), 8 at a time (pt__quad_area8;
@@ -11658,6 +11824,63 @@ static int pt__batch_area_lights(const pt__batch_ctx *b, pt__lane *lanes, const 
     (void)b; (void)lanes; (void)area; (void)n; (void)defer; /* (b->area is 0) */
 #endif
     return ndefer;
+}
+
+/* Stage 2s: the sphere lights' samples stage 2 left (sph: n lanes), 8 at a time
+   (pt__sphere_sample8; a last group's unused lanes copy its first); a lane the vector code left
+   out does what stage 2 would have done. Then the pick and the shadow ray (pt__nee_prepare_to
+   with the shadow ray's end made). */
+static void pt__batch_sphere_lights(const pt__batch_ctx *b, pt__lane *lanes, const int *sph, int n)
+{
+#ifdef PT__WIDE
+    const pt_scene *s = b->s;
+    float in[PT__SS_IN][8], out[PT__SO_OUT][8];
+    int i, j, bits;
+    for (i = 0; i < n; i += 8) {
+        for (j = 0; j < 8; ++j) {
+            const pt__lane *l = &lanes[sph[i + j < n ? i + j : i]];
+            const pt__prim *p = &s->prims[s->lights[l->li].prim];
+            in[PT__SS_O][j] = l->v.o.x;
+            in[PT__SS_O + 1][j] = l->v.o.y;
+            in[PT__SS_O + 2][j] = l->v.o.z;
+            in[PT__SS_U1][j] = l->du1;
+            in[PT__SS_U2][j] = l->du2;
+            in[PT__SS_C][j] = p->p0.x;
+            in[PT__SS_C + 1][j] = p->p0.y;
+            in[PT__SS_C + 2][j] = p->p0.z;
+            in[PT__SS_R][j] = p->p1.x;
+            in[PT__SS_MAG][j] = p->mag.x;
+            in[PT__SS_MAG + 1][j] = p->mag.y;
+            in[PT__SS_MAG + 2][j] = p->mag.z;
+        }
+        bits = pt__sphere_sample8(in, out);
+        for (j = 0; j < 8 && i + j < n; ++j) {
+            pt__lane *l = &lanes[sph[i + j]];
+            pt__vertex *v = &l->v;
+            const pt__prim *p = &s->prims[s->lights[l->li].prim];
+            l->defer = 0;
+            if ((bits >> j) & 1) {
+                pt_vec3 target = pt_v3(out[PT__SO_TARGET][j], out[PT__SO_TARGET + 1][j], out[PT__SO_TARGET + 2][j]);
+                l->ls.dir = pt_v3(out[PT__SO_DIR][j], out[PT__SO_DIR + 1][j], out[PT__SO_DIR + 2][j]);
+                l->ls.point = pt_v3(out[PT__SO_POINT][j], out[PT__SO_POINT + 1][j], out[PT__SO_POINT + 2][j]);
+                l->ls.normal = pt_v3(out[PT__SO_NORMAL][j], out[PT__SO_NORMAL + 1][j], out[PT__SO_NORMAL + 2][j]);
+                l->ls.dist = out[PT__SO_DIST][j];
+                l->ls.pdf = out[PT__SO_PDF][j];
+                l->ls.rounded = 0;
+                l->shadow = pt__lane_picked(b, &l->ls, l->dpick, l->li, &l->li) &&
+                            pt__nee_prepare_to(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st, &target);
+            } else {
+                l->shadow = pt__light_prim_sample(s, p, v->o, l->du1, l->du2, &l->ls, b->sph) &&
+                            pt__lane_picked(b, &l->ls, l->dpick, l->li, &l->li) &&
+                            pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+            }
+            v->sph_prim = l->ls.sph_prim;
+            v->sph_S = l->ls.sph_S;
+        }
+    }
+#else
+    (void)b; (void)lanes; (void)sph; (void)n; /* (b->area is 0) */
+#endif
 }
 
 /* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
@@ -12141,8 +12364,8 @@ static PT__NOINLINE int pt__batch_resume(pt__batch_ctx bc, int *live, int nlive)
 static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings *cfg, const pt__packet_scene *pk,
                                            pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
 {
-    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], area[PT__BATCH_LANES];
-    int nlive = n, nshade, ndefer, narea, i;
+    int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], area[PT__BATCH_LANES], sph[PT__BATCH_LANES];
+    int nlive = n, nshade, ndefer, narea, nsph, i;
     pt__batch_ctx bc, *b = &bc;
     pt__batch_pool pool;
     b->pool = &pool;
@@ -12180,11 +12403,13 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     while (nlive > 0) {
         pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
         if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
-        for (i = 0, nshade = 0, ndefer = 0, narea = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
+        for (i = 0, nshade = 0, ndefer = 0, narea = 0, nsph = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(b, &lanes[live[i]], copies)) {
-                if (lanes[live[i]].defer) area[narea++] = live[i];
+                if (lanes[live[i]].defer == 3) sph[nsph++] = live[i];
+                else if (lanes[live[i]].defer) area[narea++] = live[i];
                 shade[nshade++] = live[i];
             } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
+        if (nsph) pt__batch_sphere_lights(b, lanes, sph, nsph); /* (2s) spheres' samples */
         if (narea) ndefer = pt__batch_area_lights(b, lanes, area, narea, defer, 0); /* (2c) quads' samples */
         if (ndefer) pt__batch_lights(b, lanes, defer, ndefer); /* (2b) quads' solid-angle samples */
         pt__batch_shadow(s, pk, lanes, shade, nshade); /* (3) shadow rays */
