@@ -109,9 +109,175 @@ static void rayctx_axes(test_ctx *t)
     CHECK(t, bad == 0, "%d ray set-ups differ from the plain ones", bad);
 }
 
+/* pt__sincos_turn (sin and cos of 2 pi u, the sphere light's azimuth) against double sin and cos
+   at 2^21 + 1 evenly spaced u in [0, 1], at each quarter turn's and each reduction boundary's
+   neighbours (u = k/8 +- a few ulps) and at u = 0, 1: within 1.5e-7 of the exact values (the
+   outputs' rounding, 6e-8, plus that of 2 pi and of its product with the reduced u, 2e-8 and
+   4e-8 at pi/4; the Taylor polynomials' 2e-9). With AVX2, pt__sincos_turn8 gives the scalar
+   bits lane by lane at all of them, and a NaN gives NaNs in both. */
+static void ti_turn_check(test_ctx *t, float u, double *worst, int *bad)
+{
+    float s, c;
+    double es, ec, e;
+    pt__sincos_turn(u, &s, &c);
+    es = sin(6.283185307179586 * (double)u);
+    ec = cos(6.283185307179586 * (double)u);
+    e = fabs((double)s - es) > fabs((double)c - ec) ? fabs((double)s - es) : fabs((double)c - ec);
+    if (e > *worst) *worst = e;
+    if (!(e <= 1.5e-7) && !CHECK(t, (*bad)++ > 3, "u = %.9g: sin %.9g (exact %.9g), cos %.9g (exact %.9g)", (double)u,
+                               (double)s, es, (double)c, ec)) {}
+}
+#ifdef PT__WIDE
+PT__TARGET_AVX2 static void ti_turn8(const float *u, float *sv, float *cv)
+{
+    __m256 s, c;
+    pt__sincos_turn8(_mm256_loadu_ps(u), &s, &c);
+    _mm256_storeu_ps(sv, s);
+    _mm256_storeu_ps(cv, c);
+}
+#endif
+static void sincos_turn(test_ctx *t)
+{
+    const long n = 1L << 21;
+    double worst = 0.0;
+    int bad = 0, vbad = 0, k, j;
+    long i;
+    float edge[8 * 9 * 2 + 3];
+    int nedge = 0;
+    for (i = 0; i <= n; ++i) ti_turn_check(t, (float)((double)i / (double)n), &worst, &bad);
+    for (k = 0; k <= 8; ++k) {
+        float u = (float)k / 8.0f, a = u, b = u;
+        for (j = 0; j < 8; ++j) {
+            a = nextafterf(a, 2.0f);
+            b = nextafterf(b, -1.0f);
+            if (a <= 1.0f) edge[nedge++] = a;
+            if (b >= 0.0f) edge[nedge++] = b;
+        }
+        edge[nedge++] = u;
+    }
+    for (k = 0; k < nedge; ++k) ti_turn_check(t, edge[k], &worst, &bad);
+    CHECK(t, bad == 0, "%d arguments off by more than 1.5e-7 (worst %.3g)", bad, worst);
+    {
+        float s, c;
+        pt__sincos_turn((float)NAN, &s, &c);
+        CHECK(t, s != s && c != c, "a NaN gives sin %g, cos %g (want NaNs)", (double)s, (double)c);
+    }
+#ifdef PT__WIDE
+    if (pt_simd_cpu_level() >= PT_SIMD_AVX2) {
+        float u[8], sv[8], cv[8];
+        long m = 0;
+        for (i = 0; i <= n + nedge + 1; i += 8) {
+            for (j = 0; j < 8; ++j) {
+                const long q = i + j;
+                u[j] = q <= n ? (float)((double)q / (double)n) : q - n - 1 < nedge ? edge[q - n - 1] : (float)NAN;
+            }
+            ti_turn8(u, sv, cv);
+            for (j = 0; j < 8; ++j) {
+                float s, c;
+                pt__sincos_turn(u[j], &s, &c);
+                ++m;
+                if ((memcmp(&s, &sv[j], sizeof s) != 0 || memcmp(&c, &cv[j], sizeof c) != 0) && !(s != s && sv[j] != sv[j] && c != c && cv[j] != cv[j]) &&
+                    !CHECK(t, vbad++ > 3, "u = %.9g: 8 lanes give sin %.9g cos %.9g, the scalar code %.9g %.9g", (double)u[j],
+                           (double)sv[j], (double)cv[j], (double)s, (double)c)) {}
+            }
+        }
+        CHECK(t, vbad == 0, "%d of %ld lanes differ from the scalar code", vbad, m);
+    } else {
+        test_note(t, "no AVX2 on this CPU: the 8-lane version was not run");
+    }
+#endif
+    test_note(t, "worst error %.3g", worst);
+}
+
+/* Stage 2s (pt__sphere_sample8) gives pt__sphere_light_sample's and pt__light_target's bits for
+   every lane it takes, and takes nearly every lane outside its sphere: 40 000 groups of 8 lanes,
+   spheres of radius 10^-7 (below float's angular resolution: rounded samples) to 3 at distances
+   from just outside (1 + 10^-6 radii) to 10^4 radii, a sixth of the points inside or on their
+   sphere (left to the scalar code), draws including 0 and 1 - 2^-24. Deterministic (fixed seed). */
+#ifdef PT__WIDE
+static void sphere_sample8(test_ctx *t)
+{
+    pt_scene *s;
+    pt_rng r;
+    long lanes = 0, taken = 0, outside = 0;
+    int g, j, bad = 0, missed = 0;
+    if (pt_simd_cpu_level() < PT_SIMD_AVX2) {
+        test_skip(t, "no AVX2 on this CPU");
+        return;
+    }
+    s = pt_scene_create();
+    if (!CHECK(t, s != NULL, "scene")) return;
+    pt_rng_seed(&r, 5, 9);
+    for (g = 0; g < 40000; ++g) {
+        float in[PT__SS_IN][8], out[PT__SO_OUT][8];
+        pt__prim p[8];
+        pt_vec3 o[8];
+        int bits;
+        for (j = 0; j < 8; ++j) {
+            const float rad = powf(10.0f, -7.0f + 7.5f * pt_rng_float(&r)), q = pt_rng_float(&r);
+            const float dist = j == 5 ? rad * (q < 0.5f ? q : 1.0f) : rad * (1.0f + powf(10.0f, -6.0f + 10.0f * q));
+            const pt_vec3 c = pt_v3(20.0f * pt_rng_float(&r) - 10.0f, 20.0f * pt_rng_float(&r) - 10.0f, 20.0f * pt_rng_float(&r) - 10.0f);
+            const pt_vec3 dir = pt_sample_uniform_sphere(pt_rng_float(&r), pt_rng_float(&r));
+            memset(&p[j], 0, sizeof p[j]);
+            p[j].type = PT__PRIM_SPHERE;
+            p[j].p0 = c;
+            p[j].p1.x = rad;
+            pt__prim_cache(&p[j]);
+            o[j] = pt_madd(c, dir, dist);
+            in[PT__SS_O][j] = o[j].x;
+            in[PT__SS_O + 1][j] = o[j].y;
+            in[PT__SS_O + 2][j] = o[j].z;
+            in[PT__SS_U1][j] = g % 50 == 0 ? (j & 1 ? 0.0f : 0.99999994f) : pt_rng_float(&r);
+            in[PT__SS_U2][j] = g % 70 == 0 ? (j & 1 ? 0.99999994f : 0.0f) : pt_rng_float(&r);
+            in[PT__SS_C][j] = c.x;
+            in[PT__SS_C + 1][j] = c.y;
+            in[PT__SS_C + 2][j] = c.z;
+            in[PT__SS_R][j] = rad;
+            in[PT__SS_MAG][j] = p[j].mag.x;
+            in[PT__SS_MAG + 1][j] = p[j].mag.y;
+            in[PT__SS_MAG + 2][j] = p[j].mag.z;
+        }
+        bits = pt__sphere_sample8(in, out);
+        for (j = 0; j < 8; ++j) {
+            pt__light_sample ls;
+            int ok, inside = pt__sphere_inside(o[j], p[j].p0, p[j].p1.x);
+            memset(&ls, 0, sizeof ls);
+            ok = pt__sphere_light_sample(o[j], p[j].p0, p[j].p1.x, 1, in[PT__SS_U1][j], in[PT__SS_U2][j], &ls);
+            ++lanes;
+            outside += !inside;
+            if (!((bits >> j) & 1)) {
+                missed += !inside && ok && !ls.rounded;
+                continue;
+            }
+            ++taken;
+            {
+                const pt_vec3 tg = pt__offset_origin(ls.point, ls.normal, pt_neg(ls.dir), pt__prim_magnitude(&p[j], ls.normal));
+                const float want[PT__SO_OUT] = {ls.dir.x, ls.dir.y, ls.dir.z, ls.point.x, ls.point.y, ls.point.z,
+                                                ls.normal.x, ls.normal.y, ls.normal.z, tg.x, tg.y, tg.z, ls.dist, ls.pdf};
+                int k, same = ok && !inside && !ls.rounded;
+                for (k = 0; k < PT__SO_OUT; ++k) same &= memcmp(&want[k], &out[k][j], sizeof want[k]) == 0;
+                if (!same && !CHECK(t, bad++ > 3, "sphere r %g at distance %g: lane differs (scalar ok %d, rounded %d; "
+                                    "dir %.9g %.9g, pdf %.9g %.9g, dist %.9g %.9g)", (double)p[j].p1.x,
+                                    (double)pt_length(pt_sub(o[j], p[j].p0)), ok, ls.rounded, (double)ls.dir.x,
+                                    (double)out[PT__SO_DIR][j], (double)ls.pdf, (double)out[PT__SO_PDF][j],
+                                    (double)ls.dist, (double)out[PT__SO_DIST][j])) {}
+            }
+        }
+    }
+    CHECK(t, bad == 0, "%d of %ld lanes taken differ from the scalar sample", bad, taken);
+    CHECK(t, missed < outside / 100, "the vector code left %d of %ld valid outside samples to the scalar code", missed, outside);
+    test_note(t, "%ld lanes, %ld outside their sphere, %ld taken by the vector code", lanes, outside, taken);
+    pt_scene_destroy(s);
+}
+#endif
+
 static const test_case test_internals_cases[] = {
     TEST_CASE(spot_falloff_shortcut),
     TEST_CASE(rayctx_axes),
+    TEST_CASE(sincos_turn),
+#ifdef PT__WIDE
+    TEST_CASE(sphere_sample8),
+#endif
     TEST_END
 };
 

@@ -1065,19 +1065,32 @@ done:
     "quad 1.2 0.3 -1   0 1.5 0   0 0 2   lamp2\nquad 0.3 0.05 1.2   0.8 0.3 0   0.1 0 0.9   lamp\n"
 static const char quad_lights_scene[] = QUAD_LIGHTS_TEXT;
 static const char quad_sky_scene[] = QUAD_LIGHTS_TEXT "environment sky.pfm 0.5\n";
+/* Sphere lights (the batched integrator samples their cones 8 at a time): a two-sided one around
+   the camera (every vertex inside it: area sampling), a one-sided one cutting the wall, one a hair
+   above the floor (rims seen at grazing angles), a small one, and one of radius 10^-7 (narrower
+   than float's angular resolution: rounded samples). */
+static const char sphere_lights_scene[] =
+    "camera look_from 0 1.2 -2.5 look_at 0 0.8 1 vfov 75\n"
+    "material floor lambertian 0.7 0.7 0.7\nmaterial wall lambertian 0.6 0.5 0.4\n"
+    "material bulb emitter 30 28 25\nmaterial glow emitter 0.8 0.9 1 two_sided\nmaterial dot emitter 1e7 1e7 1e7\n"
+    "quad -2 0 -3   0 0 6   4 0 0   floor\nquad -2 0 3   4 0 0   0 2.5 0   wall\nquad -2 0 -3   0 2.5 0   0 0 6   wall\n"
+    "sphere 0.8 1.6 -0.5 0.15 bulb\nsphere 0 1 -1 2 glow\nsphere -1.9 1 -1 0.2 bulb\nsphere 1 0.3001 0.5 0.3 bulb\n"
+    "sphere 0.2 2.2 -1.5 0.01 bulb\nsphere 1 2.2 -0.5 1e-7 dot\n";
 
 static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
                                           "scenes/lights.scene", "scenes/textured.scene", "scenes/rough-glass.scene",
                                           "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene",
-                                          "bench/scenes/rooms.scene", "quad lights", "quad lights under a sky" };
+                                          "bench/scenes/rooms.scene", "quad lights", "quad lights under a sky",
+                                          "sphere lights" };
     static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
                                            "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol, roulette from 1",
                                            "sobol, indirect_paths 8, mixture 0.75, max_splits 12",
                                            "guiding, indirect_paths 4" };
     const int nscenes = (int)(sizeof scenes / sizeof scenes[0]), nconfigs = (int)(sizeof configs / sizeof configs[0]);
-    const int quads = nscenes - 2, rooms = nscenes - 3; /* (the two scenes of quad lights are the last) */
+    const int spheres = nscenes - 1, quads = nscenes - 3, rooms = nscenes - 4; /* (the scenes of quad and sphere
+                                                                                  lights are the last) */
     int i, c, renders = 0, split = 0, lane_copies = 0, inline_copies = 0;
     char err[512];
     for (i = 0; i < nscenes; ++i) {
@@ -1088,6 +1101,8 @@ static void batched_bit_identical(test_ctx *t)
                                                       sizeof err)
                 : i == quads + 1 ? pt_scenefile_parse(quad_sky_scene, sizeof quad_sky_scene - 1, scenes[i], "scenes", &sf, err,
                                                       sizeof err)
+                : i == spheres   ? pt_scenefile_parse(sphere_lights_scene, sizeof sphere_lights_scene - 1, scenes[i], ".", &sf,
+                                                      err, sizeof err)
                                  : pt_scenefile_load(scenes[i], &sf, err, sizeof err);
         if (!CHECK(t, r == PT_OK, "%s: %s", scenes[i], err)) continue;
         if (!CHECK(t, pt_scenefile_build(&sf, &s, &base, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) {
@@ -1157,7 +1172,7 @@ static void batched_bit_identical(test_ctx *t)
                 if ((c == 4 || c == 0) && (i <= 1 || i >= rooms)) { /* Sobol's draws made ahead (stage
                     1b), the Lambertian directions made ahead (stage 3b, Sobol and independent numbers), quad
                     lights' samples (stages 2b and 2c, on rooms and the quad lights, with and without an
-                    environment the pick can choose) and the shadow rays' packets
+                    environment the pick can choose), sphere lights' (stage 2s) and the shadow rays' packets
                     (stage 3; the Cornell boxes' and the rooms' occluders): AVX2's 8 (or 4) at a time and the
                     scalar code below that level give the same film */
                     int level;
