@@ -10470,14 +10470,18 @@ static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l)
     if (l->desc.type == PT_LIGHT_SPOT) i *= pt__spot_falloff(l, pt_scale(d, -inv));
     return i * c / d2;
 }
-static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, pt_color beta,
-                              int depth, pt__sampler *smp, int tri, pt_path_stats *st)
+/* The delta lights at vertex v (a scene with any), in two halves around the shadow ray, as
+   next-event estimation's (the batched integrator traces it with the batch's): pt__delta_prepare
+   picks one light, evaluates f and sets up the shadow ray in nr (0: nothing to add, no ray), and
+   in *Li_over_pick the light's radiance at v over the pick's probability; an unoccluded ray adds
+   beta f Li / pick (pt__delta_finish). */
+static int pt__delta_prepare(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, int depth, pt__sampler *smp,
+                             int tri, pt__nee_ray *nr, pt_color *Li, float *pick_out, pt_path_stats *st)
 {
     const pt__dlight *l = &s->dlights[0];
     pt_vec3 wi;
-    pt_color f, Li;
+    pt_color f;
     pt_ray sr;
-    pt__rayctx src;
     float tmax, pick = 1.0f;
     if (s->dlight_count > 1) {
         float u = pt__draw1(smp, PT__SET_DELTA_PICK(depth));
@@ -10485,7 +10489,7 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
             float w[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f;
             uint32_t i, k = 0;
             for (i = 0; i < s->dlight_count; ++i) sum += (w[i] = pt__delta_weight(v, &s->dlights[i]));
-            if (!(sum > 0.0f) || !pt__isfinite(sum)) return pt_v3(0, 0, 0);
+            if (!(sum > 0.0f) || !pt__isfinite(sum)) return 0;
             for (i = 0; i < s->dlight_count; ++i) /* the last light with weight whose range holds u */
                 if (w[i] > 0.0f) {
                     k = i;
@@ -10508,17 +10512,17 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
     if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
         sr.origin = pt__vertex_origin(v, pt_neg(l->axis));
         sr.dir = wi = pt_neg(l->axis);
-        Li = l->desc.intensity;
+        *Li = l->desc.intensity;
         tmax = PT__INF;
     } else {
         /* distance and direction from the surface point itself, not from the spawn point above it,
            whose offset would be a visible part of d for a light close to the surface */
         pt_vec3 d = pt_sub(l->pos, v->p);
         float d2 = pt_length2(d), fall = 1.0f;
-        if (!(d2 > 0.0f)) return pt_v3(0, 0, 0);
+        if (!(d2 > 0.0f)) return 0;
         if (l->desc.type == PT_LIGHT_SPOT && !((fall = pt__spot_falloff(l, pt_scale(d, -1.0f / sqrtf(d2)))) > 0.0f))
-            return pt_v3(0, 0, 0);
-        Li = pt_scale(l->desc.intensity, fall / d2);
+            return 0;
+        *Li = pt_scale(l->desc.intensity, fall / d2);
         wi = pt_scale(d, 1.0f / sqrtf(d2));
         sr.origin = pt__vertex_origin(v, wi);
         sr.dir = pt_sub(l->pos, sr.origin); /* the segment to the light, short of it (a light on a surface is
@@ -10526,11 +10530,29 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
         tmax = 1.0f - 1e-4f;
     }
     f = pt__material_eval(v->m, v->albedo, v->ns, v->ng, v->wo, wi, v->eta);
-    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return pt_v3(0, 0, 0);
-    pt__rayctx_init2(&src, sr, tri);
+    if (pt__is_black(f) && PT__SKIP(cfg, PT_SKIP_ZERO_BSDF_SHADOW)) return 0;
+    pt__rayctx_init2(&nr->rc, sr, tri);
+    nr->tmax = tmax;
+    nr->skip = 0xffffffffu;
+    nr->f = f;
+    *pick_out = pick;
     st->shadow_rays++;
-    if (pt__scene_any(s, &src, tmax, 0xffffffffu)) return pt_v3(0, 0, 0);
-    return pt_mul(beta, pt_scale(pt_mul(f, Li), 1.0f / pick));
+    return 1;
+}
+static pt_color pt__delta_finish(pt_color beta, const pt__nee_ray *nr, pt_color Li, float pick)
+{
+    return pt_mul(beta, pt_scale(pt_mul(nr->f, Li), 1.0f / pick));
+}
+/* Both halves with the shadow ray between them (the scalar integrator). */
+static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, pt_color beta,
+                              int depth, pt__sampler *smp, int tri, pt_path_stats *st)
+{
+    pt__nee_ray nr;
+    pt_color Li;
+    float pick;
+    if (!pt__delta_prepare(s, cfg, v, depth, smp, tri, &nr, &Li, &pick, st) || pt__scene_any(s, &nr.rc, nr.tmax, nr.skip))
+        return pt_v3(0, 0, 0);
+    return pt__delta_finish(beta, &nr, Li, pick);
 }
 
 /* The scene-feature skips (PT_SKIP_*) appear below as PT__SKIP(cfg, bit) tests; with the bit
@@ -11179,7 +11201,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    operations and adds up its radiance in the same order as the scalar integrator: the image is
    the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
    (cfg->recording) keep each path's records in its lane (pt__lane_recs). Stage 2 leaves quads' light samples to stage 2c (by area, 8 paths
-   at a time), which leaves those by solid angle to stage 2b (4 at a time; pt__lane_light).
+   at a time), which leaves those by solid angle to stage 2b (4 at a time; pt__lane_light), and
+   sphere lights' to stage 2s (8 at a time; pt__batch_sphere_lights).
    Split copies (indirect_paths: every camera sample of a default render). With the Sobol
    sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
    take free lanes and run beside the path that split (copy 0), as the camera sample's family.
@@ -11217,6 +11240,10 @@ typedef struct pt__lane {
     pt_hit h;
     pt__light_sample ls;
     pt__nee_ray nr;
+    pt__nee_ray dnr;  /* the delta lights' shadow ray (dshadow as shadow; pt__delta_prepare), with: */
+    pt_color dLi;
+    float dpick_delta;
+    int dshadow;
     /* split copies as lanes (below): the camera sample's lane is its family's root */
     int self, root, parent, copy; /* copy: which of the parent's copies (1 .. k-1) */
     int prev, next, head;         /* the family's scalar order (head: the root's, its first) */
@@ -11427,7 +11454,8 @@ static PT__HOT int pt__lane_picked(const pt__batch_ctx *b, pt__light_sample *ls,
    its shadow ray. Where the light picked is a quad, the rest is left to stage 2c (l->defer = 2;
    pt__batch_area_lights), which makes the batch's area samples of quads 8 at a time and leaves
    those to be sampled by solid angle (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which
-   sets up their spherical rectangles 4 at a time. b->area is 0 without AVX2: then it is all done
+   sets up their spherical rectangles 4 at a time; a sphere's to stage 2s (l->defer = 3;
+   pt__batch_sphere_lights), 8 cones at a time. b->area is 0 without AVX2: then it is all done
    here, as it is for a lane whose pick chose the environment. With an environment a shaped light
    is picked with pt__lights_sample_all's u0 rescaled, and its density carries the lights' share
    (pt__lane_picked). Either way each path does what pt__lights_sample_all and pt__nee_prepare do. */
@@ -11891,7 +11919,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
     const pt__prim *prim;
     const pt__material *m;
     pt__vertex *v = &l->v;
-    l->shadow = 0;
+    l->shadow = l->dshadow = 0;
     l->defer = 0;
     if (!l->found) {
         if (PT__UNLIKELY(cfg->env_on)) {
@@ -11950,6 +11978,9 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
             pt__draw2(&l->smp, PT__SET_BOUNCE(l->depth, PT__SLOT_LIGHT_POINT), &u1, &u2);
             pt__lane_light(b, l, u0, u1, u2);
         }
+        /* the delta lights (pt__trace_from's order: after the light sample's draws) */
+        l->dshadow = PT__UNLIKELY(s->dlight_count != 0) &&
+                     pt__delta_prepare(s, cfg, v, l->depth, &l->smp, b->tri, &l->dnr, &l->dLi, &l->dpick_delta, &l->st);
     }
     return 1;
 }
@@ -12061,8 +12092,9 @@ static PT__HOT int pt__lane_continue(pt__batch_ctx *b, pt__lane *l, const int co
         int split;
         if (!copies || l->wait != PT__WAIT_HEAD) {
             if (l->shadow == 1) pt__lane_add(l, pt__nee_finish(s, cfg, v, &l->ls, l->li, l->beta, l->nr.f), copies);
-            if (PT__UNLIKELY(s->dlight_count != 0))
-                pt__lane_add(l, pt__delta_nee(s, cfg, v, l->beta, l->depth, &l->smp, b->tri, &l->st), copies);
+            if (PT__UNLIKELY(s->dlight_count != 0)) /* (pt__delta_nee's zero where it adds nothing) */
+                pt__lane_add(l, l->dshadow == 1 ? pt__delta_finish(l->beta, &l->dnr, l->dLi, l->dpick_delta) : pt_v3(0, 0, 0),
+                             copies);
         }
         split = sp->first > 1 || PT__UNLIKELY(l->beta_in.x >= PT__SPLIT_BETA || l->beta_in.y >= PT__SPLIT_BETA ||
                                                l->beta_in.z >= PT__SPLIT_BETA);
@@ -12207,34 +12239,44 @@ static void pt__batch_draw_ahead(const pt__batch_ctx bc, pt__lane *lanes, const 
     }
 }
 
-/* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded), in a small
-   scene of at most PT__BVH_SMALL_SCENE primitives 8 at a time with AVX2 (pt__packet_any8; in
-   larger packet scenes the BVH measured as fast: docs/design.md, "Packets for shadow rays"), with
-   Embree 3 as streams of at most PT__RTC_STREAM rays (pt__rtc_any_n), else one at a time. */
+/* Stage 3: the shadow rays of the paths that have one (l->shadow = 2 where occluded) and of their
+   delta lights (l->dshadow), in a small scene of at most PT__BVH_SMALL_SCENE primitives 8 at a time
+   with AVX2 (pt__packet_any8; in larger packet scenes the BVH measured as fast: docs/design.md,
+   "Packets for shadow rays"), with Embree 3 as streams of at most PT__RTC_STREAM rays
+   (pt__rtc_any_n), else one at a time. */
 static void pt__batch_shadow(const pt_scene *s, const pt__packet_scene *pk, pt__lane *lanes, const int *shade, int nshade)
 {
-    int i;
+    const pt__nee_ray *ray[2 * PT__BATCH_LANES];
+    int *flag[2 * PT__BATCH_LANES];
+    int i, m = 0;
+    for (i = 0; i < nshade; ++i) { /* (the rays, gathered first) */
+        pt__lane *l = &lanes[shade[i]];
+        if (l->shadow) {
+            ray[m] = &l->nr;
+            flag[m++] = &l->shadow;
+        }
+        if (PT__UNLIKELY(l->dshadow)) {
+            ray[m] = &l->dnr;
+            flag[m++] = &l->dshadow;
+        }
+    }
 #ifdef PT__WIDE
     if (pk->n > 0 && s->prim_count <= PT__BVH_SMALL_SCENE && s->simd >= PT_SIMD_AVX2) {
         const pt__rayctx *rc[8];
         float tmax[8];
         uint32_t skip[8];
-        int which[8], m = 0, j;
-        for (i = 0; i <= nshade; ++i) {
-            if (i < nshade) {
-                pt__lane *l = &lanes[shade[i]];
-                if (!l->shadow) continue;
-                rc[m] = &l->nr.rc;
-                tmax[m] = l->nr.tmax;
-                skip[m] = l->nr.skip;
-                which[m++] = shade[i];
+        int o, j;
+        for (o = 0; o < m; o += 8) {
+            const int k = m - o < 8 ? m - o : 8;
+            int hit;
+            for (j = 0; j < k; ++j) {
+                rc[j] = &ray[o + j]->rc;
+                tmax[j] = ray[o + j]->tmax;
+                skip[j] = ray[o + j]->skip;
             }
-            if (m == 8 || (i == nshade && m > 0)) { /* a full packet, or the last one */
-                const int hit = pt__packet_any8(s, pk, rc, tmax, skip, m);
-                for (j = 0; j < m; ++j)
-                    if (hit & (1 << j)) lanes[which[j]].shadow = 2;
-                m = 0;
-            }
+            hit = pt__packet_any8(s, pk, rc, tmax, skip, k);
+            for (j = 0; j < k; ++j)
+                if (hit & (1 << j)) *flag[o + j] = 2;
         }
         return;
     }
@@ -12243,27 +12285,22 @@ static void pt__batch_shadow(const pt_scene *s, const pt__packet_scene *pk, pt__
 #endif
 #ifdef PT__RTC_STREAM
     if (s->backend == PT_BACKEND_EMBREE) {
-        const pt__rayctx *rc[PT__BATCH_LANES];
-        float tmax[PT__BATCH_LANES];
-        int which[PT__BATCH_LANES], hit[PT__BATCH_LANES], m = 0, o;
-        for (i = 0; i < nshade; ++i) {
-            pt__lane *l = &lanes[shade[i]];
-            if (!l->shadow) continue;
-            rc[m] = &l->nr.rc;
-            tmax[m] = l->nr.tmax;
-            which[m++] = shade[i];
+        const pt__rayctx *rc[2 * PT__BATCH_LANES];
+        float tmax[2 * PT__BATCH_LANES];
+        int hit[2 * PT__BATCH_LANES], o;
+        for (i = 0; i < m; ++i) {
+            rc[i] = &ray[i]->rc;
+            tmax[i] = ray[i]->tmax;
         }
         for (o = 0; o < m; o += PT__RTC_STREAM) /* (streams of at most PT__RTC_STREAM rays) */
             pt__rtc_any_n(s, rc + o, tmax + o, m - o < PT__RTC_STREAM ? m - o : PT__RTC_STREAM, hit + o);
         for (i = 0; i < m; ++i)
-            if (hit[i]) lanes[which[i]].shadow = 2;
+            if (hit[i]) *flag[i] = 2;
         return;
     }
 #endif
-    for (i = 0; i < nshade; ++i) {
-        pt__lane *l = &lanes[shade[i]];
-        if (l->shadow && pt__scene_any(s, &l->nr.rc, l->nr.tmax, l->nr.skip)) l->shadow = 2;
-    }
+    for (i = 0; i < m; ++i)
+        if (pt__scene_any(s, &ray[i]->rc, ray[i]->tmax, ray[i]->skip)) *flag[i] = 2;
 }
 
 #ifdef PT__WIDE
@@ -12284,9 +12321,11 @@ static void pt__scatter_peek(const pt__sampler *smp, int depth, float *u1, float
 /* Stage 3b (AVX2): the scattered direction and density of each path whose vertex is Lambertian
    and unguided (pt__continue's branch for such a vertex, outside the mixture strategy), made 8 at
    a time (pt__lambert_dir8) from the numbers its continuation will draw (pt__scatter_peek; with
-   independent numbers only where no delta light draws before them) and kept in the vertex tagged
-   with those numbers (pt__vertex.scat_*), which pt__continue takes when its draws match. A
-   path's chain of divisions, square root and polynomials becomes a vector's share of one. */
+   independent numbers the stream's next two: the delta lights' pick was drawn in stage 2) and
+   kept in the vertex tagged with those numbers (pt__vertex.scat_*), which pt__continue takes
+   when its draws match (a split's copies, which draw first from the stream with independent
+   numbers, leave them unused). A path's chain of divisions, square root and polynomials becomes
+   a vector's share of one. */
 static void pt__batch_scatter_ahead(const pt__batch_ctx bc, pt__lane *lanes, const int *shade, int nshade)
 {
 #ifdef PT__WIDE
@@ -12295,9 +12334,7 @@ static void pt__batch_scatter_ahead(const pt__batch_ctx bc, pt__lane *lanes, con
     float in[5][PT__BATCH_LANES + 8], out[4][PT__BATCH_LANES + 8]; /* n.x, n.y, n.z, u1, u2; w, pdf */
     pt__vertex *vs[PT__BATCH_LANES];
     int i, k, n = 0;
-    if (b->s->simd < PT_SIMD_AVX2 || b->cfg->strategy == PT_STRATEGY_MIXTURE ||
-        (b->cfg->sampler != PT_SAMPLER_SOBOL && b->s->dlight_count != 0))
-        return;
+    if (b->s->simd < PT_SIMD_AVX2 || b->cfg->strategy == PT_STRATEGY_MIXTURE) return;
     for (i = 0; i < nshade; ++i) {
         pt__lane *l = &lanes[shade[i]];
         pt__vertex *v = &l->v;

@@ -28,13 +28,14 @@ STAGES = [
     ('material sample/eval/density', ['pt__material', 'pt__scatter', 'pt__lambert', 'pt__cosine', 'pt__onb', 'pt__fresnel',
                                       'pt__reflect', 'sincos']),
     # the light sample and its shadow ray's set-up, in the scalar integrator and in the batched one's
-    # stages 2, 2b and 2c (pt__lane_light, pt__batch_lights, pt__batch_area_lights and what they inline)
+    # stages 2, 2b, 2c and 2s (pt__lane_light, pt__batch_lights, pt__batch_area_lights, pt__batch_sphere_lights
+    # and what they inline)
     ('light sampling and light pmf', ['pt__lights_sample', 'pt__lights_pick', 'pt__planar_', 'pt__light_pmf',
                                       'pt__light_prim_value', 'pt__lights_value', 'pt__lights_reachable',
                                       'pt__sphere_light', 'pt__lnode', 'pt__sphrect', 'pt__light_shadow_ray',
                                       'pt__light_target', 'pt__nee_prepare', 'pt__lane_light', 'pt__lane_pick',
                                       'pt__lane_area', 'pt__batch_lights', 'pt__batch_area_lights', 'pt__quad_area8',
-                                      'pt__qa_']),
+                                      'pt__qa_', 'pt__batch_sphere_lights', 'pt__sphere_sample8', 'pt__in_cone']),
 ]
 
 

@@ -140,7 +140,7 @@ static void sincos_turn(test_ctx *t)
 {
     const long n = 1L << 21;
     double worst = 0.0;
-    int bad = 0, vbad = 0, k, j;
+    int bad = 0, k, j;
     long i;
     float edge[8 * 9 * 2 + 3];
     int nedge = 0;
@@ -166,6 +166,7 @@ static void sincos_turn(test_ctx *t)
     if (pt_simd_cpu_level() >= PT_SIMD_AVX2) {
         float u[8], sv[8], cv[8];
         long m = 0;
+        int vbad = 0;
         for (i = 0; i <= n + nedge + 1; i += 8) {
             for (j = 0; j < 8; ++j) {
                 const long q = i + j;

@@ -1169,12 +1169,13 @@ static void batched_bit_identical(test_ctx *t)
                     }
                     pt_film_free(&f);
                 }
-                if ((c == 4 || c == 0) && (i <= 1 || i >= rooms)) { /* Sobol's draws made ahead (stage
+                if ((c == 4 || c == 0) && (i <= 1 || i == 3 || i >= rooms)) { /* Sobol's draws made ahead (stage
                     1b), the Lambertian directions made ahead (stage 3b, Sobol and independent numbers), quad
                     lights' samples (stages 2b and 2c, on rooms and the quad lights, with and without an
                     environment the pick can choose), sphere lights' (stage 2s) and the shadow rays' packets
-                    (stage 3; the Cornell boxes' and the rooms' occluders): AVX2's 8 (or 4) at a time and the
-                    scalar code below that level give the same film */
+                    (stage 3; the Cornell boxes' and the rooms' occluders, and the delta lights' rays of
+                    scenes/lights.scene, scenes[3]): AVX2's 8 (or 4) at a time and the scalar code below that
+                    level give the same film */
                     int level;
                     for (level = PT_SIMD_SCALAR; level < (int)pt_simd_cpu_level(); ++level) {
                         pt_film f;
