@@ -3963,7 +3963,8 @@ static int pt__cdf_find(const float *cdf, const int *guide, int n, float u, doub
     if (*frac >= 1.0) *frac = 0.99999999999999989;
     return lo;
 }
-static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w)
+/* A direction *w of the map's density, and the (u, v) and cell index it was drawn at. */
+static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w, float *u, float *v, size_t *cell)
 {
     double fy, fx, c0, c1, cos_t, sin_t, phi, lx, ly, lz;
     int y = pt__cdf_find(e->row_cdf, e->row_guide, e->h, u1, &fy), x;
@@ -3981,6 +3982,9 @@ static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w)
     *w = pt_normalize(pt_v3((float)(e->rot[0][0] * lx + e->rot[0][1] * ly + e->rot[0][2] * lz),
                             (float)(e->rot[1][0] * lx + e->rot[1][1] * ly + e->rot[1][2] * lz),
                             (float)(e->rot[2][0] * lx + e->rot[2][1] * ly + e->rot[2][2] * lz)));
+    *u = (float)(((double)x + fx) / (double)e->w);
+    *v = pt__atan2f((float)sin_t, (float)cos_t) * PT__INV_PI;
+    *cell = (size_t)y * (size_t)e->w + (size_t)x;
     return 1;
 }
 /* The environment light along w: the map's radiance (0 without one) and, in *density, the
@@ -3998,16 +4002,28 @@ static float pt__env_density(const pt__env *e, float c_uniform, pt_vec3 w)
     (void)pt__env_light_eval(e, c_uniform, w, &p);
     return p;
 }
-/* *Lmap (may be NULL) receives the map's radiance along the sampled direction. */
+/* Samples the environment light: direction *w and its density *pdf, and with Lmap the map's
+   radiance along it. With Lmap (light sampling) a map sample takes both from the point and cell it
+   was drawn at, without the two atan2 of the direction: the density is the cell's own, where the
+   direction's float rounding could put it in a neighbour (docs/design.md, "Environment samples
+   from their cell"). Without (a pt_pdf's sample) both come from the direction, so that the
+   sample's density is pt_pdf_value's to the bit. */
 static int pt__env_sample(const pt__env *e, float c_uniform, float u1, float u2, pt_vec3 *w, float *pdf, pt_color *Lmap)
 {
     pt_color L;
+    float u, v;
+    size_t cell;
     if (u1 < c_uniform || !e) {
         *w = pt_sample_uniform_sphere(pt__minf(u1 / c_uniform, 0.99999994f), u2);
-    } else if (!pt__env_map_sample(e, pt__minf((u1 - c_uniform) / (1.0f - c_uniform), 0.99999994f), u2, w)) {
+    } else if (!pt__env_map_sample(e, pt__minf((u1 - c_uniform) / (1.0f - c_uniform), 0.99999994f), u2, w, &u, &v,
+                                   &cell)) {
         return 0;
+    } else if (Lmap) {
+        *Lmap = pt__env_lookup(e, u, v);
+        *pdf = c_uniform * PT__INV_4PI + (1.0f - c_uniform) * e->cell_density[cell];
+        return *pdf > 0.0f && pt__isfinite(*pdf);
     }
-    L = pt__env_light_eval(e, c_uniform, *w, pdf); /* (the density as evaluated, so MIS sees the same) */
+    L = pt__env_light_eval(e, c_uniform, *w, pdf);
     if (Lmap) *Lmap = L;
     return *pdf > 0.0f && pt__isfinite(*pdf);
 }
