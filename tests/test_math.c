@@ -3,7 +3,9 @@
    rotation formula, the defining properties of the inverse transpose, orthonormality). */
 #include "test_util.h"
 
+#include <float.h>
 #include <stdio.h>
+#include <string.h>
 
 static int v3_near(pt_vec3 a, dv3 b, double tol)
 {
@@ -278,6 +280,64 @@ static void own_acos_sincos(test_ctx *t)
     test_note(t, "worst: acos %.3g, sin %.3g, cos %.3g ulps (limit 4)", worst_a, worst_s, worst_c);
 }
 
+/* |a - ref| in units in the last place of ref rounded to float (ref: the exact value, from double) */
+static double ulps_off_f(float a, double ref)
+{
+    float r = fabsf((float)ref), u = nextafterf(r, HUGE_VALF) - r;
+    return fabs((double)a - ref) / (double)u;
+}
+
+/* pt_atan2f against double atan2 at 2^21 + 1 directions evenly spaced in angle over [-pi, pi]
+   (scaled by 1, 1e-20, 1e20, 1e-35 and 1e35 in turn: the last two take libm's path), at y = 1,
+   x = +-2^k for k = -149 .. 127 (tiny and huge ratios) and at the octants' edges: within 3 ulps
+   (it measures 2.06, near pi/4, where the pi/6 reduction's rounding and the final one add up).
+   On the pairs of +-0, +-inf, NaN, +-1, a denormal and +-FLT_MAX holding a zero, infinity or
+   NaN: libm's atan2f to the bit (the signs of zero and pi included). */
+static void own_atan2f(test_ctx *t)
+{
+    const int n = 1 << 21;
+    const float scale[5] = { 1.0f, 1e-20f, 1e20f, 1e-35f, 1e35f };
+    const float sp[11] = { 0.0f, -0.0f, HUGE_VALF, -HUGE_VALF, NAN, 1.0f, -1.0f, 1e-40f, FLT_MAX, -FLT_MAX, 0.5f };
+    double worst = 0.0;
+    float at_y = 0.0f, at_x = 0.0f;
+    int i, j, bad = 0;
+    for (i = 0; i <= n + 2 * 277 + 8; i++) {
+        float y, x, r;
+        double e;
+        if (i <= n) {
+            double a = -TU_PI + 2.0 * TU_PI * i / n;
+            y = (float)sin(a) * scale[i % 5];
+            x = (float)cos(a) * scale[i % 5];
+        } else if (i <= n + 2 * 277) {
+            int k = (i - n - 1) / 2 - 149;
+            y = 1.0f;
+            x = ldexpf((i - n) % 2 ? 1.0f : -1.0f, k);
+        } else { /* the diagonals and the reduction's switch at tan(pi/12) */
+            int k = i - n - 2 * 277 - 1;
+            y = k & 1 ? -1.0f : 1.0f;
+            x = k & 2 ? -1.0f : 1.0f;
+            if (k & 4) y *= 0.26794919f;
+        }
+        r = pt_atan2f(y, x);
+        e = ulps_off_f(r, atan2((double)y, (double)x));
+        if (!(e <= worst)) { worst = e; at_y = y; at_x = x; }
+    }
+    CHECK(t, worst <= 3.0, "pt_atan2f is %.3g ulps off at (%.9g, %.9g)", worst, at_y, at_x);
+    for (i = 0; i < 11; i++) {
+        for (j = 0; j < 11; j++) {
+            float y = sp[i], x = sp[j], r = pt_atan2f(y, x), l = atan2f(y, x);
+            int special = i < 5 || j < 5;
+            if (special && !(memcmp(&r, &l, sizeof r) == 0 || (r != r && l != l))) {
+                if (bad++ < 4) CHECK(t, 0, "pt_atan2f(%g, %g) = %.9g, libm's %.9g", y, x, r, l);
+            } else if (!special) {
+                double e = ulps_off_f(r, atan2((double)y, (double)x));
+                if (e > 3.0 && bad++ < 4) CHECK(t, 0, "pt_atan2f(%g, %g) = %.9g is %.3g ulps off", y, x, r, e);
+            }
+        }
+    }
+    test_note(t, "worst: %.3g ulps (limit 3) at (%.9g, %.9g)", worst, at_y, at_x);
+}
+
 const test_case test_math_cases[] = {
     TEST_CASE(vector_ops),
     TEST_CASE(transform_basics),
@@ -285,5 +345,6 @@ const test_case test_math_cases[] = {
     TEST_CASE(transform_normal),
     TEST_CASE(onb_duff),
     TEST_CASE(own_acos_sincos),
+    TEST_CASE(own_atan2f),
     TEST_END
 };
