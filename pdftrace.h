@@ -3646,7 +3646,7 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
     return lo;
 }
 
-/* --- light tree: a light is picked by descending a tree over the lights (four children per
+/* --- light tree: a light is picked by descending a tree over the lights (eight children per
    node), choosing each child in proportion to a conservative estimate of what its lights can send
    to the shading point (power, distance and orientation: Conty Estevez & Kulla, "Importance Sampling of Many Lights
    with Adaptive Tree Splitting", 2018, as in pbrt-v4's light BVH). The orientation bounds are
