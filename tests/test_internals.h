@@ -109,6 +109,7 @@ static void rayctx_axes(test_ctx *t)
     CHECK(t, bad == 0, "%d ray set-ups differ from the plain ones", bad);
 }
 
+#ifdef PT__WIDE
 /* A random light-tree node for lighttree_level_widths: children with boxes flat, thin or wide,
    normal cones from a single direction to every direction, and some empty. */
 static void ti_random_lnode(pt_rng *r, pt__lnodew *n)
@@ -150,6 +151,7 @@ static void ti_random_lnode(pt_rng *r, pt__lnodew *n)
         n->child[k] = PT__LCHILD_LIGHT | (uint32_t)k;
     }
 }
+#endif
 
 /* The light tree's level (children's importances, their running sums and the child chosen) is
    the same to the bit in one AVX2 pass as in the SSE passes (or the scalar loop) every SIMD level
