@@ -1704,13 +1704,18 @@ typedef struct pt__lnode {
     uint32_t a, b;       /* children; a leaf: a = the light's index, b = PT__LNODE_LEAF */
 } pt__lnode;
 #define PT__LNODE_LEAF 0xffffffffu
-/* The light tree as the sampler walks it: each node holds up to four children side by side (the
-   binary tree's grandchildren), so one SSE pass bounds all four (section 2, "light tree"). */
-typedef struct pt__lnode4 {
-    float lo[3][4], hi[3][4], centre[3][4], axis[3][4]; /* per axis, per child: as in pt__lnode */
-    float r2[4], cos_o[4], sin_o[4], cos_e[4], pmin[4], power[4]; /* an empty child has power 0 */
-    uint32_t child[4];  /* a node's index, or PT__LCHILD_LIGHT | a light's index */
-} pt__lnode4;
+/* The light tree as the sampler walks it: each node holds up to eight children side by side (the
+   binary tree's nodes three levels down), so one AVX2 pass, or two SSE passes, bound all eight
+   (section 2, "light tree"). */
+#define PT__LTREE_W 8
+#define PT__LTREE_BITS 3 /* log2 PT__LTREE_W: a child's lane in a light's trail */
+typedef struct pt__lnodew {
+    float lo[3][PT__LTREE_W], hi[3][PT__LTREE_W];         /* per axis, per child: as in pt__lnode */
+    float centre[3][PT__LTREE_W], axis[3][PT__LTREE_W];
+    float r2[PT__LTREE_W], cos_o[PT__LTREE_W], sin_o[PT__LTREE_W], cos_e[PT__LTREE_W], pmin[PT__LTREE_W];
+    float power[PT__LTREE_W]; /* an empty child has power 0 */
+    uint32_t child[PT__LTREE_W]; /* a node's index, or PT__LCHILD_LIGHT | a light's index */
+} pt__lnodew;
 #define PT__LCHILD_LIGHT 0x80000000u
 
 /* A delta light (pt_scene_add_light). */
@@ -1816,8 +1821,8 @@ struct pt_scene {
     pt__light *lights;
     uint32_t light_count;
     double total_power;
-    pt__lnode4 *ltree;         /* the light tree (commit; NULL: fewer than PT__LIGHT_TREE_MIN lights) */
-    uint64_t *ltrail;          /* per light: its path from the root, two bits (the child) per level */
+    pt__lnodew *ltree;         /* the light tree (commit; NULL: fewer than PT__LIGHT_TREE_MIN lights) */
+    uint64_t *ltrail;          /* per light: its path from the root, three bits (the child) per level */
     uint32_t ltree_count;
     pt__dlight *dlights;       /* delta lights, in the order added */
     uint32_t dlight_count, dlight_cap;
@@ -3728,7 +3733,7 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
     return lo;
 }
 
-/* --- light tree: a light is picked by descending a tree over the lights (four children per
+/* --- light tree: a light is picked by descending a tree over the lights (eight children per
    node), choosing each child in proportion to a conservative estimate of what its lights can send
    to the shading point (power, distance and orientation: Conty Estevez & Kulla, "Importance Sampling of Many Lights
    with Adaptive Tree Splitting", 2018, as in pbrt-v4's light BVH). The orientation bounds are
@@ -3742,61 +3747,77 @@ static uint32_t pt__pick_light(const pt_scene *s, float u)
 #endif
 #define PT__LIGHTS_SPHERICAL 1u /* mode bits of the functions below: solid-angle sampling of planar */
 #define PT__LIGHTS_TREE 2u      /* lights; the light tree (where the scene has one) */
-/* What each of node n's children can send to p, up to a common factor, into imp[4]; 0 only
+/* What each of node n's children can send to p, up to a common factor, into imp[8]; 0 only
    where nothing can light p. nr: the receiver's normal, which nothing below its plane reaches
    (has_nr 0: no receiver bound, for a point alone or a material that transmits). Cosines are
    bounded over each child's box: the projection of a direction between p and the box on a
-   normal is at most the largest projection of their offset over their least distance. The SSE
-   version and the scalar one do the same float operations in the same order, so they agree to
-   the bit (no division by zero in any lane: fptrap). */
-#ifdef PT__SSE
-static PT__HOT void pt__lnode4_importance(const pt__lnode4 *n, pt_vec3 p, pt_vec3 nr, int has_nr, float *imp)
-{
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
-    const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z);
-    const __m128 lx = _mm_loadu_ps(n->lo[0]), ly = _mm_loadu_ps(n->lo[1]), lz = _mm_loadu_ps(n->lo[2]);
-    const __m128 hx = _mm_loadu_ps(n->hi[0]), hy = _mm_loadu_ps(n->hi[1]), hz = _mm_loadu_ps(n->hi[2]);
-    const __m128 cos_o = _mm_loadu_ps(n->cos_o);
-    __m128 dx = _mm_sub_ps(px, _mm_max_ps(lx, _mm_min_ps(px, hx)));
-    __m128 dy = _mm_sub_ps(py, _mm_max_ps(ly, _mm_min_ps(py, hy)));
-    __m128 dz = _mm_sub_ps(pz, _mm_max_ps(lz, _mm_min_ps(pz, hz)));
-    __m128 dmin2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    __m128 apart = _mm_cmpgt_ps(dmin2, zero);
-    __m128 inv = _mm_and_ps(apart, _mm_div_ps(one, _mm_sqrt_ps(_mm_or_ps(_mm_and_ps(apart, dmin2), _mm_andnot_ps(apart, one)))));
-    __m128 num, side, tilted, cone, cos_p, cos_r = one, dead, rd2;
-    /* 1 / the distance to the centre, clamped to the child's size (a point among its lights is not
-       infinitely near) */
-    dx = _mm_sub_ps(px, _mm_loadu_ps(n->centre[0]));
-    dy = _mm_sub_ps(py, _mm_loadu_ps(n->centre[1]));
-    dz = _mm_sub_ps(pz, _mm_loadu_ps(n->centre[2]));
-    rd2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    rd2 = _mm_div_ps(one, _mm_max_ps(_mm_max_ps(rd2, _mm_loadu_ps(n->r2)), _mm_set1_ps(FLT_MIN)));
-    /* the emitters: cos theta' = cos max(0, theta_w - theta_o), theta_w the least angle between
-       the cone's axis and a direction from the box to p; with cos theta_w = num / dmin, the
-       sine is sqrt(dmin^2 - num^2) / dmin */
-    num = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(n->axis[0]), px), _mm_mul_ps(_mm_loadu_ps(n->axis[1]), py)),
-                                _mm_mul_ps(_mm_loadu_ps(n->axis[2]), pz)), _mm_loadu_ps(n->pmin));
-    num = _mm_max_ps(num, zero);
-    side = _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(dmin2, _mm_mul_ps(num, num)), zero));
-    tilted = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(num, cos_o), _mm_mul_ps(side, _mm_loadu_ps(n->sin_o))), inv);
-    cone = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(cos_o, _mm_set1_ps(-1.0f)), apart), _mm_cmplt_ps(_mm_mul_ps(num, inv), cos_o));
-    cos_p = _mm_or_ps(_mm_and_ps(cone, tilted), _mm_andnot_ps(cone, one));
-    dead = _mm_and_ps(_mm_cmpgt_ps(cos_o, _mm_set1_ps(-1.0f)), _mm_cmple_ps(cos_p, _mm_loadu_ps(n->cos_e)));
-    if (has_nr) { /* the receiver: nothing on or below its plane */
-        __m128 r = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(nr.x), nr.x > 0.0f ? hx : lx),
-                                                    _mm_mul_ps(_mm_set1_ps(nr.y), nr.y > 0.0f ? hy : ly)),
-                                         _mm_mul_ps(_mm_set1_ps(nr.z), nr.z > 0.0f ? hz : lz)),
-                              _mm_set1_ps(pt_dot(nr, p)));
-        dead = _mm_or_ps(dead, _mm_cmple_ps(r, zero));
-        cos_r = _mm_or_ps(_mm_and_ps(apart, _mm_min_ps(one, _mm_mul_ps(r, inv))), _mm_andnot_ps(apart, one));
+   normal is at most the largest projection of their offset over their least distance. The AVX2
+   version (8 children), the SSE version (4 children from lane h) and the scalar one do the same
+   float operations in the same order, so they agree to the bit (no division by zero in any lane:
+   fptrap). One body for both vector widths: V the vector type, the rest its intrinsics. */
+#define PT__LNODE_IMPORTANCE(NAME, TARGET, V, SET1, LOADU, ADD, SUB, MUL, DIV, SQRT, MAX, MIN, AND, OR,         \
+                             ANDNOT, GT, LT, LE)                                                                          \
+    TARGET static V NAME(const pt__lnodew *n, int h, pt_vec3 p, pt_vec3 nr, int has_nr)                                \
+    {                                                                                                                  \
+        const V zero = SET1(0.0f), one = SET1(1.0f), none = SET1(-1.0f);                                               \
+        const V px = SET1(p.x), py = SET1(p.y), pz = SET1(p.z);                                                        \
+        const V lx = LOADU(n->lo[0] + h), ly = LOADU(n->lo[1] + h), lz = LOADU(n->lo[2] + h);                          \
+        const V hx = LOADU(n->hi[0] + h), hy = LOADU(n->hi[1] + h), hz = LOADU(n->hi[2] + h);                          \
+        const V cos_o = LOADU(n->cos_o + h);                                                                           \
+        V dx = SUB(px, MAX(lx, MIN(px, hx)));                                                                          \
+        V dy = SUB(py, MAX(ly, MIN(py, hy)));                                                                          \
+        V dz = SUB(pz, MAX(lz, MIN(pz, hz)));                                                                          \
+        V dmin2 = ADD(ADD(MUL(dx, dx), MUL(dy, dy)), MUL(dz, dz));                                                     \
+        V apart = GT(dmin2, zero);                                                                                     \
+        V inv = AND(apart, DIV(one, SQRT(OR(AND(apart, dmin2), ANDNOT(apart, one)))));                                 \
+        V num, side, tilted, cone, cos_p, cos_r = one, dead, rd2;                                                      \
+        /* 1 / the distance to the centre, clamped to the child's size (a point among its lights is   \
+           not infinitely near) */                                                                                     \
+        dx = SUB(px, LOADU(n->centre[0] + h));                                                                         \
+        dy = SUB(py, LOADU(n->centre[1] + h));                                                                         \
+        dz = SUB(pz, LOADU(n->centre[2] + h));                                                                         \
+        rd2 = ADD(ADD(MUL(dx, dx), MUL(dy, dy)), MUL(dz, dz));                                                         \
+        rd2 = DIV(one, MAX(MAX(rd2, LOADU(n->r2 + h)), SET1(FLT_MIN)));                                                \
+        /* the emitters: cos theta' = cos max(0, theta_w - theta_o), theta_w the least angle between  \
+           the cone's axis and a direction from the box to p; with cos theta_w = num / dmin, the      \
+           sine is sqrt(dmin^2 - num^2) / dmin */                                                                      \
+        num = SUB(ADD(ADD(MUL(LOADU(n->axis[0] + h), px), MUL(LOADU(n->axis[1] + h), py)), MUL(LOADU(n->axis[2] + h), pz)), \
+                  LOADU(n->pmin + h));                                                                                 \
+        num = MAX(num, zero);                                                                                          \
+        side = SQRT(MAX(SUB(dmin2, MUL(num, num)), zero));                                                             \
+        tilted = MUL(ADD(MUL(num, cos_o), MUL(side, LOADU(n->sin_o + h))), inv);                                       \
+        cone = AND(AND(GT(cos_o, none), apart), LT(MUL(num, inv), cos_o));                                             \
+        cos_p = OR(AND(cone, tilted), ANDNOT(cone, one));                                                              \
+        dead = AND(GT(cos_o, none), LE(cos_p, LOADU(n->cos_e + h)));                                                   \
+        if (has_nr) { /* the receiver: nothing on or below its plane */                                                \
+            V r = SUB(ADD(ADD(MUL(SET1(nr.x), nr.x > 0.0f ? hx : lx), MUL(SET1(nr.y), nr.y > 0.0f ? hy : ly)),         \
+                          MUL(SET1(nr.z), nr.z > 0.0f ? hz : lz)),                                                     \
+                      SET1(pt_dot(nr, p)));                                                                            \
+            dead = OR(dead, LE(r, zero));                                                                              \
+            cos_r = OR(AND(apart, MIN(one, MUL(r, inv))), ANDNOT(apart, one));                                         \
+        }                                                                                                              \
+        return ANDNOT(dead, MUL(MUL(MUL(LOADU(n->power + h), cos_p), cos_r), rd2));                                    \
     }
-    _mm_storeu_ps(imp, _mm_andnot_ps(dead, _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(_mm_loadu_ps(n->power), cos_p), cos_r), rd2)));
-}
-#else
-static void pt__lnode4_importance(const pt__lnode4 *n, pt_vec3 p, pt_vec3 nr, int has_nr, float *imp)
+#ifdef PT__SSE
+PT__LNODE_IMPORTANCE(pt__lnode_importance_sse, PT__HOT, __m128, _mm_set1_ps, _mm_loadu_ps, _mm_add_ps,
+                     _mm_sub_ps, _mm_mul_ps, _mm_div_ps, _mm_sqrt_ps, _mm_max_ps, _mm_min_ps, _mm_and_ps, _mm_or_ps,
+                     _mm_andnot_ps, _mm_cmpgt_ps, _mm_cmplt_ps, _mm_cmple_ps)
+#endif
+#ifdef PT__WIDE
+/* the signalling predicates of SSE's cmpgt, cmplt and cmple (the same flags on a NaN) */
+#define PT__LGT8(a, b) _mm256_cmp_ps(a, b, _CMP_GT_OS)
+#define PT__LLT8(a, b) _mm256_cmp_ps(a, b, _CMP_LT_OS)
+#define PT__LLE8(a, b) _mm256_cmp_ps(a, b, _CMP_LE_OS)
+PT__LNODE_IMPORTANCE(pt__lnode_importance_avx2, PT__TARGET_AVX2 inline, __m256, _mm256_set1_ps, _mm256_loadu_ps,
+                     _mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps, _mm256_div_ps, _mm256_sqrt_ps,
+                     _mm256_max_ps, _mm256_min_ps, _mm256_and_ps, _mm256_or_ps, _mm256_andnot_ps, PT__LGT8, PT__LLT8,
+                     PT__LLE8)
+#endif
+#ifndef PT__SSE
+static void pt__lnode_importance_scalar(const pt__lnodew *n, pt_vec3 p, pt_vec3 nr, int has_nr, float *imp)
 {
     int k;
-    for (k = 0; k < 4; ++k) {
+    for (k = 0; k < PT__LTREE_W; ++k) {
         pt_vec3 d;
         float dx = p.x - pt__maxf(n->lo[0][k], pt__minf(p.x, n->hi[0][k]));
         float dy = p.y - pt__maxf(n->lo[1][k], pt__minf(p.y, n->hi[1][k]));
@@ -3822,64 +3843,167 @@ static void pt__lnode4_importance(const pt__lnode4 *n, pt_vec3 p, pt_vec3 nr, in
     }
 }
 #endif
-/* One level of the descent from node n: the children's importances, their running sums c (c[3]
-   the total) and 0 when no child can light p. */
-static PT__HOT int pt__lnode4_level(const pt__lnode4 *n, pt_vec3 p, pt_vec3 nr, int has_nr, float *imp, float *c)
+/* The running sums c of the children's importances, in the order of a three-step parallel scan
+   (each sum adds the one 1, then 2, then 4 lanes down, or 0 below lane 0), which the AVX2 level
+   does in three vector additions; every level computes them so. */
+static void pt__lnodew_scan(const float *imp, float *c)
 {
-    pt__lnode4_importance(n, p, nr, has_nr, imp);
-    c[0] = imp[0];
-    c[1] = c[0] + imp[1];
-    c[2] = c[1] + imp[2];
-    c[3] = c[2] + imp[3];
-    return c[3] > 0.0f && pt__isfinite(c[3]);
+    float a[8];
+    int k, step, j;
+    for (k = 0; k < PT__LTREE_W; ++k) c[k] = imp[k];
+    for (j = 0; j < PT__LTREE_W; j += 8) {
+        float *cj = c + j;
+        for (step = 1; step < 8; step *= 2) {
+            for (k = 0; k < 8; ++k) a[k] = cj[k] + (k >= step ? cj[k - step] : 0.0f);
+            for (k = 0; k < 8; ++k) cj[k] = a[k];
+        }
+        if (j) for (k = 0; k < 8; ++k) cj[k] = cj[k] + cj[-1];
+    }
 }
+/* How many running sums are at most t (the child a descent with threshold t takes). */
+static int pt__lnodew_count(const float *c, float t)
+{
+    int k = 0, j;
+    for (j = 0; j < PT__LTREE_W; ++j) k += c[j] <= t;
+    return k;
+}
+#ifdef PT__WIDE
+/* The running sums of 8 importances in three vector additions (pt__lnodew_scan's order). */
+PT__TARGET_AVX2 static inline __m256 pt__scan8_avx2(__m256 x)
+{
+    const __m256 zero = _mm256_setzero_ps();
+    __m256 y = _mm256_blend_ps(_mm256_permutevar8x32_ps(x, _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6)), zero, 0x01);
+    x = _mm256_add_ps(x, y);
+    y = _mm256_blend_ps(_mm256_permutevar8x32_ps(x, _mm256_setr_epi32(0, 0, 0, 1, 2, 3, 4, 5)), zero, 0x03);
+    x = _mm256_add_ps(x, y);
+    return _mm256_add_ps(x, _mm256_permute2f128_ps(x, x, 0x08)); /* the low half added into the high half */
+}
+/* pt__lnodew_level with AVX2, 8 children a pass: the importances, their scan and the count at
+   u x total. */
+PT__TARGET_AVX2 static inline int pt__lnodew_level_avx2(const pt__lnodew *n, pt_vec3 p, pt_vec3 nr, int has_nr, float u,
+                                                        float *imp, float *c, int *k)
+{
+    __m256 x[PT__LTREE_W / 8], carry = _mm256_setzero_ps(), t;
+    float total;
+    int j, m = 0;
+    for (j = 0; j < PT__LTREE_W / 8; ++j) {
+        x[j] = pt__lnode_importance_avx2(n, 8 * j, p, nr, has_nr);
+        _mm256_storeu_ps(imp + 8 * j, x[j]);
+        x[j] = pt__scan8_avx2(x[j]);
+    }
+    for (j = 0; j < PT__LTREE_W / 8; ++j) {
+        if (j) x[j] = _mm256_add_ps(x[j], carry);
+        carry = _mm256_permutevar8x32_ps(x[j], _mm256_set1_epi32(7));
+        _mm256_storeu_ps(c + 8 * j, x[j]);
+    }
+    total = _mm_cvtss_f32(_mm256_castps256_ps128(carry));
+    if (!(total > 0.0f && pt__isfinite(total))) return 0;
+    t = _mm256_set1_ps(u * total);
+    for (j = 0; j < PT__LTREE_W / 8; ++j) m += __builtin_popcount((unsigned)_mm256_movemask_ps(_mm256_cmp_ps(x[j], t, _CMP_LE_OS)));
+    *k = m;
+    return 1;
+}
+#endif
 static int pt__has_normal(pt_vec3 nr) { return nr.x != 0.0f || nr.y != 0.0f || nr.z != 0.0f; }
+/* The descent of pt__tree_pick from node n (its first level's importances and sums in imp, c and
+   *k), one body for every level function LEVEL: the first child whose running sum exceeds u x
+   total, i.e. the number of sums at most that (a child that cannot light p adds nothing, so it is
+   passed over); where rounding puts u x total at or past the total, the last child that can
+   light p. */
+#define PT__TREE_DESCENT(LEVEL)                                                                                    \
+    for (;;) {                                                                                                     \
+        float t, below, total;                                                                                     \
+        int k;                                                                                                     \
+        uint32_t child;                                                                                            \
+        if (!LEVEL(n, p, nr, has_nr, u, imp, c, &k)) return 0;                                                     \
+        total = c[PT__LTREE_W - 1];                                                                                \
+        t = u * total;                                                                                             \
+        if (PT__UNLIKELY(k > PT__LTREE_W - 1)) for (k = PT__LTREE_W - 1; !(imp[k] > 0.0f); --k) {}                 \
+        below = k ? c[k - 1] : 0.0f;                                                                               \
+        prob *= imp[k] / total;                                                                                    \
+        u = pt__minf((t - below) / imp[k], 0.99999994f);                                                           \
+        child = n->child[k];                                                                                       \
+        if (child & PT__LCHILD_LIGHT) {                                                                            \
+            *light = child & ~PT__LCHILD_LIGHT;                                                                    \
+            *pmf = prob;                                                                                           \
+            return prob > 0.0f;                                                                                    \
+        }                                                                                                          \
+        n = &s->ltree[child];                                                                                      \
+    }
+#ifdef PT__WIDE
+/* pt__lnodew_level_avx2 for callers outside AVX2 code. */
+PT__TARGET_AVX2 PT__NOINLINE static int pt__lnodew_level_avx2_call(const pt__lnodew *n, pt_vec3 p, pt_vec3 nr, int has_nr,
+                                                                   float u, float *imp, float *c, int *k)
+{
+    return pt__lnodew_level_avx2(n, p, nr, has_nr, u, imp, c, k);
+}
+/* pt__tree_pick's descent compiled for AVX2 (the scalar steps are the same float operations). */
+PT__TARGET_AVX2 PT__NOINLINE static int pt__tree_pick_avx2(const pt_scene *s, pt_vec3 p, pt_vec3 nr, int has_nr, float u,
+                                                           uint32_t *light, float *pmf)
+{
+    const pt__lnodew *n = &s->ltree[0];
+    float prob = 1.0f, imp[PT__LTREE_W], c[PT__LTREE_W];
+    PT__TREE_DESCENT(pt__lnodew_level_avx2)
+}
+#endif
+/* pt__lnodew_level without the AVX2 pass (arguments as pt__lnodew_level_avx2's). */
+static PT__HOT int pt__lnodew_level_narrow(const pt__lnodew *n, pt_vec3 p, pt_vec3 nr, int has_nr, float u, float *imp,
+                                          float *c, int *k)
+{
+    float total;
+#ifdef PT__SSE
+    int j;
+    for (j = 0; j < PT__LTREE_W; j += 4) _mm_storeu_ps(imp + j, pt__lnode_importance_sse(n, j, p, nr, has_nr));
+#else
+    pt__lnode_importance_scalar(n, p, nr, has_nr, imp);
+#endif
+    pt__lnodew_scan(imp, c);
+    total = c[PT__LTREE_W - 1];
+    if (!(total > 0.0f && pt__isfinite(total))) return 0;
+    *k = pt__lnodew_count(c, u * total);
+    return 1;
+}
+/* One level of the descent from node n: the children's importances imp, their running sums c
+   (c[7] the total), and *k the number of sums at most u x total; 0 when no child can light p.
+   One AVX2 pass where the scene's level has it, else two SSE passes (or the scalar loop). */
+static PT__HOT int pt__lnodew_level(const pt_scene *s, const pt__lnodew *n, pt_vec3 p, pt_vec3 nr, int has_nr,
+                                    float u, float *imp, float *c, int *k)
+{
+#ifdef PT__WIDE
+    if (s->simd >= PT_SIMD_AVX2) return pt__lnodew_level_avx2_call(n, p, nr, has_nr, u, imp, c, k);
+#endif
+    (void)s;
+    return pt__lnodew_level_narrow(n, p, nr, has_nr, u, imp, c, k);
+}
 static PT__HOT int pt__tree_pick(const pt_scene *s, pt_vec3 p, pt_vec3 nr, float u, uint32_t *light, float *pmf)
 {
-    const pt__lnode4 *n = &s->ltree[0];
+    const pt__lnodew *n = &s->ltree[0];
     const int has_nr = pt__has_normal(nr);
-    float prob = 1.0f, imp[4], c[4];
-    for (;;) {
-        float t, below;
-        int k;
-        uint32_t child;
-        if (!pt__lnode4_level(n, p, nr, has_nr, imp, c)) return 0;
-        /* the first child whose running sum exceeds u x total: the number of sums at most that (a
-           child that cannot light p adds nothing, so it is passed over); where rounding puts u x
-           total at or past the total, the last child that can light p */
-        t = u * c[3];
-        k = (c[0] <= t) + (c[1] <= t) + (c[2] <= t) + (c[3] <= t);
-        if (PT__UNLIKELY(k > 3)) for (k = 3; !(imp[k] > 0.0f); --k) {}
-        below = k ? c[k - 1] : 0.0f;
-        prob *= imp[k] / c[3];
-        u = pt__minf((t - below) / imp[k], 0.99999994f);
-        child = n->child[k];
-        if (child & PT__LCHILD_LIGHT) {
-            *light = child & ~PT__LCHILD_LIGHT;
-            *pmf = prob;
-            return prob > 0.0f;
-        }
-        n = &s->ltree[child];
-    }
+    float prob = 1.0f, imp[PT__LTREE_W], c[PT__LTREE_W];
+#ifdef PT__WIDE
+    if (s->simd >= PT_SIMD_AVX2) return pt__tree_pick_avx2(s, p, nr, has_nr, u, light, pmf);
+#endif
+    PT__TREE_DESCENT(pt__lnodew_level_narrow)
 }
 /* The probability that light li is picked from p with receiver normal nr (mode: PT__LIGHTS_*). */
 static float pt__light_pmf(const pt_scene *s, pt_vec3 p, pt_vec3 nr, uint32_t li, unsigned mode)
 {
-    const pt__lnode4 *n;
+    const pt__lnodew *n;
     const int has_nr = pt__has_normal(nr);
     uint64_t trail;
-    float prob = 1.0f, imp[4], c[4];
+    float prob = 1.0f, imp[PT__LTREE_W], c[PT__LTREE_W];
     if (!s->ltree || !(mode & PT__LIGHTS_TREE)) return s->lights[li].select_pdf;
     n = &s->ltree[0];
     trail = s->ltrail[li];
     for (;;) {
-        uint32_t k = (uint32_t)(trail & 3u), child;
-        if (!pt__lnode4_level(n, p, nr, has_nr, imp, c)) return 0.0f;
-        prob *= imp[k] / c[3];
+        uint32_t k = (uint32_t)(trail & (PT__LTREE_W - 1u)), child;
+        int ignored;
+        if (!pt__lnodew_level(s, n, p, nr, has_nr, 0.0f, imp, c, &ignored)) return 0.0f;
+        prob *= imp[k] / c[PT__LTREE_W - 1];
         child = n->child[k];
         if (child & PT__LCHILD_LIGHT) return prob;
         n = &s->ltree[child];
-        trail >>= 2;
+        trail >>= PT__LTREE_BITS;
     }
 }
 
@@ -9609,47 +9733,49 @@ static uint32_t pt__ltree_node(pt__lnode *bin, uint32_t *count, const pt__lnode 
                  node->axis.z * (node->axis.z > 0.0f ? node->lo.z : node->hi.z);
     return n;
 }
-/* The children of the 4-wide node made from binary node b: b's grandchildren, or a child of b
-   itself where it is a light. */
-static int pt__ltree_quad(const pt__lnode *bin, uint32_t b, uint32_t *list)
+/* The nodes below binary node x, `levels` binary levels down (or a light above that), appended
+   to list. */
+static void pt__ltree_gather(const pt__lnode *bin, uint32_t x, int levels, uint32_t *list, int *n)
 {
-    int i, n = 0;
-    const uint32_t kids[2] = {bin[b].a, bin[b].b};
-    for (i = 0; i < 2; ++i) {
-        const pt__lnode *c = &bin[kids[i]];
-        if (c->b == PT__LNODE_LEAF) {
-            list[n++] = kids[i];
-        } else {
-            list[n++] = c->a;
-            list[n++] = c->b;
-        }
+    if (levels == 0 || bin[x].b == PT__LNODE_LEAF) {
+        list[(*n)++] = x;
+        return;
     }
+    pt__ltree_gather(bin, bin[x].a, levels - 1, list, n);
+    pt__ltree_gather(bin, bin[x].b, levels - 1, list, n);
+}
+/* The children of the 8-wide node made from binary node b (not a light): b's descendants three
+   levels down, or a light above that. */
+static int pt__ltree_kids(const pt__lnode *bin, uint32_t b, uint32_t *list)
+{
+    int n = 0;
+    pt__ltree_gather(bin, b, PT__LTREE_BITS, list, &n);
     return n;
 }
-static uint32_t pt__ltree_quad_count(const pt__lnode *bin, uint32_t b)
+static uint32_t pt__ltree_kids_count(const pt__lnode *bin, uint32_t b)
 {
-    uint32_t list[4], total = 1;
-    int i, n = pt__ltree_quad(bin, b, list);
+    uint32_t list[PT__LTREE_W], total = 1;
+    int i, n = pt__ltree_kids(bin, b, list);
     for (i = 0; i < n; ++i)
-        if (bin[list[i]].b != PT__LNODE_LEAF) total += pt__ltree_quad_count(bin, list[i]);
+        if (bin[list[i]].b != PT__LNODE_LEAF) total += pt__ltree_kids_count(bin, list[i]);
     return total;
 }
-/* Makes s->ltree's node for binary node b at 4-wide depth `depth`; a light's trail gets its
-   child's lane in bits 2 depth and 2 depth + 1 (depth < 32: the binary tree is at most 62 deep). */
+/* Makes s->ltree's node for binary node b at 8-wide depth `depth`; a light's trail gets its
+   child's lane in bits 3 depth to 3 depth + 2 (depth < 21: the binary tree is at most 62 deep). */
 static uint32_t pt__ltree_collapse(pt_scene *s, const pt__lnode *bin, uint32_t b, uint32_t depth, uint64_t trail)
 {
-    uint32_t m = s->ltree_count++, list[4];
-    int k, n = pt__ltree_quad(bin, b, list);
-    pt__lnode4 *node = &s->ltree[m];
+    uint32_t m = s->ltree_count++, list[PT__LTREE_W];
+    int k, n = pt__ltree_kids(bin, b, list);
+    pt__lnodew *node = &s->ltree[m];
     memset(node, 0, sizeof *node);
-    for (k = 0; k < 4; ++k) { /* empty children: no power, no cone */
+    for (k = 0; k < PT__LTREE_W; ++k) { /* empty children: no power, no cone */
         node->r2[k] = 1.0f;
         node->cos_o[k] = -1.0f;
         node->child[k] = PT__LCHILD_LIGHT;
     }
     for (k = 0; k < n; ++k) {
         const pt__lnode *x = &bin[list[k]];
-        uint64_t t = trail | ((uint64_t)k << (2u * depth));
+        uint64_t t = trail | ((uint64_t)k << (PT__LTREE_BITS * depth));
         node->lo[0][k] = x->lo.x;
         node->lo[1][k] = x->lo.y;
         node->lo[2][k] = x->lo.z;
@@ -9700,7 +9826,7 @@ static int pt__ltree_build(pt_scene *s)
             pt__lnode_of_light(s, i, &info[i]);
         }
         pt__ltree_node(bin, &count, info, keys, 0, s->light_count, 0);
-        s->ltree = (pt__lnode4 *)PT_MALLOC(sizeof(pt__lnode4) * pt__ltree_quad_count(bin, 0));
+        s->ltree = (pt__lnodew *)PT_MALLOC(sizeof(pt__lnodew) * pt__ltree_kids_count(bin, 0));
         if (s->ltree) pt__ltree_collapse(s, bin, 0, 0, 0);
     }
     PT_FREE(keys);
@@ -10335,7 +10461,7 @@ static PT__HOT int pt__scatter_sample(const pt__vertex *v, pt__sampler *smp, int
     }
 }
 
-/* The receiver normal of the light tree's choice at vertex v (pt__lnode4_importance): none of
+/* The receiver normal of the light tree's choice at vertex v (pt__lnodew_importance): none of
    these materials reflects light from below ng (pt__material_eval); any other material gets none
    (the rough dielectric transmits light from below: no bound). */
 static pt_vec3 pt__receiver_normal(const pt__vertex *v)
