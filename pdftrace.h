@@ -25,7 +25,9 @@
    The implementation wants POSIX clocks and threads: if it is the first header the file
    includes, it defines _POSIX_C_SOURCE itself; otherwise compile that file with
    -D_POSIX_C_SOURCE=200809L (or a GNU dialect). Without a monotonic clock, timings fall
-   back to clock().
+   back to clock(). Dialects and -march settings give the same images: the header keeps FMA
+   contraction out of its implementation. -ffast-math does not keep images bit-identical
+   between the integrators and SIMD levels (NaN and Inf are still caught).
 
    THE HEADER FAMILY
    =================
@@ -197,6 +199,9 @@
 #include <stdint.h>
 #include <stdio.h> /* FILE, for pt_output_file */
 #include <math.h>
+#if defined(__clang__) /* clang contracts when it parses: keep the inline algebra below exact (see IMPLEMENTATION) */
+#pragma STDC FP_CONTRACT OFF
+#endif
 
 #define PDFTRACE_VERSION_MAJOR 0
 #define PDFTRACE_VERSION_MINOR 1
@@ -1519,6 +1524,9 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 }
 #endif
 
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT DEFAULT
+#endif
 #endif /* PDFTRACE_H */
 
 /* ==========================================================================================
@@ -1528,6 +1536,17 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #ifndef PDFTRACE_IMPLEMENTATION_DONE
 #define PDFTRACE_IMPLEMENTATION_DONE
 
+/* No contraction of a * b + c into a fused multiply-add in the implementation: the vector code
+   repeats the scalar code's roundings lane by lane, which a contracted scalar expression (GCC's
+   default in GNU modes, clang's anywhere, once the target has FMA) would not match. GCC's pragma
+   is used only where the target has FMA (it changes code generation); -ffast-math overrides both. */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__) && !defined(__INTEL_COMPILER) && (defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA))
+#define PT__GCC_NO_CONTRACT
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
+#endif
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -15049,6 +15068,12 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 
 #ifdef __cplusplus
 }
+#endif
+
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT DEFAULT
+#elif defined(PT__GCC_NO_CONTRACT)
+#pragma GCC pop_options
 #endif
 
 /* PDFTRACE_IMPLEMENTATION_COMPLETE */
