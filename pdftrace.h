@@ -1539,14 +1539,21 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 /* No contraction of a * b + c into a fused multiply-add in the implementation: the vector code
    repeats the scalar code's roundings lane by lane, which a contracted scalar expression (GCC's
    default in GNU modes, clang's anywhere, once the target has FMA) would not match. GCC's pragma
-   is used only where the target has FMA (it changes code generation); -ffast-math overrides both. */
+   is used only where the target has FMA (it changes code generation); -ffast-math overrides both.
+   PT__CONTRACT_OFF ... PT__CONTRACT_RESTORE bracket the code (the tests' internals section too). */
 #if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
+#define PT__NO_CONTRACT 1
+#define PT__CONTRACT_OFF _Pragma("STDC FP_CONTRACT OFF")
+#define PT__CONTRACT_RESTORE _Pragma("STDC FP_CONTRACT DEFAULT")
 #elif defined(__GNUC__) && !defined(__INTEL_COMPILER) && (defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA))
-#define PT__GCC_NO_CONTRACT
-#pragma GCC push_options
-#pragma GCC optimize("fp-contract=off")
+#define PT__NO_CONTRACT 1
+#define PT__CONTRACT_OFF _Pragma("GCC push_options") _Pragma("GCC optimize(\"fp-contract=off\")")
+#define PT__CONTRACT_RESTORE _Pragma("GCC pop_options")
+#else
+#define PT__CONTRACT_OFF
+#define PT__CONTRACT_RESTORE
 #endif
+PT__CONTRACT_OFF
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -15070,11 +15077,7 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 }
 #endif
 
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT DEFAULT
-#elif defined(PT__GCC_NO_CONTRACT)
-#pragma GCC pop_options
-#endif
+PT__CONTRACT_RESTORE
 
 /* PDFTRACE_IMPLEMENTATION_COMPLETE */
 #endif /* PDFTRACE_IMPLEMENTATION_DONE */

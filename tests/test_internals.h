@@ -370,10 +370,10 @@ static void lighttree_level_widths(test_ctx *t)
    nothing to guard and they test nothing more than the plain runner does. */
 static void fma_guard(test_ctx *t)
 {
-#if defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA)
+#if defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA) || defined(__FMA__)
     int guarded = 0;
-#if defined(__clang__) || defined(PT__GCC_NO_CONTRACT)
-    guarded = 1;
+#ifdef PT__NO_CONTRACT
+    guarded = PT__NO_CONTRACT;
 #endif
     CHECK(t, guarded, "the target has FMA but the header did not turn contraction off");
     test_note(t, "the target has FMA; the implementation is compiled without contraction");

@@ -26,18 +26,9 @@
 #include "test.h"
 /* The internals section calls the implementation's static functions and compares them bit for
    bit, so it is compiled as the implementation is: without FMA contraction (pdftrace.h). */
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#elif defined(PT__GCC_NO_CONTRACT)
-#pragma GCC push_options
-#pragma GCC optimize("fp-contract=off")
-#endif
+PT__CONTRACT_OFF
 #include "test_internals.h"
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT DEFAULT
-#elif defined(PT__GCC_NO_CONTRACT)
-#pragma GCC pop_options
-#endif
+PT__CONTRACT_RESTORE
 
 int test_check_(test_ctx *t, int ok, const char *file, int line, const char *fmt, ...)
 {
