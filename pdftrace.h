@@ -8501,6 +8501,9 @@ typedef struct pt__packet_scene {
     uint32_t prim[PT__PACKET_MAX];  /* index into s->prims */
     int sphere[PT__PACKET_MAX];
     float v[PT__PACKET_MAX][14];    /* a quad's pt__quad4 fields, a sphere's centre and radius */
+    int chunks;                     /* runs of primitives (in that order) under one box: */
+    int chunk_end[PT__PACKET_MAX];  /* run c ends before primitive chunk_end[c] */
+    float box[PT__PACKET_MAX][6];   /* its bounds as the BVH's nodes pad them (lo xyz, hi xyz) */
 } pt__packet_scene;
 
 #ifdef PT__SSE
@@ -8514,6 +8517,36 @@ static int pt__packet_small(const pt_scene *s)
     for (i = 0; i < s->prim_count; ++i)
         if (s->prims[i].type == PT__PRIM_TRIANGLE) return 0;
     return 1;
+}
+#endif
+#ifdef PT__SSE
+/* The packets' runs of primitives under one box (the 16-ray packets test a run's box before its
+   primitives, as the BVH tests a node's): from each primitive, the longest run of at most 6 whose
+   box's half area is at most the sum of its primitives', as the faces of a box (a scene file's
+   `box`) or of a room. */
+static void pt__packet_chunks(const pt_scene *s, pt__packet_scene *ps)
+{
+    int i = 0, c = 0;
+    while (i < ps->n) {
+        pt_vec3 lo, hi, plo, phi, blo, bhi;
+        float sum;
+        int k, best = 1;
+        pt__prim_bounds(&s->prims[ps->prim[i]], &lo, &hi);
+        blo = lo; bhi = hi;
+        sum = pt__half_area(lo, hi);
+        for (k = 2; k <= 6 && i + k <= ps->n; ++k) {
+            pt__prim_bounds(&s->prims[ps->prim[i + k - 1]], &plo, &phi);
+            lo = pt__vmin(lo, plo); hi = pt__vmax(hi, phi);
+            sum += pt__half_area(plo, phi);
+            if (pt__half_area(lo, hi) <= sum) { best = k; blo = lo; bhi = hi; }
+        }
+        i += best;
+        ps->chunk_end[c] = i;
+        ps->box[c][0] = pt__pad_down(blo.x); ps->box[c][1] = pt__pad_down(blo.y); ps->box[c][2] = pt__pad_down(blo.z);
+        ps->box[c][3] = pt__pad_up(bhi.x); ps->box[c][4] = pt__pad_up(bhi.y); ps->box[c][5] = pt__pad_up(bhi.z);
+        ++c;
+    }
+    ps->chunks = c;
 }
 #endif
 /* Sets up the packets of scene s, or ps->n = 0 when it is not small. */
@@ -8543,6 +8576,7 @@ static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
             pt__quad_edge_caps(p, &v[12], &v[13]);
         }
     }
+    pt__packet_chunks(s, ps);
 #else
     (void)s; (void)i; (void)j;
 #endif
@@ -9018,9 +9052,10 @@ PT__TARGET_AVX512 static PT__HOT int pt__packet_sphere16(const pt__packet_scene 
     return bits;
 }
 
-/* Loads 16 rays (padding repeats ray 0) by axis into o, d, and their directions' d.d into *aa. */
+/* Loads 16 rays (padding repeats ray 0) by axis into o, d, their directions' d.d into *aa and
+   their inverses (pt__trav_init's: 1/0 and overflows as FLT_MAX of the sign) into inv. */
 PT__TARGET_AVX512 static PT__HOT void pt__packet_load16(const pt__rayctx *const *rcn, int n, const pt__rayctx **rc, __m512 *o,
-                                                        __m512 *d, __m512 *aa)
+                                                        __m512 *d, __m512 *aa, __m512 *inv)
 {
     float buf[6][16];
     int lane, i;
@@ -9034,6 +9069,31 @@ PT__TARGET_AVX512 static PT__HOT void pt__packet_load16(const pt__rayctx *const 
         d[i] = _mm512_loadu_ps(buf[3 + i]);
     }
     *aa = PT__DOT16(d[0], d[1], d[2], d[0], d[1], d[2]);
+    for (i = 0; i < 3; ++i) {
+        const __m512 big = _mm512_set1_ps(FLT_MAX), sign = _mm512_set1_ps(-0.0f);
+        const __mmask16 nz = _mm512_cmp_ps_mask(d[i], _mm512_setzero_ps(), _CMP_NEQ_UQ);
+        __m512 r = _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_mask_blend_ps(nz, _mm512_set1_ps(1.0f), d[i]));
+        r = _mm512_mask_blend_ps(nz, big, r);
+        inv[i] = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(PT__ANDNOT16(sign, r), big, _CMP_LE_OQ),
+                                      PT__OR16(big, PT__AND16(sign, r)), r);
+    }
+}
+
+/* Whether any of 16 rays meets box b (a run's, pt__packet_chunks) at some t <= its lim: the
+   BVH's slab test (PT__WIDE_TRAVERSAL's, lanes = rays), so it never culls a primitive that the
+   BVH would have tested. */
+PT__TARGET_AVX512 static PT__HOT int pt__packet_box16(const float *b, const __m512 *o, const __m512 *inv, __m512 lim)
+{
+    const __m512 lx = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[0]), o[0]), inv[0]);
+    const __m512 ly = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[1]), o[1]), inv[1]);
+    const __m512 lz = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[2]), o[2]), inv[2]);
+    const __m512 hx = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[3]), o[0]), inv[0]);
+    const __m512 hy = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[4]), o[1]), inv[1]);
+    const __m512 hz = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[5]), o[2]), inv[2]);
+    const __m512 t0 = PT__MAX16(PT__MAX16(PT__MIN16(lx, hx), PT__MIN16(ly, hy)), PT__MAX16(PT__MIN16(lz, hz), _mm512_setzero_ps()));
+    const __m512 t1 = PT__MIN16(PT__MIN16(PT__MAX16(lx, hx), PT__MAX16(ly, hy)), PT__MAX16(lz, hz));
+    const __m512 far = PT__MIN16(_mm512_mul_ps(t1, _mm512_set1_ps(1.00000036f)), lim);
+    return _mm512_cmp_ps_mask(t0, far, _CMP_LE_OQ) != 0;
 }
 
 /* pt__packet_closest8 for n <= 16 rays. */
@@ -9041,15 +9101,23 @@ PT__TARGET_AVX512 static void pt__packet_closest16(const pt_scene *s, const pt__
                                                    int n, int *found, uint32_t *prim, float *t_out)
 {
     const pt__rayctx *rc[16];
-    __m512 o[3], d[3], aa, inf = _mm512_set1_ps(PT__INF), best = inf;
+    __m512 o[3], d[3], inv[3], aa, inf = _mm512_set1_ps(PT__INF), best = inf;
     __m512i bpv = _mm512_setzero_si512();
-    int lane, i, any = 0;
+    int lane, i, c, any = 0;
     uint32_t bp[16];
     float bt[16];
-    pt__packet_load16(rcn, n, rc, o, d, &aa);
-    for (i = 0; i < ps->n; ++i) {
+    pt__packet_load16(rcn, n, rc, o, d, &aa, inv);
+    for (i = 0, c = 0; i < ps->n; ++i) {
         __m512 t;
-        int bits = ps->sphere[i] ? pt__packet_sphere16(ps, i, o, d, aa, rc, inf, &t) : pt__packet_quad16(s, ps, i, o, d, rc, best, &t);
+        int bits;
+        if (i == (c ? ps->chunk_end[c - 1] : 0)) { /* a run's first primitive: its box first */
+            const int end = ps->chunk_end[c++];
+            if (end - i > 1 && !pt__packet_box16(ps->box[c - 1], o, inv, best)) {
+                i = end - 1;
+                continue;
+            }
+        }
+        bits = ps->sphere[i] ? pt__packet_sphere16(ps, i, o, d, aa, rc, inf, &t) : pt__packet_quad16(s, ps, i, o, d, rc, best, &t);
         if (!bits) continue; /* no lane hit it (t is then not set) */
         /* strictly closer: at a tie the primitive of lower id (visited first) stays */
         bits &= (int)PT__LT16(t, best);
@@ -9075,21 +9143,29 @@ PT__TARGET_AVX512 static int pt__packet_any16(const pt_scene *s, const pt__packe
     float tm[16];
     uint32_t sk[16];
     const int all = (1 << n) - 1;
-    __m512 o[3], d[3], aa, lim;
+    __m512 o[3], d[3], inv[3], aa, lim;
     __m512i skv;
-    int lane, i, hit = 0;
-    pt__packet_load16(rcn, n, rc, o, d, &aa);
+    int lane, i, c, hit = 0;
+    pt__packet_load16(rcn, n, rc, o, d, &aa, inv);
     for (lane = 0; lane < 16; ++lane) {
         tm[lane] = lane < n ? tmax[lane] : 0.0f; /* (the padding: tmax 0, never a hit) */
         sk[lane] = skip[lane < n ? lane : 0];
     }
     lim = _mm512_loadu_ps(tm);
     skv = _mm512_loadu_si512((const void *)sk);
-    for (i = 0; i < ps->n; ++i) {
+    for (i = 0, c = 0; i < ps->n; ++i) {
         /* the lanes that skip this primitive test it against 0 */
         __mmask16 skipped = _mm512_cmpeq_epi32_mask(skv, _mm512_set1_epi32((int)ps->prim[i]));
         __m512 bound = _mm512_maskz_mov_ps((__mmask16)~skipped, lim), t;
-        int bits = ps->sphere[i] ? pt__packet_sphere16(ps, i, o, d, aa, rc, bound, &t)
+        int bits;
+        if (i == (c ? ps->chunk_end[c - 1] : 0)) { /* a run's first primitive: its box first */
+            const int end = ps->chunk_end[c++];
+            if (end - i > 1 && !pt__packet_box16(ps->box[c - 1], o, inv, lim)) {
+                i = end - 1;
+                continue;
+            }
+        }
+        bits = ps->sphere[i] ? pt__packet_sphere16(ps, i, o, d, aa, rc, bound, &t)
                                  : pt__packet_quad16(s, ps, i, o, d, rc, bound, &t);
         if (!bits) continue;
         hit |= bits;

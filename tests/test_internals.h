@@ -395,7 +395,8 @@ static pt_ray ti_packet_ray(pt_rng *r, const pt_scene *s)
 }
 
 /* A random scene of 1 .. 64 quads and spheres for packet_hits: quads of any orientation and
-   size, some twice (equal t: the lower id must win), some side by side (shared edges); spheres
+   size, some twice (equal t: the lower id must win), some side by side (shared edges), some the
+   faces of a box (which the 16-ray packets cull under one box, pt__packet_chunks); spheres
    of radius 10^-4 .. 2 (the small ones through pt__hit_sphere's double precision). (Not a
    sphere twice: the BVH's four-sphere blocks break such ties by lane, not by id.) */
 static pt_scene *ti_packet_scene(pt_rng *r, int n)
@@ -409,6 +410,16 @@ static pt_scene *ti_packet_scene(pt_rng *r, int n)
         const float k = pt_rng_float(r);
         if (k < 0.3f) {
             pt_scene_add_sphere(s, c, powf(10.0f, -4.0f + 4.3f * pt_rng_float(r)), m);
+        } else if (k < 0.45f && i + 6 <= n) { /* a box's six faces (one run under one box) */
+            const pt_vec3 e = pt_v3(0.02f + 2.0f * pt_rng_float(r), 0.02f + 2.0f * pt_rng_float(r), 0.02f + 2.0f * pt_rng_float(r));
+            const pt_vec3 ex = pt_v3(e.x, 0, 0), ey = pt_v3(0, e.y, 0), ez = pt_v3(0, 0, e.z), f = pt_add(c, e);
+            pt_scene_add_quad(s, c, ez, ey, m);
+            pt_scene_add_quad(s, f, pt_neg(ey), pt_neg(ez), m);
+            pt_scene_add_quad(s, c, ex, ez, m);
+            pt_scene_add_quad(s, f, pt_neg(ez), pt_neg(ex), m);
+            pt_scene_add_quad(s, c, ey, ex, m);
+            pt_scene_add_quad(s, f, pt_neg(ex), pt_neg(ey), m);
+            i += 5;
         } else {
             const pt_vec3 u = pt_scale(pt_sample_uniform_sphere(pt_rng_float(r), pt_rng_float(r)), 0.05f + 5.0f * pt_rng_float(r));
             const pt_vec3 v = pt_scale(pt_sample_uniform_sphere(pt_rng_float(r), pt_rng_float(r)), 0.05f + 5.0f * pt_rng_float(r));
