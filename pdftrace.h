@@ -8527,6 +8527,9 @@ typedef struct pt__packet_scene {
     uint32_t prim[PT__PACKET_MAX];  /* index into s->prims */
     int sphere[PT__PACKET_MAX];
     float v[PT__PACKET_MAX][14];    /* a quad's pt__quad4 fields, a sphere's centre and radius */
+    int chunks;                     /* runs of primitives (in that order) under one box: */
+    int chunk_end[PT__PACKET_MAX];  /* run c ends before primitive chunk_end[c] */
+    float box[PT__PACKET_MAX][6];   /* its bounds as the BVH's nodes pad them (lo xyz, hi xyz) */
 } pt__packet_scene;
 
 #ifdef PT__SSE
@@ -8540,6 +8543,36 @@ static int pt__packet_small(const pt_scene *s)
     for (i = 0; i < s->prim_count; ++i)
         if (s->prims[i].type == PT__PRIM_TRIANGLE) return 0;
     return 1;
+}
+#endif
+#ifdef PT__SSE
+/* The packets' runs of primitives under one box (the 16-ray packets test a run's box before its
+   primitives, as the BVH tests a node's): from each primitive, the longest run of at most 6 whose
+   box's half area is at most the sum of its primitives', as the faces of a box (a scene file's
+   `box`) or of a room. */
+static void pt__packet_chunks(const pt_scene *s, pt__packet_scene *ps)
+{
+    int i = 0, c = 0;
+    while (i < ps->n) {
+        pt_vec3 lo, hi, plo, phi, blo, bhi;
+        float sum;
+        int k, best = 1;
+        pt__prim_bounds(&s->prims[ps->prim[i]], &lo, &hi);
+        blo = lo; bhi = hi;
+        sum = pt__half_area(lo, hi);
+        for (k = 2; k <= 6 && i + k <= ps->n; ++k) {
+            pt__prim_bounds(&s->prims[ps->prim[i + k - 1]], &plo, &phi);
+            lo = pt__vmin(lo, plo); hi = pt__vmax(hi, phi);
+            sum += pt__half_area(plo, phi);
+            if (pt__half_area(lo, hi) <= sum) { best = k; blo = lo; bhi = hi; }
+        }
+        i += best;
+        ps->chunk_end[c] = i;
+        ps->box[c][0] = pt__pad_down(blo.x); ps->box[c][1] = pt__pad_down(blo.y); ps->box[c][2] = pt__pad_down(blo.z);
+        ps->box[c][3] = pt__pad_up(bhi.x); ps->box[c][4] = pt__pad_up(bhi.y); ps->box[c][5] = pt__pad_up(bhi.z);
+        ++c;
+    }
+    ps->chunks = c;
 }
 #endif
 /* Sets up the packets of scene s, or ps->n = 0 when it is not small. */
@@ -8569,6 +8602,7 @@ static void pt__packet_init(const pt_scene *s, pt__packet_scene *ps)
             pt__quad_edge_caps(p, &v[12], &v[13]);
         }
     }
+    pt__packet_chunks(s, ps);
 #else
     (void)s; (void)i; (void)j;
 #endif
@@ -8929,6 +8963,240 @@ PT__TARGET_AVX2 static int pt__packet_any8(const pt_scene *s, const pt__packet_s
         hit |= bits;
         if ((hit & all) == all) break;
         lim = _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), sel), sel)), lim);
+    }
+    return hit & all;
+}
+
+/* The same four with AVX-512F, 16 rays at a time (pt_simd_level AVX512): each lane does the float
+   operations of its 8-wide counterpart, with the lanes' masks in mask registers. */
+#define PT__LT16(a, b) _mm512_cmp_ps_mask((a), (b), _CMP_LT_OS)
+#define PT__GT16(a, b) _mm512_cmp_ps_mask((b), (a), _CMP_LT_OS)
+#define PT__OR16(a, b) _mm512_castsi512_ps(_mm512_or_si512(_mm512_castps_si512(a), _mm512_castps_si512(b)))
+#define PT__AND16(a, b) _mm512_castsi512_ps(_mm512_and_si512(_mm512_castps_si512(a), _mm512_castps_si512(b)))
+/* (the zero-masked forms under a full mask, as PT__MAX16) */
+#define PT__ANDNOT16(a, b) \
+    _mm512_castsi512_ps(_mm512_maskz_andnot_epi32((__mmask16)0xffff, _mm512_castps_si512(a), _mm512_castps_si512(b)))
+#define PT__SQRT16(a) _mm512_maskz_sqrt_ps((__mmask16)0xffff, a)
+#define PT__DOT16(ax, ay, az, bx, by, bz) \
+    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(ax, bx), _mm512_mul_ps(ay, by)), _mm512_mul_ps(az, bz))
+PT__TARGET_AVX512 static PT__HOT int pt__packet_quad16(const pt_scene *s, const pt__packet_scene *ps, int i, const __m512 *o,
+                                                       const __m512 *d, const pt__rayctx *const *rc, __m512 best, __m512 *t_out)
+{
+    const float *v = ps->v[i];
+    __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
+    __m512 nx = _mm512_set1_ps(v[3]), ny = _mm512_set1_ps(v[4]), nz = _mm512_set1_ps(v[5]);
+    __m512 px = _mm512_set1_ps(v[0]), py = _mm512_set1_ps(v[1]), pz = _mm512_set1_ps(v[2]);
+    __m512 denom = PT__DOT16(nx, ny, nz, d[0], d[1], d[2]), t, hx, hy, hz, a, bb;
+    int ok = (int)_mm512_cmp_ps_mask(denom, zero, _CMP_NEQ_UQ), out, bits, edge, lane;
+    if (!ok) return 0;
+    t = PT__DOT16(nx, ny, nz, _mm512_sub_ps(px, o[0]), _mm512_sub_ps(py, o[1]), _mm512_sub_ps(pz, o[2]));
+    t = _mm512_div_ps(t, _mm512_mask_blend_ps((__mmask16)ok, one, denom));
+    /* t < best: as in pt__packet_quad8 */
+    ok &= (int)(PT__GT16(t, zero) & PT__LT16(t, best));
+    if (!ok) return 0;
+    t = _mm512_maskz_mov_ps((__mmask16)ok, t);
+    hx = _mm512_sub_ps(_mm512_add_ps(o[0], _mm512_mul_ps(d[0], t)), px);
+    hy = _mm512_sub_ps(_mm512_add_ps(o[1], _mm512_mul_ps(d[1], t)), py);
+    hz = _mm512_sub_ps(_mm512_add_ps(o[2], _mm512_mul_ps(d[2], t)), pz);
+    a = PT__DOT16(hx, hy, hz, _mm512_set1_ps(v[6]), _mm512_set1_ps(v[7]), _mm512_set1_ps(v[8]));
+    bb = PT__DOT16(hx, hy, hz, _mm512_set1_ps(v[9]), _mm512_set1_ps(v[10]), _mm512_set1_ps(v[11]));
+    out = (int)(PT__LT16(a, zero) | PT__GT16(a, one) | PT__LT16(bb, zero) | PT__GT16(bb, one));
+    bits = ok & ~out;
+    edge = ok & out;
+    if (edge) { /* pt__hit_quad's margin decides the lanes within the caps */
+        __m512 ta = _mm512_set1_ps(v[12]), tb = _mm512_set1_ps(v[13]);
+        edge &= ~(int)(PT__LT16(a, _mm512_sub_ps(zero, ta)) | PT__GT16(a, _mm512_add_ps(one, ta)) |
+                       PT__LT16(bb, _mm512_sub_ps(zero, tb)) | PT__GT16(bb, _mm512_add_ps(one, tb)));
+        if (edge) {
+            float ts[16];
+            _mm512_storeu_ps(ts, t);
+            for (lane = 0; lane < 16; ++lane) {
+                float tq;
+                if ((edge & (1 << lane)) && pt__hit_quad(rc[lane], &s->prims[ps->prim[i]], PT__INF, &tq)) {
+                    bits |= 1 << lane;
+                    ts[lane] = tq;
+                }
+            }
+            t = _mm512_loadu_ps(ts);
+        }
+    }
+    *t_out = t;
+    return bits;
+}
+
+/* (lim: each lane's tmax, pt__hit_sphere's; 0 for a lane not to test) */
+PT__TARGET_AVX512 static PT__HOT int pt__packet_sphere16(const pt__packet_scene *ps, int i, const __m512 *o, const __m512 *d,
+                                                         __m512 aa, const pt__rayctx *const *rc, __m512 lim, __m512 *t_out)
+{
+    const float *v = ps->v[i];
+    __m512 zero = _mm512_setzero_ps(), sign = _mm512_set1_ps(-0.0f), r = _mm512_set1_ps(v[3]), fx, fy, fz, bp, ff, rr, k;
+    __m512 lx, ly, lz, ll, disc, cc, sq, qq, qd, t0, t1, lo, hi, t;
+    int bits, tiny, lane, ok, sw, h0, h1;
+    fx = _mm512_sub_ps(o[0], _mm512_set1_ps(v[0]));
+    fy = _mm512_sub_ps(o[1], _mm512_set1_ps(v[1]));
+    fz = _mm512_sub_ps(o[2], _mm512_set1_ps(v[2]));
+    bp = _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(sign), _mm512_castps_si512(PT__DOT16(fx, fy, fz, d[0], d[1], d[2]))));
+    ff = PT__DOT16(fx, fy, fz, fx, fy, fz);
+    rr = _mm512_mul_ps(r, r);
+    tiny = (int)(PT__LT16(rr, _mm512_mul_ps(_mm512_set1_ps(1e-6f), ff)) & PT__GT16(lim, zero));
+    k = _mm512_div_ps(bp, aa);
+    lx = _mm512_add_ps(fx, _mm512_mul_ps(d[0], k));
+    ly = _mm512_add_ps(fy, _mm512_mul_ps(d[1], k));
+    lz = _mm512_add_ps(fz, _mm512_mul_ps(d[2], k));
+    ll = PT__SQRT16(PT__DOT16(lx, ly, lz, lx, ly, lz));
+    disc = _mm512_mul_ps(_mm512_mul_ps(aa, _mm512_sub_ps(r, ll)), _mm512_add_ps(r, ll));
+    ok = 0xffff & ~(int)PT__LT16(disc, zero);
+    cc = _mm512_sub_ps(ff, rr);
+    sq = PT__SQRT16(_mm512_maskz_mov_ps((__mmask16)ok, disc)); /* no square root of a negative: FE_INVALID traps */
+    qq = _mm512_add_ps(bp, PT__OR16(PT__ANDNOT16(sign, sq), PT__AND16(sign, bp)));
+    ok &= ~(int)_mm512_cmp_ps_mask(qq, zero, _CMP_EQ_OQ);
+    qd = _mm512_mask_blend_ps((__mmask16)ok, _mm512_set1_ps(1.0f), qq);
+    t0 = _mm512_div_ps(cc, qd);
+    t1 = _mm512_div_ps(qq, aa);
+    sw = (int)PT__GT16(t0, t1);
+    lo = _mm512_mask_blend_ps((__mmask16)sw, t0, t1);
+    hi = _mm512_mask_blend_ps((__mmask16)sw, t1, t0);
+    h0 = (int)(PT__GT16(lo, zero) & PT__LT16(lo, lim));
+    h1 = (int)(PT__GT16(hi, zero) & PT__LT16(hi, lim));
+    t = _mm512_mask_blend_ps((__mmask16)h0, hi, lo);
+    bits = ok & (h0 | h1) & ~tiny;
+    if (tiny) { /* tiny or distant: pt__hit_sphere's double-precision case */
+        float ts[16], lims[16];
+        _mm512_storeu_ps(ts, t);
+        _mm512_storeu_ps(lims, lim);
+        for (lane = 0; lane < 16; ++lane) {
+            float tz;
+            if ((tiny & (1 << lane)) &&
+                pt__hit_sphere(rc[lane], pt_v3(v[0], v[1], v[2]), v[3], lims[lane], &tz)) {
+                bits |= 1 << lane;
+                ts[lane] = tz;
+            }
+        }
+        t = _mm512_loadu_ps(ts);
+    }
+    *t_out = t;
+    return bits;
+}
+
+/* Loads 16 rays (padding repeats ray 0) by axis into o, d, their directions' d.d into *aa and
+   their inverses (pt__trav_init's: 1/0 and overflows as FLT_MAX of the sign) into inv. */
+PT__TARGET_AVX512 static PT__HOT void pt__packet_load16(const pt__rayctx *const *rcn, int n, const pt__rayctx **rc, __m512 *o,
+                                                        __m512 *d, __m512 *aa, __m512 *inv)
+{
+    float buf[6][16];
+    int lane, i;
+    for (lane = 0; lane < 16; ++lane) {
+        rc[lane] = rcn[lane < n ? lane : 0];
+        buf[0][lane] = rc[lane]->o.x; buf[1][lane] = rc[lane]->o.y; buf[2][lane] = rc[lane]->o.z;
+        buf[3][lane] = rc[lane]->d.x; buf[4][lane] = rc[lane]->d.y; buf[5][lane] = rc[lane]->d.z;
+    }
+    for (i = 0; i < 3; ++i) {
+        o[i] = _mm512_loadu_ps(buf[i]);
+        d[i] = _mm512_loadu_ps(buf[3 + i]);
+    }
+    *aa = PT__DOT16(d[0], d[1], d[2], d[0], d[1], d[2]);
+    for (i = 0; i < 3; ++i) {
+        const __m512 big = _mm512_set1_ps(FLT_MAX), sign = _mm512_set1_ps(-0.0f);
+        const __mmask16 nz = _mm512_cmp_ps_mask(d[i], _mm512_setzero_ps(), _CMP_NEQ_UQ);
+        __m512 r = _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_mask_blend_ps(nz, _mm512_set1_ps(1.0f), d[i]));
+        r = _mm512_mask_blend_ps(nz, big, r);
+        inv[i] = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(PT__ANDNOT16(sign, r), big, _CMP_LE_OQ),
+                                      PT__OR16(big, PT__AND16(sign, r)), r);
+    }
+}
+
+/* Whether any of 16 rays meets box b (a run's, pt__packet_chunks) at some t <= its lim: the
+   BVH's slab test (PT__WIDE_TRAVERSAL's, lanes = rays), so it never culls a primitive that the
+   BVH would have tested. */
+PT__TARGET_AVX512 static PT__HOT int pt__packet_box16(const float *b, const __m512 *o, const __m512 *inv, __m512 lim)
+{
+    const __m512 lx = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[0]), o[0]), inv[0]);
+    const __m512 ly = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[1]), o[1]), inv[1]);
+    const __m512 lz = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[2]), o[2]), inv[2]);
+    const __m512 hx = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[3]), o[0]), inv[0]);
+    const __m512 hy = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[4]), o[1]), inv[1]);
+    const __m512 hz = _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(b[5]), o[2]), inv[2]);
+    const __m512 t0 = PT__MAX16(PT__MAX16(PT__MIN16(lx, hx), PT__MIN16(ly, hy)), PT__MAX16(PT__MIN16(lz, hz), _mm512_setzero_ps()));
+    const __m512 t1 = PT__MIN16(PT__MIN16(PT__MAX16(lx, hx), PT__MAX16(ly, hy)), PT__MAX16(lz, hz));
+    const __m512 far = PT__MIN16(_mm512_mul_ps(t1, _mm512_set1_ps(1.00000036f)), lim);
+    return _mm512_cmp_ps_mask(t0, far, _CMP_LE_OQ) != 0;
+}
+
+/* pt__packet_closest8 for n <= 16 rays. */
+PT__TARGET_AVX512 static void pt__packet_closest16(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rcn,
+                                                   int n, int *found, uint32_t *prim, float *t_out)
+{
+    const pt__rayctx *rc[16];
+    __m512 o[3], d[3], inv[3], aa, inf = _mm512_set1_ps(PT__INF), best = inf;
+    __m512i bpv = _mm512_setzero_si512();
+    int lane, i, c, any = 0;
+    uint32_t bp[16];
+    float bt[16];
+    pt__packet_load16(rcn, n, rc, o, d, &aa, inv);
+    for (i = 0, c = 0; i < ps->n; ++i) {
+        __m512 t;
+        int bits;
+        if (i == (c ? ps->chunk_end[c - 1] : 0)) { /* a run's first primitive: its box first */
+            const int end = ps->chunk_end[c++];
+            if (end - i > 1 && !pt__packet_box16(ps->box[c - 1], o, inv, best)) {
+                i = end - 1;
+                continue;
+            }
+        }
+        bits = ps->sphere[i] ? pt__packet_sphere16(ps, i, o, d, aa, rc, inf, &t) : pt__packet_quad16(s, ps, i, o, d, rc, best, &t);
+        if (!bits) continue; /* no lane hit it (t is then not set) */
+        /* strictly closer: at a tie the primitive of lower id (visited first) stays */
+        bits &= (int)PT__LT16(t, best);
+        if (!bits) continue;
+        best = _mm512_mask_blend_ps((__mmask16)bits, best, t);
+        bpv = _mm512_mask_blend_epi32((__mmask16)bits, bpv, _mm512_set1_epi32((int)ps->prim[i]));
+        any |= bits;
+    }
+    _mm512_storeu_ps(bt, best);
+    _mm512_storeu_si512((void *)bp, bpv);
+    for (lane = 0; lane < n; ++lane) {
+        found[lane] = (any >> lane) & 1;
+        prim[lane] = bp[lane];
+        t_out[lane] = bt[lane];
+    }
+}
+
+/* pt__packet_any8 for n <= 16 rays. */
+PT__TARGET_AVX512 static int pt__packet_any16(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rcn,
+                                              const float *tmax, const uint32_t *skip, int n)
+{
+    const pt__rayctx *rc[16];
+    float tm[16];
+    uint32_t sk[16];
+    const int all = (1 << n) - 1;
+    __m512 o[3], d[3], inv[3], aa, lim;
+    __m512i skv;
+    int lane, i, c, hit = 0;
+    pt__packet_load16(rcn, n, rc, o, d, &aa, inv);
+    for (lane = 0; lane < 16; ++lane) {
+        tm[lane] = lane < n ? tmax[lane] : 0.0f; /* (the padding: tmax 0, never a hit) */
+        sk[lane] = skip[lane < n ? lane : 0];
+    }
+    lim = _mm512_loadu_ps(tm);
+    skv = _mm512_loadu_si512((const void *)sk);
+    for (i = 0, c = 0; i < ps->n; ++i) {
+        /* the lanes that skip this primitive test it against 0 */
+        __mmask16 skipped = _mm512_cmpeq_epi32_mask(skv, _mm512_set1_epi32((int)ps->prim[i]));
+        __m512 bound = _mm512_maskz_mov_ps((__mmask16)~skipped, lim), t;
+        int bits;
+        if (i == (c ? ps->chunk_end[c - 1] : 0)) { /* a run's first primitive: its box first */
+            const int end = ps->chunk_end[c++];
+            if (end - i > 1 && !pt__packet_box16(ps->box[c - 1], o, inv, lim)) {
+                i = end - 1;
+                continue;
+            }
+        }
+        bits = ps->sphere[i] ? pt__packet_sphere16(ps, i, o, d, aa, rc, bound, &t)
+                                 : pt__packet_quad16(s, ps, i, o, d, rc, bound, &t);
+        if (!bits) continue;
+        hit |= bits;
+        if ((hit & all) == all) break;
+        lim = _mm512_maskz_mov_ps((__mmask16)~bits, lim);
     }
     return hit & all;
 }
@@ -12382,16 +12650,17 @@ static PT__HOT void pt__batch_closest(const pt_scene *s, const pt__packet_scene 
     if (pk->n > 0) {
         int w = 4;
 #ifdef PT__WIDE
-        if (s->simd >= PT_SIMD_AVX2) w = 8;
+        if (s->simd >= PT_SIMD_AVX2) w = s->simd >= PT_SIMD_AVX512 ? 16 : 8;
 #endif
         for (i = 0; i < nlive; i += w) {
-            const pt__rayctx *rc[8];
-            int m = nlive - i < w ? nlive - i : w, found[8];
-            uint32_t prim[8];
-            float t[8];
+            const pt__rayctx *rc[16];
+            int m = nlive - i < w ? nlive - i : w, found[16];
+            uint32_t prim[16];
+            float t[16];
             for (j = 0; j < m; ++j) rc[j] = &lanes[live[i + j]].rc;
 #ifdef PT__WIDE
-            if (w == 8) pt__packet_closest8(s, pk, rc, m, found, prim, t);
+            if (m > 8) pt__packet_closest16(s, pk, rc, m, found, prim, t);
+            else if (w >= 8) pt__packet_closest8(s, pk, rc, m, found, prim, t);
             else
 #endif
                 pt__packet_closest4(s, pk, rc, m, found, prim, t);
@@ -12470,19 +12739,20 @@ static void pt__batch_shadow(const pt_scene *s, const pt__packet_scene *pk, pt__
     }
 #ifdef PT__WIDE
     if (pk->n > 0 && s->prim_count <= PT__BVH_SMALL_SCENE && s->simd >= PT_SIMD_AVX2) {
-        const pt__rayctx *rc[8];
-        float tmax[8];
-        uint32_t skip[8];
+        const pt__rayctx *rc[16];
+        float tmax[16];
+        uint32_t skip[16];
+        const int w = s->simd >= PT_SIMD_AVX512 ? 16 : 8;
         int o, j;
-        for (o = 0; o < m; o += 8) {
-            const int k = m - o < 8 ? m - o : 8;
+        for (o = 0; o < m; o += w) {
+            const int k = m - o < w ? m - o : w;
             int hit;
             for (j = 0; j < k; ++j) {
                 rc[j] = &ray[o + j]->rc;
                 tmax[j] = ray[o + j]->tmax;
                 skip[j] = ray[o + j]->skip;
             }
-            hit = pt__packet_any8(s, pk, rc, tmax, skip, k);
+            hit = k > 8 ? pt__packet_any16(s, pk, rc, tmax, skip, k) : pt__packet_any8(s, pk, rc, tmax, skip, k);
             for (j = 0; j < k; ++j)
                 if (hit & (1 << j)) *flag[o + j] = 2;
         }

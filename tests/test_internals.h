@@ -364,6 +364,171 @@ static void lighttree_level_widths(test_ctx *t)
 #endif
 }
 
+#if defined(PT__SSE)
+/* A random ray for packet_hits: from a point in [-6, 6]^3, a third in a random direction, the
+   rest aimed at a random primitive: a quad's point at (a, b) on it, often on or within 10^-6 of an
+   edge or corner, or a sphere's silhouette, just inside or outside; directions not unit length. */
+static pt_ray ti_packet_ray(pt_rng *r, const pt_scene *s)
+{
+    static const float edge[6] = {0.0f, 1.0f, -1e-6f, 1e-6f, 1.0f - 1e-6f, 1.0f + 1e-6f};
+    pt_vec3 o = pt_v3(12.0f * pt_rng_float(r) - 6.0f, 12.0f * pt_rng_float(r) - 6.0f, 12.0f * pt_rng_float(r) - 6.0f), target;
+    const pt__prim *p = &s->prims[pt_rng_u32(r) % s->prim_count];
+    const float len = 0.01f + 10.0f * pt_rng_float(r);
+    pt_ray ray;
+    ray.origin = o;
+    if (pt_rng_float(r) < 0.33f) {
+        ray.dir = pt_scale(pt_sample_uniform_sphere(pt_rng_float(r), pt_rng_float(r)), len);
+        return ray;
+    }
+    if (p->type == PT__PRIM_QUAD) {
+        float a = pt_rng_float(r), b = pt_rng_float(r);
+        if (pt_rng_float(r) < 0.6f) a = edge[pt_rng_u32(r) % 6];
+        if (pt_rng_float(r) < 0.4f) b = edge[pt_rng_u32(r) % 6];
+        target = pt_add(p->p0, pt_add(pt_scale(p->p1, a), pt_scale(p->p2, b)));
+    } else {
+        pt_vec3 to = pt_sub(p->p0, o), side = pt_cross(to, pt_sample_uniform_sphere(pt_rng_float(r), pt_rng_float(r)));
+        const float k = pt_rng_float(r) < 0.5f ? 1.0f : 1.0f + (pt_rng_float(r) - 0.5f) * 4e-6f;
+        target = pt_length(side) > 0.0f ? pt_madd(p->p0, pt_normalize(side), p->p1.x * k) : p->p0;
+    }
+    ray.dir = pt_scale(pt_normalize(pt_sub(target, o)), len);
+    return ray;
+}
+
+/* A random scene of 1 .. 64 quads and spheres for packet_hits: quads of any orientation and
+   size, some twice (equal t: the lower id must win), some side by side (shared edges), some the
+   faces of a box (which the 16-ray packets cull under one box, pt__packet_chunks); spheres
+   of radius 10^-4 .. 2 (the small ones through pt__hit_sphere's double precision). (Not a
+   sphere twice: the BVH's four-sphere blocks break such ties by lane, not by id.) */
+static pt_scene *ti_packet_scene(pt_rng *r, int n)
+{
+    pt_scene *s = pt_scene_create();
+    int m, i;
+    if (!s) return NULL;
+    m = pt_scene_add_lambertian(s, pt_v3(0.5f, 0.5f, 0.5f));
+    for (i = 0; i < n; ++i) {
+        const pt_vec3 c = pt_v3(8.0f * pt_rng_float(r) - 4.0f, 8.0f * pt_rng_float(r) - 4.0f, 8.0f * pt_rng_float(r) - 4.0f);
+        const float k = pt_rng_float(r);
+        if (k < 0.3f) {
+            pt_scene_add_sphere(s, c, powf(10.0f, -4.0f + 4.3f * pt_rng_float(r)), m);
+        } else if (k < 0.45f && i + 6 <= n) { /* a box's six faces (one run under one box) */
+            const pt_vec3 e = pt_v3(0.02f + 2.0f * pt_rng_float(r), 0.02f + 2.0f * pt_rng_float(r), 0.02f + 2.0f * pt_rng_float(r));
+            const pt_vec3 ex = pt_v3(e.x, 0, 0), ey = pt_v3(0, e.y, 0), ez = pt_v3(0, 0, e.z), f = pt_add(c, e);
+            pt_scene_add_quad(s, c, ez, ey, m);
+            pt_scene_add_quad(s, f, pt_neg(ey), pt_neg(ez), m);
+            pt_scene_add_quad(s, c, ex, ez, m);
+            pt_scene_add_quad(s, f, pt_neg(ez), pt_neg(ex), m);
+            pt_scene_add_quad(s, c, ey, ex, m);
+            pt_scene_add_quad(s, f, pt_neg(ex), pt_neg(ey), m);
+            i += 5;
+        } else {
+            const pt_vec3 u = pt_scale(pt_sample_uniform_sphere(pt_rng_float(r), pt_rng_float(r)), 0.05f + 5.0f * pt_rng_float(r));
+            const pt_vec3 v = pt_scale(pt_sample_uniform_sphere(pt_rng_float(r), pt_rng_float(r)), 0.05f + 5.0f * pt_rng_float(r));
+            pt_scene_add_quad(s, c, u, v, m);
+            if (k < 0.4f && i + 1 < n) pt_scene_add_quad(s, c, u, v, m), ++i;
+            else if (k < 0.5f && i + 1 < n) pt_scene_add_quad(s, pt_add(c, u), u, v, m), ++i;
+        }
+    }
+    if (pt_scene_commit(s) != PT_OK) {
+        pt_scene_destroy(s);
+        return NULL;
+    }
+    return s;
+}
+
+/* One group of n rays through the packets of width w (4, 8 or 16; closest hits, and any hits in
+   scenes of at most PT__BVH_SMALL_SCENE primitives): returns how many rays differ from the BVH. */
+static int ti_packet_group(const pt_scene *s, const pt__packet_scene *ps, const pt__rayctx *const *rc, int n, int w,
+                           const float *tmax, const uint32_t *skip, const int *want_any, const int *want_found,
+                           const uint32_t *want_prim, const float *want_t)
+{
+    int found[16], j, bad = 0, hit = -1;
+    uint32_t prim[16];
+    float t[16];
+    if (w == 4) pt__packet_closest4(s, ps, rc, n, found, prim, t);
+#ifdef PT__WIDE
+    else if (w == 8) pt__packet_closest8(s, ps, rc, n, found, prim, t);
+    else pt__packet_closest16(s, ps, rc, n, found, prim, t);
+    if (w > 4 && s->prim_count <= PT__BVH_SMALL_SCENE)
+        hit = w == 8 ? pt__packet_any8(s, ps, rc, tmax, skip, n) : pt__packet_any16(s, ps, rc, tmax, skip, n);
+#else
+    (void)tmax; (void)skip; (void)want_any;
+#endif
+    for (j = 0; j < n; ++j) {
+        int same = found[j] == want_found[j];
+        if (same && found[j]) same = prim[j] == want_prim[j] && memcmp(&t[j], &want_t[j], sizeof t[j]) == 0;
+        if (hit >= 0 && ((hit >> j) & 1) != want_any[j]) same = 0;
+        bad += !same;
+    }
+    return bad;
+}
+
+/* The closest-hit and any-hit packets (pt__packet_closest4/8/16, pt__packet_any8/16) give the
+   BVH's answers bit for bit (hit or not, primitive, t; occluded or not): 300 random scenes of 1 to
+   64 quads and spheres (ti_packet_scene), 512 rays each (ti_packet_ray), in groups of 1 to the
+   packet's width, any hits with tmax the closest hit's t, just above it, random or infinite and
+   the skipped primitive the closest hit's, another or none. Every width the CPU runs is tested
+   whatever the dispatch level (the BVH's: PDFTRACE_SIMD). Deterministic (fixed seed); the rays must hit often enough, and
+   the any-hit limits cut off some of the hits, or the cases were lost. */
+static void packet_hits(test_ctx *t)
+{
+    enum { RAYS = 512 };
+    pt_rng r;
+    pt__packet_scene *ps = (pt__packet_scene *)malloc(sizeof *ps);
+    long rays = 0, hits = 0, cut = 0;
+    int k, bad = 0, widths = pt_simd_cpu_level() >= PT_SIMD_AVX512 ? 3 : pt_simd_cpu_level() >= PT_SIMD_AVX2 ? 2 : 1;
+    if (!CHECK(t, ps != NULL, "memory")) return;
+    pt_rng_seed(&r, 11, 3);
+    for (k = 0; k < 300; ++k) {
+        pt_scene *s = ti_packet_scene(&r, 1 + (int)(pt_rng_u32(&r) % (k % 2 ? 32u : 64u)));
+        static pt__rayctx rcs[RAYS];
+        const pt__rayctx *rc[RAYS];
+        float want_t[RAYS], tmax[RAYS];
+        uint32_t want_prim[RAYS], skip[RAYS];
+        int want_found[RAYS], want_any[RAYS], i, wi;
+        if (!CHECK(t, s != NULL, "scene %d", k)) break;
+        { /* (with PDFTRACE_SIMD=scalar the packets, made all the same, meet the scalar BVH) */
+            const int simd = s->simd;
+            if (simd == PT_SIMD_SCALAR) s->simd = PT_SIMD_SSE2;
+            pt__packet_init(s, ps);
+            s->simd = simd;
+        }
+        if (!CHECK(t, ps->n == (int)s->prim_count, "scene %d: %d of %u primitives in packets", k, ps->n, s->prim_count)) {
+            pt_scene_destroy(s);
+            break;
+        }
+        for (i = 0; i < RAYS; ++i) {
+            float bary[3];
+            const float q = pt_rng_float(&r);
+            pt__rayctx_init2(&rcs[i], ti_packet_ray(&r, s), 0);
+            rc[i] = &rcs[i];
+            want_found[i] = pt__scene_closest(s, &rcs[i], PT__INF, &want_prim[i], &want_t[i], bary);
+            tmax[i] = !want_found[i] || q < 0.2f ? PT__INF : q < 0.5f ? want_t[i] : q < 0.7f ? nextafterf(want_t[i], PT__INF)
+                                                                                         : 20.0f * pt_rng_float(&r);
+            skip[i] = pt_rng_float(&r) < 0.3f ? 0xffffffffu : want_found[i] && pt_rng_float(&r) < 0.6f ? want_prim[i]
+                                                                                                 : pt_rng_u32(&r) % s->prim_count;
+            want_any[i] = pt__scene_any(s, &rcs[i], tmax[i], skip[i]);
+            hits += want_found[i];
+            cut += want_found[i] && !want_any[i];
+        }
+        rays += RAYS;
+        for (wi = 0; wi < widths; ++wi) {
+            const int w = 4 << wi;
+            for (i = 0; i < RAYS;) {
+                const int n = 1 + (int)(pt_rng_u32(&r) % (uint32_t)w), m = RAYS - i < n ? RAYS - i : n;
+                bad += ti_packet_group(s, ps, rc + i, m, w, tmax + i, skip + i, want_any + i, want_found + i, want_prim + i,
+                                       want_t + i);
+                i += m;
+            }
+        }
+        pt_scene_destroy(s);
+    }
+    free(ps);
+    CHECK(t, bad == 0, "%d rays' packet answers differ from the BVH's", bad);
+    CHECK(t, hits > rays / 3 && cut > hits / 10, "%ld of %ld rays hit, %ld of them not occluded below tmax", hits, rays, cut);
+    test_note(t, "%ld rays, %ld hits, %ld cut by tmax or skip, %d widths", rays, hits, cut, widths);
+}
+#endif
+
 /* With a target that has FMA (make test's fma runner: GNU C, -march=native), the header must
    turn contraction off in its implementation, or this runner's bit-for-bit comparisons of vector
    and scalar code (render.batched_bit_identical, the sections above) fail; without FMA there is
@@ -389,6 +554,9 @@ static const test_case test_internals_cases[] = {
     TEST_CASE(sincos_turn),
     TEST_CASE(sphere_sample8),
     TEST_CASE(lighttree_level_widths),
+#if defined(PT__SSE)
+    TEST_CASE(packet_hits),
+#endif
     TEST_END
 };
 
