@@ -199,8 +199,28 @@
 #include <stdint.h>
 #include <stdio.h> /* FILE, for pt_output_file */
 #include <math.h>
-#if defined(__clang__) /* clang contracts when it parses: keep the inline algebra below exact (see IMPLEMENTATION) */
-#pragma STDC FP_CONTRACT OFF
+/* No contraction of a * b + c into a fused multiply-add in pdftrace's code: the vector code
+   repeats the scalar code's roundings lane by lane, which a contracted scalar expression (GCC's
+   default in GNU modes, clang's anywhere, once the target has FMA) would not match. GCC's pragma
+   is used only where the target has FMA (it changes code generation) and over the inline algebra
+   below only in the implementation's file (where a copy GCC keeps out of line must not contract);
+   clang contracts as it parses, so its pragma covers that algebra always. -ffast-math overrides
+   both. PT__CONTRACT_OFF ... PT__CONTRACT_RESTORE bracket code (the tests' internals section too). */
+#if defined(__clang__)
+#define PT__NO_CONTRACT 1
+#define PT__CONTRACT_OFF _Pragma("STDC FP_CONTRACT OFF")
+#define PT__CONTRACT_RESTORE _Pragma("STDC FP_CONTRACT DEFAULT")
+#elif defined(__GNUC__) && !defined(__INTEL_COMPILER) && (defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA))
+#define PT__NO_CONTRACT 1
+#define PT__CONTRACT_OFF _Pragma("GCC push_options") _Pragma("GCC optimize(\"fp-contract=off\")")
+#define PT__CONTRACT_RESTORE _Pragma("GCC pop_options")
+#else
+#define PT__CONTRACT_OFF
+#define PT__CONTRACT_RESTORE
+#endif
+#if defined(__clang__) || defined(PDFTRACE_IMPLEMENTATION)
+#define PT__CONTRACT_PUBLIC
+PT__CONTRACT_OFF
 #endif
 
 #define PDFTRACE_VERSION_MAJOR 0
@@ -1524,8 +1544,8 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 }
 #endif
 
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT DEFAULT
+#ifdef PT__CONTRACT_PUBLIC
+PT__CONTRACT_RESTORE
 #endif
 #endif /* PDFTRACE_H */
 
@@ -1536,24 +1556,7 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #ifndef PDFTRACE_IMPLEMENTATION_DONE
 #define PDFTRACE_IMPLEMENTATION_DONE
 
-/* No contraction of a * b + c into a fused multiply-add in the implementation: the vector code
-   repeats the scalar code's roundings lane by lane, which a contracted scalar expression (GCC's
-   default in GNU modes, clang's anywhere, once the target has FMA) would not match. GCC's pragma
-   is used only where the target has FMA (it changes code generation); -ffast-math overrides both.
-   PT__CONTRACT_OFF ... PT__CONTRACT_RESTORE bracket the code (the tests' internals section too). */
-#if defined(__clang__)
-#define PT__NO_CONTRACT 1
-#define PT__CONTRACT_OFF _Pragma("STDC FP_CONTRACT OFF")
-#define PT__CONTRACT_RESTORE _Pragma("STDC FP_CONTRACT DEFAULT")
-#elif defined(__GNUC__) && !defined(__INTEL_COMPILER) && (defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA))
-#define PT__NO_CONTRACT 1
-#define PT__CONTRACT_OFF _Pragma("GCC push_options") _Pragma("GCC optimize(\"fp-contract=off\")")
-#define PT__CONTRACT_RESTORE _Pragma("GCC pop_options")
-#else
-#define PT__CONTRACT_OFF
-#define PT__CONTRACT_RESTORE
-#endif
-PT__CONTRACT_OFF
+PT__CONTRACT_OFF /* no FMA contraction (defined with the public part) */
 
 #include <stdio.h>
 #include <stdlib.h>
