@@ -4311,28 +4311,52 @@ PT__TARGET_AVX2 static inline __m256d pt__gather4d(const double *base, __m128i i
 {
     return _mm256_mask_i32gather_pd(_mm256_setzero_pd(), base, i, _mm256_castsi256_pd(_mm256_set1_epi64x(-1)), 8);
 }
-/* pt__cdf_find for 8 lanes, the cdf of lane j at cdf + base[j] (n + 1 entries): the first i with
-   cdf[i + 1] > u counted by halving steps (the number of i < n with cdf[i + 1] <= u, at most
-   n - 1: the scalar search's answer wherever its interval is not empty), and u's place in it in
-   two halves of 4 doubles. Returns the lanes whose interval is empty (the scalar code's u = 1
-   case), for it to redo. */
-PT__TARGET_AVX2 static inline __m256 pt__cdf_find8(const float *cdf, __m256i base, int n, __m256 u, __m256i *idx, __m256d *frac)
+/* The first i in [start, bound] of each lane with cdf[i + 1] > u, or bound, by halving steps of
+   at most wmax in all (the number of i from start on with cdf[i + 1] <= u: cdf is non-decreasing). */
+PT__TARGET_AVX2 static inline __m256i pt__cdf_count8(const float *cdf, __m256i base, __m256i start, __m256i bound, int wmax,
+                                                     __m256 u)
 {
-    const __m256i nn = _mm256_set1_epi32(n);
-    __m256i i = _mm256_setzero_si256();
-    __m256 c0, c1, empty;
-    int step = 1, h;
-    while (2 * step <= n - 1) step *= 2;
-    for (; step >= 1 && n > 1; step /= 2) {
+    const __m256i b1 = _mm256_add_epi32(bound, _mm256_set1_epi32(1));
+    __m256i i = start;
+    int step = 1;
+    while (2 * step <= wmax) step *= 2;
+    for (; step >= 1 && wmax > 0; step /= 2) {
         const __m256i cand = _mm256_add_epi32(i, _mm256_set1_epi32(step));
-        const __m256 c = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, _mm256_min_epi32(cand, nn)), 4);
-        const __m256 adv = _mm256_andnot_ps(_mm256_cmp_ps(c, u, _CMP_GT_OQ),
-                                            _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_add_epi32(nn, _mm256_set1_epi32(1)), cand)));
+        const __m256 c = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, _mm256_min_epi32(cand, bound)), 4);
+        const __m256 adv = _mm256_andnot_ps(_mm256_cmp_ps(c, u, _CMP_GT_OQ), _mm256_castsi256_ps(_mm256_cmpgt_epi32(b1, cand)));
         i = _mm256_add_epi32(i, _mm256_and_si256(_mm256_castps_si256(adv), _mm256_set1_epi32(step)));
     }
-    i = _mm256_min_epi32(i, _mm256_set1_epi32(n - 1));
+    return i;
+}
+/* pt__cdf_find for 8 lanes, the cdf of lane j at cdf + base[j] (n + 1 entries) and its guide at
+   guide + base[j]: the first i with cdf[i + 1] > u (at most n - 1), searched between the guide's
+   entries as the scalar code starts, and checked (cdf[i] <= u < cdf[i + 1] at the ends' exceptions)
+   to be the first one; where the guide's bracket missed it (float rounding of u n), the group
+   searches all n intervals. That is the scalar search's answer wherever its interval is not
+   empty. u's place in it in two halves of 4 doubles. Returns the lanes whose interval is empty
+   (the scalar code's u = 1 case), for it to redo. */
+PT__TARGET_AVX2 static inline __m256 pt__cdf_find8(const float *cdf, const int *guide, __m256i base, int n, __m256 u,
+                                                   __m256i *idx, __m256d *frac)
+{
+    const __m256i zero = _mm256_setzero_si256(), n1 = _mm256_set1_epi32(n - 1);
+    const __m256i k = _mm256_max_epi32(_mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(u, _mm256_set1_ps((float)n))), n1), zero);
+    const __m256i lo = _mm256_i32gather_epi32(guide, _mm256_add_epi32(base, k), 4);
+    const __m256i hi = _mm256_i32gather_epi32(guide, _mm256_add_epi32(base, _mm256_add_epi32(k, _mm256_set1_epi32(1))), 4);
+    int wd[8], wmax = 0, j, h;
+    __m256i i;
+    __m256 c0, c1, empty, miss;
+    _mm256_storeu_si256((__m256i *)wd, _mm256_sub_epi32(hi, lo));
+    for (j = 0; j < 8; ++j) wmax = wd[j] > wmax ? wd[j] : wmax;
+    i = pt__cdf_count8(cdf, base, lo, hi, wmax, u);
     c0 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, i), 4);
     c1 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, _mm256_add_epi32(i, _mm256_set1_epi32(1))), 4);
+    miss = _mm256_or_ps(_mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(i, n1)), _mm256_cmp_ps(c1, u, _CMP_NGT_UQ)),
+                        _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(i, zero)), _mm256_cmp_ps(c0, u, _CMP_GT_OQ)));
+    if (PT__UNLIKELY(_mm256_movemask_ps(miss))) {
+        i = _mm256_min_epi32(pt__cdf_count8(cdf, base, zero, _mm256_set1_epi32(n), n - 1, u), n1);
+        c0 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, i), 4);
+        c1 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, _mm256_add_epi32(i, _mm256_set1_epi32(1))), 4);
+    }
     empty = _mm256_cmp_ps(c1, c0, _CMP_NGT_UQ);
     c1 = _mm256_blendv_ps(c1, _mm256_add_ps(c0, _mm256_set1_ps(1.0f)), empty);
     for (h = 0; h < 2; ++h) {
@@ -4363,8 +4387,9 @@ PT__TARGET_AVX2 static int pt__env_sample8(const pt__env *e, float c, const floa
     __m256i y, x;
     __m256 bad1, bad2, bad3, w[3], st[2], ct[2], uf[2], sn8, cs8, u, v, l2, ok, L[3], inv;
     int h, k;
-    bad1 = pt__cdf_find8(e->row_cdf, _mm256_setzero_si256(), e->h, v1, &y, fy);
-    bad2 = pt__cdf_find8(e->col_cdf, _mm256_mullo_epi32(y, _mm256_set1_epi32(e->w + 1)), e->w, _mm256_loadu_ps(u2), &x, fx);
+    bad1 = pt__cdf_find8(e->row_cdf, e->row_guide, _mm256_setzero_si256(), e->h, v1, &y, fy);
+    bad2 = pt__cdf_find8(e->col_cdf, e->col_guide, _mm256_mullo_epi32(y, _mm256_set1_epi32(e->w + 1)), e->w,
+                         _mm256_loadu_ps(u2), &x, fx);
     for (h = 0; h < 2; ++h) {
         const __m128i yh = h ? _mm256_extracti128_si256(y, 1) : _mm256_castsi256_si128(y);
         const __m128i xh = h ? _mm256_extracti128_si256(x, 1) : _mm256_castsi256_si128(x);

@@ -344,17 +344,19 @@ static float ti_env_draw(pt_rng *r, const float *cdf, int n)
 }
 #endif
 /* Stages 1e and 2e (pt__env_eval8, pt__env_sample8) give pt__env_eval's and pt__env_sample's bits
-   for every lane they take, and take all but 0.1 % of random ones: maps of 2 x 2, 37 x 19 and 256 x 128
-   pixels (a sky with a sun one pixel wide, rows and columns of zeros: empty CDF intervals), under
-   a rotation; 2^17 random directions and directions at and near the poles, on and beside the u
-   seam and along the axes; 2^17 draws at random and at the CDFs' entries and their neighbours
-   (the cells' edges), 0 and 1 - 2^-24, with uniform shares 0 and 0.3 (a quarter of the groups
-   random directions and draws only, for the share taken: the others hold the poles, where
-   pt__atan2f goes to libm and so the lanes to the scalar code). Deterministic (fixed seed). */
+   for every lane they take, and take all but 0.1 % of random ones. Maps of 2 x 2, 37 x 19 and
+   256 x 128 pixels (a sky with a sun one pixel wide, rows and columns of zeros: empty CDF
+   intervals) and a uniform one of 37 x 24 (its CDF entries on the guide tables' steps k / n, where
+   the rounding of u n sends the guide's bracket past the answer), under a rotation; 2^16 groups
+   of 8 random directions and directions at and near the poles, on and beside the u seam and along
+   the axes, and of draws at random and at the CDFs' entries and their neighbours (the cells'
+   edges), 0 and 1 - 2^-24, with uniform shares 0 and 0.3 (a quarter of the groups random
+   directions and draws only, for the share taken: the others hold the poles, where pt__atan2f
+   goes to libm and so the lanes to the scalar code). Deterministic (fixed seed). */
 static void env_lanes8(test_ctx *t)
 {
 #ifdef PT__WIDE
-    static const int dims[3][2] = { { 2, 2 }, { 37, 19 }, { 256, 128 } };
+    static const int dims[4][2] = { { 2, 2 }, { 37, 19 }, { 256, 128 }, { 37, 24 } };
     pt_rng r;
     long etaken = 0, ebad = 0, eall = 0, staken = 0, sbad = 0, sall = 0, eplain = 0, splain = 0, nplain = 0;
     int m, g, j;
@@ -363,7 +365,7 @@ static void env_lanes8(test_ctx *t)
         return;
     }
     pt_rng_seed(&r, 31, 7);
-    for (m = 0; m < 3; ++m) {
+    for (m = 0; m < 4; ++m) {
         const int W = dims[m][0], H = dims[m][1];
         pt_scene *s = pt_scene_create();
         pt_image img;
@@ -386,6 +388,7 @@ static void env_lanes8(test_ctx *t)
                 p[0] = v;
                 p[1] = 0.8f * v;
                 p[2] = v * pt_rng_float(&r);
+                if (m == 3) p[0] = p[1] = p[2] = 1.0f; /* (uniform: the columns' CDF entries on the guide's steps k / n) */
             }
         if (m == 1) xf = pt_transform_identity();
         d.map = &img;
