@@ -318,6 +318,13 @@ $(BUILD)/test_runner_nothreads: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_ST
 	$(CC) $(PT_CPPFLAGS) $(PNG_CPPFLAGS) $(CPPFLAGS) -DPDFTRACE_NO_THREADS -DPDFTRACE_NO_SIMD $(CFLAGS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PNG_LDLIBS) $(PT_LDLIBS)
 
 # Always with OpenEXR, whatever OPENEXR says; `make exr-test` runs only its exr section.
+# The unit tests in GNU C for this machine's CPU (FMA where it has one, so a * b + c may contract):
+# make test runs the sections that compare vector and scalar code bit for bit with it.
+FMA_CFLAGS ?= -std=gnu11 -O2 -march=native
+$(BUILD)/test_runner_fma: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) $(OPT_STAMP) | $(BUILD)
+	$(need_tests)
+	$(CC) $(PT_CPPFLAGS) $(CPPFLAGS) $(FMA_CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(PT_LDLIBS)
+
 $(BUILD)/test_runner_exr: $(TEST_SRCS) $(TEST_HDRS) $(PT_HEADERS) | $(BUILD)
 	$(need_tests)
 	$(CC) -I. $(EXR_FLAGS) $(CPPFLAGS) $(CFLAGS) $(PT_THREADS) $(LDFLAGS) -o $@ $(TEST_SRCS) $(LDLIBS) $(EXR_LIBS) -lm
@@ -414,14 +421,15 @@ bench-refs: $(BUILD)/bench
 # the fuzz corpus replay (tests/fuzz/corpus, with FP traps where glibc has them, and under
 # ASan+UBSan), the FP-trap renders of the scene suite, and the unit-test runners: plain, without
 # threads, and under ASan+UBSan (gcc, and clang when installed), each sanitizer runner in two
-# parts (the pdf section, the rest) so the two cores end together. The jobs are listed longest
+# parts (the pdf section, the rest) so the two cores end together, and the vector-against-scalar
+# sections built for this CPU in GNU C (test_runner_fma). The jobs are listed longest
 # first; the logs are printed in that order, and the last line adds up every job's
 # "N passed, M failed, K skipped".
 TEST_JOBS ?= 2
 SAN_ENV := ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
 TEST_BINS := $(BUILD)/ptv $(BUILD)/pdftrace $(BUILD)/cornell $(BUILD)/test_runner $(BUILD)/test_runner_nothreads \
       $(BUILD)/test_runner_asan $(if $(SAN_CLANG_PATH),$(BUILD)/test_runner_asan_clang) $(BUILD)/fuzz_replay \
-      $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap
+      $(BUILD)/fuzz_replay_asan $(BUILD)/fptrap $(BUILD)/test_runner_fma
 CLANG_SAN_JOBS := $(if $(SAN_CLANG_PATH),\
     asan-clang-rest '$(SAN_ENV) ./$(BUILD)/test_runner_asan_clang --skip pdf.',\
     asan-clang 'echo "SKIP the clang ASan+UBSan runner: $(SAN_CLANG) is not installed (apt-get install clang)"; echo "0 passed, 0 failed, 1 skipped"')
@@ -441,7 +449,8 @@ test:
 	    fuzz-asan '$(SAN_ENV) ./$(BUILD)/fuzz_replay_asan tests/fuzz/corpus' \
 	    cli 'tests/cli/pdftrace.sh $(BUILD)/pdftrace scenes $(BUILD)/cli-work' \
 	    fuzz 'PT_FUZZ_FPTRAP=1 ./$(BUILD)/fuzz_replay tests/fuzz/corpus' \
-	    fptrap './$(BUILD)/fptrap scenes/*.scene'
+	    fptrap './$(BUILD)/fptrap scenes/*.scene' \
+	    fma './$(BUILD)/test_runner_fma render.batched internals.'
 
 # ---- make stress: the numerical stress cases at full size (tests/stress/; the same cases run
 # small in the runner's `stress` section). Prints case | metric | bound | result; non-zero exit

@@ -25,7 +25,9 @@
    The implementation wants POSIX clocks and threads: if it is the first header the file
    includes, it defines _POSIX_C_SOURCE itself; otherwise compile that file with
    -D_POSIX_C_SOURCE=200809L (or a GNU dialect). Without a monotonic clock, timings fall
-   back to clock().
+   back to clock(). Dialects and -march settings give the same images: the header keeps FMA
+   contraction out of its implementation. -ffast-math does not keep images bit-identical
+   between the integrators and SIMD levels (NaN and Inf are still caught).
 
    THE HEADER FAMILY
    =================
@@ -197,6 +199,9 @@
 #include <stdint.h>
 #include <stdio.h> /* FILE, for pt_output_file */
 #include <math.h>
+#if defined(__clang__) /* clang contracts when it parses: keep the inline algebra below exact (see IMPLEMENTATION) */
+#pragma STDC FP_CONTRACT OFF
+#endif
 
 #define PDFTRACE_VERSION_MAJOR 0
 #define PDFTRACE_VERSION_MINOR 1
@@ -1519,6 +1524,9 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 }
 #endif
 
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT DEFAULT
+#endif
 #endif /* PDFTRACE_H */
 
 /* ==========================================================================================
@@ -1528,6 +1536,24 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #ifndef PDFTRACE_IMPLEMENTATION_DONE
 #define PDFTRACE_IMPLEMENTATION_DONE
 
+/* No contraction of a * b + c into a fused multiply-add in the implementation: the vector code
+   repeats the scalar code's roundings lane by lane, which a contracted scalar expression (GCC's
+   default in GNU modes, clang's anywhere, once the target has FMA) would not match. GCC's pragma
+   is used only where the target has FMA (it changes code generation); -ffast-math overrides both.
+   PT__CONTRACT_OFF ... PT__CONTRACT_RESTORE bracket the code (the tests' internals section too). */
+#if defined(__clang__)
+#define PT__NO_CONTRACT 1
+#define PT__CONTRACT_OFF _Pragma("STDC FP_CONTRACT OFF")
+#define PT__CONTRACT_RESTORE _Pragma("STDC FP_CONTRACT DEFAULT")
+#elif defined(__GNUC__) && !defined(__INTEL_COMPILER) && (defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA))
+#define PT__NO_CONTRACT 1
+#define PT__CONTRACT_OFF _Pragma("GCC push_options") _Pragma("GCC optimize(\"fp-contract=off\")")
+#define PT__CONTRACT_RESTORE _Pragma("GCC pop_options")
+#else
+#define PT__CONTRACT_OFF
+#define PT__CONTRACT_RESTORE
+#endif
+PT__CONTRACT_OFF
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -13094,6 +13120,33 @@ static void pt__film_sample(double *sum, double *sq, double *odd, double *lo, ui
     }
 }
 
+#ifdef PT__WIDE
+/* pt__film_sample with the three channels in one AVX2 vector per sum (the fourth lane unused):
+   the same IEEE additions and subtractions per channel, so the same sums to the bit. */
+PT__TARGET_AVX2 static void pt__film_sample_avx2(double *sum, double *sq, double *odd, double *lo, uint32_t k, pt_color L)
+{
+    const __m256d v = _mm256_set_pd(0.0, (double)L.z, (double)L.y, (double)L.x);
+    double *hi[3], *lw[3];
+    __m256d x[3];
+    int j, nq = (k & 1u) ? 3 : 2;
+    hi[0] = sum; hi[1] = sq; hi[2] = odd;
+    lw[0] = lo; lw[1] = lo + 3; lw[2] = lo + 6;
+    x[0] = v; x[1] = _mm256_mul_pd(v, v); x[2] = v; /* a float's square is exact in a double */
+    for (j = 0; j < nq; ++j) { /* pt__dd_add: two of pt__two_sum */
+        __m256d h = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(hi[j])), _mm_load_sd(hi[j] + 2), 1);
+        __m256d l = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(lw[j])), _mm_load_sd(lw[j] + 2), 1);
+        __m256d t = _mm256_add_pd(h, x[j]), bv = _mm256_sub_pd(t, h);
+        __m256d e = _mm256_add_pd(_mm256_sub_pd(h, _mm256_sub_pd(t, bv)), _mm256_sub_pd(x[j], bv));
+        __m256d b = _mm256_add_pd(e, l), t2 = _mm256_add_pd(t, b), bv2 = _mm256_sub_pd(t2, t);
+        __m256d e2 = _mm256_add_pd(_mm256_sub_pd(t, _mm256_sub_pd(t2, bv2)), _mm256_sub_pd(b, bv2));
+        _mm_storeu_pd(hi[j], _mm256_castpd256_pd128(t2));
+        _mm_store_sd(hi[j] + 2, _mm256_extractf128_pd(t2, 1));
+        _mm_storeu_pd(lw[j], _mm256_castpd256_pd128(e2));
+        _mm_store_sd(lw[j] + 2, _mm256_extractf128_pd(e2, 1));
+    }
+}
+#endif
+
 /* dst += src over np pixels (either may be a view into a merge buffer; a NULL low counts as 0). */
 static void pt__film_add_raw(pt_film *dst, const pt_film *src, size_t np)
 {
@@ -13179,6 +13232,23 @@ static pt_ray pt__camera_sample(const pt__pass *ps, pt__sampler *smp, int x, int
     return pt__camera_ray(ps->cam, (float)x + jx, (float)y + jy, l1, l2);
 }
 
+/* A finished lane's sample into its pixel's sums, its rays into the pixel's count, its stats into *st. */
+static void pt__lane_to_film(const pt__pass *ps, const pt__lane *d, pt_path_stats *st)
+{
+    pt_film *film = ps->film;
+    uint32_t p = d->pix;
+#ifdef PT__WIDE
+    if (ps->scene->simd >= PT_SIMD_AVX2)
+        pt__film_sample_avx2(film->sum + 3u * p, film->sum_sq + 3u * p, film->sum_odd + 3u * p, film->low + 9u * p,
+                             d->index_k, d->L);
+    else
+#endif
+        pt__film_sample(film->sum + 3u * p, film->sum_sq + 3u * p, film->sum_odd + 3u * p, film->low + 9u * p,
+                        d->index_k, d->L);
+    if (ps->pixel_rays) ps->pixel_rays[p] += (double)(d->st.camera_rays + d->st.bounce_rays + d->st.shadow_rays);
+    pt__stats_sum(st, &d->st);
+}
+
 /* The batched integrator's job: the job's samples, in the scalar job's order, PT__BATCH at a
    time through pt__batch_run; each sample then goes to its pixel (the film's sums do not depend
    on the order they are added in) and its rays to the pixel's count. Returns 0 (nothing done)
@@ -13230,15 +13300,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
                 pt__lane_start(l, ps->cfg, pt__camera_sample(ps, &l->smp, x, y, pix, index_k, pixel_key, cache));
                 if (++n < PT__BATCH) continue;
                 copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, kids, n);
-                for (i = 0; i < n; ++i) {
-                    pt__lane *d = &lanes[i];
-                    uint32_t p = d->pix;
-                    pt__film_sample(film->sum + 3u * p, film->sum_sq + 3u * p, film->sum_odd + 3u * p, film->low + 9u * p,
-                                    d->index_k, d->L);
-                    if (ps->pixel_rays)
-                        ps->pixel_rays[p] += (double)(d->st.camera_rays + d->st.bounce_rays + d->st.shadow_rays);
-                    pt__stats_sum(&st, &d->st);
-                }
+                for (i = 0; i < n; ++i) pt__lane_to_film(ps, &lanes[i], &st);
                 n = 0;
             }
             film->count[pix] += mine; /* (read by no path: the samples in flight keep their index_k) */
@@ -13247,14 +13309,7 @@ static int pt__render_job_batched(pt__pass *ps, int index)
         }
     }
     copies += pt__batch_run(ps->scene, ps->cfg, pk, lanes, kids, n);
-    for (i = 0; i < n; ++i) {
-        pt__lane *d = &lanes[i];
-        uint32_t p = d->pix;
-        pt__film_sample(film->sum + 3u * p, film->sum_sq + 3u * p, film->sum_odd + 3u * p, film->low + 9u * p, d->index_k,
-                        d->L);
-        if (ps->pixel_rays) ps->pixel_rays[p] += (double)(d->st.camera_rays + d->st.bounce_rays + d->st.shadow_rays);
-        pt__stats_sum(&st, &d->st);
-    }
+    for (i = 0; i < n; ++i) pt__lane_to_film(ps, &lanes[i], &st);
     PT_FREE(lanes);
     PT_FREE(recs);
     PT_FREE(cache);
@@ -15400,6 +15455,8 @@ PTDEF int pt_image_apply_display(const pt_image *src, const pt_display_desc *d, 
 #ifdef __cplusplus
 }
 #endif
+
+PT__CONTRACT_RESTORE
 
 /* PDFTRACE_IMPLEMENTATION_COMPLETE */
 #endif /* PDFTRACE_IMPLEMENTATION_DONE */

@@ -536,7 +536,26 @@ static void lighttree_level_widths(test_ctx *t)
 #endif
 }
 
+/* With a target that has FMA (make test's fma runner: GNU C, -march=native), the header must
+   turn contraction off in its implementation, or this runner's bit-for-bit comparisons of vector
+   and scalar code (render.batched_bit_identical, the sections above) fail; without FMA there is
+   nothing to guard and they test nothing more than the plain runner does. */
+static void fma_guard(test_ctx *t)
+{
+#if defined(__FP_FAST_FMAF) || defined(__FP_FAST_FMA) || defined(__FMA__)
+    int guarded = 0;
+#ifdef PT__NO_CONTRACT
+    guarded = PT__NO_CONTRACT;
+#endif
+    CHECK(t, guarded, "the target has FMA but the header did not turn contraction off");
+    test_note(t, "the target has FMA; the implementation is compiled without contraction");
+#else
+    test_skip(t, "the target has no FMA (build with -march=native on a CPU that has it)");
+#endif
+}
+
 static const test_case test_internals_cases[] = {
+    TEST_CASE(fma_guard),
     TEST_CASE(spot_falloff_shortcut),
     TEST_CASE(rayctx_axes),
     TEST_CASE(sincos_turn),

@@ -24,7 +24,11 @@
 #include <time.h>
 
 #include "test.h"
-#include "test_internals.h" /* (its section calls the implementation's static functions) */
+/* The internals section calls the implementation's static functions and compares them bit for
+   bit, so it is compiled as the implementation is: without FMA contraction (pdftrace.h). */
+PT__CONTRACT_OFF
+#include "test_internals.h"
+PT__CONTRACT_RESTORE
 
 int test_check_(test_ctx *t, int ok, const char *file, int line, const char *fmt, ...)
 {
