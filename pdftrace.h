@@ -4165,7 +4165,7 @@ static int pt__cdf_find(const float *cdf, const int *guide, int n, float u, doub
 /* A direction *w of the map's density, and the (u, v) and cell index it was drawn at. */
 static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w, float *u, float *v, size_t *cell)
 {
-    double fy, fx, c0, c1, cos_t, sin_t, phi, lx, ly, lz;
+    double fy, fx, c0, c1, cos_t, sin_t, phi, sin_p, cos_p, lx, ly, lz;
     int y = pt__cdf_find(e->row_cdf, e->row_guide, e->h, u1, &fy), x;
     const float *cc = e->col_cdf + (size_t)y * (size_t)(e->w + 1);
     if (!(cc[e->w] > 0.0f)) return 0;
@@ -4175,9 +4175,10 @@ static int pt__env_map_sample(const pt__env *e, float u1, float u2, pt_vec3 *w, 
     cos_t = c0 - fy * (c0 - c1);
     sin_t = sqrt(pt__maxd(0.0, (1.0 - cos_t) * (1.0 + cos_t)));
     phi = 2.0 * 3.14159265358979323846 * ((double)x + fx) / (double)e->w;
-    lx = sin_t * sin(phi);
+    pt__sincos_d(phi, &sin_p, &cos_p); /* (phi in [0, 2 pi); pt__env_sample8 does the same in 4 lanes) */
+    lx = sin_t * sin_p;
     ly = cos_t;
-    lz = -sin_t * cos(phi);
+    lz = -sin_t * cos_p;
     *w = pt_normalize(pt_v3((float)(e->rot[0][0] * lx + e->rot[0][1] * ly + e->rot[0][2] * lz),
                             (float)(e->rot[1][0] * lx + e->rot[1][1] * ly + e->rot[1][2] * lz),
                             (float)(e->rot[2][0] * lx + e->rot[2][1] * ly + e->rot[2][2] * lz)));
@@ -4233,6 +4234,235 @@ static float pt__env_uniform_share(const pt__env *e, pt_color bg)
     if (!(b > 0.0)) return 0.0f;
     return m > 0.0 ? (float)(b / (b + m)) : 1.0f;
 }
+#ifdef PT__WIDE
+/* The environment 8 lanes at a time (stages 1e and 2e of the batched integrator, AVX2): each lane
+   does the float and double operations of pt__atan2f, pt__env_eval, pt__cdf_find and
+   pt__env_map_sample in their order, without FMA, so the same bits. A lane the scalar code would
+   answer differently from the common path (pt__atan2f's arguments that go to libm, an empty
+   CDF interval, a uniform-sphere sample) is left out of the returned bits for the scalar code to
+   redo; it computes with harmless operands, so no lane raises an exception the scalar code would
+   not. The map's indices are 32-bit: pt__env_wide says whether the map is small enough. */
+enum { PT__EO_L = 0, PT__EO_PM = 3, PT__EO_DIR = 4, PT__EO_OUT = 7 };
+static int pt__env_wide(const pt__env *e)
+{
+    return e && (double)e->h * (double)(e->w + 1) < 2147483647.0 && 3.0 * (double)e->w * (double)e->h < 2147483647.0;
+}
+/* pt__atan2f for 8 lanes; *bad: the lanes pt__atan2f gives to libm (a zero, an infinity, a NaN,
+   arguments beyond 1e-30 .. 1e30), whose results here are meaningless. */
+PT__TARGET_AVX2 static inline __m256 pt__atan2f8(__m256 y, __m256 x, __m256 *bad)
+{
+    const __m256 signbit = _mm256_set1_ps(-0.0f), one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+    const __m256 ax = _mm256_andnot_ps(signbit, x), ay = _mm256_andnot_ps(signbit, y);
+    const __m256 swap = _mm256_cmp_ps(ay, ax, _CMP_GT_OQ);
+    __m256 hi = _mm256_blendv_ps(ax, ay, swap), lo = _mm256_blendv_ps(ay, ax, swap), ok, big, r0, r1, a, t, r;
+    __m256i k;
+    ok = _mm256_and_ps(_mm256_cmp_ps(lo, zero, _CMP_GT_OQ),
+                       _mm256_and_ps(_mm256_cmp_ps(hi, _mm256_set1_ps(1e-30f), _CMP_GT_OQ),
+                                     _mm256_cmp_ps(hi, _mm256_set1_ps(1e30f), _CMP_LT_OQ)));
+    *bad = _mm256_andnot_ps(ok, _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
+    hi = _mm256_blendv_ps(one, hi, ok);
+    lo = _mm256_blendv_ps(one, lo, ok);
+    big = _mm256_cmp_ps(lo, _mm256_mul_ps(_mm256_set1_ps(0.26794919f), hi), _CMP_GT_OQ);
+    r0 = _mm256_blendv_ps(_mm256_set1_ps(pt__atan_red[0][0]), _mm256_set1_ps(pt__atan_red[1][0]), big);
+    r1 = _mm256_blendv_ps(_mm256_set1_ps(pt__atan_red[0][1]), _mm256_set1_ps(pt__atan_red[1][1]), big);
+    a = _mm256_div_ps(_mm256_sub_ps(_mm256_mul_ps(lo, r0), _mm256_mul_ps(hi, r1)),
+                      _mm256_add_ps(_mm256_mul_ps(lo, r1), _mm256_mul_ps(hi, r0)));
+    t = _mm256_mul_ps(a, a);
+    r = _mm256_add_ps(_mm256_set1_ps(pt__atan_c[2]), _mm256_mul_ps(t, _mm256_set1_ps(pt__atan_c[3])));
+    r = _mm256_add_ps(_mm256_set1_ps(pt__atan_c[0]), _mm256_mul_ps(t, _mm256_add_ps(_mm256_set1_ps(pt__atan_c[1]), _mm256_mul_ps(t, r))));
+    r = _mm256_add_ps(a, _mm256_mul_ps(a, _mm256_mul_ps(t, r)));
+    k = _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(_mm256_cmp_ps(x, zero, _CMP_LT_OQ)), _mm256_set1_epi32(4)),
+                        _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(swap), _mm256_set1_epi32(2)),
+                                        _mm256_and_si256(_mm256_castps_si256(big), _mm256_set1_epi32(1))));
+    r = _mm256_add_ps(_mm256_permutevar8x32_ps(_mm256_loadu_ps(pt__atan_off), k),
+                      _mm256_mul_ps(_mm256_permutevar8x32_ps(_mm256_loadu_ps(pt__atan_sgn), k), r));
+    return _mm256_or_ps(_mm256_andnot_ps(signbit, r), _mm256_and_ps(signbit, y));
+}
+/* pt__env_lookup for 8 lanes: the four pixels' channels gathered (indices below 2^31: pt__env_wide). */
+PT__TARGET_AVX2 static inline void pt__env_lookup8(const pt__env *e, __m256 u, __m256 v, __m256 *L)
+{
+    const __m256 one = _mm256_set1_ps(1.0f), half = _mm256_set1_ps(0.5f);
+    const __m256i W = _mm256_set1_epi32(e->w), h1 = _mm256_set1_epi32(e->h - 1), i1 = _mm256_set1_epi32(1);
+    const __m256 fx = _mm256_sub_ps(_mm256_mul_ps(u, _mm256_set1_ps((float)e->w)), half);
+    const __m256 fy = _mm256_sub_ps(_mm256_mul_ps(v, _mm256_set1_ps((float)e->h)), half);
+    const __m256 x0f = _mm256_floor_ps(fx), y0f = _mm256_floor_ps(fy);
+    const __m256 tx = _mm256_sub_ps(fx, x0f), ty = _mm256_sub_ps(fy, y0f);
+    const __m256 sx = _mm256_sub_ps(one, tx), sy = _mm256_sub_ps(one, ty);
+    __m256i x0 = _mm256_cvttps_epi32(x0f), y0 = _mm256_cvttps_epi32(y0f), x1, y1, ia, ib, ic, id;
+    int c;
+    x0 = _mm256_add_epi32(x0, _mm256_and_si256(_mm256_cmpgt_epi32(_mm256_setzero_si256(), x0), W)); /* x0 < 0 */
+    x0 = _mm256_sub_epi32(x0, _mm256_andnot_si256(_mm256_cmpgt_epi32(W, x0), W));                    /* x0 >= w */
+    x1 = _mm256_add_epi32(x0, i1);
+    x1 = _mm256_and_si256(x1, _mm256_cmpgt_epi32(W, x1));
+    y1 = _mm256_min_epi32(_mm256_add_epi32(y0, i1), h1);
+    y0 = _mm256_min_epi32(_mm256_max_epi32(y0, _mm256_setzero_si256()), h1);
+    y0 = _mm256_mullo_epi32(y0, W);
+    y1 = _mm256_mullo_epi32(y1, W);
+    ia = _mm256_mullo_epi32(_mm256_add_epi32(y0, x0), _mm256_set1_epi32(3));
+    ib = _mm256_mullo_epi32(_mm256_add_epi32(y0, x1), _mm256_set1_epi32(3));
+    ic = _mm256_mullo_epi32(_mm256_add_epi32(y1, x0), _mm256_set1_epi32(3));
+    id = _mm256_mullo_epi32(_mm256_add_epi32(y1, x1), _mm256_set1_epi32(3));
+    for (c = 0; c < 3; ++c) {
+        const float *base = e->rgb + c;
+        const __m256 a = _mm256_i32gather_ps(base, ia, 4), b = _mm256_i32gather_ps(base, ib, 4);
+        const __m256 cc = _mm256_i32gather_ps(base, ic, 4), d = _mm256_i32gather_ps(base, id, 4);
+        L[c] = _mm256_add_ps(_mm256_mul_ps(sy, _mm256_add_ps(_mm256_mul_ps(sx, a), _mm256_mul_ps(tx, b))),
+                             _mm256_mul_ps(ty, _mm256_add_ps(_mm256_mul_ps(sx, cc), _mm256_mul_ps(tx, d))));
+    }
+}
+/* pt__env_eval for 8 lanes: w (unit, world) in in[0..2]; the map's radiance to out[PT__EO_L ..]
+   and the cell's density to out[PT__EO_PM]. Returns the lanes taken. */
+PT__TARGET_AVX2 static int pt__env_eval8(const pt__env *e, float (*in)[8], float (*out)[8])
+{
+    const __m256 wx = _mm256_loadu_ps(in[0]), wy = _mm256_loadu_ps(in[1]), wz = _mm256_loadu_ps(in[2]);
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    __m256 c[3], uu, u, v, bad1, bad2, L[3];
+    __m256i xi, yi;
+    int k;
+    for (k = 0; k < 3; ++k)
+        c[k] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(e->rot[0][k]), wx), _mm256_mul_ps(_mm256_set1_ps(e->rot[1][k]), wy)),
+                             _mm256_mul_ps(_mm256_set1_ps(e->rot[2][k]), wz));
+    uu = _mm256_mul_ps(pt__atan2f8(c[0], _mm256_xor_ps(_mm256_set1_ps(-0.0f), c[2]), &bad1), _mm256_set1_ps(0.5f * PT__INV_PI));
+    uu = _mm256_blendv_ps(uu, _mm256_add_ps(uu, one), _mm256_cmp_ps(uu, zero, _CMP_LT_OQ));
+    u = _mm256_and_ps(uu, _mm256_cmp_ps(uu, one, _CMP_LT_OQ));
+    v = _mm256_mul_ps(pt__atan2f8(_mm256_sqrt_ps(_mm256_add_ps(_mm256_mul_ps(c[0], c[0]), _mm256_mul_ps(c[2], c[2]))), c[1], &bad2),
+                      _mm256_set1_ps(PT__INV_PI));
+    xi = _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(u, _mm256_set1_ps((float)e->w))), _mm256_set1_epi32(e->w - 1));
+    yi = _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(v, _mm256_set1_ps((float)e->h))), _mm256_set1_epi32(e->h - 1));
+    _mm256_storeu_ps(out[PT__EO_PM],
+                     _mm256_i32gather_ps(e->cell_density, _mm256_add_epi32(_mm256_mullo_epi32(yi, _mm256_set1_epi32(e->w)), xi), 4));
+    pt__env_lookup8(e, u, v, L);
+    for (k = 0; k < 3; ++k) _mm256_storeu_ps(out[PT__EO_L + k], L[k]);
+    return ~_mm256_movemask_ps(_mm256_or_ps(bad1, bad2)) & 0xff;
+}
+/* 4 doubles base[i] (the masked form: gcc 12's unmasked one reads an undefined source, which g++ warns of) */
+PT__TARGET_AVX2 static inline __m256d pt__gather4d(const double *base, __m128i i)
+{
+    return _mm256_mask_i32gather_pd(_mm256_setzero_pd(), base, i, _mm256_castsi256_pd(_mm256_set1_epi64x(-1)), 8);
+}
+/* The first i in [start, bound] of each lane with cdf[i + 1] > u, or bound, by halving steps of
+   at most wmax in all (the number of i from start on with cdf[i + 1] <= u: cdf is non-decreasing). */
+PT__TARGET_AVX2 static inline __m256i pt__cdf_count8(const float *cdf, __m256i base, __m256i start, __m256i bound, int wmax,
+                                                     __m256 u)
+{
+    const __m256i b1 = _mm256_add_epi32(bound, _mm256_set1_epi32(1));
+    __m256i i = start;
+    int step = 1;
+    while (2 * step <= wmax) step *= 2;
+    for (; step >= 1 && wmax > 0; step /= 2) {
+        const __m256i cand = _mm256_add_epi32(i, _mm256_set1_epi32(step));
+        const __m256 c = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, _mm256_min_epi32(cand, bound)), 4);
+        const __m256 adv = _mm256_andnot_ps(_mm256_cmp_ps(c, u, _CMP_GT_OQ), _mm256_castsi256_ps(_mm256_cmpgt_epi32(b1, cand)));
+        i = _mm256_add_epi32(i, _mm256_and_si256(_mm256_castps_si256(adv), _mm256_set1_epi32(step)));
+    }
+    return i;
+}
+/* pt__cdf_find for 8 lanes, the cdf of lane j at cdf + base[j] (n + 1 entries) and its guide at
+   guide + base[j]: the first i with cdf[i + 1] > u (at most n - 1), searched between the guide's
+   entries as the scalar code starts, and checked (cdf[i] <= u < cdf[i + 1] at the ends' exceptions)
+   to be the first one; where the guide's bracket missed it (float rounding of u n), the group
+   searches all n intervals. That is the scalar search's answer wherever its interval is not
+   empty. u's place in it in two halves of 4 doubles. Returns the lanes whose interval is empty
+   (the scalar code's u = 1 case), for it to redo. */
+PT__TARGET_AVX2 static inline __m256 pt__cdf_find8(const float *cdf, const int *guide, __m256i base, int n, __m256 u,
+                                                   __m256i *idx, __m256d *frac)
+{
+    const __m256i zero = _mm256_setzero_si256(), n1 = _mm256_set1_epi32(n - 1);
+    const __m256i k = _mm256_max_epi32(_mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(u, _mm256_set1_ps((float)n))), n1), zero);
+    const __m256i lo = _mm256_i32gather_epi32(guide, _mm256_add_epi32(base, k), 4);
+    const __m256i hi = _mm256_i32gather_epi32(guide, _mm256_add_epi32(base, _mm256_add_epi32(k, _mm256_set1_epi32(1))), 4);
+    int wd[8], wmax = 0, j, h;
+    __m256i i;
+    __m256 c0, c1, empty, miss;
+    _mm256_storeu_si256((__m256i *)wd, _mm256_sub_epi32(hi, lo));
+    for (j = 0; j < 8; ++j) wmax = wd[j] > wmax ? wd[j] : wmax;
+    i = pt__cdf_count8(cdf, base, lo, hi, wmax, u);
+    c0 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, i), 4);
+    c1 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, _mm256_add_epi32(i, _mm256_set1_epi32(1))), 4);
+    miss = _mm256_or_ps(_mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(i, n1)), _mm256_cmp_ps(c1, u, _CMP_NGT_UQ)),
+                        _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(i, zero)), _mm256_cmp_ps(c0, u, _CMP_GT_OQ)));
+    if (PT__UNLIKELY(_mm256_movemask_ps(miss))) {
+        i = _mm256_min_epi32(pt__cdf_count8(cdf, base, zero, _mm256_set1_epi32(n), n - 1, u), n1);
+        c0 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, i), 4);
+        c1 = _mm256_i32gather_ps(cdf, _mm256_add_epi32(base, _mm256_add_epi32(i, _mm256_set1_epi32(1))), 4);
+    }
+    empty = _mm256_cmp_ps(c1, c0, _CMP_NGT_UQ);
+    c1 = _mm256_blendv_ps(c1, _mm256_add_ps(c0, _mm256_set1_ps(1.0f)), empty);
+    for (h = 0; h < 2; ++h) {
+        const __m256d ud = _mm256_cvtps_pd(h ? _mm256_extractf128_ps(u, 1) : _mm256_castps256_ps128(u));
+        const __m256d d0 = _mm256_cvtps_pd(h ? _mm256_extractf128_ps(c0, 1) : _mm256_castps256_ps128(c0));
+        const __m256d d1 = _mm256_cvtps_pd(h ? _mm256_extractf128_ps(c1, 1) : _mm256_castps256_ps128(c1));
+        __m256d f = _mm256_div_pd(_mm256_sub_pd(ud, d0), _mm256_sub_pd(d1, d0));
+        f = _mm256_blendv_pd(f, _mm256_setzero_pd(), _mm256_cmp_pd(f, _mm256_setzero_pd(), _CMP_LT_OQ));
+        frac[h] = _mm256_blendv_pd(f, _mm256_set1_pd(0.99999999999999989), _mm256_cmp_pd(f, _mm256_set1_pd(1.0), _CMP_GE_OQ));
+    }
+    *idx = i;
+    return empty;
+}
+/* pt__env_sample with its radiance wanted (light sampling) for 8 lanes of draws u1, u2 and the
+   uniform share c: the direction to out[PT__EO_DIR ..], the map's radiance at the point drawn
+   to out[PT__EO_L ..] and the density c / (4 pi) + (1 - c) p_cell to out[PT__EO_PM] (the
+   caller tests it > 0 and finite, as pt__env_sample does). Returns the lanes taken: not those
+   with u1 < c (a uniform-sphere sample), an empty interval, or sin theta, cos theta that
+   pt__atan2f gives to libm (the poles). */
+PT__TARGET_AVX2 static int pt__env_sample8(const pt__env *e, float c, const float *u1, const float *u2, float (*out)[8])
+{
+    const __m256 cv = _mm256_set1_ps(c), one = _mm256_set1_ps(1.0f);
+    const __m256 a1 = _mm256_loadu_ps(u1);
+    const __m256 bad0 = _mm256_cmp_ps(a1, cv, _CMP_LT_OQ);
+    const __m256 v1 = _mm256_min_ps(_mm256_div_ps(_mm256_sub_ps(a1, cv), _mm256_sub_ps(one, cv)), _mm256_set1_ps(0.99999994f));
+    const __m256d tau = _mm256_set1_pd(2.0 * 3.14159265358979323846), W = _mm256_set1_pd((double)e->w);
+    __m256d fy[2], fx[2];
+    __m256i y, x;
+    __m256 bad1, bad2, bad3, w[3], st[2], ct[2], uf[2], sn8, cs8, u, v, l2, ok, L[3], inv;
+    int h, k;
+    bad1 = pt__cdf_find8(e->row_cdf, e->row_guide, _mm256_setzero_si256(), e->h, v1, &y, fy);
+    bad2 = pt__cdf_find8(e->col_cdf, e->col_guide, _mm256_mullo_epi32(y, _mm256_set1_epi32(e->w + 1)), e->w,
+                         _mm256_loadu_ps(u2), &x, fx);
+    for (h = 0; h < 2; ++h) {
+        const __m128i yh = h ? _mm256_extracti128_si256(y, 1) : _mm256_castsi256_si128(y);
+        const __m128i xh = h ? _mm256_extracti128_si256(x, 1) : _mm256_castsi256_si128(x);
+        const __m256d c0 = pt__gather4d(e->cos_edge, yh), c1 = pt__gather4d(e->cos_edge, _mm_add_epi32(yh, _mm_set1_epi32(1)));
+        const __m256d cos_t = _mm256_sub_pd(c0, _mm256_mul_pd(fy[h], _mm256_sub_pd(c0, c1)));
+        const __m256d one_d = _mm256_set1_pd(1.0);
+        const __m256d sin_t = _mm256_sqrt_pd(_mm256_max_pd(_mm256_setzero_pd(), _mm256_mul_pd(_mm256_sub_pd(one_d, cos_t),
+                                                                                               _mm256_add_pd(one_d, cos_t))));
+        const __m256d xf = _mm256_add_pd(_mm256_cvtepi32_pd(xh), fx[h]);
+        __m256d sn, cs, l[3];
+        pt__sincos4(_mm256_div_pd(_mm256_mul_pd(tau, xf), W), &sn, &cs);
+        l[0] = _mm256_mul_pd(sin_t, sn);
+        l[1] = cos_t;
+        l[2] = _mm256_mul_pd(_mm256_xor_pd(_mm256_set1_pd(-0.0), sin_t), cs);
+        for (k = 0; k < 3; ++k) {
+            const __m256d d = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd((double)e->rot[k][0]), l[0]),
+                                                          _mm256_mul_pd(_mm256_set1_pd((double)e->rot[k][1]), l[1])),
+                                            _mm256_mul_pd(_mm256_set1_pd((double)e->rot[k][2]), l[2]));
+            const __m128 f = _mm256_cvtpd_ps(d);
+            w[k] = h ? _mm256_insertf128_ps(w[k], f, 1) : _mm256_castps128_ps256(f);
+        }
+        uf[h] = _mm256_castps128_ps256(_mm256_cvtpd_ps(_mm256_div_pd(xf, W)));
+        st[h] = _mm256_castps128_ps256(_mm256_cvtpd_ps(sin_t));
+        ct[h] = _mm256_castps128_ps256(_mm256_cvtpd_ps(cos_t));
+    }
+    u = _mm256_insertf128_ps(uf[0], _mm256_castps256_ps128(uf[1]), 1);
+    sn8 = _mm256_insertf128_ps(st[0], _mm256_castps256_ps128(st[1]), 1);
+    cs8 = _mm256_insertf128_ps(ct[0], _mm256_castps256_ps128(ct[1]), 1);
+    /* pt_normalize */
+    l2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w[0], w[0]), _mm256_mul_ps(w[1], w[1])), _mm256_mul_ps(w[2], w[2]));
+    ok = _mm256_cmp_ps(l2, _mm256_setzero_ps(), _CMP_GT_OQ);
+    inv = _mm256_div_ps(one, _mm256_sqrt_ps(_mm256_blendv_ps(one, l2, ok)));
+    for (k = 0; k < 3; ++k) _mm256_storeu_ps(out[PT__EO_DIR + k], _mm256_and_ps(ok, _mm256_mul_ps(w[k], inv)));
+    v = _mm256_mul_ps(pt__atan2f8(sn8, cs8, &bad3), _mm256_set1_ps(PT__INV_PI));
+    pt__env_lookup8(e, u, v, L);
+    for (k = 0; k < 3; ++k) _mm256_storeu_ps(out[PT__EO_L + k], L[k]);
+    _mm256_storeu_ps(out[PT__EO_PM],
+                     _mm256_add_ps(_mm256_mul_ps(cv, _mm256_set1_ps(PT__INV_4PI)),
+                                   _mm256_mul_ps(_mm256_sub_ps(one, cv),
+                                                 _mm256_i32gather_ps(e->cell_density,
+                                                                     _mm256_add_epi32(_mm256_mullo_epi32(y, _mm256_set1_epi32(e->w)), x), 4))));
+    return ~_mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(bad0, bad1), _mm256_or_ps(bad2, bad3))) & 0xff;
+}
+#endif
 
 /* --- fuzzy metal lobe: the direction of r + f s, with r the unit mirror direction and s
    uniform in the unit ball (Shirley, "Ray Tracing in One Weekend" v3, sec. 10.6). Its
@@ -10776,6 +11006,26 @@ static PT__HOT pt_vec3 pt__vertex_origin(const pt__vertex *v, pt_vec3 w)
     return PT__UNLIKELY(v->m->transmits) && pt_dot(w, v->ng) < 0.0f ? v->ob : v->o;
 }
 
+/* The environment's light sample ls whose direction and density (pt__env_sample's, > 0 and finite)
+   are set, with the map's radiance Lmap there: the rest of it, and its pick's probability. */
+static PT__HOT int pt__env_light_finish(const pt__settings *cfg, pt_color Lmap, pt__light_sample *ls, uint32_t *light_index)
+{
+    ls->radiance = pt_add(cfg->background, Lmap);
+    ls->pdf *= cfg->env_pick;
+    ls->dist = PT__INF;
+    ls->point = ls->normal = pt_v3(0, 0, 0);
+    ls->rounded = 0;
+    *light_index = PT__ENV_LIGHT;
+    return ls->pdf > 0.0f;
+}
+/* A light sample of the environment, picked (pt__lights_sample_all). */
+static PT__HOT int pt__env_light_sample(const pt__settings *cfg, float u1, float u2, pt__light_sample *ls,
+                                        uint32_t *light_index)
+{
+    pt_color Lmap;
+    if (!pt__env_sample(cfg->env, cfg->env_uniform, u1, u2, &ls->dir, &ls->pdf, &Lmap)) return 0;
+    return pt__env_light_finish(cfg, Lmap, ls, light_index);
+}
 /* Light sampling with the environment: it is picked with probability cfg->env_pick, the shaped
    lights (pt__lights_sample) otherwise; ls->pdf is the pick's probability times the light's
    density, and *light_index is PT__ENV_LIGHT for the environment. */
@@ -10783,17 +11033,7 @@ static PT__HOT int pt__lights_sample_all(const pt_scene *s, const pt__settings *
                                          float u1, float u2, pt__light_sample *ls, uint32_t *light_index)
 {
     if (PT__UNLIKELY(cfg->env_pick > 0.0f)) {
-        if (u0 < cfg->env_pick) {
-            pt_color Lmap;
-            if (!pt__env_sample(cfg->env, cfg->env_uniform, u1, u2, &ls->dir, &ls->pdf, &Lmap)) return 0;
-            ls->radiance = pt_add(cfg->background, Lmap);
-            ls->pdf *= cfg->env_pick;
-            ls->dist = PT__INF;
-            ls->point = ls->normal = pt_v3(0, 0, 0);
-            ls->rounded = 0;
-            *light_index = PT__ENV_LIGHT;
-            return ls->pdf > 0.0f;
-        }
+        if (u0 < cfg->env_pick) return pt__env_light_sample(cfg, u1, u2, ls, light_index);
         u0 = pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f);
         if (!pt__lights_sample(s, o, nr, u0, u1, u2, ls, light_index, pt__lights_mode(cfg))) return 0;
         ls->pdf *= cfg->lights_share;
@@ -11395,14 +11635,24 @@ static void pt__vertex_learned(const pt__settings *cfg, pt__vertex *v, pt_path_s
 
 /* What a ray along w that leaves the scene with throughput beta gathers from the environment
    light, weighted as emission found by a ray is (the strategies at the top of this section). */
-static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta, int prev_delta, float prev_pdf)
+/* pt__env_escape given the map's radiance Lmap along w and the density pm of its cell (0 and 0
+   without a map), pt__env_light_eval's operations in its order. */
+static pt_color pt__env_escape_map(const pt__settings *cfg, pt_color Lmap, float pm, pt_color beta, int prev_delta,
+                                   float prev_pdf)
 {
-    float wt = 1.0f, p;
-    pt_color L;
-    if (!prev_delta && cfg->strategy == PT_STRATEGY_LIGHT) return pt_v3(0, 0, 0);
-    L = pt_add(cfg->background, pt__env_light_eval(cfg->env, cfg->env_uniform, w, &p));
+    const float p = cfg->env_uniform * PT__INV_4PI + (1.0f - cfg->env_uniform) * pm;
+    const pt_color L = pt_add(cfg->background, Lmap);
+    float wt = 1.0f;
     if (!prev_delta && cfg->strategy == PT_STRATEGY_MIS) wt = pt__power_heuristic(prev_pdf, cfg->env_pick * p);
     return pt_scale(pt_mul(beta, L), wt);
+}
+static pt_color pt__env_escape(const pt__settings *cfg, pt_vec3 w, pt_color beta, int prev_delta, float prev_pdf)
+{
+    float pm = 0.0f;
+    pt_color Lmap;
+    if (!prev_delta && cfg->strategy == PT_STRATEGY_LIGHT) return pt_v3(0, 0, 0);
+    Lmap = cfg->env ? pt__env_eval(cfg->env, w, &pm) : pt_v3(0, 0, 0);
+    return pt__env_escape_map(cfg, Lmap, pm, beta, prev_delta, prev_pdf);
 }
 
 /* Vertex v's spawn point on the side of ng and, for a transmitting material, the one below it
@@ -11712,7 +11962,7 @@ typedef struct pt__lane {
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
     int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
-    int defer;         /* its light sample left to stage 2b (1), 2c (2) or 2s (3) (pt__lane_light) with these: */
+    int defer;         /* its light sample left to stage 2b (1), 2c (2), 2s (3) or 2e (4) (pt__lane_light) with these: */
     float dpick, du1, du2; /* the pick's probability, the point's numbers */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
@@ -11723,6 +11973,9 @@ typedef struct pt__lane {
     pt_color dLi;
     float dpick_delta;
     int dshadow;
+    int esc;          /* stage 1e evaluated the environment map where the ray left the scene: */
+    pt_color esc_L;   /* its radiance */
+    float esc_pm;     /* and its cell's density (pt__env_eval) */
     /* split copies as lanes (below): the camera sample's lane is its family's root */
     int self, root, parent, copy; /* copy: which of the parent's copies (1 .. k-1) */
     int prev, next, head;         /* the family's scalar order (head: the root's, its first) */
@@ -11813,6 +12066,7 @@ typedef struct pt__batch_ctx {
     const pt__settings *cfg;
     int tri, any_lights, nee, pick, copies;
     int area;        /* quads' light samples left to stage 2c, and 2b (pt__lane_light) */
+    int env8;        /* the environment map evaluated (stage 1e) and sampled (stage 2e) 8 lanes at a time */
     int sph;         /* solid-angle sampling of quads allowed (PT__LIGHTS_SPHERICAL) */
     unsigned lmode;  /* pt__lights_mode */
     pt__lane *lanes;
@@ -11934,8 +12188,9 @@ static PT__HOT int pt__lane_picked(const pt__batch_ctx *b, pt__light_sample *ls,
    pt__batch_area_lights), which makes the batch's area samples of quads 8 at a time and leaves
    those to be sampled by solid angle (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which
    sets up their spherical rectangles 4 at a time; a sphere's to stage 2s (l->defer = 3;
-   pt__batch_sphere_lights), 8 cones at a time. b->area is 0 without AVX2: then it is all done
-   here, as it is for a lane whose pick chose the environment. With an environment a shaped light
+   pt__batch_sphere_lights), 8 cones at a time; the environment's to stage 2e (l->defer = 4;
+   pt__batch_env_lights), 8 at a time. b->area and b->env8 are 0 without AVX2: then it is all done
+   here. With an environment a shaped light
    is picked with pt__lights_sample_all's u0 rescaled, and its density carries the lights' share
    (pt__lane_picked). Either way each path does what pt__lights_sample_all and pt__nee_prepare do. */
 static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0, float u1, float u2)
@@ -11947,6 +12202,12 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0
     float pick = 0.0f;
     l->ls.sph_prim = NULL;
     l->ls.sph_S = 0.0;
+    if (b->env8 && u0 < cfg->env_pick) {
+        l->defer = 4;
+        l->du1 = u1;
+        l->du2 = u2;
+        return;
+    }
     if (!b->area || (PT__UNLIKELY(cfg->env_pick > 0.0f) && u0 < cfg->env_pick)) {
         l->shadow = pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
                     pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
@@ -12390,6 +12651,86 @@ static void pt__batch_sphere_lights(const pt__batch_ctx *b, pt__lane *lanes, con
 #endif
 }
 
+/* Stage 1e: the environment map along the rays of the live paths (live: n lanes) that left the
+   scene, 8 at a time (pt__env_eval8; a last group's unused lanes copy its first), for stage 2 to
+   weigh (pt__env_escape_map). A lane the vector code left out, or one whose path gathers nothing
+   there (light sampling only, after a non-delta vertex), is left to stage 2 (l->esc = 0). */
+static void pt__batch_escapes(const pt__batch_ctx *b, pt__lane *lanes, const int *live, int n)
+{
+#ifdef PT__WIDE
+    const pt__settings *cfg = b->cfg;
+    const int light_only = cfg->strategy == PT_STRATEGY_LIGHT;
+    float in[3][8], out[PT__EO_OUT][8];
+    int idx[8], i, j, m = 0, bits;
+    for (i = 0; i <= n; ++i) {
+        if (i < n) {
+            pt__lane *l = &lanes[live[i]];
+            if (l->found) continue;
+            l->esc = 0;
+            if (light_only && !l->prev_delta) continue;
+            idx[m++] = live[i];
+            if (m < 8) continue;
+        }
+        if (!m) break;
+        for (j = 0; j < 8; ++j) {
+            const pt__lane *l = &lanes[idx[j < m ? j : 0]];
+            in[0][j] = l->ray.dir.x;
+            in[1][j] = l->ray.dir.y;
+            in[2][j] = l->ray.dir.z;
+        }
+        bits = pt__env_eval8(cfg->env, in, out);
+        for (j = 0; j < m; ++j) {
+            pt__lane *l = &lanes[idx[j]];
+            l->esc = (bits >> j) & 1;
+            l->esc_L = pt_v3(out[PT__EO_L][j], out[PT__EO_L + 1][j], out[PT__EO_L + 2][j]);
+            l->esc_pm = out[PT__EO_PM][j];
+        }
+        m = 0;
+    }
+#else
+    (void)b; (void)lanes; (void)live; (void)n; /* (b->env8 is 0) */
+#endif
+}
+
+/* Stage 2e: the environment's light samples stage 2 left (env: n lanes), 8 at a time
+   (pt__env_sample8; a last group's unused lanes copy its first); a lane the vector code left out
+   does what stage 2 would have done. Then the pick and the shadow ray (pt__nee_prepare). */
+static void pt__batch_env_lights(const pt__batch_ctx *b, pt__lane *lanes, const int *env, int n)
+{
+#ifdef PT__WIDE
+    const pt__settings *cfg = b->cfg;
+    float u1[8], u2[8], out[PT__EO_OUT][8];
+    int i, j, bits;
+    for (i = 0; i < n; i += 8) {
+        for (j = 0; j < 8; ++j) {
+            const pt__lane *l = &lanes[env[i + j < n ? i + j : i]];
+            u1[j] = l->du1;
+            u2[j] = l->du2;
+        }
+        bits = pt__env_sample8(cfg->env, cfg->env_uniform, u1, u2, out);
+        for (j = 0; j < 8 && i + j < n; ++j) {
+            pt__lane *l = &lanes[env[i + j]];
+            pt__vertex *v = &l->v;
+            l->defer = 0;
+            if ((bits >> j) & 1) {
+                l->ls.dir = pt_v3(out[PT__EO_DIR][j], out[PT__EO_DIR + 1][j], out[PT__EO_DIR + 2][j]);
+                l->ls.pdf = out[PT__EO_PM][j];
+                l->shadow = l->ls.pdf > 0.0f && pt__isfinite(l->ls.pdf) &&
+                            pt__env_light_finish(cfg, pt_v3(out[PT__EO_L][j], out[PT__EO_L + 1][j], out[PT__EO_L + 2][j]),
+                                                 &l->ls, &l->li);
+            } else {
+                l->shadow = pt__env_light_sample(cfg, l->du1, l->du2, &l->ls, &l->li);
+            }
+            l->shadow = l->shadow && pt__nee_prepare(b->s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+            v->sph_prim = l->ls.sph_prim;
+            v->sph_S = l->ls.sph_S;
+        }
+    }
+#else
+    (void)b; (void)lanes; (void)env; (void)n; /* (b->env8 is 0) */
+#endif
+}
+
 /* Stage 2 for one path whose closest hit is known: returns 0 if the path ends here. */
 static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int copies)
 {
@@ -12402,7 +12743,8 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
     l->defer = 0;
     if (!l->found) {
         if (PT__UNLIKELY(cfg->env_on)) {
-            pt_color e = pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf);
+            pt_color e = b->env8 && l->esc ? pt__env_escape_map(cfg, l->esc_L, l->esc_pm, l->beta, l->prev_delta, l->prev_pdf)
+                                           : pt__env_escape(cfg, l->ray.dir, l->beta, l->prev_delta, l->prev_pdf);
             pt__lane_add(l, e, copies);
             if (PT__UNLIKELY(l->recs != NULL) && l->recs->last >= 0 && b->nee) l->recs->e[l->recs->last] = e;
         } else {
@@ -12883,7 +13225,8 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
                                            pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
 {
     int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], area[PT__BATCH_LANES], sph[PT__BATCH_LANES];
-    int nlive = n, nshade, ndefer, narea, nsph, i;
+    int env[PT__BATCH_LANES];
+    int nlive = n, nshade, ndefer, narea, nsph, nenv, i;
     pt__batch_ctx bc, *b = &bc;
     pt__batch_pool pool;
     b->pool = &pool;
@@ -12899,6 +13242,10 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     b->area = s->simd >= PT_SIMD_AVX2;
 #ifndef PT__WIDE
     b->area = 0;
+#endif
+    b->env8 = 0;
+#ifdef PT__WIDE
+    b->env8 = b->area && cfg->env_on && pt__env_wide(cfg->env) && cfg->env_uniform < 1.0f;
 #endif
     b->lanes = lanes;
     b->pool->kids = kids;
@@ -12921,12 +13268,15 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     while (nlive > 0) {
         pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
         if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
-        for (i = 0, nshade = 0, ndefer = 0, narea = 0, nsph = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
+        if (b->env8) pt__batch_escapes(b, lanes, live, nlive); /* (1e) the environment where rays left */
+        for (i = 0, nshade = 0, ndefer = 0, narea = 0, nsph = 0, nenv = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(b, &lanes[live[i]], copies)) {
-                if (lanes[live[i]].defer == 3) sph[nsph++] = live[i];
+                if (lanes[live[i]].defer == 4) env[nenv++] = live[i];
+                else if (lanes[live[i]].defer == 3) sph[nsph++] = live[i];
                 else if (lanes[live[i]].defer) area[narea++] = live[i];
                 shade[nshade++] = live[i];
             } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
+        if (nenv) pt__batch_env_lights(b, lanes, env, nenv); /* (2e) the environment's samples */
         if (nsph) pt__batch_sphere_lights(b, lanes, sph, nsph); /* (2s) spheres' samples */
         if (narea) ndefer = pt__batch_area_lights(b, lanes, area, narea, defer, 0); /* (2c) quads' samples */
         if (ndefer) pt__batch_lights(b, lanes, defer, ndefer); /* (2b) quads' solid-angle samples */

@@ -274,6 +274,178 @@ static void sphere_sample8(test_ctx *t)
 #endif
 }
 #ifdef PT__WIDE
+static int ti_bits8(int bits)
+{
+    int j, n = 0;
+    for (j = 0; j < 8; ++j) n += (bits >> j) & 1;
+    return n;
+}
+/* One group of 8 environment lookups (stage 1e) against pt__env_eval, lane by lane, bit for bit. */
+static int ti_env_eval_group(test_ctx *t, const pt__env *e, const pt_vec3 *w, long *bad)
+{
+    float in[3][8], out[PT__EO_OUT][8];
+    int j, bits;
+    for (j = 0; j < 8; ++j) {
+        in[0][j] = w[j].x;
+        in[1][j] = w[j].y;
+        in[2][j] = w[j].z;
+    }
+    bits = pt__env_eval8(e, in, out);
+    for (j = 0; j < 8; ++j) {
+        float pm;
+        pt_color L;
+        if (!((bits >> j) & 1)) continue;
+        L = pt__env_eval(e, w[j], &pm);
+        if ((memcmp(&L.x, &out[PT__EO_L][j], 4) || memcmp(&L.y, &out[PT__EO_L + 1][j], 4) ||
+             memcmp(&L.z, &out[PT__EO_L + 2][j], 4) || memcmp(&pm, &out[PT__EO_PM][j], 4)) &&
+            !CHECK(t, (*bad)++ > 3, "%dx%d map, direction (%.9g, %.9g, %.9g): 8 lanes give %.9g %.9g %.9g density %.9g, "
+                   "pt__env_eval %.9g %.9g %.9g density %.9g", e->w, e->h, (double)w[j].x, (double)w[j].y, (double)w[j].z,
+                   (double)out[PT__EO_L][j], (double)out[PT__EO_L + 1][j], (double)out[PT__EO_L + 2][j],
+                   (double)out[PT__EO_PM][j], (double)L.x, (double)L.y, (double)L.z, (double)pm)) {}
+    }
+    return ti_bits8(bits);
+}
+/* One group of 8 environment samples (stage 2e) against pt__env_sample with its radiance wanted. */
+static int ti_env_sample_group(test_ctx *t, const pt__env *e, float c, const float *u1, const float *u2, long *bad)
+{
+    float out[PT__EO_OUT][8];
+    int j, bits = pt__env_sample8(e, c, u1, u2, out);
+    for (j = 0; j < 8; ++j) {
+        pt_vec3 w;
+        float pdf;
+        pt_color L;
+        int ok, vok, same;
+        if (!((bits >> j) & 1)) continue;
+        ok = pt__env_sample(e, c, u1[j], u2[j], &w, &pdf, &L);
+        vok = out[PT__EO_PM][j] > 0.0f && pt__isfinite(out[PT__EO_PM][j]);
+        same = ok == vok && !memcmp(&w.x, &out[PT__EO_DIR][j], 4) && !memcmp(&w.y, &out[PT__EO_DIR + 1][j], 4) &&
+               !memcmp(&w.z, &out[PT__EO_DIR + 2][j], 4) && !memcmp(&pdf, &out[PT__EO_PM][j], 4);
+        if (ok) same &= !memcmp(&L.x, &out[PT__EO_L][j], 4) && !memcmp(&L.y, &out[PT__EO_L + 1][j], 4) &&
+                        !memcmp(&L.z, &out[PT__EO_L + 2][j], 4);
+        if (!same && !CHECK(t, (*bad)++ > 3, "%dx%d map, c %g, u %.9g %.9g: 8 lanes give (%.9g, %.9g, %.9g) pdf %.9g L %.9g, "
+                            "pt__env_sample %d (%.9g, %.9g, %.9g) pdf %.9g L %.9g", e->w, e->h, (double)c, (double)u1[j],
+                            (double)u2[j], (double)out[PT__EO_DIR][j], (double)out[PT__EO_DIR + 1][j],
+                            (double)out[PT__EO_DIR + 2][j], (double)out[PT__EO_PM][j], (double)out[PT__EO_L][j], ok,
+                            (double)w.x, (double)w.y, (double)w.z, (double)pdf, (double)L.x)) {}
+    }
+    return ti_bits8(bits);
+}
+/* A number near a CDF's entry (the edges of the cells' intervals) or anywhere in [0, 1). */
+static float ti_env_draw(pt_rng *r, const float *cdf, int n)
+{
+    const float q = pt_rng_float(r), x = cdf[pt_rng_u32(r) % (uint32_t)(n + 1)];
+    int k = (int)(pt_rng_u32(r) % 5u) - 2;
+    float y = x;
+    if (q < 0.5f) return pt_rng_float(r);
+    if (q < 0.55f) return q < 0.525f ? 0.0f : 0.99999994f;
+    for (; k > 0; --k) y = nextafterf(y, 2.0f);
+    for (; k < 0; ++k) y = nextafterf(y, -1.0f);
+    return y < 0.0f ? 0.0f : (y < 1.0f ? y : 0.99999994f);
+}
+#endif
+/* Stages 1e and 2e (pt__env_eval8, pt__env_sample8) give pt__env_eval's and pt__env_sample's bits
+   for every lane they take, and take all but 0.1 % of random ones. Maps of 2 x 2, 37 x 19 and
+   256 x 128 pixels (a sky with a sun one pixel wide, rows and columns of zeros: empty CDF
+   intervals) and a uniform one of 37 x 24 (its CDF entries on the guide tables' steps k / n, where
+   the rounding of u n sends the guide's bracket past the answer), under a rotation; 2^16 groups
+   of 8 random directions and directions at and near the poles, on and beside the u seam and along
+   the axes, and of draws at random and at the CDFs' entries and their neighbours (the cells'
+   edges), 0 and 1 - 2^-24, with uniform shares 0 and 0.3 (a quarter of the groups random
+   directions and draws only, for the share taken: the others hold the poles, where pt__atan2f
+   goes to libm and so the lanes to the scalar code). Deterministic (fixed seed). */
+static void env_lanes8(test_ctx *t)
+{
+#ifdef PT__WIDE
+    static const int dims[4][2] = { { 2, 2 }, { 37, 19 }, { 256, 128 }, { 37, 24 } };
+    pt_rng r;
+    long etaken = 0, ebad = 0, eall = 0, staken = 0, sbad = 0, sall = 0, eplain = 0, splain = 0, nplain = 0;
+    int m, g, j;
+    if (pt_simd_cpu_level() < PT_SIMD_AVX2) {
+        test_skip(t, "no AVX2 on this CPU");
+        return;
+    }
+    pt_rng_seed(&r, 31, 7);
+    for (m = 0; m < 4; ++m) {
+        const int W = dims[m][0], H = dims[m][1];
+        pt_scene *s = pt_scene_create();
+        pt_image img;
+        pt_environment_desc d;
+        pt_transform xf = pt_transform_rotate(pt_v3(0.3f, 1.0f, -0.2f), 71.0f);
+        int x, y;
+        if (!CHECK(t, s != NULL, "scene")) return;
+        img.width = W;
+        img.height = H;
+        img.rgb = (float *)malloc(sizeof(float) * 3 * (size_t)W * (size_t)H);
+        if (!CHECK(t, img.rgb != NULL, "map")) {
+            pt_scene_destroy(s);
+            return;
+        }
+        for (y = 0; y < H; ++y)
+            for (x = 0; x < W; ++x) {
+                float *p = img.rgb + 3 * (y * W + x), v = 0.05f + pt_rng_float(&r);
+                if (W > 2 && (y == 3 || (x % 11 == 5 && y > H / 2))) v = 0.0f; /* (empty rows and columns) */
+                if (x == W / 3 && y == H / 4) v = 5e4f;                          /* (a sun) */
+                p[0] = v;
+                p[1] = 0.8f * v;
+                p[2] = v * pt_rng_float(&r);
+                if (m == 3) p[0] = p[1] = p[2] = 1.0f; /* (uniform: the columns' CDF entries on the guide's steps k / n) */
+            }
+        if (m == 1) xf = pt_transform_identity();
+        d.map = &img;
+        d.scale = 0.5f;
+        if (!CHECK(t, pt_scene_set_transform(s, &xf) == PT_OK && pt_scene_set_environment(s, &d) == PT_OK,
+                   "%dx%d map: %s", W, H, pt_scene_error_message(s))) {
+            free(img.rgb);
+            pt_scene_destroy(s);
+            return;
+        }
+        for (g = 0; g < (1 << 14); ++g) {
+            pt_vec3 w[8];
+            const int plain = g % 4 == 1;
+            float u1[8], u2[8], c = g & 2 ? 0.3f : 0.0f;
+            int k;
+            for (j = 0; j < 8; ++j) {
+                const float a = pt_rng_float(&r), b = pt_rng_float(&r), tiny = powf(10.0f, -40.0f * pt_rng_float(&r));
+                pt_vec3 v = pt_sample_uniform_sphere(a, b);
+                switch (g % 8 == 0 ? j : 8) {
+                case 0: v = pt_v3(0.0f, a < 0.5f ? 1.0f : -1.0f, 0.0f); break;       /* the poles */
+                case 1: v = pt_v3(tiny, a < 0.5f ? 1.0f : -1.0f, -tiny); break;     /* beside them */
+                case 2: v = pt_v3(0.0f, 2.0f * a - 1.0f, -1.0f); break;             /* the u seam */
+                case 3: v = pt_v3(b < 0.5f ? tiny : -tiny, 2.0f * a - 1.0f, -1.0f); break;
+                case 4: v = pt_v3(b < 0.5f ? 1.0f : -1.0f, 0.0f, 0.0f); break;      /* the axes */
+                case 5: v = pt_v3(0.0f, 0.0f, b < 0.5f ? 1.0f : -1.0f); break;
+                default: break;
+                }
+                w[j] = pt_normalize(v);
+                if (m != 1) w[j] = pt_transform_vector(&xf, w[j]); /* (the map's own directions under the turn too) */
+                u1[j] = ti_env_draw(&r, s->env->row_cdf, H);
+                u2[j] = ti_env_draw(&r, s->env->col_cdf + (pt_rng_u32(&r) % (uint32_t)H) * (uint32_t)(W + 1), W);
+                if (plain) {
+                    u1[j] = c + (1.0f - c) * pt_rng_float(&r);
+                    u2[j] = pt_rng_float(&r);
+                }
+                sall += u1[j] >= c;
+            }
+            eall += 8;
+            etaken += k = ti_env_eval_group(t, s->env, w, &ebad);
+            eplain += plain ? k : 0;
+            staken += k = ti_env_sample_group(t, s->env, c, u1, u2, &sbad);
+            splain += plain ? k : 0;
+            nplain += plain ? 8 : 0;
+        }
+        free(img.rgb);
+        pt_scene_destroy(s);
+    }
+    CHECK(t, ebad == 0, "%ld of %ld environment lookups taken differ from pt__env_eval", ebad, etaken);
+    CHECK(t, sbad == 0, "%ld of %ld environment samples taken differ from pt__env_sample", sbad, staken);
+    CHECK(t, eplain >= nplain - nplain / 1000 && splain >= nplain - nplain / 1000,
+          "of %ld random lanes the vector code took %ld lookups and %ld samples (want all but 0.1 %%)", nplain, eplain, splain);
+    test_note(t, "lookups: %ld of %ld lanes taken; samples: %ld of %ld map samples taken", etaken, eall, staken, sall);
+#else
+    test_skip(t, "built without the wide code (PT__WIDE)");
+#endif
+}
+#ifdef PT__WIDE
 /* A random light-tree node for lighttree_level_widths: children with boxes flat, thin or wide,
    normal cones from a single direction to every direction, and some empty. */
 static void ti_random_lnode(pt_rng *r, pt__lnodew *n)
@@ -553,6 +725,7 @@ static const test_case test_internals_cases[] = {
     TEST_CASE(rayctx_axes),
     TEST_CASE(sincos_turn),
     TEST_CASE(sphere_sample8),
+    TEST_CASE(env_lanes8),
     TEST_CASE(lighttree_level_widths),
 #if defined(PT__SSE)
     TEST_CASE(packet_hits),

@@ -1043,7 +1043,7 @@ done:
 
 /* The batched integrator (pt_render_desc.integrator) renders the same film as the scalar one, bit
    for bit, over scene files that between them hold every feature the integrator branches on (glass
-   and a diffuse ball, an environment map, delta lights, textures, a rough dielectric, triangles,
+   and a diffuse ball, environment maps (one with a sun), delta lights, textures, a rough dielectric, triangles,
    many lights, a guide's scene), under every strategy, both samplers, indirect paths, splitting
    (mixture with light weight 0.75), adaptive sampling and guiding (its training iterations too,
    with Sobol and with independent numbers and 4 indirect paths); with Sobol, split copies run as
@@ -1081,7 +1081,8 @@ static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
                                           "scenes/lights.scene", "scenes/textured.scene", "scenes/rough-glass.scene",
-                                          "scenes/mesh.scene", "bench/scenes/many-lights.scene", "bench/scenes/door.scene",
+                                          "scenes/mesh.scene", "bench/scenes/sun-sky.scene", "bench/scenes/many-lights.scene",
+                                          "bench/scenes/door.scene",
                                           "bench/scenes/rooms.scene", "quad lights", "quad lights under a sky",
                                           "sphere lights" };
     static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
@@ -1169,13 +1170,14 @@ static void batched_bit_identical(test_ctx *t)
                     }
                     pt_film_free(&f);
                 }
-                if ((c == 4 || c == 0) && (i <= 1 || i == 3 || i >= rooms)) { /* Sobol's draws made ahead (stage
+                if ((c == 4 || c == 0) && (i <= 3 || i == 7 || i >= rooms)) { /* Sobol's draws made ahead (stage
                     1b), the Lambertian directions made ahead (stage 3b, Sobol and independent numbers), quad
                     lights' samples (stages 2b and 2c, on rooms and the quad lights, with and without an
                     environment the pick can choose), sphere lights' (stage 2s) and the shadow rays' packets
                     (stage 3; the Cornell boxes' and the rooms' occluders, and the delta lights' rays of
-                    scenes/lights.scene, scenes[3]): AVX2's 8 (or 4) at a time and the scalar code below that
-                    level give the same film */
+                    scenes/lights.scene, scenes[3]), the environment's lookups and samples (stages 1e and 2e,
+                    scenes/env.scene and sun-sky, scenes[2] and [7]): AVX2's 8 (or 4) at a time and the scalar
+                    code below that level give the same film */
                     int level;
                     for (level = PT_SIMD_SCALAR; level < (int)pt_simd_cpu_level(); ++level) {
                         pt_film f;
