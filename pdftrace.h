@@ -6897,6 +6897,8 @@ static float pt__spot_falloff(const pt__dlight *l, pt_vec3 w)
     if (cs > 0.0f && sn >= 0.0f && sn <= FLT_MAX) {
         if ((double)sn < (double)cs * l->tan_in) return 1.0f;
         if ((double)sn > (double)cs * l->tan_out) return 0.0f;
+    } else if (cs <= 0.0f && l->tan_out < HUGE_VAL) {
+        return 0.0f; /* 90 degrees or more (atan2f's few ulps under pi/2 included), the cone narrower */
     }
     a = atan2f(sn, cs);
     if (a <= l->beam) return 1.0f;
