@@ -1725,10 +1725,13 @@ typedef struct pt__dlight {
     pt_vec3 pos;         /* relative to the scene's origin (commit) */
     pt_vec3 axis;        /* unit: the spot's axis, the directional light's direction of travel */
     float cutoff, beam, inv_transition; /* SPOT (radians) */
-    double tan_in, tan_out; /* SPOT: the falloff's shortcuts (pt__spot_bounds) */
+    float tan_in, tan_out; /* SPOT: the falloff's shortcuts (pt__spot_bounds) */
+    float mean;          /* the intensity's mean (commit) */
     double power;        /* picks it (commit) */
     float select_pdf, cdf;
 } pt__dlight;
+/* Up to this many delta lights are picked by what each gives the vertex (pt__delta_prepare). */
+#define PT__DELTA_PICK_MAX 16u
 
 /* The environment map (pt_scene_set_environment) and its sampling tables: a pixel's cell is
    the rectangle [x, x+1) / W by [y, y+1) / H of (u, v); its probability is row_pmf x the
@@ -6632,13 +6635,14 @@ PTDEF int pt_material_is_delta(const pt_scene *s, int material)
 /* The spot's shortcuts for pt__spot_falloff: an angle whose tangent (sin over a positive cos) is
    below tan_in is inside the beam, one whose tangent is above tan_out is outside the cone. Each
    bound is 1e-4 of the angle inside its edge, far beyond the few float ulps of atan2f's error
-   and the double products' rounding, so atan2f would compare alike; tan_in 0 and tan_out
-   infinite turn them off (a beam too narrow for a relative margin, a cone near 90 degrees). */
+   and the float products' and bounds' rounding, so atan2f would compare alike; tan_in 0 and
+   tan_out infinite turn them off (a beam too narrow for a relative margin, a cone near 90
+   degrees). */
 static void pt__spot_bounds(pt__dlight *l)
 {
     double in = (double)l->beam * (1.0 - 1e-4), out = (double)l->cutoff * (1.0 + 1e-4);
-    l->tan_in = l->beam >= 1e-6f ? tan(in) : 0.0;
-    l->tan_out = out < 1.5 ? tan(out) : HUGE_VAL;
+    l->tan_in = l->beam >= 1e-6f ? (float)tan(in) : 0.0f;
+    l->tan_out = out < 1.5 ? (float)tan(out) : (float)HUGE_VAL;
 }
 PTDEF int pt_scene_add_light(pt_scene *s, const pt_light_desc *d)
 {
@@ -6895,9 +6899,9 @@ static float pt__spot_falloff(const pt__dlight *l, pt_vec3 w)
     /* the angle atan2f(sn, cs) is well inside the beam or well outside the cone: the comparisons
        below give what they would give on atan2f's result, without it */
     if (cs > 0.0f && sn >= 0.0f && sn <= FLT_MAX) {
-        if ((double)sn < (double)cs * l->tan_in) return 1.0f;
-        if ((double)sn > (double)cs * l->tan_out) return 0.0f;
-    } else if (cs <= 0.0f && l->tan_out < HUGE_VAL) {
+        if (sn < cs * l->tan_in) return 1.0f;
+        if (sn > cs * l->tan_out) return 0.0f;
+    } else if (cs <= 0.0f && l->tan_out <= FLT_MAX) {
         return 0.0f; /* 90 degrees or more (atan2f's few ulps under pi/2 included), the cone narrower */
     }
     a = atan2f(sn, cs);
@@ -9937,6 +9941,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
         for (i = 0; i < s->dlight_count; ++i) {
             pt__dlight *l = &s->dlights[i];
             l->pos = s->fixed_origin ? l->desc.position : pt__to_local(s, l->desc.position);
+            l->mean = (l->desc.intensity.x + l->desc.intensity.y + l->desc.intensity.z) * (1.0f / 3.0f);
             l->power = pt__dlight_power(l, r);
             if (!(l->power > 0.0) || !(l->power < 1e300))
                 return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "commit: light %u has power %g", (unsigned)i, l->power);
@@ -10634,12 +10639,14 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    scene's cross-section takes most picks in a room it lights only through a window:
    docs/design.md, "Lights without a shape"). With more, by power. A point light at the shading
    point itself (d = 0, an integrand with no finite value) adds nothing. */
-#define PT__DELTA_PICK_MAX 16u
-static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l)
+/* The weight of light l at v, and in *fall the spot's falloff toward v (1 for other lights;
+   unset where the weight is 0 before it). */
+static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l, float *fall)
 {
-    float c, i = (l->desc.intensity.x + l->desc.intensity.y + l->desc.intensity.z) * (1.0f / 3.0f);
+    float c, i = l->mean;
     pt_vec3 d;
     float d2, inv, sg = 1.0f;
+    *fall = 1.0f;
     if (PT__UNLIKELY(v->m->transmits)) sg = 0.0f; /* |cos|: a transmitting vertex sees lights below ng too */
     if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
         c = -pt_dot(v->ng, l->axis);
@@ -10652,7 +10659,7 @@ static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l)
     c = pt_dot(v->ng, d) * inv;
     if (sg == 0.0f) c = fabsf(c);
     if (!(c > 0.0f)) return 0.0f;
-    if (l->desc.type == PT_LIGHT_SPOT) i *= pt__spot_falloff(l, pt_scale(d, -inv));
+    if (l->desc.type == PT_LIGHT_SPOT) i *= (*fall = pt__spot_falloff(l, pt_scale(d, -inv)));
     return i * c / d2;
 }
 /* The delta lights at vertex v (a scene with any), in two halves around the shadow ray, as
@@ -10667,13 +10674,13 @@ static int pt__delta_prepare(const pt_scene *s, const pt__settings *cfg, const p
     pt_vec3 wi;
     pt_color f;
     pt_ray sr;
-    float tmax, pick = 1.0f;
+    float tmax, pick = 1.0f, fall_k = -1.0f; /* the picked light's falloff, if its weight has it */
     if (s->dlight_count > 1) {
         float u = pt__draw1(smp, PT__SET_DELTA_PICK(depth));
         if (s->dlight_count <= PT__DELTA_PICK_MAX) {
-            float w[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f;
+            float w[PT__DELTA_PICK_MAX], fall[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f;
             uint32_t i, k = 0;
-            for (i = 0; i < s->dlight_count; ++i) sum += (w[i] = pt__delta_weight(v, &s->dlights[i]));
+            for (i = 0; i < s->dlight_count; ++i) sum += (w[i] = pt__delta_weight(v, &s->dlights[i], &fall[i]));
             if (!(sum > 0.0f) || !pt__isfinite(sum)) return 0;
             for (i = 0; i < s->dlight_count; ++i) /* the last light with weight whose range holds u */
                 if (w[i] > 0.0f) {
@@ -10683,6 +10690,7 @@ static int pt__delta_prepare(const pt_scene *s, const pt__settings *cfg, const p
                 }
             l = &s->dlights[k];
             pick = w[k] / sum;
+            fall_k = fall[k]; /* (w[k] > 0: the weight got as far as the falloff) */
         } else {
             uint32_t lo = 0, hi = s->dlight_count - 1u;
             while (lo < hi) { /* first light whose cdf exceeds u */
@@ -10705,7 +10713,8 @@ static int pt__delta_prepare(const pt_scene *s, const pt__settings *cfg, const p
         pt_vec3 d = pt_sub(l->pos, v->p);
         float d2 = pt_length2(d), fall = 1.0f;
         if (!(d2 > 0.0f)) return 0;
-        if (l->desc.type == PT_LIGHT_SPOT && !((fall = pt__spot_falloff(l, pt_scale(d, -1.0f / sqrtf(d2)))) > 0.0f))
+        if (l->desc.type == PT_LIGHT_SPOT &&
+            !((fall = fall_k >= 0.0f ? fall_k : pt__spot_falloff(l, pt_scale(d, -1.0f / sqrtf(d2)))) > 0.0f))
             return 0;
         *Li = pt_scale(l->desc.intensity, fall / d2);
         wi = pt_scale(d, 1.0f / sqrtf(d2));

@@ -47,7 +47,7 @@ static void spot_falloff_shortcut(test_ctx *t)
             const float x = pt__spot_falloff(&l, w), y = ti_spot_plain(&l, w);
             const float sn = pt_length(pt_cross(ax, w)), cs = pt_dot(ax, w);
             ++n;
-            if (cs > 0.0f && ((double)sn < (double)cs * l.tan_in || (double)sn > (double)cs * l.tan_out)) ++fast;
+            if (cs > 0.0f && (sn < cs * l.tan_in || sn > cs * l.tan_out)) ++fast;
             if (memcmp(&x, &y, sizeof x) != 0 &&
                 !CHECK(t, bad++ > 3, "cone %g, beam %g degrees, angle %.9g rad: falloff %.9g, plain %.9g", (double)c,
                        (double)b, (double)ang, (double)x, (double)y)) {}
