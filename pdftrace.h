@@ -1754,10 +1754,13 @@ typedef struct pt__dlight {
     pt_vec3 pos;         /* relative to the scene's origin (commit) */
     pt_vec3 axis;        /* unit: the spot's axis, the directional light's direction of travel */
     float cutoff, beam, inv_transition; /* SPOT (radians) */
-    double tan_in, tan_out; /* SPOT: the falloff's shortcuts (pt__spot_bounds) */
+    float tan_in, tan_out; /* SPOT: the falloff's shortcuts (pt__spot_bounds) */
+    float mean;          /* the intensity's mean (commit) */
     double power;        /* picks it (commit) */
     float select_pdf, cdf;
 } pt__dlight;
+/* Up to this many delta lights are picked by what each gives the vertex (pt__delta_prepare). */
+#define PT__DELTA_PICK_MAX 16u
 
 /* The environment map (pt_scene_set_environment) and its sampling tables: a pixel's cell is
    the rectangle [x, x+1) / W by [y, y+1) / H of (u, v); its probability is row_pmf x the
@@ -6891,13 +6894,14 @@ PTDEF int pt_material_is_delta(const pt_scene *s, int material)
 /* The spot's shortcuts for pt__spot_falloff: an angle whose tangent (sin over a positive cos) is
    below tan_in is inside the beam, one whose tangent is above tan_out is outside the cone. Each
    bound is 1e-4 of the angle inside its edge, far beyond the few float ulps of atan2f's error
-   and the double products' rounding, so atan2f would compare alike; tan_in 0 and tan_out
-   infinite turn them off (a beam too narrow for a relative margin, a cone near 90 degrees). */
+   and the float products' and bounds' rounding, so atan2f would compare alike; tan_in 0 and
+   tan_out infinite turn them off (a beam too narrow for a relative margin, a cone near 90
+   degrees). */
 static void pt__spot_bounds(pt__dlight *l)
 {
     double in = (double)l->beam * (1.0 - 1e-4), out = (double)l->cutoff * (1.0 + 1e-4);
-    l->tan_in = l->beam >= 1e-6f ? tan(in) : 0.0;
-    l->tan_out = out < 1.5 ? tan(out) : HUGE_VAL;
+    l->tan_in = l->beam >= 1e-6f ? (float)tan(in) : 0.0f;
+    l->tan_out = out < 1.5 ? (float)tan(out) : (float)HUGE_VAL;
 }
 PTDEF int pt_scene_add_light(pt_scene *s, const pt_light_desc *d)
 {
@@ -7154,8 +7158,10 @@ static float pt__spot_falloff(const pt__dlight *l, pt_vec3 w)
     /* the angle atan2f(sn, cs) is well inside the beam or well outside the cone: the comparisons
        below give what they would give on atan2f's result, without it */
     if (cs > 0.0f && sn >= 0.0f && sn <= FLT_MAX) {
-        if ((double)sn < (double)cs * l->tan_in) return 1.0f;
-        if ((double)sn > (double)cs * l->tan_out) return 0.0f;
+        if (sn < cs * l->tan_in) return 1.0f;
+        if (sn > cs * l->tan_out) return 0.0f;
+    } else if (cs <= 0.0f && l->tan_out <= FLT_MAX) {
+        return 0.0f; /* 90 degrees or more (atan2f's few ulps under pi/2 included), the cone narrower */
     }
     a = atan2f(sn, cs);
     if (a <= l->beam) return 1.0f;
@@ -10462,6 +10468,7 @@ PTDEF int pt_scene_commit(pt_scene *s)
         for (i = 0; i < s->dlight_count; ++i) {
             pt__dlight *l = &s->dlights[i];
             l->pos = s->fixed_origin ? l->desc.position : pt__to_local(s, l->desc.position);
+            l->mean = (l->desc.intensity.x + l->desc.intensity.y + l->desc.intensity.z) * (1.0f / 3.0f);
             l->power = pt__dlight_power(l, r);
             if (!(l->power > 0.0) || !(l->power < 1e300))
                 return pt__fail(s, PT_ERROR_INVALID_ARGUMENT, "commit: light %u has power %g", (unsigned)i, l->power);
@@ -11169,12 +11176,14 @@ static PT__HOT pt_color pt__nee_contribution(const pt_scene *s, const pt__settin
    scene's cross-section takes most picks in a room it lights only through a window:
    docs/design.md, "Lights without a shape"). With more, by power. A point light at the shading
    point itself (d = 0, an integrand with no finite value) adds nothing. */
-#define PT__DELTA_PICK_MAX 16u
-static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l)
+/* The weight of light l at v, and in *fall the spot's falloff toward v (1 for other lights;
+   unset where the weight is 0 before it). */
+static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l, float *fall)
 {
-    float c, i = (l->desc.intensity.x + l->desc.intensity.y + l->desc.intensity.z) * (1.0f / 3.0f);
+    float c, i = l->mean;
     pt_vec3 d;
     float d2, inv, sg = 1.0f;
+    *fall = 1.0f;
     if (PT__UNLIKELY(v->m->transmits)) sg = 0.0f; /* |cos|: a transmitting vertex sees lights below ng too */
     if (l->desc.type == PT_LIGHT_DIRECTIONAL) {
         c = -pt_dot(v->ng, l->axis);
@@ -11187,37 +11196,64 @@ static float pt__delta_weight(const pt__vertex *v, const pt__dlight *l)
     c = pt_dot(v->ng, d) * inv;
     if (sg == 0.0f) c = fabsf(c);
     if (!(c > 0.0f)) return 0.0f;
-    if (l->desc.type == PT_LIGHT_SPOT) i *= pt__spot_falloff(l, pt_scale(d, -inv));
+    if (l->desc.type == PT_LIGHT_SPOT) i *= (*fall = pt__spot_falloff(l, pt_scale(d, -inv)));
     return i * c / d2;
+}
+/* pt__delta_prepare's pick among n weights w with running sums against us = u x their sum: the
+   last light with weight up to the first whose running sum exceeds us, without branches (a
+   weight of 0 leaves the sum as it is, so adding it changes nothing). */
+static uint32_t pt__delta_pick_select(const float *w, uint32_t n, float us)
+{
+    float acc = 0.0f;
+    uint32_t i, k = 0;
+    int done = 0;
+    for (i = 0; i < n; ++i) {
+        const int take = !done & (w[i] > 0.0f);
+        acc += w[i];
+        k = take ? i : k;
+        done |= take & (us < acc);
+    }
+    return k;
 }
 /* The delta lights at vertex v (a scene with any), in two halves around the shadow ray, as
    next-event estimation's (the batched integrator traces it with the batch's): pt__delta_prepare
    picks one light, evaluates f and sets up the shadow ray in nr (0: nothing to add, no ray), and
    in *Li_over_pick the light's radiance at v over the pick's probability; an unoccluded ray adds
-   beta f Li / pick (pt__delta_finish). */
+   beta f Li / pick (pt__delta_finish). w_in and fall_in: the lights' weights and falloffs at v
+   (pt__delta_weight's bits, from stage 2d: pt__batch_delta) for 2 .. PT__DELTA_PICK_MAX lights,
+   or NULL to compute them here. */
 static int pt__delta_prepare(const pt_scene *s, const pt__settings *cfg, const pt__vertex *v, int depth, pt__sampler *smp,
-                             int tri, pt__nee_ray *nr, pt_color *Li, float *pick_out, pt_path_stats *st)
+                             int tri, pt__nee_ray *nr, pt_color *Li, float *pick_out, pt_path_stats *st,
+                             const float *w_in, const float *fall_in)
 {
     const pt__dlight *l = &s->dlights[0];
     pt_vec3 wi;
     pt_color f;
     pt_ray sr;
-    float tmax, pick = 1.0f;
+    float tmax, pick = 1.0f, fall_k = -1.0f; /* the picked light's falloff, if its weight has it */
     if (s->dlight_count > 1) {
         float u = pt__draw1(smp, PT__SET_DELTA_PICK(depth));
         if (s->dlight_count <= PT__DELTA_PICK_MAX) {
-            float w[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f;
+            float wl[PT__DELTA_PICK_MAX], fl[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f;
+            const float *w = w_in ? w_in : wl, *fall = w_in ? fall_in : fl;
             uint32_t i, k = 0;
-            for (i = 0; i < s->dlight_count; ++i) sum += (w[i] = pt__delta_weight(v, &s->dlights[i]));
+            if (w_in)
+                for (i = 0; i < s->dlight_count; ++i) sum += w[i];
+            else
+                for (i = 0; i < s->dlight_count; ++i) sum += (wl[i] = pt__delta_weight(v, &s->dlights[i], &fl[i]));
             if (!(sum > 0.0f) || !pt__isfinite(sum)) return 0;
-            for (i = 0; i < s->dlight_count; ++i) /* the last light with weight whose range holds u */
-                if (w[i] > 0.0f) {
-                    k = i;
-                    acc += w[i];
-                    if (u * sum < acc) break;
-                }
+            if (w_in) /* (weights ready: the same pick without branches, which a random pick mispredicts) */
+                k = pt__delta_pick_select(w, s->dlight_count, u * sum);
+            else
+                for (i = 0; i < s->dlight_count; ++i) /* the last light with weight whose range holds u */
+                    if (w[i] > 0.0f) {
+                        k = i;
+                        acc += w[i];
+                        if (u * sum < acc) break;
+                    }
             l = &s->dlights[k];
             pick = w[k] / sum;
+            fall_k = fall[k]; /* (w[k] > 0: the weight got as far as the falloff) */
         } else {
             uint32_t lo = 0, hi = s->dlight_count - 1u;
             while (lo < hi) { /* first light whose cdf exceeds u */
@@ -11240,7 +11276,8 @@ static int pt__delta_prepare(const pt_scene *s, const pt__settings *cfg, const p
         pt_vec3 d = pt_sub(l->pos, v->p);
         float d2 = pt_length2(d), fall = 1.0f;
         if (!(d2 > 0.0f)) return 0;
-        if (l->desc.type == PT_LIGHT_SPOT && !((fall = pt__spot_falloff(l, pt_scale(d, -1.0f / sqrtf(d2)))) > 0.0f))
+        if (l->desc.type == PT_LIGHT_SPOT &&
+            !((fall = fall_k >= 0.0f ? fall_k : pt__spot_falloff(l, pt_scale(d, -1.0f / sqrtf(d2)))) > 0.0f))
             return 0;
         *Li = pt_scale(l->desc.intensity, fall / d2);
         wi = pt_scale(d, 1.0f / sqrtf(d2));
@@ -11270,7 +11307,8 @@ static pt_color pt__delta_nee(const pt_scene *s, const pt__settings *cfg, const 
     pt__nee_ray nr;
     pt_color Li;
     float pick;
-    if (!pt__delta_prepare(s, cfg, v, depth, smp, tri, &nr, &Li, &pick, st) || pt__scene_any(s, &nr.rc, nr.tmax, nr.skip))
+    if (!pt__delta_prepare(s, cfg, v, depth, smp, tri, &nr, &Li, &pick, st, NULL, NULL) ||
+        pt__scene_any(s, &nr.rc, nr.tmax, nr.skip))
         return pt_v3(0, 0, 0);
     return pt__delta_finish(beta, &nr, Li, pick);
 }
@@ -11976,6 +12014,7 @@ typedef struct pt__lane {
     int esc;          /* stage 1e evaluated the environment map where the ray left the scene: */
     pt_color esc_L;   /* its radiance */
     float esc_pm;     /* and its cell's density (pt__env_eval) */
+    int ddefer;       /* its delta lights left to stage 2d (pt__batch_delta) */
     /* split copies as lanes (below): the camera sample's lane is its family's root */
     int self, root, parent, copy; /* copy: which of the parent's copies (1 .. k-1) */
     int prev, next, head;         /* the family's scalar order (head: the root's, its first) */
@@ -12068,6 +12107,7 @@ typedef struct pt__batch_ctx {
     int area;        /* quads' light samples left to stage 2c, and 2b (pt__lane_light) */
     int env8;        /* the environment map evaluated (stage 1e) and sampled (stage 2e) 8 lanes at a time */
     int sph;         /* solid-angle sampling of quads allowed (PT__LIGHTS_SPHERICAL) */
+    int dvec;        /* the delta lights' weights left to stage 2d (pt__batch_delta) */
     unsigned lmode;  /* pt__lights_mode */
     pt__lane *lanes;
     pt__batch_pool *pool; /* (copies only) */
@@ -12739,7 +12779,7 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
     const pt__prim *prim;
     const pt__material *m;
     pt__vertex *v = &l->v;
-    l->shadow = l->dshadow = 0;
+    l->shadow = l->dshadow = l->ddefer = 0;
     l->defer = 0;
     if (!l->found) {
         if (PT__UNLIKELY(cfg->env_on)) {
@@ -12800,11 +12840,133 @@ static PT__HOT int pt__lane_shade(const pt__batch_ctx *b, pt__lane *l, const int
             pt__lane_light(b, l, u0, u1, u2);
         }
         /* the delta lights (pt__trace_from's order: after the light sample's draws) */
-        l->dshadow = PT__UNLIKELY(s->dlight_count != 0) &&
-                     pt__delta_prepare(s, cfg, v, l->depth, &l->smp, b->tri, &l->dnr, &l->dLi, &l->dpick_delta, &l->st);
+        l->ddefer = b->dvec;
+        if (PT__UNLIKELY(s->dlight_count != 0) && !b->dvec)
+            l->dshadow = pt__delta_prepare(s, cfg, v, l->depth, &l->smp, b->tri, &l->dnr, &l->dLi, &l->dpick_delta, &l->st,
+                                           NULL, NULL);
     }
     return 1;
 }
+
+#ifdef PT__WIDE
+/* Inputs of pt__delta_weight8, one row of 8 lanes each: the vertices' p and ng, and sg (1, or 0
+   where the material transmits). */
+enum { PT__DW_P = 0, PT__DW_N = 3, PT__DW_SG = 6, PT__DW_IN = 7 };
+/* pt__delta_weight of light l at 8 vertices at a time with AVX2, each lane doing the scalar
+   code's float operations in its order (no FMA), so the same bits, into w and fall; a lane whose
+   value the scalar code does not compute (it returns 0 first) is computed on safe operands (no
+   0/0, x/0 or 0 x inf to trap on) and masked. Returns the lanes (bits) of a spot whose
+   shortcuts could not decide the falloff (it needs atan2f): their w and fall are the scalar
+   code's to fill. */
+PT__TARGET_AVX2 static int pt__delta_weight8(const pt__dlight *l, float (*in)[8], float *w, float *fall)
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), sign = _mm256_set1_ps(-0.0f);
+    const __m256 nx = _mm256_loadu_ps(in[PT__DW_N]), ny = _mm256_loadu_ps(in[PT__DW_N + 1]);
+    const __m256 nz = _mm256_loadu_ps(in[PT__DW_N + 2]), sg = _mm256_loadu_ps(in[PT__DW_SG]);
+    const __m256 mean = _mm256_set1_ps(l->mean), transmits = _mm256_cmp_ps(sg, zero, _CMP_EQ_OQ);
+    __m256 dx, dy, dz, d2, ok, inv, c, i = mean, f = one;
+    int undecided = 0;
+    if (l->desc.type == PT_LIGHT_DIRECTIONAL) { /* i max(0, c) + (1 - sg) i max(0, -c), c = -(ng . axis) */
+        c = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_set1_ps(l->axis.x)), _mm256_mul_ps(ny, _mm256_set1_ps(l->axis.y))),
+                          _mm256_mul_ps(nz, _mm256_set1_ps(l->axis.z)));
+        c = _mm256_xor_ps(sign, c);
+        _mm256_storeu_ps(w, _mm256_add_ps(_mm256_mul_ps(mean, _mm256_max_ps(zero, c)),
+                                          _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(one, sg), mean),
+                                                        _mm256_max_ps(zero, _mm256_xor_ps(sign, c)))));
+        _mm256_storeu_ps(fall, one);
+        return 0;
+    }
+    dx = _mm256_sub_ps(_mm256_set1_ps(l->pos.x), _mm256_loadu_ps(in[PT__DW_P]));
+    dy = _mm256_sub_ps(_mm256_set1_ps(l->pos.y), _mm256_loadu_ps(in[PT__DW_P + 1]));
+    dz = _mm256_sub_ps(_mm256_set1_ps(l->pos.z), _mm256_loadu_ps(in[PT__DW_P + 2]));
+    d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+    ok = _mm256_cmp_ps(d2, zero, _CMP_GT_OQ);
+    d2 = _mm256_blendv_ps(one, d2, ok);
+    inv = _mm256_div_ps(one, _mm256_sqrt_ps(d2));
+    c = _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, dx), _mm256_mul_ps(ny, dy)), _mm256_mul_ps(nz, dz)), inv);
+    c = _mm256_blendv_ps(c, _mm256_andnot_ps(sign, c), transmits); /* (|c| where the vertex transmits) */
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(c, zero, _CMP_GT_OQ));
+    if (l->desc.type == PT_LIGHT_SPOT) { /* pt__spot_falloff toward -d / |d| */
+        const __m256 ax = _mm256_set1_ps(l->axis.x), ay = _mm256_set1_ps(l->axis.y), az = _mm256_set1_ps(l->axis.z);
+        const __m256 ninv = _mm256_xor_ps(sign, inv);
+        const __m256 wx = _mm256_mul_ps(dx, ninv), wy = _mm256_mul_ps(dy, ninv), wz = _mm256_mul_ps(dz, ninv);
+        const __m256 cx = _mm256_sub_ps(_mm256_mul_ps(ay, wz), _mm256_mul_ps(az, wy));
+        const __m256 cy = _mm256_sub_ps(_mm256_mul_ps(az, wx), _mm256_mul_ps(ax, wz));
+        const __m256 cz = _mm256_sub_ps(_mm256_mul_ps(ax, wy), _mm256_mul_ps(ay, wx));
+        const __m256 sn = _mm256_sqrt_ps(
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(cx, cx), _mm256_mul_ps(cy, cy)), _mm256_mul_ps(cz, cz)));
+        const __m256 cs = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, wx), _mm256_mul_ps(ay, wy)), _mm256_mul_ps(az, wz));
+        const __m256 front = _mm256_and_ps(_mm256_cmp_ps(cs, zero, _CMP_GT_OQ),
+                                           _mm256_and_ps(_mm256_cmp_ps(sn, zero, _CMP_GE_OQ),
+                                                         _mm256_cmp_ps(sn, _mm256_set1_ps(FLT_MAX), _CMP_LE_OQ)));
+        const __m256 inside = _mm256_and_ps(front, _mm256_cmp_ps(sn, _mm256_mul_ps(cs, _mm256_set1_ps(l->tan_in)), _CMP_LT_OQ));
+        __m256 outside = zero;
+        if (l->tan_out <= FLT_MAX) /* (else: no shortcut outside, and no 0 x inf) */
+            outside = _mm256_or_ps(_mm256_and_ps(front, _mm256_cmp_ps(sn, _mm256_mul_ps(cs, _mm256_set1_ps(l->tan_out)),
+                                                                      _CMP_GT_OQ)),
+                                   _mm256_cmp_ps(cs, zero, _CMP_LE_OQ));
+        f = _mm256_and_ps(inside, one);
+        i = _mm256_mul_ps(mean, f);
+        undecided = _mm256_movemask_ps(_mm256_andnot_ps(_mm256_or_ps(inside, outside), ok));
+    }
+    _mm256_storeu_ps(w, _mm256_and_ps(ok, _mm256_div_ps(_mm256_mul_ps(i, c), d2)));
+    _mm256_storeu_ps(fall, f);
+    return undecided;
+}
+/* Stage 2d: the delta lights' weights at the vertices stage 2 left to it (l->ddefer), 8 vertices
+   a light at a time (pt__delta_weight8; a last group's unused lanes copy its first), then each
+   vertex's pick and shadow ray (pt__delta_prepare with those weights). Its draw is the lane's
+   next after stage 2's (pt__lane_shade leaves nothing else to draw in between), so the numbers
+   are the scalar integrator's. */
+static void pt__batch_delta(const pt__batch_ctx *b, pt__lane *lanes, const int *shade, int nshade)
+{
+    const pt_scene *s = b->s;
+    const uint32_t nl = s->dlight_count;
+    float in[PT__DW_IN][8], w[PT__DELTA_PICK_MAX][8], fall[PT__DELTA_PICK_MAX][8];
+    pt__lane *ls[8];
+    int i = 0;
+    while (i < nshade) {
+        int n = 0, j, k;
+        uint32_t q;
+        for (; i < nshade && n < 8; ++i) {
+            pt__lane *l = &lanes[shade[i]];
+            const pt__vertex *v = &l->v;
+            if (!l->ddefer) continue;
+            in[PT__DW_P][n] = v->p.x;
+            in[PT__DW_P + 1][n] = v->p.y;
+            in[PT__DW_P + 2][n] = v->p.z;
+            in[PT__DW_N][n] = v->ng.x;
+            in[PT__DW_N + 1][n] = v->ng.y;
+            in[PT__DW_N + 2][n] = v->ng.z;
+            in[PT__DW_SG][n] = v->m->transmits ? 0.0f : 1.0f;
+            ls[n++] = l;
+        }
+        if (!n) break;
+        for (j = n; j < 8; ++j)
+            for (k = 0; k < PT__DW_IN; ++k) in[k][j] = in[k][0];
+        for (q = 0; q < nl; ++q) {
+            int bits = pt__delta_weight8(&s->dlights[q], in, w[q], fall[q]);
+            for (j = 0; bits; ++j, bits >>= 1)
+                if ((bits & 1) && j < n) w[q][j] = pt__delta_weight(&ls[j]->v, &s->dlights[q], &fall[q][j]);
+        }
+        for (j = 0; j < n; ++j) {
+            pt__lane *l = ls[j];
+            float wj[PT__DELTA_PICK_MAX], fj[PT__DELTA_PICK_MAX];
+            for (q = 0; q < nl; ++q) {
+                wj[q] = w[q][j];
+                fj[q] = fall[q][j];
+            }
+            l->dshadow = pt__delta_prepare(s, b->cfg, &l->v, l->depth, &l->smp, b->tri, &l->dnr, &l->dLi, &l->dpick_delta,
+                                           &l->st, wj, fj);
+        }
+    }
+}
+#else
+static void pt__batch_delta(const pt__batch_ctx *b, pt__lane *lanes, const int *shade, int nshade)
+{
+    (void)b; (void)lanes; (void)shade; (void)nshade;
+}
+#endif
 
 /* Stage 4's splits with the Sobol sampler: copies 1 .. k-1 of lane l's split into k take free
    lanes of their own, each after its continuation from l's vertex (pt__split_copies's order:
@@ -13240,8 +13402,9 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     b->lmode = pt__lights_mode(cfg);
     b->sph = (b->lmode & PT__LIGHTS_SPHERICAL) != 0;
     b->area = s->simd >= PT_SIMD_AVX2;
+    b->dvec = b->area && s->dlight_count > 1u && s->dlight_count <= PT__DELTA_PICK_MAX;
 #ifndef PT__WIDE
-    b->area = 0;
+    b->area = b->dvec = 0;
 #endif
     b->env8 = 0;
 #ifdef PT__WIDE
@@ -13277,6 +13440,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
                 shade[nshade++] = live[i];
             } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
         if (nenv) pt__batch_env_lights(b, lanes, env, nenv); /* (2e) the environment's samples */
+        if (b->dvec) pt__batch_delta(b, lanes, shade, nshade); /* (2d) the delta lights */
         if (nsph) pt__batch_sphere_lights(b, lanes, sph, nsph); /* (2s) spheres' samples */
         if (narea) ndefer = pt__batch_area_lights(b, lanes, area, narea, defer, 0); /* (2c) quads' samples */
         if (ndefer) pt__batch_lights(b, lanes, defer, ndefer); /* (2b) quads' solid-angle samples */

@@ -47,7 +47,7 @@ static void spot_falloff_shortcut(test_ctx *t)
             const float x = pt__spot_falloff(&l, w), y = ti_spot_plain(&l, w);
             const float sn = pt_length(pt_cross(ax, w)), cs = pt_dot(ax, w);
             ++n;
-            if (cs > 0.0f && ((double)sn < (double)cs * l.tan_in || (double)sn > (double)cs * l.tan_out)) ++fast;
+            if (cs > 0.0f && (sn < cs * l.tan_in || sn > cs * l.tan_out)) ++fast;
             if (memcmp(&x, &y, sizeof x) != 0 &&
                 !CHECK(t, bad++ > 3, "cone %g, beam %g degrees, angle %.9g rad: falloff %.9g, plain %.9g", (double)c,
                        (double)b, (double)ang, (double)x, (double)y)) {}
@@ -716,6 +716,104 @@ static void fma_guard(test_ctx *t)
     test_note(t, "the target has FMA; the implementation is compiled without contraction");
 #else
     test_skip(t, "the target has no FMA (build with -march=native on a CPU that has it)");
+/* Stage 2d's weights (pt__delta_weight8, with the scalar code for the lanes it leaves) equal
+   pt__delta_weight's to the bit, and so do the falloffs where the weight is not 0: 3000 lights
+   (points, directional lights, spots with beam below or equal to the cutoff, cones from 0.001 to
+   90 degrees) at 8 vertices each, half of them aimed near the beam's or the cone's edge, some
+   at the light itself (d = 0) or transmitting (|cos|). pt__delta_pick_select picks as the
+   branchy loop on weights with zeros among them, small integers among them with u x sum on a
+   running sum (ties). Deterministic (fixed seed). */
+static void delta_weight8(test_ctx *t)
+{
+#ifdef PT__WIDE
+    const float deg = 0.017453292519943295f;
+    pt__material opaque, transmits;
+    pt_rng r;
+    long n = 0, left = 0, bad = 0, nonzero = 0;
+    int k, j;
+    if (pt_simd_cpu_level() < PT_SIMD_AVX2) {
+        test_skip(t, "no AVX2 on this CPU");
+        return;
+    }
+    memset(&opaque, 0, sizeof opaque);
+    memset(&transmits, 0, sizeof transmits);
+    transmits.transmits = 1;
+    pt_rng_seed(&r, 11, 3);
+    for (k = 0; k < 6000; ++k) {
+        pt__dlight l;
+        pt__vertex v[8];
+        float in[PT__DW_IN][8], w[8], fall[8];
+        int bits;
+        memset(&l, 0, sizeof l);
+        l.desc.type = k % 5 == 0 ? PT_LIGHT_POINT : k % 5 == 1 ? PT_LIGHT_DIRECTIONAL : PT_LIGHT_SPOT;
+        l.pos = pt_v3(4.0f * pt_rng_float(&r) - 2.0f, 4.0f * pt_rng_float(&r) - 2.0f, 4.0f * pt_rng_float(&r) - 2.0f);
+        l.axis = pt_normalize(pt_v3(pt_rng_float(&r) - 0.5f, pt_rng_float(&r) - 0.5f, pt_rng_float(&r) - 0.5f));
+        l.mean = 0.1f + 10.0f * pt_rng_float(&r);
+        if (l.desc.type == PT_LIGHT_SPOT) {
+            const float c = k % 7 == 0 ? 90.0f : k % 11 == 0 ? 0.001f : 0.01f + 89.99f * pt_rng_float(&r);
+            const float b = (k & 1) ? c : c * (0.05f + 0.95f * pt_rng_float(&r));
+            l.cutoff = c * deg;
+            l.beam = b * deg;
+            l.inv_transition = b < c ? 1.0f / (l.cutoff - l.beam) : 0.0f;
+            pt__spot_bounds(&l);
+        }
+        for (j = 0; j < 8; ++j) {
+            const float e = pt_rng_float(&r), len = 0.01f + 3.0f * pt_rng_float(&r);
+            const float edge = (j & 2) ? l.beam : l.cutoff;
+            const float ang = j % 2 == 0 ? edge * (1.0f + 2e-3f * (e - 0.5f)) : 3.1415926f * e;
+            const pt_vec3 tn = pt_normalize(pt_cross(l.axis, pt_v3(0.3f, 0.7f, -0.2f)));
+            const pt_vec3 dir = pt_add(pt_scale(l.axis, cosf(ang)), pt_scale(tn, sinf(ang)));
+            memset(&v[j], 0, sizeof v[j]);
+            v[j].m = j == 5 ? &transmits : &opaque;
+            v[j].p = j == 7 && k % 4 == 0 ? l.pos : pt_madd(l.pos, dir, len); /* (on the light: d = 0) */
+            v[j].ng = j == 6 ? pt_neg(dir) : pt_sample_uniform_sphere(pt_rng_float(&r), pt_rng_float(&r));
+            in[PT__DW_P][j] = v[j].p.x;
+            in[PT__DW_P + 1][j] = v[j].p.y;
+            in[PT__DW_P + 2][j] = v[j].p.z;
+            in[PT__DW_N][j] = v[j].ng.x;
+            in[PT__DW_N + 1][j] = v[j].ng.y;
+            in[PT__DW_N + 2][j] = v[j].ng.z;
+            in[PT__DW_SG][j] = v[j].m->transmits ? 0.0f : 1.0f;
+        }
+        bits = pt__delta_weight8(&l, in, w, fall);
+        for (j = 0; j < 8; ++j) {
+            float f, x;
+            ++n;
+            if ((bits >> j) & 1) {
+                ++left;
+                continue;
+            }
+            x = pt__delta_weight(&v[j], &l, &f);
+            nonzero += x > 0.0f;
+            if ((memcmp(&x, &w[j], sizeof x) != 0 || (x > 0.0f && memcmp(&f, &fall[j], sizeof f) != 0)) &&
+                !CHECK(t, bad++ > 3, "light type %d, cone %g, beam %g rad, lane %d: weight %.9g falloff %.9g, scalar %.9g %.9g",
+                       (int)l.desc.type, (double)l.cutoff, (double)l.beam, j, (double)w[j], (double)fall[j], (double)x,
+                       (double)f)) {}
+        }
+    }
+    CHECK(t, bad == 0, "%ld of %ld lanes differ from pt__delta_weight", bad, n);
+    CHECK(t, left < n / 4 && nonzero > n / 4, "%ld of %ld lanes left to the scalar code, %ld weights above 0", left, n, nonzero);
+    for (k = 0; k < 20000; ++k) { /* the pick */
+        float w[PT__DELTA_PICK_MAX], sum = 0.0f, acc = 0.0f, u = pt_rng_float(&r);
+        uint32_t i, m = 2u + (uint32_t)k % (PT__DELTA_PICK_MAX - 1u), want = 0;
+        for (i = 0; i < m; ++i)
+            sum += (w[i] = pt_rng_float(&r) < 0.4f ? 0.0f : (k & 1) ? (float)(int)(4.0f * pt_rng_float(&r)) : pt_rng_float(&r));
+        if (!(sum > 0.0f)) continue;
+        if (k & 1) u = (float)(int)(sum * u) / sum; /* (u x sum a whole number, as are the running sums) */
+        for (i = 0; i < m; ++i)
+            if (w[i] > 0.0f) {
+                want = i;
+                acc += w[i];
+                if (u * sum < acc) break;
+            }
+        if (pt__delta_pick_select(w, m, u * sum) != want &&
+            !CHECK(t, bad++ > 3, "pick %u of %u lights, u %.9g: %u", (unsigned)want, (unsigned)m, (double)u,
+                   (unsigned)pt__delta_pick_select(w, m, u * sum))) {}
+    }
+    CHECK(t, bad == 0, "%ld picks or weights differ", bad);
+    test_note(t, "%ld lanes, %ld left to the scalar code", n, left);
+#else
+    test_skip(t, "built without the wide code (PT__WIDE)");
 #endif
 }
 
@@ -730,6 +828,7 @@ static const test_case test_internals_cases[] = {
 #if defined(PT__SSE)
     TEST_CASE(packet_hits),
 #endif
+    TEST_CASE(delta_weight8),
     TEST_END
 };
 
