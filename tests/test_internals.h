@@ -716,6 +716,9 @@ static void fma_guard(test_ctx *t)
     test_note(t, "the target has FMA; the implementation is compiled without contraction");
 #else
     test_skip(t, "the target has no FMA (build with -march=native on a CPU that has it)");
+#endif
+}
+
 /* Stage 2d's weights (pt__delta_weight8, with the scalar code for the lanes it leaves) equal
    pt__delta_weight's to the bit, and so do the falloffs where the weight is not 0: 3000 lights
    (points, directional lights, spots with beam below or equal to the cutoff, cones from 0.001 to
