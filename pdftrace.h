@@ -3905,24 +3905,29 @@ PT__TARGET_AVX2 static inline int pt__lnodew_level_avx2(const pt__lnodew *n, pt_
 }
 #endif
 static int pt__has_normal(pt_vec3 nr) { return nr.x != 0.0f || nr.y != 0.0f || nr.z != 0.0f; }
-/* The descent of pt__tree_pick from node n (its first level's importances and sums in imp, c and
-   *k), one body for every level function LEVEL: the first child whose running sum exceeds u x
-   total, i.e. the number of sums at most that (a child that cannot light p adds nothing, so it is
-   passed over); where rounding puts u x total at or past the total, the last child that can
-   light p. */
+/* One step of pt__tree_pick's descent after node n's level (importances imp, running sums c, k
+   the number of sums at most u x total): the first child whose running sum exceeds u x total (a
+   child that cannot light p adds nothing, so it is passed over); where rounding puts u x total
+   at or past the total, the last child that can light p. Multiplies the choice's probability
+   into *prob, rescales *u for the next level and returns the child (n->child). Every descent
+   (one pick, or several interleaved) steps with this, so they agree to the bit. */
+static PT__HOT uint32_t pt__tree_step(const pt__lnodew *n, const float *imp, const float *c, int k, float *u, float *prob)
+{
+    const float total = c[PT__LTREE_W - 1], t = *u * total;
+    float below;
+    if (PT__UNLIKELY(k > PT__LTREE_W - 1)) for (k = PT__LTREE_W - 1; !(imp[k] > 0.0f); --k) {}
+    below = k ? c[k - 1] : 0.0f;
+    *prob *= imp[k] / total;
+    *u = pt__minf((t - below) / imp[k], 0.99999994f);
+    return n->child[k];
+}
+/* The descent of pt__tree_pick from node n, one body for every level function LEVEL. */
 #define PT__TREE_DESCENT(LEVEL)                                                                                    \
     for (;;) {                                                                                                     \
-        float t, below, total;                                                                                     \
         int k;                                                                                                     \
         uint32_t child;                                                                                            \
         if (!LEVEL(n, p, nr, has_nr, u, imp, c, &k)) return 0;                                                     \
-        total = c[PT__LTREE_W - 1];                                                                                \
-        t = u * total;                                                                                             \
-        if (PT__UNLIKELY(k > PT__LTREE_W - 1)) for (k = PT__LTREE_W - 1; !(imp[k] > 0.0f); --k) {}                 \
-        below = k ? c[k - 1] : 0.0f;                                                                               \
-        prob *= imp[k] / total;                                                                                    \
-        u = pt__minf((t - below) / imp[k], 0.99999994f);                                                           \
-        child = n->child[k];                                                                                       \
+        child = pt__tree_step(n, imp, c, k, &u, &prob);                                                            \
         if (child & PT__LCHILD_LIGHT) {                                                                            \
             *light = child & ~PT__LCHILD_LIGHT;                                                                    \
             *pmf = prob;                                                                                           \
@@ -3944,6 +3949,72 @@ PT__TARGET_AVX2 PT__NOINLINE static int pt__tree_pick_avx2(const pt_scene *s, pt
     const pt__lnodew *n = &s->ltree[0];
     float prob = 1.0f, imp[PT__LTREE_W], c[PT__LTREE_W];
     PT__TREE_DESCENT(pt__lnodew_level_avx2)
+}
+#endif
+/* A pick of pt__tree_picks_avx2: in, the point, the receiver normal (0: none) and the number u
+   of pt__tree_pick; out, what it gives (ok its return, light and pmf set where ok). */
+typedef struct pt__tree_query {
+    pt_vec3 p, nr;
+    float u, pmf;
+    uint32_t light;
+    int ok;
+} pt__tree_query;
+#ifdef PT__WIDE
+#ifndef PT__TREE_SLOTS
+#define PT__TREE_SLOTS 4 /* the picks descending side by side */
+#endif
+/* Sets up slot g of pt__tree_picks_avx2 for query q at the root (has_nr, u and prob its state). */
+static PT__HOT void pt__tree_slot(const pt__tree_query *q, int *has_nr, float *u, float *prob)
+{
+    *has_nr = pt__has_normal(q->nr);
+    *u = q->u;
+    *prob = 1.0f;
+}
+/* pt__tree_pick (AVX2) for n points at once. A descent is a chain of dependent steps (a node's
+   load, its children's importances, their sums, the child), so one pick leaves the core mostly
+   waiting; here PT__TREE_SLOTS picks descend together, each one level a round, so their chains
+   overlap, and a slot whose pick ends takes the next query. Each pick does pt__tree_pick's float
+   operations (pt__lnodew_level_avx2, pt__tree_step), so the results are the same to the bit. */
+PT__TARGET_AVX2 PT__NOINLINE static void pt__tree_picks_avx2(const pt_scene *s, pt__tree_query *q, int n)
+{
+    const pt__lnodew *node[PT__TREE_SLOTS];
+    float u[PT__TREE_SLOTS], prob[PT__TREE_SLOTS], imp[PT__TREE_SLOTS][PT__LTREE_W], c[PT__TREE_SLOTS][PT__LTREE_W];
+    int has_nr[PT__TREE_SLOTS], at[PT__TREE_SLOTS], k[PT__TREE_SLOTS], lit[PT__TREE_SLOTS];
+    int next = 0, live = 0, g;
+    for (g = 0; g < PT__TREE_SLOTS; ++g) {
+        at[g] = next < n ? next++ : -1;
+        node[g] = &s->ltree[0];
+        k[g] = lit[g] = 0;
+        if (at[g] >= 0) {
+            pt__tree_slot(&q[at[g]], &has_nr[g], &u[g], &prob[g]);
+            ++live;
+        }
+    }
+    while (live) {
+        for (g = 0; g < PT__TREE_SLOTS; ++g)
+            if (at[g] >= 0)
+                lit[g] = pt__lnodew_level_avx2(node[g], q[at[g]].p, q[at[g]].nr, has_nr[g], u[g], imp[g], c[g], &k[g]);
+        for (g = 0; g < PT__TREE_SLOTS; ++g) {
+            pt__tree_query *x;
+            uint32_t child;
+            if (at[g] < 0) continue;
+            x = &q[at[g]];
+            x->ok = 0;
+            if (lit[g]) {
+                child = pt__tree_step(node[g], imp[g], c[g], k[g], &u[g], &prob[g]);
+                if (!(child & PT__LCHILD_LIGHT)) {
+                    node[g] = &s->ltree[child];
+                    continue;
+                }
+                x->light = child & ~PT__LCHILD_LIGHT;
+                x->pmf = prob[g];
+                x->ok = prob[g] > 0.0f;
+            }
+            node[g] = &s->ltree[0]; /* the pick ended: the slot takes the next */
+            if (next < n) pt__tree_slot(&q[at[g] = next++], &has_nr[g], &u[g], &prob[g]);
+            else at[g] = -1, --live;
+        }
+    }
 }
 #endif
 /* pt__lnodew_level without the AVX2 pass (arguments as pt__lnodew_level_avx2's). */
@@ -11415,8 +11486,8 @@ typedef struct pt__lane {
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
     int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
-    int defer;         /* its light sample left to stage 2b (1), 2c (2) or 2s (3) (pt__lane_light) with these: */
-    float dpick, du1, du2; /* the pick's probability, the point's numbers */
+    int defer;         /* its light sample left to stage 2b (1), 2c (2), 2s (3) or its pick to 2t (4) */
+    float dpick, du0, du1, du2; /* (pt__lane_light) with the pick's probability, its number, the point's */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
     pt_hit h;
@@ -11516,6 +11587,7 @@ typedef struct pt__batch_ctx {
     const pt__settings *cfg;
     int tri, any_lights, nee, pick, copies;
     int area;        /* quads' light samples left to stage 2c, and 2b (pt__lane_light) */
+    int picks;       /* the light tree's picks left to stage 2t (pt__lane_light) */
     int sph;         /* solid-angle sampling of quads allowed (PT__LIGHTS_SPHERICAL) */
     unsigned lmode;  /* pt__lights_mode */
     pt__lane *lanes;
@@ -11632,15 +11704,37 @@ static PT__HOT int pt__lane_picked(const pt__batch_ctx *b, pt__light_sample *ls,
     }
     return 1;
 }
+/* The rest of pt__lane_light at lane l once its pick chose shaped light li with probability pick
+   (stage 2, or 2t): a quad's or a sphere's sample left to stages 2c and 2s (l->defer 2 or 3), any
+   other light's sample and its shadow ray. */
+static PT__HOT void pt__lane_light_picked(const pt__batch_ctx *b, pt__lane *l, uint32_t li, float pick)
+{
+    const pt_scene *s = b->s;
+    pt__vertex *v = &l->v;
+    const pt__prim *p = &s->prims[s->lights[li].prim];
+    if (p->type == PT__PRIM_QUAD || p->type == PT__PRIM_SPHERE) {
+        l->defer = p->type == PT__PRIM_QUAD ? 2 : 3;
+        l->li = li;
+        l->dpick = pick;
+        return;
+    }
+    l->shadow = pt__light_prim_sample(s, p, v->o, l->du1, l->du2, &l->ls, b->sph) &&
+                pt__lane_picked(b, &l->ls, pick, li, &l->li) &&
+                pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+    v->sph_prim = l->ls.sph_prim;
+    v->sph_S = l->ls.sph_S;
+}
 /* Stage 2's light sample at lane l's vertex (the numbers u0, u1, u2 of pt__lights_sample_all) and
-   its shadow ray. Where the light picked is a quad, the rest is left to stage 2c (l->defer = 2;
-   pt__batch_area_lights), which makes the batch's area samples of quads 8 at a time and leaves
-   those to be sampled by solid angle (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which
-   sets up their spherical rectangles 4 at a time; a sphere's to stage 2s (l->defer = 3;
-   pt__batch_sphere_lights), 8 cones at a time. b->area is 0 without AVX2: then it is all done
-   here, as it is for a lane whose pick chose the environment. With an environment a shaped light
-   is picked with pt__lights_sample_all's u0 rescaled, and its density carries the lights' share
-   (pt__lane_picked). Either way each path does what pt__lights_sample_all and pt__nee_prepare do. */
+   its shadow ray. Where the light tree picks (b->picks), the pick is left to stage 2t (l->defer =
+   4; pt__batch_picks), which makes the batch's picks several at a time. Where the light picked is
+   a quad, the rest is left to stage 2c (l->defer = 2; pt__batch_area_lights), which makes the
+   batch's area samples of quads 8 at a time and leaves those to be sampled by solid angle
+   (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which sets up their spherical rectangles 4
+   at a time; a sphere's to stage 2s (l->defer = 3; pt__batch_sphere_lights), 8 cones at a time.
+   b->area is 0 without AVX2: then it is all done here, as it is for a lane whose pick chose the
+   environment. With an environment a shaped light is picked with pt__lights_sample_all's u0
+   rescaled, and its density carries the lights' share (pt__lane_picked). Either way each path
+   does what pt__lights_sample_all and pt__nee_prepare do. */
 static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0, float u1, float u2)
 {
     const pt_scene *s = b->s;
@@ -11650,29 +11744,62 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0
     float pick = 0.0f;
     l->ls.sph_prim = NULL;
     l->ls.sph_S = 0.0;
+    l->du1 = u1;
+    l->du2 = u2;
     if (!b->area || (PT__UNLIKELY(cfg->env_pick > 0.0f) && u0 < cfg->env_pick)) {
         l->shadow = pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
                     pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
-    } else if (!pt__lane_pick(b, v, PT__UNLIKELY(cfg->env_pick > 0.0f)
-                                        ? pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f) : u0,
-                              &li, &pick)) {
-        l->shadow = 0;
     } else {
-        const pt__prim *p = &s->prims[s->lights[li].prim];
-        if (p->type == PT__PRIM_QUAD || p->type == PT__PRIM_SPHERE) {
-            l->defer = p->type == PT__PRIM_QUAD ? 2 : 3;
-            l->li = li;
-            l->dpick = pick;
-            l->du1 = u1;
-            l->du2 = u2;
+        if (PT__UNLIKELY(cfg->env_pick > 0.0f)) u0 = pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f);
+        if (b->picks) {
+            l->defer = 4;
+            l->du0 = u0;
             return;
         }
-        l->shadow = pt__light_prim_sample(s, p, v->o, u1, u2, &l->ls, b->sph) &&
-                    pt__lane_picked(b, &l->ls, pick, li, &l->li) &&
-                    pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+        if (pt__lane_pick(b, v, u0, &li, &pick)) {
+            pt__lane_light_picked(b, l, li, pick);
+            return;
+        }
+        l->shadow = 0;
     }
     v->sph_prim = l->ls.sph_prim;
     v->sph_S = l->ls.sph_S;
+}
+/* Stage 2t: the light tree's picks stage 2 left (pick: n lanes), PT__TREE_SLOTS side by side
+   (pt__tree_picks_avx2), then the rest of each lane's light sample (pt__lane_light_picked), whose
+   quads and spheres are appended to area (*narea) and sph (*nsph) for stages 2c and 2s. */
+static void pt__batch_picks(const pt__batch_ctx *b, pt__lane *lanes, const int *pick, int n, int *area, int *narea,
+                            int *sph, int *nsph)
+{
+#ifdef PT__WIDE
+    pt__tree_query q[PT__BATCH];
+    int i, j, m;
+    for (i = 0; i < n; i += m) {
+        m = n - i < PT__BATCH ? n - i : PT__BATCH;
+        for (j = 0; j < m; ++j) {
+            const pt__vertex *v = &lanes[pick[i + j]].v;
+            q[j].p = v->o;
+            q[j].nr = pt__receiver_normal(v);
+            q[j].u = lanes[pick[i + j]].du0;
+        }
+        pt__tree_picks_avx2(b->s, q, m);
+        for (j = 0; j < m; ++j) {
+            pt__lane *l = &lanes[pick[i + j]];
+            l->defer = 0;
+            if (q[j].ok) {
+                pt__lane_light_picked(b, l, q[j].light, q[j].pmf);
+                if (l->defer == 3) sph[(*nsph)++] = pick[i + j];
+                else if (l->defer) area[(*narea)++] = pick[i + j];
+                continue;
+            }
+            l->shadow = 0;
+            l->v.sph_prim = NULL; /* (l->ls's, as pt__lane_light leaves it) */
+            l->v.sph_S = 0.0;
+        }
+    }
+#else
+    (void)b; (void)lanes; (void)pick; (void)n; (void)area; (void)narea; (void)sph; (void)nsph; /* (b->picks is 0) */
+#endif
 }
 /* Stage 2b for lane l, whose quad p's spherical rectangle was set up (ok; then q, S: its point and
    solid angle): the rest of pt__planar_light_sample, the pick, and the shadow ray. */
@@ -12584,7 +12711,8 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
                                            pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
 {
     int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], area[PT__BATCH_LANES], sph[PT__BATCH_LANES];
-    int nlive = n, nshade, ndefer, narea, nsph, i;
+    int pick[PT__BATCH_LANES];
+    int nlive = n, nshade, ndefer, narea, nsph, npick, i;
     pt__batch_ctx bc, *b = &bc;
     pt__batch_pool pool;
     b->pool = &pool;
@@ -12601,6 +12729,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
 #ifndef PT__WIDE
     b->area = 0;
 #endif
+    b->picks = b->area && s->ltree && (b->lmode & PT__LIGHTS_TREE);
     b->lanes = lanes;
     b->pool->kids = kids;
     b->pool->recording = cfg->recording;
@@ -12622,12 +12751,14 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
     while (nlive > 0) {
         pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
         if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
-        for (i = 0, nshade = 0, ndefer = 0, narea = 0, nsph = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
+        for (i = 0, nshade = 0, ndefer = 0, narea = 0, nsph = 0, npick = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(b, &lanes[live[i]], copies)) {
-                if (lanes[live[i]].defer == 3) sph[nsph++] = live[i];
+                if (lanes[live[i]].defer == 4) pick[npick++] = live[i];
+                else if (lanes[live[i]].defer == 3) sph[nsph++] = live[i];
                 else if (lanes[live[i]].defer) area[narea++] = live[i];
                 shade[nshade++] = live[i];
             } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
+        if (npick) pt__batch_picks(b, lanes, pick, npick, area, &narea, sph, &nsph); /* (2t) the light tree's picks */
         if (nsph) pt__batch_sphere_lights(b, lanes, sph, nsph); /* (2s) spheres' samples */
         if (narea) ndefer = pt__batch_area_lights(b, lanes, area, narea, defer, 0); /* (2c) quads' samples */
         if (ndefer) pt__batch_lights(b, lanes, defer, ndefer); /* (2b) quads' solid-angle samples */
