@@ -3963,12 +3963,64 @@ typedef struct pt__tree_query {
 #ifndef PT__TREE_SLOTS
 #define PT__TREE_SLOTS 4 /* the picks descending side by side */
 #endif
-/* Sets up slot g of pt__tree_picks_avx2 for query q at the root (has_nr, u and prob its state). */
-static PT__HOT void pt__tree_slot(const pt__tree_query *q, int *has_nr, float *u, float *prob)
+/* The state of pt__tree_picks_avx2's slots: each slot's query (at; -1: idle), node, number u,
+   probability so far, receiver-normal flag, and its level's importances, sums, count and whether
+   any child lights the point (lit); next: the next query to take, live: the slots busy. */
+typedef struct pt__tree_slots {
+    const pt__lnodew *node[PT__TREE_SLOTS];
+    float u[PT__TREE_SLOTS], prob[PT__TREE_SLOTS], imp[PT__TREE_SLOTS][PT__LTREE_W], c[PT__TREE_SLOTS][PT__LTREE_W];
+    int has_nr[PT__TREE_SLOTS], at[PT__TREE_SLOTS], k[PT__TREE_SLOTS], lit[PT__TREE_SLOTS];
+    int next, live;
+} pt__tree_slots;
+/* Slot g takes the next of the n queries q at the root, or goes idle. */
+static PT__HOT void pt__tree_slot_take(const pt_scene *s, pt__tree_slots *z, const pt__tree_query *q, int n, int g)
 {
-    *has_nr = pt__has_normal(q->nr);
-    *u = q->u;
-    *prob = 1.0f;
+    z->node[g] = &s->ltree[0];
+    if (z->next >= n) {
+        if (z->at[g] >= 0) --z->live;
+        z->at[g] = -1;
+        return;
+    }
+    if (z->at[g] < 0) ++z->live;
+    z->at[g] = z->next++;
+    z->has_nr[g] = pt__has_normal(q[z->at[g]].nr);
+    z->u[g] = q[z->at[g]].u;
+    z->prob[g] = 1.0f;
+}
+static void pt__tree_slots_start(const pt_scene *s, pt__tree_slots *z, const pt__tree_query *q, int n)
+{
+    int g;
+    z->next = z->live = 0;
+    for (g = 0; g < PT__TREE_SLOTS; ++g) {
+        z->at[g] = -1;
+        z->u[g] = 0.0f;
+        z->has_nr[g] = z->k[g] = z->lit[g] = 0;
+        pt__tree_slot_take(s, z, q, n, g);
+    }
+}
+/* Every busy slot's step after its level (pt__tree_step): down to the child, or its query's
+   result and the next query. */
+static PT__HOT void pt__tree_slots_step(const pt_scene *s, pt__tree_slots *z, pt__tree_query *q, int n)
+{
+    int g;
+    for (g = 0; g < PT__TREE_SLOTS; ++g) {
+        pt__tree_query *x;
+        uint32_t child;
+        if (z->at[g] < 0) continue;
+        x = &q[z->at[g]];
+        x->ok = 0;
+        if (z->lit[g]) {
+            child = pt__tree_step(z->node[g], z->imp[g], z->c[g], z->k[g], &z->u[g], &z->prob[g]);
+            if (!(child & PT__LCHILD_LIGHT)) {
+                z->node[g] = &s->ltree[child];
+                continue;
+            }
+            x->light = child & ~PT__LCHILD_LIGHT;
+            x->pmf = z->prob[g];
+            x->ok = z->prob[g] > 0.0f;
+        }
+        pt__tree_slot_take(s, z, q, n, g); /* the pick ended: the slot takes the next */
+    }
 }
 /* pt__tree_pick (AVX2) for n points at once. A descent is a chain of dependent steps (a node's
    load, its children's importances, their sums, the child), so one pick leaves the core mostly
@@ -3977,43 +4029,125 @@ static PT__HOT void pt__tree_slot(const pt__tree_query *q, int *has_nr, float *u
    operations (pt__lnodew_level_avx2, pt__tree_step), so the results are the same to the bit. */
 PT__TARGET_AVX2 PT__NOINLINE static void pt__tree_picks_avx2(const pt_scene *s, pt__tree_query *q, int n)
 {
-    const pt__lnodew *node[PT__TREE_SLOTS];
-    float u[PT__TREE_SLOTS], prob[PT__TREE_SLOTS], imp[PT__TREE_SLOTS][PT__LTREE_W], c[PT__TREE_SLOTS][PT__LTREE_W];
-    int has_nr[PT__TREE_SLOTS], at[PT__TREE_SLOTS], k[PT__TREE_SLOTS], lit[PT__TREE_SLOTS];
-    int next = 0, live = 0, g;
-    for (g = 0; g < PT__TREE_SLOTS; ++g) {
-        at[g] = next < n ? next++ : -1;
-        node[g] = &s->ltree[0];
-        k[g] = lit[g] = 0;
-        if (at[g] >= 0) {
-            pt__tree_slot(&q[at[g]], &has_nr[g], &u[g], &prob[g]);
-            ++live;
-        }
-    }
-    while (live) {
+    pt__tree_slots z;
+    int g;
+    pt__tree_slots_start(s, &z, q, n);
+    while (z.live) {
         for (g = 0; g < PT__TREE_SLOTS; ++g)
-            if (at[g] >= 0)
-                lit[g] = pt__lnodew_level_avx2(node[g], q[at[g]].p, q[at[g]].nr, has_nr[g], u[g], imp[g], c[g], &k[g]);
-        for (g = 0; g < PT__TREE_SLOTS; ++g) {
-            pt__tree_query *x;
-            uint32_t child;
-            if (at[g] < 0) continue;
-            x = &q[at[g]];
-            x->ok = 0;
-            if (lit[g]) {
-                child = pt__tree_step(node[g], imp[g], c[g], k[g], &u[g], &prob[g]);
-                if (!(child & PT__LCHILD_LIGHT)) {
-                    node[g] = &s->ltree[child];
-                    continue;
-                }
-                x->light = child & ~PT__LCHILD_LIGHT;
-                x->pmf = prob[g];
-                x->ok = prob[g] > 0.0f;
+            if (z.at[g] >= 0) {
+                const pt__tree_query *x = &q[z.at[g]];
+                z.lit[g] = pt__lnodew_level_avx2(z.node[g], x->p, x->nr, z.has_nr[g], z.u[g], z.imp[g], z.c[g], &z.k[g]);
             }
-            node[g] = &s->ltree[0]; /* the pick ended: the slot takes the next */
-            if (next < n) pt__tree_slot(&q[at[g] = next++], &has_nr[g], &u[g], &prob[g]);
-            else at[g] = -1, --live;
+        pt__tree_slots_step(s, &z, q, n);
+    }
+}
+/* Two 8-float rows as one 16-float vector (a's in lanes 0-7, b's in 8-15); and two numbers
+   broadcast to the halves. (The zero-masked insert under a full mask: g++ warns about the plain
+   one's undefined pass-through.) */
+PT__TARGET_AVX512 static inline __m512 pt__join8(__m256 a, __m256 b)
+{
+    return _mm512_castpd_ps(_mm512_maskz_insertf64x4((__mmask8)0xff, _mm512_castpd256_pd512(_mm256_castps_pd(a)),
+                                                     _mm256_castps_pd(b), 1));
+}
+#define PT__LOAD2(F) pt__join8(_mm256_loadu_ps(na->F), _mm256_loadu_ps(nb->F))
+#define PT__SET2(x, y) pt__join8(_mm256_set1_ps(x), _mm256_set1_ps(y))
+#define PT__SEL16(m, yes, no) _mm512_mask_blend_ps(m, no, yes)
+/* pt__lnode_importance_avx2 of node na from point pa (normal ra; ha: has one) in lanes 0-7 and of
+   nb from pb in lanes 8-15, in one AVX-512 pass: the same float operations in the same order
+   per lane; a lane mask selects where the AVX2 code ands with a lane mask. The receiver's bound
+   is computed for both halves and applied where its half has a normal. */
+PT__TARGET_AVX512 static inline __m512 pt__lnode_importance2_avx512(const pt__lnodew *na, const pt__lnodew *nb, pt_vec3 pa,
+                                                                  pt_vec3 pb, pt_vec3 ra, pt_vec3 rb, int ha, int hb)
+{
+    const __mmask16 all = 0xffff, hmask = (__mmask16)((ha ? 0x00ffu : 0u) | (hb ? 0xff00u : 0u));
+    const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f), none = _mm512_set1_ps(-1.0f);
+    const __m512 px = PT__SET2(pa.x, pb.x), py = PT__SET2(pa.y, pb.y), pz = PT__SET2(pa.z, pb.z);
+    const __m512 lx = PT__LOAD2(lo[0]), ly = PT__LOAD2(lo[1]), lz = PT__LOAD2(lo[2]);
+    const __m512 hx = PT__LOAD2(hi[0]), hy = PT__LOAD2(hi[1]), hz = PT__LOAD2(hi[2]);
+    const __m512 cos_o = PT__LOAD2(cos_o);
+    __m512 dx = _mm512_sub_ps(px, _mm512_maskz_max_ps(all, lx, _mm512_maskz_min_ps(all, px, hx)));
+    __m512 dy = _mm512_sub_ps(py, _mm512_maskz_max_ps(all, ly, _mm512_maskz_min_ps(all, py, hy)));
+    __m512 dz = _mm512_sub_ps(pz, _mm512_maskz_max_ps(all, lz, _mm512_maskz_min_ps(all, pz, hz)));
+    __m512 dmin2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
+    __mmask16 apart = _mm512_cmp_ps_mask(dmin2, zero, _CMP_GT_OS), cone, dead, lit;
+    __m512 inv = _mm512_maskz_mov_ps(apart, _mm512_div_ps(one, _mm512_maskz_sqrt_ps(all, PT__SEL16(apart, dmin2, one))));
+    __m512 num, side, tilted, cos_p, cos_r = one, rd2, r;
+    dx = _mm512_sub_ps(px, PT__LOAD2(centre[0]));
+    dy = _mm512_sub_ps(py, PT__LOAD2(centre[1]));
+    dz = _mm512_sub_ps(pz, PT__LOAD2(centre[2]));
+    rd2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
+    rd2 = _mm512_div_ps(one, _mm512_maskz_max_ps(all, _mm512_maskz_max_ps(all, rd2, PT__LOAD2(r2)), _mm512_set1_ps(FLT_MIN)));
+    num = _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(PT__LOAD2(axis[0]), px), _mm512_mul_ps(PT__LOAD2(axis[1]), py)),
+                                      _mm512_mul_ps(PT__LOAD2(axis[2]), pz)),
+                        PT__LOAD2(pmin));
+    num = _mm512_maskz_max_ps(all, num, zero);
+    side = _mm512_maskz_sqrt_ps(all, _mm512_maskz_max_ps(all, _mm512_sub_ps(dmin2, _mm512_mul_ps(num, num)), zero));
+    tilted = _mm512_mul_ps(_mm512_add_ps(_mm512_mul_ps(num, cos_o), _mm512_mul_ps(side, PT__LOAD2(sin_o))), inv);
+    lit = _mm512_cmp_ps_mask(cos_o, none, _CMP_GT_OS);
+    cone = lit & apart & _mm512_cmp_ps_mask(_mm512_mul_ps(num, inv), cos_o, _CMP_LT_OS);
+    cos_p = PT__SEL16(cone, tilted, one);
+    dead = lit & _mm512_cmp_ps_mask(cos_p, PT__LOAD2(cos_e), _CMP_LE_OS);
+    if (hmask) { /* the receiver: nothing on or below its plane (masked to the halves with a normal) */
+        const __mmask16 sx = (__mmask16)((ra.x > 0.0f ? 0x00ffu : 0u) | (rb.x > 0.0f ? 0xff00u : 0u));
+        const __mmask16 sy = (__mmask16)((ra.y > 0.0f ? 0x00ffu : 0u) | (rb.y > 0.0f ? 0xff00u : 0u));
+        const __mmask16 sz = (__mmask16)((ra.z > 0.0f ? 0x00ffu : 0u) | (rb.z > 0.0f ? 0xff00u : 0u));
+        r = _mm512_maskz_add_ps(hmask, _mm512_maskz_mul_ps(hmask, PT__SET2(ra.x, rb.x), PT__SEL16(sx, hx, lx)),
+                                _mm512_maskz_mul_ps(hmask, PT__SET2(ra.y, rb.y), PT__SEL16(sy, hy, ly)));
+        r = _mm512_maskz_add_ps(hmask, r, _mm512_maskz_mul_ps(hmask, PT__SET2(ra.z, rb.z), PT__SEL16(sz, hz, lz)));
+        r = _mm512_maskz_sub_ps(hmask, r, PT__SET2(pt_dot(ra, pa), pt_dot(rb, pb)));
+        dead |= _mm512_mask_cmp_ps_mask(hmask, r, zero, _CMP_LE_OS);
+        cos_r = PT__SEL16(hmask & apart, _mm512_maskz_min_ps(hmask, one, _mm512_maskz_mul_ps(hmask, r, inv)), one);
+    }
+    return _mm512_maskz_mov_ps((__mmask16)~dead, _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(PT__LOAD2(power), cos_p), cos_r), rd2));
+}
+#undef PT__LOAD2
+#undef PT__SEL16
+/* pt__lnodew_level_avx2 for slots g and g + 1 of z at once (lanes 0-7 and 8-15): the importances,
+   their running sums (pt__scan8_avx2's three additions within each half), each slot's total and
+   count at u x total (z->lit, z->k); xa, xb: the slots' queries. */
+PT__TARGET_AVX512 static inline void pt__lnodew_level2_avx512(pt__tree_slots *z, int g, const pt__tree_query *xa,
+                                                              const pt__tree_query *xb)
+{
+    const __m512i i1 = _mm512_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6, 8, 8, 9, 10, 11, 12, 13, 14);
+    const __m512i i2 = _mm512_setr_epi32(0, 0, 0, 1, 2, 3, 4, 5, 8, 8, 8, 9, 10, 11, 12, 13);
+    const __m512i i4 = _mm512_setr_epi32(0, 0, 0, 0, 0, 1, 2, 3, 8, 8, 8, 8, 8, 9, 10, 11);
+    __m512 x = pt__lnode_importance2_avx512(z->node[g], z->node[g + 1], xa->p, xb->p, xa->nr, xb->nr, z->has_nr[g],
+                                            z->has_nr[g + 1]);
+    float t[2];
+    unsigned go = 0u, le;
+    int j;
+    _mm512_storeu_ps(z->imp[g], x); /* (slots g and g + 1's rows are one after the other) */
+    x = _mm512_add_ps(x, _mm512_maskz_permutexvar_ps((__mmask16)0xfefe, i1, x));
+    x = _mm512_add_ps(x, _mm512_maskz_permutexvar_ps((__mmask16)0xfcfc, i2, x));
+    x = _mm512_add_ps(x, _mm512_maskz_permutexvar_ps((__mmask16)0xf0f0, i4, x));
+    _mm512_storeu_ps(z->c[g], x);
+    for (j = 0; j < 2; ++j) {
+        const float total = z->c[g + j][PT__LTREE_W - 1];
+        z->lit[g + j] = total > 0.0f && pt__isfinite(total);
+        t[j] = z->lit[g + j] ? z->u[g + j] * total : 0.0f;
+        if (z->lit[g + j]) go |= j ? 0xff00u : 0x00ffu;
+    }
+    le = (unsigned)_mm512_mask_cmp_ps_mask((__mmask16)go, x, PT__SET2(t[0], t[1]), _CMP_LE_OS);
+    z->k[g] = __builtin_popcount(le & 0xffu);
+    z->k[g + 1] = __builtin_popcount(le >> 8);
+}
+#undef PT__SET2
+#if PT__TREE_SLOTS % 2
+#error "PT__TREE_SLOTS must be even (pt__tree_picks_avx512 pairs them)"
+#endif
+/* pt__tree_picks_avx2 with two slots a pass of AVX-512 (pt__lnodew_level2_avx512): the same
+   results to the bit. An idle slot beside a busy one computes from its partner's query, unread. */
+PT__TARGET_AVX512 PT__NOINLINE static void pt__tree_picks_avx512(const pt_scene *s, pt__tree_query *q, int n)
+{
+    pt__tree_slots z;
+    int g;
+    pt__tree_slots_start(s, &z, q, n);
+    while (z.live) {
+        for (g = 0; g < PT__TREE_SLOTS; g += 2) {
+            const int a = z.at[g] >= 0 ? z.at[g] : z.at[g + 1], b = z.at[g + 1] >= 0 ? z.at[g + 1] : z.at[g];
+            if (a >= 0) pt__lnodew_level2_avx512(&z, g, &q[a], &q[b]);
         }
+        pt__tree_slots_step(s, &z, q, n);
     }
 }
 #endif
@@ -11784,7 +11918,8 @@ static void pt__batch_picks(const pt__batch_ctx *b, pt__lane *lanes, const int *
             q[j].nr = pt__receiver_normal(v);
             q[j].u = lanes[pick[i + j]].du0;
         }
-        pt__tree_picks_avx2(b->s, q, m);
+        if (b->s->simd >= PT_SIMD_AVX512) pt__tree_picks_avx512(b->s, q, m);
+        else pt__tree_picks_avx2(b->s, q, m);
         for (j = 0; j < m; ++j) {
             pt__lane *l = &lanes[pick[i + j]];
             l->defer = 0;

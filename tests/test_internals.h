@@ -364,12 +364,13 @@ static void lighttree_level_widths(test_ctx *t)
 #endif
 }
 
-/* The light tree's picks made side by side (pt__tree_picks_avx2, as the batched integrator's
-   stage 2t makes them) are pt__tree_pick's to the bit, at AVX2 and at the narrow levels: the hall
-   of 1024 lamps (bench/scenes/many-tris.scene), 20000 points in and around it (some on its
-   lamps' plane), with no receiver normal, a random one or an axis, and the numbers 0 and the
-   largest below 1 among the others; queries in runs of every length from 1 to 11, so slots end
-   and refill at every phase. Deterministic (fixed seed); skipped where the CPU or the build has
+/* The light tree's picks made side by side (pt__tree_picks_avx2 and, where the CPU has AVX-512,
+   pt__tree_picks_avx512, as the batched integrator's stage 2t makes them) are pt__tree_pick's to
+   the bit, at AVX2 and at the narrow levels: the hall of 1024 lamps (bench/scenes/many-tris.scene),
+   20000 points in and around it (some on its lamps' plane), with no receiver normal, a random one
+   or an axis (the two slots of an AVX-512 pass often differ in having one), and the numbers 0 and
+   the largest below 1 among the others; queries in runs of every length from 1 to 11, so slots
+   end and refill at every phase. Deterministic (fixed seed); skipped where the CPU or the build has
    no AVX2 (the scene's SIMD level, whatever PDFTRACE_SIMD sets, is set by hand for each pick). */
 static void lighttree_picks_interleaved(test_ctx *t)
 {
@@ -377,7 +378,8 @@ static void lighttree_picks_interleaved(test_ctx *t)
     pt_scenefile sf;
     pt_scene *s = NULL;
     pt_render_desc base;
-    pt__tree_query q[11];
+    pt__tree_query q[11], q512[11];
+    const int avx512 = __builtin_cpu_supports("avx512f");
     pt_rng r;
     char err[512];
     long n = 0, bad = 0, unlit = 0;
@@ -410,8 +412,9 @@ static void lighttree_picks_interleaved(test_ctx *t)
             x->u = j % 7 == 3 ? 0.0f : j % 7 == 5 ? 0.99999994f : pt_rng_float(&r);
             x->ok = -1;
         }
-        s->simd = PT_SIMD_AVX2;
+        memcpy(q512, q, sizeof q);
         pt__tree_picks_avx2(s, q, run);
+        if (avx512) pt__tree_picks_avx512(s, q512, run);
         for (j = 0; j < run; ++j) {
             const pt__tree_query *x = &q[j];
             uint32_t la = 0xdeadu, lb = 0xdeadu;
@@ -426,6 +429,11 @@ static void lighttree_picks_interleaved(test_ctx *t)
             }
             ++n;
             unlit += !x->ok;
+            if (avx512 && (q512[j].ok != x->ok || (x->ok && (q512[j].light != x->light ||
+                                                             memcmp(&q512[j].pmf, &x->pmf, sizeof x->pmf) != 0))) &&
+                !CHECK(t, bad++ > 3, "point (%g, %g, %g), u %.9g: AVX-512 %d (light %u, pmf %.9g), AVX2 %d (light %u, pmf %.9g)",
+                       (double)x->p.x, (double)x->p.y, (double)x->p.z, (double)x->u, q512[j].ok, (unsigned)q512[j].light,
+                       (double)q512[j].pmf, x->ok, (unsigned)x->light, (double)x->pmf)) {}
             if ((x->ok != ra || (ra && (x->light != la || memcmp(&x->pmf, &pa, sizeof pa) != 0)) || lv < PT_SIMD_AVX2) &&
                 !CHECK(t, bad++ > 3, "point (%g, %g, %g), u %.9g: side by side %d (light %u, pmf %.9g), alone %d (light %u, "
                        "pmf %.9g), level %d", (double)x->p.x, (double)x->p.y, (double)x->p.z, (double)x->u, x->ok,
@@ -434,7 +442,7 @@ static void lighttree_picks_interleaved(test_ctx *t)
     }
     CHECK(t, bad == 0, "%ld of %ld picks differ between side by side and alone", bad, n);
     CHECK(t, unlit < n / 4, "%ld of %ld points lit by no light: the cases miss the picks", unlit, n);
-    test_note(t, "%ld picks in runs of 1 to 11, %ld lit by no light", n, unlit);
+    test_note(t, "%ld picks in runs of 1 to 11, %ld lit by no light; AVX-512 %s", n, unlit, avx512 ? "too" : "absent");
     pt_scene_destroy(s);
 #else
     test_skip(t, "built without the wide code (PT__WIDE)");
