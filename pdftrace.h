@@ -11590,10 +11590,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
    (cfg->recording) keep each path's records in its lane (pt__lane_recs). Stage 2 leaves light
    samples of quads to stage 2c (by area, 8 at a time), which leaves those by solid angle to 2b
-   (4 at a time), and of spheres to 2s (8 at a time; pt__lane_light); with a light tree it leaves
-   the picks to 2t (four descending side by side), which passes quads and spheres on to 2c and 2s.
-   Split copies (indirect_paths: every camera sample of a default render). With the Sobol
-   sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
+   (4 at a time), of spheres to 2s (8 at a time), light-tree picks to 2t (pt__lane_light). Split
+   copies (indirect_paths: every camera sample of a default render). With the Sobol sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
    take free lanes and run beside the path that split (copy 0), as the camera sample's family.
    What the scalar integrator does in its depth-first order is kept: (a) sums: a copy's lane sums
    its own path from 0; the parent logs what it gathers while its copies run (pt__lane_add) and,
