@@ -3937,24 +3937,29 @@ PT__TARGET_AVX2 static inline int pt__lnodew_level_avx2(const pt__lnodew *n, pt_
 }
 #endif
 static int pt__has_normal(pt_vec3 nr) { return nr.x != 0.0f || nr.y != 0.0f || nr.z != 0.0f; }
-/* The descent of pt__tree_pick from node n (its first level's importances and sums in imp, c and
-   *k), one body for every level function LEVEL: the first child whose running sum exceeds u x
-   total, i.e. the number of sums at most that (a child that cannot light p adds nothing, so it is
-   passed over); where rounding puts u x total at or past the total, the last child that can
-   light p. */
+/* One step of pt__tree_pick's descent after node n's level (importances imp, running sums c, k
+   the number of sums at most u x total): the first child whose running sum exceeds u x total (a
+   child that cannot light p adds nothing, so it is passed over); where rounding puts u x total
+   at or past the total, the last child that can light p. Multiplies the choice's probability
+   into *prob, rescales *u for the next level and returns the child (n->child). Every descent
+   (one pick, or several interleaved) steps with this, so they agree to the bit. */
+static PT__HOT uint32_t pt__tree_step(const pt__lnodew *n, const float *imp, const float *c, int k, float *u, float *prob)
+{
+    const float total = c[PT__LTREE_W - 1], t = *u * total;
+    float below;
+    if (PT__UNLIKELY(k > PT__LTREE_W - 1)) for (k = PT__LTREE_W - 1; !(imp[k] > 0.0f); --k) {}
+    below = k ? c[k - 1] : 0.0f;
+    *prob *= imp[k] / total;
+    *u = pt__minf((t - below) / imp[k], 0.99999994f);
+    return n->child[k];
+}
+/* The descent of pt__tree_pick from node n, one body for every level function LEVEL. */
 #define PT__TREE_DESCENT(LEVEL)                                                                                    \
     for (;;) {                                                                                                     \
-        float t, below, total;                                                                                     \
         int k;                                                                                                     \
         uint32_t child;                                                                                            \
         if (!LEVEL(n, p, nr, has_nr, u, imp, c, &k)) return 0;                                                     \
-        total = c[PT__LTREE_W - 1];                                                                                \
-        t = u * total;                                                                                             \
-        if (PT__UNLIKELY(k > PT__LTREE_W - 1)) for (k = PT__LTREE_W - 1; !(imp[k] > 0.0f); --k) {}                 \
-        below = k ? c[k - 1] : 0.0f;                                                                               \
-        prob *= imp[k] / total;                                                                                    \
-        u = pt__minf((t - below) / imp[k], 0.99999994f);                                                           \
-        child = n->child[k];                                                                                       \
+        child = pt__tree_step(n, imp, c, k, &u, &prob);                                                            \
         if (child & PT__LCHILD_LIGHT) {                                                                            \
             *light = child & ~PT__LCHILD_LIGHT;                                                                    \
             *pmf = prob;                                                                                           \
@@ -3976,6 +3981,206 @@ PT__TARGET_AVX2 PT__NOINLINE static int pt__tree_pick_avx2(const pt_scene *s, pt
     const pt__lnodew *n = &s->ltree[0];
     float prob = 1.0f, imp[PT__LTREE_W], c[PT__LTREE_W];
     PT__TREE_DESCENT(pt__lnodew_level_avx2)
+}
+#endif
+/* A pick of pt__tree_picks_avx2: in, the point, the receiver normal (0: none) and the number u
+   of pt__tree_pick; out, what it gives (ok its return, light and pmf set where ok). */
+typedef struct pt__tree_query {
+    pt_vec3 p, nr;
+    float u, pmf;
+    uint32_t light;
+    int ok;
+} pt__tree_query;
+#ifdef PT__WIDE
+#ifndef PT__TREE_SLOTS
+#define PT__TREE_SLOTS 4 /* the picks descending side by side */
+#endif
+/* The state of pt__tree_picks_avx2's slots: each slot's query (at; -1: idle), node, number u,
+   probability so far, receiver-normal flag, and its level's importances, sums, count and whether
+   any child lights the point (lit); next: the next query to take, live: the slots busy. */
+typedef struct pt__tree_slots {
+    const pt__lnodew *node[PT__TREE_SLOTS];
+    float u[PT__TREE_SLOTS], prob[PT__TREE_SLOTS], imp[PT__TREE_SLOTS][PT__LTREE_W], c[PT__TREE_SLOTS][PT__LTREE_W];
+    int has_nr[PT__TREE_SLOTS], at[PT__TREE_SLOTS], k[PT__TREE_SLOTS], lit[PT__TREE_SLOTS];
+    int next, live;
+} pt__tree_slots;
+/* Slot g takes the next of the n queries q at the root, or goes idle. */
+static PT__HOT void pt__tree_slot_take(const pt_scene *s, pt__tree_slots *z, const pt__tree_query *q, int n, int g)
+{
+    z->node[g] = &s->ltree[0];
+    if (z->next >= n) {
+        if (z->at[g] >= 0) --z->live;
+        z->at[g] = -1;
+        return;
+    }
+    if (z->at[g] < 0) ++z->live;
+    z->at[g] = z->next++;
+    z->has_nr[g] = pt__has_normal(q[z->at[g]].nr);
+    z->u[g] = q[z->at[g]].u;
+    z->prob[g] = 1.0f;
+}
+static void pt__tree_slots_start(const pt_scene *s, pt__tree_slots *z, const pt__tree_query *q, int n)
+{
+    int g;
+    z->next = z->live = 0;
+    for (g = 0; g < PT__TREE_SLOTS; ++g) {
+        z->at[g] = -1;
+        z->u[g] = 0.0f;
+        z->has_nr[g] = z->k[g] = z->lit[g] = 0;
+        pt__tree_slot_take(s, z, q, n, g);
+    }
+}
+/* Every busy slot's step after its level (pt__tree_step): down to the child, or its query's
+   result and the next query. */
+static PT__HOT void pt__tree_slots_step(const pt_scene *s, pt__tree_slots *z, pt__tree_query *q, int n)
+{
+    int g;
+    for (g = 0; g < PT__TREE_SLOTS; ++g) {
+        pt__tree_query *x;
+        uint32_t child;
+        if (z->at[g] < 0) continue;
+        x = &q[z->at[g]];
+        x->ok = 0;
+        if (z->lit[g]) {
+            child = pt__tree_step(z->node[g], z->imp[g], z->c[g], z->k[g], &z->u[g], &z->prob[g]);
+            if (!(child & PT__LCHILD_LIGHT)) {
+                z->node[g] = &s->ltree[child];
+                continue;
+            }
+            x->light = child & ~PT__LCHILD_LIGHT;
+            x->pmf = z->prob[g];
+            x->ok = z->prob[g] > 0.0f;
+        }
+        pt__tree_slot_take(s, z, q, n, g); /* the pick ended: the slot takes the next */
+    }
+}
+/* pt__tree_pick (AVX2) for n points at once. A descent is a chain of dependent steps (a node's
+   load, its children's importances, their sums, the child), so one pick leaves the core mostly
+   waiting; here PT__TREE_SLOTS picks descend together, each one level a round, so their chains
+   overlap, and a slot whose pick ends takes the next query. Each pick does pt__tree_pick's float
+   operations (pt__lnodew_level_avx2, pt__tree_step), so the results are the same to the bit. */
+PT__TARGET_AVX2 PT__NOINLINE static void pt__tree_picks_avx2(const pt_scene *s, pt__tree_query *q, int n)
+{
+    pt__tree_slots z;
+    int g;
+    pt__tree_slots_start(s, &z, q, n);
+    while (z.live) {
+        for (g = 0; g < PT__TREE_SLOTS; ++g)
+            if (z.at[g] >= 0) {
+                const pt__tree_query *x = &q[z.at[g]];
+                z.lit[g] = pt__lnodew_level_avx2(z.node[g], x->p, x->nr, z.has_nr[g], z.u[g], z.imp[g], z.c[g], &z.k[g]);
+            }
+        pt__tree_slots_step(s, &z, q, n);
+    }
+}
+/* Two 8-float rows as one 16-float vector (a's in lanes 0-7, b's in 8-15); and two numbers
+   broadcast to the halves. (The zero-masked insert under a full mask: g++ warns about the plain
+   one's undefined pass-through.) */
+PT__TARGET_AVX512 static inline __m512 pt__join8(__m256 a, __m256 b)
+{
+    return _mm512_castpd_ps(_mm512_maskz_insertf64x4((__mmask8)0xff, _mm512_castpd256_pd512(_mm256_castps_pd(a)),
+                                                     _mm256_castps_pd(b), 1));
+}
+#define PT__LOAD2(F) pt__join8(_mm256_loadu_ps(na->F), _mm256_loadu_ps(nb->F))
+#define PT__SET2(x, y) pt__join8(_mm256_set1_ps(x), _mm256_set1_ps(y))
+#define PT__SEL16(m, yes, no) _mm512_mask_blend_ps(m, no, yes)
+/* pt__lnode_importance_avx2 of node na from point pa (normal ra; ha: has one) in lanes 0-7 and of
+   nb from pb in lanes 8-15, in one AVX-512 pass: the same float operations in the same order
+   per lane; a lane mask selects where the AVX2 code ands with a lane mask. The receiver's bound
+   is computed for both halves and applied where its half has a normal. */
+PT__TARGET_AVX512 static inline __m512 pt__lnode_importance2_avx512(const pt__lnodew *na, const pt__lnodew *nb, pt_vec3 pa,
+                                                                  pt_vec3 pb, pt_vec3 ra, pt_vec3 rb, int ha, int hb)
+{
+    const __mmask16 all = 0xffff, hmask = (__mmask16)((ha ? 0x00ffu : 0u) | (hb ? 0xff00u : 0u));
+    const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f), none = _mm512_set1_ps(-1.0f);
+    const __m512 px = PT__SET2(pa.x, pb.x), py = PT__SET2(pa.y, pb.y), pz = PT__SET2(pa.z, pb.z);
+    const __m512 lx = PT__LOAD2(lo[0]), ly = PT__LOAD2(lo[1]), lz = PT__LOAD2(lo[2]);
+    const __m512 hx = PT__LOAD2(hi[0]), hy = PT__LOAD2(hi[1]), hz = PT__LOAD2(hi[2]);
+    const __m512 cos_o = PT__LOAD2(cos_o);
+    __m512 dx = _mm512_sub_ps(px, _mm512_maskz_max_ps(all, lx, _mm512_maskz_min_ps(all, px, hx)));
+    __m512 dy = _mm512_sub_ps(py, _mm512_maskz_max_ps(all, ly, _mm512_maskz_min_ps(all, py, hy)));
+    __m512 dz = _mm512_sub_ps(pz, _mm512_maskz_max_ps(all, lz, _mm512_maskz_min_ps(all, pz, hz)));
+    __m512 dmin2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
+    __mmask16 apart = _mm512_cmp_ps_mask(dmin2, zero, _CMP_GT_OS), cone, dead, lit;
+    __m512 inv = _mm512_maskz_mov_ps(apart, _mm512_div_ps(one, _mm512_maskz_sqrt_ps(all, PT__SEL16(apart, dmin2, one))));
+    __m512 num, side, tilted, cos_p, cos_r = one, rd2, r;
+    dx = _mm512_sub_ps(px, PT__LOAD2(centre[0]));
+    dy = _mm512_sub_ps(py, PT__LOAD2(centre[1]));
+    dz = _mm512_sub_ps(pz, PT__LOAD2(centre[2]));
+    rd2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
+    rd2 = _mm512_div_ps(one, _mm512_maskz_max_ps(all, _mm512_maskz_max_ps(all, rd2, PT__LOAD2(r2)), _mm512_set1_ps(FLT_MIN)));
+    num = _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(PT__LOAD2(axis[0]), px), _mm512_mul_ps(PT__LOAD2(axis[1]), py)),
+                                      _mm512_mul_ps(PT__LOAD2(axis[2]), pz)),
+                        PT__LOAD2(pmin));
+    num = _mm512_maskz_max_ps(all, num, zero);
+    side = _mm512_maskz_sqrt_ps(all, _mm512_maskz_max_ps(all, _mm512_sub_ps(dmin2, _mm512_mul_ps(num, num)), zero));
+    tilted = _mm512_mul_ps(_mm512_add_ps(_mm512_mul_ps(num, cos_o), _mm512_mul_ps(side, PT__LOAD2(sin_o))), inv);
+    lit = _mm512_cmp_ps_mask(cos_o, none, _CMP_GT_OS);
+    cone = lit & apart & _mm512_cmp_ps_mask(_mm512_mul_ps(num, inv), cos_o, _CMP_LT_OS);
+    cos_p = PT__SEL16(cone, tilted, one);
+    dead = lit & _mm512_cmp_ps_mask(cos_p, PT__LOAD2(cos_e), _CMP_LE_OS);
+    if (hmask) { /* the receiver: nothing on or below its plane (masked to the halves with a normal) */
+        const __mmask16 sx = (__mmask16)((ra.x > 0.0f ? 0x00ffu : 0u) | (rb.x > 0.0f ? 0xff00u : 0u));
+        const __mmask16 sy = (__mmask16)((ra.y > 0.0f ? 0x00ffu : 0u) | (rb.y > 0.0f ? 0xff00u : 0u));
+        const __mmask16 sz = (__mmask16)((ra.z > 0.0f ? 0x00ffu : 0u) | (rb.z > 0.0f ? 0xff00u : 0u));
+        r = _mm512_maskz_add_ps(hmask, _mm512_maskz_mul_ps(hmask, PT__SET2(ra.x, rb.x), PT__SEL16(sx, hx, lx)),
+                                _mm512_maskz_mul_ps(hmask, PT__SET2(ra.y, rb.y), PT__SEL16(sy, hy, ly)));
+        r = _mm512_maskz_add_ps(hmask, r, _mm512_maskz_mul_ps(hmask, PT__SET2(ra.z, rb.z), PT__SEL16(sz, hz, lz)));
+        r = _mm512_maskz_sub_ps(hmask, r, PT__SET2(pt_dot(ra, pa), pt_dot(rb, pb)));
+        dead |= _mm512_mask_cmp_ps_mask(hmask, r, zero, _CMP_LE_OS);
+        cos_r = PT__SEL16(hmask & apart, _mm512_maskz_min_ps(hmask, one, _mm512_maskz_mul_ps(hmask, r, inv)), one);
+    }
+    return _mm512_maskz_mov_ps((__mmask16)~dead, _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(PT__LOAD2(power), cos_p), cos_r), rd2));
+}
+#undef PT__LOAD2
+#undef PT__SEL16
+/* pt__lnodew_level_avx2 for slots g and g + 1 of z at once (lanes 0-7 and 8-15): the importances,
+   their running sums (pt__scan8_avx2's three additions within each half), each slot's total and
+   count at u x total (z->lit, z->k); xa, xb: the slots' queries. */
+PT__TARGET_AVX512 static inline void pt__lnodew_level2_avx512(pt__tree_slots *z, int g, const pt__tree_query *xa,
+                                                              const pt__tree_query *xb)
+{
+    const __m512i i1 = _mm512_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6, 8, 8, 9, 10, 11, 12, 13, 14);
+    const __m512i i2 = _mm512_setr_epi32(0, 0, 0, 1, 2, 3, 4, 5, 8, 8, 8, 9, 10, 11, 12, 13);
+    const __m512i i4 = _mm512_setr_epi32(0, 0, 0, 0, 0, 1, 2, 3, 8, 8, 8, 8, 8, 9, 10, 11);
+    __m512 x = pt__lnode_importance2_avx512(z->node[g], z->node[g + 1], xa->p, xb->p, xa->nr, xb->nr, z->has_nr[g],
+                                            z->has_nr[g + 1]);
+    float t[2];
+    unsigned go = 0u, le;
+    int j;
+    _mm512_storeu_ps(z->imp[g], x); /* (slots g and g + 1's rows are one after the other) */
+    x = _mm512_add_ps(x, _mm512_maskz_permutexvar_ps((__mmask16)0xfefe, i1, x));
+    x = _mm512_add_ps(x, _mm512_maskz_permutexvar_ps((__mmask16)0xfcfc, i2, x));
+    x = _mm512_add_ps(x, _mm512_maskz_permutexvar_ps((__mmask16)0xf0f0, i4, x));
+    _mm512_storeu_ps(z->c[g], x);
+    for (j = 0; j < 2; ++j) {
+        const float total = z->c[g + j][PT__LTREE_W - 1];
+        z->lit[g + j] = total > 0.0f && pt__isfinite(total);
+        t[j] = z->lit[g + j] ? z->u[g + j] * total : 0.0f;
+        if (z->lit[g + j]) go |= j ? 0xff00u : 0x00ffu;
+    }
+    le = (unsigned)_mm512_mask_cmp_ps_mask((__mmask16)go, x, PT__SET2(t[0], t[1]), _CMP_LE_OS);
+    z->k[g] = __builtin_popcount(le & 0xffu);
+    z->k[g + 1] = __builtin_popcount(le >> 8);
+}
+#undef PT__SET2
+#if PT__TREE_SLOTS % 2
+#error "PT__TREE_SLOTS must be even (pt__tree_picks_avx512 pairs them)"
+#endif
+/* pt__tree_picks_avx2 with two slots a pass of AVX-512 (pt__lnodew_level2_avx512): the same
+   results to the bit. An idle slot beside a busy one computes from its partner's query, unread. */
+PT__TARGET_AVX512 PT__NOINLINE static void pt__tree_picks_avx512(const pt_scene *s, pt__tree_query *q, int n)
+{
+    pt__tree_slots z;
+    int g;
+    pt__tree_slots_start(s, &z, q, n);
+    while (z.live) {
+        for (g = 0; g < PT__TREE_SLOTS; g += 2) {
+            const int a = z.at[g] >= 0 ? z.at[g] : z.at[g + 1], b = z.at[g + 1] >= 0 ? z.at[g + 1] : z.at[g];
+            if (a >= 0) pt__lnodew_level2_avx512(&z, g, &q[a], &q[b]);
+        }
+        pt__tree_slots_step(s, &z, q, n);
+    }
 }
 #endif
 /* pt__lnodew_level without the AVX2 pass (arguments as pt__lnodew_level_avx2's). */
@@ -11970,8 +12175,8 @@ PTDEF pt_color pt_trace_path(const pt_scene *s, const pt_render_desc *d, pt_ray 
    the same bit for bit (tests/test_render.c, "batched"). A guide's training iterations
    (cfg->recording) keep each path's records in its lane (pt__lane_recs). Stage 2 leaves light
    samples of quads to stage 2c (by area, 8 at a time), which leaves those by solid angle to 2b
-   (4 at a time), and of spheres to 2s (8 at a time; pt__lane_light). Split copies (indirect_paths: every camera sample of a default render). With the Sobol
-   sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
+   (4 at a time), of spheres to 2s (8 at a time), light-tree picks to 2t (pt__lane_light). Split
+   copies (indirect_paths: every camera sample of a default render). With the Sobol sampler a copy draws from sets of its own (pt__split_sampler), so copies 1 .. k-1 of a split
    take free lanes and run beside the path that split (copy 0), as the camera sample's family.
    What the scalar integrator does in its depth-first order is kept: (a) sums: a copy's lane sums
    its own path from 0; the parent logs what it gathers while its copies run (pt__lane_add) and,
@@ -12000,8 +12205,8 @@ typedef struct pt__lane {
     pt_vec3 prev_p, prev_n;
     float prev_pdf, k; /* k: indirect_paths, the throughput the path starts with (pt__trace) */
     int depth, surfaces, prev_delta, found, shadow; /* surfaces: non-delta vertices so far */
-    int defer;         /* its light sample left to stage 2b (1), 2c (2), 2s (3) or 2e (4) (pt__lane_light) with these: */
-    float dpick, du1, du2; /* the pick's probability, the point's numbers */
+    int defer;         /* its light sample left to stage 2b (1), 2c (2), 2s (3) or 2e (4), or its pick to 2t (5) */
+    float dpick, du0, du1, du2; /* (pt__lane_light) with the pick's probability, its number (2t), the point's */
     uint32_t pi, li, pix, index_k;
     float t, bary[3];
     pt_hit h;
@@ -12106,6 +12311,7 @@ typedef struct pt__batch_ctx {
     int tri, any_lights, nee, pick, copies;
     int area;        /* quads' light samples left to stage 2c, and 2b (pt__lane_light) */
     int env8;        /* the environment map evaluated (stage 1e) and sampled (stage 2e) 8 lanes at a time */
+    int picks;       /* the light tree's picks left to stage 2t (pt__lane_light) */
     int sph;         /* solid-angle sampling of quads allowed (PT__LIGHTS_SPHERICAL) */
     int dvec;        /* the delta lights' weights left to stage 2d (pt__batch_delta) */
     unsigned lmode;  /* pt__lights_mode */
@@ -12223,15 +12429,36 @@ static PT__HOT int pt__lane_picked(const pt__batch_ctx *b, pt__light_sample *ls,
     }
     return 1;
 }
+/* The rest of pt__lane_light at lane l once its pick chose shaped light li with probability pick
+   (stage 2, or 2t): a quad's or a sphere's sample left to stages 2c and 2s (l->defer 2 or 3), any
+   other light's sample and its shadow ray. */
+static PT__HOT void pt__lane_light_picked(const pt__batch_ctx *b, pt__lane *l, uint32_t li, float pick)
+{
+    const pt_scene *s = b->s;
+    pt__vertex *v = &l->v;
+    const pt__prim *p = &s->prims[s->lights[li].prim];
+    if (p->type == PT__PRIM_QUAD || p->type == PT__PRIM_SPHERE) {
+        l->defer = p->type == PT__PRIM_QUAD ? 2 : 3;
+        l->li = li;
+        l->dpick = pick;
+        return;
+    }
+    l->shadow = pt__light_prim_sample(s, p, v->o, l->du1, l->du2, &l->ls, b->sph) &&
+                pt__lane_picked(b, &l->ls, pick, li, &l->li) &&
+                pt__nee_prepare(s, b->cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+    v->sph_prim = l->ls.sph_prim;
+    v->sph_S = l->ls.sph_S;
+}
 /* Stage 2's light sample at lane l's vertex (the numbers u0, u1, u2 of pt__lights_sample_all) and
-   its shadow ray. Where the light picked is a quad, the rest is left to stage 2c (l->defer = 2;
-   pt__batch_area_lights), which makes the batch's area samples of quads 8 at a time and leaves
-   those to be sampled by solid angle (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which
-   sets up their spherical rectangles 4 at a time; a sphere's to stage 2s (l->defer = 3;
-   pt__batch_sphere_lights), 8 cones at a time; the environment's to stage 2e (l->defer = 4;
-   pt__batch_env_lights), 8 at a time. b->area and b->env8 are 0 without AVX2: then it is all done
-   here. With an environment a shaped light
-   is picked with pt__lights_sample_all's u0 rescaled, and its density carries the lights' share
+   its shadow ray. Where the light tree picks (b->picks), the pick is left to stage 2t (l->defer =
+   5; pt__batch_picks), which makes the batch's picks several at a time. Where the light picked is
+   a quad, the rest is left to stage 2c (l->defer = 2; pt__batch_area_lights), which makes the
+   batch's area samples of quads 8 at a time and leaves those to be sampled by solid angle
+   (pt__sphrect_wanted) to stage 2b (pt__batch_lights), which sets up their spherical rectangles 4
+   at a time; a sphere's to stage 2s (l->defer = 3; pt__batch_sphere_lights), 8 cones at a time;
+   the environment's to stage 2e (l->defer = 4; pt__batch_env_lights), 8 at a time. b->area and
+   b->env8 are 0 without AVX2: then it is all done here. With an environment a shaped light is
+   picked with pt__lights_sample_all's u0 rescaled, and its density carries the lights' share
    (pt__lane_picked). Either way each path does what pt__lights_sample_all and pt__nee_prepare do. */
 static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0, float u1, float u2)
 {
@@ -12242,35 +12469,67 @@ static PT__HOT void pt__lane_light(const pt__batch_ctx *b, pt__lane *l, float u0
     float pick = 0.0f;
     l->ls.sph_prim = NULL;
     l->ls.sph_S = 0.0;
+    l->du1 = u1;
+    l->du2 = u2;
     if (b->env8 && u0 < cfg->env_pick) {
         l->defer = 4;
-        l->du1 = u1;
-        l->du2 = u2;
         return;
     }
     if (!b->area || (PT__UNLIKELY(cfg->env_pick > 0.0f) && u0 < cfg->env_pick)) {
         l->shadow = pt__lights_sample_all(s, cfg, v->o, pt__receiver_normal(v), u0, u1, u2, &l->ls, &l->li) &&
                     pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
-    } else if (!pt__lane_pick(b, v, PT__UNLIKELY(cfg->env_pick > 0.0f)
-                                        ? pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f) : u0,
-                              &li, &pick)) {
-        l->shadow = 0;
     } else {
-        const pt__prim *p = &s->prims[s->lights[li].prim];
-        if (p->type == PT__PRIM_QUAD || p->type == PT__PRIM_SPHERE) {
-            l->defer = p->type == PT__PRIM_QUAD ? 2 : 3;
-            l->li = li;
-            l->dpick = pick;
-            l->du1 = u1;
-            l->du2 = u2;
+        if (PT__UNLIKELY(cfg->env_pick > 0.0f)) u0 = pt__minf((u0 - cfg->env_pick) / cfg->lights_share, 0.99999994f);
+        if (b->picks) {
+            l->defer = 5;
+            l->du0 = u0;
             return;
         }
-        l->shadow = pt__light_prim_sample(s, p, v->o, u1, u2, &l->ls, b->sph) &&
-                    pt__lane_picked(b, &l->ls, pick, li, &l->li) &&
-                    pt__nee_prepare(s, cfg, v, &l->ls, l->li, b->tri, &l->nr, &l->st);
+        if (pt__lane_pick(b, v, u0, &li, &pick)) {
+            pt__lane_light_picked(b, l, li, pick);
+            return;
+        }
+        l->shadow = 0;
     }
     v->sph_prim = l->ls.sph_prim;
     v->sph_S = l->ls.sph_S;
+}
+/* Stage 2t: the light tree's picks stage 2 left (pick: n lanes), PT__TREE_SLOTS side by side
+   (pt__tree_picks_avx2), then the rest of each lane's light sample (pt__lane_light_picked), whose
+   quads and spheres are appended to area (*narea) and sph (*nsph) for stages 2c and 2s. */
+static void pt__batch_picks(const pt__batch_ctx *b, pt__lane *lanes, const int *pick, int n, int *area, int *narea,
+                            int *sph, int *nsph)
+{
+#ifdef PT__WIDE
+    pt__tree_query q[PT__BATCH];
+    int i, j, m;
+    for (i = 0; i < n; i += m) {
+        m = n - i < PT__BATCH ? n - i : PT__BATCH;
+        for (j = 0; j < m; ++j) {
+            const pt__vertex *v = &lanes[pick[i + j]].v;
+            q[j].p = v->o;
+            q[j].nr = pt__receiver_normal(v);
+            q[j].u = lanes[pick[i + j]].du0;
+        }
+        if (b->s->simd >= PT_SIMD_AVX512) pt__tree_picks_avx512(b->s, q, m);
+        else pt__tree_picks_avx2(b->s, q, m);
+        for (j = 0; j < m; ++j) {
+            pt__lane *l = &lanes[pick[i + j]];
+            l->defer = 0;
+            if (q[j].ok) {
+                pt__lane_light_picked(b, l, q[j].light, q[j].pmf);
+                if (l->defer == 3) sph[(*nsph)++] = pick[i + j];
+                else if (l->defer) area[(*narea)++] = pick[i + j];
+                continue;
+            }
+            l->shadow = 0;
+            l->v.sph_prim = NULL; /* (l->ls's, as pt__lane_light leaves it) */
+            l->v.sph_S = 0.0;
+        }
+    }
+#else
+    (void)b; (void)lanes; (void)pick; (void)n; (void)area; (void)narea; (void)sph; (void)nsph; /* (b->picks is 0) */
+#endif
 }
 /* Stage 2b for lane l, whose quad p's spherical rectangle was set up (ok; then q, S: its point and
    solid angle): the rest of pt__planar_light_sample, the pick, and the shadow ray. */
@@ -13387,8 +13646,8 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
                                            pt__lane *lanes, pt__lane_kids *kids, int n, const int copies)
 {
     int live[PT__BATCH_LANES], shade[PT__BATCH_LANES], defer[PT__BATCH_LANES], area[PT__BATCH_LANES], sph[PT__BATCH_LANES];
-    int env[PT__BATCH_LANES];
-    int nlive = n, nshade, ndefer, narea, nsph, nenv, i;
+    int env[PT__BATCH_LANES], pick[PT__BATCH_LANES];
+    int nlive = n, nshade, ndefer, narea, nsph, nenv, npick, i;
     pt__batch_ctx bc, *b = &bc;
     pt__batch_pool pool;
     b->pool = &pool;
@@ -13410,6 +13669,7 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
 #ifdef PT__WIDE
     b->env8 = b->area && cfg->env_on && pt__env_wide(cfg->env) && cfg->env_uniform < 1.0f;
 #endif
+    b->picks = b->area && s->ltree && (b->lmode & PT__LIGHTS_TREE);
     b->lanes = lanes;
     b->pool->kids = kids;
     b->pool->recording = cfg->recording;
@@ -13432,13 +13692,15 @@ static PT__HOT uint64_t pt__batch_run_with(const pt_scene *s, const pt__settings
         pt__batch_closest(s, pk, lanes, live, nlive, b->tri); /* (1) closest hits */
         if (cfg->sampler == PT_SAMPLER_SOBOL) pt__batch_draw_ahead(*b, lanes, live, nlive); /* (1b) */
         if (b->env8) pt__batch_escapes(b, lanes, live, nlive); /* (1e) the environment where rays left */
-        for (i = 0, nshade = 0, ndefer = 0, narea = 0, nsph = 0, nenv = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
+        for (i = 0, nshade = 0, ndefer = 0, narea = 0, nsph = 0, nenv = 0, npick = 0; i < nlive; ++i) /* (2) emission, vertices, light samples */
             if (pt__lane_shade(b, &lanes[live[i]], copies)) {
-                if (lanes[live[i]].defer == 4) env[nenv++] = live[i];
+                if (lanes[live[i]].defer == 5) pick[npick++] = live[i];
+                else if (lanes[live[i]].defer == 4) env[nenv++] = live[i];
                 else if (lanes[live[i]].defer == 3) sph[nsph++] = live[i];
                 else if (lanes[live[i]].defer) area[narea++] = live[i];
                 shade[nshade++] = live[i];
             } else if (copies) pt__lane_end(lanes, b->pool, live[i]);
+        if (npick) pt__batch_picks(b, lanes, pick, npick, area, &narea, sph, &nsph); /* (2t) the light tree's picks */
         if (nenv) pt__batch_env_lights(b, lanes, env, nenv); /* (2e) the environment's samples */
         if (b->dvec) pt__batch_delta(b, lanes, shade, nshade); /* (2d) the delta lights */
         if (nsph) pt__batch_sphere_lights(b, lanes, sph, nsph); /* (2s) spheres' samples */

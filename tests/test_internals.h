@@ -820,6 +820,91 @@ static void delta_weight8(test_ctx *t)
 #endif
 }
 
+/* The light tree's picks made side by side (pt__tree_picks_avx2 and, where the CPU has AVX-512,
+   pt__tree_picks_avx512, as the batched integrator's stage 2t makes them) are pt__tree_pick's to
+   the bit, at AVX2 and at the narrow levels: the hall of 1024 lamps (bench/scenes/many-tris.scene),
+   20000 points in and around it (some on its lamps' plane), with no receiver normal, a random one
+   or an axis (the two slots of an AVX-512 pass often differ in having one), and the numbers 0 and
+   the largest below 1 among the others; queries in runs of every length from 1 to 11, so slots
+   end and refill at every phase. Deterministic (fixed seed); skipped where the CPU or the build has
+   no AVX2 (the scene's SIMD level, whatever PDFTRACE_SIMD sets, is set by hand for each pick). */
+static void lighttree_picks_interleaved(test_ctx *t)
+{
+#ifdef PT__WIDE
+    pt_scenefile sf;
+    pt_scene *s = NULL;
+    pt_render_desc base;
+    pt__tree_query q[11], q512[11];
+    const int avx512 = __builtin_cpu_supports("avx512f");
+    pt_rng r;
+    char err[512];
+    long n = 0, bad = 0, unlit = 0;
+    int i, j, run;
+    if (!__builtin_cpu_supports("avx2")) {
+        test_skip(t, "no AVX2 on this CPU");
+        return;
+    }
+    if (!CHECK(t, pt_scenefile_load("bench/scenes/many-tris.scene", &sf, err, sizeof err) == PT_OK, "%s", err)) return;
+    if (!CHECK(t, pt_scenefile_build(&sf, &s, &base, err, sizeof err) == PT_OK, "%s", err)) {
+        pt_scenefile_free(&sf);
+        return;
+    }
+    pt_scenefile_free(&sf);
+    if (!CHECK(t, s->ltree != NULL, "no light tree")) {
+        pt_scene_destroy(s);
+        return;
+    }
+    pt_rng_seed(&r, 23, 5);
+    for (i = 0, run = 1; n < 20000; ++i, run = run % 11 + 1) {
+        for (j = 0; j < run; ++j) {
+            pt__tree_query *x = &q[j];
+            const unsigned kind = pt_rng_u32(&r) % 6u;
+            x->p = pt_v3(7.0f * pt_rng_float(&r) - 3.5f, 4.4f * pt_rng_float(&r) - 0.2f, 42.0f * pt_rng_float(&r) - 21.0f);
+            if (kind == 5) x->p.y = 3.98f; /* the ceiling lamps' plane */
+            x->nr = kind == 0 ? pt_v3(0.0f, 0.0f, 0.0f)
+                    : kind == 1 ? pt_v3(0.0f, 1.0f, 0.0f)
+                    : kind == 2 ? pt_v3(-1.0f, 0.0f, 0.0f)
+                    : pt_normalize(pt_v3(pt_rng_float(&r) - 0.5f, pt_rng_float(&r) - 0.5f, pt_rng_float(&r) - 0.5f));
+            x->u = j % 7 == 3 ? 0.0f : j % 7 == 5 ? 0.99999994f : pt_rng_float(&r);
+            x->ok = -1;
+        }
+        memcpy(q512, q, sizeof q);
+        pt__tree_picks_avx2(s, q, run);
+        if (avx512) pt__tree_picks_avx512(s, q512, run);
+        for (j = 0; j < run; ++j) {
+            const pt__tree_query *x = &q[j];
+            uint32_t la = 0xdeadu, lb = 0xdeadu;
+            float pa = -1.0f, pb = -1.0f;
+            int lv, ra, rb;
+            s->simd = PT_SIMD_AVX2;
+            ra = pt__tree_pick(s, x->p, x->nr, x->u, &la, &pa);
+            for (lv = PT_SIMD_SCALAR; lv < PT_SIMD_AVX2; ++lv) { /* (the narrow levels agree with AVX2) */
+                s->simd = lv;
+                rb = pt__tree_pick(s, x->p, x->nr, x->u, &lb, &pb);
+                if (rb != ra || (ra && (lb != la || memcmp(&pa, &pb, sizeof pa) != 0))) break;
+            }
+            ++n;
+            unlit += !x->ok;
+            if (avx512 && (q512[j].ok != x->ok || (x->ok && (q512[j].light != x->light ||
+                                                             memcmp(&q512[j].pmf, &x->pmf, sizeof x->pmf) != 0))) &&
+                !CHECK(t, bad++ > 3, "point (%g, %g, %g), u %.9g: AVX-512 %d (light %u, pmf %.9g), AVX2 %d (light %u, pmf %.9g)",
+                       (double)x->p.x, (double)x->p.y, (double)x->p.z, (double)x->u, q512[j].ok, (unsigned)q512[j].light,
+                       (double)q512[j].pmf, x->ok, (unsigned)x->light, (double)x->pmf)) {}
+            if ((x->ok != ra || (ra && (x->light != la || memcmp(&x->pmf, &pa, sizeof pa) != 0)) || lv < PT_SIMD_AVX2) &&
+                !CHECK(t, bad++ > 3, "point (%g, %g, %g), u %.9g: side by side %d (light %u, pmf %.9g), alone %d (light %u, "
+                       "pmf %.9g), level %d", (double)x->p.x, (double)x->p.y, (double)x->p.z, (double)x->u, x->ok,
+                       (unsigned)x->light, (double)x->pmf, ra, (unsigned)la, (double)pa, lv)) {}
+        }
+    }
+    CHECK(t, bad == 0, "%ld of %ld picks differ between side by side and alone", bad, n);
+    CHECK(t, unlit < n / 4, "%ld of %ld points lit by no light: the cases miss the picks", unlit, n);
+    test_note(t, "%ld picks in runs of 1 to 11, %ld lit by no light; AVX-512 %s", n, unlit, avx512 ? "too" : "absent");
+    pt_scene_destroy(s);
+#else
+    test_skip(t, "built without the wide code (PT__WIDE)");
+#endif
+}
+
 static const test_case test_internals_cases[] = {
     TEST_CASE(fma_guard),
     TEST_CASE(spot_falloff_shortcut),
@@ -828,6 +913,7 @@ static const test_case test_internals_cases[] = {
     TEST_CASE(sphere_sample8),
     TEST_CASE(env_lanes8),
     TEST_CASE(lighttree_level_widths),
+    TEST_CASE(lighttree_picks_interleaved),
 #if defined(PT__SSE)
     TEST_CASE(packet_hits),
 #endif

@@ -1077,6 +1077,31 @@ static const char sphere_lights_scene[] =
     "sphere 0.8 1.6 -0.5 0.15 bulb\nsphere 0 1 -1 2 glow\nsphere -1.9 1 -1 0.2 bulb\nsphere 1 0.3001 0.5 0.3 bulb\n"
     "sphere 0.2 2.2 -1.5 0.01 bulb\nsphere 1 2.2 -0.5 1e-7 dot\n";
 
+/* Enough lights for the light tree (the batched integrator makes its picks several at a time,
+   stage 2t): eight small triangles facing down from the ceiling in two brightnesses, six quads
+   (upright on the walls, two of them two-sided, one lying on the floor) and four small spheres;
+   the same under scenes/sky.pfm (the pick's number then rescaled past the environment's share). */
+#define TREE_LIGHTS_TEXT                                                                                                    \
+    "camera look_from 0 1.2 -2.5 look_at 0 0.8 1 vfov 75\n"                                                                 \
+    "material floor lambertian 0.7 0.7 0.7\nmaterial wall lambertian 0.6 0.5 0.4\n"                                         \
+    "material tlo emitter 8 7 6\nmaterial thi emitter 40 38 34\nmaterial qlamp emitter 3 3 4 two_sided\n"                   \
+    "material bulb emitter 30 28 25\n"                                                                                      \
+    "quad -2 0 -3   0 0 6   4 0 0   floor\nquad -2 0 3   4 0 0   0 2.5 0   wall\nquad -2 0 -3   0 2.5 0   0 0 6   wall\n"   \
+    "triangle -1.60 2.49 -2.50   -1.40 2.49 -2.50   -1.60 2.49 -2.30   tlo\n"                                               \
+    "triangle -0.60 2.49 -2.50   -0.40 2.49 -2.50   -0.60 2.49 -2.30   thi\n"                                               \
+    "triangle 0.40 2.49 -2.50   0.60 2.49 -2.50   0.40 2.49 -2.30   tlo\n"                                                  \
+    "triangle 1.40 2.49 -2.50   1.60 2.49 -2.50   1.40 2.49 -2.30   thi\n"                                                  \
+    "triangle -1.60 2.49 1.00   -1.40 2.49 1.00   -1.60 2.49 1.20   thi\n"                                                  \
+    "triangle -0.60 2.49 1.00   -0.40 2.49 1.00   -0.60 2.49 1.20   tlo\n"                                                  \
+    "triangle 0.40 2.49 1.00   0.60 2.49 1.00   0.40 2.49 1.20   thi\n"                                                     \
+    "triangle 1.40 2.49 1.00   1.60 2.49 1.00   1.40 2.49 1.20   tlo\n"                                                     \
+    "quad -1.99 1 -2   0 0.3 0   0 0 0.3   qlamp\nquad -1.99 1 0   0 0.3 0   0 0 0.3   qlamp\n"                             \
+    "quad -1.99 1 2   0 0.3 0   0 0 0.3   bulb\nquad -0.5 1.5 2.99   0 0.3 0   0.4 0 0   bulb\n"                            \
+    "quad 0.5 1.5 2.99   0 0.3 0   0.4 0 0   bulb\nquad 0.5 0.02 0   0 0 0.4   0.4 0 0   bulb\n"                            \
+    "sphere 0.8 1.6 -0.5 0.1 bulb\nsphere -1 0.4 1.5 0.15 bulb\nsphere 1.5 2 2 0.05 bulb\nsphere 0 0.2 -1 0.1 bulb\n"
+static const char tree_lights_scene[] = TREE_LIGHTS_TEXT;
+static const char tree_sky_scene[] = TREE_LIGHTS_TEXT "environment sky.pfm 0.5\n";
+
 static void batched_bit_identical(test_ctx *t)
 {
     static const char *const scenes[] = { "scenes/cornell.scene", "scenes/cornell-diffuse.scene", "scenes/env.scene",
@@ -1084,14 +1109,14 @@ static void batched_bit_identical(test_ctx *t)
                                           "scenes/mesh.scene", "bench/scenes/sun-sky.scene", "bench/scenes/many-lights.scene",
                                           "bench/scenes/door.scene",
                                           "bench/scenes/rooms.scene", "quad lights", "quad lights under a sky",
-                                          "sphere lights" };
+                                          "sphere lights", "tree lights", "tree lights under a sky" };
     static const char *const configs[] = { "MIS", "material", "light", "mixture", "MIS sobol",
                                            "mixture 0.75 sobol", "indirect_paths 4", "adaptive", "guiding sobol, roulette from 1",
                                            "sobol, indirect_paths 8, mixture 0.75, max_splits 12",
                                            "guiding, indirect_paths 4" };
     const int nscenes = (int)(sizeof scenes / sizeof scenes[0]), nconfigs = (int)(sizeof configs / sizeof configs[0]);
-    const int spheres = nscenes - 1, quads = nscenes - 3, rooms = nscenes - 4; /* (the scenes of quad and sphere
-                                                                                  lights are the last) */
+    const int trees = nscenes - 2, spheres = nscenes - 3, quads = nscenes - 5, rooms = nscenes - 6; /* (the scenes
+                                                            of quad, sphere and many lights are the last) */
     int i, c, renders = 0, split = 0, lane_copies = 0, inline_copies = 0;
     char err[512];
     for (i = 0; i < nscenes; ++i) {
@@ -1104,6 +1129,10 @@ static void batched_bit_identical(test_ctx *t)
                                                       sizeof err)
                 : i == spheres   ? pt_scenefile_parse(sphere_lights_scene, sizeof sphere_lights_scene - 1, scenes[i], ".", &sf,
                                                       err, sizeof err)
+                : i == trees     ? pt_scenefile_parse(tree_lights_scene, sizeof tree_lights_scene - 1, scenes[i], ".", &sf, err,
+                                                      sizeof err)
+                : i == trees + 1 ? pt_scenefile_parse(tree_sky_scene, sizeof tree_sky_scene - 1, scenes[i], "scenes", &sf, err,
+                                                      sizeof err)
                                  : pt_scenefile_load(scenes[i], &sf, err, sizeof err);
         if (!CHECK(t, r == PT_OK, "%s: %s", scenes[i], err)) continue;
         if (!CHECK(t, pt_scenefile_build(&sf, &s, &base, err, sizeof err) == PT_OK, "%s: %s", scenes[i], err)) {
